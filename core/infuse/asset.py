@@ -1,0 +1,66 @@
+"""What a reader returns (:class:`Asset`) and what a character is (:class:`Character`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .motion import Motion
+from .skeleton import Skeleton
+
+
+@dataclass
+class Asset:
+    """The contents of one file, converted into the core frame (metres, +Y up).
+
+    - ``skeleton``: the joint hierarchy (for a motion-only file: the joints its channels name,
+      with the skeleton found beside it when there is one).
+    - ``motions``: clip name -> :class:`Motion` (may be empty).
+    - ``morph_targets``: names of blend shapes / morph targets, in file order.
+    - ``source_units`` / ``source_up_axis``: what the file used, e.g. ``"cm"`` and ``"Z"``;
+      ``units_detected_by``: ``"file"`` (declared), ``"guess"`` or ``"override"``.
+    - ``meta``: format-specific facts (VRM humanoid map, channel orders, sync points...).
+    - ``payload``: format-specific data a writer needs to keep what the core does not model
+      (mesh, skin, materials); opaque to the core.
+    """
+
+    path: Path | None
+    format: str
+    skeleton: Skeleton
+    motions: dict[str, Motion] = field(default_factory=dict)
+    morph_targets: list[str] = field(default_factory=list)
+    source_units: str = "m"
+    source_up_axis: str = "Y"
+    units_detected_by: str = "file"
+    meta: dict[str, Any] = field(default_factory=dict)
+    payload: Any = None
+
+    @property
+    def num_frames(self) -> int:
+        return sum(m.num_frames for m in self.motions.values())
+
+    @property
+    def fps(self) -> float | None:
+        return next(iter(self.motions.values())).fps if self.motions else None
+
+
+@dataclass
+class Character:
+    """A skeleton ready to be animated: the asset it came from, plus what infuse adds to it.
+
+    ``mapping`` (canonical name -> joint) and ``clips`` are filled by mappers and retargeters;
+    ``asset.payload`` keeps the mesh and morph data so writers can write the character back.
+    """
+
+    name: str
+    asset: Asset
+    mapping: Any = None
+    clips: dict[str, Motion] = field(default_factory=dict)
+
+    @property
+    def skeleton(self) -> Skeleton:
+        return self.asset.skeleton
+
+    @property
+    def morph_targets(self) -> list[str]:
+        return self.asset.morph_targets

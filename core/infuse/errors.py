@@ -1,0 +1,62 @@
+"""Typed errors. Each one names the input, the place in it and the problem.
+
+The CLI turns them into one line on stderr and an exit code:
+0 ok; 2 bad input or usage (:class:`InputError`, :class:`UsageError`); 3 the input is valid but
+cannot be used for what was asked (:class:`UnusableInputError` and subclasses such as
+:class:`NotHumanoidError`, or a feature whose optional extra is not installed); 1 is a bug.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class InfuseError(Exception):
+    """Base of every error infuse raises on purpose."""
+
+    exit_code = 1
+
+
+class InputError(InfuseError):
+    """A file or value is malformed: names the file, the place (line, node, field) and the problem."""
+
+    exit_code = 2
+
+    def __init__(self, file: str | Path | None, place: str | None, problem: str):
+        self.file = str(file) if file is not None else None
+        self.place = place
+        self.problem = problem
+        where = ":".join(p for p in (self.file, place) if p)
+        super().__init__(f"{where}: {problem}" if where else problem)
+
+
+class UsageError(InfuseError):
+    """A command or API call was given arguments that do not fit together."""
+
+    exit_code = 2
+
+
+class UnusableInputError(InfuseError):
+    """The input is well formed but cannot be used for the requested operation."""
+
+    exit_code = 3
+
+    def __init__(self, file: str | Path | None, problem: str):
+        self.file = str(file) if file is not None else None
+        self.problem = problem
+        super().__init__(f"{self.file}: {problem}" if self.file else problem)
+
+
+class UnsupportedFormatError(UnusableInputError):
+    """No installed reader or writer handles this file type."""
+
+
+class MissingFeatureError(UnusableInputError):
+    """An optional extra or system package is needed; the message says how to install it."""
+
+
+class NotHumanoidError(UnusableInputError):
+    """A skeleton is not a humanoid; ``reason`` says why."""
+
+    def __init__(self, file: str | Path | None, reason: str):
+        self.reason = reason
+        super().__init__(file, f"not a humanoid: {reason}")

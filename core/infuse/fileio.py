@@ -1,0 +1,61 @@
+"""Loading and saving files through whichever reader or writer plugin handles their type."""
+from __future__ import annotations
+
+import json
+import struct
+import zlib
+from pathlib import Path
+
+from . import registry
+from .asset import Asset
+from .atomic import atomic_path
+from .errors import InfuseError, InputError, UnsupportedFormatError
+from .plugin_types import normalized_extension
+
+# Exceptions that, raised while parsing, mean the file is malformed rather than a bug in infuse.
+_PARSE_ERRORS = (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, struct.error,
+                 json.JSONDecodeError, zlib.error, EOFError, OverflowError)
+
+
+def _pick(kind: str, table: dict, path: Path, format: str | None):
+    if format:
+        if format not in table:
+            raise UnsupportedFormatError(path, f"no {kind} named {format!r}; installed: {', '.join(sorted(table)) or 'none'}")
+        return table[format]
+    ext = normalized_extension(path)
+    for item in table.values():
+        if ext in item.extensions:
+            return item
+    known = sorted({e for item in table.values() for e in item.extensions})
+    raise UnsupportedFormatError(path, f"no installed {kind} handles {ext or 'files without extension'!r}; known: {', '.join(known)}")
+
+
+def load(path: str | Path, format: str | None = None, **options) -> Asset:
+    """Read ``path`` with the reader for its extension (or the reader named ``format``).
+
+    ``options`` go to the reader: ``units`` and ``up_axis`` override detection. Malformed files
+    raise :class:`InputError` naming the file, the place and the problem.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(path, None, "file not found")
+    if path.is_dir():
+        raise InputError(path, None, "is a folder, expected a file")
+    reader = _pick("reader", registry.readers(), path, format)
+    try:
+        return reader.read(path, **options)
+    except InfuseError:
+        raise
+    except RecursionError:
+        raise InputError(path, None, f"cannot be read as {reader.name}: nesting too deep") from None
+    except _PARSE_ERRORS as exc:
+        raise InputError(path, None, f"cannot be read as {reader.name}: {type(exc).__name__}: {exc}") from exc
+
+
+def save(asset: Asset, path: str | Path, format: str | None = None, **options) -> Path:
+    """Write ``asset`` to ``path`` atomically with the writer for its extension; returns ``path``."""
+    path = Path(path)
+    writer = _pick("writer", registry.writers(), path, format)
+    with atomic_path(path) as tmp:
+        writer.write(asset, tmp, **options)
+    return path

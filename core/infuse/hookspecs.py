@@ -1,0 +1,58 @@
+"""The contract between infuse and its plugins: every hook a plugin may implement.
+
+A plugin is a module with functions marked ``@infuse.hookimpl`` whose names match the specs
+below. It is found through an entry point in one of the groups of
+:data:`infuse.registry.ENTRY_POINT_GROUPS`; the built-in features register the same way.
+Every hook returns a list of descriptors (see :mod:`infuse.plugin_types`).
+"""
+from __future__ import annotations
+
+import pluggy
+
+hookspec = pluggy.HookspecMarker("infuse")
+hookimpl = pluggy.HookimplMarker("infuse")
+
+
+@hookspec
+def infuse_readers():
+    """Return a list of :class:`~infuse.plugin_types.Reader` for the file formats this plugin reads."""
+
+
+@hookspec
+def infuse_writers():
+    """Return a list of :class:`~infuse.plugin_types.Writer` for the file formats this plugin writes."""
+
+
+@hookspec
+def infuse_mappers():
+    """Return a list of :class:`~infuse.plugin_types.Mapper` (skeleton -> canonical joint names)."""
+
+
+@hookspec
+def infuse_retargeters():
+    """Return a list of :class:`~infuse.plugin_types.Retargeter` (motion on A -> motion on B)."""
+
+
+@hookspec
+def infuse_controllers():
+    """Return a list of :class:`~infuse.plugin_types.Component` whose factories build runtime controllers."""
+
+
+@hookspec
+def infuse_behaviour_packs():
+    """Return a list of :class:`~infuse.plugin_types.Component`; ``info["manifest"]`` is the pack's manifest path."""
+
+
+@hookspec
+def infuse_tts_engines():
+    """Return a list of :class:`~infuse.plugin_types.Component` whose factories build text-to-speech engines."""
+
+
+@hookspec
+def infuse_bml_behaviours():
+    """Return a list of :class:`~infuse.plugin_types.Component`; ``info["elements"]`` names the BML elements handled."""
+
+
+@hookspec
+def infuse_commands():
+    """Return a list of :class:`~infuse.plugin_types.Command` to add to the ``infuse`` CLI."""

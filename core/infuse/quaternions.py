@@ -1,0 +1,175 @@
+"""Quaternion maths on numpy arrays, vectorized over any leading shape.
+
+Convention, used everywhere in infuse: quaternions are stored scalar-last ``(x, y, z, w)``,
+like glTF and ``scipy.spatial.transform.Rotation``; they are unit quaternions acting on
+column vectors (``rotate(q, v) = q v q*``), and ``multiply(a, b)`` applies ``b`` first, then ``a``.
+Angles are radians unless a name ends in ``_deg``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
+    """Identity quaternions of shape ``shape + (4,)``."""
+    out = np.zeros(tuple(shape) + (4,))
+    out[..., 3] = 1.0
+    return out
+
+
+def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a * b`` (x,y,z,w), broadcast over leading axes."""
+    ax, ay, az, aw = np.moveaxis(np.asarray(a, dtype=np.float64), -1, 0)
+    bx, by, bz, bw = np.moveaxis(np.asarray(b, dtype=np.float64), -1, 0)
+    return np.stack(
+        (
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz,
+        ),
+        axis=-1,
+    )
+
+
+def conjugate(q: np.ndarray) -> np.ndarray:
+    """Conjugate, the inverse of a unit quaternion (x,y,z,w)."""
+    out = np.array(q, dtype=np.float64, copy=True)
+    out[..., :3] *= -1.0
+    return out
+
+
+inverse = conjugate
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate vectors ``v`` (...,3) by unit quaternions ``q`` (...,4, x,y,z,w)."""
+    q = np.asarray(q, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    u = q[..., :3]
+    w = q[..., 3:4]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def normalize(q: np.ndarray) -> np.ndarray:
+    """Unit-length quaternions; a zero quaternion becomes the identity."""
+    q = np.asarray(q, dtype=np.float64)
+    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    safe = n > 1e-12
+    return np.where(safe, q / np.where(safe, n, 1.0), IDENTITY)
+
+
+def canonical_sign(q: np.ndarray) -> np.ndarray:
+    """The same rotations with w >= 0 (q and -q are one rotation)."""
+    q = np.asarray(q, dtype=np.float64)
+    return np.where(q[..., 3:4] < 0.0, -q, q)
+
+
+def make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Flip signs along ``axis`` (frames) so neighbouring quaternions lie in one hemisphere."""
+    q = np.moveaxis(np.array(q, dtype=np.float64, copy=True), axis, 0)
+    dots = np.sum(q[1:] * q[:-1], axis=-1)
+    flips = np.cumsum(dots < 0.0, axis=0) % 2
+    q[1:][flips.astype(bool)] *= -1.0
+    return np.moveaxis(q, 0, axis)
+
+
+def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Quaternions from unit ``axis`` (...,3) and ``angle`` in radians (...)."""
+    axis = np.asarray(axis, dtype=np.float64)
+    half = 0.5 * np.asarray(angle, dtype=np.float64)[..., None]
+    return np.concatenate((axis * np.sin(half), np.cos(half)), axis=-1)
+
+
+def from_rotvec(rotvec: np.ndarray) -> np.ndarray:
+    """Quaternions from rotation vectors (axis * angle, radians), shape (...,3)."""
+    rotvec = np.asarray(rotvec, dtype=np.float64)
+    shape = rotvec.shape[:-1]
+    return Rotation.from_rotvec(rotvec.reshape(-1, 3)).as_quat().reshape(shape + (4,))
+
+
+def to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors (axis * angle, radians, angle in [0, pi]) from quaternions (...,4)."""
+    q = np.asarray(q, dtype=np.float64)
+    shape = q.shape[:-1]
+    return Rotation.from_quat(q.reshape(-1, 4)).as_rotvec().reshape(shape + (3,))
+
+
+def from_matrix(m: np.ndarray) -> np.ndarray:
+    """Quaternions from rotation matrices (...,3,3) acting on column vectors."""
+    m = np.asarray(m, dtype=np.float64)
+    shape = m.shape[:-2]
+    return Rotation.from_matrix(m.reshape(-1, 3, 3)).as_quat().reshape(shape + (4,))
+
+
+def to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (...,3,3) from quaternions (...,4)."""
+    q = np.asarray(q, dtype=np.float64)
+    shape = q.shape[:-1]
+    return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(shape + (3, 3))
+
+
+def from_euler(order: str, angles: np.ndarray, degrees: bool = False) -> np.ndarray:
+    """Quaternions from intrinsic Euler angles.
+
+    ``order`` is a string such as ``"ZXY"``: the rotation is R = R_Z(a0) R_X(a1) R_Y(a2), the
+    convention of BVH channel lists (the first listed axis is outermost). ``angles`` is (...,3).
+    """
+    angles = np.asarray(angles, dtype=np.float64)
+    shape = angles.shape[:-1]
+    rot = Rotation.from_euler(order.upper(), angles.reshape(-1, 3), degrees=degrees)
+    return rot.as_quat().reshape(shape + (4,))
+
+
+def to_euler(order: str, q: np.ndarray, degrees: bool = False) -> np.ndarray:
+    """Intrinsic Euler angles (...,3) in ``order`` (see :func:`from_euler`) from quaternions."""
+    q = np.asarray(q, dtype=np.float64)
+    shape = q.shape[:-1]
+    rot = Rotation.from_quat(q.reshape(-1, 4))
+    return rot.as_euler(order.upper(), degrees=degrees).reshape(shape + (3,))
+
+
+def between(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Shortest-arc rotations taking directions ``u`` to ``v`` (...,3); need not be unit length."""
+    u = np.asarray(u, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    u = u / np.maximum(np.linalg.norm(u, axis=-1, keepdims=True), 1e-12)
+    v = v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+    d = np.sum(u * v, axis=-1, keepdims=True)
+    c = np.cross(u, v)
+    q = np.concatenate((c, 1.0 + d), axis=-1)
+    # Opposite directions: rotate by pi about any axis orthogonal to u.
+    opposite = (1.0 + d[..., 0]) < 1e-9
+    if np.any(opposite):
+        ortho = np.cross(u, np.array([1.0, 0.0, 0.0]))
+        small = np.linalg.norm(ortho, axis=-1) < 1e-6
+        ortho = np.where(small[..., None], np.cross(u, np.array([0.0, 1.0, 0.0])), ortho)
+        q = np.where(opposite[..., None], np.concatenate((ortho, np.zeros_like(d)), axis=-1), q)
+    return normalize(q)
+
+
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Rotation angle in radians, in [0, pi], of ``a^-1 b``."""
+    d = np.abs(np.sum(normalize(a) * normalize(b), axis=-1))
+    return 2.0 * np.arccos(np.clip(d, 0.0, 1.0))
+
+
+def slerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Spherical interpolation from ``a`` (t=0) to ``b`` (t=1), shortest path; ``t`` broadcasts."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)[..., None]
+    d = np.sum(a * b, axis=-1, keepdims=True)
+    b = np.where(d < 0.0, -b, b)
+    d = np.abs(d)
+    theta = np.arccos(np.clip(d, -1.0, 1.0))
+    s = np.sin(theta)
+    near = s < 1e-6
+    safe_s = np.where(near, 1.0, s)
+    wa = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe_s)
+    wb = np.where(near, t, np.sin(t * theta) / safe_s)
+    return normalize(wa * a + wb * b)

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Idempotent setup: system packages (when root), .venv/ with infuse, every built-in plugin,
+# every behaviour pack and the example packages installed editable, and the npm tools used in tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-python3}
+VENV=.venv
+
+# System packages the features need (speech, video renders, browser viewer tests, glTF validation).
+SYSTEM_PACKAGES="espeak-ng libespeak-ng1 ffmpeg nodejs npm"
+missing=""
+for p in $SYSTEM_PACKAGES; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
+done
+# node/npm may come from elsewhere than Debian's packages; only ask apt for them when absent.
+command -v node >/dev/null 2>&1 && missing=$(echo "$missing" | sed 's/\bnodejs\b//')
+command -v npm >/dev/null 2>&1 && missing=$(echo "$missing" | sed 's/\bnpm\b//')
+missing=$(echo $missing)
+if [ -n "$missing" ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "setup: installing system packages: $missing"
+    DEBIAN_FRONTEND=noninteractive apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing >/dev/null
+  else
+    echo "setup: warning: missing system packages ($missing); run: sudo apt-get install $missing" >&2
+  fi
+fi
+
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "setup: creating $VENV"
+  "$PY" -m venv "$VENV"
+  "$VENV/bin/python" -m pip install -q --upgrade pip setuptools wheel
+fi
+
+packages=". $(ls -d plugins/*/ behaviour_libs/*/ examples/*/ 2>/dev/null | while read -r d; do [ -f "$d/pyproject.toml" ] && echo "$d"; done | tr '\n' ' ')"
+stamp=$(cat scripts/setup.sh $(for d in $packages; do echo "$d/pyproject.toml"; done) | sha1sum | cut -d' ' -f1)
+if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
+  echo "setup: installing infuse and its plugins into $VENV"
+  args=""
+  for d in $packages; do args="$args -e $d"; done
+  "$VENV/bin/python" -m pip install -q --no-build-isolation $args -e ".[test]"
+  echo "$stamp" > "$VENV/.setup-stamp"
+fi
+
+# Khronos glTF validator (npm), used by the tests of the glTF writer.
+if command -v npm >/dev/null 2>&1 && [ ! -f "$VENV/tools/node_modules/gltf-validator/package.json" ]; then
+  echo "setup: installing gltf-validator (npm)"
+  npm install --silent --no-audit --no-fund --prefix "$VENV/tools" gltf-validator >/dev/null
+fi
+echo "setup: ready ($VENV/bin/infuse)"
