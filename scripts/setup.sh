@@ -32,7 +32,11 @@ if [ ! -x "$VENV/bin/python" ]; then
   "$VENV/bin/python" -m pip install -q --upgrade pip setuptools wheel
 fi
 
-packages=". $(ls -d plugins/*/ behaviour_libs/*/ examples/*/ 2>/dev/null | while read -r d; do [ -f "$d/pyproject.toml" ] && echo "$d"; done | tr '\n' ' ')"
+shopt -s nullglob
+packages="."
+for d in plugins/*/ behaviour_libs/*/ examples/*/; do
+  [ -f "$d/pyproject.toml" ] && packages="$packages ${d%/}"
+done
 stamp=$(cat scripts/setup.sh $(for d in $packages; do echo "$d/pyproject.toml"; done) | sha1sum | cut -d' ' -f1)
 if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "setup: installing infuse and its plugins into $VENV"
