@@ -1,0 +1,290 @@
+"""Mappings from canonical joint names to the joints of one skeleton, and how to obtain them.
+
+A :class:`Mapping` says, for every canonical name (:mod:`infuse.canonical`), which joint of a
+skeleton it means (or ``None``: no counterpart), how sure the mapper is (0..1) and why. Mappings
+are made by mapper plugins (:func:`map_skeleton` looks them up by name), saved as small JSON
+files a person can edit, and completed from a partial hand-made file::
+
+    {"mapping": {"base": "Hips", "l_wrist": null, ...},
+     "confidence": {"base": 0.98, ...},
+     "unmapped": ["HeadTop_End", ...],
+     "reasons": {"base": "...", ...}, "mapper": "heuristic", "overall_confidence": 0.95}
+
+In a hand-edited file ``null`` means "this skeleton has no such joint"; a canonical name that is
+left out means "let the mapper decide".
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from . import registry
+from .atomic import atomic_path
+from .canonical import ALL_NAMES, CANONICAL_NAMES, is_canonical
+from .errors import InputError, UsageError
+from .skeleton import Skeleton
+
+DEFAULT_MAPPER = "heuristic"
+
+
+@dataclass
+class Mapping:
+    """Canonical name -> joint name (or ``None``) for one skeleton, with confidences and reasons.
+
+    - ``joints``: every canonical name (required and extra) -> joint name or ``None``.
+    - ``confidence``: canonical name -> 0..1, how sure the mapper is of that entry (also of a ``None``).
+    - ``reasons``: canonical name -> a short sentence saying why.
+    - ``unmapped``: joints of the skeleton no canonical name points to, in skeleton order.
+    - ``overall_confidence``: 0..1 for the whole map (by default the mean over the required names).
+    - ``mapper``: the name of the mapper that made it (``"saved"`` for a file used as is).
+    """
+
+    joints: dict[str, str | None]
+    confidence: dict[str, float] = field(default_factory=dict)
+    reasons: dict[str, str] = field(default_factory=dict)
+    unmapped: tuple[str, ...] = ()
+    overall_confidence: float = 0.0
+    mapper: str = ""
+
+    @classmethod
+    def build(cls, skeleton: Skeleton, joints: dict[str, str | None], confidence: dict[str, float] | None = None,
+              reasons: dict[str, str] | None = None, mapper: str = "", overall_confidence: float | None = None) -> "Mapping":
+        """A complete mapping from a partial ``joints`` dict: missing names become ``None``, the
+        unmapped joints and (unless given) the overall confidence are computed."""
+        confidence = dict(confidence or {})
+        reasons = dict(reasons or {})
+        full = {name: joints.get(name) for name in ALL_NAMES}
+        for name in ALL_NAMES:
+            confidence.setdefault(name, 0.5)
+            confidence[name] = float(min(1.0, max(0.0, confidence[name])))
+            reasons.setdefault(name, "")
+        used = {v for v in full.values() if v is not None}
+        unmapped = tuple(n for n in skeleton.names if n not in used)
+        if overall_confidence is None:
+            overall_confidence = float(np.mean([confidence[n] for n in CANONICAL_NAMES]))
+        return cls(full, confidence, reasons, unmapped, float(overall_confidence), mapper)
+
+    # -- access ------------------------------------------------------------------------------------
+    def __getitem__(self, canonical: str) -> str | None:
+        return self.joints[canonical]
+
+    def get(self, canonical: str, default: str | None = None) -> str | None:
+        value = self.joints.get(canonical)
+        return default if value is None else value
+
+    def mapped(self) -> dict[str, str]:
+        """Only the canonical names that have a joint."""
+        return {k: v for k, v in self.joints.items() if v is not None}
+
+    def inverse(self) -> dict[str, str]:
+        """Joint name -> canonical name (the first canonical name, in table order, when a joint is used twice)."""
+        out: dict[str, str] = {}
+        for k, v in self.joints.items():
+            if v is not None:
+                out.setdefault(v, k)
+        return out
+
+    def indices(self, skeleton: Skeleton) -> dict[str, int]:
+        """Canonical name -> joint index in ``skeleton`` for the mapped names."""
+        return {k: skeleton.index[v] for k, v in self.mapped().items()}
+
+    # -- files ---------------------------------------------------------------------------------------
+    def to_dict(self, extras: bool = True) -> dict[str, Any]:
+        """The JSON document (``mapping``, ``confidence``, ``unmapped``, plus ``reasons``, ``mapper``,
+        ``overall_confidence``). Extra canonical names are written only when mapped, or with ``extras``."""
+        names = [n for n in ALL_NAMES if n in CANONICAL_NAMES or extras or self.joints.get(n) is not None]
+        return {
+            "mapping": {n: self.joints.get(n) for n in names},
+            "confidence": {n: round(self.confidence.get(n, 0.0), 3) for n in names},
+            "unmapped": list(self.unmapped),
+            "reasons": {n: self.reasons.get(n, "") for n in names},
+            "mapper": self.mapper,
+            "overall_confidence": round(self.overall_confidence, 3),
+        }
+
+    def save(self, path: str | Path) -> Path:
+        """Write the JSON document atomically; returns ``path``."""
+        path = Path(path)
+        with atomic_path(path) as tmp:
+            Path(tmp).write_text(json.dumps(self.to_dict(extras=False), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path, skeleton: Skeleton) -> "Mapping":
+        """Read a saved mapping for ``skeleton``; names missing from the file become ``None``.
+
+        Use :func:`map_skeleton` with ``saved_map=`` to let a mapper fill in the missing names instead.
+        """
+        saved = read_map(path)
+        check_map(saved, skeleton, path)
+        return cls.build(skeleton, saved.joints, saved.confidence, saved.reasons, mapper=saved.mapper or "saved")
+
+
+@dataclass
+class SavedMap:
+    """The entries a mapping file states (possibly partial): ``joints`` holds only the names present."""
+
+    joints: dict[str, str | None]
+    confidence: dict[str, float]
+    reasons: dict[str, str]
+    mapper: str
+    source: str
+
+    def is_complete(self) -> bool:
+        return all(n in self.joints for n in CANONICAL_NAMES)
+
+
+def parse_map(doc: Any, source: str = "<map>") -> SavedMap:
+    """Validate a mapping document (a dict, as read from JSON); raises :class:`InputError` naming the key."""
+    if not isinstance(doc, dict) or not isinstance(doc.get("mapping"), dict):
+        raise InputError(source, "mapping", 'expected an object {"mapping": {canonical name: joint name or null}}')
+    joints: dict[str, str | None] = {}
+    for key, value in doc["mapping"].items():
+        if not is_canonical(key):
+            raise InputError(source, f"mapping.{key}", f"{key!r} is not a canonical joint name")
+        if value is not None and not isinstance(value, str):
+            raise InputError(source, f"mapping.{key}", "expected a joint name (string) or null")
+        joints[key] = value
+    confidence: dict[str, float] = {}
+    raw_conf = doc.get("confidence") or {}
+    if not isinstance(raw_conf, dict):
+        raise InputError(source, "confidence", "expected an object {canonical name: number}")
+    for key, value in raw_conf.items():
+        if key not in joints:
+            continue  # a confidence without an entry says nothing
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= float(value) <= 1.0:
+            raise InputError(source, f"confidence.{key}", "expected a number between 0 and 1")
+        confidence[key] = float(value)
+    reasons = {k: str(v) for k, v in (doc.get("reasons") or {}).items() if k in joints} if isinstance(doc.get("reasons"), dict) else {}
+    return SavedMap(joints, confidence, reasons, str(doc.get("mapper") or ""), source)
+
+
+def read_map(path: str | Path) -> SavedMap:
+    """Read and validate a mapping file (JSON)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, None, "mapping file not found")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputError(path, None, f"not a JSON mapping file: {exc}") from None
+    return parse_map(doc, str(path))
+
+
+def check_map(saved: SavedMap, skeleton: Skeleton, source: str | Path | None = None) -> None:
+    """Raise :class:`InputError` (naming the file and the key) if the map names a joint ``skeleton`` lacks."""
+    for key, value in saved.joints.items():
+        if value is not None and value not in skeleton.index:
+            raise InputError(source or saved.source, f"mapping.{key}", f"joint {value!r} is not in the skeleton")
+
+
+def _as_saved(saved_map: Any) -> SavedMap:
+    if isinstance(saved_map, SavedMap):
+        return saved_map
+    if isinstance(saved_map, Mapping):
+        return SavedMap(dict(saved_map.joints), dict(saved_map.confidence), dict(saved_map.reasons), saved_map.mapper, "<mapping>")
+    if isinstance(saved_map, dict):
+        return parse_map(saved_map if "mapping" in saved_map else {"mapping": saved_map}, "<map>")
+    return read_map(saved_map)
+
+
+def get_mapper(name: str):
+    """The installed mapper plugin called ``name``; :class:`UsageError` listing the installed ones otherwise."""
+    table = registry.mappers()
+    if name not in table:
+        raise UsageError(f"no mapper named {name!r}; installed: {', '.join(sorted(table)) or 'none'}")
+    return table[name]
+
+
+def rest_alternative_pose(asset) -> np.ndarray | None:
+    """(J, 3) global joint positions of the first frame of the asset's first clip, metres, or ``None``.
+
+    Mappers use it when a file's rest pose says little about the body (e.g. every bone along one axis).
+    """
+    from .kinematics import forward_kinematics
+
+    motion = next(iter(getattr(asset, "motions", {}).values()), None)
+    if motion is None or motion.num_frames == 0 or motion.skeleton.num_joints != asset.skeleton.num_joints:
+        return None
+    jt = None if motion.joint_translations is None else motion.joint_translations[:1]
+    _, pos = forward_kinematics(motion.skeleton, motion.local_rotations[:1], motion.root_translations[:1], jt)
+    return pos[0] if np.all(np.isfinite(pos)) else None
+
+
+def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
+    """Hand-set entries of ``saved`` win over ``produced``; a joint given by hand to one name is taken
+    away from any other name the mapper gave it to."""
+    joints = dict(produced.joints)
+    confidence = dict(produced.confidence)
+    reasons = dict(produced.reasons)
+    taken = {v: k for k, v in saved.joints.items() if v is not None}
+    for key, value in list(joints.items()):
+        if key not in saved.joints and value in taken:
+            joints[key] = None
+            confidence[key] = 0.3
+            reasons[key] = f"{value!r} is set to {taken[value]} by hand"
+    for key, value in saved.joints.items():
+        joints[key] = value
+        confidence[key] = saved.confidence.get(key, 1.0)
+        reasons[key] = saved.reasons.get(key) or f"set by hand in {saved.source}"
+    mapper = f"{produced.mapper}+saved" if produced.mapper else "saved"
+    return Mapping.build(skeleton, joints, confidence, reasons, mapper=mapper)
+
+
+def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = None, *, pose: np.ndarray | None = None,
+                 meta: dict | None = None, **options) -> Mapping:
+    """Map a skeleton (or the skeleton of an :class:`~infuse.asset.Asset`) to the canonical names.
+
+    - ``mapper``: the name of an installed mapper plugin (see ``infuse plugins``).
+    - ``saved_map``: a mapping file path, a parsed dict or a :class:`Mapping`; its entries win and
+      the mapper fills in the names it leaves out (a complete file is used as is).
+    - ``pose``: optional (J, 3) global joint positions in metres (core frame) of a representative
+      pose, for skeletons whose rest pose is arbitrary; taken from the first frame of an Asset's
+      first clip when not given. ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
+
+    Raises :class:`UsageError` for an unknown mapper, :class:`InputError` for a map naming joints the
+    skeleton does not have, :class:`~infuse.errors.NotHumanoidError` when the mapper refuses the skeleton.
+    """
+    file = options.pop("file", None)
+    if isinstance(source, Skeleton):
+        skeleton = source
+    else:  # an Asset
+        skeleton = source.skeleton
+        file = file or getattr(source, "path", None)
+        meta = dict(source.meta) if meta is None else meta
+        if pose is None:
+            pose = rest_alternative_pose(source)
+    saved = _as_saved(saved_map) if saved_map is not None else None
+    if saved is not None:
+        check_map(saved, skeleton)
+        if saved.is_complete():
+            return Mapping.build(skeleton, saved.joints, saved.confidence, saved.reasons, mapper=saved.mapper or "saved")
+    plugin = get_mapper(mapper or DEFAULT_MAPPER)
+    fixed = dict(saved.joints) if saved is not None else None
+    result = plugin.map(skeleton, pose=pose, meta=meta or {}, fixed=fixed, file=file, **options)
+    if not isinstance(result, Mapping):  # a plain {canonical: joint} dict from a simple plugin
+        result = Mapping.build(skeleton, dict(result), mapper=plugin.name)
+    elif not result.mapper:
+        result.mapper = plugin.name
+    _check_result(result, skeleton, plugin.name)
+    return complete(saved, result, skeleton) if saved is not None else result
+
+
+def _check_result(result: Mapping, skeleton: Skeleton, name: str) -> None:
+    for key, value in result.joints.items():
+        if value is not None and value not in skeleton.index:
+            raise ValueError(f"mapper {name!r} returned joint {value!r} for {key}, which is not in the skeleton")
+
+
+def format_table(mapping: Mapping, names: Iterable[str] = CANONICAL_NAMES) -> str:
+    """A text table: canonical name, joint, confidence, reason."""
+    rows = []
+    width = max(len(str(mapping.joints.get(n))) for n in names)
+    for n in names:
+        joint = mapping.joints.get(n)
+        rows.append(f"  {n:<20} {('-' if joint is None else joint):<{width}}  {mapping.confidence.get(n, 0):.2f}  {mapping.reasons.get(n, '')}")
+    return "\n".join(rows)
