@@ -1,0 +1,195 @@
+"""BVH file -> :class:`infuse.Asset` in the core frame (metres, +Y up, quaternions x,y,z,w).
+
+Euler channels are intrinsic in their listed order, the first axis outermost (``Zrotation
+Xrotation Yrotation`` means ``R = Rz · Rx · Ry``), in degrees. Position channels replace the
+matching components of a joint's OFFSET (as in Blender and most mocap tools); any joint may have
+them (Bandai files animate every joint) and they then become ``Motion.joint_translations``.
+
+BVH declares no unit and no up axis. The unit is the one of metres, decimetres (MakeHuman's),
+centimetres and millimetres that gives the figure a human size
+(:func:`infuse.conventions.guess_unit` on the rest pose); the up axis is +Y unless the figure is
+clearly taller along Z (:func:`infuse.conventions.guess_up_axis` on its extent averaged over a few
+frames, or on the rest pose when there is no motion). Both measure the body only: leading
+single-child joints such as a ground-projected root are left out. ``units=`` and ``up_axis=``
+override both. ``Asset.meta`` keeps what a writer needs to reproduce the file: channels per
+joint, the frame time and the unit scale.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.asset import Asset
+from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, guess_unit, guess_up_axis
+from infuse.errors import InputError
+from infuse.kinematics import forward_kinematics
+from infuse.motion import Motion
+from infuse.skeleton import Skeleton
+
+from .parse import BvhDocument, parse
+
+_AXIS = {"X": 0, "Y": 1, "Z": 2}
+#: Units a BVH file is guessed to use. Decimetres are MakeHuman's; inches and CMU units are
+#: too close to centimetres to tell apart by size, so they are only taken as ``units=`` overrides.
+UNIT_CANDIDATES = ("m", "dm", "cm", "mm")
+#: Frames whose poses decide the up axis (evenly spread over the clip).
+UP_AXIS_SAMPLE_FRAMES = 8
+
+
+def channel_layout(doc: BvhDocument):
+    """Column indices of the channels, as arrays for vectorized gathers.
+
+    Returns ``(rotation_columns, rotation_axes, position_columns)``: ``rotation_columns`` (J, 3)
+    is the column of each joint's 1st, 2nd and 3rd rotation channel in file order (-1 where a
+    joint has fewer), ``rotation_axes`` (J, 3) their axes (0=X, 1=Y, 2=Z), and
+    ``position_columns`` is ``(joints, axes, columns)``, one entry per position channel.
+    """
+    joints = len(doc.names)
+    rot_cols = np.full((joints, 3), -1, dtype=np.int64)
+    rot_axes = np.zeros((joints, 3), dtype=np.int64)
+    pos_joints: list[int] = []
+    pos_axes: list[int] = []
+    pos_cols: list[int] = []
+    for j, (start, chans) in enumerate(zip(doc.channel_starts, doc.channels)):
+        k = 0
+        for offset, c in enumerate(chans):
+            if c.endswith("rotation"):
+                rot_cols[j, k] = start + offset
+                rot_axes[j, k] = _AXIS[c[0]]
+                k += 1
+            else:
+                pos_joints.append(j)
+                pos_axes.append(_AXIS[c[0]])
+                pos_cols.append(int(start) + offset)
+    positions = (np.array(pos_joints, dtype=np.int64), np.array(pos_axes, dtype=np.int64), np.array(pos_cols, dtype=np.int64))
+    return rot_cols, rot_axes, positions
+
+
+def local_rotations(values: np.ndarray, rotation_columns: np.ndarray, rotation_axes: np.ndarray) -> np.ndarray:
+    """(F, J, 4) local rotations (x, y, z, w) from Euler channels in degrees, all frames at once.
+
+    Intrinsic rotations in file order: R = R_a0(v0) · R_a1(v1) · R_a2(v2), the first listed
+    axis outermost; missing channels are zero angles.
+    """
+    frames = values.shape[0]
+    joints = rotation_columns.shape[0]
+    half = np.where(rotation_columns >= 0, values[:, rotation_columns], 0.0) * (np.pi / 360.0)  # (F, J, 3)
+    sin, cos = np.sin(half), np.cos(half)
+    rows = np.arange(joints)
+    out = None
+    for k in range(3):
+        q = np.zeros((frames, joints, 4))
+        q[:, rows, rotation_axes[:, k]] = sin[..., k]
+        q[..., 3] = cos[..., k]
+        out = q if out is None else quat.multiply(out, q)
+    return out
+
+
+def local_translations(doc: BvhDocument, position_columns) -> np.ndarray:
+    """(F, J, 3) local translations in file units: OFFSETs with position channels written over them."""
+    frames = doc.values.shape[0]
+    out = np.broadcast_to(doc.offsets, (frames,) + doc.offsets.shape).copy()
+    js, axes, cols = position_columns
+    out[:, js, axes] = doc.values[:, cols]
+    return out
+
+
+def body_joints(skeleton: Skeleton) -> np.ndarray:
+    """Indices of the figure itself: the subtree of the first joint below root 0 that branches.
+
+    Leading single-child joints (a ground-projected ``joint_Root``, a ``reference`` node) may sit
+    metres away from the body; they would distort any size or orientation measured on positions.
+    """
+    j = 0
+    while len(skeleton.children[j]) == 1:
+        j = skeleton.children[j][0]
+    inside = np.zeros(skeleton.num_joints, dtype=bool)
+    inside[j] = True
+    for i in range(j + 1, skeleton.num_joints):  # parents precede children
+        p = skeleton.parents[i]
+        inside[i] = p >= 0 and inside[p]
+    return np.flatnonzero(inside)
+
+
+def _unit(skeleton: Skeleton, body: np.ndarray, units: str | None) -> str:
+    if units is not None:
+        if units not in UNIT_SCALES:
+            raise InputError(None, "units", f"unknown unit {units!r}; known: {', '.join(UNIT_SCALES)}")
+        return units
+    sites = np.isin(skeleton.end_site_parents, body)
+    points = np.concatenate((skeleton.rest_global_positions[body], skeleton.rest_end_site_positions[sites]))
+    return guess_unit(float(np.max(np.ptp(points, axis=0))), UNIT_CANDIDATES)
+
+
+def _up_axis(skeleton: Skeleton, body: np.ndarray, poses: np.ndarray | None, up_axis: str | None) -> str:
+    """``up_axis``, or the axis a figure is tallest along, averaged over ``poses`` (K, J, 3) when given."""
+    if up_axis is not None:
+        if up_axis not in UP_AXIS_ROTATIONS:
+            raise InputError(None, "up_axis", f"unknown up axis {up_axis!r}; known: {', '.join(UP_AXIS_ROTATIONS)}")
+        return up_axis
+    if poses is None:
+        return guess_up_axis(skeleton.rest_global_positions[body])
+    spread = np.ptp(poses[:, body], axis=1).mean(axis=0)  # mean extent per axis over the sampled frames
+    return guess_up_axis(np.stack((np.zeros(3), spread)))
+
+
+def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: str | None = None) -> Asset:
+    """Convert a parsed document into the core frame (see the module docstring)."""
+    file = str(path)
+    joints = len(doc.names)
+    rest = Skeleton(doc.names, doc.parents, doc.offsets, quat.identity((joints,)),
+                    doc.end_site_parents, doc.end_site_offsets)
+    rotation_columns, rotation_axes, position_columns = channel_layout(doc)
+    frames = doc.values.shape[0]
+    rots = local_rotations(doc.values, rotation_columns, rotation_axes)
+    pos_joints = position_columns[0]
+    animated = bool(np.any(pos_joints != 0))  # translations beyond joint 0's need joint_translations
+    if animated:
+        trans = local_translations(doc, position_columns)
+        root = trans[:, 0]
+    else:
+        root = np.broadcast_to(doc.offsets[0], (frames, 3)).copy()
+        root[:, position_columns[1]] = doc.values[:, position_columns[2]]
+        trans = None
+    body = body_joints(rest)
+    poses = None
+    if frames and up_axis is None:
+        sample = np.unique(np.linspace(0, frames - 1, min(frames, UP_AXIS_SAMPLE_FRAMES)).astype(np.int64))
+        poses = forward_kinematics(rest, rots[sample], root[sample], None if trans is None else trans[sample])[1]
+    try:
+        unit = _unit(rest, body, units)
+        axis = _up_axis(rest, body, poses, up_axis)
+    except InputError as exc:
+        raise InputError(file, exc.place, exc.problem) from None
+    scale = UNIT_SCALES[unit]
+    up = UP_AXIS_ROTATIONS[axis]
+    skeleton = rest.transformed(scale, None if axis == "Y" else up)
+    motions = {}
+    if frames:
+        roots = skeleton.roots
+        root = root * scale
+        if axis != "Y":
+            rots[:, roots] = quat.multiply(up, rots[:, roots])
+            root = quat.rotate(up, root)
+        if trans is not None:
+            trans *= scale
+            if axis != "Y":
+                trans[:, roots] = quat.rotate(up, trans[:, roots])
+        motion = Motion(skeleton, 1.0 / doc.frame_time, rots, root, trans, name=path.stem)
+        motion.validate(file)
+        motions[motion.name] = motion
+    meta = {
+        "channels": {n: list(c) for n, c in zip(doc.names, doc.channels)},
+        "frame_time": doc.frame_time,
+        "unit_scale_m": scale,
+    }
+    return Asset(path=path, format="bvh", skeleton=skeleton, motions=motions, source_units=unit,
+                 source_up_axis=axis, units_detected_by="override" if units is not None else "guess", meta=meta)
+
+
+def read(path: str | Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
+    """Read a BVH file into an :class:`~infuse.Asset` (see the module docstring for conventions)."""
+    path = Path(path)
+    return to_asset(path, parse(path), units=units, up_axis=up_axis)
