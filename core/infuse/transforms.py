@@ -1,0 +1,114 @@
+"""4x4 transform matrices: how readers of scene-graph formats (COLLADA, FBX, Ogre) reach the core model.
+
+Those formats give each node a local matrix, possibly with scale, shear-free pivots and non-joint
+parents. Readers compose them into global matrices, change the frame (units, up axis) once on the
+globals, then keep only the joints: :func:`rigid_locals` turns global joint frames into the local
+rotations and translations of :class:`~infuse.skeleton.Skeleton` and :class:`~infuse.motion.Motion`.
+Scale is folded into translations (global positions stay exact), so the core needs no scale.
+
+Matrices act on column vectors, translation in the last column: ``p' = M @ [p, 1]``.
+Shapes: ``(..., 4, 4)`` with any leading axes (frames, nodes). Quaternions are (x, y, z, w).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import conventions
+from . import quaternions as quat
+from .motion import Motion
+from .skeleton import Skeleton
+
+
+def compose(translations: np.ndarray, rotations: np.ndarray, scales: np.ndarray | None = None) -> np.ndarray:
+    """``T · R · S`` matrices (..., 4, 4) from translations (..., 3), quaternions (..., 4), scales (..., 3)."""
+    translations = np.asarray(translations, dtype=np.float64)
+    rotations = np.asarray(rotations, dtype=np.float64)
+    shape = np.broadcast_shapes(translations.shape[:-1], rotations.shape[:-1])
+    out = np.zeros(shape + (4, 4))
+    rot = quat.to_matrix(np.broadcast_to(rotations, shape + (4,)))
+    if scales is not None:
+        rot = rot * np.asarray(scales, dtype=np.float64)[..., None, :]
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = translations
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def decompose(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Translations (..., 3), rotations (..., 4) and scales (..., 3) of affine matrices (..., 4, 4).
+
+    The rotation is the nearest one to the 3x3 block (polar decomposition, so shear or
+    non-uniform scale under rotation give the best rigid fit); a mirroring block yields a
+    negative scale on one axis.
+    """
+    m = np.asarray(matrices, dtype=np.float64)
+    block = m[..., :3, :3]
+    u, _, vt = np.linalg.svd(block)
+    det = np.linalg.det(u @ vt)
+    u[..., :, 2] *= np.where(det < 0.0, -1.0, 1.0)[..., None]
+    rot = u @ vt
+    scales = np.einsum("...ji,...ji->...i", rot, block)  # diagonal of R^T M, signed
+    return m[..., :3, 3].copy(), quat.normalize(quat.from_matrix(rot)), scales
+
+
+def global_matrices(parents: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """Global matrices (F, N, 4, 4) from local ones, parents (N,) in topological order (-1 for roots).
+
+    Vectorized over frames and over all nodes of one depth at a time.
+    """
+    parents = np.asarray(parents, dtype=np.int64)
+    out = np.array(local, dtype=np.float64, copy=True)
+    depth = np.zeros(len(parents), dtype=np.int64)
+    for i, p in enumerate(parents):
+        if p >= 0:
+            depth[i] = depth[p] + 1
+    for level in range(1, int(depth.max(initial=0)) + 1):
+        idx = np.nonzero(depth == level)[0]
+        out[..., idx, :, :] = out[..., parents[idx], :, :] @ out[..., idx, :, :]
+    return out
+
+
+def frame_change(scale: float, up_axis: str) -> np.ndarray:
+    """The 4x4 matrix taking a file's coordinates (``scale`` metres per unit, ``up_axis`` up) to the core frame."""
+    out = np.eye(4)
+    out[:3, :3] = quat.to_matrix(conventions.UP_AXIS_ROTATIONS[up_axis]) * float(scale)
+    return out
+
+
+def rigid_locals(parents: np.ndarray, global_mats: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Local rotations (..., J, 4) and translations (..., J, 3) of joints from their global matrices.
+
+    ``parents`` (J,) indexes the joint set itself (-1: a root, whose local values are global).
+    Each joint's frame is the rigid part of its global matrix; its translation is its global
+    position seen from the parent joint's rigid frame, so scale and folded-away non-joint nodes
+    end up in the translations and FK reproduces every global joint position exactly.
+    """
+    parents = np.asarray(parents, dtype=np.int64)
+    pos, rot, _ = decompose(global_mats)
+    has_parent = parents >= 0
+    par = np.where(has_parent, parents, 0)
+    par_rot = np.where(has_parent[:, None], rot[..., par, :], quat.IDENTITY)
+    par_pos = np.where(has_parent[:, None], pos[..., par, :], 0.0)
+    inv = quat.conjugate(par_rot)
+    local_rot = quat.normalize(quat.multiply(inv, rot))
+    local_trans = quat.rotate(inv, pos - par_pos)
+    return local_rot, local_trans
+
+
+def skeleton_from_globals(names, parents, global_mats: np.ndarray) -> Skeleton:
+    """A :class:`Skeleton` whose rest pose puts each joint at its global matrix (J, 4, 4), core frame."""
+    rot, trans = rigid_locals(parents, global_mats)
+    return Skeleton(names, parents, trans, quat.canonical_sign(rot))
+
+
+def motion_from_globals(skeleton: Skeleton, fps: float, global_mats: np.ndarray, name: str = "",
+                        tolerance: float = 1e-7) -> Motion:
+    """A :class:`Motion` reproducing joint global matrices (F, J, 4, 4) given in the core frame.
+
+    ``joint_translations`` is kept only when some joint other than the first root moves away
+    from its rest offset by more than ``tolerance`` metres (animated translation or scale).
+    """
+    rot, trans = rigid_locals(skeleton.parents, global_mats)
+    rot = quat.make_continuous(rot, axis=0)
+    moved = np.abs(trans[:, 1:] - skeleton.rest_translations[1:]).max(initial=0.0) > tolerance
+    return Motion(skeleton, fps, rot, trans[:, 0], trans if moved else None, name=name)
