@@ -1,0 +1,223 @@
+"""What a render shows: figures (a skeleton moving through global joint positions) and markers.
+
+Coordinates are the core frame: metres, right-handed, +Y up, +Z the character's forward, +X its
+left. Times are seconds; frame ``i`` of a figure is at ``i / fps``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+from PIL import ImageColor
+
+from ..kinematics import end_site_positions, motion_fk
+from ..motion import Motion
+from ..skeleton import Skeleton
+
+RGB = tuple[int, int, int]
+
+#: Base colours given to figures that do not choose one, in order.
+PALETTE: tuple[RGB, ...] = (
+    (38, 101, 181),   # blue
+    (214, 104, 22),   # orange
+    (36, 145, 84),    # green
+    (142, 68, 173),   # purple
+    (192, 57, 43),    # red
+    (22, 139, 150),   # teal
+)
+
+#: Side codes of :attr:`Figure.sides`.
+LEFT, CENTRE, RIGHT = 1, 0, -1
+
+
+def to_rgb(color) -> RGB:
+    """``"#rrggbb"``, a colour name or an (r, g, b) tuple of 0..255 ints -> (r, g, b)."""
+    if isinstance(color, str):
+        return ImageColor.getrgb(color)[:3]
+    r, g, b = (int(c) for c in color[:3])
+    return (r, g, b)
+
+
+def default_sides(skeleton: Skeleton, centre_tolerance: float = 0.02) -> np.ndarray:
+    """(J,) side of each joint: +1 left (+X of the root at rest), -1 right, 0 centre.
+
+    A joint within ``centre_tolerance`` x the skeleton's height of the root's X plane counts as
+    centre. Callers who know the sides from joint names (a mapping) should pass their own array.
+    """
+    rest = skeleton.rest_global_positions
+    dx = rest[:, 0] - rest[skeleton.roots[0], 0]
+    tol = centre_tolerance * max(skeleton.height(), 1e-9)
+    return np.where(dx > tol, LEFT, np.where(dx < -tol, RIGHT, CENTRE)).astype(np.int8)
+
+
+@dataclass
+class Marker:
+    """A labelled point in space, fixed or moving: a gaze or reach target.
+
+    - ``position``: (3,) metres, or (F, 3) one per frame of the figure it belongs to.
+    - ``style``: ``"cross"`` (three axis strokes) or ``"sphere"`` (a shaded disc).
+    - ``size``: metres, the cross's half length or the sphere's radius.
+    - ``ray_from``: a joint name of the owning figure; a dashed line goes from it to the marker
+      (a gaze ray, a reach line).
+    """
+
+    position: np.ndarray
+    label: str = ""
+    color: object = (200, 30, 90)
+    style: str = "cross"
+    size: float = 0.05
+    ray_from: str | None = None
+
+    def __post_init__(self):
+        pos = np.asarray(self.position, dtype=np.float64)
+        if pos.shape == (3,):
+            pos = pos[None]
+        if pos.ndim != 2 or pos.shape[1] != 3 or not np.all(np.isfinite(pos)):
+            raise ValueError(f"marker {self.label!r}: position must be finite (3,) or (F, 3), got shape {np.shape(self.position)}")
+        if self.style not in ("cross", "sphere"):
+            raise ValueError(f"marker {self.label!r}: style must be 'cross' or 'sphere', got {self.style!r}")
+        self.position = pos
+        self.color = to_rgb(self.color)
+
+    def at(self, frames: np.ndarray) -> np.ndarray:
+        """(T, 3) positions at the owning figure's frame indices ``frames`` (held at the ends)."""
+        return self.position[np.clip(frames, 0, len(self.position) - 1)]
+
+
+@dataclass
+class Figure:
+    """A skeleton and where its joints are over time: one stick figure to draw.
+
+    - ``positions``: (F, J, 3) global joint positions, metres (e.g. from :func:`infuse.motion_fk`).
+    - ``fps``: frames per second of ``positions``.
+    - ``end_sites``: optional (F, E, 3) global end-site positions (leaf tips: head top, toes).
+    - ``color``: base colour; the left side is drawn lighter and the right side darker.
+    - ``sides``: (J,) +1 left / -1 right / 0 centre; default :func:`default_sides`.
+    - ``highlight``: joints to ring (low-confidence mappings...): joint names or a (J,) bool array.
+    - ``names``: joint labels to draw: ``True`` for every joint, joint names, or {joint: text}.
+    - ``contacts``: {joint name: (F,) bool}; the joint and its ground spot turn the contact colour
+      on frames where it is True (foot contacts).
+    - ``markers``: :class:`Marker` objects that belong to this figure (drawn in its panel).
+    """
+
+    skeleton: Skeleton
+    positions: np.ndarray
+    fps: float = 30.0
+    label: str = ""
+    color: object | None = None
+    end_sites: np.ndarray | None = None
+    sides: np.ndarray | None = None
+    highlight: Iterable[str] | np.ndarray | None = None
+    names: bool | Sequence[str] | Mapping[str, str] | None = None
+    contacts: Mapping[str, np.ndarray] | None = None
+    markers: list[Marker] = field(default_factory=list)
+
+    def __post_init__(self):
+        sk = self.skeleton
+        j = sk.num_joints
+        pos = np.asarray(self.positions, dtype=np.float64)
+        if pos.ndim == 2:
+            pos = pos[None]
+        if pos.ndim != 3 or pos.shape[1:] != (j, 3) or len(pos) == 0:
+            raise ValueError(f"figure {self.label!r}: positions must be (F, {j}, 3), got {np.shape(self.positions)}")
+        if not np.all(np.isfinite(pos)):
+            raise ValueError(f"figure {self.label!r}: positions contain NaN or infinity")
+        self.positions = pos
+        if not (np.isfinite(self.fps) and self.fps > 0):
+            raise ValueError(f"figure {self.label!r}: fps must be positive")
+        if self.end_sites is not None:
+            es = np.asarray(self.end_sites, dtype=np.float64)
+            if es.ndim == 2:
+                es = es[None]
+            if es.shape != (len(pos), len(sk.end_site_parents), 3):
+                raise ValueError(f"figure {self.label!r}: end_sites must be (F, E, 3) matching the skeleton's end sites")
+            self.end_sites = es
+        self.sides = default_sides(sk) if self.sides is None else np.asarray(self.sides, dtype=np.int8)
+        if self.sides.shape != (j,):
+            raise ValueError(f"figure {self.label!r}: sides must be ({j},)")
+        self.highlight = self._joint_mask(self.highlight, "highlight")
+        self.names = self._name_labels(self.names)
+        contacts = {}
+        for name, flags in (self.contacts or {}).items():
+            flags = np.asarray(flags, dtype=bool).reshape(-1)
+            if len(flags) != len(pos):
+                raise ValueError(f"figure {self.label!r}: contact array for {name!r} has {len(flags)} frames, expected {len(pos)}")
+            contacts[self._joint(name, "contacts")] = flags
+        self.contacts = contacts
+
+    # -- construction ----------------------------------------------------------------------------
+    @classmethod
+    def from_motion(cls, motion: Motion, **options) -> "Figure":
+        """A figure playing ``motion`` (FK of every frame at once, end sites included)."""
+        g_rot, g_pos = motion_fk(motion)
+        ends = end_site_positions(motion.skeleton, g_rot, g_pos) if len(motion.skeleton.end_site_parents) else None
+        options.setdefault("label", motion.name)
+        return cls(motion.skeleton, g_pos, fps=motion.fps, end_sites=ends, **options)
+
+    @classmethod
+    def from_skeleton(cls, skeleton: Skeleton, **options) -> "Figure":
+        """A one-frame figure in the skeleton's rest pose."""
+        ends = skeleton.rest_end_site_positions[None] if len(skeleton.end_site_parents) else None
+        return cls(skeleton, skeleton.rest_global_positions[None], end_sites=ends, **options)
+
+    # -- derived ---------------------------------------------------------------------------------
+    @property
+    def num_frames(self) -> int:
+        return len(self.positions)
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first to the last frame."""
+        return (self.num_frames - 1) / self.fps
+
+    def frames_at(self, times: np.ndarray) -> np.ndarray:
+        """(T,) frame index nearest to each time in seconds, held at the first and last frame."""
+        return np.clip(np.rint(np.asarray(times) * self.fps).astype(np.int64), 0, self.num_frames - 1)
+
+    def points(self) -> np.ndarray:
+        """(F, J + E, 3): joints then end sites, the points bones connect."""
+        if self.end_sites is None:
+            return self.positions
+        return np.concatenate((self.positions, self.end_sites), axis=1)
+
+    def bones(self) -> np.ndarray:
+        """(B, 2) indices into :meth:`points`: (parent, child) for each joint and end site."""
+        sk = self.skeleton
+        child = np.nonzero(sk.parents >= 0)[0]
+        pairs = [np.stack((sk.parents[child], child), axis=1)]
+        if self.end_sites is not None:
+            e = len(sk.end_site_parents)
+            pairs.append(np.stack((sk.end_site_parents, sk.num_joints + np.arange(e)), axis=1))
+        return np.concatenate(pairs).astype(np.int64)
+
+    # -- helpers ---------------------------------------------------------------------------------
+    def _joint(self, name: str, what: str) -> int:
+        try:
+            return self.skeleton.index[name]
+        except KeyError:
+            raise ValueError(f"figure {self.label!r}: {what} names unknown joint {name!r}") from None
+
+    def _joint_mask(self, value, what: str) -> np.ndarray:
+        j = self.skeleton.num_joints
+        if value is None:
+            return np.zeros(j, dtype=bool)
+        arr = np.asarray(value)
+        if arr.dtype == bool:
+            if arr.shape != (j,):
+                raise ValueError(f"figure {self.label!r}: {what} mask must be ({j},)")
+            return arr
+        mask = np.zeros(j, dtype=bool)
+        for name in value:
+            mask[self._joint(name, what)] = True
+        return mask
+
+    def _name_labels(self, value) -> dict[int, str]:
+        """Joint index -> text to draw beside it."""
+        if not value:
+            return {}
+        if value is True:
+            return dict(enumerate(self.skeleton.names))
+        if isinstance(value, Mapping):
+            return {self._joint(k, "names"): str(v) for k, v in value.items()}
+        return {self._joint(k, "names"): k for k in value}
