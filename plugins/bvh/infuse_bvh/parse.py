@@ -167,10 +167,10 @@ def _parse_hierarchy(file, text: str):
                 listed = words[2:2 + count]
                 if len(listed) != count or len(words) > 2 + count and words[2 + count].lower() in _CHANNEL_BY_KEY:
                     raise InputError(file, f"line {lineno}", f"CHANNELS of {owner} says {count} but lists {len(words) - 2}")
-                try:
-                    chans = tuple(_CHANNEL_BY_KEY[c.lower()] for c in listed)
-                except KeyError as exc:
-                    raise InputError(file, f"line {lineno}", f"unknown channel {exc.args[0]!r} in {owner}") from None
+                unknown = [c for c in listed if c.lower() not in _CHANNEL_BY_KEY]
+                if unknown:
+                    raise InputError(file, f"line {lineno}", f"unknown channel {unknown[0]!r} in {owner}")
+                chans = tuple(_CHANNEL_BY_KEY[c.lower()] for c in listed)
                 if len(set(chans)) != len(chans):
                     raise InputError(file, f"line {lineno}", f"{owner} lists a channel twice")
                 if channels[i]:
