@@ -110,7 +110,7 @@ def filmstrip(renderer: Renderer, title: str = "", columns: int = STRIP_COLUMNS,
     sheet = Image.new("RGB", (tw * cols, th * rows + head), renderer.style.background)
     draw = ImageDraw.Draw(sheet)
     for k in range(n):
-        sheet.paste(renderer.image(k), ((k % cols) * tw, head + (k // cols) * th))
+        sheet.paste(renderer.image(k, labels=k == 0), ((k % cols) * tw, head + (k // cols) * th))
         if k % cols:
             x = (k % cols) * tw
             draw.line((x, head + (k // cols) * th, x, head + (k // cols + 1) * th - 1), fill=renderer.style.grid)

@@ -133,14 +133,14 @@ class Renderer:
         if self.camera.follow is not None:
             return self.camera.follow
         fig, frames = self.figures[0], self.frames[0]
-        root = fig.positions[frames[0]:frames[-1] + 1, 0][:, [0, 2]]
+        root = fig.positions[frames[0]:frames[-1] + 1, fig.root][:, [0, 2]]
         travel = float(np.max(np.ptp(root, axis=0))) if len(root) > 1 else 0.0
         return travel > 2.0 * max(fig.skeleton.height(), 0.1)
 
     def _follow_target(self, i: int) -> np.ndarray:
         """(T, 3) the figure's root, smoothed over about a second so the camera does not shake."""
         fig = self.figures[i]
-        root = fig.positions[:, 0]
+        root = fig.positions[:, fig.root]
         k = max(int(round(fig.fps)) | 1, 1)
         padded = np.pad(root, ((k // 2, k // 2), (0, 0)), mode="edge")
         smooth = np.stack([np.convolve(padded[:, a], np.ones(k) / k, mode="valid") for a in range(3)], axis=1)
@@ -154,7 +154,7 @@ class Renderer:
         pad = self.unit * 3
         label_row = round(self.font_px * 1.5)
         for panel in self.panels:
-            pts = np.concatenate([self._points[i] for i in panel.members], axis=1)
+            pts = np.concatenate([self._points[i][:, self.figures[i].visible] for i in panel.members], axis=1)
             heights = [self.figures[i].skeleton.height() for i in panel.members]
             panel.height = max(max(heights), 0.1)
             lowest = float(pts[..., 1].min())
@@ -200,7 +200,7 @@ class Renderer:
                 mp, mn = panel.view.project(self._marker_points(i))
                 self._marker_pix.append((i, mp))
                 self._marker_near.append((i, mn))
-                nears.append(near)
+                nears.append(near[:, self.figures[i].visible])
             allnear = np.concatenate([n.reshape(-1) for n in nears])
             panel.near_range = (float(allnear.min()), float(allnear.max()))
         for name in ("_pix", "_near", "_shadow", "_marker_pix", "_marker_near"):
@@ -210,14 +210,20 @@ class Renderer:
     def __len__(self) -> int:
         return len(self.times)
 
-    def image(self, t: int) -> Image.Image:
-        """The RGB image of output frame ``t`` (0 <= t < len(self))."""
+    def joint_pixels(self, figure: int, t: int) -> np.ndarray:
+        """(J + E, 2) where figure ``figure``'s joints then end sites land in output frame ``t``, in
+        output-image pixels (x right, y down)."""
+        panel = next(p for p in self.panels if figure in p.members)
+        return (self._pix[figure][t] + np.array(panel.rect[:2])) / self.ss
+
+    def image(self, t: int, labels: bool = True) -> Image.Image:
+        """The RGB image of output frame ``t`` (0 <= t < len(self)); ``labels``: name the figures."""
         w, h = self.size
         canvas = Image.new("RGB", (w * self.ss, h * self.ss), self.style.background)
         for k, panel in enumerate(self.panels):
             x, y, pw, ph = (int(round(v)) for v in panel.rect)
             sub = Image.new("RGB", (pw, ph), self.style.background)
-            self._draw_panel(ImageDraw.Draw(sub), panel, t)
+            self._draw_panel(ImageDraw.Draw(sub), panel, t, labels)
             canvas.paste(sub, (x, y))
         draw = ImageDraw.Draw(canvas)
         for panel in self.panels[1:]:  # a rule between side-by-side panels
@@ -237,7 +243,7 @@ class Renderer:
         base = self.colors[i]
         return {LEFT: mix(base, WHITE, 0.42), RIGHT: mix(base, BLACK, 0.3), 0: base}
 
-    def _draw_panel(self, draw: ImageDraw.ImageDraw, panel: _Panel, t: int) -> None:
+    def _draw_panel(self, draw: ImageDraw.ImageDraw, panel: _Panel, t: int, labels: bool) -> None:
         st, view, u = self.style, panel.view, self.unit
         bone_w = max(1.6 * u, 2.0 * self.ss)
         edge = max(0.28 * u, self.ss * 0.6)
@@ -248,7 +254,7 @@ class Renderer:
         for i in panel.members:
             fig, frame = self.figures[i], self.frames[i][t]
             if st.show_trail and frame > 0:
-                root = fig.positions[: frame + 1, 0].copy()
+                root = fig.positions[: frame + 1, fig.root].copy()
                 root = root[np.unique(np.linspace(0, len(root) - 1, min(len(root), 400)).astype(int))]
                 root[:, 1] = panel.ground
                 pix = view.project(root, t)[0]
@@ -256,13 +262,14 @@ class Renderer:
                           width=max(int(round(0.5 * u)), 1), joint="curve")
             if st.show_shadow:
                 sh = self._shadow[i][t]
-                for pa, ch in fig.bones():
+                for pa, ch in fig.bones:
                     capsule(draw, sh[pa], sh[ch], bone_w, st.shadow, st.shadow, 0)
             for j, flags in fig.contacts.items():
                 if flags[frame]:
                     self._contact_ring(draw, view, t, fig.positions[frame, j], panel, 0.08 * panel.height)
         self._draw_figures(draw, panel, t, bone_w, edge)
-        self._draw_panel_label(draw, panel)
+        if labels:
+            self._draw_panel_label(draw, panel)
 
     def _contact_ring(self, draw, view: PanelView, t: int, where: np.ndarray, panel: _Panel, radius: float) -> None:
         angles = np.linspace(0.0, 2.0 * np.pi, 25)
@@ -283,14 +290,14 @@ class Renderer:
             colors = self._side_colors(i)
             contact = {j for j, flags in fig.contacts.items() if flags[frame]}
             nj = fig.skeleton.num_joints
-            for pa, ch in fig.bones():
+            for pa, ch in fig.bones:
                 side = fig.sides[ch] if ch < nj else fig.sides[pa]
                 color = st.contact if pa in contact else colors[int(side)]
                 z = (near[pa] + near[ch]) / 2.0
                 fill = self._fog(panel, color, z)
                 outline = mix(fill, BLACK, 0.45)
                 items.append((z, 0, lambda a=pix[pa], b=pix[ch], f=fill, o=outline: capsule(draw, a, b, bone_w, f, o, edge)))
-            for j in range(nj):
+            for j in np.nonzero(fig.visible[:nj])[0]:
                 big = j in contact
                 r = bone_w * (0.85 if big else 0.32)
                 fill = st.contact if big else mix(self._fog(panel, colors[int(fig.sides[j])], near[j]), BLACK, 0.5)
@@ -305,10 +312,11 @@ class Renderer:
                 items.append((z, 3, lambda m=marker, c=centre, i=i: self._draw_marker(draw, panel, t, m, c, i)))
                 if marker.label:
                     overlays.append((centre, marker.label, marker.color))
-            for j in np.nonzero(fig.highlight)[0]:
+            for j in np.nonzero(fig.highlight & fig.visible[:nj])[0]:
                 overlays.append((pix[j], None, st.highlight))
             for j, text in fig.names.items():
-                overlays.append((pix[j], text, st.text))
+                if fig.visible[j]:
+                    overlays.append((pix[j], text, st.text))
         items.sort(key=lambda it: (it[0], it[1]))
         for _, _, paint in items:
             paint()

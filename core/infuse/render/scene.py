@@ -6,6 +6,7 @@ left. Times are seconds; frame ``i`` of a figure is at ``i / fps``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
@@ -39,16 +40,39 @@ def to_rgb(color) -> RGB:
     return (r, g, b)
 
 
-def default_sides(skeleton: Skeleton, centre_tolerance: float = 0.02) -> np.ndarray:
-    """(J,) side of each joint: +1 left (+X of the root at rest), -1 right, 0 centre.
+def default_sides(skeleton: Skeleton, pose: np.ndarray | None = None, centre_tolerance: float = 0.02) -> np.ndarray:
+    """(J,) side of each joint from geometry: +1 left (+X), -1 right (-X), 0 centre.
 
-    A joint within ``centre_tolerance`` x the skeleton's height of the root's X plane counts as
-    centre. Callers who know the sides from joint names (a mapping) should pass their own array.
+    The rest pose is used when it stands upright (at least half as tall along +Y as it is wide);
+    otherwise ``pose`` (J, 3), e.g. a clip's first frame, when given (some files keep every bone
+    along one axis at rest).
+    Sides are measured from the median joint X, so a root left off-centre does not tilt them;
+    joints within ``centre_tolerance`` x the height of it are centre. Callers who know the sides
+    from names (a mapping, see :func:`sides_from_mapping`) should pass their own array.
     """
     rest = skeleton.rest_global_positions
-    dx = rest[:, 0] - rest[skeleton.roots[0], 0]
-    tol = centre_tolerance * max(skeleton.height(), 1e-9)
+    extent = np.ptp(rest, axis=0)
+    upright = extent[1] >= 0.5 * extent.max()  # a T-pose is about as wide as tall; a lying rest is flat in Y
+    points = rest if upright or pose is None else np.asarray(pose, dtype=np.float64)
+    dx = points[:, 0] - np.median(points[:, 0])
+    tol = centre_tolerance * max(float(np.max(np.ptp(points, axis=0))), 1e-9)
     return np.where(dx > tol, LEFT, np.where(dx < -tol, RIGHT, CENTRE)).astype(np.int8)
+
+
+def sides_from_mapping(skeleton: Skeleton, mapping) -> np.ndarray:
+    """(J,) sides from a canonical :class:`~infuse.mapping.Mapping`; unmapped joints take their
+    nearest mapped ancestor's side (fingers follow their wrist), roots without one are centre."""
+    from ..canonical import canonical_joint
+
+    codes = {"left": LEFT, "right": RIGHT, "center": CENTRE}
+    own = {}
+    for canonical, joint in mapping.mapped().items():
+        if joint in skeleton.index:
+            own.setdefault(skeleton.index[joint], codes[canonical_joint(canonical).side])
+    sides = np.zeros(skeleton.num_joints, dtype=np.int8)
+    for j, parent in enumerate(skeleton.parents):  # parents come first, so they are already set
+        sides[j] = own.get(j, sides[parent] if parent >= 0 else CENTRE)
+    return sides
 
 
 @dataclass
@@ -93,7 +117,8 @@ class Figure:
     - ``fps``: frames per second of ``positions``.
     - ``end_sites``: optional (F, E, 3) global end-site positions (leaf tips: head top, toes).
     - ``color``: base colour; the left side is drawn lighter and the right side darker.
-    - ``sides``: (J,) +1 left / -1 right / 0 centre; default :func:`default_sides`.
+    - ``sides``: (J,) +1 left / -1 right / 0 centre; default :func:`default_sides` (of the rest
+      pose, or of the first frame when the rest pose is not upright).
     - ``highlight``: joints to ring (low-confidence mappings...): joint names or a (J,) bool array.
     - ``names``: joint labels to draw: ``True`` for every joint, joint names, or {joint: text}.
     - ``contacts``: {joint name: (F,) bool}; the joint and its ground spot turn the contact colour
@@ -133,7 +158,7 @@ class Figure:
             if es.shape != (len(pos), len(sk.end_site_parents), 3):
                 raise ValueError(f"figure {self.label!r}: end_sites must be (F, E, 3) matching the skeleton's end sites")
             self.end_sites = es
-        self.sides = default_sides(sk) if self.sides is None else np.asarray(self.sides, dtype=np.int8)
+        self.sides = default_sides(sk, pos[0]) if self.sides is None else np.asarray(self.sides, dtype=np.int8)
         if self.sides.shape != (j,):
             raise ValueError(f"figure {self.label!r}: sides must be ({j},)")
         self.highlight = self._joint_mask(self.highlight, "highlight")
@@ -181,15 +206,37 @@ class Figure:
             return self.positions
         return np.concatenate((self.positions, self.end_sites), axis=1)
 
+    @cached_property
     def bones(self) -> np.ndarray:
-        """(B, 2) indices into :meth:`points`: (parent, child) for each joint and end site."""
+        """(B, 2) indices into :meth:`points`: (parent, child) links that act as rigid bones.
+
+        A link whose length changes by more than 5% of the skeleton's height over the clip is not
+        a bone but a free joint (a BVH root left at the origin while the hips walk away) and is
+        left out.
+        """
         sk = self.skeleton
         child = np.nonzero(sk.parents >= 0)[0]
         pairs = [np.stack((sk.parents[child], child), axis=1)]
         if self.end_sites is not None:
             e = len(sk.end_site_parents)
             pairs.append(np.stack((sk.end_site_parents, sk.num_joints + np.arange(e)), axis=1))
-        return np.concatenate(pairs).astype(np.int64)
+        pairs = np.concatenate(pairs).astype(np.int64).reshape(-1, 2)
+        pts = self.points()
+        lengths = np.linalg.norm(pts[:, pairs[:, 1]] - pts[:, pairs[:, 0]], axis=-1)  # (F, B)
+        rigid = np.ptp(lengths, axis=0) <= 0.05 * max(sk.height(), 1e-6)
+        return pairs[rigid]
+
+    @cached_property
+    def root(self) -> int:
+        """Index of the first joint that is drawn: the one the trail and a following camera track."""
+        return int(np.argmax(self.visible[: self.skeleton.num_joints]))
+
+    @cached_property
+    def visible(self) -> np.ndarray:
+        """(J + E,) bool: points that belong to a drawn bone (every point when there is no bone)."""
+        mask = np.zeros(self.points().shape[1], dtype=bool)
+        mask[self.bones.reshape(-1)] = True
+        return mask if mask.any() else ~mask
 
     # -- helpers ---------------------------------------------------------------------------------
     def _joint(self, name: str, what: str) -> int:
