@@ -101,10 +101,13 @@ def body_joints(skeleton: Skeleton) -> np.ndarray:
 
     Leading single-child joints (a ground-projected ``joint_Root``, a ``reference`` node) may sit
     metres away from the body; they would distort any size or orientation measured on positions.
+    A skeleton that never branches (a plain chain) is all body.
     """
     j = 0
     while len(skeleton.children[j]) == 1:
         j = skeleton.children[j][0]
+    if not skeleton.children[j]:
+        return np.arange(skeleton.num_joints)
     inside = np.zeros(skeleton.num_joints, dtype=bool)
     inside[j] = True
     for i in range(j + 1, skeleton.num_joints):  # parents precede children
