@@ -1,0 +1,108 @@
+"""VRM 0.x, VRM 1.0 and VRM Animation (VRMA) extensions: humanoid bone maps and expressions.
+
+- VRM 0.x: ``extensions.VRM`` (``humanoid.humanBones`` is a list of ``{bone, node}``; expressions are
+  ``blendShapeMaster.blendShapeGroups`` with ``binds`` ``{mesh, index, weight 0..100}``). Its models
+  face -Z (UniVRM flips X when exporting from Unity).
+- VRM 1.0: ``extensions.VRMC_vrm`` (``humanoid.humanBones`` maps bone -> ``{node}``; expressions are
+  ``expressions.preset`` / ``expressions.custom`` with ``morphTargetBinds`` ``{node, index, weight 0..1}``).
+  Its models face +Z like glTF.
+- VRMA: ``extensions.VRMC_vrm_animation`` (``humanoid.humanBones`` like VRM 1.0; each expression is a
+  node whose animated ``translation.x`` is the weight; ``lookAt.node`` is a gaze target).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from infuse.errors import InputError
+
+from .accessors import check_index
+
+
+@dataclass
+class Expression:
+    """One VRM expression: its name and the morph targets it drives.
+
+    ``binds`` holds ``(kind, index, target, weight)`` with kind ``"node"`` (VRM 1.0, a mesh node) or
+    ``"mesh"`` (VRM 0.x), ``target`` the morph target index and ``weight`` in 0..1. ``node`` is the
+    VRMA expression node (its translation.x carries the weight), else ``None``.
+    """
+
+    name: str
+    binds: list = field(default_factory=list)
+    node: int | None = None
+
+
+@dataclass
+class VrmInfo:
+    """What the VRM extensions say: ``version`` ("0.x", "1.0" or "vrma-1.0"), ``bones`` (VRM bone name ->
+    node index), ``expressions`` in file order, and ``look_at_node`` (VRMA gaze target node)."""
+
+    version: str
+    bones: dict[str, int]
+    expressions: list[Expression]
+    look_at_node: int | None = None
+
+    @property
+    def expression_nodes(self) -> set[int]:
+        return {e.node for e in self.expressions if e.node is not None}
+
+
+def vrm_info(doc_json: dict, file) -> VrmInfo | None:
+    """The VRM facts of a document, or ``None`` for a plain glTF."""
+    ext = doc_json.get("extensions") or {}
+    n_nodes = len(doc_json.get("nodes", []))
+    if not isinstance(ext, dict):
+        return None
+    if isinstance(ext.get("VRMC_vrm_animation"), dict):
+        e = ext["VRMC_vrm_animation"]
+        bones = _bones_v1(e, n_nodes, file, "extensions.VRMC_vrm_animation")
+        exprs = []
+        for group in ("preset", "custom"):
+            for name, spec in ((e.get("expressions") or {}).get(group) or {}).items():
+                if isinstance(spec, dict) and "node" in spec:
+                    node = check_index(file, f"extensions.VRMC_vrm_animation.expressions.{group}.{name}", spec["node"], n_nodes, "node")
+                    exprs.append(Expression(str(name), node=node))
+        look = (e.get("lookAt") or {}).get("node")
+        if look is not None:
+            look = check_index(file, "extensions.VRMC_vrm_animation.lookAt", look, n_nodes, "node")
+        return VrmInfo("vrma-1.0", bones, exprs, look)
+    if isinstance(ext.get("VRMC_vrm"), dict):
+        e = ext["VRMC_vrm"]
+        bones = _bones_v1(e, n_nodes, file, "extensions.VRMC_vrm")
+        exprs = []
+        for group in ("preset", "custom"):
+            for name, spec in ((e.get("expressions") or {}).get(group) or {}).items():
+                if not isinstance(spec, dict):
+                    continue
+                binds = [("node", b["node"], b["index"], float(b.get("weight", 1.0)))
+                         for b in spec.get("morphTargetBinds") or [] if isinstance(b, dict) and "node" in b and "index" in b]
+                exprs.append(Expression(str(name), binds))
+        return VrmInfo("1.0", bones, exprs)
+    if isinstance(ext.get("VRM"), dict):
+        e = ext["VRM"]
+        bones: dict[str, int] = {}
+        for k, b in enumerate((e.get("humanoid") or {}).get("humanBones") or []):
+            if isinstance(b, dict) and "bone" in b and b.get("node") is not None and b.get("node") != -1:
+                bones[str(b["bone"])] = check_index(file, f"extensions.VRM.humanoid.humanBones[{k}]", b["node"], n_nodes, "node")
+        exprs = []
+        for g in (e.get("blendShapeMaster") or {}).get("blendShapeGroups") or []:
+            if not isinstance(g, dict):
+                continue
+            preset = str(g.get("presetName") or "unknown")
+            name = preset if preset != "unknown" else str(g.get("name") or f"expression{len(exprs)}")
+            binds = [("mesh", b["mesh"], b["index"], float(b.get("weight", 100.0)) / 100.0)
+                     for b in g.get("binds") or [] if isinstance(b, dict) and "mesh" in b and "index" in b]
+            exprs.append(Expression(name, binds))
+        return VrmInfo("0.x", bones, exprs)
+    return None
+
+
+def _bones_v1(ext: dict, n_nodes: int, file, place: str) -> dict[str, int]:
+    bones: dict[str, int] = {}
+    human = (ext.get("humanoid") or {}).get("humanBones") or {}
+    if not isinstance(human, dict):
+        raise InputError(file, f"{place}.humanoid.humanBones", "is not an object")
+    for bone, spec in human.items():
+        if isinstance(spec, dict) and "node" in spec:
+            bones[str(bone)] = check_index(file, f"{place}.humanoid.humanBones.{bone}", spec["node"], n_nodes, "node")
+    return bones
