@@ -141,7 +141,7 @@ def _shared_palette(renderer: Renderer, samples: int = 8) -> Image.Image:
 
 
 def write_gif(renderer: Renderer, path: str | Path, fps: float, progress: Progress | None = None) -> Path:
-    """An endlessly looping GIF, one image per renderer frame at ``fps``."""
+    """An endlessly looping GIF, one image per renderer frame at ``fps`` (GIF delays are whole 1/100 s)."""
     palette = _shared_palette(renderer)
     frames = []
     for k in range(len(renderer)):
@@ -149,7 +149,7 @@ def write_gif(renderer: Renderer, path: str | Path, fps: float, progress: Progre
         if progress:
             progress.advance()
     with atomic_path(path) as tmp:
-        frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:], duration=round(1000.0 / fps),
+        frames[0].save(tmp, format="GIF", save_all=True, append_images=frames[1:], duration=10 * max(round(100.0 / fps), 1),
                        loop=0, optimize=False, disposal=1)
     return Path(path)
 

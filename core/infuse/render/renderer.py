@@ -142,7 +142,9 @@ class Renderer:
         fig = self.figures[i]
         root = fig.positions[:, fig.root]
         k = max(int(round(fig.fps)) | 1, 1)
-        padded = np.pad(root, ((k // 2, k // 2), (0, 0)), mode="edge")
+        # odd reflection at the ends keeps a steady walk exactly centred (edge padding would lag)
+        padded = np.pad(root, ((k // 2, k // 2), (0, 0)), mode="reflect", reflect_type="odd") if len(root) > k // 2 \
+            else np.pad(root, ((k // 2, k // 2), (0, 0)), mode="edge")
         smooth = np.stack([np.convolve(padded[:, a], np.ones(k) / k, mode="valid") for a in range(3)], axis=1)
         out = smooth[self.frames[i]]
         out[:, 1] = root[:, 1].mean()
@@ -342,8 +344,8 @@ class Renderer:
         pos = marker.at(self.frames[i][t:t + 1])[0]
         ends = pos + np.concatenate([np.eye(3), -np.eye(3)]) * marker.size
         pix = view.project(ends, t)[0]
-        for k in range(3):
-            for colour, width in ((mix(fill, BLACK, 0.45), 0.8 * u + 2 * self.ss), (fill, 0.8 * u)):
+        for colour, width in ((mix(fill, BLACK, 0.45), 0.8 * u + 2 * self.ss), (fill, 0.8 * u)):  # outlines under fills
+            for k in range(3):
                 draw.line((pix[k][0], pix[k][1], pix[k + 3][0], pix[k + 3][1]), fill=colour, width=max(int(round(width)), 1))
 
     def _draw_panel_label(self, draw: ImageDraw.ImageDraw, panel: _Panel) -> None:
