@@ -72,14 +72,6 @@ class Rig:
                    np.zeros((n, 3), dtype=bool), np.zeros((n, 3, 2)), np.zeros((n, 3)),
                    np.zeros((n, 3), dtype=bool), np.zeros((n, 3, 2)))
 
-    def extended(self, names: list[str]) -> "Rig":
-        """This rig plus free root joints ``names`` (channel joints the ``.sk`` lacks)."""
-        extra = Rig.free_roots(names)
-        fields = {k: (getattr(self, k) + getattr(extra, k) if isinstance(getattr(self, k), list)
-                      else np.concatenate((getattr(self, k), getattr(extra, k))))
-                  for k in self.__dataclass_fields__}
-        return Rig(**fields)
-
     def rotations(self, raw: np.ndarray, euler: np.ndarray) -> np.ndarray:
         """Local rotations (F,J,4) = ``prerot * value * postrot`` from raw Quat values and Euler angles."""
         value = np.array(raw)

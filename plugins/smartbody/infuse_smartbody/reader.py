@@ -103,37 +103,39 @@ def _motion_units(skm, sk_unit: tuple[str, str, str] | None, override: str | Non
 def read_skm(path: Path, units: str | None = None, up_axis: str | None = None, skeleton: str | Path | None = None) -> Asset:
     """A SmartBody ``.skm`` motion on its skeleton (``skeleton=PATH`` or found beside the file).
 
-    The reported joints are the skeleton's plus any channel joint it lacks (added as roots); with
-    no skeleton found, the channel joints alone, all roots. ``meta["skeleton_file"]`` says which
-    ``.sk`` was used. Timing metadata (ready, stroke, relax...) become ``sync_points`` in seconds
+    A channel naming a joint the skeleton lacks is an error; with no skeleton found (or
+    ``skeleton="none"``) the joints are the channel joints alone, all roots at the origin.
+    ``meta["skeleton_file"]`` says which ``.sk`` was used. Timing metadata (ready, stroke, relax...) become ``sync_points`` in seconds
     from the first frame.
     """
     path = Path(path)
     skm = parse_skm(path, _read_text(path))
     meta: dict = {"name": skm.name, "channels": len(skm.channels), "channel_joints": skm.joints}
-    if skeleton is not None:
+    if skeleton == "none":
+        sk, meta["skeleton_found_in"] = None, "not used (skeleton='none')"
+    elif skeleton is not None:
         sk_path = Path(skeleton)
         if not sk_path.is_file():
             raise InputError(sk_path, None, "skeleton file not found")
-        sk: SkFile | None = load_sk(sk_path)
+        sk = load_sk(sk_path)
         meta["skeleton_found_in"] = "given by the caller"
     else:
         sk, record = find_skeleton(path, skm.joints)
         meta.update(record)
     if sk is not None:
+        known = set(sk.names)
+        unknown = next((c for c in skm.channels if c.joint not in known), None)
+        if unknown is not None:
+            raise InputError(path, f"line {unknown.line}", f"channel {unknown.joint} {unknown.type}: joint "
+                             f"{unknown.joint!r} is not in the skeleton {sk.path.name} (pass skeleton=PATH, or 'none')")
         sk_unit = sk_units(sk)
         rig = Rig.from_sk(sk, _scale(sk_unit[0]))
-        known = set(sk.names)
-        missing = [n for n in skm.joints if n not in known]
-        if missing:
-            rig = rig.extended(missing)
-            meta["joints_added_as_roots"] = missing
         meta.update(skeleton_file=str(sk.path), skeleton_units=sk_unit[0], skeleton_units_rule=sk_unit[2])
     else:
         sk_unit = None
         rig = Rig.free_roots(skm.joints)
         meta["skeleton_file"] = None
-        meta["skeleton_note"] = "no .sk found: flat skeleton of the channel joints, all roots at the origin"
+        meta["skeleton_note"] = "no .sk used: flat skeleton of the channel joints, all roots at the origin"
     unit, detected_by, rule = _motion_units(skm, sk_unit, units)
     meta["units_rule"] = rule
 

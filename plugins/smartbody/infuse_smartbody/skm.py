@@ -36,7 +36,8 @@ _KEY_LINE = re.compile(r"^[ \t]*kt[ \t]+(\S+)[ \t]+fr[ \t]+(.*?)[ \t]*\r?$", re.
 _LAST_KEY_LINE = re.compile(r".*^[ \t]*kt[ \t][^\n]*", re.M | re.S)  # greedy: ends at the last key line
 _NONEMPTY_LINE = re.compile(r"^[ \t]*\S", re.M)
 _TIMING = re.compile(r"^(\w+)[ \t]+time[ \t]*:?[ \t]*(\S+)$")
-_TAGGED = re.compile(r"^(\w+)[ \t]*:?[ \t]*(.*)$")
+_TIMING_PREFIX = re.compile(r"^\w+[ \t]+time\b")
+_TAGGED = re.compile(r"^(\w+)[ \t]*:?[ \t]*(\S.*)$")
 
 
 @dataclass(frozen=True)
@@ -200,15 +201,14 @@ def _parse_metadata(path: Path, text: str, start: int) -> tuple[dict, dict]:
             continue
         where = f"line {first + i}"
         if line.startswith("kt ") or line == "kt":
-            raise InputError(path, where, "more frame lines than 'frames' announces")
+            raise InputError(path, where, "a frame line after the frame block (malformed, or more frames than 'frames' announces)")
         m = _TIMING.match(line)
         tagged = _TAGGED.match(line)
-        if m:
-            name, value = m.group(1), m.group(2)
-        elif tagged:
-            name, value = tagged.group(1), tagged.group(2)
-        else:
-            raise InputError(path, where, f"expected metadata 'NAME time: SECONDS', found {line[:40]!r}")
+        if _TIMING_PREFIX.match(line) and not m:
+            raise InputError(path, where, f"expected 'NAME time: SECONDS', found {line[:40]!r}")
+        if not (m or tagged):
+            raise InputError(path, where, f"expected metadata 'NAME time: SECONDS' or 'NAME VALUE', found {line[:40]!r}")
+        name, value = (m or tagged).group(1), (m or tagged).group(2)
         try:
             seconds = float(value)
         except ValueError:
