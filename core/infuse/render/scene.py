@@ -75,6 +75,15 @@ def sides_from_mapping(skeleton: Skeleton, mapping) -> np.ndarray:
     return sides
 
 
+def _namespace_length(names: Sequence[str]) -> int:
+    """Length of a namespace prefix (up to a ``:`` or ``|``) that every name shares, else 0."""
+    first = names[0]
+    cut = max(first.rfind(":"), first.rfind("|")) + 1
+    while cut and not all(n.startswith(first[:cut]) for n in names):
+        cut = max(first.rfind(":", 0, cut - 1), first.rfind("|", 0, cut - 1)) + 1
+    return cut
+
+
 @dataclass
 class Marker:
     """A labelled point in space, fixed or moving: a gaze or reach target.
@@ -120,7 +129,8 @@ class Figure:
     - ``sides``: (J,) +1 left / -1 right / 0 centre; default :func:`default_sides` (of the rest
       pose, or of the first frame when the rest pose is not upright).
     - ``highlight``: joints to ring (low-confidence mappings...): joint names or a (J,) bool array.
-    - ``names``: joint labels to draw: ``True`` for every joint, joint names, or {joint: text}.
+    - ``names``: joint labels to draw: ``True`` for every joint (without a namespace every name
+      shares, such as ``mixamorig:``), joint names, or {joint: text}. Stored as {joint index: text}.
     - ``contacts``: {joint name: (F,) bool}; the joint and its ground spot turn the contact colour
       on frames where it is True (foot contacts).
     - ``markers``: :class:`Marker` objects that belong to this figure (drawn in its panel).
@@ -264,7 +274,9 @@ class Figure:
         if not value:
             return {}
         if value is True:
-            return dict(enumerate(self.skeleton.names))
+            names = self.skeleton.names
+            cut = _namespace_length(names)
+            return {j: n[cut:] or n for j, n in enumerate(names)}
         if isinstance(value, Mapping):
             return {self._joint(k, "names"): str(v) for k, v in value.items()}
         return {self._joint(k, "names"): k for k in value}
