@@ -1,0 +1,59 @@
+"""How long speech lasts and when its marks fall: estimated from the text, or asked of a TTS engine.
+
+A TTS plugin offers real timings by giving its engine a ``time_speech(text, marks, voice=None,
+language=None) -> SpeechTiming`` method (see :class:`SpeechTimer`); without one the scheduler
+uses :class:`EstimatedSpeechTimer`.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, Sequence, runtime_checkable
+
+
+@dataclass(frozen=True)
+class SpeechTiming:
+    """``duration_s``: length of the utterance; ``mark_times_s``: mark id -> seconds from its start;
+    ``source``: ``"estimate"`` or the engine's name; ``details``: plain data an engine adds (phonemes, audio path)."""
+
+    duration_s: float
+    mark_times_s: dict
+    source: str = "estimate"
+    details: dict = field(default_factory=dict)
+
+
+@runtime_checkable
+class SpeechTimer(Protocol):
+    def time_speech(self, text: str, marks: Sequence[tuple[str, int]], voice: str | None = None,
+                    language: str | None = None) -> SpeechTiming:
+        """Timing of ``text``; ``marks`` are (mark id, character offset in ``text``)."""
+
+
+@dataclass(frozen=True)
+class EstimatedSpeechTimer:
+    """Speech timing from the text alone: a fixed time per character plus pauses at punctuation.
+
+    The defaults (0.068 s per character, about 175 words per minute) match ordinary conversational rate.
+    """
+
+    seconds_per_char: float = 0.068
+    comma_pause_s: float = 0.15
+    sentence_pause_s: float = 0.35
+
+    def char_times(self, text: str) -> list[float]:
+        """Seconds from the start of ``text`` at which each character offset 0..len(text) is reached."""
+        times = [0.0]
+        for ch in text:
+            cost = self.seconds_per_char if not ch.isspace() else self.seconds_per_char * 0.5
+            if ch in ",;:":
+                cost += self.comma_pause_s
+            elif ch in ".!?":
+                cost += self.sentence_pause_s
+            times.append(times[-1] + cost)
+        return times
+
+    def time_speech(self, text, marks, voice=None, language=None) -> SpeechTiming:
+        times = self.char_times(text)
+        # Pauses after the last word are not speech.
+        end = self.char_times(text.rstrip(" .!?,;:"))[-1] if text.strip() else 0.0
+        marks_s = {mark: min(times[min(offset, len(text))], end) for mark, offset in marks}
+        return SpeechTiming(end, marks_s, "estimate")

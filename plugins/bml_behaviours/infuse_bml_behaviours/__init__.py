@@ -1,0 +1,1 @@
+"""The built-in BML behaviour handlers of infuse, registered like any third-party plugin."""
