@@ -97,6 +97,8 @@ def _parse_header(path: Path, header: str) -> tuple[str, list[Channel], float | 
     channels: list[Channel] = []
     seen: set[tuple[str, str]] = set()
     for _ in range(count):
+        if ts.finished:
+            raise ts.error(f"'channels {count}' but only {len(channels)} channel lines follow before 'frames'")
         joint = ts.next("a channel's joint name")
         kind = ts.next(f"the channel type of joint {joint.text!r}")
         if kind.text in ("Swing", "Twist"):
@@ -120,11 +122,16 @@ def _parse_header(path: Path, header: str) -> tuple[str, list[Channel], float | 
     return name, channels, start_kt
 
 
-def _frame_values(path: Path, text: str, body_start: int, frames: int, width: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Key times (F,) and values (F, width) of the frame block; also where the block ends."""
+def _frame_values(path: Path, text: str, body_start: int, frames: int, width: int):
+    """Key times (F,), values (F, width), where the frame block ends, and the first non-finite value's
+    (frame, column) or ``None``."""
     body = text[body_start:]
     rows = _KEY_LINE.findall(body)
+    block = body[: m.end()] if (m := _LAST_KEY_LINE.match(body)) else ""
     if len(rows) < frames:
+        stray = _first_stray(text, body_start, block)
+        if stray is not None and stray[0] < _line_of(text, len(text.rstrip())):
+            raise InputError(path, f"line {stray[0]}", f"expected a frame line 'kt TIME fr VALUES', found {stray[1][:40]!r}")
         raise InputError(path, f"line {_line_of(text, len(text.rstrip()))}",
                          f"'frames {frames}' but only {len(rows)} frame lines ('kt TIME fr VALUES') follow (file truncated?)")
     if len(rows) > frames:
@@ -132,9 +139,9 @@ def _frame_values(path: Path, text: str, body_start: int, frames: int, width: in
         raise InputError(path, f"line {_line_of(text, body_start + extra.start())}",
                          f"more frame lines than 'frames {frames}' announces")
     # The frame block runs to the end of the last key line and must hold nothing else.
-    block = body[: _LAST_KEY_LINE.match(body).end()]
     if len(_NONEMPTY_LINE.findall(block)) != frames:
-        _raise_stray_line(path, text, body_start, block)
+        number, line = _first_stray(text, body_start, block)
+        raise InputError(path, f"line {number}", f"expected a frame line 'kt TIME fr VALUES', found {line[:40]!r}")
     times_text, values_text = zip(*rows)
     numbers = " ".join(values_text).split()
     if len(numbers) != frames * width:
@@ -150,8 +157,8 @@ def _frame_values(path: Path, text: str, body_start: int, frames: int, width: in
     if not np.all(np.isfinite(values)):
         frame = int(np.nonzero(~np.isfinite(values).all(axis=1))[0][0])
         col = int(np.nonzero(~np.isfinite(values[frame]))[0][0])
-        raise InputError(path, f"frame {frame + 1}", f"value {col + 1} is not finite ({values[frame, col]})")
-    return times, values, body_start + len(block)
+        return times, values, body_start + len(block), (frame, col)
+    return times, values, body_start + len(block), None
 
 
 def _block_lines(text: str, body_start: int, block: str):
@@ -161,11 +168,12 @@ def _block_lines(text: str, body_start: int, block: str):
             yield first + i, line
 
 
-def _raise_stray_line(path, text, body_start, block):
+def _first_stray(text: str, body_start: int, block: str) -> tuple[int, str] | None:
+    """The first non-empty line of the frame block that is not a frame line: (line number, text)."""
     for number, line in _block_lines(text, body_start, block):
         if not _KEY_LINE.match(line):
-            raise InputError(path, f"line {number}", f"expected a frame line 'kt TIME fr VALUES', found {line.strip()[:40]!r}")
-    raise InputError(path, None, "malformed frame block")
+            return number, line.strip()
+    return None
 
 
 def _raise_bad_width(path, text, body_start, block, width):
@@ -240,7 +248,12 @@ def parse_skm(path: Path, text: str) -> SkmFile:
     if not channels:
         raise InputError(path, None, "no channels")
     width = sum(c.size for c in channels)
-    times, values, end = _frame_values(path, text, m.end(), frames, width)
+    times, values, end, bad = _frame_values(path, text, m.end(), frames, width)
+    if bad is not None:
+        frame, col = bad
+        sizes = np.array([c.size for c in channels])
+        channel = channels[int(np.searchsorted(np.cumsum(sizes), col, side="right"))]
+        raise InputError(path, f"frame {frame + 1}", f"channel {channel.joint} {channel.type}: value is not finite ({values[frame, col]})")
     timings, other = _parse_metadata(path, text, end)
     units, units_line = declared_units(text[: m.start()], path)
     return SkmFile(path, name, units, units_line, channels, times, values, start_kt, timings, other)
