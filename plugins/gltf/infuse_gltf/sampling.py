@@ -21,23 +21,29 @@ INTERPOLATIONS = ("LINEAR", "STEP", "CUBICSPLINE")
 def detect_fps(times: list[np.ndarray]) -> tuple[float, str]:
     """The frame rate the keyframe times were sampled at, or :data:`DEFAULT_FPS`.
 
-    A rate is accepted when every key of every channel sits (within 1 % of a frame) on one grid
-    whose step is the smallest key interval, and that rate lies in :data:`FPS_RANGE`. Returns the
-    rate and how it was found (``"keyframes"`` or ``"default"``).
+    A rate is found when every key of every channel sits (within 1 % of a frame) on one grid whose
+    step is the smallest key interval, and it lies in :data:`FPS_RANGE`. The rate is fitted to the
+    keys, then rounded to a whole number of frames per second only if the keys fit the round rate
+    to float32 precision (so a 30.00003 fps source keeps its rate). Returns the rate and how it was
+    found (``"keyframes"`` or ``"default"``).
     """
     keys = np.unique(np.concatenate([np.asarray(t, dtype=np.float64).ravel() for t in times])) if times else np.zeros(0)
     if keys.size < 3:
         return DEFAULT_FPS, "default"
     step = float(np.min(np.diff(keys)))
-    if step <= 0:
+    span = keys - keys[0]
+    if step <= 0 or span[-1] <= 0:
         return DEFAULT_FPS, "default"
-    rate = 1.0 / step
-    nearest = np.round(rate)
-    if abs(rate - nearest) < 0.01 * rate:  # 29.97-ish keys from float32 round-off -> 30
-        rate = float(nearest)
-    pos = (keys - keys[0]) * rate
-    if not (FPS_RANGE[0] <= rate <= FPS_RANGE[1]) or np.max(np.abs(pos - np.round(pos))) > 0.01:
+    frames = np.round(span / step)  # the smallest interval carries float32 noise: refit on the whole span
+    rate = float(frames[-1] / span[-1])
+    if np.max(np.abs(span * rate - frames)) > 0.01:
         return DEFAULT_FPS, "default"
+    if not FPS_RANGE[0] <= rate <= FPS_RANGE[1]:
+        return DEFAULT_FPS, "default"
+    whole = float(np.round(rate))
+    tolerance = np.maximum(4.0 * np.spacing(np.abs(keys).astype(np.float32)).astype(np.float64) * whole, 1e-6)
+    if np.all(np.abs(span * whole - frames) <= tolerance):
+        rate = whole
     return rate, "keyframes"
 
 

@@ -301,6 +301,10 @@ def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, payload: GltfPa
     unknown = [n for n in weights if n not in binds]
     if unknown:
         raise UsageError(f"morph-weight track {clip!r} names targets this character does not have: {', '.join(unknown[:8])}")
+    unbound = [n for n in weights if not binds[n]]
+    if unbound:
+        raise UsageError(f"morph-weight track {clip!r}: VRM expressions without morph target binds cannot be animated: "
+                         f"{', '.join(unbound[:8])}")
     per_node: dict[int, np.ndarray] = {}
     touched: dict[int, set] = {}
     expression_nodes: dict[int, np.ndarray] = {}
