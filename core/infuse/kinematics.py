@@ -29,23 +29,47 @@ def forward_kinematics(
     local_rotations = np.asarray(local_rotations, dtype=np.float64)
     frames = local_rotations.shape[0]
     j = skeleton.num_joints
+    # Work joint-major and component-major, (J, 4, F): a joint's x, y, z, w over all frames are
+    # contiguous rows, so gathering a depth level's parents copies whole blocks and every product
+    # below runs on long contiguous vectors.
+    lr = np.ascontiguousarray(local_rotations.transpose(1, 2, 0))
     if joint_translations is None:
-        trans = np.broadcast_to(skeleton.rest_translations, (frames, j, 3)).copy()
+        tr = skeleton.rest_translations[:, :, None]  # (J, 3, 1), broadcast over frames
     else:
-        trans = np.array(joint_translations, dtype=np.float64)
-    trans[:, 0] = root_translations
-    g_rot = np.empty((frames, j, 4))
-    g_pos = np.empty((frames, j, 3))
+        tr = np.ascontiguousarray(np.asarray(joint_translations, dtype=np.float64).transpose(1, 2, 0))
+    g_rot = np.empty((j, 4, frames))
+    g_pos = np.empty((j, 3, frames))
     levels = skeleton.levels
     roots = levels[0]
-    g_rot[:, roots] = local_rotations[:, roots]
-    g_pos[:, roots] = trans[:, roots]
+    g_rot[roots] = lr[roots]
+    g_pos[roots] = tr[roots]
+    g_pos[0] = np.asarray(root_translations, dtype=np.float64).T
     parents = skeleton.parents
     for idx in levels[1:]:
-        par_rot = g_rot[:, parents[idx]]
-        g_rot[:, idx] = quat.multiply(par_rot, local_rotations[:, idx])
-        g_pos[:, idx] = g_pos[:, parents[idx]] + quat.rotate(par_rot, trans[:, idx])
-    return g_rot, g_pos
+        par = parents[idx]
+        q = g_rot[par]
+        x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+        b = lr[idx]
+        bx, by, bz, bw = b[:, 0], b[:, 1], b[:, 2], b[:, 3]
+        out = np.empty((len(idx), 4, frames))
+        out[:, 0] = w * bx + x * bw + y * bz - z * by
+        out[:, 1] = w * by - x * bz + y * bw + z * bx
+        out[:, 2] = w * bz + x * by - y * bx + z * bw
+        out[:, 3] = w * bw - x * bx - y * by - z * bz
+        g_rot[idx] = out
+        # Parent rotation applied to the offset v: v + w c + u x c, with c = 2 (u x v).
+        t = tr[idx]
+        vx, vy, vz = t[:, 0], t[:, 1], t[:, 2]
+        cx = 2.0 * (y * vz - z * vy)
+        cy = 2.0 * (z * vx - x * vz)
+        cz = 2.0 * (x * vy - y * vx)
+        p = g_pos[par]
+        pos = np.empty((len(idx), 3, frames))
+        pos[:, 0] = p[:, 0] + vx + w * cx + (y * cz - z * cy)
+        pos[:, 1] = p[:, 1] + vy + w * cy + (z * cx - x * cz)
+        pos[:, 2] = p[:, 2] + vz + w * cz + (x * cy - y * cx)
+        g_pos[idx] = pos
+    return np.ascontiguousarray(g_rot.transpose(2, 0, 1)), np.ascontiguousarray(g_pos.transpose(2, 0, 1))
 
 
 def motion_fk(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
