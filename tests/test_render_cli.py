@@ -142,3 +142,38 @@ def test_mp4(tmp_path, capsys, bvh):
     code, _, _ = run(capsys, bvh, "-o", tmp_path / "x.mp4", "--size", "160x120", "--perspective", "--follow")
     assert code == 0 and (tmp_path / "x.mp4").stat().st_size > 1000
     assert (tmp_path / "x.mp4").read_bytes()[4:8] == b"ftyp"
+
+
+def test_canonical_names_and_low_confidence_rings(tmp_path, capsys, bvh, monkeypatch):
+    from infuse.mapping import Mapping
+    from infuse.render import command
+
+    def fake_map(asset, mapper=None, saved_map=None):
+        joints = {"base": "Hips", "skullbase": "Head", "l_hip": "LeftUpLeg", "r_hip": "RightUpLeg"}
+        return Mapping.build(asset.skeleton, joints, {"l_hip": 0.2, "base": 0.9, "skullbase": 0.9, "r_hip": 0.9})
+
+    seen = {}
+    real_render = command.render
+
+    def spy(figures, out, **kw):
+        seen["figure"] = figures[0]
+        return real_render(figures, out, **kw)
+
+    monkeypatch.setattr(command, "map_skeleton", fake_map)
+    monkeypatch.setattr(command, "render", spy)
+    code, _, _ = run(capsys, bvh, "-o", tmp_path / "c.png", "--canonical", "--size", "200x300")
+    fig = seen["figure"]
+    sk = fig.skeleton
+    assert code == 0
+    assert fig.names[sk.index["Head"]] == "skullbase" and fig.names[sk.index["LeftUpLeg"]] == "l_hip"
+    assert list(sk.names[i] for i in fig.highlight.nonzero()[0]) == ["LeftUpLeg"]
+    # sides come from the mapping: the left leg and its child are left, the head centre
+    assert fig.sides[sk.index["LeftLeg"]] == 1 and fig.sides[sk.index["RightLeg"]] == -1 and fig.sides[sk.index["Head"]] == 0
+
+
+def test_canonical_without_a_mapper_is_a_usage_error(tmp_path, capsys, bvh, monkeypatch):
+    from infuse import registry
+
+    monkeypatch.setattr(registry, "mappers", lambda: {})
+    code, _, err = run(capsys, bvh, "-o", tmp_path / "c.png", "--canonical")
+    assert code == 2 and "mapper" in err and not (tmp_path / "c.png").exists()

@@ -4,16 +4,19 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from .. import fileio
+from .. import fileio, registry
 from ..cli.builtin import add_read_options, read_options
-from ..errors import InputError, UsageError
+from ..errors import InfuseError, InputError, UsageError
 from ..hookspecs import hookimpl
+from ..mapping import DEFAULT_MAPPER, map_skeleton
 from ..plugin_types import Command
 from .camera import VIEWS, Camera
 from .output import check_suffix, render
-from .scene import Figure
+from .scene import Figure, sides_from_mapping
 
 MAX_SIDE = 8192
+#: Mapping entries below this confidence are ringed by ``--canonical``.
+LOW_CONFIDENCE = 0.5
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -36,6 +39,10 @@ def _arguments(p) -> None:
     p.add_argument("--end", type=float, help="last time to draw, seconds")
     p.add_argument("--strip", type=int, metavar="N", help="PNG: a filmstrip of N frames spread over the clip")
     p.add_argument("--names", action="store_true", help="label every joint with its name")
+    p.add_argument("--canonical", action="store_true",
+                   help=f"label mapped joints with their canonical names and ring those mapped with confidence < {LOW_CONFIDENCE}")
+    p.add_argument("--mapper", help=f"mapper plugin for left/right colours and --canonical (default {DEFAULT_MAPPER}, when installed)")
+    p.add_argument("--map", dest="map_file", metavar="MAP.json", help="saved joint map to use instead of (or to complete) the mapper's")
     p.add_argument("--highlight", action="append", default=[], metavar="JOINT",
                    help="ring a joint (repeatable, or comma-separated names)")
     p.add_argument("--view", choices=list(VIEWS), default="three-quarter", help="where the camera looks from")
@@ -52,6 +59,21 @@ def _arguments(p) -> None:
     add_read_options(p)
 
 
+def _mapping(asset, args):
+    """The asset's canonical mapping: required when asked for, else best effort (``None`` when unavailable).
+
+    Without a mapping, left and right come from geometry (see :func:`~infuse.render.scene.default_sides`).
+    """
+    if args.canonical or args.mapper or args.map_file:
+        return map_skeleton(asset, mapper=args.mapper or DEFAULT_MAPPER, saved_map=args.map_file)
+    if DEFAULT_MAPPER not in registry.mappers():
+        return None
+    try:
+        return map_skeleton(asset)
+    except (InfuseError, ValueError):  # not a humanoid, or a rig the mapper cannot read: colour by geometry
+        return None
+
+
 def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
     asset = fileio.load(path, format=args.read_format, **read_options(args))
     if args.clip is not None:
@@ -64,7 +86,16 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
     clip = motion.name if motion is not None and motion.name else ("rest pose" if motion is None else "clip")
     label = f"{path.name}: {clip}" if many else clip
     ringed = [n for n in highlight if n in asset.skeleton.index]
-    options = dict(label=label, names=True if args.names else None, highlight=ringed or None)
+    names = True if args.names else None
+    mapping = _mapping(asset, args)
+    sides = None
+    if mapping is not None:
+        sides = sides_from_mapping(asset.skeleton, mapping)
+        if args.canonical:
+            mapped = mapping.mapped()
+            names = {joint: canonical for canonical, joint in reversed(list(mapped.items()))}
+            ringed += [joint for canonical, joint in mapped.items() if mapping.confidence.get(canonical, 1.0) < LOW_CONFIDENCE]
+    options = dict(label=label, names=names, highlight=ringed or None, sides=sides)
     if motion is None:
         return Figure.from_skeleton(asset.skeleton, **options)
     return Figure.from_motion(motion, **options)
