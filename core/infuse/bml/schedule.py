@@ -34,7 +34,8 @@ class Activation:
 
     ``sync_times``: sync id -> global seconds, in the behaviour's temporal order (``start`` first, ``end``
     last); ``controller``: the controller kind; ``parameters``: what it needs (JSON-friendly);
-    ``persistent``: the effect stays after ``end``; ``stop_s``: set when a later block interrupted it.
+    ``persistent``: the effect stays after ``end``; ``stop_s``: set when a later block interrupted it;
+    ``sync_aliases``: other names of its sync points (``"ready"`` -> ``"attackPeak"``).
     """
 
     character: str | None
@@ -47,6 +48,12 @@ class Activation:
     persistent: bool = False
     required: bool = False
     stop_s: float | None = None
+    sync_aliases: dict = field(default_factory=dict)
+
+    def time(self, sync: str) -> float | None:
+        """Global time of sync point ``sync`` (any of its names), or None."""
+        name = sync if sync in self.sync_times else self.sync_aliases.get(sync)
+        return self.sync_times.get(name) if name else None
 
     @property
     def start(self) -> float:
@@ -59,7 +66,8 @@ class Activation:
     def as_dict(self) -> dict:
         return {"character": self.character, "block": self.block, "behaviour": self.behaviour, "element": self.element,
                 "controller": self.controller, "parameters": self.parameters, "sync_times": dict(self.sync_times),
-                "persistent": self.persistent, "required": self.required, "stop_s": self.stop_s}
+                "persistent": self.persistent, "required": self.required, "stop_s": self.stop_s,
+                "sync_aliases": dict(self.sync_aliases)}
 
 
 @dataclass
@@ -156,7 +164,8 @@ class Scheduler:
         else:
             activations = tuple(
                 Activation(character, block.id, b.id, b.element, plans[b.id].controller, plans[b.id].parameters,
-                           {s: start + t for s, t in solution.times[b.id].items()}, plans[b.id].persistent, b.required)
+                           {s: start + t for s, t in solution.times[b.id].items()}, plans[b.id].persistent, b.required,
+                           sync_aliases=dict(plans[b.id].timing.aliases))
                 for b in block.behaviours if b.id in solution.times)
             end = max([start] + [a.end for a in activations])
             record = BlockSchedule(block, character, start, end, activations, tuple(issues))
@@ -255,7 +264,7 @@ class Scheduler:
             return None
         ids = tuple(activation.sync_times)
         offsets = tuple(activation.sync_times[s] - activation.start for s in ids)
-        sync = TimingModel(ids, offsets).resolve(ref.sync, ref.iteration)
+        sync = TimingModel(ids, offsets, aliases=activation.sync_aliases).resolve(ref.sync, ref.iteration)
         return None if sync is None else activation.sync_times[sync] + ref.offset - block_start
 
     # -- feedback -------------------------------------------------------------------------------------------

@@ -57,3 +57,29 @@ class EstimatedSpeechTimer:
         end = self.char_times(text.rstrip(" .!?,;:"))[-1] if text.strip() else 0.0
         marks_s = {mark: min(times[min(offset, len(text))], end) for mark, offset in marks}
         return SpeechTiming(end, marks_s, "estimate")
+
+
+@dataclass(frozen=True)
+class EngineSpeechTimer:
+    """Real timings from a TTS engine (``engine.synthesize(text) -> infuse.speech.Utterance``, marks written as
+    ``<mark name="..."/>``). Only timing is kept here; the realizer asks the engine again for the audio."""
+
+    engine: object
+
+    def time_speech(self, text, marks, voice=None, language=None) -> SpeechTiming:
+        from xml.sax.saxutils import escape, quoteattr
+
+        if not text.strip():
+            return SpeechTiming(0.0, {m: 0.0 for m, _ in marks}, getattr(self.engine, "name", "tts"))
+        if marks:
+            pieces, last = [], 0
+            for mark, offset in sorted(marks, key=lambda m: m[1]):
+                pieces.append(escape(text[last:offset]) + f"<mark name={quoteattr(mark)}/>")
+                last = offset
+            markup = "".join(pieces) + escape(text[last:])
+        else:
+            markup = text
+        utterance = self.engine.synthesize(markup)
+        details = {"phonemes": [list(p) for p in utterance.phonemes], "words": [list(w) for w in utterance.words]}
+        mark_times = {m: float(utterance.marks.get(m, 0.0)) for m, _ in marks}
+        return SpeechTiming(float(utterance.duration_s), mark_times, getattr(self.engine, "name", "tts"), details)
