@@ -181,8 +181,8 @@ def test_markers_and_rays_are_drawn(skeleton):
     assert reddish[y0 - 6:y0 + 7, x0 - 12:x0 + 13].any()
     # and nothing red anywhere else: the figure and the ground are not red
     ys, xs = np.nonzero(reddish)
-    on_line = np.abs(np.cross(np.stack([xs - head[0], ys - head[1]], 1), np.array([mx, my]) - head)) \
-        / np.linalg.norm(np.array([mx, my]) - head)
+    dx, dy = np.array([mx, my]) - head
+    on_line = np.abs((xs - head[0]) * dy - (ys - head[1]) * dx) / np.hypot(dx, dy)  # distance to the head-target line
     assert np.all((on_line < 6) | (np.hypot(xs - mx, ys - my) < 40))
 
 
