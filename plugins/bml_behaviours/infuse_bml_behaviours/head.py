@@ -14,6 +14,8 @@ from .common import Notes, number, word
 #: Peak angle per unit amount, degrees.
 AMPLITUDE_DEG = {"NOD": 30.0, "SHAKE": 45.0, "TOSS": 30.0, "TILT": 30.0, "WIGGLE": 30.0, "WAGGLE": 30.0,
                  "ORIENT": 30.0, "SPIN": 45.0}
+#: Words of head lexemes that name a direction to turn the head to (Greta: ``Down_Aside_Right``).
+DIRECTION_WORDS = {"UP", "DOWN", "LEFT", "RIGHT", "ASIDE", "FORWARD", "BACK"}
 ATTRIBUTES = {"lexeme", "type", "repetition", "repeats", "amount", "velocity", "sbm:velocity", "sbm:repeats",
               "sbm:amount"}
 
@@ -34,6 +36,12 @@ def nod_timing(repeats: float, velocity_hz: float) -> TimingModel:
 def plan(behaviour, context) -> BehaviourPlan:
     notes = Notes()
     kind = (word(behaviour, ("lexeme", "type")) or "NOD").upper()
+    words = kind.replace("-", "_").split("_")
+    direction = None
+    if kind not in AMPLITUDE_DEG and set(words) <= DIRECTION_WORDS:
+        kind, direction = "ORIENT", [w for w in words if w != "ASIDE"]
+    elif kind not in AMPLITUDE_DEG and words[0] in AMPLITUDE_DEG:
+        kind = words[0]  # a variant such as NOD_BIG or SHAKE_MIDDLE
     if kind not in AMPLITUDE_DEG:
         notes.append(f"head movement {kind!r} is unknown; it is realized as a NOD")
         kind = "NOD"
@@ -41,5 +49,5 @@ def plan(behaviour, context) -> BehaviourPlan:
     velocity = number(behaviour, ("velocity", "sbm:velocity"), 1.0, notes, minimum=1e-3)
     amount = number(behaviour, ("amount", "sbm:amount"), 0.5, notes, -1.0, 1.0)
     parameters = {"lexeme": kind, "amount": amount, "repeats": repeats, "velocity_hz": velocity,
-                  "peak_angle_deg": amount * AMPLITUDE_DEG[kind]}
+                  "peak_angle_deg": amount * AMPLITUDE_DEG[kind], "direction": direction}
     return BehaviourPlan(nod_timing(repeats, velocity), "head", parameters, notes=tuple(notes))
