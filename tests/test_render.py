@@ -352,3 +352,20 @@ def test_figure_validates_shapes(skeleton):
         Figure.from_skeleton(skeleton, contacts={"LeftAnkle": [True, False]})
     with pytest.raises(ValueError, match="style"):
         Marker((0, 0, 0), style="star")
+
+
+def test_named_views_put_the_character_where_expected(skeleton):
+    fig = Figure.from_skeleton(skeleton)
+    idx = skeleton.index
+
+    def pix(view):
+        return Renderer([fig], [0.0], size=(300, 300), camera=Camera(view=view)).joint_pixels(0, 0)
+
+    side = pix("side")  # from the character's right: the toes (+Z) point to the image's right
+    assert side[idx["LeftToe"], 0] > side[idx["LeftAnkle"], 0] + 5
+    top = pix("top")  # a map: forward is up, the character's left on the image's left
+    assert top[idx["LeftToe"], 1] < top[idx["LeftAnkle"], 1] - 5
+    assert top[idx["LeftShoulder"], 0] < top[idx["RightShoulder"], 0] - 20
+    quarter = pix("three-quarter")  # from the front-right: the left side is further right and the head up
+    assert quarter[idx["LeftShoulder"], 0] > quarter[idx["RightShoulder"], 0]
+    assert quarter[idx["Head"], 1] < quarter[idx["Hips"], 1]

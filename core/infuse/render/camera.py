@@ -3,7 +3,9 @@
 A view is an azimuth and an elevation (degrees). Azimuth 0 looks at the character's front (the
 camera stands on +Z looking towards -Z, so the character's left, +X, is on the image's right);
 azimuth -90 stands on the character's right (-X), so forward (+Z) runs to the image's right;
-elevation 90 looks straight down. Projection is vectorized over all frames and points at once.
+elevation 90 looks straight down. The named top view (azimuth 180) reads like a map: forward is
+up the image and the character's left is on the image's left. Projection is vectorized over all
+frames and points at once.
 """
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ import numpy as np
 VIEWS: dict[str, tuple[float, float]] = {
     "front": (0.0, 0.0),
     "side": (-90.0, 0.0),
-    "top": (0.0, 90.0),
+    "top": (180.0, 90.0),
     "three-quarter": (-35.0, 15.0),
 }
 

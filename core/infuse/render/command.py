@@ -84,7 +84,7 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
     else:
         motion = next(iter(asset.motions.values()), None)
     clip = motion.name if motion is not None and motion.name else ("rest pose" if motion is None else "clip")
-    label = f"{path.name}: {clip}" if many else clip
+    label = (path.name if clip == path.stem else f"{path.name}: {clip}") if many else clip
     ringed = [n for n in highlight if n in asset.skeleton.index]
     names = True if args.names else None
     mapping = _mapping(asset, args)

@@ -75,6 +75,8 @@ class _Panel:
         self.height = 1.0  # a figure height (metres), for sizes in the scene
         self.near_range = (0.0, 1.0)
         self.grid: tuple[np.ndarray, np.ndarray] | None = None
+        self.labels: list[tuple[int, float, float, str]] = []  # (figure, x, y, text) of the names at the top
+        self.label_height = 0.0
 
 
 class Renderer:
@@ -154,8 +156,8 @@ class Renderer:
         follow = self._follow()
         contents, targets, rects = [], [], []
         pad = self.unit * 3
-        label_row = round(self.font_px * 1.5)
         for panel in self.panels:
+            self._layout_labels(panel)
             pts = np.concatenate([self._points[i][:, self.figures[i].visible] for i in panel.members], axis=1)
             heights = [self.figures[i].skeleton.height() for i in panel.members]
             panel.height = max(max(heights), 0.1)
@@ -165,7 +167,7 @@ class Renderer:
             contents.append(np.concatenate([pts, on_ground(pts, panel.ground)] + markers, axis=1))
             targets.append(self._follow_target(panel.members[0]) if follow else None)
             _, _, w, h = panel.rect
-            rects.append((pad, label_row + pad, w - 2 * pad, h - label_row - 2 * pad))
+            rects.append((pad, panel.label_height + pad, w - 2 * pad, h - panel.label_height - 2 * pad))
         views = frame_panels(self.camera, contents, targets, rects)
         for panel, view, content in zip(self.panels, views, contents):
             panel.view = view
@@ -262,7 +264,7 @@ class Renderer:
                 pix = view.project(root, t)[0]
                 draw.line([tuple(p) for p in pix], fill=mix(self.colors[i], st.background, 0.55),
                           width=max(int(round(0.5 * u)), 1), joint="curve")
-            if st.show_shadow:
+            if st.show_shadow and view.basis[2, 1] < 0.85:  # seen from nearly above, a shadow only clutters
                 sh = self._shadow[i][t]
                 for pa, ch in fig.bones:
                     capsule(draw, sh[pa], sh[ch], bone_w, st.shadow, st.shadow, 0)
@@ -348,22 +350,41 @@ class Renderer:
             for k in range(3):
                 draw.line((pix[k][0], pix[k][1], pix[k + 3][0], pix[k + 3][1]), fill=colour, width=max(int(round(width)), 1))
 
-    def _draw_panel_label(self, draw: ImageDraw.ImageDraw, panel: _Panel) -> None:
-        """Each figure's name in its colour, with the left/right shades it uses."""
-        x, y = self.unit * 3, self.font_px * 0.25
+    def _layout_labels(self, panel: _Panel) -> None:
+        """Place each figure's name and left/right legend in rows at the top of the panel."""
         fnt, small = font(self.font_px), font(round(self.font_px * 0.8))
+        r = self.font_px * 0.32
+        legend = sum(2.6 * r + small.getlength(t) + self.font_px * 0.4 for t in "LR")
+        left = self.unit * 3
+        room = panel.rect[2] - 2 * left
+        x, y, row = left, self.font_px * 0.25, self.font_px * 1.4
+        panel.labels = []
         for i in panel.members:
             label = self.figures[i].label or f"figure {i + 1}"
+            fit = room - legend - self.font_px * 0.6
+            if fnt.getlength(label) > fit:
+                while len(label) > 1 and fnt.getlength(label + "…") > fit:
+                    label = label[:-1]
+                label += "…"
+            width = fnt.getlength(label) + self.font_px * 0.6 + legend
+            if x > left and x + width > left + room:
+                x, y = left, y + row
+            panel.labels.append((i, x, y, label))
+            x += width + self.font_px * 0.8
+        panel.label_height = y + row
+
+    def _draw_panel_label(self, draw: ImageDraw.ImageDraw, panel: _Panel) -> None:
+        """Each figure's name in its colour, with the left/right shades it uses."""
+        fnt, small = font(self.font_px), font(round(self.font_px * 0.8))
+        r = self.font_px * 0.32
+        for i, x, y, label in panel.labels:
             draw.text((x, y), label, font=fnt, fill=mix(self.colors[i], BLACK, 0.2))
             x += draw.textlength(label, font=fnt) + self.font_px * 0.6
             colors = self._side_colors(i)
             for text, side in (("L", LEFT), ("R", RIGHT)):
-                r = self.font_px * 0.32
-                cy = y + self.font_px * 0.6
-                disc(draw, (x + r, cy), r, colors[side], mix(colors[side], BLACK, 0.45), self.ss)
+                disc(draw, (x + r, y + self.font_px * 0.6), r, colors[side], mix(colors[side], BLACK, 0.45), self.ss)
                 draw.text((x + 2.6 * r, y + self.font_px * 0.12), text, font=small, fill=self.style.text)
                 x += 2.6 * r + draw.textlength(text, font=small) + self.font_px * 0.4
-            x += self.font_px * 0.8
 
     def _draw_chrome(self, draw: ImageDraw.ImageDraw, t: int) -> None:
         """Title at the top, frame and time counter at the bottom right."""
