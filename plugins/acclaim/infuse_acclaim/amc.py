@@ -1,0 +1,104 @@
+"""Parsing Acclaim ``.amc`` motions, vectorized over lines with numpy string operations.
+
+Layout: ``#`` comments and ``:FULLY-SPECIFIED`` / ``:DEGREES`` / ``:RADIANS`` header keywords, then
+for each frame a line with the frame number followed by one line per animated bone,
+``NAME v1 v2 ...`` (the root's values in the ASF ``:root order``, a bone's in its ``dof`` order).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from infuse.errors import InputError
+
+
+@dataclass
+class AmcFile:
+    path: Path
+    angle_unit: str | None  # "deg", "rad" or None when the header does not say
+    first_frame: int
+    frames: int
+    lines: dict[str, np.ndarray]  # bone name (in order of appearance) -> (F,) line numbers of its values
+    values: dict[str, list[str]]  # bone name -> per-frame value strings (parsed by :func:`bone_values`)
+
+
+def parse_amc(path: Path, text: str) -> AmcFile:
+    """Split ``.amc`` text into frames and per-bone value lines; checks each bone appears once per frame."""
+    raw = np.array(text.replace("\t", " ").split("\n"))
+    stripped = np.char.strip(np.char.partition(raw, "#")[:, 0]) if raw.size else raw
+    numbers = np.nonzero(stripped != "")[0]
+    if numbers.size == 0:
+        raise InputError(path, None, "empty file")
+    content = stripped[numbers]
+    header = np.char.startswith(content, ":")
+    angle_unit = None
+    for line in content[header]:
+        word = line.split()[0].upper()
+        if word in (":DEGREES", ":DEGREE"):
+            angle_unit = "deg"
+        elif word in (":RADIANS", ":RADIAN"):
+            angle_unit = "rad"
+        elif word != ":FULLY-SPECIFIED":
+            raise InputError(path, f"line {numbers[np.nonzero(content == line)[0][0]] + 1}", f"unknown header keyword {word!r}")
+    body_start = int(np.argmin(header)) if not header.all() else header.size
+    if header[body_start:].any():
+        at = body_start + int(np.argmax(header[body_start:]))
+        raise InputError(path, f"line {numbers[at] + 1}", "header keyword after the first frame")
+    content, numbers = content[body_start:], numbers[body_start:] + 1
+    if content.size == 0:
+        raise InputError(path, None, "no frames")
+    parts = np.char.partition(content, " ")
+    first, rest = parts[:, 0], np.char.strip(parts[:, 2])
+    is_frame = np.char.isdigit(first) & (rest == "")
+    if not is_frame[0]:
+        raise InputError(path, f"line {numbers[0]}", f"expected a frame number, found {content[0][:40]!r}")
+    frame_numbers = first[is_frame].astype(np.int64)
+    jumps = np.nonzero(np.diff(frame_numbers) != 1)[0]
+    if jumps.size:
+        k = jumps[0]
+        line = numbers[np.nonzero(is_frame)[0][k + 1]]
+        raise InputError(path, f"line {line}", f"frame number {frame_numbers[k + 1]} does not follow {frame_numbers[k]}")
+    frame_of = np.cumsum(is_frame) - 1
+    frames = int(frame_numbers.size)
+    bone_rows = ~is_frame
+    names_all = first[bone_rows]
+    lines: dict[str, np.ndarray] = {}
+    values: dict[str, list[str]] = {}
+    for name in dict.fromkeys(names_all.tolist()):
+        rows = np.nonzero(bone_rows & (first == name))[0]
+        counts = np.bincount(frame_of[rows], minlength=frames)
+        if counts.max() > 1:
+            f = int(np.argmax(counts > 1))
+            raise InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} appears {counts[f]} times")
+        if counts.min() == 0:
+            f = int(np.argmin(counts))
+            raise InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} is missing (file truncated?)")
+        lines[name] = numbers[rows]
+        values[name] = rest[rows].tolist()
+    return AmcFile(path, angle_unit, int(frame_numbers[0]), frames, lines, values)
+
+
+def bone_values(amc: AmcFile, name: str, count: int) -> np.ndarray:
+    """(F, count) numbers of bone ``name``; a wrong count, a non-number or NaN raises :class:`InputError`."""
+    rows = amc.values[name]
+    tokens = " ".join(rows).split()
+    if len(tokens) != amc.frames * count:
+        for line, row in zip(amc.lines[name], rows):
+            if len(row.split()) != count:
+                raise InputError(amc.path, f"line {line}", f"bone {name!r} has {len(row.split())} values, its dofs need {count}")
+    try:
+        out = np.array(tokens, dtype=np.float64).reshape(amc.frames, count)
+    except ValueError:
+        for line, row in zip(amc.lines[name], rows):
+            for tok in row.split():
+                try:
+                    float(tok)
+                except ValueError:
+                    raise InputError(amc.path, f"line {line}", f"bone {name!r}: {tok[:30]!r} is not a number") from None
+        raise
+    bad = ~np.isfinite(out).all(axis=1)
+    if bad.any():
+        f = int(np.argmax(bad))
+        raise InputError(amc.path, f"line {amc.lines[name][f]}", f"bone {name!r}: value is not finite (frame {amc.first_frame + f})")
+    return out
