@@ -83,6 +83,8 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
         motion = asset.motions[args.clip]
     else:
         motion = next(iter(asset.motions.values()), None)
+    if motion is not None and motion.num_frames == 0:
+        motion = None  # an empty clip: show the rest pose
     clip = motion.name if motion is not None and motion.name else ("rest pose" if motion is None else "clip")
     label = (path.name if clip == path.stem else f"{path.name}: {clip}") if many else clip
     ringed = [n for n in highlight if n in asset.skeleton.index]

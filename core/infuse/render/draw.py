@@ -15,8 +15,9 @@ RGB = tuple[int, int, int]
 
 def mix(color: RGB, other: RGB, amount: float) -> RGB:
     """``color`` moved ``amount`` (0..1) of the way to ``other``."""
-    a = float(np.clip(amount, 0.0, 1.0))
-    return tuple(int(round(c + (o - c) * a)) for c, o in zip(color, other))  # type: ignore[return-value]
+    a = min(max(float(amount), 0.0), 1.0)
+    return (round(color[0] + (other[0] - color[0]) * a), round(color[1] + (other[1] - color[1]) * a),
+            round(color[2] + (other[2] - color[2]) * a))
 
 
 @lru_cache(maxsize=32)
@@ -27,7 +28,8 @@ def font(size: int) -> ImageFont.FreeTypeFont:
 
 def capsule(draw: ImageDraw.ImageDraw, a, b, width: float, fill: RGB, outline: RGB, edge: float) -> None:
     """A bone from ``a`` to ``b``: a line with round ends, ``width`` pixels wide inside an ``edge`` pixel outline."""
-    for w, colour in ((width + 2 * edge, outline), (width, fill)):
+    passes = ((width + 2 * edge, outline), (width, fill)) if edge > 0 else ((width, fill),)
+    for w, colour in passes:
         r = w / 2.0
         draw.line((a[0], a[1], b[0], b[1]), fill=colour, width=max(int(round(w)), 1))
         for x, y in (a, b):

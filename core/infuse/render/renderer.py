@@ -69,7 +69,7 @@ class _Panel:
 
     def __init__(self, members: list[int], rect: tuple[float, float, float, float]):
         self.members = members
-        self.rect = rect  # (x, y, w, h) pixels of the whole panel on the canvas
+        self.rect = rect  # (x, y, w, h) integer pixels of the whole panel on the (supersampled) canvas
         self.view: PanelView | None = None
         self.ground = 0.0
         self.height = 1.0  # a figure height (metres), for sizes in the scene
@@ -118,8 +118,10 @@ class Renderer:
         self.header = round(self.font_px * 1.7) if title else 0
         self.footer = round(self.font_px * 1.6) if counter else round(self.font_px * 0.5)
         groups = [list(range(len(self.figures)))] if overlay else [[i] for i in range(len(self.figures))]
-        pw = w / len(groups)
-        self.panels = [_Panel(g, (k * pw, self.header, pw, h - self.header - self.footer)) for k, g in enumerate(groups)]
+        edges = [round(k * w / len(groups)) for k in range(len(groups) + 1)]
+        # panels span the full height (the title and counter are drawn over them) and tile the width exactly
+        self.panels = [_Panel(g, (edges[k], 0, edges[k + 1] - edges[k], h)) for k, g in enumerate(groups)]
+        self._blanks: dict[tuple[int, int], Image.Image] = {}
         self._points = [f.points()[fr] for f, fr in zip(self.figures, self.frames)]  # (T, N, 3) each
         self._frame_views()
         self._project()
@@ -167,7 +169,8 @@ class Renderer:
             contents.append(np.concatenate([pts, on_ground(pts, panel.ground)] + markers, axis=1))
             targets.append(self._follow_target(panel.members[0]) if follow else None)
             _, _, w, h = panel.rect
-            rects.append((pad, panel.label_height + pad, w - 2 * pad, h - panel.label_height - 2 * pad))
+            top = self.header + panel.label_height + pad
+            rects.append((pad, top, w - 2 * pad, h - top - self.footer - pad))
         views = frame_panels(self.camera, contents, targets, rects)
         for panel, view, content in zip(self.panels, views, contents):
             panel.view = view
@@ -223,19 +226,34 @@ class Renderer:
     def image(self, t: int, labels: bool = True) -> Image.Image:
         """The RGB image of output frame ``t`` (0 <= t < len(self)); ``labels``: name the figures."""
         w, h = self.size
-        canvas = Image.new("RGB", (w * self.ss, h * self.ss), self.style.background)
-        for k, panel in enumerate(self.panels):
-            x, y, pw, ph = (int(round(v)) for v in panel.rect)
-            sub = Image.new("RGB", (pw, ph), self.style.background)
-            self._draw_panel(ImageDraw.Draw(sub), panel, t, labels)
-            canvas.paste(sub, (x, y))
+        if len(self.panels) == 1:
+            canvas = self._blank(w * self.ss, h * self.ss)
+            self._draw_panel(ImageDraw.Draw(canvas), self.panels[0], t, labels)
+        else:  # each panel on its own image, so nothing spills into its neighbour
+            canvas = Image.new("RGB", (w * self.ss, h * self.ss))
+            for panel in self.panels:
+                x, y, pw, ph = panel.rect
+                sub = self._blank(pw, ph)
+                self._draw_panel(ImageDraw.Draw(sub), panel, t, labels)
+                canvas.paste(sub, (x, y))
         draw = ImageDraw.Draw(canvas)
         for panel in self.panels[1:]:  # a rule between side-by-side panels
-            x = round(panel.rect[0])
-            draw.line((x, panel.rect[1] + self.unit * 2, x, panel.rect[1] + panel.rect[3] - self.unit * 2),
+            x = panel.rect[0]
+            draw.line((x, self.header + self.unit * 2, x, panel.rect[3] - self.footer - self.unit * 2),
                       fill=self.style.grid, width=max(int(round(0.3 * self.unit)), 1))
         self._draw_chrome(draw, t)
         return canvas.reduce(self.ss) if self.ss > 1 else canvas
+
+    def _halo(self, fnt) -> dict:
+        """Text options for a background-coloured outline, so text stays readable over grid lines."""
+        return {"stroke_width": max(1, round(fnt.size / 8)), "stroke_fill": self.style.background}
+
+    def _blank(self, width: int, height: int) -> Image.Image:
+        """A background-coloured image (copied from a cached one: filling is slower than copying)."""
+        key = (width, height)
+        if key not in self._blanks:
+            self._blanks[key] = Image.new("RGB", key, self.style.background)
+        return self._blanks[key].copy()
 
     def _fog(self, panel: _Panel, color: RGB, near: float) -> RGB:
         """Far things fade a little towards the background: a depth cue."""
@@ -357,7 +375,7 @@ class Renderer:
         legend = sum(2.6 * r + small.getlength(t) + self.font_px * 0.4 for t in "LR")
         left = self.unit * 3
         room = panel.rect[2] - 2 * left
-        x, y, row = left, self.font_px * 0.25, self.font_px * 1.4
+        x, y, row = left, self.header + self.font_px * 0.25, self.font_px * 1.4
         panel.labels = []
         for i in panel.members:
             label = self.figures[i].label or f"figure {i + 1}"
@@ -371,29 +389,31 @@ class Renderer:
                 x, y = left, y + row
             panel.labels.append((i, x, y, label))
             x += width + self.font_px * 0.8
-        panel.label_height = y + row
+        panel.label_height = y + row - self.header
 
     def _draw_panel_label(self, draw: ImageDraw.ImageDraw, panel: _Panel) -> None:
         """Each figure's name in its colour, with the left/right shades it uses."""
         fnt, small = font(self.font_px), font(round(self.font_px * 0.8))
         r = self.font_px * 0.32
         for i, x, y, label in panel.labels:
-            draw.text((x, y), label, font=fnt, fill=mix(self.colors[i], BLACK, 0.2))
+            draw.text((x, y), label, font=fnt, fill=mix(self.colors[i], BLACK, 0.2), **self._halo(fnt))
             x += draw.textlength(label, font=fnt) + self.font_px * 0.6
             colors = self._side_colors(i)
             for text, side in (("L", LEFT), ("R", RIGHT)):
                 disc(draw, (x + r, y + self.font_px * 0.6), r, colors[side], mix(colors[side], BLACK, 0.45), self.ss)
-                draw.text((x + 2.6 * r, y + self.font_px * 0.12), text, font=small, fill=self.style.text)
+                draw.text((x + 2.6 * r, y + self.font_px * 0.12), text, font=small, fill=self.style.text, **self._halo(small))
                 x += 2.6 * r + draw.textlength(text, font=small) + self.font_px * 0.4
 
     def _draw_chrome(self, draw: ImageDraw.ImageDraw, t: int) -> None:
         """Title at the top, frame and time counter at the bottom right."""
         w, h = self.size[0] * self.ss, self.size[1] * self.ss
         if self.title:
-            draw.text((self.font_px * 0.6, self.font_px * 0.3), self.title, font=font(round(self.font_px * 1.15)), fill=self.style.text)
+            fnt = font(round(self.font_px * 1.15))
+            draw.text((self.font_px * 0.6, self.font_px * 0.3), self.title, font=fnt, fill=self.style.text, **self._halo(fnt))
         if self.counter:
             fig = self.figures[0]
             text = f"frame {self.frames[0][t] + 1}/{fig.num_frames}   {self.times[t]:6.2f} s"
             fnt = font(round(self.font_px * 0.85))
             tw = draw.textlength(text, font=fnt)
-            draw.text((w - tw - self.font_px * 0.6, h - self.font_px * 1.25), text, font=fnt, fill=mix(self.style.text, self.style.background, 0.25))
+            draw.text((w - tw - self.font_px * 0.6, h - self.font_px * 1.25), text, font=fnt,
+                      fill=mix(self.style.text, self.style.background, 0.25), **self._halo(fnt))
