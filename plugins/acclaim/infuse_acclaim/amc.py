@@ -21,10 +21,16 @@ class AmcFile:
     frames: int
     lines: dict[str, np.ndarray]  # bone name (in order of appearance) -> (F,) line numbers of its values
     values: dict[str, list[str]]  # bone name -> per-frame value strings (parsed by :func:`bone_values`)
+    problems: list[InputError]  # bones missing from, or repeated in, a frame (see :meth:`check_frames`)
+
+    def check_frames(self) -> None:
+        """Raise the first problem with the frame structure (call after checking bone names)."""
+        if self.problems:
+            raise self.problems[0]
 
 
 def parse_amc(path: Path, text: str) -> AmcFile:
-    """Split ``.amc`` text into frames and per-bone value lines; checks each bone appears once per frame."""
+    """Split ``.amc`` text into frames and per-bone value lines (each bone should appear once per frame)."""
     raw = np.array(text.replace("\t", " ").split("\n"))
     stripped = np.char.strip(np.char.partition(raw, "#")[:, 0]) if raw.size else raw
     numbers = np.nonzero(stripped != "")[0]
@@ -65,18 +71,19 @@ def parse_amc(path: Path, text: str) -> AmcFile:
     names_all = first[bone_rows]
     lines: dict[str, np.ndarray] = {}
     values: dict[str, list[str]] = {}
+    problems: list[InputError] = []
     for name in dict.fromkeys(names_all.tolist()):
         rows = np.nonzero(bone_rows & (first == name))[0]
         counts = np.bincount(frame_of[rows], minlength=frames)
         if counts.max() > 1:
             f = int(np.argmax(counts > 1))
-            raise InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} appears {counts[f]} times")
-        if counts.min() == 0:
+            problems.append(InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} appears {counts[f]} times"))
+        elif counts.min() == 0:
             f = int(np.argmin(counts))
-            raise InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} is missing (file truncated?)")
+            problems.append(InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} is missing (file truncated?)"))
         lines[name] = numbers[rows]
         values[name] = rest[rows].tolist()
-    return AmcFile(path, angle_unit, int(frame_numbers[0]), frames, lines, values)
+    return AmcFile(path, angle_unit, int(frame_numbers[0]), frames, lines, values, problems)
 
 
 def bone_values(amc: AmcFile, name: str, count: int) -> np.ndarray:

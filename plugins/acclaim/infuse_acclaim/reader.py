@@ -209,6 +209,7 @@ def read_amc(path: Path, units: str | None = None, up_axis: str | None = None, s
         _check_bones(amc, asf)
     else:
         asf, record = _matching_asf(path, amc)
+    amc.check_frames()
     unit, metres, detected_by, skel, axis, up, meta = _prepare(asf, units, up_axis)
     meta.update(record)
     angle = amc.angle_unit or ("rad" if asf.radians_per_unit == 1.0 else "deg")
