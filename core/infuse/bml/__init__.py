@@ -11,7 +11,7 @@ from .feedback import BlockPrediction, BlockProgress, FeedbackBus, SyncPointProg
 from .model import Behaviour, Block, BmlDocument, Constraint, Issue, Node
 from .parse import DEFAULT_MAX_BYTES, parse_bml, parse_bml_file
 from .schedule import Activation, BlockSchedule, Scheduler
-from .speech import EstimatedSpeechTimer, SpeechTimer, SpeechTiming
+from .speech import EngineSpeechTimer, EstimatedSpeechTimer, SpeechTimer, SpeechTiming
 from .sync import STANDARD_SYNC_POINTS, SyncRef, SyncRefError, TimingError, TimingModel, parse_sync_ref
 
 __all__ = [
@@ -20,6 +20,6 @@ __all__ = [
     "Behaviour", "Block", "BmlDocument", "Constraint", "Issue", "Node",
     "DEFAULT_MAX_BYTES", "parse_bml", "parse_bml_file",
     "Activation", "BlockSchedule", "Scheduler",
-    "EstimatedSpeechTimer", "SpeechTimer", "SpeechTiming",
+    "EngineSpeechTimer", "EstimatedSpeechTimer", "SpeechTimer", "SpeechTiming",
     "STANDARD_SYNC_POINTS", "SyncRef", "SyncRefError", "TimingError", "TimingModel", "parse_sync_ref",
 ]
