@@ -271,7 +271,29 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
     elif not result.mapper:
         result.mapper = plugin.name
     _check_result(result, skeleton, plugin.name)
+    result = restrict_to_animated(result, skeleton, (meta or {}).get("channel_joints"))
     return complete(saved, result, skeleton) if saved is not None else result
+
+
+def restrict_to_animated(mapping: Mapping, skeleton: Skeleton, animated) -> Mapping:
+    """Drop entries naming joints a motion file does not animate.
+
+    A motion file (e.g. SmartBody ``.skm``) may animate only some joints of the skeleton it names;
+    its reader lists them in ``meta["channel_joints"]``. Canonical names pointing elsewhere become
+    ``None``: the file has no data for them.
+    """
+    if not animated:
+        return mapping
+    keep = set(animated)
+    joints = dict(mapping.joints)
+    confidence = dict(mapping.confidence)
+    reasons = dict(mapping.reasons)
+    for key, value in mapping.joints.items():
+        if value is not None and value not in keep:
+            joints[key] = None
+            reasons[key] = f"{value!r} is not animated in this file"
+    return Mapping.build(skeleton, joints, confidence, reasons, mapper=mapping.mapper,
+                         overall_confidence=mapping.overall_confidence)
 
 
 def _check_result(result: Mapping, skeleton: Skeleton, name: str) -> None:

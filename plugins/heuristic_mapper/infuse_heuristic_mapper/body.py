@@ -1,0 +1,178 @@
+"""The body plan: which pair of mirror-image limbs are the legs, which the arms, and where they meet.
+
+A humanoid has two pairs of limbs. Each pair hangs from one joint (the two subtrees are mirror
+images: the same path lengths along their main chains, about the same number of joints), the
+legs and the arms lie in different branches, and the legs point away from the head. Candidate
+pairs are scored on symmetry, length, names and rest geometry, and the best legs/arms combination
+wins. Path lengths do not depend on the pose, so this works on arbitrary rest poses; the geometry
+tests take the pose that makes a standing body.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from .view import SkeletonView
+
+LEG_ROLES = frozenset({"thigh", "shin", "foot", "toe", "legpart", "toe_end"})
+ARM_ROLES = frozenset({"clavicle", "shoulder", "upperarm", "forearm", "hand", "thumb", "index", "middle", "ring",
+                       "pinky", "finger", "palm"})
+NON_BODY_FLAGS = ("control", "secondary", "prop", "face", "root")
+
+
+@dataclass(frozen=True)
+class LimbPair:
+    """Two mirror-image subtrees ``a`` and ``b`` hanging from joint ``branch``."""
+
+    branch: int
+    a: int
+    b: int
+    length: float  # mean path length from the branch to the far end of each limb, metres
+    symmetry: float  # 0..1
+
+
+@dataclass(frozen=True)
+class BodyPlan:
+    """The chosen legs and arms (either may be missing) and the score that chose them."""
+
+    legs: LimbPair | None
+    arms: LimbPair | None
+    score: float
+    reason: str
+
+
+def _chain_profile(view: SkeletonView, branch: int, child: int, depth: int = 6) -> np.ndarray:
+    chain = view.main_chain(child, depth)
+    return np.cumsum(view.bone[chain])
+
+
+def limb_pairs(view: SkeletonView, min_fraction: float = 0.06) -> list[LimbPair]:
+    """Every pair of sibling subtrees that look like mirror-image limbs."""
+    out: list[LimbPair] = []
+    floor = min_fraction * view.scale
+    for j in range(view.n):
+        kids = [c for c in view.children[j] if view.limb_length(j, c) > floor]
+        if len(kids) < 2:
+            continue
+        profiles = {c: _chain_profile(view, j, c) for c in kids}
+        for x, y in combinations(kids, 2):
+            lx, ly = view.limb_length(j, x), view.limb_length(j, y)
+            ratio = min(lx, ly) / max(lx, ly)
+            if ratio < 0.25:
+                continue
+            # compare the chains joint by joint: a prop in one hand lengthens only one limb
+            px, py = profiles[x], profiles[y]
+            m = min(len(px), len(py))
+            err = float(np.mean(np.abs(px[:m] - py[:m]))) / max(px[m - 1], py[m - 1], 1e-9)
+            size_ratio = min(view.size[x], view.size[y]) / max(view.size[x], view.size[y])
+            symmetry = 0.55 * max(0.0, 1.0 - 3.0 * err) + 0.25 * ratio + 0.2 * size_ratio
+            if symmetry < 0.6 or px[m - 1] < floor:
+                continue
+            out.append(LimbPair(j, x, y, min(lx, ly), symmetry))
+    return out
+
+
+def _role_votes(view: SkeletonView, pair: LimbPair) -> tuple[float, float, float]:
+    """Fractions of the pair's first chain joints whose names say leg, arm, or not-body."""
+    leg = arm = bad = total = 0
+    for root in (pair.a, pair.b):
+        chain = view.main_chain(root, 5)
+        for k, j in enumerate(chain):
+            info = view.info[j]
+            total += 1
+            leg += bool(info.roles & LEG_ROLES)
+            arm += bool(info.roles & ARM_ROLES)
+            if k < 2 and info.flagged(*NON_BODY_FLAGS):
+                bad += 1
+    total = max(total, 1)
+    return leg / total, arm / total, bad / 4.0
+
+
+def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
+    """Cosine between the legs' direction (branch to far ends) and the body's up (legs branch to
+    ``up_from``); about -1 for a standing body, about 0 for a four-legged one."""
+    if up_from is None:
+        return -1.0
+    up = view.P[up_from] - view.P[legs.branch]
+    ends = view.P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0) - view.P[legs.branch]
+    nu, ne = np.linalg.norm(up), np.linalg.norm(ends)
+    if nu < 1e-9 or ne < 1e-9:
+        return 1.0
+    return float(np.dot(up, ends) / (nu * ne))
+
+
+def _upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> int | None:
+    """The joint that stands for "up" from the legs' branch: the arms' branch, else the far end of
+    the longest branch that is not a leg."""
+    if arms is not None and arms.branch != legs.branch:
+        return arms.branch
+    best, best_len = None, 0.0
+    for c in view.children[legs.branch]:
+        if c in (legs.a, legs.b) or (arms is not None and c in (arms.a, arms.b)):
+            continue
+        length = view.limb_length(legs.branch, c)
+        if length > best_len:
+            best, best_len = int(view.far[c]), length
+    if best is None and arms is not None:  # arms and legs share a branch: use the arms' mid point
+        return None
+    return best
+
+
+def choose_plan(view: SkeletonView, pairs: list[LimbPair]) -> BodyPlan | None:
+    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all."""
+    if not pairs:
+        return None
+    span = view.scale
+    feats = {}
+    for p in pairs:
+        leg, arm, bad = _role_votes(view, p)
+        feats[p] = (leg, arm, bad)
+    ranked = sorted(pairs, key=lambda p: -(p.length / span + p.symmetry))[:12]
+    best: BodyPlan | None = None
+    for legs in ranked + [None]:
+        for arms in ranked + [None]:
+            if legs is None and arms is None:
+                continue
+            if legs is not None and arms is not None:
+                if legs == arms or legs.branch == arms.branch and {legs.a, legs.b} & {arms.a, arms.b}:
+                    continue
+                if any(view.is_descendant(arms.branch, c) for c in (legs.a, legs.b)):
+                    continue
+                if any(view.is_descendant(legs.branch, c) for c in (arms.a, arms.b)):
+                    continue
+            score, why = 0.0, []
+            if legs is not None:
+                leg_v, arm_v, bad = feats[legs]
+                score += 2.0 * legs.symmetry + 1.5 * legs.length / span + 1.5 * (leg_v - arm_v) - 2.0 * bad
+            else:
+                score -= 2.5
+                why.append("no legs")
+            if arms is not None:
+                leg_v, arm_v, bad = feats[arms]
+                score += 2.0 * arms.symmetry + 1.5 * arms.length / span + 1.5 * (arm_v - leg_v) - 2.0 * bad
+            else:
+                score -= 2.5
+                why.append("no arms")
+            if legs is not None and arms is not None:
+                if arms.branch == legs.branch:
+                    score -= 1.5
+                elif view.is_descendant(legs.branch, arms.branch):
+                    score -= 2.0  # legs hanging below the arms' joint's subtree: upside down
+                else:
+                    torso = view.P[arms.branch] - view.P[legs.branch]
+                    t_len = float(np.linalg.norm(torso))
+                    if t_len < 0.08 * legs.length:
+                        score -= 1.0
+                cos = legs_down(view, legs, _upper_anchor(view, legs, arms))
+                score += 0.75 * (-cos)
+                # hands hang above the feet in every rest a person stands in
+                up = view.P[arms.branch] - view.P[legs.branch]
+                feet = view.P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
+                hands = view.P[[view.far[arms.a], view.far[arms.b]]].mean(axis=0)
+                if np.dot(hands - feet, up) < 0:
+                    score -= 0.5
+            if best is None or score > best.score:
+                best = BodyPlan(legs, arms, score, ", ".join(why))
+    return best

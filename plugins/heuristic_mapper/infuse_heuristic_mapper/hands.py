@@ -1,0 +1,131 @@
+"""Fingers: which chains below a wrist are the thumb, index, middle, ring and pinky.
+
+The thumb is the chain that leaves the hand at an angle and starts near the wrist (or is named
+so); the other fingers are ordered across the palm starting next to the thumb. Metacarpal and
+palm joints (a first bone that starts at the wrist) are not finger joints. A hand without an
+identifiable thumb and at least two other fingers (a mitten) keeps its fingers unmapped.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .view import SkeletonView
+
+FINGER_ORDER = ("index", "middle", "ring", "pinky")
+_NOT_FINGER = ("prop", "control", "secondary", "face")
+
+
+def _finger_roots(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray, depth: int = 0) -> list[int]:
+    """Chain starts of the fingers: a joint parenting several chains (a palm) is replaced by them."""
+    out: list[int] = []
+    for r in roots:
+        info = view.info[r]
+        if info.flagged(*_NOT_FINGER):
+            continue
+        kids = [c for c in view.children[r] if not view.info[c].flagged(*_NOT_FINGER) and view.size[c] >= 2]
+        if depth < 2 and len(kids) >= 2:
+            out.extend(_finger_roots(view, kids, wrist_pos, depth + 1))
+        else:
+            out.append(r)
+    return out
+
+
+def _trim(view: SkeletonView, chain: list[int]) -> list[int]:
+    """Drop end/nub leaves (not real joints) from the tip of a finger chain."""
+    while len(chain) > 1 and view.info[chain[-1]].flagged("end") and not view.children[chain[-1]]:
+        chain = chain[:-1]
+    return chain
+
+
+def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray) -> list[int]:
+    if len(chain) < 2:
+        return chain
+    first = view.info[chain[0]]
+    if first.flagged("metacarpal") or first.has("palm") or first.flagged("helper"):
+        return chain[1:]
+    tip = view.P[view.far[chain[0]]]
+    reach = float(np.linalg.norm(tip - wrist_pos))
+    if reach > 1e-9 and float(np.linalg.norm(view.P[chain[0]] - wrist_pos)) < 0.3 * reach:
+        return chain[1:]
+    return chain
+
+
+def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:
+    """Finger name -> chain joints (finger segments 1..4), and a note. Empty when unidentifiable."""
+    starts = _finger_roots(view, roots, wrist_pos)
+    chains = {r: _trim(view, view.main_chain(r, 6)) for r in starts}
+    chains = {r: c for r, c in chains.items() if c}
+    if len(chains) < 3:
+        return {}, f"{len(chains)} digit chain(s): a mitten or no fingers"
+    bases = np.array([view.P[r] for r in chains])
+    tips = np.array([view.P[view.far[r]] for r in chains])
+    dirs = tips - wrist_pos
+    norms = np.linalg.norm(dirs, axis=1, keepdims=True)
+    dirs = dirs / np.maximum(norms, 1e-9)
+    keys = list(chains)
+    # thumb: named, else the chain that diverges most from the others and starts nearest the wrist
+    named = [r for r in keys if view.info[r].has("thumb")]
+    numbered = _numbered_thumb(view, keys)
+    thumb = None
+    if len(named) == 1:
+        thumb, why = named[0], "named thumb"
+    elif numbered is not None:
+        thumb, why = numbered, "lowest-numbered finger (thumb)"
+    else:
+        dev = np.zeros(len(keys))
+        for i in range(len(keys)):
+            others = np.delete(dirs, i, axis=0).mean(axis=0)
+            others /= max(np.linalg.norm(others), 1e-9)
+            dev[i] = np.degrees(np.arccos(np.clip(np.dot(dirs[i], others), -1, 1)))
+        dist = np.linalg.norm(bases - wrist_pos, axis=1)
+        score = dev + 20.0 * (1.0 - dist / max(dist.max(), 1e-9))
+        i = int(np.argmax(score))
+        second = np.partition(score, -2)[-2] if len(score) > 1 else 0.0
+        if dev[i] > 18.0 and score[i] - second > 8.0:
+            thumb, why = keys[i], "diverging digit next to the wrist (thumb)"
+    if thumb is None:
+        return {}, "no thumb can be told apart: digits left unmapped"
+    others = [r for r in keys if r != thumb]
+    if len(others) < 2:
+        return {}, "a thumb and a single finger (mitten): digits left unmapped"
+    ordered = _order_fingers(view, thumb, others, wrist_pos, dirs.mean(axis=0))
+    out = {"thumb": chains[thumb][:4]}
+    for name, r in zip(FINGER_ORDER, ordered):
+        out[name] = _drop_metacarpal(view, chains[r], wrist_pos)[:4]
+    return out, why
+
+
+def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
+    """Biped/MakeHuman style "finger0..4" or "finger1..5": the lowest first number is the thumb."""
+    nums = []
+    for r in keys:
+        info = view.info[r]
+        if not info.has("finger") or not info.numbers or info.roles & {"index", "middle", "ring", "pinky", "thumb"}:
+            return None
+        nums.append(info.numbers[0])
+    if len(set(nums)) != len(nums) or len(nums) < 4:
+        return None
+    return keys[int(np.argmin(nums))]
+
+
+def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos: np.ndarray, axis: np.ndarray) -> list[int]:
+    """Non-thumb fingers from the thumb side across the palm (names first when they say it all)."""
+    by_name = {}
+    for r in others:
+        roles = view.info[r].roles & set(FINGER_ORDER)
+        if len(roles) == 1:
+            by_name[r] = FINGER_ORDER.index(next(iter(roles)))
+    if len(by_name) == len(others) and len(set(by_name.values())) == len(others):
+        return sorted(others, key=lambda r: by_name[r])
+    axis = axis / max(np.linalg.norm(axis), 1e-9)
+    side = view.P[thumb] - wrist_pos
+    side = side - np.dot(side, axis) * axis
+    if np.linalg.norm(side) < 1e-9:
+        side = view.P[view.far[thumb]] - wrist_pos
+        side = side - np.dot(side, axis) * axis
+    side /= max(np.linalg.norm(side), 1e-9)
+    # knuckle positions: a finger chain's start, past any metacarpal
+    def across(r: int) -> float:
+        chain = _drop_metacarpal(view, view.main_chain(r, 6), wrist_pos)
+        return float(np.dot(view.P[chain[0]] - wrist_pos, side))
+    return sorted(others, key=lambda r: -across(r))

@@ -1,0 +1,604 @@
+"""The heuristic mapper: any humanoid skeleton -> canonical joint names, with confidences and reasons.
+
+Order of work (each step is its own module):
+
+1. :mod:`.body` finds the legs and arms as pairs of mirror-image limbs and checks the body stands
+   (legs point away from the head); a rest pose that is not a standing body (e.g. every bone along
+   one axis) is replaced by the caller's pose.
+2. :mod:`.limbs` places hip/knee/ankle and clavicle/shoulder/elbow/wrist on each limb's chain.
+3. The torso between the pelvis and the arms, the neck and the head come from the path between the
+   two limb pairs; :mod:`.hands` names the fingers.
+4. Left and right come from the body's own axes (up from pelvis to chest, forward from the feet),
+   with names breaking ties.
+
+A skeleton without any pair of limbs, or whose legs do not point away from its head (a
+quadruped), raises :class:`~infuse.errors.NotHumanoidError` with the reason.
+"""
+from __future__ import annotations
+
+import numpy as np
+from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
+from infuse.errors import NotHumanoidError
+from infuse.mapping import Mapping
+
+from .body import LimbPair, choose_plan, legs_down, limb_pairs
+from .hands import assign_fingers
+from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate
+from .view import SkeletonView
+
+NAME = "heuristic"
+#: cos(legs direction, spine direction) above which a body is not standing (about 140 degrees)
+STANDING_COS = -0.75
+_NOT_BODY = ("control", "secondary", "prop", "face")
+
+
+class _Result:
+    """Canonical name -> (joint index, confidence, reason), filled step by step."""
+
+    def __init__(self, view: SkeletonView):
+        self.view = view
+        self.joint: dict[str, int] = {}
+        self.conf: dict[str, float] = {}
+        self.reason: dict[str, str] = {}
+
+    def put(self, name: str, joint: int | None, conf: float, reason: str) -> None:
+        if joint is None or joint < 0:
+            self.joint.pop(name, None)
+            self.conf[name] = float(np.clip(conf, 0.0, 1.0))
+            self.reason[name] = reason
+            return
+        self.joint[name] = int(joint)
+        self.conf[name] = float(np.clip(conf, 0.0, 1.0))
+        self.reason[name] = reason
+
+
+def _conf_from_margin(margin: float, base: float = 0.6) -> float:
+    return base + (0.98 - base) * (1.0 - np.exp(-max(margin, 0.0) / 1.2))
+
+
+def _pose_frames(pose) -> np.ndarray | None:
+    if pose is None:
+        return None
+    arr = np.asarray(pose, dtype=np.float64)
+    if arr.ndim == 2:
+        arr = arr[None]
+    if arr.ndim != 3 or arr.shape[-1] != 3 or not np.all(np.isfinite(arr)):
+        return None
+    return arr
+
+
+def _plan_for(view: SkeletonView):
+    pairs = limb_pairs(view)
+    return choose_plan(view, pairs)
+
+
+def _standing(view: SkeletonView, plan) -> float:
+    """legs_down cosine for the plan in the view's current pose (-1 standing, 0 four-legged)."""
+    if plan is None or plan.legs is None:
+        return -1.0
+    from .body import _upper_anchor
+    return legs_down(view, plan.legs, _upper_anchor(view, plan.legs, plan.arms))
+
+
+def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options) -> Mapping:
+    """Map ``skeleton`` to the canonical names (see the module docstring).
+
+    ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
+    representative poses; used when the rest pose is not a standing body, and to tell the body's
+    front from frames of motion. ``fixed``: canonical name -> joint name (or None) set by hand;
+    they are kept and the rest is mapped around them.
+    """
+    view = SkeletonView(skeleton, skeleton.rest_global_positions)
+    frames = _pose_frames(pose)
+    if frames is not None and frames.shape[1] != view.n:
+        frames = None
+    plan = _plan_for(view)
+    cos = _standing(view, plan)
+    used_pose = "rest pose"
+    if (plan is None or cos > STANDING_COS) and frames is not None:
+        view_pose = SkeletonView(skeleton, frames[0])
+        plan_pose = _plan_for(view_pose)
+        cos_pose = _standing(view_pose, plan_pose)
+        if plan_pose is not None and (plan is None or cos_pose < cos):
+            view, plan, cos, used_pose = view_pose, plan_pose, cos_pose, "first frame (the rest pose is not a standing body)"
+    result = _Result(view)
+    if plan is None:
+        if _map_face_only(view, result):
+            return _finish(skeleton, result, fixed, 0.3)
+        raise NotHumanoidError(file, f"no pair of mirror-image limbs among its {view.n} joints"
+                               + (" (a single chain)" if all(len(c) <= 1 for c in view.children) else ""))
+    if plan.legs is not None and cos > STANDING_COS:
+        angle = np.degrees(np.arccos(np.clip(cos, -1, 1)))
+        raise NotHumanoidError(file, f"its legs do not point away from its head (they are {angle:.0f} degrees "
+                               "from the spine's direction instead of about 180): a four-legged or lying body")
+    if plan.legs is not None and plan.arms is not None and _hands_on_ground(view, plan):
+        raise NotHumanoidError(file, "its front limbs reach the ground like its legs: a four-legged body")
+    if plan.legs is None and plan.arms is None:
+        raise NotHumanoidError(file, "neither legs nor arms found")
+    _map_body(view, plan, result, frames, used_pose)
+    overall = np.mean([result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
+    return _finish(skeleton, result, fixed, float(overall))
+
+
+def _hands_on_ground(view: SkeletonView, plan) -> bool:
+    """True when the arms' far ends are as low as the feet (a quadruped's front legs)."""
+    legs, arms = plan.legs, plan.arms
+    up = view.P[arms.branch] - view.P[legs.branch]
+    norm = np.linalg.norm(up)
+    if norm < 1e-9:
+        return False
+    up /= norm
+    feet = view.P[[view.far[legs.a], view.far[legs.b]]] @ up
+    hands = view.P[[view.far[arms.a], view.far[arms.b]]] @ up
+    leg_height = float(view.P[legs.branch] @ up - feet.mean())
+    return leg_height > 0 and float(hands.mean() - feet.mean()) < 0.2 * leg_height
+
+
+def _finish(skeleton, result: _Result, fixed, overall: float) -> Mapping:
+    names = skeleton.names
+    joints = {n: names[j] for n, j in result.joint.items()}
+    conf = dict(result.conf)
+    reasons = dict(result.reason)
+    for n in ALL_NAMES:
+        if n not in conf:
+            conf[n] = 0.5
+            reasons[n] = reasons.get(n) or "no counterpart found"
+    if fixed:
+        taken = {v for v in fixed.values() if v is not None}
+        for n, v in list(joints.items()):
+            if n not in fixed and v in taken:
+                del joints[n]
+                conf[n] = 0.3
+                reasons[n] = f"{v!r} is set by hand to another name"
+        for n, v in fixed.items():
+            if v is None:
+                joints.pop(n, None)
+            else:
+                joints[n] = v
+            conf[n] = 1.0
+            reasons[n] = "set by hand"
+    return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME, overall_confidence=overall)
+
+
+# -- face only ------------------------------------------------------------------------------------------
+def _map_face_only(view: SkeletonView, result: _Result) -> bool:
+    """A skeleton with no limbs but named eyes (a face rig): map the eyes by their names."""
+    eyes = _named_eyes(view, range(view.n))
+    if not eyes:
+        return False
+    for side, j in eyes.items():
+        result.put(f"eyeball_{side}", j, 0.6, "named eye (a face rig without a body)")
+    return True
+
+
+def _named_eyes(view: SkeletonView, candidates) -> dict[str, int]:
+    found: dict[str, int] = {}
+    for j in candidates:
+        info = view.info[j]
+        if info.has("eye") and not info.flagged("face", "control", "end", "helper") and info.side:
+            side = "left" if info.side > 0 else "right"
+            if side not in found:
+                found[side] = int(j)
+    return found
+
+
+# -- body ------------------------------------------------------------------------------------------------
+def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> None:
+    legs: LimbPair | None = plan.legs
+    arms: LimbPair | None = plan.arms
+    up_guess = None
+    if legs is not None:
+        from .body import _upper_anchor
+        anchor = _upper_anchor(view, legs, arms)
+        if anchor is not None:
+            up_guess = view.P[anchor] - view.P[legs.branch]
+            up_guess = up_guess / max(np.linalg.norm(up_guess), 1e-12)
+    leg_res = assign_legs(view, legs.branch, [legs.a, legs.b], up_guess) if legs is not None else {}
+    arm_res = assign_arms(view, arms.branch, [arms.a, arms.b]) if arms is not None else {}
+    body_chain: set[int] = set()
+    for r in list(leg_res.values()) + list(arm_res.values()):
+        body_chain.update(r.chain)
+    # IK-driven feet and hands hang elsewhere
+    for r in leg_res.values():
+        _relocate_end(view, r, "ankle", "knee", body_chain)
+    for r in arm_res.values():
+        _relocate_end(view, r, "wrist", "elbow", body_chain)
+
+    # torso, neck and head
+    if legs is not None and arms is not None:
+        junction = view.lca(legs.branch, arms.branch)
+    else:
+        junction = (legs or arms).branch
+    base, base_why = _choose_base(view, junction, legs)
+    up = _up_axis(view, base, legs, arms, leg_res, arm_res)
+    shoulders = [r.slots["shoulder"] for r in arm_res.values()]
+    torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
+
+    result.put("base", base, 0.9, base_why)
+    _put_torso(result, torso, chest_why)
+    _put_neck(result, neck)
+    if head >= 0:
+        result.put("skullbase", head, 0.85, "head: the joint where the neck ends and the skull begins")
+    else:
+        result.put("skullbase", None, 0.5, "no head joint above the neck")
+
+    # sides
+    side_of, side_why, side_conf = _sides(view, base, up, legs, arms, leg_res, arm_res, frames)
+
+    for root, r in leg_res.items():
+        s = side_of[root]
+        _put_leg(view, result, s, r, side_why, side_conf, up, base)
+    for root, r in arm_res.items():
+        s = side_of[root]
+        _put_arm(view, result, s, r, side_why, side_conf)
+    # eyes
+    if head >= 0:
+        _put_eyes(view, result, head, up, base)
+
+
+def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body_chain: set[int]) -> None:
+    """A limb chain that ends early (no joint there, or only an end marker) has its hand or foot
+    elsewhere in the tree (IK rigs): take the joint found where the limb ends."""
+    j = r.slots[end]
+    if j >= 0 and not (view.info[j].flagged("end") and not view.children[j]):
+        return
+    mid = view.P[r.slots[middle]]
+    target = view.P[j] if j >= 0 else r.predicted[end]
+    seg = float(np.linalg.norm(target - mid))
+    exclude = set(view.subtree(r.chain[0]).tolist()) | body_chain
+    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 0.5) * seg, 1e-6))
+    if new >= 0:
+        r.slots[end] = new
+        r.notes[end] = "IK-driven: found where the limb ends, outside its chain"
+
+
+def _only_body_child(view: SkeletonView, parent: int, child: int) -> bool:
+    for c in view.children[parent]:
+        if c == child:
+            continue
+        if view.info[c].flagged(*_NOT_BODY, "root") or view.limb_length(parent, c) < 0.15 * view.scale:
+            continue
+        return False
+    return True
+
+
+def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None) -> tuple[int, str]:
+    """The pelvis: the joint where legs and torso meet, or the pelvis just above it in a Biped-style rig."""
+    info = view.info[junction]
+    p = int(view.parents[junction])
+    if p >= 0 and not info.has("hips") and info.roles & {"spine", "chest"} and view.info[p].has("hips") \
+            and _only_body_child(view, p, junction):
+        return p, "pelvis above the spine joint that carries the legs"
+    why = "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
+    return junction, why
+
+
+def _up_axis(view, base, legs, arms, leg_res, arm_res) -> np.ndarray:
+    P = view.P
+    if arms is not None and np.linalg.norm(P[arms.branch] - P[base]) > 1e-3 * view.scale:
+        up = P[arms.branch] - P[base]
+    elif legs is not None:
+        up = P[base] - P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
+    else:
+        up = np.array([0.0, 1.0, 0.0])
+    return up / max(np.linalg.norm(up), 1e-12)
+
+
+def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.ndarray) -> list[int]:
+    """The chain from ``top`` towards the head (excluding the arms), following neck/head joints."""
+    excluded = {arms.a, arms.b} if arms is not None else set()
+    chain: list[int] = []
+    cur = top
+    for _ in range(12):
+        kids = [c for c in view.children[cur] if c not in excluded]
+        if not kids:
+            break
+        def score(c: int) -> float:
+            info = view.info[c]
+            far = view.P[view.far[c]] - view.P[cur]
+            norm = np.linalg.norm(far)
+            upness = float(np.dot(far, up) / norm) if norm > 1e-9 else 0.0
+            s = upness + 0.5 * view.limb_length(cur, c) / view.scale
+            s += 1.0 * bool(info.roles & {"neck", "head", "spine", "chest"})
+            s -= 2.0 * info.flagged(*_NOT_BODY) + 1.0 * info.flagged("end")
+            s -= 1.0 * bool(info.roles & {"eye", "clavicle", "shoulder", "upperarm", "thigh"})
+            return s
+        nxt = max(kids, key=score)
+        if score(nxt) < -1.0:
+            break
+        chain.append(nxt)
+        cur = nxt
+    return chain
+
+
+def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: np.ndarray, shoulders: list[int]):
+    """(torso joints bottom-up, neck joints bottom-up, head joint or -1, reason for the chest)."""
+    P = view.P
+    if arms is not None and view.is_descendant(arms.branch, base):
+        path = view.path_down(base, arms.branch)[1:]
+        top = arms.branch
+    else:
+        path = []
+        top = base
+    torso = [j for j in path if not view.info[j].flagged("control", "secondary", "prop", "helper")]
+    neck_from_top = False
+    chest_why = "chest: the joint the arms hang from"
+    if torso and shoulders:
+        s_mean = P[shoulders].mean(axis=0)
+        t_len = float(np.dot(s_mean - P[base], up))
+        height = float(np.dot(P[top] - s_mean, up)) / max(t_len, 1e-9)
+        info = view.info[top]
+        named_neck = info.has("neck") and not info.roles & {"chest", "spine"}
+        named_torso = bool(info.roles & {"chest", "spine", "hips"})
+        if named_neck or (not named_torso and height > -0.1 and len(torso) > 1):
+            neck_from_top = True
+            torso = torso[:-1]
+            chest_why = "chest: the last torso joint below the neck that carries the arms"
+    above = _head_branch(view, top, arms, up)
+    chain = ([top] if neck_from_top else []) + above
+    head = _pick_head(view, chain, base, up, top, neck_from_top)
+    if head < 0:
+        return torso, chain if neck_from_top else [], -1, chest_why
+    neck = chain[:chain.index(head)]
+    return torso, neck, head, chest_why
+
+
+def _pick_head(view: SkeletonView, chain: list[int], base: int, up: np.ndarray, top: int, neck_from_top: bool) -> int:
+    if not chain:
+        return -1
+    P = view.P
+    torso_len = max(float(np.dot(P[top] - P[base], up)), 1e-3 * view.scale)
+    scores = []
+    for i, j in enumerate(chain):
+        info = view.info[j]
+        s = 0.0
+        s += 2.0 * info.has("head") - 1.5 * (info.has("neck") and not info.has("head"))
+        s -= 2.0 * info.flagged("end") + 1.0 * info.flagged("face", "secondary") + 1.5 * info.flagged("control")
+        kids = [c for c in view.children[j] if not view.info[c].flagged("end")]
+        s += 0.8 * (len(view.children[j]) >= 2) + 0.3 * (len(kids) >= 2)
+        leaf = not view.children[j]
+        if leaf and i > 0 and view.bone[j] > 0.25 * torso_len:
+            s -= 1.2  # a long last bone: the top of the skull, not a joint
+        height = float(np.dot(P[j] - P[top], up)) / torso_len
+        s -= 0.6 * max(0.0, height - 0.75)  # far above the chest: the skull's top or hair
+        neck_count = i - (1 if neck_from_top else 0) + (1 if neck_from_top else 0)
+        s -= 0.35 * max(0, neck_count - 2)
+        if i == 0 and not neck_from_top:
+            s -= 0.4  # a head right on the chest is less common than a neck
+        scores.append(s)
+    if neck_from_top:
+        scores[0] = -np.inf
+    if not np.isfinite(max(scores)):
+        return -1
+    return chain[int(np.argmax(scores))]
+
+
+def _put_torso(result: _Result, torso: list[int], chest_why: str) -> None:
+    if not torso:
+        for n in ("spine1", "spine2", "spine3"):
+            result.put(n, None, 0.6, "no torso joint between the pelvis and the neck")
+        return
+    result.put("spine3", torso[-1], 0.85, chest_why)
+    if len(torso) >= 2:
+        result.put("spine1", torso[0], 0.85, "lowest torso joint above the pelvis")
+    else:
+        result.put("spine1", None, 0.7, "a single torso joint is the chest")
+    if len(torso) >= 3:
+        result.put("spine2", torso[1], 0.85, "second torso joint from the pelvis")
+    else:
+        result.put("spine2", None, 0.7, f"{len(torso)} torso joint(s): no middle one")
+
+
+def _put_neck(result: _Result, neck: list[int]) -> None:
+    if not neck:
+        result.put("spine4", None, 0.6, "no neck joint between the chest and the head")
+        result.put("spine5", None, 0.6, "no neck joint")
+        return
+    result.put("spine4", neck[0], 0.85, "lowest neck joint")
+    if len(neck) >= 2:
+        result.put("spine5", neck[-1], 0.8, "neck joint just below the head")
+    else:
+        result.put("spine5", None, 0.7, "a single neck joint is spine4")
+
+
+def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
+    """Root of each limb -> "l"/"r", the reason and the confidence."""
+    P = view.P
+    pairs = [p for p in (legs, arms) if p is not None]
+    lateral = np.zeros(3)
+    for p in pairs:
+        res = leg_res if p is legs else arm_res
+        key = "hip" if p is legs else "shoulder"
+        d = P[res[p.a].slots[key]] - P[res[p.b].slots[key]]
+        if np.dot(d, lateral) < 0:
+            d = -d
+        lateral = lateral + d
+    lateral = lateral - np.dot(lateral, up) * up
+    lateral /= max(np.linalg.norm(lateral), 1e-12)
+    # reference: lateral points from the first pair's b member to its a member
+    ref = pairs[0]
+    ref_res = leg_res if ref is legs else arm_res
+    ref_key = "hip" if ref is legs else "shoulder"
+    if np.dot(P[ref_res[ref.a].slots[ref_key]] - P[ref_res[ref.b].slots[ref_key]], lateral) < 0:
+        lateral = -lateral
+    forward = np.cross(lateral, up)  # the body's front if the "a" members are on its left
+    geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames, base)
+    names = _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs)
+    if abs(geo) >= 0.3:
+        a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
+        if names and (names > 0) == a_left:
+            conf = min(0.99, conf + 0.05)
+    elif names:
+        a_left, why, conf = names > 0, "left/right from the names (the feet do not show the front)", 0.7
+    elif abs(geo) > 0.05:
+        a_left, why, conf = geo > 0, geo_why + " (weak)", 0.55
+    else:
+        a_left, why, conf = True, "left/right undecidable (no front, no side names): a guess", 0.3
+    left = lateral if a_left else -lateral
+    side_of = {}
+    for p in pairs:
+        res = leg_res if p is legs else arm_res
+        key = "hip" if p is legs else "shoulder"
+        for root in (p.a, p.b):
+            side_of[root] = "l" if np.dot(P[res[root].slots[key]] - P[base], left) > 0 else "r"
+        if side_of[p.a] == side_of[p.b]:  # both on one side of the pelvis: order them by the axis
+            da = np.dot(P[res[p.a].slots[key]], left)
+            db = np.dot(P[res[p.b].slots[key]], left)
+            side_of[p.a], side_of[p.b] = ("l", "r") if da >= db else ("r", "l")
+    return side_of, why, conf
+
+
+def _front_votes(view, forward, up, legs, leg_res, frames, base) -> tuple[float, str]:
+    """+1 when the feet point along ``forward``, -1 against, ~0 when they do not tell."""
+    if legs is None:
+        return 0.0, ""
+    votes = []
+    for root in (legs.a, legs.b):
+        r = leg_res[root]
+        ankle = r.slots["ankle"]
+        if ankle < 0:
+            continue
+        toe_chain = view.main_chain(ankle, 3)
+        if len(toe_chain) < 2:
+            continue
+        tip = toe_chain[-1]
+        v = view.P[tip] - view.P[ankle]
+        n = np.linalg.norm(v)
+        if n > 1e-9:
+            votes.append(float(np.dot(v, forward)) / n)
+        if frames is not None and len(frames) > 1:
+            fv = frames[:, tip] - frames[:, ankle]
+            fn = np.linalg.norm(fv, axis=1)
+            ok = fn > 1e-9
+            # per-frame body axes would be better; the rest's axes hold for upright motion
+            votes.extend((fv[ok] @ forward / fn[ok]).tolist()[:0])
+    if not votes:
+        return 0.0, ""
+    return float(np.mean(votes)), "left = up x forward, forward from the toes"
+
+
+def _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs) -> float:
+    """> 0 when the names put the "a" members on the left, < 0 right, 0 silent."""
+    total = 0
+    for p in pairs:
+        res = leg_res if p is legs else arm_res
+        for root, sign in ((p.a, 1), (p.b, -1)):
+            for j in res[root].chain[:4]:
+                total += sign * view.info[j].side
+    return float(np.sign(total))
+
+
+def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> None:
+    m = r.margins
+    result.put(f"{s}_hip", r.slots["hip"], min(side_conf, _conf_from_margin(m.get("hip", 0))),
+               f"thigh: first long bone of the leg; {side_why}")
+    result.put(f"{s}_knee", r.slots["knee"], min(side_conf, _conf_from_margin(m.get("knee", 0))),
+               "shin: the leg bone after the knee")
+    ankle = r.slots["ankle"]
+    note = r.notes.get("ankle", "")
+    result.put(f"{s}_ankle", ankle, min(side_conf, _conf_from_margin(m.get("ankle", 0))),
+               "foot: where the shin ends" + (f" ({note})" if note else ""))
+    if ankle < 0:
+        result.put(f"{s}_forefoot", None, 0.5, "no foot joint")
+        result.put(f"{s}_toe", None, 0.5, "no foot joint")
+        return
+    toes = [c for c in view.children[ankle] if not view.info[c].flagged("control", "prop", "heel", "secondary")]
+    forefoot = -1
+    if toes:
+        if len(toes) >= 3:  # one chain per toe: the big toe is the one nearest the body's middle plane
+            forefoot = min(toes, key=lambda c: abs(float(np.dot(view.P[c] - view.P[base],
+                                                                 np.cross(up, np.cross(view.P[c] - view.P[base], up))))) )
+            forefoot = _big_toe(view, toes, base, up)
+        else:
+            forefoot = max(toes, key=lambda c: view.limb_length(ankle, c))
+    if forefoot >= 0:
+        result.put(f"{s}_forefoot", forefoot, 0.8, "ball of the foot: the joint after the ankle")
+        nxt = [c for c in view.children[forefoot] if not view.info[c].flagged("control", "prop")]
+        if nxt:
+            toe = max(nxt, key=lambda c: view.limb_length(forefoot, c))
+            result.put(f"{s}_toe", toe, 0.6, "toe end: the joint after the ball of the foot")
+        else:
+            result.put(f"{s}_toe", None, 0.7, "the ball of the foot is a leaf")
+    else:
+        result.put(f"{s}_forefoot", None, 0.7, "the foot joint is a leaf")
+        result.put(f"{s}_toe", None, 0.7, "the foot joint is a leaf")
+
+
+def _big_toe(view, toes, base, up) -> int:
+    """Of several toe chains, the one nearest the body's middle plane (the big toe)."""
+    P = view.P
+    ref = P[base]
+    def lateral_distance(c):
+        v = P[c] - ref
+        v = v - np.dot(v, up) * up
+        return float(np.linalg.norm(v))
+    # the big toe is the most medial one; the pelvis lies on the middle plane
+    return min(toes, key=lateral_distance)
+
+
+def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
+    m = r.margins
+    clav = r.slots["clavicle"]
+    if clav >= 0:
+        result.put(f"{s}_acromioclavicular", clav, min(side_conf, _conf_from_margin(m.get("clavicle", 0))),
+                   f"clavicle: short bone from the chest to the shoulder; {side_why}")
+    else:
+        result.put(f"{s}_acromioclavicular", None, _conf_from_margin(m.get("clavicle", 0)),
+                   "no clavicle: the arm starts at the shoulder")
+    result.put(f"{s}_shoulder", r.slots["shoulder"], min(side_conf, _conf_from_margin(m.get("shoulder", 0))),
+               f"upper arm; {side_why}")
+    result.put(f"{s}_elbow", r.slots["elbow"], min(side_conf, _conf_from_margin(m.get("elbow", 0))),
+               "forearm: the arm bone after the elbow")
+    wrist = r.slots["wrist"]
+    hand_roots: list[int] = []
+    if wrist >= 0:
+        siblings = _coincident_siblings(view, wrist)
+        if siblings:
+            hand_roots = [wrist] + siblings
+            result.put(f"{s}_wrist", None, 0.6, "no single hand joint: palm bones start at the wrist")
+            wrist_pos = view.P[wrist]
+        else:
+            note = r.notes.get("wrist", "")
+            result.put(f"{s}_wrist", wrist, min(side_conf, _conf_from_margin(m.get("wrist", 0))),
+                       "hand: where the forearm ends" + (f" ({note})" if note else ""))
+            hand_roots = list(view.children[wrist])
+            wrist_pos = view.P[wrist]
+    else:
+        result.put(f"{s}_wrist", None, 0.5, "no hand joint at the end of the forearm")
+        wrist_pos = None
+    twist = forearm_twist(view, r) if wrist >= 0 else -1
+    if twist >= 0 and twist not in hand_roots:
+        result.put(f"{s}_forearm", twist, 0.75, "forearm twist: first joint after the elbow")
+    else:
+        result.put(f"{s}_forearm", None, 0.75, "no twist joint between elbow and hand")
+    if wrist_pos is None or not hand_roots:
+        return
+    fingers, why = assign_fingers(view, hand_roots, wrist_pos)
+    for finger in ("thumb", "index", "middle", "ring", "pinky"):
+        chain = fingers.get(finger, [])
+        for k in range(4):
+            name = f"{s}_{finger}{k + 1}"
+            if k < len(chain):
+                result.put(name, chain[k], 0.75, f"{finger} segment {k + 1} ({why})")
+            else:
+                result.put(name, None, 0.6, why if not fingers else f"the {finger} has {len(chain)} joint(s)")
+
+
+def _coincident_siblings(view: SkeletonView, j: int) -> list[int]:
+    """Siblings of ``j`` at the same place that also lead somewhere (palm bones side by side)."""
+    p = int(view.parents[j])
+    if p < 0:
+        return []
+    tol = 0.01 * view.scale
+    return [c for c in view.children[p] if c != j and view.size[c] >= 2
+            and float(np.linalg.norm(view.P[c] - view.P[j])) < max(tol, 0.2 * float(np.linalg.norm(view.P[j] - view.P[p])))
+            and not view.info[c].flagged(*_NOT_BODY)]
+
+
+def _put_eyes(view, result, head, up, base) -> None:
+    eyes = _named_eyes(view, view.subtree(head))
+    for side in ("left", "right"):
+        if side in eyes:
+            result.put(f"eyeball_{side}", eyes[side], 0.8, "named eye below the head")
+        else:
+            result.put(f"eyeball_{side}", None, 0.6, "no eye joint below the head")

@@ -1,0 +1,129 @@
+"""A skeleton prepared for mapping: positions, tree measures and name facts, computed once.
+
+Lengths are metres in the core frame, but nothing here assumes an up axis, a facing or a unit:
+the mapper finds the body's own axes from its structure (see :mod:`.body`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .names import NameInfo, analyse_all
+
+
+class SkeletonView:
+    """Joint positions ``P`` (J, 3) of one pose plus topology and measures of the tree.
+
+    - ``bone[j]``: distance from the parent's position (0 for roots).
+    - ``reach[j]``: longest path length (sum of bone lengths) from ``j`` down to a descendant;
+      ``far[j]``: that descendant.
+    - ``size[j]``: joints in the subtree of ``j`` (itself included).
+    - ``scale``: the longest path between two joints of the tree (the body's span), metres.
+    - ``info[j]``: :class:`~.names.NameInfo` of the name.
+    """
+
+    def __init__(self, skeleton, positions: np.ndarray):
+        self.skeleton = skeleton
+        self.names = skeleton.names
+        self.parents = np.asarray(skeleton.parents)
+        self.n = len(self.names)
+        self.children: tuple[tuple[int, ...], ...] = skeleton.children
+        self.info: list[NameInfo] = analyse_all(self.names)
+        self.set_pose(positions)
+        # pre/post order for subtree tests
+        tin = np.zeros(self.n, dtype=np.int64)
+        tout = np.zeros(self.n, dtype=np.int64)
+        clock = 0
+        stack = [(int(r), False) for r in reversed(skeleton.roots)]
+        while stack:
+            j, done = stack.pop()
+            if done:
+                tout[j] = clock
+                clock += 1
+                continue
+            tin[j] = clock
+            clock += 1
+            stack.append((j, True))
+            stack.extend((c, False) for c in reversed(self.children[j]))
+        self.tin, self.tout = tin, tout
+        size = np.ones(self.n, dtype=np.int64)
+        for j in range(self.n - 1, 0, -1):
+            p = self.parents[j]
+            if p >= 0:
+                size[p] += size[j]
+        self.size = size
+
+    def set_pose(self, positions: np.ndarray) -> None:
+        """Use another pose (J, 3): recomputes every length-based measure."""
+        P = np.asarray(positions, dtype=np.float64)
+        self.P = P
+        par = self.parents
+        has_parent = par >= 0
+        bone = np.zeros(self.n)
+        bone[has_parent] = np.linalg.norm(P[has_parent] - P[par[has_parent]], axis=1)
+        self.bone = bone
+        reach = np.zeros(self.n)
+        far = np.arange(self.n)
+        best2 = np.zeros(self.n)  # second-longest downward path, for the span
+        for j in range(self.n - 1, -1, -1):
+            p = par[j]
+            if p < 0:
+                continue
+            cand = reach[j] + bone[j]
+            if cand > reach[p]:
+                best2[p] = reach[p]
+                reach[p] = cand
+                far[p] = far[j]
+            elif cand > best2[p]:
+                best2[p] = cand
+        self.reach = reach
+        self.far = far
+        self.scale = float(max(np.max(reach + best2), 1e-9))
+
+    # -- topology ------------------------------------------------------------------------------------
+    def is_descendant(self, a: int, b: int) -> bool:
+        """True when ``a`` is ``b`` or lies in the subtree of ``b``."""
+        return bool(self.tin[b] <= self.tin[a] and self.tout[a] <= self.tout[b])
+
+    def ancestors(self, j: int) -> list[int]:
+        """``j``'s ancestors, nearest first."""
+        out = []
+        p = int(self.parents[j])
+        while p >= 0:
+            out.append(p)
+            p = int(self.parents[p])
+        return out
+
+    def lca(self, a: int, b: int) -> int:
+        """Lowest common ancestor (-1 when in different trees)."""
+        while a >= 0 and not self.is_descendant(b, a):
+            a = int(self.parents[a])
+        return a
+
+    def path_down(self, top: int, bottom: int) -> list[int]:
+        """Joints from ``top`` down to ``bottom`` inclusive (``bottom`` must be in ``top``'s subtree)."""
+        out = [bottom]
+        while out[-1] != top:
+            out.append(int(self.parents[out[-1]]))
+        return out[::-1]
+
+    def main_chain(self, j: int, limit: int = 16) -> list[int]:
+        """From ``j`` follow the child leading to the farthest descendant, at most ``limit`` joints.
+
+        Children whose names mark them as controls, props or secondary bones are passed over when
+        another child exists (an IK hand hanging beside the forearm must not pull the chain away).
+        """
+        chain = [j]
+        while len(chain) < limit and self.children[chain[-1]]:
+            kids = self.children[chain[-1]]
+            plain = [c for c in kids if not self.info[c].flagged("control", "prop", "secondary")]
+            pool = plain or kids
+            chain.append(max(pool, key=lambda c: self.bone[c] + self.reach[c]))
+        return chain
+
+    def subtree(self, j: int) -> np.ndarray:
+        """Indices of the subtree of ``j`` (``j`` included)."""
+        return np.nonzero((self.tin >= self.tin[j]) & (self.tout <= self.tout[j]))[0]
+
+    def limb_length(self, branch: int, child: int) -> float:
+        """Path length from ``branch`` through ``child`` to the farthest joint below it."""
+        return float(self.bone[child] + self.reach[child])
