@@ -1,0 +1,169 @@
+"""FBX models (scene nodes): hierarchy, which are joints, and their local transforms.
+
+A model's local matrix follows the FBX SDK::
+
+    L = T · Roff · Rp · Rpre · R · Rpost⁻¹ · Rp⁻¹ · Soff · Sp · S · Sp⁻¹
+
+with T/R/S the ``Lcl Translation/Rotation/Scaling`` properties, Euler angles in degrees in the
+model's ``RotationOrder`` (``XYZ`` means X applied first), pre/post rotations in XYZ order, and
+the rotation/scaling offsets and pivots. As in Blender's importer, pre/post rotations and the
+rotation order apply only when ``RotationActive`` is set. Parents combine by plain matrix
+products (the RSrs inheritance rule). Geometric transforms affect meshes only and are ignored.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .document import Document, FbxObject, number, vector
+
+#: FBX RotationOrder enum -> axes in the order they are applied (extrinsic).
+ROTATION_ORDERS = {0: "xyz", 1: "xzy", 2: "yzx", 3: "yxz", 4: "zxy", 5: "zyx", 6: "xyz"}
+
+#: Model subclasses that are skeleton joints, and those kept when they sit above or below one.
+BONE_CLASSES = ("LimbNode", "Root")
+HELPER_CLASSES = ("Null",)
+
+
+@dataclass
+class Model:
+    """A model with its static transform parts (file units, degrees)."""
+
+    obj: FbxObject
+    parent: int  # index into the model list, -1 for the scene root
+    translation: np.ndarray
+    rotation: np.ndarray
+    scaling: np.ndarray
+    order: str
+    pre: np.ndarray  # 3x3
+    post_inv: np.ndarray  # 3x3
+    rotation_offset: np.ndarray
+    rotation_pivot: np.ndarray
+    scaling_offset: np.ndarray
+    scaling_pivot: np.ndarray
+
+
+def models(doc: Document) -> list[Model]:
+    """Every model, parents before children; a model under two models or on a cycle raises InputError."""
+    objs = [o for o in doc.objects.values() if o.kind == "Model"]
+    parent_id: dict[int, int | None] = {}
+    for o in objs:
+        for c in doc.by_child.get(o.id, ()):
+            if c.parent != 0 and c.parent not in doc.objects:
+                raise doc.error(o.node, f"model {o.name!r} is connected to unknown object id {c.parent}")
+        model_parents = [p for p, prop in doc.parents_of(o.id, "Model") if prop is None]
+        if len(model_parents) > 1:
+            raise doc.error(o.node, f"model {o.name!r} has {len(model_parents)} parent models")
+        parent_id[o.id] = model_parents[0].id if model_parents else None
+    order: list[int] = []
+    state: dict[int, int] = {}  # 1 visiting, 2 done
+    for o in objs:
+        chain = []
+        cur = o.id
+        while cur is not None and state.get(cur) != 2:
+            if state.get(cur) == 1:
+                raise doc.error(doc.objects[cur].node, f"model hierarchy has a cycle through {doc.objects[cur].name!r}")
+            state[cur] = 1
+            chain.append(cur)
+            cur = parent_id[cur]
+        for c in reversed(chain):
+            state[c] = 2
+            order.append(c)
+    index = {oid: i for i, oid in enumerate(order)}
+    out = []
+    for oid in order:
+        o = doc.objects[oid]
+        p = parent_id[oid]
+        out.append(_model(doc, o, index[p] if p is not None else -1))
+    return out
+
+
+def _model(doc: Document, o: FbxObject, parent: int) -> Model:
+    active = number(doc, o.props, "RotationActive", 0.0, o.node) != 0.0
+    order_code = int(number(doc, o.props, "RotationOrder", 0.0, o.node)) if active else 0
+    if order_code not in ROTATION_ORDERS:
+        raise doc.error(o.node, f"model {o.name!r}: unknown RotationOrder {order_code}")
+    zero = (0.0, 0.0, 0.0)
+    pre = vector(doc, o, "PreRotation", zero) if active else np.zeros(3)
+    post = vector(doc, o, "PostRotation", zero) if active else np.zeros(3)
+    return Model(
+        o, parent,
+        vector(doc, o, "Lcl Translation", zero), vector(doc, o, "Lcl Rotation", zero),
+        vector(doc, o, "Lcl Scaling", (1.0, 1.0, 1.0)), ROTATION_ORDERS[order_code],
+        Rotation.from_euler("xyz", pre, degrees=True).as_matrix(),
+        Rotation.from_euler("xyz", post, degrees=True).inv().as_matrix(),
+        vector(doc, o, "RotationOffset", zero), vector(doc, o, "RotationPivot", zero),
+        vector(doc, o, "ScalingOffset", zero), vector(doc, o, "ScalingPivot", zero),
+    )
+
+
+def euler_matrices(order: str, degrees: np.ndarray) -> np.ndarray:
+    """Rotation matrices (F, 3, 3) from FBX Euler angles (F, 3) given as (x, y, z) in degrees."""
+    axes = ["xyz".index(a) for a in order]
+    return Rotation.from_euler(order, np.asarray(degrees, dtype=np.float64)[:, axes], degrees=True).as_matrix()
+
+
+def local_matrices(m: Model, translation: np.ndarray, rotation: np.ndarray, scaling: np.ndarray) -> np.ndarray:
+    """Local matrices (F, 4, 4) of model ``m`` for per-frame T (F,3), R (F,3, degrees), S (F,3)."""
+    frames = len(translation)
+    r3 = m.pre @ euler_matrices(m.order, rotation) @ m.post_inv
+    # Pivots and offsets only move the origin: L = [R S, t] with t gathering every translation.
+    rs = r3 * scaling[:, None, :]
+    out = np.zeros((frames, 4, 4))
+    out[:, :3, :3] = rs
+    rp, sp = m.rotation_pivot, m.scaling_pivot
+    t = translation + m.rotation_offset + rp - r3 @ rp
+    t = t + np.einsum("fij,j->fi", r3, m.scaling_offset + sp) - np.einsum("fij,j->fi", rs, sp)
+    out[:, :3, 3] = t
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def joint_models(doc: Document, ms: list[Model]) -> list[int]:
+    """Indices of the joints: bones (LimbNode, Root, or linked by a skin cluster), the Null models
+    above them, and Null models hanging below a joint (end sites, sockets)."""
+    clustered = {o.id for c in doc.objects.values() if c.kind == "Deformer" and c.subclass == "Cluster"
+                 for o, _ in doc.children_of(c.id, "Model")}
+    is_bone = [m.obj.subclass in BONE_CLASSES or m.obj.id in clustered for m in ms]
+    chosen = set()
+    for i, bone in enumerate(is_bone):
+        if bone:
+            chosen.add(i)
+            p = ms[i].parent
+            while p >= 0:
+                if ms[p].obj.subclass in HELPER_CLASSES:
+                    chosen.add(p)
+                p = ms[p].parent
+    for i, m in enumerate(ms):  # parents precede children, so one pass reaches whole Null chains
+        if i not in chosen and m.obj.subclass in HELPER_CLASSES and m.parent in chosen:
+            chosen.add(i)
+    return sorted(chosen)
+
+
+def joint_parents(ms: list[Model], joints: list[int]) -> np.ndarray:
+    """Parent of each joint within the joint list: the nearest joint ancestor, -1 for none."""
+    position = {n: j for j, n in enumerate(joints)}
+    out = np.full(len(joints), -1, dtype=np.int64)
+    for j, n in enumerate(joints):
+        p = ms[n].parent
+        while p >= 0 and p not in position:
+            p = ms[p].parent
+        out[j] = position.get(p, -1)
+    return out
+
+
+def unique_names(ms: list[Model], joints: list[int]) -> list[str]:
+    """Joint names, with ``#k`` appended to repeats."""
+    seen: set[str] = set()
+    out = []
+    for n in joints:
+        base = name = ms[n].obj.name or f"model{ms[n].obj.id}"
+        k = 1
+        while name in seen:
+            k += 1
+            name = f"{base}#{k}"
+        seen.add(name)
+        out.append(name)
+    return out

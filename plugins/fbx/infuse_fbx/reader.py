@@ -1,0 +1,142 @@
+"""Reading a binary FBX 7.x ``.fbx`` file into an :class:`~infuse.asset.Asset` (metres, +Y up).
+
+Joints are the skeleton models (see :func:`.models.joint_models`); other models above them are
+folded into the roots. The rest pose is the models' static ``Lcl`` transforms. Units come from
+``GlobalSettings/UnitScaleFactor`` (centimetres per unit, default 1) and the up axis from
+``UpAxis``/``UpAxisSign``; ``units=`` / ``up_axis=`` override them. Each animation stack becomes a
+Motion sampled at the file's frame rate (``TimeMode``) over the stack's local time span. Names of
+blend-shape channels become ``morph_targets``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from infuse.asset import Asset
+from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
+from infuse.errors import UnusableInputError, UsageError
+from infuse.transforms import frame_change, global_matrices, motion_from_globals, skeleton_from_globals
+
+from . import animation, binary, models
+from .document import Document, build, number
+
+#: Largest frames x models product sampled for one take (bounds memory on absurd time spans).
+MAX_SAMPLES = 4_000_000
+
+_AXES = "XYZ"
+
+
+def read(path: Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
+    """Read a binary FBX file; see the module docstring for what is kept and how it is converted."""
+    path = Path(path)
+    data = path.read_bytes()
+    head = data[:4096]
+    if not binary.is_binary_fbx(data) and (head.lstrip().startswith(b"; FBX") or b"FBXHeaderExtension:" in head):
+        raise UnusableInputError(path, "ASCII FBX is not supported; re-export the file as binary FBX")
+    version, root = binary.parse(path, data)
+    if version < 7000:
+        raise UnusableInputError(path, f"FBX version {version} (6.x) is not supported; re-export as FBX 2011 or later (7.x)")
+    doc = build(path, version, root)
+    settings = doc.settings()
+    scale, unit_name, units_by = _units(doc, settings, units)
+    up = _up_axis(doc, settings, up_axis)
+    ms = models.models(doc)
+    joints = models.joint_models(doc, ms)
+    if not joints:
+        raise UnusableInputError(path, "no skeleton: the file has no LimbNode, Root or skinned models")
+    parents = np.array([m.parent for m in ms], dtype=np.int64)
+    change = frame_change(scale, up)
+    rest_local = np.stack([models.local_matrices(m, m.translation[None], m.rotation[None], m.scaling[None])[0] for m in ms])
+    rest = change @ global_matrices(parents, rest_local[None])[0, joints]
+    skeleton = skeleton_from_globals(models.unique_names(ms, joints), models.joint_parents(ms, joints), rest)
+
+    fps = animation.frame_rate(doc, settings)
+    motions = {}
+    takes_meta = []
+    for take in animation.takes(doc):
+        frames = int(np.floor((take.stop - take.start) * fps + 1e-6)) + 1
+        if frames * len(ms) > MAX_SAMPLES:
+            raise UnusableInputError(path, f"animation {take.name!r} is too long to sample: {frames} frames")
+        t = take.start + np.arange(frames) / fps
+        local = np.broadcast_to(rest_local, (frames,) + rest_local.shape).copy()
+        for i, m in enumerate(ms):
+            channels = [take.tracks.get((m.obj.id, c)) for c in range(3)]
+            if any(channels):
+                trs = [_channel(track, static, t) for track, static in zip(channels, (m.translation, m.rotation, m.scaling))]
+                local[:, i] = models.local_matrices(m, *trs)
+        g = change @ global_matrices(parents, local)[:, joints]
+        motions[take.name] = motion_from_globals(skeleton, fps, g, name=take.name)
+        takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
+    meta = {"fbx_version": version, "unit_scale_factor_cm": number(doc, settings, "UnitScaleFactor", 1.0),
+            "axes": _axis_meta(doc, settings), "takes": takes_meta,
+            "folded_models": [ms[i].obj.name for i in sorted(_ancestors(ms, joints) - set(joints))]}
+    return Asset(path, "fbx", skeleton, motions, _morph_targets(doc), source_units=unit_name, source_up_axis=up,
+                 units_detected_by=units_by, meta=meta)
+
+
+def _channel(track, static: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Per-frame (F, 3) values of one T/R/S channel: curves where present, else defaults or the rest value."""
+    out = np.broadcast_to(static, (len(t), 3)).copy()
+    for axis, comp in enumerate(track or ()):
+        if isinstance(comp, animation.Curve):
+            out[:, axis] = animation.sample(comp, t)
+        elif np.isfinite(comp):
+            out[:, axis] = comp
+    return out
+
+
+def _units(doc: Document, settings: dict, override: str | None) -> tuple[float, str, str]:
+    if override is not None:
+        if override not in UNIT_SCALES:
+            raise UsageError(f"unknown unit {override!r}; known: {', '.join(UNIT_SCALES)}")
+        return UNIT_SCALES[override], override, "override"
+    cm = number(doc, settings, "UnitScaleFactor", 1.0)
+    if cm <= 0:
+        raise doc.error(doc.root.find("GlobalSettings"), f"UnitScaleFactor {cm} must be positive")
+    scale = cm * 0.01
+    name = next((u for u, s in UNIT_SCALES.items() if abs(s - scale) <= 1e-9 * s), f"{scale:g} m")
+    return scale, name, "file"
+
+
+def _up_axis(doc: Document, settings: dict, override: str | None) -> str:
+    if override is not None:
+        if override not in UP_AXIS_ROTATIONS:
+            raise UsageError(f"unknown up axis {override!r}; known: {', '.join(UP_AXIS_ROTATIONS)}")
+        return override
+    axis = int(number(doc, settings, "UpAxis", 1.0))
+    sign = number(doc, settings, "UpAxisSign", 1.0)
+    if axis not in (0, 1, 2):
+        raise doc.error(doc.root.find("GlobalSettings"), f"UpAxis {axis} is not 0, 1 or 2")
+    name = ("-" if sign < 0 else "") + _AXES[axis]
+    if name not in UP_AXIS_ROTATIONS:
+        raise UnusableInputError(doc.path, f"up axis {name} is not supported")
+    return name
+
+
+def _axis_meta(doc: Document, settings: dict) -> dict:
+    """The file's axis system as signed axis names (up, front, coord)."""
+    out = {}
+    for key in ("Up", "Front", "Coord"):
+        axis = int(number(doc, settings, f"{key}Axis", -1.0))
+        if axis in (0, 1, 2):
+            out[key.lower()] = ("-" if number(doc, settings, f"{key}AxisSign", 1.0) < 0 else "+") + _AXES[axis]
+    return out
+
+
+def _ancestors(ms: list[models.Model], joints: list[int]) -> set[int]:
+    out = set(joints)
+    for j in joints:
+        p = ms[j].parent
+        while p >= 0 and p not in out:
+            out.add(p)
+            p = ms[p].parent
+    return out
+
+
+def _morph_targets(doc: Document) -> list[str]:
+    names: list[str] = []
+    for obj in doc.objects.values():
+        if obj.kind == "Deformer" and obj.subclass == "BlendShapeChannel" and obj.name not in names:
+            names.append(obj.name)
+    return names
