@@ -138,7 +138,7 @@ def test_cli_rejects_malformed_file(case, malformed, capsys):
     assert "Traceback" not in err[0] and "internal error" not in err[0]
 
 
-@pytest.mark.parametrize("case", ["asf_truncated_2", "asf_cycle", "amc_truncated_5", "amc_unknown_bone"])
+@pytest.mark.parametrize("case", ["asf_cycle", "amc_truncated_5"])
 def test_real_cli_process(case, malformed):
     path = malformed[case]
     run = subprocess.run([str(INFUSE), "info", str(path), "--json"], capture_output=True, text=True, cwd=REPO, timeout=120)

@@ -75,7 +75,6 @@ def test_motion_finds_its_skeleton(rel):
 
 @pytest.mark.parametrize("rel", [
     "smartbody/ChrBrad/ChrBrad.sk",
-    "smartbody/behaviorsets/reaching/skeletons/common.sk",
     "smartbody/behaviorsets/MaleLocomotion/motions/ChrUtah_Jog001.skm",
     "smartbody/ChrBrad/face/ChrBrad@045_blink_rt.skm",
 ])

@@ -140,7 +140,7 @@ def test_generator_covers_every_listed_case(malformed):
     assert set(malformed) == {f"sk_{c}" for c in SK_CASES} | {f"skm_{c}" for c in SKM_CASES}
 
 
-@pytest.mark.parametrize("case", ["sk_truncated_3", "sk_garbage_bytes", "skm_nan_value", "skm_unknown_joint"])
+@pytest.mark.parametrize("case", ["sk_truncated_3", "skm_unknown_joint"])
 def test_real_cli_process(case, malformed):
     path = malformed[case]
     run = subprocess.run([str(INFUSE), "info", str(path), "--json"], capture_output=True, text=True, cwd=REPO, timeout=120)
