@@ -47,7 +47,7 @@ def _load_asf(path: str, mtime_ns: int, size: int) -> AsfFile:
 def load_asf(path: Path) -> AsfFile:
     """Parse ``path`` (cached while the file is unchanged)."""
     st = path.stat()
-    return _load_asf(str(path.resolve()), st.st_mtime_ns, st.st_size)
+    return _load_asf(str(path.absolute()), st.st_mtime_ns, st.st_size)
 
 
 def _skeleton(asf: AsfFile, metres: float) -> Skeleton:
@@ -126,7 +126,7 @@ def read_asf(path: Path, units: str | None = None, up_axis: str | None = None) -
 def _matching_asf(amc_path: Path, amc: AmcFile) -> tuple[AsfFile, dict]:
     """The ``.asf`` beside the motion that has all its bones; a name like ``11_01.amc`` prefers ``11.asf``."""
     bones = set(amc.values) - {"root"}
-    candidates = sorted(p for p in amc_path.resolve().parent.glob("*.asf") if p.is_file())
+    candidates = sorted(p for p in amc_path.absolute().parent.glob("*.asf") if p.is_file())
     if not candidates:
         raise UnusableInputError(amc_path, "no .asf skeleton beside it; pass skeleton=PATH")
     fitting, partial, unreadable = [], [], {}

@@ -24,7 +24,7 @@ PLACES = (
 def load_sk(path: Path) -> SkFile:
     """Parse ``path`` (cached while the file is unchanged)."""
     st = path.stat()
-    return _load_sk(str(path.resolve()), st.st_mtime_ns, st.st_size)
+    return _load_sk(str(path.absolute()), st.st_mtime_ns, st.st_size)
 
 
 @lru_cache(maxsize=32)
@@ -35,7 +35,7 @@ def _load_sk(path: str, mtime_ns: int, size: int) -> SkFile:
 def find_skeleton(skm_path: Path, joints: list[str]) -> tuple[SkFile | None, dict]:
     """The best ``.sk`` for a motion animating ``joints``, and a record of the search for ``Asset.meta``."""
     wanted = set(joints)
-    folder = skm_path.resolve().parent
+    folder = skm_path.absolute().parent
     best: tuple[int, SkFile, str] | None = None
     tried: list[str] = []
     skipped: dict[str, str] = {}
