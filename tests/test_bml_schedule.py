@@ -9,7 +9,7 @@ from lxml import etree
 import infuse
 from infuse import registry
 from infuse.bml import (
-    BehaviourPlan, EstimatedSpeechTimer, Scheduler, SpeechTiming, TimingModel, installed_handlers, parse_bml,
+    BehaviourPlan, EstimatedSpeechTimer, Scheduler, SpeechTiming, TimingModel, installed_handlers,
 )
 from infuse.bml.speech import EngineSpeechTimer
 from infuse.plugin_types import Component
@@ -263,3 +263,18 @@ def test_speech_timing_estimate_is_monotonic():
     values = [timing.mark_times_s[str(i)] for i in range(len(text) + 1)]
     assert values == sorted(values) and values[-1] <= timing.duration_s
     assert isinstance(timing, SpeechTiming) and 1.0 < timing.duration_s < 3.0
+
+
+def test_real_tts_engine_marks_drive_the_schedule():
+    speech = pytest.importorskip("infuse.speech")
+    try:
+        engine = speech.tts_engine("espeak")
+    except infuse.InfuseError as exc:
+        pytest.skip(f"espeak engine not available: {exc}")
+    s = Scheduler(speech_timer=engine)  # an engine is wrapped in an EngineSpeechTimer
+    (r,) = s.submit(bml('<speech id="s"><text>Nice to <sync id="m"/>meet you.</text></speech>'
+                        '<head id="h" lexeme="NOD" stroke="s:m"/>'))
+    t = r.local_times()
+    assert r.activation("s").parameters["timing_source"] == "espeak" and not r.issues
+    assert t["s"]["start"] < t["s"]["m"] < t["s"]["end"] and t["h"]["stroke"] == pytest.approx(t["s"]["m"])
+    assert r.activation("s").parameters["tts"]["phonemes"]

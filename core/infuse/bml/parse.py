@@ -8,6 +8,7 @@ others to a placeholder so their attributes can be reported as unknown rather th
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 
 from lxml import etree
@@ -301,8 +302,6 @@ def _text_and_marks(element) -> tuple[str | None, list]:
 
 def _unique_ids(behaviours: list[Behaviour], block_id: str, issues: list[Issue]) -> list[Behaviour]:
     """Give every behaviour an id: unnamed ones get ``element_N``, a repeated id gets ``id#N`` and a warning."""
-    from dataclasses import replace
-
     taken = {b.id for b in behaviours if b.id}
     seen: set[str] = set()
     counters: dict[str, int] = {}

@@ -24,7 +24,7 @@ from .model import (
 )
 from .parse import parse_bml, parse_bml_file
 from .solve import BlockSolver
-from .speech import EstimatedSpeechTimer
+from .speech import EngineSpeechTimer, EstimatedSpeechTimer
 from .sync import SyncRef, TimingModel
 
 
@@ -104,7 +104,8 @@ class Scheduler:
     """Schedules BML blocks for one scene (any number of characters).
 
     ``handlers``: element -> handler (default: the installed BML behaviour plugins); ``speech_timer``:
-    real TTS timings when given, an estimate from the text otherwise; ``clip_timing`` and ``locate``: see
+    a :class:`~infuse.bml.speech.SpeechTimer` or a TTS engine (real timings), an estimate from the text
+    when None; ``clip_timing`` and ``locate``: see
     :class:`~infuse.bml.behaviours.BehaviourContext`.
     """
 
@@ -120,6 +121,8 @@ class Scheduler:
             self.handlers = installed_handlers()
         if self.speech_timer is None:
             self.speech_timer = EstimatedSpeechTimer()
+        elif not hasattr(self.speech_timer, "time_speech") and hasattr(self.speech_timer, "synthesize"):
+            self.speech_timer = EngineSpeechTimer(self.speech_timer)  # a TTS engine given directly
         self.blocks: dict[str, BlockSchedule] = {}
         self._pending: list = []
         self._sequence = itertools.count()
