@@ -3,7 +3,9 @@
 The thumb is the chain that leaves the hand at an angle and starts near the wrist (or is named
 so); the other fingers are ordered across the palm starting next to the thumb. Metacarpal and
 palm joints (a first bone that starts at the wrist) are not finger joints. A hand without an
-identifiable thumb and at least two other fingers (a mitten) keeps its fingers unmapped.
+identifiable thumb and at least two other fingers (a mitten) keeps its fingers unmapped, and so does
+a stylized hand of fewer than five digits whose thumb is not named (which digit is missing cannot
+be told).
 """
 from __future__ import annotations
 
@@ -38,11 +40,16 @@ def _trim(view: SkeletonView, chain: list[int]) -> list[int]:
 
 
 def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray) -> list[int]:
+    """A finger starts at its knuckle: leading helper, metacarpal and palm joints are dropped, and a
+    first joint that starts at the wrist (a metacarpal by position) too."""
+    while len(chain) > 1:
+        first = view.info[chain[0]]
+        if first.flagged("metacarpal", "helper") or first.has("palm"):
+            chain = chain[1:]
+        else:
+            break
     if len(chain) < 2:
         return chain
-    first = view.info[chain[0]]
-    if first.flagged("metacarpal") or first.has("palm") or first.flagged("helper"):
-        return chain[1:]
     tip = view.P[view.far[chain[0]]]
     reach = float(np.linalg.norm(tip - wrist_pos))
     if reach > 1e-9 and float(np.linalg.norm(view.P[chain[0]] - wrist_pos)) < 0.3 * reach:
@@ -50,13 +57,20 @@ def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray
     return chain
 
 
+def _drop_helpers(view: SkeletonView, chain: list[int]) -> list[int]:
+    """A thumb starts at its first real joint: leading helper joints are dropped."""
+    while len(chain) > 1 and view.info[chain[0]].flagged("helper"):
+        chain = chain[1:]
+    return chain
+
+
 def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:
     """Finger name -> chain joints (finger segments 1..4), and a note. Empty when unidentifiable."""
     starts = _finger_roots(view, roots, wrist_pos)
     chains = {r: _trim(view, view.main_chain(r, 6)) for r in starts}
-    chains = {r: c for r, c in chains.items() if c}
+    chains = {r: c for r, c in chains.items() if c and not (len(c) == 1 and view.info[c[0]].flagged("end"))}
     if len(chains) < 3:
-        return {}, f"{len(chains)} digit chain(s): a mitten or no fingers"
+        return _few_digits(view, chains, wrist_pos)
     bases = np.array([view.P[r] for r in chains])
     tips = np.array([view.P[view.far[r]] for r in chains])
     dirs = tips - wrist_pos
@@ -71,6 +85,8 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
         thumb, why = named[0], "named thumb"
     elif numbered is not None:
         thumb, why = numbered, "lowest-numbered finger (thumb)"
+    elif len(keys) < 5:
+        return {}, f"{len(keys)} digits and none named thumb: a stylized hand, digits left unmapped"
     else:
         dev = np.zeros(len(keys))
         for i in range(len(keys)):
@@ -89,10 +105,27 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
     if len(others) < 2:
         return {}, "a thumb and a single finger (mitten): digits left unmapped"
     ordered = _order_fingers(view, thumb, others, wrist_pos, dirs.mean(axis=0))
-    out = {"thumb": chains[thumb][:4]}
+    out = {"thumb": _drop_helpers(view, chains[thumb])[:4]}
     for name, r in zip(FINGER_ORDER, ordered):
         out[name] = _drop_metacarpal(view, chains[r], wrist_pos)[:4]
     return out, why
+
+
+def _few_digits(view: SkeletonView, chains: dict[int, list[int]], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:
+    """One or two digit chains: a named thumb is kept; beside it a single-joint "fingers" segment
+    (CMU) is the index; a second chain of several joints makes a mitten, left unmapped."""
+    thumbs = [r for r in chains if view.info[r].has("thumb")]
+    if len(thumbs) != 1:
+        return {}, f"{len(chains)} digit chain(s) and no named thumb: digits left unmapped"
+    thumb = thumbs[0]
+    others = [r for r in chains if r != thumb]
+    if not others:
+        return {"thumb": _drop_helpers(view, chains[thumb])[:4]}, "a thumb and no other finger"
+    finger = _drop_metacarpal(view, chains[others[0]], wrist_pos)
+    if len(finger) == 1:
+        return {"thumb": _drop_helpers(view, chains[thumb])[:4], "index": finger}, \
+            "a thumb and one segment for all fingers"
+    return {}, "a thumb and a single finger (mitten): digits left unmapped"
 
 
 def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
@@ -103,7 +136,8 @@ def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
         if not info.has("finger") or not info.numbers or info.roles & {"index", "middle", "ring", "pinky", "thumb"}:
             return None
         nums.append(info.numbers[0])
-    if len(set(nums)) != len(nums) or len(nums) < 4:
+    ordered = sorted(nums)
+    if len(nums) != 5 or ordered != list(range(ordered[0], ordered[0] + 5)):
         return None
     return keys[int(np.argmin(nums))]
 

@@ -58,11 +58,19 @@ def _bend(P: np.ndarray) -> np.ndarray:
 
 
 def _role_cost(view: SkeletonView, chain: list[int], good: dict[str, float], bad_flags: dict[str, float]) -> np.ndarray:
-    """(m+1,) name cost of putting each chain joint in one slot (last entry: the virtual point)."""
+    """(m+1,) name cost of putting each chain joint in one slot (last entry: the virtual point).
+
+    ``good``: role -> bonus (negative: the name says another slot). A role every chain joint has
+    (``hand.L``, ``hand.L.001``, ``hand.L.002``) tells nothing and is ignored.
+    """
     out = np.zeros(len(chain) + 1)
-    for i, j in enumerate(chain):
-        info = view.info[j]
-        out[i] -= max((w for r, w in good.items() if r in info.roles), default=0.0)
+    infos = [view.info[j] for j in chain]
+    common = set.intersection(*(set(i.roles) for i in infos)) if len(infos) >= 3 else set()
+    for i, info in enumerate(infos):
+        roles = info.roles - common
+        pos = max((w for r, w in good.items() if r in roles and w > 0), default=0.0)
+        neg = min((w for r, w in good.items() if r in roles and w < 0), default=0.0)
+        out[i] -= pos if pos else neg
         out[i] += sum(w for f, w in bad_flags.items() if f in info.flags)
     return out
 
@@ -121,6 +129,23 @@ def _prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scal
     return out
 
 
+def _leg_prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, up) -> np.ndarray:
+    """Like :func:`_prefix_costs` for a leg: a joint whose bone to the next runs sideways (a pelvis
+    bone from the hips' centre to the hip socket) is cheap to leave out."""
+    out = np.zeros(len(chain) + 1)
+    acc = 0.0
+    for i, j in enumerate(chain):
+        out[i] = acc
+        cheap = view.info[j].flagged("helper") or float(np.linalg.norm(view.P[j] - anchor)) < 1e-3 * scale
+        if not cheap and up is not None and i + 1 < len(chain):
+            seg = view.P[chain[i + 1]] - view.P[j]
+            n = float(np.linalg.norm(seg))
+            cheap = n < 1e-3 * scale or -float(seg @ up) / n < 0.5
+        acc += 0.3 if cheap else 0.9
+    out[-1] = acc
+    return out
+
+
 def _mirror_offsets(view: SkeletonView, chains: list[list[int]], anchor: np.ndarray) -> list[np.ndarray]:
     """Per chain point, half the distance to the same point of the mirror chain: how far the point
     lies from the body's middle plane. Past the shorter chain, the distance to the anchor."""
@@ -171,8 +196,8 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         if up is not None:  # thigh and shin point away from the head
             for seg, length in ((Pk - Ph, thigh), (Pa - Pk, shin)):
                 down = -(seg @ up) / np.maximum(length, 1e-9)
-                cost += np.where(down < 0.5, 3.0 * (0.5 - down), 0.0)
-        cost += _prefix_costs(view, chain, anchor, scale, 0.9)[h]
+                cost += np.where(down < 0.5, 6.0 * (0.5 - down), 0.0)
+        cost += _leg_prefix_costs(view, chain, anchor, scale, up)[h]
         skip = _skip_costs(view, chain, scale)
         cost += _between(skip, h, k) + _between(skip, k, a)
         chain_arr = np.array(chain)
@@ -332,7 +357,7 @@ def relocate(view: SkeletonView, target: np.ndarray, exclude: set[int], toleranc
         score = d[j] / tolerance
         score -= 0.5 * (len(view.children[j]) > 0)
         score -= 0.6 * bool(info.roles & {"hand", "foot"})
-        score += 0.8 * info.flagged("secondary", "prop", "face") + 0.3 * info.flagged("end")
+        score += 0.8 * info.flagged("secondary", "prop", "face", "control") + 0.3 * info.flagged("end")
         score += 0.8 * bool(info.roles & {"thumb", "index", "middle", "ring", "pinky", "finger", "toe"})
         if score < best_score:
             best, best_score = j, score

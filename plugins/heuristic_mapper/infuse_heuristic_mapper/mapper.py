@@ -245,8 +245,8 @@ def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body
     mid = view.P[r.slots[middle]]
     target = view.P[j] if j >= 0 else r.predicted[end]
     seg = float(np.linalg.norm(target - mid))
-    exclude = set(view.subtree(r.chain[0]).tolist()) | body_chain
-    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 0.5) * seg, 1e-6))
+    exclude = body_chain
+    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
     if new >= 0:
         r.slots[end] = new
         r.notes[end] = "IK-driven: found where the limb ends, outside its chain"
@@ -323,18 +323,21 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
     torso = [j for j in path if not view.info[j].flagged("control", "secondary", "prop", "helper")]
     neck_from_top = False
     chest_why = "chest: the joint the arms hang from"
+    above = _head_branch(view, top, arms, up)
     if torso and shoulders:
+        # the arms may hang from the neck (3ds Max Biped): a joint at shoulder height, named neck or
+        # with the head right above it, is the neck
         s_mean = P[shoulders].mean(axis=0)
-        t_len = float(np.dot(s_mean - P[base], up))
-        height = float(np.dot(P[top] - s_mean, up)) / max(t_len, 1e-9)
+        t_len = max(float(np.dot(s_mean - P[base], up)), 1e-9)
+        height = float(np.dot(P[top] - s_mean, up)) / t_len
+        to_next = float(np.linalg.norm(P[above[0]] - P[top])) / t_len if above else 1.0
         info = view.info[top]
         named_neck = info.has("neck") and not info.roles & {"chest", "spine"}
         named_torso = bool(info.roles & {"chest", "spine", "hips"})
-        if named_neck or (not named_torso and height > -0.1 and len(torso) > 1):
+        if named_neck or (not named_torso and height > -0.1 and to_next < 0.35 and len(torso) > 1):
             neck_from_top = True
             torso = torso[:-1]
             chest_why = "chest: the last torso joint below the neck that carries the arms"
-    above = _head_branch(view, top, arms, up)
     chain = ([top] if neck_from_top else []) + above
     head = _pick_head(view, chain, base, up, top, neck_from_top)
     if head < 0:
@@ -511,6 +514,10 @@ def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> N
             forefoot = _big_toe(view, toes, base, up)
         else:
             forefoot = max(toes, key=lambda c: view.limb_length(ankle, c))
+    if forefoot >= 0 and view.info[forefoot].flagged("end") and not view.children[forefoot]:
+        result.put(f"{s}_forefoot", None, 0.6, "the only joint past the ankle is the toe tip")
+        result.put(f"{s}_toe", forefoot, 0.6, "toe end: the tip of the foot")
+        return
     if forefoot >= 0:
         result.put(f"{s}_forefoot", forefoot, 0.8, "ball of the foot: the joint after the ankle")
         nxt = [c for c in view.children[forefoot] if not view.info[c].flagged("control", "prop")]

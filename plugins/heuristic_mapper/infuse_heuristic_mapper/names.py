@@ -178,7 +178,8 @@ def common_prefix(names: list[str]) -> str:
 @lru_cache(maxsize=8192)
 def analyse(name: str, prefix: str = "") -> NameInfo:
     """The :class:`NameInfo` of one joint name, with ``prefix`` (shared by the skeleton's names) removed."""
-    text = strip_namespace(name)
+    helper = name.startswith("_")  # "__LeftShoulder": an internal helper joint
+    text = strip_namespace(name).lstrip("_")
     if prefix and text.startswith(prefix) and len(text) > len(prefix):
         text = text[len(prefix):]
     low = text.lower()
@@ -228,6 +229,8 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
     if "leg" in roles:
         roles.discard("leg")
         roles.add("legpart")
+    if helper:
+        flags.add("helper")
     if "end" in flags and "toe" in roles:
         roles.add("toe_end")
     return NameInfo(tuple(joined), side, frozenset(roles), frozenset(flags), tuple(numbers))
