@@ -165,9 +165,13 @@ class Renderer:
             panel.height = max(max(heights), 0.1)
             lowest = float(pts[..., 1].min())
             panel.ground = 0.0 if abs(lowest) < 0.1 * panel.height else lowest
-            markers = [self._marker_points(i) for i in panel.members]
-            contents.append(np.concatenate([pts, on_ground(pts, panel.ground)] + markers, axis=1))
-            targets.append(self._follow_target(panel.members[0]) if follow else None)
+            markers = np.concatenate([self._marker_points(i) for i in panel.members], axis=1)
+            target = self._follow_target(panel.members[0]) if follow else None
+            if target is not None:  # a following camera frames the markers near the figure, not far-away ones
+                near = np.linalg.norm(markers - target[:, None], axis=-1) <= 1.5 * panel.height
+                markers = np.where(near[..., None], markers, target[:, None])
+            contents.append(np.concatenate([pts, on_ground(pts, panel.ground), markers], axis=1))
+            targets.append(target)
             _, _, w, h = panel.rect
             top = self.header + panel.label_height + pad
             rects.append((pad, top, w - 2 * pad, h - top - self.footer - pad))
