@@ -352,6 +352,8 @@ def test_figure_validates_shapes(skeleton):
         Figure.from_skeleton(skeleton, contacts={"LeftAnkle": [True, False]})
     with pytest.raises(ValueError, match="style"):
         Marker((0, 0, 0), style="star")
+    with pytest.raises(ValueError, match="unknown joint 'Eye'"):
+        Figure.from_skeleton(skeleton, markers=[Marker((0, 1, 1), ray_from="Eye")])
 
 
 def test_named_views_put_the_character_where_expected(skeleton):

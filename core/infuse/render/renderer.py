@@ -199,23 +199,18 @@ class Renderer:
         panel.grid = (a, b)
 
     def _project(self) -> None:
-        """Pixels and nearness of every figure point, its ground shadow and markers, all frames at once."""
-        self._pix, self._near, self._shadow, self._marker_pix, self._marker_near = [], [], [], [], []
+        """Pixels and nearness of every figure point, its ground shadow and markers, all frames at once.
+
+        Each table maps a figure index to (T, N, 2) pixels or (T, N) nearness on its panel's image.
+        """
+        self._pix, self._near, self._shadow, self._marker_pix, self._marker_near = {}, {}, {}, {}, {}
         for panel in self.panels:
-            nears = []
             for i in panel.members:
-                pix, near = panel.view.project(self._points[i])
-                self._pix.append((i, pix))
-                self._near.append((i, near))
-                self._shadow.append((i, panel.view.project(on_ground(self._points[i], panel.ground))[0]))
-                mp, mn = panel.view.project(self._marker_points(i))
-                self._marker_pix.append((i, mp))
-                self._marker_near.append((i, mn))
-                nears.append(near[:, self.figures[i].visible])
-            allnear = np.concatenate([n.reshape(-1) for n in nears])
-            panel.near_range = (float(allnear.min()), float(allnear.max()))
-        for name in ("_pix", "_near", "_shadow", "_marker_pix", "_marker_near"):
-            setattr(self, name, dict(sorted(getattr(self, name))))
+                self._pix[i], self._near[i] = panel.view.project(self._points[i])
+                self._shadow[i] = panel.view.project(on_ground(self._points[i], panel.ground))[0]
+                self._marker_pix[i], self._marker_near[i] = panel.view.project(self._marker_points(i))
+            near = np.concatenate([self._near[i][:, self.figures[i].visible].reshape(-1) for i in panel.members])
+            panel.near_range = (float(near.min()), float(near.max()))
 
     # -- drawing ----------------------------------------------------------------------------------
     def __len__(self) -> int:
@@ -308,8 +303,8 @@ class Renderer:
     def _draw_figures(self, draw: ImageDraw.ImageDraw, panel: _Panel, t: int, bone_w: float, edge: float) -> None:
         """Bones, joints, markers and rays of the panel's figures, sorted far to near; then overlays."""
         st, u = self.style, self.unit
-        items = []  # (nearness, order, painter)
-        overlays = []
+        items = []  # (nearness, order, painter): drawn far to near
+        rings, labels = [], []  # drawn on top of everything
         for i in panel.members:
             fig, frame = self.figures[i], self.frames[i][t]
             pix, near = self._pix[i][t], self._near[i][t]
@@ -331,29 +326,24 @@ class Renderer:
             mpix, mnear = self._marker_pix[i][t], self._marker_near[i][t]
             for k, marker in enumerate(fig.markers):
                 centre, z = mpix[k], mnear[k]
-                if marker.ray_from is not None and marker.ray_from in fig.skeleton.index:
+                if marker.ray_from is not None:
                     src = fig.skeleton.index[marker.ray_from]
                     items.append(((z + near[src]) / 2.0, 2, lambda a=pix[src], b=centre, c=marker.color:
                                   dashed_line(draw, a, b, c, max(0.45 * u, self.ss), 1.6 * u)))
                 items.append((z, 3, lambda m=marker, c=centre, i=i: self._draw_marker(draw, panel, t, m, c, i)))
                 if marker.label:
-                    overlays.append((centre, marker.label, marker.color))
-            for j in np.nonzero(fig.highlight & fig.visible[:nj])[0]:
-                overlays.append((pix[j], None, st.highlight))
-            for j, text in fig.names.items():
-                if fig.visible[j]:
-                    overlays.append((pix[j], text, st.text))
+                    labels.append((centre, marker.label, marker.color))
+            rings += [pix[j] for j in np.nonzero(fig.highlight & fig.visible[:nj])[0]]
+            labels += [(pix[j], text, st.text) for j, text in fig.names.items() if fig.visible[j]]
         items.sort(key=lambda it: (it[0], it[1]))
         for _, _, paint in items:
             paint()
         placer = LabelPlacer(draw, (0, 0, panel.rect[2], panel.rect[3]))
         small = font(round(self.font_px * 0.78))
-        for centre, text, color in overlays:
-            if text is None:  # a highlight ring
-                disc(draw, centre, bone_w * 1.7, None, color, max(0.45 * u, self.ss))
-        for centre, text, color in overlays:
-            if text is not None:
-                placer.place(centre, text, small, color, self.style.background, bone_w * 1.2)
+        for centre in rings:
+            disc(draw, centre, bone_w * 1.7, None, st.highlight, max(0.45 * u, self.ss))
+        for centre, text, color in labels:
+            placer.place(centre, text, small, color, st.background, bone_w * 1.2)
 
     def _draw_marker(self, draw, panel: _Panel, t: int, marker, centre, i: int) -> None:
         u, view = self.unit, panel.view

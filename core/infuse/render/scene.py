@@ -180,6 +180,9 @@ class Figure:
                 raise ValueError(f"figure {self.label!r}: contact array for {name!r} has {len(flags)} frames, expected {len(pos)}")
             contacts[self._joint(name, "contacts")] = flags
         self.contacts = contacts
+        for marker in self.markers:
+            if marker.ray_from is not None:
+                self._joint(marker.ray_from, f"marker {marker.label!r} ray_from")
 
     # -- construction ----------------------------------------------------------------------------
     @classmethod
