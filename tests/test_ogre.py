@@ -114,9 +114,16 @@ def _expected(t):
     return np.array([m[:3, 3] for m in (hips, spine, spine @ T(0, 50, 0), spine @ T(10, 30, 0))])
 
 
-def test_keyframes_offset_the_binding_pose_and_wrap(tmp_path):
+QUATERNION_KEYS = SKELETON.replace(
+    '<rotate angle="1.5707963267948966"><axis x="0" y="0" z="1"/></rotate>',
+    '<rotate qx="0" qy="0" qz="0.7071067811865476" qw="0.7071067811865476"/>')
+
+
+@pytest.mark.parametrize("text", [SKELETON, QUATERNION_KEYS], ids=["angle-axis", "quaternion"])
+def test_keyframes_offset_the_binding_pose_and_wrap(tmp_path, text):
+    assert "qz=" in QUATERNION_KEYS
     path = tmp_path / "small.skeleton.xml"
-    path.write_text(SKELETON)
+    path.write_text(text)
     asset = infuse.load(path, units="cm")
     sk = asset.skeleton
     assert sk.names == ("Hips", "Spine", "Head", "Arm") and list(sk.parents) == [-1, 0, 1, 1]

@@ -72,3 +72,13 @@ def test_motion_from_globals_reproduces_every_frame():
     assert still.joint_translations is None
     _, pos = forward_kinematics(sk, still.local_rotations, still.root_translations)
     assert np.allclose(pos, g[:1, :, :3, 3], atol=1e-9)
+
+
+def test_decompose_sheared_block_gives_the_nearest_rotation():
+    from scipy.linalg import polar
+
+    parent = transforms.compose(np.zeros(3), quat.IDENTITY, np.array([1.0, 3.0, 1.0]))
+    child = transforms.compose(np.zeros(3), quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), 0.5))
+    _, rot, _ = transforms.decompose(parent @ child)
+    nearest, _ = polar((parent @ child)[:3, :3])
+    assert np.allclose(quat.to_matrix(rot), nearest, atol=1e-9)

@@ -43,10 +43,19 @@ def decompose(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """
     m = np.asarray(matrices, dtype=np.float64)
     block = m[..., :3, :3]
-    u, _, vt = np.linalg.svd(block)
-    det = np.linalg.det(u @ vt)
-    u[..., :, 2] *= np.where(det < 0.0, -1.0, 1.0)[..., None]
-    rot = u @ vt
+    # T·R·S blocks have orthogonal columns: dividing by their lengths gives R exactly. Only blocks
+    # with shear (non-uniform scale under a rotated child) need the slower polar decomposition.
+    det = np.einsum("...i,...i->...", block[..., :, 0], np.cross(block[..., :, 1], block[..., :, 2]))
+    lengths = np.linalg.norm(block, axis=-2)
+    lengths[..., 2] *= np.where(det < 0.0, -1.0, 1.0)
+    safe = np.where(np.abs(lengths) > 1e-12, lengths, 1.0)
+    rot = block / safe[..., None, :]
+    skew = np.abs(np.swapaxes(rot, -1, -2) @ rot - np.eye(3)).max(axis=(-1, -2)) > 1e-6
+    if np.any(skew):
+        u, _, vt = np.linalg.svd(block[skew])
+        flip = np.linalg.det(u @ vt) < 0.0
+        u[flip, :, 2] *= -1.0
+        rot[skew] = u @ vt
     scales = np.einsum("...ji,...ji->...i", rot, block)  # diagonal of R^T M, signed
     return m[..., :3, 3].copy(), quat.normalize(quat.from_matrix(rot)), scales
 

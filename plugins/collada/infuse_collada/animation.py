@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .curves import Curve, sample
+from .curves import Curve, sample_all
 from .document import Document
 from .scene import MEMBERS, TRANSFORM_SIZES, SceneNode
 
@@ -128,8 +128,7 @@ def frame_rate(chs: list[Channel]) -> float:
 def sample_transforms(nodes: list[SceneNode], chs: list[Channel], times: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
     """Per-frame values (F, k) of every animated transform element, keyed by (node, transform) index."""
     out: dict[tuple[int, int], np.ndarray] = {}
-    for ch in chs:
-        values = sample(ch.curve, times)
+    for ch, values in zip(chs, sample_all([ch.curve for ch in chs], times)):
         for n in ch.nodes:
             key = (n, ch.transform)
             if key not in out:

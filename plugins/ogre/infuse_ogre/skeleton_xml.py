@@ -6,6 +6,7 @@ Parsing is safe: no entities, no DTD, no network.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -66,7 +67,7 @@ class _Reader:
             value = float(raw)
         except ValueError:
             raise self.error(element, f"{name}={raw[:40]!r} is not a number") from None
-        if not np.isfinite(value):
+        if not math.isfinite(value):
             raise self.error(element, f"{name}={raw!r} is not finite")
         return value
 
@@ -80,27 +81,29 @@ class _Reader:
             return [self.number(element, "factor")] * 3
         return [self.number(element, k) for k in "xyz"]
 
-    def rotation(self, element, required: bool) -> np.ndarray:
+    def raw_rotation(self, element) -> list[float]:
+        """``[kind, a, b, c, d]``: kind 0 is angle + axis (radians), 1 a quaternion (x, y, z, w); no element: identity."""
         if element is None:
-            if required:
-                raise InputError(self.path, None, "bone has no <rotation>")
-            return quat.IDENTITY
+            return [1.0, 0.0, 0.0, 0.0, 1.0]
         if element.get("qw") is not None:
-            q = np.array([self.number(element, k) for k in ("qx", "qy", "qz", "qw")])
-            if np.linalg.norm(q) < 1e-12:
-                raise self.error(element, "rotation quaternion is zero")
-            return quat.normalize(q)
-        angle = self.number(element, "angle")
+            return [1.0] + [self.number(element, k) for k in ("qx", "qy", "qz", "qw")]
         axis_el = element.find("axis")
         if axis_el is None:
             raise self.error(element, "rotation has no <axis>")
-        axis = np.array(self.vector(axis_el))
-        norm = np.linalg.norm(axis)
-        if norm < 1e-12:
-            if abs(angle) > 1e-12:
-                raise self.error(axis_el, "rotation axis is zero")
-            return quat.IDENTITY
-        return quat.from_axis_angle(axis / norm, angle)
+        return [0.0, self.number(element, "angle")] + self.vector(axis_el)
+
+    def rotations(self, raw: np.ndarray, elements) -> np.ndarray:
+        """Unit quaternions (K, 4) from raw rotations (K, 5), vectorized; ``elements`` place errors."""
+        is_quat = raw[:, 0] == 1.0
+        axis = raw[:, 2:5]
+        norm = np.linalg.norm(np.where(is_quat[:, None], raw[:, 1:4], axis), axis=-1)
+        qnorm = np.linalg.norm(raw[:, 1:5], axis=-1)
+        bad = np.nonzero(np.where(is_quat, qnorm < 1e-12, (norm < 1e-12) & (np.abs(raw[:, 1]) > 1e-12)))[0]
+        if bad.size:
+            raise self.error(elements[bad[0]], "rotation axis or quaternion is zero")
+        unit_axis = axis / np.where(norm > 1e-12, norm, 1.0)[:, None]
+        from_axis = quat.from_axis_angle(unit_axis, np.where(norm > 1e-12, raw[:, 1], 0.0))
+        return np.where(is_quat[:, None], raw[:, 1:5] / np.where(qnorm > 0, qnorm, 1.0)[:, None], from_axis)
 
 
 def parse(path: Path) -> tuple[Bones, list[Animation]]:
@@ -138,7 +141,7 @@ def _bones(r: _Reader, root) -> Bones:
         rot_el = el.find("rotation")
         if rot_el is None:
             raise r.error(el, f"bone {name!r} has no <rotation>")
-        rot.append(r.rotation(rot_el, required=True))
+        rot.append(r.raw_rotation(rot_el))
         scl.append(r.vector(el.find("scale"), (1.0, 1.0, 1.0)))
     parent_of: dict[int, int] = {}
     index = {n: i for i, n in enumerate(names)}
@@ -150,10 +153,11 @@ def _bones(r: _Reader, root) -> Bones:
         if index[bone] in parent_of:
             raise r.error(bp, f"bone {bone!r} has two parents")
         parent_of[index[bone]] = index[parent]
+    rot = r.rotations(np.array(rot), elements)
     order = _topological(r, names, ids, parent_of)
     new = {old: k for k, old in enumerate(order)}
     parents = np.array([new[parent_of[i]] if i in parent_of else -1 for i in order], dtype=np.int64)
-    return Bones([names[i] for i in order], parents, np.array(pos)[order], np.array(rot)[order], np.array(scl)[order])
+    return Bones([names[i] for i in order], parents, np.array(pos)[order], rot[order], np.array(scl)[order])
 
 
 def _topological(r: _Reader, names, ids, parent_of: dict[int, int]) -> list[int]:
@@ -187,10 +191,39 @@ def _animation(r: _Reader, el, index: dict[str, int]) -> Animation:
         keys = track.findall("keyframes/keyframe")
         if not keys:
             continue
-        times = np.array([r.number(k, "time") for k in keys])
-        trans = np.array([r.vector(k.find("translate"), (0.0, 0.0, 0.0)) for k in keys])
-        rots = np.array([r.rotation(k.find("rotate"), required=False) for k in keys])
-        scales = np.array([r.vector(k.find("scale"), (1.0, 1.0, 1.0)) for k in keys])
+        columns = _columns(track, len(keys))
+        if columns is None:  # element by element, to name the faulty one or fill absent parts
+            columns = (np.array([r.number(k, "time") for k in keys]),
+                       np.array([r.vector(k.find("translate"), (0.0, 0.0, 0.0)) for k in keys]),
+                       np.array([r.raw_rotation(k.find("rotate")) for k in keys]),
+                       np.array([r.vector(k.find("scale"), (1.0, 1.0, 1.0)) for k in keys]))
+        times, trans, raw_rots, scales = columns
+        rots = r.rotations(raw_rots, keys)
         order = np.argsort(times, kind="stable")  # Ogre keeps keyframes sorted by time
         tracks.append(Track(index[bone], times[order], trans[order], rots[order], scales[order]))
     return Animation(name, length, tracks)
+
+
+def _columns(track, k: int):
+    """A track's keyframe columns read in bulk (times, translations, raw rotations, scales), or
+    ``None`` when some keyframe lacks a part, uses another form or holds a bad number."""
+    def column(element: str, attribute: str, default: float) -> np.ndarray | None:
+        present = len(track.xpath(f"keyframes/keyframe/{element}")) if element else k
+        if present == 0:
+            return np.full(k, default)
+        values = track.xpath(f"keyframes/keyframe/{element + '/' if element else ''}@{attribute}")
+        if present != k or len(values) != k:
+            return None
+        try:
+            return np.array(values, dtype=np.float64)
+        except ValueError:
+            return None
+
+    parts = [column("", "time", 0.0)]
+    parts += [column("translate", a, 0.0) for a in "xyz"]
+    parts += [column("rotate", "angle", 0.0)]
+    parts += [column("rotate/axis", a, 1.0 if a == "x" else 0.0) for a in "xyz"]
+    parts += [column("scale", a, 1.0) for a in "xyz"]
+    if any(p is None or not np.all(np.isfinite(p)) for p in parts):
+        return None
+    return parts[0], np.stack(parts[1:4], axis=1), np.stack([np.zeros(k)] + parts[4:8], axis=1), np.stack(parts[8:11], axis=1)
