@@ -59,6 +59,7 @@ class AccessorReader:
         if not isinstance(self.accessors, list) or not isinstance(self.views, list):
             raise InputError(self.file, "accessors" if not isinstance(self.accessors, list) else "bufferViews", "is not an array")
         self._cache: dict[int, np.ndarray] = {}
+        self._finite: set[int] = set()
 
     def is_readable(self, index: int) -> bool:
         """False when the accessor's data sit in a compressed view (meshopt) that this reader cannot decode."""
@@ -95,17 +96,22 @@ class AccessorReader:
             raise InputError(self.file, vplace, f"byteStride {stride!r} must be a multiple of 4 in [4, 252]")
         return data[offset:offset + length], stride
 
-    def read(self, index, place: str = "accessor") -> np.ndarray:
+    def read(self, index, place: str = "accessor", check_finite: bool = True) -> np.ndarray:
         """Accessor ``index`` as a read-only array: ``(count, n)`` for vectors/scalars (n = 1..4) or
         ``(count, cols, rows)`` for matrices. Float and normalized data are float32/float64; other
-        integers keep their dtype."""
+        integers keep their dtype. NaN or infinity raises :class:`InputError` unless ``check_finite``
+        is False (the caller then checks many accessors at once, and asks again to name a bad one)."""
         index = check_index(self.file, place, index, len(self.accessors), "accessor")
-        cached = self._cache.get(index)
-        if cached is not None:
-            return cached
-        out = self._decode(index)
-        out.setflags(write=False)
-        self._cache[index] = out
+        out = self._cache.get(index)
+        if out is None:
+            out = self._decode(index)
+            out.setflags(write=False)
+            self._cache[index] = out
+        if check_finite and index not in self._finite:
+            if out.dtype.kind == "f" and not np.all(np.isfinite(out)):
+                bad = int(np.nonzero(~np.isfinite(out.reshape(len(out), -1)).all(axis=1))[0][0])
+                raise InputError(self.file, f"accessors[{index}] element {bad}", "value is not finite (NaN or infinity)")
+            self._finite.add(index)
         return out
 
     def _decode(self, index: int) -> np.ndarray:
@@ -141,11 +147,7 @@ class AccessorReader:
             if ctype == 5126:
                 raise InputError(self.file, place, "normalized is set on a float accessor")
             arr = np.maximum(arr.astype(np.float64) / NORMALIZED_DIVISORS[ctype], -1.0)
-        arr = arr.reshape(count, rows) if cols == 1 else arr
-        if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
-            bad = int(np.nonzero(~np.isfinite(arr.reshape(count, -1)).all(axis=1))[0][0])
-            raise InputError(self.file, f"{place} element {bad}", "value is not finite (NaN or infinity)")
-        return arr
+        return arr.reshape(count, rows) if cols == 1 else arr
 
     def _apply_sparse(self, arr: np.ndarray, sparse: dict, count: int, dtype, shape, place: str) -> np.ndarray:
         place = f"{place}.sparse"

@@ -483,24 +483,31 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
         return None
     used_samplers = sorted({s for _, _, s in trs + weights})
     place = f"animations[{a}]"
-    times = {}
+    # Exporters often give every channel its own copy of one time list: check and sample each list once.
+    times: dict[int, np.ndarray] = {}
+    time_key: dict[int, bytes] = {}
+    distinct: dict[bytes, np.ndarray] = {}
     for s in used_samplers:
         inp = clip["samplers"][s][0]
-        arr = accessors.read(inp, f"{place}.samplers[{s}].input")
-        if arr.shape[1] != 1 or arr.dtype.kind != "f":
+        arr = accessors.read(inp, f"{place}.samplers[{s}].input", check_finite=False)
+        if arr.ndim != 2 or arr.shape[1] != 1 or arr.dtype.kind != "f":
             raise InputError(file, f"{place}.samplers[{s}].input", "keyframe times must be float scalars")
-        tk = arr[:, 0].astype(np.float64)
-        if np.any(np.diff(tk) < 0):
-            raise InputError(file, f"{place}.samplers[{s}].input", "keyframe times decrease")
-        times[s] = tk
+        key = arr.tobytes()
+        if key not in distinct:
+            accessors.read(inp, f"{place}.samplers[{s}].input")  # names the accessor if a time is NaN
+            tk = arr[:, 0].astype(np.float64)
+            if np.any(np.diff(tk) < 0):
+                raise InputError(file, f"{place}.samplers[{s}].input", "keyframe times decrease")
+            distinct[key] = tk
+        times[s], time_key[s] = distinct[key], key
     if fps_override is not None:
         if not (np.isfinite(fps_override) and fps_override > 0):
             raise UsageError(f"fps must be positive, got {fps_override}")
         fps, fps_by = float(fps_override), "override"
     else:
-        fps, fps_by = detect_fps(list(times.values()))
-    start = min(float(t[0]) for t in times.values())
-    end = max(float(t[-1]) for t in times.values())
+        fps, fps_by = detect_fps(list(distinct.values()))
+    start = min(float(t[0]) for t in distinct.values())
+    end = max(float(t[-1]) for t in distinct.values())
     query = frame_times(start, end, fps)
     f = len(query)
 
@@ -510,11 +517,14 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
     target = {"translation": t, "rotation": r, "scale": sc}
     groups: dict[tuple, list] = {}
     for node, path, s in trs:
-        groups.setdefault((clip["samplers"][s][0], clip["samplers"][s][2], path), []).append((node, s))
+        groups.setdefault((time_key[s], clip["samplers"][s][2], path), []).append((node, s))
     for (_, interp, path), members in groups.items():
         width = 4 if path == "rotation" else 3
         vals = [_output(accessors, clip, s, times[s], interp, width, place, file) for _, s in members]
         stacked = np.stack(vals, axis=-2)  # (K, n, C) or (K, 3, n, C)
+        if not np.all(np.isfinite(stacked)):
+            for _, s in members:  # raises, naming the accessor
+                accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")
         if path == "rotation":
             stacked = quat.normalize(stacked)
         out = sample(times[members[0][1]], stacked, interp, query, rotation=path == "rotation")
@@ -531,10 +541,12 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
             interp = clip["samplers"][s][2]
             if path == "translation":  # a VRMA expression node: translation.x is the weight
                 vals = _output(accessors, clip, s, times[s], interp, 3, place, file)
+                accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")  # finite check
                 tracks["weights"].setdefault(expression_nodes[node], sample(times[s], vals, interp, query, False)[:, 0])
                 continue
             names_ = target_names[nodes[node]["mesh"]]
             vals = _output(accessors, clip, s, times[s], interp, len(names_), place, file)
+            accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")  # finite check
             out = sample(times[s], vals, interp, query, False)
             for k, tn in enumerate(names_):
                 tracks["weights"].setdefault(tn, out[:, k])
@@ -546,7 +558,7 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
 def _output(accessors: AccessorReader, clip, s: int, times: np.ndarray, interp: str, width: int, place: str, file) -> np.ndarray:
     """Sampler ``s`` output values as (K, width) or (K, 3, width) for CUBICSPLINE, float64."""
     out_index = clip["samplers"][s][1]
-    vals = accessors.read(out_index, f"{place}.samplers[{s}].output")
+    vals = accessors.read(out_index, f"{place}.samplers[{s}].output", check_finite=False)
     k = len(times)
     per_key = 3 if interp == "CUBICSPLINE" else 1
     flat = np.asarray(vals, dtype=np.float64).reshape(-1)
