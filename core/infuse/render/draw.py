@@ -56,7 +56,10 @@ def dashed_line(draw: ImageDraw.ImageDraw, a, b, fill: RGB, width: float, dash: 
 
 
 class LabelPlacer:
-    """Draws short texts near anchor points, trying a few spots around each so labels do not overlap."""
+    """Draws short texts near anchor points, trying a few spots around each so labels do not overlap.
+
+    Labels are placed in the order given, so earlier ones win the free spots.
+    """
 
     def __init__(self, draw: ImageDraw.ImageDraw, bounds: tuple[float, float, float, float]):
         self.draw = draw
@@ -70,8 +73,12 @@ class LabelPlacer:
             return False
         return all(x1 <= o[0] or x0 >= o[2] or y1 <= o[1] or y0 >= o[3] for o in self.boxes)
 
-    def place(self, anchor, text: str, fnt, fill: RGB, halo: RGB, gap: float) -> None:
-        """Put ``text`` beside ``anchor`` (right, left, above, below, then diagonals, then further out)."""
+    def place(self, anchor, text: str, fnt, fill: RGB, halo: RGB, gap: float) -> bool:
+        """Put ``text`` beside ``anchor`` (right, left, above, below, then diagonals, then further out).
+
+        Returns False, drawing nothing, when every spot overlaps a placed label or leaves the
+        bounds: in a crowd (finger joints) overlapping names would be unreadable anyway.
+        """
         left, top, right, bottom = self.draw.textbbox((0, 0), text, font=fnt)
         w, h = right - left, bottom - top
         x, y = anchor
@@ -82,9 +89,8 @@ class LabelPlacer:
                       (x + g, y - g - h), (x - g - w, y - g - h), (x + g, y + g), (x - g - w, y + g)]
         for sx, sy in spots:
             if self._free((sx, sy, sx + w, sy + h)):
-                break
-        else:
-            sx, sy = spots[0]  # nowhere free: overlap rather than hide a name that was asked for
-        self.boxes.append((sx, sy, sx + w, sy + h))
-        stroke = max(1, int(round(fnt.size / 7)))
-        self.draw.text((sx - left, sy - top), text, font=fnt, fill=fill, stroke_width=stroke, stroke_fill=halo)
+                self.boxes.append((sx, sy, sx + w, sy + h))
+                stroke = max(1, int(round(fnt.size / 7)))
+                self.draw.text((sx - left, sy - top), text, font=fnt, fill=fill, stroke_width=stroke, stroke_fill=halo)
+                return True
+        return False

@@ -334,7 +334,9 @@ class Renderer:
                 if marker.label:
                     labels.append((centre, marker.label, marker.color))
             rings += [pix[j] for j in np.nonzero(fig.highlight & fig.visible[:nj])[0]]
-            labels += [(pix[j], text, st.text) for j, text in fig.names.items() if fig.visible[j]]
+            # joints nearer the root first: they win the free spots over crowded fingers
+            named = sorted((j for j in fig.names if fig.visible[j]), key=lambda j: fig.skeleton.depths[j])
+            labels += [(pix[j], fig.names[j], st.text) for j in named]
         items.sort(key=lambda it: (it[0], it[1]))
         for _, _, paint in items:
             paint()
