@@ -1,8 +1,10 @@
 """Reading ``.sk`` and ``.skm`` files into :class:`~infuse.asset.Asset` (metres, +Y up, +Z forward).
 
 SmartBody already uses the core's axes, so by default only lengths are scaled. Options:
-``units`` overrides the file's length unit, ``up_axis`` ("Y" or "Z") declares the file's up axis,
-and for ``.skm`` files ``skeleton=PATH`` names the ``.sk`` to play the motion on.
+``units`` overrides the length unit of the file being read (for an ``.skm``, of its position
+channels; its ``.sk`` keeps its own unit), ``up_axis`` ("Y" or "Z") declares the file's up axis,
+and for ``.skm`` files ``skeleton=PATH`` names the ``.sk`` to play the motion on (``"none"``: no
+skeleton, the channel joints alone).
 """
 from __future__ import annotations
 

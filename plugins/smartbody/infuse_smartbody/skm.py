@@ -122,9 +122,10 @@ def _parse_header(path: Path, header: str) -> tuple[str, list[Channel], float | 
     return name, channels, start_kt
 
 
-def _frame_values(path: Path, text: str, body_start: int, frames: int, width: int):
-    """Key times (F,), values (F, width), where the frame block ends, and the first non-finite value's
-    (frame, column) or ``None``."""
+def _frame_values(path: Path, text: str, body_start: int, frames: int, channels: list[Channel]):
+    """Key times (F,), values (F, V) of the frame block, and where the block ends in ``text``."""
+    sizes = np.array([c.size for c in channels])
+    width = int(sizes.sum())
     body = text[body_start:]
     rows = _KEY_LINE.findall(body)
     block = body[: m.end()] if (m := _LAST_KEY_LINE.match(body)) else ""
@@ -157,8 +158,9 @@ def _frame_values(path: Path, text: str, body_start: int, frames: int, width: in
     if not np.all(np.isfinite(values)):
         frame = int(np.nonzero(~np.isfinite(values).all(axis=1))[0][0])
         col = int(np.nonzero(~np.isfinite(values[frame]))[0][0])
-        return times, values, body_start + len(block), (frame, col)
-    return times, values, body_start + len(block), None
+        channel = channels[int(np.searchsorted(np.cumsum(sizes), col, side="right"))]
+        raise InputError(path, f"frame {frame + 1}", f"channel {channel.joint} {channel.type}: value is not finite ({values[frame, col]})")
+    return times, values, body_start + len(block)
 
 
 def _block_lines(text: str, body_start: int, block: str):
@@ -247,13 +249,7 @@ def parse_skm(path: Path, text: str) -> SkmFile:
         raise InputError(path, f"line {frames_line}", f"frame count must be at least 1, found {frames}")
     if not channels:
         raise InputError(path, None, "no channels")
-    width = sum(c.size for c in channels)
-    times, values, end, bad = _frame_values(path, text, m.end(), frames, width)
-    if bad is not None:
-        frame, col = bad
-        sizes = np.array([c.size for c in channels])
-        channel = channels[int(np.searchsorted(np.cumsum(sizes), col, side="right"))]
-        raise InputError(path, f"frame {frame + 1}", f"channel {channel.joint} {channel.type}: value is not finite ({values[frame, col]})")
+    times, values, end = _frame_values(path, text, m.end(), frames, channels)
     timings, other = _parse_metadata(path, text, end)
     units, units_line = declared_units(text[: m.start()], path)
     return SkmFile(path, name, units, units_line, channels, times, values, start_kt, timings, other)
