@@ -99,6 +99,33 @@ def fbx_bytes(top, version=7400):
     return out + b"\0" * (25 if version >= 7500 else 13)
 
 
+def _ascii_value(p):
+    if isinstance(p, str):
+        if "\x00\x01" in p:  # binary "name\0\1Class" is "Class::name" in ASCII
+            name, cls = p.split("\x00\x01")
+            p = f"{cls}::{name}"
+        return '"' + p + '"'
+    if isinstance(p, np.ndarray):
+        return f"*{len(p)} {{\n a: " + ",".join(repr(v.item()) for v in p) + "\n}"
+    return repr(int(p) if isinstance(p, bool) else p)
+
+
+def _ascii_node(name, props, children, indent=""):
+    line = f"{indent}{name}: " + ", ".join(_ascii_value(p) for p in props)
+    if not children:
+        return line + "\n"
+    return line + " {\n" + "".join(_ascii_node(*c, indent + "\t") for c in children) + indent + "}\n"
+
+
+def fbx_text(top, version=7400):
+    """The same records as :func:`fbx_bytes`, as an ASCII FBX file (names as ``Class::name``)."""
+    header = ("FBXHeaderExtension", [], [("FBXVersion", [version], [])])
+    out = f"; FBX {version // 1000}.{version // 100 % 10}.0 project file\n; written by a test\n"
+    for n in [header] + list(top):
+        out += _ascii_node(*n)
+    return out.encode()
+
+
 def P(name, *values):
     return ("P", [name, "", "", "A", *values], [])
 
@@ -205,10 +232,11 @@ def _expected(t):
     return np.array([(core @ m)[:3, 3] for m in mats])
 
 
-@pytest.mark.parametrize("version", [7400, 7500])
-def test_synthetic_scene_matches_explicit_matrices(tmp_path, version):
+@pytest.mark.parametrize("version,encode", [(7400, fbx_bytes), (7500, fbx_bytes), (7400, fbx_text)],
+                         ids=["binary-7400", "binary-7500", "ascii-7400"])
+def test_synthetic_scene_matches_explicit_matrices(tmp_path, version, encode):
     path = tmp_path / "scene.fbx"
-    path.write_bytes(fbx_bytes(scene(), version))
+    path.write_bytes(encode(scene(), version))
     asset = infuse.load(path)
     sk = asset.skeleton
     assert sk.names == ("Armature", "Hips", "Spine", "Head", "Socket", "Skinned")  # not the Prop mesh
@@ -229,8 +257,7 @@ def test_overrides_and_unsupported_variants(tmp_path):
     asset = infuse.load(path, units="cm", up_axis="Y")
     assert (asset.source_units, asset.units_detected_by, asset.source_up_axis) == ("cm", "override", "Y")
     assert np.isclose(asset.skeleton.height() * 2.54, base.skeleton.height())
-    for name, data in (("ascii.fbx", b"; FBX 7.4.0 project file\nFBXHeaderExtension:  {\n}\n"),
-                       ("old.fbx", fbx_bytes(scene(), 6100))):
+    for name, data in (("old-ascii.fbx", fbx_text(scene(), 6100)), ("old.fbx", fbx_bytes(scene(), 6100))):
         p = tmp_path / name
         p.write_bytes(data)
         with pytest.raises(infuse.UnusableInputError, match="not supported"):
@@ -266,6 +293,13 @@ def _malformed_cases():
     for _ in range(100):
         deep = ("Nest", [], [deep])
     yield "too-deep", fbx_bytes(scene() + [deep])
+    text = fbx_text(scene())
+    yield "ascii-truncated", text[: len(text) // 2]
+    yield "ascii-nan", text.replace(b'"Lcl Translation", "", "", "A", 0.0, 12.0, 0.0', b'"Lcl Translation", "", "", "A", 0.0, nan, 0.0')
+    yield "ascii-array-count", text.replace(b"*2 {", b"*3 {", 1)
+    yield "ascii-stray-brace", text + b"}\n"
+    yield "ascii-no-version", b"; FBX 7.4.0 project file\nFBXHeaderExtension:  {\n}\n"
+    yield "ascii-cycle", fbx_text(scene(connections=[C("OO", 10, 13)] + CONNECTIONS[1:]))
 
 
 def _cases():

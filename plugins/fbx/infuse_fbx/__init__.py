@@ -1,1 +1,1 @@
-"""Binary FBX reader for infuse: skeleton models, rest pose, animation stacks, blend-shape names."""
+"""FBX reader (binary and ASCII 7.x, pure Python) for infuse: skeleton models, rest pose, animation stacks, blend-shape names."""

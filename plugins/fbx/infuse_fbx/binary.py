@@ -31,12 +31,14 @@ _ARRAYS = {b"f": np.dtype("<f4"), b"d": np.dtype("<f8"), b"l": np.dtype("<i8"), 
 
 @dataclass
 class Node:
-    """One record: ``name``, ``props`` (ints, floats, bools, str/bytes, numpy arrays), ``children``."""
+    """One record: ``name``, ``props`` (ints, floats, bools, str/bytes, numpy arrays), ``children``,
+    and where it starts (``offset``: a byte offset, or a line number when ``line`` is set)."""
 
     name: str
     props: list = field(default_factory=list)
     children: list["Node"] = field(default_factory=list)
-    offset: int = 0
+    offset: int = 0  # byte offset in a binary file, line number in an ASCII one
+    line: bool = False
 
     def find(self, name: str) -> "Node | None":
         return next((c for c in self.children if c.name == name), None)

@@ -47,7 +47,9 @@ class Document:
     by_child: dict[int, list[Connection]] = field(default_factory=dict)
 
     def error(self, node: Node | None, problem: str) -> InputError:
-        return InputError(self.path, f"byte {node.offset} ({node.name})" if node is not None else None, problem)
+        if node is None:
+            return InputError(self.path, None, problem)
+        return InputError(self.path, f"{'line' if node.line else 'byte'} {node.offset} ({node.name})", problem)
 
     def settings(self) -> dict[str, list]:
         """``GlobalSettings`` properties (UpAxis, UnitScaleFactor, TimeMode...)."""

@@ -1,4 +1,4 @@
-"""Reading a binary FBX 7.x ``.fbx`` file into an :class:`~infuse.asset.Asset` (metres, +Y up).
+"""Reading an FBX 7.x ``.fbx`` file (binary or ASCII) into an :class:`~infuse.asset.Asset` (metres, +Y up).
 
 Joints are the skeleton models (see :func:`.models.joint_models`); other models above them are
 folded into the roots. The rest pose is the models' static ``Lcl`` transforms. Units come from
@@ -18,7 +18,7 @@ from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
 from infuse.transforms import frame_change, global_matrices, motion_from_globals, skeleton_from_globals
 
-from . import animation, binary, models
+from . import animation, ascii_format, binary, models
 from .document import Document, build, number
 
 #: Largest frames x models product sampled for one take (bounds memory on absurd time spans).
@@ -28,13 +28,13 @@ _AXES = "XYZ"
 
 
 def read(path: Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
-    """Read a binary FBX file; see the module docstring for what is kept and how it is converted."""
+    """Read an FBX file; see the module docstring for what is kept and how it is converted."""
     path = Path(path)
     data = path.read_bytes()
-    head = data[:4096]
-    if not binary.is_binary_fbx(data) and (head.lstrip().startswith(b"; FBX") or b"FBXHeaderExtension:" in head):
-        raise UnusableInputError(path, "ASCII FBX is not supported; re-export the file as binary FBX")
-    version, root = binary.parse(path, data)
+    if not binary.is_binary_fbx(data) and ascii_format.is_ascii_fbx(data):
+        version, root = ascii_format.parse(path, data)
+    else:
+        version, root = binary.parse(path, data)
     if version < 7000:
         raise UnusableInputError(path, f"FBX version {version} (6.x) is not supported; re-export as FBX 2011 or later (7.x)")
     doc = build(path, version, root)
