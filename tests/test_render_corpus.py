@@ -122,3 +122,12 @@ def test_demo_without_corpus_exits_2(monkeypatch, capsys):
     monkeypatch.setenv("INFUSE_CORPUS", str(REPO / "no-such-corpus"))
     assert demo.main() == 2
     assert "INFUSE_CORPUS" in capsys.readouterr().err
+
+
+def test_bandai_sides_from_the_first_frame_match_the_names(bandai):
+    """Bandai's rest pose lies along X, so the sides come from the first frame; its names say the truth."""
+    fig = Figure.from_motion(next(iter(bandai.motions.values())))
+    names = bandai.skeleton.names
+    for suffix, side in (("_L", 1), ("_R", -1)):
+        limbs = [i for i, n in enumerate(names) if n.endswith(suffix) and not n.startswith("Shoulder")]
+        assert len(limbs) >= 7 and all(fig.sides[i] == side for i in limbs), suffix

@@ -40,23 +40,31 @@ def to_rgb(color) -> RGB:
     return (r, g, b)
 
 
-def default_sides(skeleton: Skeleton, pose: np.ndarray | None = None, centre_tolerance: float = 0.02) -> np.ndarray:
+def default_sides(skeleton: Skeleton, pose: np.ndarray | None = None, mask: np.ndarray | None = None,
+                  centre_tolerance: float = 0.02) -> np.ndarray:
     """(J,) side of each joint from geometry: +1 left (+X), -1 right (-X), 0 centre.
 
     The rest pose is used when it stands upright (at least half as tall along +Y as it is wide);
     otherwise ``pose`` (J, 3), e.g. a clip's first frame, when given (some files keep every bone
-    along one axis at rest).
-    Sides are measured from the median joint X, so a root left off-centre does not tilt them;
-    joints within ``centre_tolerance`` x the height of it are centre. Callers who know the sides
-    from names (a mapping, see :func:`sides_from_mapping`) should pass their own array.
+    along one axis at rest). Only the joints in ``mask`` (J,) bool, default all, are measured, so
+    a detached root does not make a lying rest pose look tall. Sides are measured from the median
+    joint X; joints within ``centre_tolerance`` x the pose's size of it are centre, and a joint under
+    a left or right joint takes its side (limbs do not change side). Callers who know
+    the sides from names (a mapping, see :func:`sides_from_mapping`) should pass their own array.
     """
+    mask = np.ones(skeleton.num_joints, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     rest = skeleton.rest_global_positions
-    extent = np.ptp(rest, axis=0)
+    extent = np.ptp(rest[mask], axis=0)
     upright = extent[1] >= 0.5 * extent.max()  # a T-pose is about as wide as tall; a lying rest is flat in Y
     points = rest if upright or pose is None else np.asarray(pose, dtype=np.float64)
-    dx = points[:, 0] - np.median(points[:, 0])
-    tol = centre_tolerance * max(float(np.max(np.ptp(points, axis=0))), 1e-9)
-    return np.where(dx > tol, LEFT, np.where(dx < -tol, RIGHT, CENTRE)).astype(np.int8)
+    dx = points[:, 0] - np.median(points[mask, 0])
+    tol = centre_tolerance * max(float(np.max(np.ptp(points[mask], axis=0))), 1e-9)
+    own = np.where(dx > tol, LEFT, np.where(dx < -tol, RIGHT, CENTRE)).astype(np.int8)
+    sides = own.copy()
+    for j, parent in enumerate(skeleton.parents):  # a limb keeps its side (a foot crossing the midline mid-stride)
+        if parent >= 0 and sides[parent] != CENTRE:
+            sides[j] = sides[parent]
+    return sides
 
 
 def sides_from_mapping(skeleton: Skeleton, mapping) -> np.ndarray:
@@ -168,7 +176,9 @@ class Figure:
             if es.shape != (len(pos), len(sk.end_site_parents), 3):
                 raise ValueError(f"figure {self.label!r}: end_sites must be (F, E, 3) matching the skeleton's end sites")
             self.end_sites = es
-        self.sides = default_sides(sk, pos[0]) if self.sides is None else np.asarray(self.sides, dtype=np.int8)
+        if self.sides is None:
+            self.sides = default_sides(sk, pos[0], self.visible[:j])
+        self.sides = np.asarray(self.sides, dtype=np.int8)
         if self.sides.shape != (j,):
             raise ValueError(f"figure {self.label!r}: sides must be ({j},)")
         self.highlight = self._joint_mask(self.highlight, "highlight")
