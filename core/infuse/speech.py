@@ -180,11 +180,13 @@ _MARK_ELEMENTS = {"mark": "name", "sync": "id", "tm": "id"}
 @dataclass(frozen=True)
 class SpeechText:
     """Speech text split for an engine: ``plain`` (marks removed), ``ssml`` (marks as SSML ``<mark>``,
-    ``None`` when there are none) and the mark names in order."""
+    ``None`` when there are none), the mark names in order and where each sits in ``plain``
+    (character offsets)."""
 
     plain: str
     ssml: str | None
     marks: tuple[str, ...]
+    mark_offsets: tuple[int, ...] = ()
 
 
 def parse_speech_markup(text: str) -> SpeechText:
@@ -194,7 +196,7 @@ def parse_speech_markup(text: str) -> SpeechText:
     Other elements, duplicate or missing names raise :class:`InputError`.
     """
     if not _MARKUP.search(text):
-        return SpeechText(text, None, ())
+        return SpeechText(text, None, (), ())
     from lxml import etree
     from xml.sax.saxutils import escape, quoteattr
 
@@ -206,6 +208,7 @@ def parse_speech_markup(text: str) -> SpeechText:
     plain = [root.text or ""]
     ssml = [escape(root.text or "")]
     marks: list[str] = []
+    offsets: list[int] = []
     for child in root:
         tag = child.tag if isinstance(child.tag, str) else ""
         if tag.lower() not in _MARK_ELEMENTS:
@@ -219,9 +222,10 @@ def parse_speech_markup(text: str) -> SpeechText:
         if len(child) or (child.text or "").strip():
             raise InputError(None, "speech text", f"<{tag} {name!r}> must be empty")
         marks.append(name)
+        offsets.append(sum(len(p) for p in plain))
         ssml.append(f"<mark name={quoteattr(name)}/>" + escape(child.tail or ""))
         plain.append(child.tail or "")
-    return SpeechText("".join(plain), "".join(ssml), tuple(marks))
+    return SpeechText("".join(plain), "".join(ssml), tuple(marks), tuple(offsets))
 
 
 _ALLOWED_CONTROLS = {"\t", "\n", "\r"}

@@ -1,0 +1,13 @@
+"""Registers the ``file`` TTS engine (entry point group ``infuse.tts``)."""
+from __future__ import annotations
+
+from infuse import hookimpl
+from infuse.plugin_types import Component
+
+from .engine import FileEngine
+
+
+@hookimpl
+def infuse_tts_engines():
+    return [Component("file", FileEngine, "recorded speech: a WAV plus a phoneme timing file (TextGrid, MFA JSON, JSON, TSV)",
+                      {"settings": ["audio", "timing", "alphabet"]})]
