@@ -202,7 +202,8 @@ def render(
     """Render ``figures`` to ``path`` (.png, .gif or .mp4) and return the path.
 
     A PNG is one still (``frame``, else ``start``, else the first frame) or, with ``strip=N``, a
-    filmstrip of N frames evenly spread over ``start``..``end`` (``size`` is then one tile's).
+    filmstrip of N frames evenly spread over ``start``..``end`` (``size`` is then one tile's; the
+    camera follows a figure that travels more than half its height, unless ``camera.follow`` says).
     GIF and MP4 play ``start``..``end`` (seconds; default the whole clip) at ``fps`` (default the
     first figure's rate; GIF at most 25). Figures go side by side, one panel each at one scale,
     unless ``overlay``. ``progress``: a progress bar on stderr (``None``: only on a terminal).
@@ -224,7 +225,8 @@ def render(
         times = select_times(figures, frame=frame, start=start, end=end, fps=fps, still=kind == ".png")
         size = size or (max(STILL_SIZE[0], 400 * panels), STILL_SIZE[1])
     tile_title = "" if strip is not None else title
-    renderer = Renderer(figures, times, overlay=overlay, camera=camera, size=size, title=tile_title, style=style)
+    renderer = Renderer(figures, times, overlay=overlay, camera=camera, size=size, title=tile_title, style=style,
+                        follow_travel=0.5 if strip is not None else 2.0)  # small tiles: keep the figure big
     if kind == ".png" and strip is None:
         return write_png(renderer, path)
     with Progress(len(renderer), f"render {Path(path).name}", enabled=progress) as bar:

@@ -86,6 +86,8 @@ class Renderer:
     - ``camera``: view, projection and follow mode (:class:`~infuse.render.camera.Camera`).
     - ``size``: (width, height) of each output image in pixels.
     - ``title``: text at the top; ``counter``: draw "frame i/F  t s" at the bottom.
+    - ``follow_travel``: with ``camera.follow=None``, follow the root when it travels more than
+      this many figure heights over the rendered frames.
     """
 
     def __init__(
@@ -100,12 +102,14 @@ class Renderer:
         counter: bool = True,
         style: Style = Style(),
         supersample: int = 2,
+        follow_travel: float = 2.0,
     ):
         if not figures:
             raise ValueError("nothing to render: no figures")
         self.figures = list(figures)
         self.times = default_times(self.figures) if times is None else np.atleast_1d(np.asarray(times, dtype=np.float64))
         self.camera, self.style, self.title, self.counter = camera, style, title, counter
+        self.follow_travel = follow_travel
         self.size = (int(size[0]), int(size[1]))
         if min(self.size) < 16:
             raise ValueError(f"image size {self.size} is too small (at least 16x16)")
@@ -139,7 +143,7 @@ class Renderer:
         fig, frames = self.figures[0], self.frames[0]
         root = fig.positions[frames[0]:frames[-1] + 1, fig.root][:, [0, 2]]
         travel = float(np.max(np.ptp(root, axis=0))) if len(root) > 1 else 0.0
-        return travel > 2.0 * max(fig.skeleton.height(), 0.1)
+        return travel > self.follow_travel * max(fig.skeleton.height(), 0.1)
 
     def _follow_target(self, i: int) -> np.ndarray:
         """(T, 3) the figure's root, smoothed over about a second so the camera does not shake."""
