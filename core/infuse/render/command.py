@@ -51,7 +51,7 @@ def _arguments(p) -> None:
     p.add_argument("--fps", type=float, help="GIF/MP4 frame rate (default: the clip's; GIF at most 25)")
     follow = p.add_mutually_exclusive_group()
     follow.add_argument("--follow", dest="follow", action="store_true", default=None,
-                        help="keep the root centred (default: when it travels more than twice its height)")
+                        help="keep the root centred (default: when it travels more than twice its height; half of it for --strip)")
     follow.add_argument("--no-follow", dest="follow", action="store_false", help="a still camera framing every frame")
     p.add_argument("--overlay", action="store_true", help="draw all files in one panel instead of side by side")
     p.add_argument("--title", help="text at the top (default: the file name)")
