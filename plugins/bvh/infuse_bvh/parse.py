@@ -1,8 +1,8 @@
 """BVH text -> :class:`BvhDocument`: the file's own numbers, in its own units and axes.
 
 The HIERARCHY block is read line by line (it is small); the MOTION block is read in one go with
-numpy: values per line are counted on the raw bytes and all numbers are converted at once, so a
-file's frame count never drives a Python loop. Malformed input raises
+numpy: values per line are counted on the raw bytes and all numbers are converted at once
+(:mod:`.numbers`), so a file's frame count never drives a Python loop. Malformed input raises
 :class:`infuse.errors.InputError` naming the line, joint or frame.
 """
 from __future__ import annotations
@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from infuse.errors import InputError
+
+from .numbers import parse_floats, token_bounds, whitespace
 
 #: Channel names as written by convention; files are matched case-insensitively.
 CHANNEL_NAMES = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
@@ -199,16 +201,13 @@ def _header_value(file, lines: list[str], index: int, lineno: int, pattern: re.P
     return match.group(1)
 
 
-def _line_structure(buf: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Token start offsets, the (0-based) line of each token, and the non-empty line numbers with their token counts."""
-    b = np.frombuffer(buf, dtype=np.uint8)
-    space = b <= 32  # space, tab, CR, LF and control bytes separate numbers
-    starts = np.flatnonzero(~space & np.concatenate(([True], space[:-1])))
+def _line_structure(b: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The (0-based) line of each token, and the non-empty line numbers stacked over their token counts."""
     newlines = np.flatnonzero(b == 10)
     token_lines = np.searchsorted(newlines, starts)
     per_line = np.bincount(token_lines)
     lines = np.flatnonzero(per_line)
-    return starts, token_lines, np.stack((lines, per_line[lines]))
+    return token_lines, np.stack((lines, per_line[lines]))
 
 
 def _first_bad_token(buf: bytes, starts: np.ndarray) -> int:
@@ -224,7 +223,11 @@ def _first_bad_token(buf: bytes, starts: np.ndarray) -> int:
 def _parse_motion(file, buf: bytes, first_line: int, frames: int, channels: list[tuple[str, ...]], names: list[str]) -> np.ndarray:
     """(frames, C) values from the bytes after 'Frame Time', whose first line is ``first_line`` (1-based)."""
     width = sum(len(c) for c in channels)
-    starts, token_lines, (lines, counts) = _line_structure(buf)
+    b = np.frombuffer(buf, dtype=np.uint8)
+    space = whitespace(b)
+    bounds = token_bounds(b, space)
+    starts = bounds[0]
+    token_lines, (lines, counts) = _line_structure(b, starts)
     total = len(starts)
     if len(lines) == frames and np.any(counts != width):
         k = int(np.argmax(counts != width))
@@ -245,7 +248,7 @@ def _parse_motion(file, buf: bytes, first_line: int, frames: int, channels: list
     if total == 0:
         return np.zeros((frames, width))
     try:
-        values = np.array(buf.split(), dtype=np.float64)
+        values = parse_floats(buf, b, space, bounds)
     except ValueError:
         i = _first_bad_token(buf, starts)
         token = buf[starts[i]:].split(None, 1)[0][:40].decode("utf-8", "replace")

@@ -43,7 +43,8 @@ def channel_layout(doc: BvhDocument):
 
     Returns ``(rotation_columns, rotation_axes, position_columns)``: ``rotation_columns`` (J, 3)
     is the column of each joint's 1st, 2nd and 3rd rotation channel in file order (-1 where a
-    joint has fewer), ``rotation_axes`` (J, 3) their axes (0=X, 1=Y, 2=Z), and
+    joint has fewer), ``rotation_axes`` (J, 3) a permutation of (0, 1, 2) = (X, Y, Z) per joint
+    starting with its listed axes (unlisted ones follow, with zero angles), and
     ``position_columns`` is ``(joints, axes, columns)``, one entry per position channel.
     """
     joints = len(doc.names)
@@ -53,16 +54,16 @@ def channel_layout(doc: BvhDocument):
     pos_axes: list[int] = []
     pos_cols: list[int] = []
     for j, (start, chans) in enumerate(zip(doc.channel_starts, doc.channels)):
-        k = 0
+        axes: list[int] = []
         for offset, c in enumerate(chans):
             if c.endswith("rotation"):
-                rot_cols[j, k] = start + offset
-                rot_axes[j, k] = _AXIS[c[0]]
-                k += 1
+                rot_cols[j, len(axes)] = start + offset
+                axes.append(_AXIS[c[0]])
             else:
                 pos_joints.append(j)
                 pos_axes.append(_AXIS[c[0]])
                 pos_cols.append(int(start) + offset)
+        rot_axes[j] = axes + [a for a in (0, 1, 2) if a not in axes]
     positions = (np.array(pos_joints, dtype=np.int64), np.array(pos_axes, dtype=np.int64), np.array(pos_cols, dtype=np.int64))
     return rot_cols, rot_axes, positions
 
@@ -70,20 +71,24 @@ def channel_layout(doc: BvhDocument):
 def local_rotations(values: np.ndarray, rotation_columns: np.ndarray, rotation_axes: np.ndarray) -> np.ndarray:
     """(F, J, 4) local rotations (x, y, z, w) from Euler channels in degrees, all frames at once.
 
-    Intrinsic rotations in file order: R = R_a0(v0) · R_a1(v1) · R_a2(v2), the first listed
-    axis outermost; missing channels are zero angles.
+    Intrinsic rotations in file order, R = R_a(v1) · R_b(v2) · R_c(v3), the first listed axis
+    outermost; (a, b, c) is each joint's axis permutation and missing channels are zero angles.
+    The product of the three half-angle quaternions is written out in closed form, with
+    e_a x e_b = s e_c (s = +1 for XYZ, YZX, ZXY and -1 for the other orders).
     """
-    frames = values.shape[0]
-    joints = rotation_columns.shape[0]
+    frames, joints = values.shape[0], rotation_columns.shape[0]
     half = np.where(rotation_columns >= 0, values[:, rotation_columns], 0.0) * (np.pi / 360.0)  # (F, J, 3)
-    sin, cos = np.sin(half), np.cos(half)
+    s1, s2, s3 = np.moveaxis(np.sin(half), -1, 0)
+    c1, c2, c3 = np.moveaxis(np.cos(half), -1, 0)
+    a, b = rotation_axes[:, 0], rotation_axes[:, 1]
+    sign = np.where((b - a) % 3 == 1, 1.0, -1.0)  # +1 when (a, b, c) is a cyclic permutation
+    s1c2, c1s2, c1c2, s1s2 = s1 * c2, c1 * s2, c1 * c2, s1 * s2
+    out = np.empty((frames, joints, 4))
     rows = np.arange(joints)
-    out = None
-    for k in range(3):
-        q = np.zeros((frames, joints, 4))
-        q[:, rows, rotation_axes[:, k]] = sin[..., k]
-        q[..., 3] = cos[..., k]
-        out = q if out is None else quat.multiply(out, q)
+    out[:, rows, a] = c3 * s1c2 + sign * (s3 * c1s2)
+    out[:, rows, b] = c3 * c1s2 - sign * (s3 * s1c2)
+    out[:, rows, rotation_axes[:, 2]] = s3 * c1c2 + sign * (c3 * s1s2)
+    out[..., 3] = c3 * c1c2 - sign * (s3 * s1s2)
     return out
 
 
@@ -116,31 +121,39 @@ def body_joints(skeleton: Skeleton) -> np.ndarray:
     return np.flatnonzero(inside)
 
 
-def _unit(skeleton: Skeleton, body: np.ndarray, units: str | None) -> str:
+def rest_positions(doc: BvhDocument) -> tuple[np.ndarray, np.ndarray]:
+    """Global joint (J, 3) and end-site (E, 3) positions at rest, file units (BVH rests have no rotations)."""
+    joints = np.array(doc.offsets)
+    for j, p in enumerate(doc.parents):
+        if p >= 0:
+            joints[j] += joints[p]
+    return joints, joints[doc.end_site_parents] + doc.end_site_offsets
+
+
+def _unit(doc: BvhDocument, body: np.ndarray, units: str | None) -> str:
     if units is not None:
         if units not in UNIT_SCALES:
             raise InputError(None, "units", f"unknown unit {units!r}; known: {', '.join(UNIT_SCALES)}")
         return units
-    sites = np.isin(skeleton.end_site_parents, body)
-    points = np.concatenate((skeleton.rest_global_positions[body], skeleton.rest_end_site_positions[sites]))
+    joints, sites = rest_positions(doc)
+    points = np.concatenate((joints[body], sites[np.isin(doc.end_site_parents, body)]))
     return guess_unit(float(np.max(np.ptp(points, axis=0))), UNIT_CANDIDATES)
 
 
-def _up_axis(skeleton: Skeleton, body: np.ndarray, poses: np.ndarray | None, up_axis: str | None) -> str:
+def _up_axis(doc: BvhDocument, body: np.ndarray, poses: np.ndarray | None, up_axis: str | None) -> str:
     """``up_axis``, or the axis a figure is tallest along, averaged over ``poses`` (K, J, 3) when given."""
     if up_axis is not None:
         if up_axis not in UP_AXIS_ROTATIONS:
             raise InputError(None, "up_axis", f"unknown up axis {up_axis!r}; known: {', '.join(UP_AXIS_ROTATIONS)}")
         return up_axis
     if poses is None:
-        return guess_up_axis(skeleton.rest_global_positions[body])
+        return guess_up_axis(rest_positions(doc)[0][body])
     spread = np.ptp(poses[:, body], axis=1).mean(axis=0)  # mean extent per axis over the sampled frames
     return guess_up_axis(np.stack((np.zeros(3), spread)))
 
 
 def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: str | None = None) -> Asset:
     """Convert a parsed document into the core frame (see the module docstring)."""
-    file = str(path)
     joints = len(doc.names)
     rest = Skeleton(doc.names, doc.parents, doc.offsets, quat.identity((joints,)),
                     doc.end_site_parents, doc.end_site_offsets)
@@ -161,11 +174,8 @@ def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: st
     if frames and up_axis is None:
         sample = np.unique(np.linspace(0, frames - 1, min(frames, UP_AXIS_SAMPLE_FRAMES)).astype(np.int64))
         poses = forward_kinematics(rest, rots[sample], root[sample], None if trans is None else trans[sample])[1]
-    try:
-        unit = _unit(rest, body, units)
-        axis = _up_axis(rest, body, poses, up_axis)
-    except InputError as exc:
-        raise InputError(file, exc.place, exc.problem) from None
+    unit = _unit(doc, body, units)
+    axis = _up_axis(doc, body, poses, up_axis)
     scale = UNIT_SCALES[unit]
     up = UP_AXIS_ROTATIONS[axis]
     skeleton = rest.transformed(scale, None if axis == "Y" else up)
@@ -181,7 +191,6 @@ def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: st
             if axis != "Y":
                 trans[:, roots] = quat.rotate(up, trans[:, roots])
         motion = Motion(skeleton, 1.0 / doc.frame_time, rots, root, trans, name=path.stem)
-        motion.validate(file)
         motions[motion.name] = motion
     meta = {
         "channels": {n: list(c) for n, c in zip(doc.names, doc.channels)},
@@ -195,4 +204,9 @@ def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: st
 def read(path: str | Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
     """Read a BVH file into an :class:`~infuse.Asset` (see the module docstring for conventions)."""
     path = Path(path)
-    return to_asset(path, parse(path), units=units, up_axis=up_axis)
+    try:
+        return to_asset(path, parse(path), units=units, up_axis=up_axis)
+    except InputError as exc:
+        if exc.file is None:  # raised by the core's checks (finite values, options): name the file
+            raise InputError(path, exc.place, exc.problem) from None
+        raise
