@@ -48,7 +48,7 @@ def read(path: Path, units: str | None = None, up_axis: str | None = None, **_op
     motions = {}
     meta: dict = {"unit_meter": _declared_scale(doc),
                   "folded_nodes": [nodes[n].name for n in sorted(relevant - set(joints))],
-                  "skins": sum(1 for _ in doc.root.iter("instance_controller")),
+                  "skins": sum(len(el.findall("instance_controller")) for el in elements),
                   "authoring_tool": (doc.root.findtext("asset/contributor/authoring_tool") or "").strip()}
     if chs:
         fps = animation.frame_rate(chs)

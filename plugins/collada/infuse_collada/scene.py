@@ -145,10 +145,10 @@ def local_matrices(nodes: list[SceneNode], animated: dict[tuple[int, int], np.nd
 
 
 def joint_indices(doc: Document, nodes: list[SceneNode], elements: list) -> list[int]:
-    """Indices of the joint nodes: typed joints and every node an instanced skin names, in node order."""
+    """Indices of the joint nodes: typed joints and every node a skin instanced in the scene names, in node order."""
     chosen = {i for i, node in enumerate(nodes) if node.typed_joint}
     index_of = {id(el): i for i, el in enumerate(elements)}
-    for inst in doc.root.iter("instance_controller"):
+    for inst in (i for el in elements for i in el.findall("instance_controller")):
         controller = doc.resolve(inst.get("url"), inst)
         joints_input = controller.find("skin/joints/input[@semantic='JOINT']")
         if joints_input is None:
