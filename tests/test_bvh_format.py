@@ -276,3 +276,11 @@ def test_bandai_style_position_channels_on_every_joint(tmp_path):
     assert np.allclose(motion.joint_translations[:, 3], raw["values"][:, 6 * 3:6 * 3 + 3] * 0.01)
     order = [asset.skeleton.index[j["name"]] for j in raw["joints"]]
     assert np.abs(motion_fk(motion)[1][:, order] - matrix_chain_positions(raw) * 0.01).max() < 1e-9
+
+
+def test_unknown_overrides_are_input_errors_naming_the_file(tmp_path):
+    text = _small_motion_document(_human())
+    for options, place in (({"units": "furlong"}, "units"), ({"up_axis": "W"}, "up_axis")):
+        with pytest.raises(infuse.InputError) as info:
+            _load_text(tmp_path, text, **options)
+        assert info.value.place == place and info.value.file.endswith("m.bvh")
