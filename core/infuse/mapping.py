@@ -200,19 +200,22 @@ def get_mapper(name: str):
     return table[name]
 
 
-def rest_alternative_pose(asset) -> np.ndarray | None:
-    """(J, 3) global joint positions of the first frame of the asset's first clip, metres, or ``None``.
+def sample_poses(asset, count: int = 12) -> np.ndarray | None:
+    """(F, J, 3) global joint positions (metres) of up to ``count`` frames spread over the asset's
+    first clip (its first frame first), or ``None`` when it has no motion.
 
-    Mappers use it when a file's rest pose says little about the body (e.g. every bone along one axis).
+    Mappers use them when a file's rest pose says little about the body (e.g. every bone along one
+    axis), and to tell the body's front from how it moves.
     """
     from .kinematics import forward_kinematics
 
     motion = next(iter(getattr(asset, "motions", {}).values()), None)
     if motion is None or motion.num_frames == 0 or motion.skeleton.num_joints != asset.skeleton.num_joints:
         return None
-    jt = None if motion.joint_translations is None else motion.joint_translations[:1]
-    _, pos = forward_kinematics(motion.skeleton, motion.local_rotations[:1], motion.root_translations[:1], jt)
-    return pos[0] if np.all(np.isfinite(pos)) else None
+    frames = np.unique(np.linspace(0, motion.num_frames - 1, min(count, motion.num_frames)).astype(np.int64))
+    jt = None if motion.joint_translations is None else motion.joint_translations[frames]
+    _, pos = forward_kinematics(motion.skeleton, motion.local_rotations[frames], motion.root_translations[frames], jt)
+    return pos if np.all(np.isfinite(pos)) else None
 
 
 def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
@@ -242,9 +245,9 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
     - ``mapper``: the name of an installed mapper plugin (see ``infuse plugins``).
     - ``saved_map``: a mapping file path, a parsed dict or a :class:`Mapping`; its entries win and
       the mapper fills in the names it leaves out (a complete file is used as is).
-    - ``pose``: optional (J, 3) global joint positions in metres (core frame) of a representative
-      pose, for skeletons whose rest pose is arbitrary; taken from the first frame of an Asset's
-      first clip when not given. ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
+    - ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
+      representative poses, for skeletons whose rest pose is arbitrary; sampled from an Asset's
+      first clip when not given (:func:`sample_poses`). ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
 
     Raises :class:`UsageError` for an unknown mapper, :class:`InputError` for a map naming joints the
     skeleton does not have, :class:`~infuse.errors.NotHumanoidError` when the mapper refuses the skeleton.
@@ -257,7 +260,7 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
         file = file or getattr(source, "path", None)
         meta = dict(source.meta) if meta is None else meta
         if pose is None:
-            pose = rest_alternative_pose(source)
+            pose = sample_poses(source)
     saved = _as_saved(saved_map) if saved_map is not None else None
     if saved is not None:
         check_map(saved, skeleton)

@@ -95,12 +95,16 @@ def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
     ``up_from``); about -1 for a standing body, about 0 for a four-legged one."""
     if up_from is None:
         return -1.0
-    up = view.P[up_from] - view.P[legs.branch]
-    ends = view.P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0) - view.P[legs.branch]
-    nu, ne = np.linalg.norm(up), np.linalg.norm(ends)
-    if nu < 1e-9 or ne < 1e-9:
+    P = view.P
+    return _cos(P[up_from] - P[legs.branch], 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]]) - P[legs.branch])
+
+
+def _cos(u: np.ndarray, v: np.ndarray) -> float:
+    nu = float(np.sqrt(u @ u))
+    nv = float(np.sqrt(v @ v))
+    if nu < 1e-12 or nv < 1e-12:
         return 1.0
-    return float(np.dot(up, ends) / (nu * ne))
+    return float(u @ v) / (nu * nv)
 
 
 def _upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> int | None:
@@ -115,64 +119,59 @@ def _upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> 
         length = view.limb_length(legs.branch, c)
         if length > best_len:
             best, best_len = int(view.far[c]), length
-    if best is None and arms is not None:  # arms and legs share a branch: use the arms' mid point
-        return None
     return best
 
 
-def choose_plan(view: SkeletonView, pairs: list[LimbPair]) -> BodyPlan | None:
-    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all."""
+def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 5) -> BodyPlan | None:
+    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all.
+
+    Each pair is first scored alone as legs and as arms (symmetry, length, names); the best few of
+    each are then combined and the combination scored on how they sit in the tree and in space.
+    """
     if not pairs:
         return None
     span = view.scale
-    feats = {}
+    P = view.P
+    as_legs, as_arms = {}, {}
+    ends = {}
     for p in pairs:
-        leg, arm, bad = _role_votes(view, p)
-        feats[p] = (leg, arm, bad)
-    ranked = sorted(pairs, key=lambda p: -(p.length / span + p.symmetry))[:12]
+        leg_v, arm_v, bad = _role_votes(view, p)
+        base = 2.0 * p.symmetry + 1.5 * p.length / span - 2.0 * bad
+        as_legs[p] = base + 1.5 * (leg_v - arm_v)
+        as_arms[p] = base + 1.5 * (arm_v - leg_v)
+        ends[p] = 0.5 * (P[view.far[p.a]] + P[view.far[p.b]])
+    leg_cands = sorted(pairs, key=lambda p: -as_legs[p])[:keep] + [None]
+    arm_cands = sorted(pairs, key=lambda p: -as_arms[p])[:keep] + [None]
     best: BodyPlan | None = None
-    for legs in ranked + [None]:
-        for arms in ranked + [None]:
+    for legs in leg_cands:
+        for arms in arm_cands:
             if legs is None and arms is None:
                 continue
+            score, why = 0.0, []
             if legs is not None and arms is not None:
-                if legs == arms or legs.branch == arms.branch and {legs.a, legs.b} & {arms.a, arms.b}:
+                if legs == arms or (legs.branch == arms.branch and {legs.a, legs.b} & {arms.a, arms.b}):
                     continue
                 if any(view.is_descendant(arms.branch, c) for c in (legs.a, legs.b)):
                     continue
                 if any(view.is_descendant(legs.branch, c) for c in (arms.a, arms.b)):
                     continue
-            score, why = 0.0, []
-            if legs is not None:
-                leg_v, arm_v, bad = feats[legs]
-                score += 2.0 * legs.symmetry + 1.5 * legs.length / span + 1.5 * (leg_v - arm_v) - 2.0 * bad
-            else:
-                score -= 2.5
-                why.append("no legs")
-            if arms is not None:
-                leg_v, arm_v, bad = feats[arms]
-                score += 2.0 * arms.symmetry + 1.5 * arms.length / span + 1.5 * (arm_v - leg_v) - 2.0 * bad
-            else:
-                score -= 2.5
-                why.append("no arms")
-            if legs is not None and arms is not None:
                 if arms.branch == legs.branch:
                     score -= 1.5
                 elif view.is_descendant(legs.branch, arms.branch):
-                    score -= 2.0  # legs hanging below the arms' joint's subtree: upside down
+                    score -= 2.0  # legs hanging from below the arms' joint: upside down
                 else:
-                    torso = view.P[arms.branch] - view.P[legs.branch]
-                    t_len = float(np.linalg.norm(torso))
-                    if t_len < 0.08 * legs.length:
+                    up = P[arms.branch] - P[legs.branch]
+                    if float(np.sqrt(up @ up)) < 0.08 * legs.length:
                         score -= 1.0
-                cos = legs_down(view, legs, _upper_anchor(view, legs, arms))
-                score += 0.75 * (-cos)
-                # hands hang above the feet in every rest a person stands in
-                up = view.P[arms.branch] - view.P[legs.branch]
-                feet = view.P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
-                hands = view.P[[view.far[arms.a], view.far[arms.b]]].mean(axis=0)
-                if np.dot(hands - feet, up) < 0:
-                    score -= 0.5
+                    score += 0.75 * -_cos(up, ends[legs] - P[legs.branch])
+                    if float((ends[arms] - ends[legs]) @ up) < 0:
+                        score -= 0.5  # hands hang above the feet in every rest a person stands in
+            score += as_legs[legs] if legs is not None else -2.5
+            score += as_arms[arms] if arms is not None else -2.5
+            if legs is None:
+                why.append("no legs")
+            if arms is None:
+                why.append("no arms")
             if best is None or score > best.score:
                 best = BodyPlan(legs, arms, score, ", ".join(why))
     return best

@@ -65,13 +65,21 @@ def _role_cost(view: SkeletonView, chain: list[int], good: dict[str, float], bad
     """
     out = np.zeros(len(chain) + 1)
     infos = [view.info[j] for j in chain]
-    common = set.intersection(*(set(i.roles) for i in infos)) if len(infos) >= 3 else set()
+    common = frozenset.intersection(*(i.roles for i in infos)) if len(infos) >= 3 else frozenset()
     for i, info in enumerate(infos):
-        roles = info.roles - common
-        pos = max((w for r, w in good.items() if r in roles and w > 0), default=0.0)
-        neg = min((w for r, w in good.items() if r in roles and w < 0), default=0.0)
-        out[i] -= pos if pos else neg
-        out[i] += sum(w for f, w in bad_flags.items() if f in info.flags)
+        roles = info.roles - common if common else info.roles
+        if roles:
+            pos = neg = 0.0
+            for r in roles:
+                w = good.get(r, 0.0)
+                if w > pos:
+                    pos = w
+                elif w < neg:
+                    neg = w
+            out[i] -= pos if pos else neg
+        if info.flags:
+            for f in info.flags:
+                out[i] += bad_flags.get(f, 0.0)
     return out
 
 
@@ -119,31 +127,23 @@ def _between(skip: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 def _prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, other: float) -> np.ndarray:
     """(m+1,) cost of leaving all chain joints before index i unmapped."""
-    out = np.zeros(len(chain) + 1)
-    acc = 0.0
-    for i, j in enumerate(chain):
-        out[i] = acc
-        helper = view.info[j].flagged("helper") or float(np.linalg.norm(view.P[j] - anchor)) < 1e-3 * scale
-        acc += 0.15 if helper else other
-    out[-1] = acc
-    return out
+    near = np.einsum("ij,ij->i", view.P[chain] - anchor, view.P[chain] - anchor) < (1e-3 * scale) ** 2
+    steps = [0.15 if (near[i] or view.info[j].flagged("helper")) else other for i, j in enumerate(chain)]
+    return np.concatenate(([0.0], np.cumsum(steps)))
 
 
 def _leg_prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, up) -> np.ndarray:
     """Like :func:`_prefix_costs` for a leg: a joint whose bone to the next runs sideways (a pelvis
     bone from the hips' centre to the hip socket) is cheap to leave out."""
-    out = np.zeros(len(chain) + 1)
-    acc = 0.0
-    for i, j in enumerate(chain):
-        out[i] = acc
-        cheap = view.info[j].flagged("helper") or float(np.linalg.norm(view.P[j] - anchor)) < 1e-3 * scale
-        if not cheap and up is not None and i + 1 < len(chain):
-            seg = view.P[chain[i + 1]] - view.P[j]
-            n = float(np.linalg.norm(seg))
-            cheap = n < 1e-3 * scale or -float(seg @ up) / n < 0.5
-        acc += 0.3 if cheap else 0.9
-    out[-1] = acc
-    return out
+    P = view.P[chain]
+    near = np.einsum("ij,ij->i", P - anchor, P - anchor) < (1e-3 * scale) ** 2
+    sideways = np.zeros(len(chain), dtype=bool)
+    if up is not None and len(chain) > 1:
+        seg = P[1:] - P[:-1]
+        n = np.sqrt(np.einsum("ij,ij->i", seg, seg))
+        sideways[:-1] = (n < 1e-3 * scale) | (-(seg @ up) < 0.5 * n)
+    steps = [0.3 if (near[i] or sideways[i] or view.info[j].flagged("helper")) else 0.9 for i, j in enumerate(chain)]
+    return np.concatenate(([0.0], np.cumsum(steps)))
 
 
 def _mirror_offsets(view: SkeletonView, chains: list[list[int]], anchor: np.ndarray) -> list[np.ndarray]:
@@ -270,7 +270,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         cost += np.where(rel_s < 0.45, 4.0 * (0.45 - rel_s), 0.0)
         cost += np.where(has_c & (rel_c > 0.75), 3.0 * (rel_c - 0.75), 0.0)
         first = np.where(has_c, c, s)
-        cost += _prefix_costs(view, chain, anchor, scale, 1.0)[first]
+        cost += _prefix_costs(view, chain, anchor, scale, 0.6)[first]
         skip = _skip_costs(view, chain, scale)
         cost += np.where(has_c, _between(skip, c, s) + 0.5 * (s > c + 1), 0.0)
         cost += _between(skip, s, e) + _between(skip, e, w)
@@ -278,9 +278,13 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         nxt = np.minimum(w + 1, m - 1)
         after = np.where((w + 1 < m) & ~virtual, np.linalg.norm(P[nxt] - Pw, axis=1), 0.0)
         cost += np.where(after > 0.7 * fore, 2.0, 0.0)
-        branching = np.array([sum(1 for ch in view.children[j] if not view.info[ch].flagged("end", "twist", "control"))
-                              for j in chain] + [0])
-        cost -= np.where(~virtual & (branching[np.minimum(w, m)] >= 2), 0.6, 0.0)
+        kids = [[ch for ch in view.children[j] if not view.info[ch].flagged("end", "twist", "control")] for j in chain]
+        branching = np.array([len(k) >= 3 or sum(view.size[ch] >= 2 for ch in k) >= 2 for k in kids] + [False])
+        many = np.array([len(k) >= 2 for k in kids] + [False])
+        cost -= np.where(~virtual & many[np.minimum(w, m)], 0.6, 0.0)
+        # the hand is where the fingers branch: a wrist past a branching joint is a finger
+        first_branch = next((i for i in range(m) if branching[i]), m)
+        cost += np.where((e < first_branch) & (w > first_branch) & (w < m), 1.5, 0.0)
         rem = np.where(virtual, 0.0, view.reach[chain_arr[np.minimum(w, m - 1)]])
         cost += np.where(rem > 1.6 * fore, 0.6, 0.0)
         bend = np.concatenate((_bend(P), [0.0]))
@@ -316,6 +320,33 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
             r.predicted["wrist"] = Pw[best]
         out[root] = r
     return out
+
+
+def settle_coincident(view: SkeletonView, result: LimbResult) -> None:
+    """Several joints at one place along a chain (a twist joint at the elbow, a helper above a
+    joint): the slot goes to the one that branches (parents the next segments), else the last one,
+    whose bone is the segment that follows."""
+    chain = result.chain
+    tol = 1e-3 * view.scale
+    taken = {j for j in result.slots.values() if j >= 0}
+    for slot, j in list(result.slots.items()):
+        if j < 0 or j not in chain:
+            continue
+        i = chain.index(j)
+        lo = i
+        while lo > 0 and float(np.linalg.norm(view.P[chain[lo - 1]] - view.P[chain[i]])) < tol:
+            lo -= 1
+        hi = i
+        while hi + 1 < len(chain) and float(np.linalg.norm(view.P[chain[hi + 1]] - view.P[chain[i]])) < tol:
+            hi += 1
+        if lo == hi:
+            continue
+        run = [c for c in chain[lo:hi + 1] if c == j or c not in taken]
+        best = max(run, key=lambda c: (len(view.children[c]), chain.index(c)))
+        if best != j and not view.info[j].roles - view.info[best].roles:
+            taken.discard(j)
+            taken.add(best)
+            result.slots[slot] = best
 
 
 def forearm_twist(view: SkeletonView, result: LimbResult) -> int:

@@ -23,7 +23,7 @@ from infuse.mapping import Mapping
 
 from .body import LimbPair, choose_plan, legs_down, limb_pairs
 from .hands import assign_fingers
-from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate
+from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
 from .view import SkeletonView
 
 NAME = "heuristic"
@@ -44,11 +44,9 @@ class _Result:
     def put(self, name: str, joint: int | None, conf: float, reason: str) -> None:
         if joint is None or joint < 0:
             self.joint.pop(name, None)
-            self.conf[name] = float(np.clip(conf, 0.0, 1.0))
-            self.reason[name] = reason
-            return
-        self.joint[name] = int(joint)
-        self.conf[name] = float(np.clip(conf, 0.0, 1.0))
+        else:
+            self.joint[name] = int(joint)
+        self.conf[name] = min(1.0, max(0.0, float(conf)))
         self.reason[name] = reason
 
 
@@ -197,6 +195,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     arm_res = assign_arms(view, arms.branch, [arms.a, arms.b]) if arms is not None else {}
     body_chain: set[int] = set()
     for r in list(leg_res.values()) + list(arm_res.values()):
+        settle_coincident(view, r)
         body_chain.update(r.chain)
     # IK-driven feet and hands hang elsewhere
     for r in leg_res.values():
@@ -209,8 +208,8 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         junction = view.lca(legs.branch, arms.branch)
     else:
         junction = (legs or arms).branch
-    base, base_why = _choose_base(view, junction, legs)
-    up = _up_axis(view, base, legs, arms, leg_res, arm_res)
+    up = _up_axis(view, junction, legs, arms, leg_res, arm_res)
+    base, base_why = _choose_base(view, junction, legs, [r.slots["hip"] for r in leg_res.values()], up)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
     torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
 
@@ -223,7 +222,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         result.put("skullbase", None, 0.5, "no head joint above the neck")
 
     # sides
-    side_of, side_why, side_conf = _sides(view, base, up, legs, arms, leg_res, arm_res, frames)
+    side_of, side_why, side_conf, left = _sides(view, base, up, legs, arms, leg_res, arm_res, frames)
 
     for root, r in leg_res.items():
         s = side_of[root]
@@ -233,7 +232,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         _put_arm(view, result, s, r, side_why, side_conf)
     # eyes
     if head >= 0:
-        _put_eyes(view, result, head, up, base)
+        _put_eyes(view, result, head, up, left, [base] + torso + neck)
 
 
 def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body_chain: set[int]) -> None:
@@ -262,15 +261,24 @@ def _only_body_child(view: SkeletonView, parent: int, child: int) -> bool:
     return True
 
 
-def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None) -> tuple[int, str]:
-    """The pelvis: the joint where legs and torso meet, or the pelvis just above it in a Biped-style rig."""
+def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, hips: list[int], up) -> tuple[int, str]:
+    """The pelvis: the joint where legs and torso meet, or its parent when the legs hang from a spine
+    joint well above the hip sockets (3ds Max Biped: Pelvis -> Spine -> thighs)."""
     info = view.info[junction]
     p = int(view.parents[junction])
-    if p >= 0 and not info.has("hips") and info.roles & {"spine", "chest"} and view.info[p].has("hips") \
-            and _only_body_child(view, p, junction):
+    if p < 0 or not _only_body_child(view, p, junction):
+        return junction, "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
+    parent_info = view.info[p]
+    if not info.has("hips") and info.roles & {"spine", "chest"} and parent_info.has("hips"):
         return p, "pelvis above the spine joint that carries the legs"
-    why = "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
-    return junction, why
+    if hips and up is not None and not info.has("hips") and not parent_info.flagged("root"):
+        sockets = view.P[hips].mean(axis=0)
+        thigh = max(float(np.mean([view.bone[c] for j in hips for c in view.children[j]] or [0.0])), 1e-9)
+        h_junction = float((view.P[junction] - sockets) @ up) / thigh
+        h_parent = float((view.P[p] - sockets) @ up) / thigh
+        if h_junction > 0.4 and -0.2 < h_parent < h_junction - 0.1:
+            return p, "pelvis: the legs hang from a spine joint above it"
+    return junction, "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
 
 
 def _up_axis(view, base, legs, arms, leg_res, arm_res) -> np.ndarray:
@@ -359,9 +367,10 @@ def _pick_head(view: SkeletonView, chain: list[int], base: int, up: np.ndarray, 
         s -= 2.0 * info.flagged("end") + 1.0 * info.flagged("face", "secondary") + 1.5 * info.flagged("control")
         kids = [c for c in view.children[j] if not view.info[c].flagged("end")]
         s += 0.8 * (len(view.children[j]) >= 2) + 0.3 * (len(kids) >= 2)
-        leaf = not view.children[j]
-        if leaf and i > 0 and view.bone[j] > 0.25 * torso_len:
-            s -= 1.2  # a long last bone: the top of the skull, not a joint
+        leaf = not view.children[j] and not view.has_end_site[j]
+        prev = view.bone[chain[i - 1]] if i > 0 else 0.0
+        if leaf and i > 0 and view.bone[j] > 0.25 * torso_len and view.bone[j] > 1.5 * prev:
+            s -= 1.2  # a long last bone ending in a leaf: the top of the skull, not a joint
         height = float(np.dot(P[j] - P[top], up)) / torso_len
         s -= 0.6 * max(0.0, height - 0.75)  # far above the chest: the skull's top or hair
         neck_count = i - (1 if neck_from_top else 0) + (1 if neck_from_top else 0)
@@ -425,7 +434,8 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
     if np.dot(P[ref_res[ref.a].slots[ref_key]] - P[ref_res[ref.b].slots[ref_key]], lateral) < 0:
         lateral = -lateral
     forward = np.cross(lateral, up)  # the body's front if the "a" members are on its left
-    geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames, base)
+    top = arms.branch if arms is not None else base
+    geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames if top != base else None, base, top)
     names = _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs)
     if abs(geo) >= 0.3:
         a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
@@ -448,36 +458,50 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
             da = np.dot(P[res[p.a].slots[key]], left)
             db = np.dot(P[res[p.b].slots[key]], left)
             side_of[p.a], side_of[p.b] = ("l", "r") if da >= db else ("r", "l")
-    return side_of, why, conf
+    return side_of, why, conf, left
 
 
-def _front_votes(view, forward, up, legs, leg_res, frames, base) -> tuple[float, str]:
-    """+1 when the feet point along ``forward``, -1 against, ~0 when they do not tell."""
+def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[float, str]:
+    """+1 when the feet point (and the knees bend) along ``forward``, -1 against, ~0 when they do not
+    tell. ``forward`` is the front if the pair's "a" members are on the left. With frames of motion
+    each frame votes in its own body axes."""
     if legs is None:
         return 0.0, ""
-    votes = []
-    for root in (legs.a, legs.b):
-        r = leg_res[root]
+    ra, rb = leg_res[legs.a], leg_res[legs.b]
+    feet = []
+    for r in (ra, rb):
         ankle = r.slots["ankle"]
         if ankle < 0:
             continue
-        toe_chain = view.main_chain(ankle, 3)
-        if len(toe_chain) < 2:
-            continue
-        tip = toe_chain[-1]
-        v = view.P[tip] - view.P[ankle]
-        n = np.linalg.norm(v)
-        if n > 1e-9:
-            votes.append(float(np.dot(v, forward)) / n)
-        if frames is not None and len(frames) > 1:
-            fv = frames[:, tip] - frames[:, ankle]
-            fn = np.linalg.norm(fv, axis=1)
-            ok = fn > 1e-9
-            # per-frame body axes would be better; the rest's axes hold for upright motion
-            votes.extend((fv[ok] @ forward / fn[ok]).tolist()[:0])
-    if not votes:
-        return 0.0, ""
-    return float(np.mean(votes)), "left = up x forward, forward from the toes"
+        tip = view.main_chain(ankle, 3)[-1]
+        if tip != ankle:
+            feet.append((ankle, tip))
+    knees = [(r.slots["hip"], r.slots["knee"], r.slots["ankle"]) for r in (ra, rb) if r.slots["ankle"] >= 0]
+    poses = [view.P[None]] if frames is None else [view.P[None], frames]
+    toe_votes, knee_votes = [], []
+    for F in poses:
+        if F is view.P[None]:
+            fwd = forward[None]
+        else:  # the body's axes in every frame, oriented like the rest's
+            u = F[:, top] - F[:, base]
+            lat = F[:, ra.slots["hip"]] - F[:, rb.slots["hip"]]
+            fwd = np.cross(lat, u)
+            fwd /= np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-12)
+        for ankle, tip in feet:
+            v = F[:, tip] - F[:, ankle]
+            n = np.linalg.norm(v, axis=1)
+            ok = n > 1e-9
+            toe_votes.extend((np.einsum("ij,ij->i", v[ok], fwd[ok]) / n[ok]).tolist())
+        for h, k, a in knees:
+            mid = 0.5 * (F[:, h] + F[:, a])
+            off = np.einsum("ij,ij->i", F[:, k] - mid, fwd)
+            length = np.linalg.norm(F[:, k] - F[:, h], axis=1)
+            knee_votes.extend(np.clip(off / np.maximum(length, 1e-9) * 5.0, -1, 1).tolist())
+    toe = float(np.mean(toe_votes)) if toe_votes else 0.0
+    knee = float(np.mean(knee_votes)) if knee_votes else 0.0
+    if abs(toe) >= 0.3 or not knee_votes:
+        return toe, "left = up x forward, forward from the toes"
+    return float(np.clip(toe + 0.5 * knee, -1, 1)), "left = up x forward, forward from the toes and knees"
 
 
 def _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs) -> float:
@@ -602,10 +626,46 @@ def _coincident_siblings(view: SkeletonView, j: int) -> list[int]:
             and not view.info[c].flagged(*_NOT_BODY)]
 
 
-def _put_eyes(view, result, head, up, base) -> None:
+def _put_eyes(view, result, head, up, left, below: list[int]) -> None:
+    """Eyes: named ones below the head; else, in a head with few joints, a mirror-image pair of
+    small joints in front of and above the head joint."""
     eyes = _named_eyes(view, view.subtree(head))
+    why = "named eye below the head"
+    if not eyes:
+        eyes = _eye_pair(view, head, up, left)
+        why = "mirror-image pair in front of the head (eyes)"
     for side in ("left", "right"):
         if side in eyes:
-            result.put(f"eyeball_{side}", eyes[side], 0.8, "named eye below the head")
+            result.put(f"eyeball_{side}", eyes[side], 0.8 if why.startswith("named") else 0.55, why)
         else:
             result.put(f"eyeball_{side}", None, 0.6, "no eye joint below the head")
+
+
+def _eye_pair(view, head, up, left) -> dict[str, int]:
+    P = view.P
+    inside = [int(j) for j in view.subtree(head) if j != head and view.size[j] <= 2
+              and not view.info[j].flagged("face", "end", "secondary", "control", "prop")]
+    if not inside or len(inside) > 8:  # a face rig: too many look-alike pairs to tell the eyes by shape
+        return {}
+    forward = np.cross(left, up)
+    neck_len = max(float(np.linalg.norm(P[head] - P[int(view.parents[head])])), 1e-3 * view.scale)
+    best, best_score = None, np.inf
+    for i, a in enumerate(inside):
+        for b in inside[i + 1:]:
+            d = P[a] - P[b]
+            sep = float(np.linalg.norm(d))
+            if sep < 1e-9:
+                continue
+            across = abs(float(d @ left)) / sep
+            mid = 0.5 * (P[a] + P[b]) - P[head]
+            if across < 0.85 or abs(float(mid @ left)) > 0.2 * sep:
+                continue
+            if float(mid @ forward) <= 0 or float(mid @ up) <= 0:
+                continue
+            score = (1 - across) + abs(float(mid @ left)) / sep + 0.1 * sep / neck_len
+            if score < best_score:
+                best, best_score = (a, b), score
+    if best is None:
+        return {}
+    a, b = best
+    return {"left": a, "right": b} if float((P[a] - P[b]) @ left) > 0 else {"left": b, "right": a}

@@ -129,7 +129,7 @@ class NameInfo:
         return role in self.roles
 
     def flagged(self, *flags: str) -> bool:
-        return any(f in self.flags for f in flags)
+        return not self.flags.isdisjoint(flags)
 
 
 def _translate_cjk(name: str) -> str:

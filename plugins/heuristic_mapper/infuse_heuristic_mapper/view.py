@@ -28,6 +28,13 @@ class SkeletonView:
         self.n = len(self.names)
         self.children: tuple[tuple[int, ...], ...] = skeleton.children
         self.info: list[NameInfo] = analyse_all(self.names)
+        # children a chain may follow: controls, props and secondary bones only when nothing else is there
+        self.followable = tuple(
+            tuple(c for c in kids if not self.info[c].flagged("control", "prop", "secondary")) or kids
+            for kids in self.children)
+        #: joints that carry an end site (BVH): a leaf with one is a real joint, not an end marker
+        self.has_end_site = np.zeros(self.n, dtype=bool)
+        self.has_end_site[np.asarray(skeleton.end_site_parents, dtype=np.int64)] = True
         self.set_pose(positions)
         # pre/post order for subtree tests
         tin = np.zeros(self.n, dtype=np.int64)
@@ -78,6 +85,7 @@ class SkeletonView:
         self.reach = reach
         self.far = far
         self.scale = float(max(np.max(reach + best2), 1e-9))
+        self._chains: dict[tuple[int, int], list[int]] = {}
 
     # -- topology ------------------------------------------------------------------------------------
     def is_descendant(self, a: int, b: int) -> bool:
@@ -112,13 +120,23 @@ class SkeletonView:
         Children whose names mark them as controls, props or secondary bones are passed over when
         another child exists (an IK hand hanging beside the forearm must not pull the chain away).
         """
+        key = (j, limit)
+        cached = self._chains.get(key)
+        if cached is not None:
+            return list(cached)
         chain = [j]
-        while len(chain) < limit and self.children[chain[-1]]:
-            kids = self.children[chain[-1]]
-            plain = [c for c in kids if not self.info[c].flagged("control", "prop", "secondary")]
-            pool = plain or kids
-            chain.append(max(pool, key=lambda c: self.bone[c] + self.reach[c]))
-        return chain
+        length = self.bone + self.reach
+        while len(chain) < limit:
+            pool = self.followable[chain[-1]]
+            if not pool:
+                break
+            best = pool[0]
+            for c in pool[1:]:
+                if length[c] > length[best]:
+                    best = c
+            chain.append(best)
+        self._chains[key] = chain
+        return list(chain)
 
     def subtree(self, j: int) -> np.ndarray:
         """Indices of the subtree of ``j`` (``j`` included)."""
