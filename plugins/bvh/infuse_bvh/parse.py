@@ -45,12 +45,6 @@ class BvhDocument:
     frame_time: float
     values: np.ndarray
 
-    @property
-    def channel_starts(self) -> np.ndarray:
-        """(J,) column in ``values`` of each joint's first channel."""
-        counts = np.fromiter((len(c) for c in self.channels), dtype=np.int64, count=len(self.channels))
-        return np.concatenate(([0], np.cumsum(counts)[:-1]))
-
 
 def _numbers(file, lineno: int, what: str, words: list[str], count: int) -> list[float]:
     if len(words) != count:

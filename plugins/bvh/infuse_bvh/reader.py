@@ -16,6 +16,7 @@ joint, the frame time and the unit scale.
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,6 @@ from infuse import quaternions as quat
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, guess_unit, guess_up_axis
 from infuse.errors import InputError
-from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
 
@@ -38,8 +38,10 @@ UNIT_CANDIDATES = ("m", "dm", "cm", "mm")
 UP_AXIS_SAMPLE_FRAMES = 8
 
 
-def channel_layout(doc: BvhDocument):
-    """Column indices of the channels, as arrays for vectorized gathers.
+@lru_cache(maxsize=64)
+def channel_layout(channels: tuple[tuple[str, ...], ...]):
+    """Column indices of the channels, as arrays for vectorized gathers (cached: files of one
+    dataset share their layout; the arrays are read-only).
 
     Returns ``(rotation_columns, rotation_axes, position_columns)``: ``rotation_columns`` (J, 3)
     is the column of each joint's 1st, 2nd and 3rd rotation channel in file order (-1 where a
@@ -47,25 +49,30 @@ def channel_layout(doc: BvhDocument):
     starting with its listed axes (unlisted ones follow, with zero angles), and
     ``position_columns`` is ``(joints, axes, columns)``, one entry per position channel.
     """
-    joints = len(doc.names)
+    joints = len(channels)
     rot_cols = np.full((joints, 3), -1, dtype=np.int64)
     rot_axes = np.zeros((joints, 3), dtype=np.int64)
     pos_joints: list[int] = []
     pos_axes: list[int] = []
     pos_cols: list[int] = []
-    for j, (start, chans) in enumerate(zip(doc.channel_starts, doc.channels)):
+    column = 0
+    for j, chans in enumerate(channels):
         axes: list[int] = []
-        for offset, c in enumerate(chans):
+        for c in chans:
             if c.endswith("rotation"):
-                rot_cols[j, len(axes)] = start + offset
+                rot_cols[j, len(axes)] = column
                 axes.append(_AXIS[c[0]])
             else:
                 pos_joints.append(j)
                 pos_axes.append(_AXIS[c[0]])
-                pos_cols.append(int(start) + offset)
+                pos_cols.append(column)
+            column += 1
         rot_axes[j] = axes + [a for a in (0, 1, 2) if a not in axes]
-    positions = (np.array(pos_joints, dtype=np.int64), np.array(pos_axes, dtype=np.int64), np.array(pos_cols, dtype=np.int64))
-    return rot_cols, rot_axes, positions
+    out = (rot_cols, rot_axes, np.array(pos_joints, dtype=np.int64), np.array(pos_axes, dtype=np.int64),
+           np.array(pos_cols, dtype=np.int64))
+    for array in out:
+        array.setflags(write=False)
+    return out[0], out[1], out[2:]
 
 
 def local_rotations(values: np.ndarray, rotation_columns: np.ndarray, rotation_axes: np.ndarray) -> np.ndarray:
@@ -101,24 +108,44 @@ def local_translations(doc: BvhDocument, position_columns) -> np.ndarray:
     return out
 
 
-def body_joints(skeleton: Skeleton) -> np.ndarray:
+def body_joints(parents: np.ndarray) -> np.ndarray:
     """Indices of the figure itself: the subtree of the first joint below root 0 that branches.
 
     Leading single-child joints (a ground-projected ``joint_Root``, a ``reference`` node) may sit
     metres away from the body; they would distort any size or orientation measured on positions.
     A skeleton that never branches (a plain chain) is all body.
     """
+    joints = len(parents)
+    children = np.bincount(parents[parents >= 0], minlength=joints)
     j = 0
-    while len(skeleton.children[j]) == 1:
-        j = skeleton.children[j][0]
-    if not skeleton.children[j]:
-        return np.arange(skeleton.num_joints)
-    inside = np.zeros(skeleton.num_joints, dtype=bool)
+    while children[j] == 1:
+        j = int(np.flatnonzero(parents == j)[0])
+    if children[j] == 0:
+        return np.arange(joints)
+    inside = np.zeros(joints, dtype=bool)
     inside[j] = True
-    for i in range(j + 1, skeleton.num_joints):  # parents precede children
-        p = skeleton.parents[i]
+    for i in range(j + 1, joints):  # parents precede children
+        p = parents[i]
         inside[i] = p >= 0 and inside[p]
     return np.flatnonzero(inside)
+
+
+def sampled_positions(parents: np.ndarray, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:
+    """(K, J, 3) global positions of a few frames, chaining rotation matrices joint by joint.
+
+    For the handful of frames that decide the up axis this beats level-by-level FK, whose cost
+    does not shrink with the frame count. ``rotations`` (K, J, 4), ``translations`` (K, J, 3).
+    """
+    local = quat.to_matrix(rotations)
+    rot = np.empty_like(local)
+    pos = np.empty(translations.shape)
+    for j, p in enumerate(parents):
+        if p < 0:
+            rot[:, j], pos[:, j] = local[:, j], translations[:, j]
+        else:
+            rot[:, j] = rot[:, p] @ local[:, j]
+            pos[:, j] = pos[:, p] + np.einsum("kab,kb->ka", rot[:, p], translations[:, j])
+    return pos
 
 
 def rest_positions(doc: BvhDocument) -> tuple[np.ndarray, np.ndarray]:
@@ -155,33 +182,38 @@ def _up_axis(doc: BvhDocument, body: np.ndarray, poses: np.ndarray | None, up_ax
 def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: str | None = None) -> Asset:
     """Convert a parsed document into the core frame (see the module docstring)."""
     joints = len(doc.names)
-    rest = Skeleton(doc.names, doc.parents, doc.offsets, quat.identity((joints,)),
-                    doc.end_site_parents, doc.end_site_offsets)
-    rotation_columns, rotation_axes, position_columns = channel_layout(doc)
+    rotation_columns, rotation_axes, position_columns = channel_layout(doc.channels)
     frames = doc.values.shape[0]
     rots = local_rotations(doc.values, rotation_columns, rotation_axes)
     pos_joints = position_columns[0]
-    animated = bool(np.any(pos_joints != 0))  # translations beyond joint 0's need joint_translations
-    if animated:
+    if np.any(pos_joints != 0):  # translations beyond joint 0's: Motion.joint_translations
         trans = local_translations(doc, position_columns)
         root = trans[:, 0]
     else:
+        trans = None
         root = np.broadcast_to(doc.offsets[0], (frames, 3)).copy()
         root[:, position_columns[1]] = doc.values[:, position_columns[2]]
-        trans = None
-    body = body_joints(rest)
+    body = body_joints(doc.parents)
     poses = None
     if frames and up_axis is None:
         sample = np.unique(np.linspace(0, frames - 1, min(frames, UP_AXIS_SAMPLE_FRAMES)).astype(np.int64))
-        poses = forward_kinematics(rest, rots[sample], root[sample], None if trans is None else trans[sample])[1]
+        sample_trans = np.broadcast_to(doc.offsets, (len(sample), joints, 3)).copy() if trans is None else trans[sample]
+        sample_trans[:, 0] = root[sample]
+        poses = sampled_positions(doc.parents, rots[sample], sample_trans)
     unit = _unit(doc, body, units)
     axis = _up_axis(doc, body, poses, up_axis)
     scale = UNIT_SCALES[unit]
     up = UP_AXIS_ROTATIONS[axis]
-    skeleton = rest.transformed(scale, None if axis == "Y" else up)
+    roots = np.flatnonzero(doc.parents < 0)
+    rest_translations = doc.offsets * scale
+    rest_rotations = quat.identity((joints,))
+    if axis != "Y":
+        rest_translations[roots] = quat.rotate(up, rest_translations[roots])
+        rest_rotations[roots] = up
+    skeleton = Skeleton(doc.names, doc.parents, rest_translations, rest_rotations,
+                        doc.end_site_parents, doc.end_site_offsets * scale)
     motions = {}
     if frames:
-        roots = skeleton.roots
         root = root * scale
         if axis != "Y":
             rots[:, roots] = quat.multiply(up, rots[:, roots])
