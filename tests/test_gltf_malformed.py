@@ -169,3 +169,55 @@ def test_error_names_the_place(tmp_path, name):
     with pytest.raises(InputError) as err:
         infuse.load(path)
     assert PLACES[name] in str(err.value) and err.value.file == str(path)
+
+
+def _mutations(doc: dict, rng: np.random.Generator, count: int):
+    """``count`` copies of ``doc`` with one to three values replaced by a wrong type, a bad index or NaN,
+    or a key removed."""
+    def paths(obj, prefix=()):
+        if prefix:
+            yield prefix
+        items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list) else ()
+        for key, value in items:
+            yield from paths(value, prefix + (key,))
+
+    every = list(paths(doc))
+    values = [None, -1, 0, 7, 10 ** 9, "x", [], {}, 1.5, True, [1, 2], {"a": 1}, float("nan"), [0, 0, 0, 0]]
+    for _ in range(count):
+        mutated = json.loads(json.dumps(doc))
+        for _ in range(rng.integers(1, 4)):
+            path = every[rng.integers(len(every))]
+            parent = mutated
+            try:
+                for key in path[:-1]:
+                    parent = parent[key]
+                if isinstance(parent, dict) and rng.random() < 0.2:
+                    parent.pop(path[-1], None)
+                else:
+                    parent[path[-1]] = values[rng.integers(len(values))]
+            except (KeyError, IndexError, TypeError):
+                pass  # an earlier change removed this place
+        yield mutated
+
+
+def test_random_damage_gives_typed_errors_only(tmp_path):
+    """Random damage to the JSON of a VRM-flavoured rig: every outcome is a clean read (then a clean
+    write) or an infuse error; never a stray exception (a bug, exit code 1)."""
+    b, n = mini_rig()
+    b.doc["extensions"] = {"VRMC_vrm": {"specVersion": "1.0", "humanoid": {"humanBones": {"hips": {"node": n["hips"]}}},
+                                        "expressions": {"preset": {"aa": {"morphTargetBinds": [{"node": n["face"], "index": 0, "weight": 1}]}}}}}
+    good = b.glb()
+    clen = struct.unpack_from("<I", good, 12)[0]
+    doc = json.loads(good[20:20 + clen])
+    path, out = tmp_path / "damaged.glb", tmp_path / "written.glb"
+    outcomes = {"read": 0, "refused": 0}
+    for mutated in _mutations(doc, np.random.default_rng(11), 300):
+        path.write_bytes(_patch_json(good, json.dumps(mutated).encode()))
+        try:
+            asset = infuse.load(path)
+            infuse.save(asset, out)
+            outcomes["read"] += 1
+        except infuse.InfuseError as exc:
+            assert getattr(exc, "file", None) in (str(path), None), exc
+            outcomes["refused"] += 1
+    assert outcomes["read"] > 30 and outcomes["refused"] > 30

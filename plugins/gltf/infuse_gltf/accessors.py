@@ -63,13 +63,17 @@ class AccessorReader:
 
     def is_readable(self, index: int) -> bool:
         """False when the accessor's data sit in a compressed view (meshopt) that this reader cannot decode."""
-        acc = self.accessors[index] if 0 <= index < len(self.accessors) else {}
-        views = [acc.get("bufferView")] + [((acc.get("sparse") or {}).get(k) or {}).get("bufferView") for k in ("indices", "values")]
+        valid = isinstance(index, int) and 0 <= index < len(self.accessors) and isinstance(self.accessors[index], dict)
+        acc = self.accessors[index] if valid else {}
+        sparse = acc.get("sparse") if isinstance(acc.get("sparse"), dict) else {}
+        views = [acc.get("bufferView")] + [(sparse.get(k) if isinstance(sparse.get(k), dict) else {}).get("bufferView")
+                                           for k in ("indices", "values")]
         return not any(self._compression(v) for v in views if isinstance(v, int) and 0 <= v < len(self.views))
 
     def _compression(self, view_index: int) -> str | None:
-        ext = self.views[view_index].get("extensions") or {}
-        return next((name for name in VIEW_COMPRESSION if name in ext), None)
+        view = self.views[view_index]
+        ext = view.get("extensions") if isinstance(view, dict) else None
+        return next((name for name in VIEW_COMPRESSION if name in ext), None) if isinstance(ext, dict) else None
 
     def _view_bytes(self, view_index, place: str) -> tuple[memoryview, int | None]:
         """The bytes of a buffer view and its byteStride."""
@@ -120,9 +124,9 @@ class AccessorReader:
         if not isinstance(acc, dict):
             raise InputError(self.file, place, "is not an object")
         ctype = acc.get("componentType")
-        if ctype not in COMPONENT_DTYPES:
+        if not isinstance(ctype, int) or ctype not in COMPONENT_DTYPES:
             raise InputError(self.file, place, f"componentType {ctype!r} is not a glTF component type")
-        if acc.get("type") not in TYPE_SHAPES:
+        if not isinstance(acc.get("type"), str) or acc["type"] not in TYPE_SHAPES:
             raise InputError(self.file, place, f"type {acc.get('type')!r} is not a glTF accessor type")
         dtype = COMPONENT_DTYPES[ctype]
         cols, rows = TYPE_SHAPES[acc["type"]]
@@ -159,7 +163,8 @@ class AccessorReader:
         idx_spec, val_spec = sparse.get("indices"), sparse.get("values")
         if not isinstance(idx_spec, dict) or not isinstance(val_spec, dict):
             raise InputError(self.file, place, "indices and values must be objects")
-        idx_dtype = {5121: np.dtype("<u1"), 5123: np.dtype("<u2"), 5125: np.dtype("<u4")}.get(idx_spec.get("componentType"))
+        ctype = idx_spec.get("componentType")
+        idx_dtype = {5121: np.dtype("<u1"), 5123: np.dtype("<u2"), 5125: np.dtype("<u4")}.get(ctype) if isinstance(ctype, int) else None
         if idx_dtype is None:
             raise InputError(self.file, f"{place}.indices", f"componentType {idx_spec.get('componentType')!r} must be an unsigned integer type")
         indices = self._packed(idx_spec, idx_dtype, (n,), f"{place}.indices")

@@ -7,10 +7,17 @@ these name are called ``"<mesh name>.<k>"`` (``"mesh<m>.<k>"`` for an unnamed me
 from __future__ import annotations
 
 
+def _obj(value) -> dict:
+    return value if isinstance(value, dict) else {}
+
+
 def target_count(mesh: dict) -> int:
     """Number of morph targets of a mesh (every primitive must have the same number)."""
-    prims = mesh.get("primitives") or []
-    return len(prims[0].get("targets") or []) if prims and isinstance(prims[0], dict) else 0
+    prims = mesh.get("primitives")
+    if not isinstance(prims, list) or not prims or not isinstance(prims[0], dict):
+        return 0
+    targets = prims[0].get("targets")
+    return len(targets) if isinstance(targets, list) else 0
 
 
 def mesh_target_names(doc_json: dict) -> list[list[str]]:
@@ -22,12 +29,14 @@ def mesh_target_names(doc_json: dict) -> list[list[str]]:
             out.append([])
             continue
         n = target_count(mesh)
-        prim = (mesh.get("primitives") or [{}])[0]
-        candidates = [(mesh.get("extras") or {}).get("targetNames"), (prim.get("extras") or {}).get("targetNames")]
+        prims = mesh.get("primitives")
+        prim = prims[0] if isinstance(prims, list) and prims and isinstance(prims[0], dict) else {}
+        candidates = [_obj(mesh.get("extras")).get("targetNames"), _obj(prim.get("extras")).get("targetNames")]
         names = next((list(map(str, c)) for c in candidates if isinstance(c, list) and len(c) == n), None)
         if names is None:
             acc_names = []
-            for target in prim.get("targets") or []:
+            targets = prim.get("targets")
+            for target in targets if isinstance(targets, list) else []:
                 idx = target.get("POSITION") if isinstance(target, dict) else None
                 acc = accessors[idx] if isinstance(idx, int) and 0 <= idx < len(accessors) else {}
                 acc_names.append(acc.get("name") if isinstance(acc, dict) else None)

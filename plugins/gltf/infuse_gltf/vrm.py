@@ -47,6 +47,26 @@ class VrmInfo:
         return {e.node for e in self.expressions if e.node is not None}
 
 
+def _obj(value) -> dict:
+    return value if isinstance(value, dict) else {}
+
+
+def _arr(value) -> list:
+    return value if isinstance(value, list) else []
+
+
+def _bind(file, place: str, bind, ref_key: str, default_weight: float) -> tuple:
+    """``(ref, target index, weight)`` of one morph target bind, or :class:`InputError`."""
+    if not isinstance(bind, dict):
+        raise InputError(file, place, "is not an object")
+    ref, index, weight = bind.get(ref_key), bind.get("index"), bind.get("weight", default_weight)
+    if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in (ref, index)):
+        raise InputError(file, place, f"{ref_key} and index must be non-negative integers")
+    if not isinstance(weight, (int, float)) or isinstance(weight, bool) or not float(weight) == float(weight):
+        raise InputError(file, place, "weight is not a number")
+    return ref, index, float(weight)
+
+
 def vrm_info(doc_json: dict, file) -> VrmInfo | None:
     """The VRM facts of a document, or ``None`` for a plain glTF."""
     ext = doc_json.get("extensions") or {}
@@ -58,11 +78,11 @@ def vrm_info(doc_json: dict, file) -> VrmInfo | None:
         bones = _bones_v1(e, n_nodes, file, "extensions.VRMC_vrm_animation")
         exprs = []
         for group in ("preset", "custom"):
-            for name, spec in ((e.get("expressions") or {}).get(group) or {}).items():
+            for name, spec in _obj(_obj(e.get("expressions")).get(group)).items():
                 if isinstance(spec, dict) and "node" in spec:
                     node = check_index(file, f"extensions.VRMC_vrm_animation.expressions.{group}.{name}", spec["node"], n_nodes, "node")
                     exprs.append(Expression(str(name), node=node))
-        look = (e.get("lookAt") or {}).get("node")
+        look = _obj(e.get("lookAt")).get("node")
         if look is not None:
             look = check_index(file, "extensions.VRMC_vrm_animation.lookAt", look, n_nodes, "node")
         return VrmInfo("vrma-1.0", bones, exprs, look)
@@ -71,27 +91,29 @@ def vrm_info(doc_json: dict, file) -> VrmInfo | None:
         bones = _bones_v1(e, n_nodes, file, "extensions.VRMC_vrm")
         exprs = []
         for group in ("preset", "custom"):
-            for name, spec in ((e.get("expressions") or {}).get(group) or {}).items():
-                if not isinstance(spec, dict):
-                    continue
-                binds = [("node", b["node"], b["index"], float(b.get("weight", 1.0)))
-                         for b in spec.get("morphTargetBinds") or [] if isinstance(b, dict) and "node" in b and "index" in b]
+            for name, spec in _obj(_obj(e.get("expressions")).get(group)).items():
+                place = f"extensions.VRMC_vrm.expressions.{group}.{name}.morphTargetBinds"
+                binds = [("node",) + _bind(file, f"{place}[{k}]", b, "node", 1.0)
+                         for k, b in enumerate(_arr(_obj(spec).get("morphTargetBinds")))]
                 exprs.append(Expression(str(name), binds))
         return VrmInfo("1.0", bones, exprs)
     if isinstance(ext.get("VRM"), dict):
         e = ext["VRM"]
         bones: dict[str, int] = {}
-        for k, b in enumerate((e.get("humanoid") or {}).get("humanBones") or []):
+        for k, b in enumerate(_arr(_obj(e.get("humanoid")).get("humanBones"))):
             if isinstance(b, dict) and "bone" in b and b.get("node") is not None and b.get("node") != -1:
                 bones[str(b["bone"])] = check_index(file, f"extensions.VRM.humanoid.humanBones[{k}]", b["node"], n_nodes, "node")
         exprs = []
-        for g in (e.get("blendShapeMaster") or {}).get("blendShapeGroups") or []:
+        for gi, g in enumerate(_arr(_obj(e.get("blendShapeMaster")).get("blendShapeGroups"))):
             if not isinstance(g, dict):
                 continue
             preset = str(g.get("presetName") or "unknown")
             name = preset if preset != "unknown" else str(g.get("name") or f"expression{len(exprs)}")
-            binds = [("mesh", b["mesh"], b["index"], float(b.get("weight", 100.0)) / 100.0)
-                     for b in g.get("binds") or [] if isinstance(b, dict) and "mesh" in b and "index" in b]
+            place = f"extensions.VRM.blendShapeMaster.blendShapeGroups[{gi}].binds"
+            binds = []
+            for k, b in enumerate(_arr(g.get("binds"))):
+                mesh, index, weight = _bind(file, f"{place}[{k}]", b, "mesh", 100.0)
+                binds.append(("mesh", mesh, index, weight / 100.0))
             exprs.append(Expression(name, binds))
         return VrmInfo("0.x", bones, exprs)
     return None
@@ -99,7 +121,7 @@ def vrm_info(doc_json: dict, file) -> VrmInfo | None:
 
 def _bones_v1(ext: dict, n_nodes: int, file, place: str) -> dict[str, int]:
     bones: dict[str, int] = {}
-    human = (ext.get("humanoid") or {}).get("humanBones") or {}
+    human = _obj(ext.get("humanoid")).get("humanBones") or {}
     if not isinstance(human, dict):
         raise InputError(file, f"{place}.humanoid.humanBones", "is not an object")
     for bone, spec in human.items():
