@@ -44,7 +44,7 @@ def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray
     first joint that starts at the wrist (a metacarpal by position) too."""
     while len(chain) > 1:
         first = view.info[chain[0]]
-        if first.flagged("metacarpal", "helper") or first.has("palm"):
+        if first.flagged("metacarpal", "helper") or first.has("palm") or _coincides_with_child(view, chain[0]):
             chain = chain[1:]
         else:
             break
@@ -58,10 +58,16 @@ def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray
 
 
 def _drop_helpers(view: SkeletonView, chain: list[int]) -> list[int]:
-    """A thumb starts at its first real joint: leading helper joints are dropped."""
-    while len(chain) > 1 and view.info[chain[0]].flagged("helper"):
+    """A thumb starts at its first real joint: leading helper joints (named so, or sitting exactly
+    where their only child is) are dropped."""
+    while len(chain) > 1 and (view.info[chain[0]].flagged("helper") or _coincides_with_child(view, chain[0])):
         chain = chain[1:]
     return chain
+
+
+def _coincides_with_child(view: SkeletonView, j: int) -> bool:
+    kids = view.children[j]
+    return len(kids) == 1 and view.bone[kids[0]] < 1e-4 * view.scale
 
 
 def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:

@@ -200,8 +200,11 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         cost += _leg_prefix_costs(view, chain, anchor, scale, up)[h]
         skip = _skip_costs(view, chain, scale)
         cost += _between(skip, h, k) + _between(skip, k, a)
-        chain_arr = np.array(chain)
-        rem = np.where(virtual, 0.0, view.reach[chain_arr[np.minimum(a, m - 1)]])
+        # the foot past the ankle is short: its farthest chain joint (a heel may loop back) is near
+        diff = P[:, None, :] - P[None, :, :]
+        dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
+        extent = np.array([dist[i, i + 1:].max() if i + 1 < m else 0.0 for i in range(m)] + [0.0])
+        rem = np.where(virtual, 0.0, extent[a])
         cost += np.where(rem > 0.9 * shin, ((rem / np.maximum(shin, 1e-9) - 0.9) / 0.25) ** 2, 0.0)
         start = np.linalg.norm(Ph - anchor, axis=1)
         cost += np.where(start < 0.02 * thigh, 0.6, 0.0)  # a joint at the pelvis is a helper, not the thigh

@@ -316,6 +316,8 @@ def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.nda
             break
         chain.append(nxt)
         cur = nxt
+        if sum(not view.info[c].flagged("end") for c in view.children[cur]) >= 2:
+            break  # the skull: eyes, jaw, face or hair hang from it
     return chain
 
 
@@ -342,7 +344,7 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
         info = view.info[top]
         named_neck = info.has("neck") and not info.roles & {"chest", "spine"}
         named_torso = bool(info.roles & {"chest", "spine", "hips"})
-        if named_neck or (not named_torso and height > -0.1 and to_next < 0.35 and len(torso) > 1):
+        if named_neck or (not named_torso and height > 0.04 and to_next < 0.35 and len(torso) > 1):
             neck_from_top = True
             torso = torso[:-1]
             chest_why = "chest: the last torso joint below the neck that carries the arms"
@@ -355,34 +357,22 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
 
 
 def _pick_head(view: SkeletonView, chain: list[int], base: int, up: np.ndarray, top: int, neck_from_top: bool) -> int:
-    if not chain:
+    """The head: a joint named so, else the last joint of the chain above the chest, unless that one
+    is only the end of the skull (a leaf without end site whose bone is long next to the neck's)."""
+    candidates = chain[1:] if neck_from_top else chain
+    if not candidates:
         return -1
+    named = [j for j in candidates if view.info[j].has("head") and not view.info[j].flagged("end", "face", "control")]
+    if named:
+        return named[0]
     P = view.P
     torso_len = max(float(np.dot(P[top] - P[base], up)), 1e-3 * view.scale)
-    scores = []
-    for i, j in enumerate(chain):
-        info = view.info[j]
-        s = 0.0
-        s += 2.0 * info.has("head") - 1.5 * (info.has("neck") and not info.has("head"))
-        s -= 2.0 * info.flagged("end") + 1.0 * info.flagged("face", "secondary") + 1.5 * info.flagged("control")
-        kids = [c for c in view.children[j] if not view.info[c].flagged("end")]
-        s += 0.8 * (len(view.children[j]) >= 2) + 0.3 * (len(kids) >= 2)
-        leaf = not view.children[j] and not view.has_end_site[j]
-        prev = view.bone[chain[i - 1]] if i > 0 else 0.0
-        if leaf and i > 0 and view.bone[j] > 0.25 * torso_len and view.bone[j] > 1.5 * prev:
-            s -= 1.2  # a long last bone ending in a leaf: the top of the skull, not a joint
-        height = float(np.dot(P[j] - P[top], up)) / torso_len
-        s -= 0.6 * max(0.0, height - 0.75)  # far above the chest: the skull's top or hair
-        neck_count = i - (1 if neck_from_top else 0) + (1 if neck_from_top else 0)
-        s -= 0.35 * max(0, neck_count - 2)
-        if i == 0 and not neck_from_top:
-            s -= 0.4  # a head right on the chest is less common than a neck
-        scores.append(s)
-    if neck_from_top:
-        scores[0] = -np.inf
-    if not np.isfinite(max(scores)):
-        return -1
-    return chain[int(np.argmax(scores))]
+    last = candidates[-1]
+    if len(candidates) >= 2 and not view.children[last] and not view.has_end_site[last]:
+        prev = view.bone[candidates[-2]]
+        if view.info[last].flagged("end") or (view.bone[last] > 0.15 * torso_len and view.bone[last] > 1.5 * prev):
+            last = candidates[-2]
+    return last
 
 
 def _put_torso(result: _Result, torso: list[int], chest_why: str) -> None:
@@ -644,7 +634,8 @@ def _put_eyes(view, result, head, up, left, below: list[int]) -> None:
 def _eye_pair(view, head, up, left) -> dict[str, int]:
     P = view.P
     inside = [int(j) for j in view.subtree(head) if j != head and view.size[j] <= 2
-              and not view.info[j].flagged("face", "end", "secondary", "control", "prop")]
+              and not view.info[j].flagged("face", "end", "secondary", "control", "prop")
+              and not (len(view.children[j]) == 1 and view.bone[view.children[j][0]] < 1e-4 * view.scale)]
     if not inside or len(inside) > 8:  # a face rig: too many look-alike pairs to tell the eyes by shape
         return {}
     forward = np.cross(left, up)
