@@ -7,7 +7,7 @@ PY=${PYTHON:-python3}
 VENV=.venv
 
 # System packages the features need (speech, video renders, browser viewer tests, glTF validation).
-SYSTEM_PACKAGES="espeak-ng libespeak-ng1 ffmpeg nodejs npm"
+SYSTEM_PACKAGES="espeak-ng libespeak-ng1 ffmpeg nodejs npm chromium"
 missing=""
 for p in $SYSTEM_PACKAGES; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
@@ -46,9 +46,11 @@ if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "$stamp" > "$VENV/.setup-stamp"
 fi
 
-# Khronos glTF validator (npm), used by the tests of the glTF writer.
-if command -v npm >/dev/null 2>&1 && [ ! -f "$VENV/tools/node_modules/gltf-validator/package.json" ]; then
-  echo "setup: installing gltf-validator (npm)"
-  npm install --silent --no-audit --no-fund --prefix "$VENV/tools" gltf-validator >/dev/null
+# Khronos glTF validator (npm), used by the tests of the glTF writer; three.js for the browser viewer.
+THREE_VERSION=0.187.0
+if command -v npm >/dev/null 2>&1 && { [ ! -f "$VENV/tools/node_modules/gltf-validator/package.json" ] ||
+    ! grep -qs "\"version\": \"$THREE_VERSION\"" "$VENV/tools/node_modules/three/package.json"; }; then
+  echo "setup: installing gltf-validator and three (npm)"
+  npm install --silent --no-audit --no-fund --prefix "$VENV/tools" gltf-validator "three@$THREE_VERSION" >/dev/null
 fi
 echo "setup: ready ($VENV/bin/infuse)"
