@@ -320,3 +320,47 @@ def test_bad_option_values_are_usage_errors(mini_glb):
     for options in ({"units": "furlong"}, {"up_axis": "W"}, {"facing": "up"}, {"fps": -1}):
         with pytest.raises((UsageError, InputError)):
             infuse.load(mini_glb, **options)
+
+
+def _png_1x1() -> bytes:
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", 1, 1, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(b"\0\xff\x00\x00")) + chunk(b"IEND", b"")
+
+
+def test_gltf_with_external_files_is_written_standalone(tmp_path):
+    b, n = mini_rig()
+    (tmp_path / "skin.png").write_bytes(_png_1x1())
+    b.doc["images"] = [{"uri": "skin.png"}]
+    b.doc["textures"] = [{"source": 0}]
+    b.doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+    b.doc["meshes"][0]["primitives"][0]["material"] = 0
+    b.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = b.accessor(np.zeros((3, 2)))
+    source = b.write_gltf(tmp_path / "model.gltf", external=True)
+    asset = infuse.load(source)
+    out_dir = tmp_path / "elsewhere"
+    written = [infuse.save(asset, out_dir / "copy.glb"), infuse.save(asset, out_dir / "copy.gltf")]
+    for path, report in zip(written, validator.validate_files(written)):
+        assert report["issues"]["numErrors"] == 0, validator.errors(report)
+        doc = parse_bytes(path.read_bytes(), path).json
+        assert doc["images"][0]["uri"].startswith("data:image/png;base64,")
+        back = infuse.load(path)
+        np.testing.assert_allclose(back.motions["wave"].local_rotations, asset.motions["wave"].local_rotations, atol=1e-7)
+
+
+def test_validate_command(tmp_path, mini_glb):
+    b, _ = mini_rig()
+    time_accessor = b.doc["accessors"][b.doc["animations"][0]["samplers"][0]["input"]]
+    del time_accessor["min"], time_accessor["max"]  # the spec requires bounds on animation inputs
+    bad = b.write_glb(tmp_path / "unbounded.glb")
+    run = subprocess.run([str(INFUSE_CLI), "validate-gltf", str(mini_glb), str(bad)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2, run.stderr
+    lines = run.stdout.splitlines()
+    assert lines[0].startswith(f"{mini_glb}: 0 errors") and f"{bad}: " in run.stdout and "error ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS" in run.stdout
+    missing = subprocess.run([str(INFUSE_CLI), "validate-gltf", str(tmp_path / "nothing.glb")], capture_output=True, text=True, timeout=120)
+    assert missing.returncode == 2 and "file not found" in missing.stderr
