@@ -102,14 +102,15 @@ def _holds(starts, ends, names, duration: float, vs: VisemeSet, s: LipSyncSettin
     frame = 1.0 / s.fps
     is_closure = np.array([phoneme_viseme(n) == "PP" for n in names], bool)
     spans = _runs(starts, ends, is_closure)
-    # closed from half a ramp after the lips meet to half a ramp before they part, so the closure pose
-    # is half-way in at the start of the bilabial and half-way out at its end; always >= one frame
+    # the hold starts at the bilabial's start and is complete a ramp later (the blend alone decides
+    # when the closure viseme takes over, at the boundary); it ends likewise. A closure too short for
+    # that is complete on the frame nearest its middle, so the lips do meet on a frame.
     ramp = np.full(len(spans), s.closure_ramp_s)
-    first, last = spans[:, 0] + ramp / 2, spans[:, 1] - ramp / 2
+    first, last = spans[:, 0] + ramp, spans[:, 1] - ramp
     short = last - first < frame
-    centre = (spans[:, 0] + spans[:, 1]) / 2
-    first = np.where(short, centre - frame / 2 - 1e-6, first)
-    last = np.where(short, centre + frame / 2 + 1e-6, last)
+    nearest_frame = np.round((spans[:, 0] + spans[:, 1]) / 2 * s.fps) / s.fps
+    first = np.where(short, nearest_frame, first)
+    last = np.where(short, nearest_frame, last)
     closure = co.Hold(first, last, ramp, ramp, vs.closure)
 
     is_sil = np.array([n == SILENCE for n in names], bool)
