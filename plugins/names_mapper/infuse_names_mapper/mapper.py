@@ -1,0 +1,142 @@
+"""The ``names`` mapper: canonical joint names from dictionaries of well-known rig conventions.
+
+Each convention (:mod:`.conventions`) is tried against the skeleton's normalized joint names and
+the one that names the most canonical joints wins; its torso and neck joints are then numbered by
+the labelling rule (chest = spine3, one neck joint = spine4...) using their order in the hierarchy.
+A VRM file's own humanoid map (``Asset.meta["vrm_humanoid"]``) is used first when present.
+"""
+from __future__ import annotations
+
+import re
+
+from infuse.canonical import ALL_NAMES
+from infuse.errors import NotHumanoidError
+from infuse.mapping import Mapping
+
+from .conventions import CONVENTIONS, VRM, VRM0_THUMB
+
+NAME = "names"
+_SIDES = {
+    "l": {"{s}": "l", "{Side}": "Left", "{side}": "left", "{L}": "L", "{l}": "l", "{Lf}": "Lf"},
+    "r": {"{s}": "r", "{Side}": "Right", "{side}": "right", "{L}": "R", "{l}": "r", "{Lf}": "Rt"},
+}
+MIN_NAMES = 6  # fewer canonical joints than this named by any convention: not a rig we know
+
+
+def normalize(name: str) -> str:
+    """Lower case, namespace and separators removed, ``Bip001``/``Bip01`` folded, ``DEF-`` dropped."""
+    for sep in (":", "|"):
+        if sep in name:
+            name = name.rsplit(sep, 1)[1] or name
+    low = name.lower()
+    if low.startswith(("def-", "def_")):
+        low = low[4:]
+    low = re.sub(r"[^a-z0-9]", "", low)
+    return re.sub(r"^bip0*1", "bip", low)
+
+
+def _expand(text: str, side: str | None) -> str:
+    if side is None:
+        return text
+    for k, v in _SIDES[side].items():
+        text = text.replace(k, v)
+    return text
+
+
+def _entries(table: dict[str, list[str]]):
+    """(canonical key or group, normalized joint name) for every template, both sides expanded."""
+    for key, names in table.items():
+        sides = ("l", "r") if "{" in key else (None,)
+        for side in sides:
+            for name in names:
+                yield _expand(key, side), normalize(_expand(name, side))
+
+
+def _hits(table: dict[str, list[str]], index: dict[str, str]) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {}
+    for key, norm in _entries(table):
+        joint = index.get(norm)
+        if joint is not None and joint not in out.get(key, []):
+            out.setdefault(key, []).append(joint)
+    return out
+
+
+def _number(ordered: list[str], slots: tuple[str, ...], rule: str) -> dict[str, str]:
+    """Apply the labelling rule to torso or neck joints listed bottom-up."""
+    if not ordered:
+        return {}
+    if rule == "torso":  # chest is always spine3
+        if len(ordered) == 1:
+            return {"spine3": ordered[0]}
+        if len(ordered) == 2:
+            return {"spine1": ordered[0], "spine3": ordered[1]}
+        return {"spine1": ordered[0], "spine2": ordered[1], "spine3": ordered[-1]}
+    if len(ordered) == 1:
+        return {"spine4": ordered[0]}
+    return {"spine4": ordered[0], "spine5": ordered[-1]}
+
+
+def _assemble(hits: dict[str, list[str]], skeleton) -> dict[str, str]:
+    depth = skeleton.depths
+    index = skeleton.index
+    joints: dict[str, str] = {}
+    for group in ("torso", "neck"):
+        found = sorted(hits.get(group, []), key=lambda n: depth[index[n]])
+        joints.update(_number(found, (), group))
+    for key, names in hits.items():
+        if key in ("torso", "neck") or key in joints:
+            continue
+        joints[key] = names[0]
+    return joints
+
+
+def _from_vrm_meta(humanoid, skeleton) -> dict[str, str]:
+    """Canonical -> joint from a VRM humanoid map (VRM bone name -> node name)."""
+    if not isinstance(humanoid, dict):
+        return {}
+    table = dict(VRM)
+    bones = {normalize(k) for k in humanoid}
+    if "leftthumbmetacarpal" not in bones and "leftthumbintermediate" in bones:
+        table.update(VRM0_THUMB)
+    by_bone = {}
+    for key, norm in _entries(table):
+        by_bone.setdefault(norm, key)
+    hits: dict[str, list[str]] = {}
+    for bone, node in humanoid.items():
+        key = by_bone.get(normalize(bone))
+        if key is not None and isinstance(node, str) and node in skeleton.index:
+            hits.setdefault(key, []).append(node)
+    return _assemble(hits, skeleton)
+
+
+def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options) -> Mapping:
+    """Map ``skeleton`` by its joint names (see the module docstring)."""
+    index: dict[str, str] = {}
+    for n in skeleton.names:
+        index.setdefault(normalize(n), n)
+    meta = meta or {}
+    joints = _from_vrm_meta(meta.get("vrm_humanoid"), skeleton)
+    source = "the file's VRM humanoid map" if joints else ""
+    if len(joints) < MIN_NAMES:
+        best_name, best = "", {}
+        for conv, table in CONVENTIONS.items():
+            found = _assemble(_hits(table, index), skeleton)
+            if len(found) > len(best):
+                best_name, best = conv, found
+        if len(best) < MIN_NAMES:
+            raise NotHumanoidError(file, f"no known naming convention names its joints (best: {best_name or 'none'}, "
+                                         f"{len(best)} names); try --mapper heuristic")
+        joints, source = best, f"the {best_name} naming convention"
+    conf = {n: (0.95 if n in joints else 0.7) for n in ALL_NAMES}
+    reasons = {n: (f"{joints[n]!r} in {source}" if n in joints else f"no joint of that name in {source}")
+               for n in ALL_NAMES}
+    if fixed:
+        for n, v in fixed.items():
+            if v is None:
+                joints.pop(n, None)
+            else:
+                joints[n] = v
+            conf[n] = 1.0
+            reasons[n] = "set by hand"
+    return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME,
+                         overall_confidence=0.95 if len(joints) >= 20 else 0.6)
