@@ -364,3 +364,27 @@ def test_validate_command(tmp_path, mini_glb):
     assert lines[0].startswith(f"{mini_glb}: 0 errors") and f"{bad}: " in run.stdout and "error ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS" in run.stdout
     missing = subprocess.run([str(INFUSE_CLI), "validate-gltf", str(tmp_path / "nothing.glb")], capture_output=True, text=True, timeout=120)
     assert missing.returncode == 2 and "file not found" in missing.stderr
+
+
+def test_vrm_character_clip_exported_as_vrma(tmp_path):
+    asset = infuse.load(_vrm0(tmp_path))
+    sk = asset.skeleton
+    frames = 30
+    rots = np.broadcast_to(sk.rest_rotations, (frames, sk.num_joints, 4)).copy()
+    rots[:, 1] = quat.multiply(sk.rest_rotations[1], quat.from_axis_angle(np.tile(Y, (frames, 1)), np.linspace(0, 0.8, frames)))
+    asset.motions = {"nod": infuse.Motion(sk, 30, rots, np.tile(sk.rest_translations[0], (frames, 1)), name="nod")}
+    weights = {"aa": np.linspace(0, 1, frames), "a": np.linspace(1, 0, frames)}
+    asset.meta["morph_weight_tracks"] = {"nod": {"times": np.arange(frames) / 30, "weights": weights}}
+    out = infuse.save(asset, tmp_path / "nod.vrma")
+    report = validator.validate(out)
+    assert report["issues"]["numErrors"] == 0, validator.errors(report)
+    back = infuse.load(out)
+    assert back.format == "vrma" and back.meta["vrm_humanoid"] == asset.meta["vrm_humanoid"]
+    assert back.skeleton.names == sk.names and back.morph_targets == ["aa", "a"]
+    ext = parse_bytes(out.read_bytes()).json["extensions"]["VRMC_vrm_animation"]
+    assert set(ext["expressions"]["preset"]) == {"aa"} and set(ext["expressions"]["custom"]) == {"a"}
+    np.testing.assert_allclose(motion_fk(back.motions["nod"])[1], motion_fk(asset.motions["nod"])[1], atol=1e-6)
+    for name, w in weights.items():
+        np.testing.assert_allclose(back.meta["morph_weight_tracks"]["nod"]["weights"][name], w, atol=1e-6)
+    with pytest.raises(UsageError, match=".vrm output needs a VRM character"):
+        infuse.save(infuse.load(out), tmp_path / "not_a_character.vrm")

@@ -18,6 +18,11 @@ from infuse.errors import InputError
 from .accessors import check_index
 
 
+#: VRM 1.0 preset expression names (others are custom expressions).
+VRM_PRESET_EXPRESSIONS = ("happy", "angry", "sad", "relaxed", "surprised", "aa", "ih", "ou", "ee", "oh", "blink",
+                          "blinkLeft", "blinkRight", "lookUp", "lookDown", "lookLeft", "lookRight", "neutral")
+
+
 @dataclass
 class Expression:
     """One VRM expression: its name and the morph targets it drives.

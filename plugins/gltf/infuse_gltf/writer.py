@@ -25,8 +25,13 @@ file matches raises :class:`~infuse.errors.UsageError`.
 Any other asset (from BVH, SmartBody...) is written as a new glTF: one node per joint (rest
 translation and rotation, metres, +Y up, +Z forward), end sites as leaf nodes marked
 ``extras.infuse_end_site``, a skin listing the joints with their inverse bind matrices (so readers
-know the skeleton; no mesh), and one animation per Motion. A ``.vrma`` written this way carries a
-``VRMC_vrm_animation`` humanoid map when ``asset.meta["vrm_humanoid"]`` gives one.
+know the skeleton; no mesh), and one animation per Motion.
+
+A ``.vrma`` (VRM Animation) is written the same way from any asset with a humanoid map in
+``asset.meta["vrm_humanoid"]`` (a VRM character has one): the skeleton, the clips, the
+``VRMC_vrm_animation`` humanoid map, and one expression node per morph-weight track name (VRM 1.0
+preset names go under ``preset``, others under ``custom``). A ``.vrm`` is only written from a VRM
+character (it needs the VRM extension the file came with).
 
 New binary data is appended to buffer 0 (the GLB BIN chunk). External buffers and images of a
 ``.gltf`` source are embedded (``data:`` URIs in ``.gltf`` output), so the output stands alone.
@@ -51,6 +56,7 @@ from .container import CHUNK_BIN, CHUNK_JSON, GLB_MAGIC, read_uri
 from .graph import invert, trs_matrices
 from .morph import mesh_target_names
 from .reader import END_SITE_MARK, STILL_M, GltfPayload
+from .vrm import VRM_PRESET_EXPRESSIONS, Expression, VrmInfo
 
 FLOAT = 5126
 BINARY_SUFFIXES = (".glb", ".vrm", ".vrma")
@@ -145,16 +151,23 @@ class _Target:
 def write(asset: infuse.Asset, path: str | Path) -> None:
     """Write ``asset`` to ``path`` (binary for .glb/.vrm/.vrma, JSON for .gltf); see the module doc."""
     path = Path(path)
-    binary = path.suffix.lower() in BINARY_SUFFIXES
+    suffix = path.suffix.lower()
+    binary = suffix in BINARY_SUFFIXES
     tracks = asset.meta.get("morph_weight_tracks") or {}
-    if isinstance(asset.payload, GltfPayload):
-        doc, bin_writer, other = _copy_document(asset.payload, binary)
-        _write_animations(doc, bin_writer, asset, tracks, asset.payload)
-    else:
-        if tracks:
-            raise UsageError("morph-weight tracks need a character with meshes (this asset has no glTF meshes)")
-        doc, bin_writer, other = _skeleton_document(asset, path.suffix.lower() == ".vrma")
-        _write_animations(doc, bin_writer, asset, {}, None)
+    payload = asset.payload if isinstance(asset.payload, GltfPayload) else None
+    version = payload.vrm.version if payload is not None and payload.vrm is not None else None
+    if suffix == ".vrm" and version not in ("0.x", "1.0"):
+        raise UsageError(".vrm output needs a VRM character (one read from a .vrm file); write a .glb instead")
+    if payload is not None and not (suffix == ".vrma" and version != "vrma-1.0"):
+        doc, bin_writer, other = _copy_document(payload, binary)
+        _write_animations(doc, bin_writer, asset, tracks, payload, payload.vrm)
+        _finish(doc, bin_writer, other, path, binary)
+        return
+    # A new document: the skeleton as nodes (for .vrma, also the humanoid map and expression nodes).
+    if tracks and suffix != ".vrma":
+        raise UsageError("morph-weight tracks need a character with meshes (this asset has no glTF meshes)")
+    doc, bin_writer, other, vrm = _skeleton_document(asset, suffix == ".vrma", tracks)
+    _write_animations(doc, bin_writer, asset, tracks, None, vrm)
     _finish(doc, bin_writer, other, path, binary)
 
 
@@ -182,8 +195,9 @@ def _copy_document(payload: GltfPayload, binary: bool):
     return doc, _Binary(doc, 0, data[0]), data
 
 
-def _skeleton_document(asset: infuse.Asset, vrma: bool):
-    """A new document with the skeleton as nodes and a skin (no mesh)."""
+def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict):
+    """A new document with the skeleton as nodes and a skin (no mesh); for a VRMA, also the humanoid map
+    and one expression node per morph-weight track name."""
     sk = asset.skeleton
     doc: dict = {"asset": {"version": "2.0", "generator": f"infuse {infuse.__version__}"}, "buffers": [{"byteLength": 0}]}
     nodes = [{"name": n, "translation": [float(v) for v in t], "rotation": [float(v) for v in q]}
@@ -207,20 +221,30 @@ def _skeleton_document(asset: infuse.Asset, vrma: bool):
             name += "_"
         nodes.append({"name": name, "children": roots})
         roots = [len(nodes) - 1]
-    doc["scenes"] = [{"nodes": roots}]
-    doc["scene"] = 0
     bin_writer = _Binary(doc, 0, b"")
     world = np.linalg.inv(_rest_world(sk))
     ibm = bin_writer.blocks([np.swapaxes(world, 1, 2).reshape(len(world), 16)], "MAT4")[0]
     doc["skins"] = [{"joints": list(range(sk.num_joints)), "inverseBindMatrices": ibm}]
-    humanoid = asset.meta.get("vrm_humanoid") if vrma else None
+    vrm = None
     if vrma:
+        humanoid = asset.meta.get("vrm_humanoid")
         if not humanoid:
             raise UsageError("a .vrma needs a VRM humanoid map (asset.meta['vrm_humanoid'] = {vrm bone: joint name})")
         bones = {bone: {"node": sk.index[j]} for bone, j in humanoid.items() if j in sk.index}
-        doc["extensions"] = {"VRMC_vrm_animation": {"specVersion": "1.0", "humanoid": {"humanBones": bones}}}
+        ext: dict = {"specVersion": "1.0", "humanoid": {"humanBones": bones}}
+        expressions = []
+        for name in dict.fromkeys(n for track in tracks.values() for n in (track.get("weights") or {})):
+            nodes.append({"name": name})  # a VRMA expression: its translation.x carries the weight
+            roots.append(len(nodes) - 1)
+            group = "preset" if name in VRM_PRESET_EXPRESSIONS else "custom"
+            ext.setdefault("expressions", {}).setdefault(group, {})[name] = {"node": len(nodes) - 1}
+            expressions.append(Expression(name, node=len(nodes) - 1))
+        doc["extensions"] = {"VRMC_vrm_animation": ext}
         doc["extensionsUsed"] = ["VRMC_vrm_animation"]
-    return doc, bin_writer, [b""]
+        vrm = VrmInfo("vrma-1.0", {b: v["node"] for b, v in bones.items()}, expressions)
+    doc["scenes"] = [{"nodes": roots}]
+    doc["scene"] = 0
+    return doc, bin_writer, [b""], vrm
 
 
 def _rest_world(sk) -> np.ndarray:
@@ -229,7 +253,8 @@ def _rest_world(sk) -> np.ndarray:
 
 
 # -- animations -----------------------------------------------------------------------------------
-def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, tracks: dict, payload: GltfPayload | None):
+def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, tracks: dict, payload: GltfPayload | None,
+                      vrm: VrmInfo | None):
     if payload is not None:
         rig = payload.rig
         target = _Target(rig.names, rig.joint_nodes, rig.parents, rig.root_frames, rig.parent_scales,
@@ -255,7 +280,7 @@ def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, track
         if motion is not None:
             _motion_channels(anim, bin_writer, target, motion)
         if name in tracks:
-            _weight_channels(anim, bin_writer, doc, payload, name, tracks[name])
+            _weight_channels(anim, bin_writer, doc, vrm, name, tracks[name])
         if anim["channels"]:
             animations.append(anim)
     if animations:
@@ -288,7 +313,7 @@ def _channel(anim: dict, time_acc: int, out_acc: int, node: int, path: str) -> N
     anim["channels"].append({"sampler": len(anim["samplers"]) - 1, "target": {"node": node, "path": path}})
 
 
-def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, payload: GltfPayload, clip: str, track: dict) -> None:
+def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, vrm: VrmInfo | None, clip: str, track: dict) -> None:
     """Weights channels on the mesh nodes (and VRMA expression translations) that ``track`` drives."""
     times = np.asarray(track.get("times"), dtype=np.float64).reshape(-1)
     if times.size == 0 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0) or times[0] < 0:
@@ -297,7 +322,7 @@ def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, payload: GltfPa
     for name, w in weights.items():
         if w.shape != times.shape or not np.all(np.isfinite(w)):
             raise UsageError(f"morph-weight track {clip!r} target {name!r}: {w.size} finite weights expected {times.size}")
-    binds = _target_binds(doc, payload)
+    binds = _target_binds(doc, vrm)
     unknown = [n for n in weights if n not in binds]
     if unknown:
         raise UsageError(f"morph-weight track {clip!r} names targets this character does not have: {', '.join(unknown[:8])}")
@@ -337,7 +362,7 @@ def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, payload: GltfPa
         _channel(anim, time_acc, bin_writer.blocks([xyz], "VEC3")[0], node, "translation")
 
 
-def _target_binds(doc: dict, payload: GltfPayload) -> dict[str, list[tuple]]:
+def _target_binds(doc: dict, vrm: VrmInfo | None) -> dict[str, list[tuple]]:
     """Target name -> ``(kind, node, target index, scale)`` for mesh targets, VRM and VRMA expressions."""
     names = mesh_target_names(doc)
     nodes = doc.get("nodes", [])
@@ -349,7 +374,6 @@ def _target_binds(doc: dict, payload: GltfPayload) -> dict[str, list[tuple]]:
     for m, targets in enumerate(names):
         for k, name in enumerate(targets):
             binds.setdefault(name, []).extend(("mesh", n, k, 1.0) for n in mesh_nodes.get(m, []))
-    vrm = payload.vrm if payload is not None else None
     for expr in vrm.expressions if vrm else []:
         if expr.name in binds:
             continue  # a mesh target of that name wins
