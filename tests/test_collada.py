@@ -195,6 +195,7 @@ def _malformed_cases():
     yield "empty", ""
     yield "not-collada", "<?xml version='1.0'?><scene/>"
     yield "nan-translate", SCENE.replace("<translate sid=\"translate\">0 0 50</translate>", "<translate sid=\"translate\">0 nan 50</translate>")
+    yield "overflow", SCENE.replace("<translate sid=\"translate\">0 0 50</translate>", "<translate sid=\"translate\">0 1e300 50</translate>").replace("2 2 2", "1e300 1e300 1e300")
     yield "text-in-matrix", SCENE.replace("1 0 0 0 0 1 0 0 0 0 1 30 0 0 0 1", "1 0 0 0 0 1 0 x 0 0 1 30 0 0 0 1")
     yield "short-matrix", SCENE.replace("1 0 0 0 0 1 0 0 0 0 1 30 0 0 0 1", "1 0 0 0 0 1 0 0 0 0 1 30 0 0 0")
     yield "no-scene", SCENE.split("<library_visual_scenes>")[0] + "</COLLADA>"

@@ -279,6 +279,8 @@ def _malformed_cases():
     yield "record-overrun", good[:27] + struct.pack("<III", 10**6, 0, 0) + b"\x03abc"
     yield "unknown-type", good[:27] + _node("X", [], [], 27, False)[:13] + b"\x01X"  # patched below
     yield "nan-translation", fbx_bytes(scene(_replace(OBJECTS, 13, model(13, "Head", "LimbNode", P("Lcl Translation", 0.0, float("nan"), 0.0)))))
+    yield "overflow", fbx_bytes(scene(_replace(OBJECTS, 12, model(12, "Spine", "LimbNode", P("Lcl Translation", 0.0, 1e308, 0.0),
+                                                               P("Lcl Scaling", 1e308, 1e308, 1e308)))))
     yield "cycle", fbx_bytes(scene(connections=[C("OO", 10, 13)] + CONNECTIONS[1:]))
     yield "unknown-parent", fbx_bytes(scene(connections=[C("OO", 13, 999)] + [c for c in CONNECTIONS if c[1][1] != 13]))
     yield "two-parents", fbx_bytes(scene(connections=CONNECTIONS + [C("OO", 13, 11)]))

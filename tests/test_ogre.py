@@ -145,6 +145,7 @@ def _malformed_cases():
     yield "wrong-root", "<mesh><submeshes/></mesh>"
     yield "no-bones", "<skeleton><bones/></skeleton>"
     yield "nan-position", SKELETON.replace('<position x="0" y="20" z="0"/>', '<position x="0" y="nan" z="0"/>')
+    yield "overflow", SKELETON.replace('<position x="0" y="20" z="0"/>', '<position x="0" y="1e308" z="0"/>').replace('<position x="0" y="50" z="0"/>', '<position x="0" y="1e308" z="0"/>')
     yield "text-angle", SKELETON.replace('angle="1.5707963267948966"><axis x="0" y="1"', 'angle="ninety"><axis x="0" y="1"')
     yield "missing-position", SKELETON.replace('<position x="0" y="50" z="0"/>', "")
     yield "missing-attribute", SKELETON.replace('<position x="10" y="30" z="0"/>', '<position x="10" y="30"/>')
@@ -182,3 +183,10 @@ def test_malformed_input_through_the_installed_command(tmp_path):
         paths.append(tmp_path / "cut.skeleton.xml")
         paths[-1].write_bytes(data[: len(data) // 3])
     assert_cli_exits_2(paths)
+
+
+def test_absurd_animation_length_is_refused_before_sampling(tmp_path):
+    path = tmp_path / "long.skeleton.xml"
+    path.write_text(SKELETON.replace('length="1"', 'length="1e9"'))
+    with pytest.raises(infuse.UnusableInputError, match="too long"):
+        infuse.load(path)

@@ -82,3 +82,23 @@ def test_decompose_sheared_block_gives_the_nearest_rotation():
     _, rot, _ = transforms.decompose(parent @ child)
     nearest, _ = polar((parent @ child)[:3, :3])
     assert np.allclose(quat.to_matrix(rot), nearest, atol=1e-9)
+
+
+def test_sampled_motion_in_chunks_equals_one_pass():
+    rng = np.random.default_rng(5)
+    parents, local = _random_tree(rng, 5)
+    frames = np.repeat(local[None], 10, axis=0)
+    frames[:, :, :3, 3] += rng.normal(scale=0.1, size=(10, 5, 3))
+    g = transforms.global_matrices(parents, frames)
+    sk = transforms.skeleton_from_globals([f"j{i}" for i in range(5)], parents, g[0])
+    whole = transforms.motion_from_globals(sk, 30.0, g)
+    calls = []
+
+    def between(a, b):
+        calls.append((a, b))
+        return g[a:b]
+
+    chunked = transforms.sampled_motion(sk, 30.0, 10, between, chunk=3)
+    assert calls == [(0, 3), (3, 6), (6, 9), (9, 10)]
+    assert np.allclose(chunked.local_rotations, whole.local_rotations)
+    assert np.allclose(chunked.local_translations(), whole.local_translations())

@@ -44,6 +44,10 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
     reader = _pick("reader", registry.readers(), path, format)
     try:
         return reader.read(path, **options)
+    except InputError as exc:
+        if exc.file is None:  # raised by the core model's own checks, which do not know the file
+            raise InputError(path, exc.place, exc.problem) from None
+        raise
     except InfuseError:
         raise
     except RecursionError:

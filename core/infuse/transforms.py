@@ -11,9 +11,12 @@ Shapes: ``(..., 4, 4)`` with any leading axes (frames, nodes). Quaternions are (
 """
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from . import conventions
+from .errors import InputError
 from . import quaternions as quat
 from .motion import Motion
 from .skeleton import Skeleton
@@ -51,6 +54,7 @@ def decompose(matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     safe = np.where(np.abs(lengths) > 1e-12, lengths, 1.0)
     rot = block / safe[..., None, :]
     skew = np.abs(np.swapaxes(rot, -1, -2) @ rot - np.eye(3)).max(axis=(-1, -2)) > 1e-6
+    skew &= np.all(np.isfinite(block), axis=(-1, -2))  # non-finite blocks stay NaN for the callers' checks
     if np.any(skew):
         u, _, vt = np.linalg.svd(block[skew])
         flip = np.linalg.det(u @ vt) < 0.0
@@ -104,8 +108,22 @@ def rigid_locals(parents: np.ndarray, global_mats: np.ndarray) -> tuple[np.ndarr
     return local_rot, local_trans
 
 
+def require_finite(names, global_mats: np.ndarray, where: str = "rest pose") -> None:
+    """Raise :class:`InputError` naming the first joint whose matrix (..., J, 4, 4) is not finite.
+
+    Finite but huge file values can overflow once multiplied down a hierarchy; the file is named
+    by :func:`infuse.fileio.load`.
+    """
+    bad = ~np.all(np.isfinite(global_mats), axis=(-1, -2))
+    if np.any(bad):
+        index = np.argwhere(bad)[0]
+        frame = f" frame {index[0]}" if len(index) > 1 else ""
+        raise InputError(None, f"{where}{frame} joint {names[index[-1]]!r}", "transform is not finite (values too large?)")
+
+
 def skeleton_from_globals(names, parents, global_mats: np.ndarray) -> Skeleton:
     """A :class:`Skeleton` whose rest pose puts each joint at its global matrix (J, 4, 4), core frame."""
+    require_finite(list(names), global_mats)
     rot, trans = rigid_locals(parents, global_mats)
     return Skeleton(names, parents, trans, quat.canonical_sign(rot))
 
@@ -117,7 +135,20 @@ def motion_from_globals(skeleton: Skeleton, fps: float, global_mats: np.ndarray,
     ``joint_translations`` is kept only when some joint other than the first root moves away
     from its rest offset by more than ``tolerance`` metres (animated translation or scale).
     """
-    rot, trans = rigid_locals(skeleton.parents, global_mats)
+    return sampled_motion(skeleton, fps, len(global_mats), lambda a, b: global_mats[a:b], name, tolerance)
+
+
+def sampled_motion(skeleton: Skeleton, fps: float, frames: int, globals_between: Callable[[int, int], np.ndarray],
+                   name: str = "", tolerance: float = 1e-7, chunk: int = 1024) -> Motion:
+    """Like :func:`motion_from_globals`, asking ``globals_between(start, stop)`` for the (stop - start,
+    J, 4, 4) core-frame globals of a few frames at a time, so long clips need little extra memory."""
+    j = skeleton.num_joints
+    rot, trans = np.empty((frames, j, 4)), np.empty((frames, j, 3))
+    for a in range(0, frames, chunk):
+        b = min(frames, a + chunk)
+        mats = globals_between(a, b)
+        require_finite(skeleton.names, mats, f"motion {name!r}")
+        rot[a:b], trans[a:b] = rigid_locals(skeleton.parents, mats)
     rot = quat.make_continuous(rot, axis=0)
     moved = np.abs(trans[:, 1:] - skeleton.rest_translations[1:]).max(initial=0.0) > tolerance
     return Motion(skeleton, fps, rot, trans[:, 0], trans if moved else None, name=name)

@@ -23,10 +23,10 @@ class Document:
     def __init__(self, path: Path):
         self.path = path
         try:
-            tree = etree.parse(str(path), etree.XMLParser(**_PARSER_OPTIONS))
+            # From bytes, so bad encodings are syntax errors too (lxml reports them as OSError on files).
+            self.root = etree.fromstring(path.read_bytes(), etree.XMLParser(**_PARSER_OPTIONS))
         except etree.XMLSyntaxError as exc:
             raise InputError(path, f"line {exc.lineno}" if exc.lineno else None, f"not well-formed XML: {exc.msg}") from None
-        self.root = tree.getroot()
         for el in self.root.iter():
             if isinstance(el.tag, str) and el.tag.startswith("{"):
                 el.tag = el.tag.split("}", 1)[1]

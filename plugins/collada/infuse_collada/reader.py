@@ -15,7 +15,7 @@ import numpy as np
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import frame_change, global_matrices, motion_from_globals, skeleton_from_globals
+from infuse.transforms import frame_change, global_matrices, sampled_motion, skeleton_from_globals
 
 from . import animation
 from .document import Document
@@ -23,13 +23,19 @@ from .scene import flatten, joint_indices, joint_parents, local_matrices, unique
 
 _UP_AXES = {"X_UP": "X", "Y_UP": "Y", "Z_UP": "Z"}
 
-#: Largest frames x nodes product sampled at once (bounds memory on absurd clip lengths).
-MAX_SAMPLES = 4_000_000
+#: Largest clip read, in frames x joints (bounds memory on absurd clip lengths).
+MAX_JOINT_FRAMES = 10_000_000
 
 
 def read(path: Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
     """Read a COLLADA file; see the module docstring for what is kept and how it is converted."""
-    path = Path(path)
+    # Huge but finite numbers may overflow on the way; the model's checks then name the non-finite
+    # joint, so numpy's own warnings would only add lines.
+    with np.errstate(all="ignore"):
+        return _read(Path(path), units, up_axis)
+
+
+def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     doc = Document(path)
     scale, unit_name, detected_by = _units(doc, units)
     up = _up_axis(doc, up_axis)
@@ -55,12 +61,15 @@ def read(path: Path, units: str | None = None, up_axis: str | None = None, **_op
         clips = _clips(doc, chs)
         for name, start, end, clip_chs in clips:
             frames = int(round((end - start) * fps)) + 1
-            if frames * len(nodes) > MAX_SAMPLES:
-                raise UnusableInputError(path, f"animation {name!r} is too long to sample: {frames} frames of {len(nodes)} nodes")
+            if frames * len(joints) > MAX_JOINT_FRAMES:
+                raise UnusableInputError(path, f"animation {name!r} is too long to sample: {frames} frames of {len(joints)} joints")
             times = start + np.arange(frames) / fps
-            values = animation.sample_transforms(nodes, clip_chs, times)
-            globals_ = change @ global_matrices(node_parents, local_matrices(nodes, values, frames))[:, joints]
-            motions[name] = motion_from_globals(skeleton, fps, globals_, name=name)
+
+            def globals_between(a, b, times=times, clip_chs=clip_chs):
+                values = animation.sample_transforms(nodes, clip_chs, times[a:b])
+                return change @ global_matrices(node_parents, local_matrices(nodes, values, b - a))[:, joints]
+
+            motions[name] = sampled_motion(skeleton, fps, frames, globals_between, name=name)
         meta["animation"] = {"fps": fps, "channels": len(chs), "skipped_channels": skipped,
                              "clip_start_s": {name: start for name, start, _, _ in clips}}
     return Asset(path, "collada", skeleton, motions, _morph_targets(doc), source_units=unit_name,

@@ -16,20 +16,26 @@ import numpy as np
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import frame_change, global_matrices, motion_from_globals, skeleton_from_globals
+from infuse.transforms import frame_change, global_matrices, sampled_motion, skeleton_from_globals
 
 from . import animation, ascii_format, binary, models
 from .document import Document, build, number
 
-#: Largest frames x models product sampled for one take (bounds memory on absurd time spans).
-MAX_SAMPLES = 4_000_000
+#: Largest take read, in frames x joints (bounds memory on absurd time spans).
+MAX_JOINT_FRAMES = 10_000_000
 
 _AXES = "XYZ"
 
 
 def read(path: Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
     """Read an FBX file; see the module docstring for what is kept and how it is converted."""
-    path = Path(path)
+    # Huge but finite numbers may overflow on the way; the model's checks then name the non-finite
+    # joint, so numpy's own warnings would only add lines.
+    with np.errstate(all="ignore"):
+        return _read(Path(path), units, up_axis)
+
+
+def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     data = path.read_bytes()
     if not binary.is_binary_fbx(data) and ascii_format.is_ascii_fbx(data):
         version, root = ascii_format.parse(path, data)
@@ -56,17 +62,20 @@ def read(path: Path, units: str | None = None, up_axis: str | None = None, **_op
     takes_meta = []
     for take in animation.takes(doc):
         frames = int(np.floor((take.stop - take.start) * fps + 1e-6)) + 1
-        if frames * len(ms) > MAX_SAMPLES:
+        if frames * len(joints) > MAX_JOINT_FRAMES:
             raise UnusableInputError(path, f"animation {take.name!r} is too long to sample: {frames} frames")
-        t = take.start + np.arange(frames) / fps
-        local = np.broadcast_to(rest_local, (frames,) + rest_local.shape).copy()
-        for i, m in enumerate(ms):
-            channels = [take.tracks.get((m.obj.id, c)) for c in range(3)]
-            if any(channels):
-                trs = [_channel(track, static, t) for track, static in zip(channels, (m.translation, m.rotation, m.scaling))]
-                local[:, i] = models.local_matrices(m, *trs)
-        g = change @ global_matrices(parents, local)[:, joints]
-        motions[take.name] = motion_from_globals(skeleton, fps, g, name=take.name)
+
+        def globals_between(a, b, take=take):
+            t = take.start + np.arange(a, b) / fps
+            local = np.broadcast_to(rest_local, (b - a,) + rest_local.shape).copy()
+            for i, m in enumerate(ms):
+                channels = [take.tracks.get((m.obj.id, c)) for c in range(3)]
+                if any(channels):
+                    trs = [_channel(track, static, t) for track, static in zip(channels, (m.translation, m.rotation, m.scaling))]
+                    local[:, i] = models.local_matrices(m, *trs)
+            return change @ global_matrices(parents, local)[:, joints]
+
+        motions[take.name] = sampled_motion(skeleton, fps, frames, globals_between, name=take.name)
         takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
     meta = {"fbx_version": version, "unit_scale_factor_cm": number(doc, settings, "UnitScaleFactor", 1.0),
             "axes": _axis_meta(doc, settings), "takes": takes_meta,

@@ -21,7 +21,8 @@ from infuse import quaternions as quat
 from infuse.asset import Asset
 from infuse.conventions import HUMAN_HEIGHT_M, UNIT_SCALES, UP_AXIS_ROTATIONS, guess_unit, guess_up_axis
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import compose, frame_change, global_matrices, motion_from_globals, skeleton_from_globals
+from infuse.transforms import (compose, frame_change, global_matrices, require_finite, sampled_motion,
+                               skeleton_from_globals)
 
 from .skeleton_xml import Animation, Bones, parse
 
@@ -31,16 +32,23 @@ FPS = 30.0
 UNIT_CANDIDATES = ("m", "cm", "mm", "inch")
 HUMAN_HEIGHT_RANGE_M = (1.2, 2.3)
 
-#: Largest frames x bones product sampled for one animation (bounds memory on absurd lengths).
-MAX_SAMPLES = 4_000_000
+#: Largest animation read, in frames x bones (bounds memory on absurd lengths).
+MAX_JOINT_FRAMES = 10_000_000
 
 
 def read(path: Path, units: str | None = None, up_axis: str | None = None, **_options) -> Asset:
     """Read an Ogre skeleton XML file; see the module docstring for the conversions."""
-    path = Path(path)
+    # Huge but finite numbers may overflow on the way; the model's checks then name the non-finite
+    # joint, so numpy's own warnings would only add lines.
+    with np.errstate(all="ignore"):
+        return _read(Path(path), units, up_axis)
+
+
+def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     bones, animations = parse(path)
     rest_local = compose(bones.positions, bones.rotations, bones.scales)
     rest_global = global_matrices(bones.parents, rest_local[None])[0]
+    require_finite(bones.names, rest_global, "binding pose")
     up, up_by = _up_axis(rest_global[:, :3, 3], up_axis)
     scale, unit_name, units_by, how = _units(path, rest_global[:, :3, 3], up, units)
     change = frame_change(scale, up)
@@ -48,10 +56,13 @@ def read(path: Path, units: str | None = None, up_axis: str | None = None, **_op
     motions = {}
     for anim in animations:
         frames = int(np.floor(anim.length * FPS + 1e-6)) + 1
-        if frames * len(bones.names) > MAX_SAMPLES:
+        if frames * len(bones.names) > MAX_JOINT_FRAMES:
             raise UnusableInputError(path, f"animation {anim.name!r} is too long to sample: {frames} frames")
-        local = _animated_locals(bones, anim, np.arange(frames) / FPS)
-        motions[anim.name] = motion_from_globals(skeleton, FPS, change @ global_matrices(bones.parents, local), name=anim.name)
+
+        def globals_between(a, b, anim=anim):
+            return change @ global_matrices(bones.parents, _animated_locals(bones, anim, np.arange(a, b) / FPS))
+
+        motions[anim.name] = sampled_motion(skeleton, FPS, frames, globals_between, name=anim.name)
     meta = {"units_guess": how, "up_axis_detected_by": up_by,
             "bone_scales": bool(np.any(np.abs(bones.scales - 1.0) > 1e-9))}
     return Asset(path, "ogre", skeleton, motions, source_units=unit_name, source_up_axis=up,

@@ -109,7 +109,8 @@ class _Reader:
 def parse(path: Path) -> tuple[Bones, list[Animation]]:
     """The bones and animations of an Ogre skeleton XML file; malformed input raises :class:`InputError`."""
     try:
-        root = etree.parse(str(path), etree.XMLParser(**_PARSER_OPTIONS)).getroot()
+        # From bytes, so bad encodings are syntax errors too (lxml reports them as OSError on files).
+        root = etree.fromstring(path.read_bytes(), etree.XMLParser(**_PARSER_OPTIONS))
     except etree.XMLSyntaxError as exc:
         raise InputError(path, f"line {exc.lineno}" if exc.lineno else None, f"not well-formed XML: {exc.msg}") from None
     r = _Reader(path)
