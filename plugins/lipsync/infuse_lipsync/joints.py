@@ -37,7 +37,7 @@ class JawRig:
     def from_skeleton(cls, skeleton: Skeleton, joint: str) -> "JawRig":
         j = skeleton.index[joint]
         parent = skeleton.parents[j]
-        parent_rot = skeleton.rest_global_rotations()[parent] if parent >= 0 else quat.identity()
+        parent_rot = skeleton.rest_global_rotations[parent] if parent >= 0 else quat.identity()
         axis = quat.rotate(quat.conjugate(parent_rot), LEFT_AXIS)
         return cls(joint, j, axis / np.linalg.norm(axis), skeleton.rest_rotations[j].copy())
 
