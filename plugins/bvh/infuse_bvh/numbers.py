@@ -61,6 +61,7 @@ def _vectorized(buf: bytes, b: np.ndarray, space: np.ndarray, starts: np.ndarray
     if not np.all(digit | dot | sign | exp_mark | space):
         return None
     power = np.zeros(count, dtype=np.int64)
+    mantissa_end = ends.copy()
     signs_in_exponents = 0
     marks = np.flatnonzero(exp_mark)
     if marks.size:
@@ -79,24 +80,30 @@ def _vectorized(buf: bytes, b: np.ndarray, space: np.ndarray, starts: np.ndarray
         exponent = _digit_values(d, exp_positions, exp_len)
         exponent[signed & minus[np.minimum(marks + 1, len(b) - 1)]] *= -1.0
         power[mark_token] = np.clip(exponent, -10**6, 10**6).astype(np.int64)
+        mantissa_end[mark_token] = marks
         digit = digit.copy()
         digit[exp_positions] = False  # the mantissa is what is left
     leading_sign = sign[starts]
     if int(np.count_nonzero(sign)) - signs_in_exponents != int(np.count_nonzero(leading_sign)):
         return None  # a sign inside a mantissa
-    mantissa_positions = np.flatnonzero(digit)
-    per_token = np.diff(np.searchsorted(mantissa_positions, np.append(starts, len(b))))
-    if np.any(per_token == 0):
-        return None  # "-", ".", "+e5"...
-    mantissa = _digit_values(d, mantissa_positions, per_token)
+    # From here every mantissa is [sign] digits [. digits] with at most one dot, so the digit
+    # counts follow from lengths alone.
     dots = np.flatnonzero(dot)
-    if dots.size:
+    has_dot = np.zeros(count, dtype=np.int64)
+    if dots.size == count and np.all((dots >= starts) & (dots < ends)):
+        dot_token = np.arange(count)  # one dot in every token, the common case
+    else:
         dot_token = np.searchsorted(starts, dots, side="right") - 1
         if np.any(dot_token[1:] == dot_token[:-1]):
             return None  # two dots in a token
-        first_digit = np.cumsum(per_token) - per_token  # rank of each token's first mantissa digit
-        before_dot = np.searchsorted(mantissa_positions, dots) - first_digit[dot_token]
-        power[dot_token] -= per_token[dot_token] - before_dot  # digits after the dot
+    has_dot[dot_token] = 1
+    per_token = mantissa_end - starts - leading_sign - has_dot
+    mantissa_positions = np.flatnonzero(digit)
+    if np.any(per_token <= 0) or mantissa_positions.size != int(per_token.sum()):
+        return None  # "-", ".", "+e5"...
+    mantissa = _digit_values(d, mantissa_positions, per_token)
+    before_dot = dots - starts[dot_token] - leading_sign[dot_token]
+    power[dot_token] -= per_token[dot_token] - before_dot  # digits after the dot
     slow = (mantissa >= _EXACT_MANTISSA) | (np.abs(power) > 22)
     scale = _POWERS[np.minimum(np.abs(power), 22)]
     values = np.where(power < 0, mantissa / scale, mantissa * scale)

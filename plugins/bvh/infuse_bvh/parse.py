@@ -195,13 +195,12 @@ def _header_value(file, lines: list[str], index: int, lineno: int, pattern: re.P
     return match.group(1)
 
 
-def _line_structure(b: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The (0-based) line of each token, and the non-empty line numbers stacked over their token counts."""
-    newlines = np.flatnonzero(b == 10)
-    token_lines = np.searchsorted(newlines, starts)
-    per_line = np.bincount(token_lines)
+def _line_counts(newlines: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The (0-based) numbers of the non-empty lines and how many tokens each holds."""
+    before = np.searchsorted(starts, newlines)  # tokens ahead of each line end
+    per_line = np.diff(np.concatenate(([0], before, [len(starts)])))
     lines = np.flatnonzero(per_line)
-    return token_lines, np.stack((lines, per_line[lines]))
+    return lines, per_line[lines]
 
 
 def _first_bad_token(buf: bytes, starts: np.ndarray) -> int:
@@ -221,8 +220,13 @@ def _parse_motion(file, buf: bytes, first_line: int, frames: int, channels: list
     space = whitespace(b)
     bounds = token_bounds(b, space)
     starts = bounds[0]
-    token_lines, (lines, counts) = _line_structure(b, starts)
+    newlines = np.flatnonzero(b == 10)
+    lines, counts = _line_counts(newlines, starts)
     total = len(starts)
+
+    def line_of(token: int) -> int:
+        return first_line + int(np.searchsorted(newlines, starts[token]))
+
     if len(lines) == frames and np.any(counts != width):
         k = int(np.argmax(counts != width))
         raise InputError(file, f"line {first_line + int(lines[k])} (frame {k})",
@@ -246,7 +250,7 @@ def _parse_motion(file, buf: bytes, first_line: int, frames: int, channels: list
     except ValueError:
         i = _first_bad_token(buf, starts)
         token = buf[starts[i]:].split(None, 1)[0][:40].decode("utf-8", "replace")
-        raise InputError(file, f"line {first_line + int(token_lines[i])} (frame {i // max(width, 1)})",
+        raise InputError(file, f"line {line_of(i)} (frame {i // max(width, 1)})",
                          f"{token!r} is not a number") from None
     values = values.reshape(frames, width)
     finite = np.isfinite(values)
@@ -255,7 +259,7 @@ def _parse_motion(file, buf: bytes, first_line: int, frames: int, channels: list
         frame, column = divmod(i, width)
         owners = [(n, c) for n, chans in zip(names, channels) for c in chans]
         joint, chan = owners[column]
-        raise InputError(file, f"line {first_line + int(token_lines[i])} (frame {frame})",
+        raise InputError(file, f"line {line_of(i)} (frame {frame})",
                          f"joint {joint!r} {chan} is not a finite number ({values.ravel()[i]})")
     return values
 
