@@ -405,9 +405,10 @@ class _Posing:
                                      "its mean is used (shapes under it are approximate)")
         return mean
 
-    def pose(self, t: np.ndarray, r: np.ndarray, s: np.ndarray):
+    def pose(self, t: np.ndarray, r: np.ndarray, s: np.ndarray, still_above: bool = False):
         """Core (rotations (F,J,4), translations (F,J,3), cumulative scales (F,J)) from file TRS arrays
-        (F,U,3), (F,U,4), (F,U,3) over the used nodes."""
+        (F,U,3), (F,U,4), (F,U,3) over the used nodes. ``still_above``: the nodes above the roots hold
+        their rest transforms (``rig.root_frames``) in every frame."""
         rig = self.rig
         su = self._uniform(s)
         f, j = t.shape[0], len(rig.joint_nodes)
@@ -415,12 +416,15 @@ class _Posing:
         trans = np.empty((f, j, 3))
         cum = np.empty((f, j))
         for root, chain in rig.above.items():
-            ct, cq, cs = rig.core_from_file
-            frame = (np.broadcast_to(ct, (f, 3)), np.broadcast_to(cq, (f, 4)), np.full(f, float(cs)))
-            for a in chain:
-                c = self.col[a]
-                frame = compose(frame, (t[:, c], r[:, c], su[:, c]))
-            self.last_frames[root] = frame
+            if still_above:
+                frame = rig.root_frames[root]
+            else:
+                ct, cq, cs = rig.core_from_file
+                frame = (np.broadcast_to(ct, (f, 3)), np.broadcast_to(cq, (f, 4)), np.full(f, float(cs)))
+                for a in chain:
+                    c = self.col[a]
+                    frame = compose(frame, (t[:, c], r[:, c], su[:, c]))
+                self.last_frames[root] = frame
             tt, qq, ss = compose(frame, (t[:, root], r[:, root], su[:, root]))
             trans[:, root], rot[:, root], cum[:, root] = tt, qq, ss
         parents = rig.parents
@@ -529,7 +533,8 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
             stacked = quat.normalize(stacked)
         out = sample(times[members[0][1]], stacked, interp, query, rotation=path == "rotation")
         target[path][:, [col[n] for n, _ in members]] = out
-    rot, trans, _ = posing.pose(t, r, sc)
+    n_joints = len(skeleton.names)
+    rot, trans, _ = posing.pose(t, r, sc, still_above=all(col[n] < n_joints for n, _, _ in trs))
     rest_trans = skeleton.rest_translations
     moving = np.abs(trans[:, 1:] - rest_trans[1:]).max() > STILL_M if len(rest_trans) > 1 else False
     motion = Motion(skeleton, fps, quat.make_continuous(rot), trans[:, 0], trans if moving else None, name=name)
