@@ -55,6 +55,19 @@ def test_pyttsx3_wav_is_the_timed_audio(spoken):
     assert len(audio) / rate == pytest.approx(utterance.duration_s, abs=1 / rate)
 
 
+def test_later_syntheses_are_timed_in_a_fresh_process(engine, spoken, tmp_path):
+    """libespeak-ng carries state from one utterance to the next; once this process has synthesized,
+    the timing pass runs in a fresh child, so the timings still match pyttsx3's WAV exactly."""
+    from infuse_tts_espeak.library import espeak
+
+    first, _, _ = spoken
+    assert not espeak().fresh
+    again = engine.synthesize(TEXT, tmp_path / "again.wav")
+    assert again.meta["alignment"] == "WAV identical to the timed synthesis"
+    assert again.phonemes == first.phonemes and again.marks == first.marks
+    assert (tmp_path / "again.wav").read_bytes() == first.wav_path.read_bytes()
+
+
 def test_phonemes_cover_the_audio_contiguously(spoken):
     utterance, _, _ = spoken
     starts, ends, names = utterance.phoneme_arrays()

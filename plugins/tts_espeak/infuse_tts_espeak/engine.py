@@ -1,11 +1,12 @@
 """The ``espeak`` TTS engine: text -> WAV + phoneme, word and mark timings that align with it.
 
-Two passes over the same text with the same voice, rate and volume, each in a fresh process and
-both at once:
+Two passes over the same text with the same voice, rate and volume, both at once and each from a
+freshly initialised libespeak-ng:
 
-- pyttsx3 (driver ``espeak``) writes the WAV (:mod:`.pyttsx3_writer`);
-- libespeak-ng through ctypes (:mod:`.library`, :mod:`.isolated`) synthesizes again with phoneme,
-  word and mark events, which give the timings.
+- pyttsx3 (driver ``espeak``) writes the WAV, in a child process (:mod:`.pyttsx3_writer`);
+- libespeak-ng through ctypes (:mod:`.library`) synthesizes again with phoneme, word and mark
+  events, which give the timings: in this process if it has not synthesized anything yet, else in
+  a fresh child process (:mod:`.isolated`).
 
 Both use the same library from the same fresh state, so the audio is the same; the engine checks
 that sample for sample and records the outcome in ``Utterance.meta["alignment"]``. Were they ever
@@ -128,8 +129,13 @@ class EspeakEngine:
                 timeout = self.timeout_s or pyttsx3_writer.default_timeout_s(speech.plain)
                 writer = pyttsx3_writer.start(speech.plain, tmp, self.voice, self.rate, self.volume, timeout)
                 try:
-                    timing = isolated.start(espeak_text, self.voice, self.rate, volume, ssml, self.library)
-                    samples, rate, events = isolated.finish(timing, timeout)
+                    if espeak.claim_fresh():  # this process has not synthesized yet: time it here
+                        with _as_infuse_errors():
+                            synthesis = espeak.synthesize(espeak_text, self.voice, self.rate, volume, ssml=ssml)
+                        samples, rate, events = np.frombuffer(synthesis.samples, dtype=np.int16).copy(), synthesis.sample_rate, synthesis.events
+                    else:
+                        timing = isolated.start(espeak_text, self.voice, self.rate, volume, ssml, self.library)
+                        samples, rate, events = isolated.finish(timing, timeout)
                     utterance = self._utterance(text, espeak_text, samples, rate, events)
                 except BaseException:
                     writer.kill()

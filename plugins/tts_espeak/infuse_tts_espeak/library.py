@@ -137,6 +137,14 @@ class Espeak:
         self.sample_rate = int(rate)
         self._lib = lib
         self._lock = threading.Lock()
+        self.fresh = True  # nothing synthesized yet: the next synthesis starts from the initial state
+
+    def claim_fresh(self) -> bool:
+        """True (once) when nothing has been synthesized in this process yet: the caller's next synthesis
+        starts from the same state as a new process's would."""
+        with self._lock:
+            fresh, self.fresh = self.fresh, False
+            return fresh
 
     def synthesize(self, text: str, voice: str = "en", rate: int = 175, volume: int = 100, ssml: bool = False) -> Synthesis:
         """Synthesize ``text`` (UTF-8; SSML marks when ``ssml``) with a sentence pause at the end.
@@ -179,6 +187,7 @@ class Espeak:
             lib.espeak_SetParameter(PARAM_VOLUME, int(volume), 0)
             status = lib.espeak_Synth(data, len(data) + 1, 0, POS_CHARACTER, 0, flags, None, None)
             lib.espeak_Synchronize()
+            self.fresh = False
         if status != 0:
             raise EspeakError(f"espeak-ng refused the text (espeak_Synth returned {status})")
         return Synthesis(samples, self.sample_rate, events)
