@@ -1,0 +1,143 @@
+"""The ``clip`` base controller: plays a :class:`~infuse.Motion` on a character, looping or once.
+
+The motion must be on the character's skeleton, or share joint names with it (joints it does not
+name keep the pose below), or come with its own mapping for an installed retargeter to transfer it.
+Looping carries the root forward: each cycle adds the clip's horizontal root displacement, so a walk
+cycle walks on. Rotations between frames are interpolated (normalized lerp on the shorter arc).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import quaternions as quat
+from ..errors import UsageError
+from ..motion import Motion
+from .controller import Block, Controller, Job
+from .layers import Layer, Mode
+
+
+def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
+    """Local rotations (T, J, 4), root translations (T, 3), joint translations (T, J, 3) or None, and
+    completed cycles (T,) of ``motion`` at ``times`` seconds from its start; held at the ends, or
+    wrapped over its duration when ``loop``."""
+    f = motion.num_frames
+    position = np.asarray(times, dtype=np.float64) * motion.fps
+    cycles = np.zeros(len(position))
+    jt = motion.joint_translations
+    if f == 1:
+        idx = np.zeros(len(position), dtype=np.int64)
+        return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
+    span = f - 1  # the last frame closes the cycle: it is drawn like the first
+    if loop:
+        cycles = np.floor(position / span)
+        position = position - cycles * span
+    position = np.clip(position, 0.0, span)
+    i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
+    frac = (position - i0)[:, None]
+    a = motion.local_rotations[i0]
+    b = motion.local_rotations[i0 + 1]
+    b = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0.0, -b, b)
+    rot = quat.normalize(a + frac[:, :, None] * (b - a))
+    root = motion.root_translations[i0] + frac * (motion.root_translations[i0 + 1] - motion.root_translations[i0])
+    if jt is not None:
+        jt = jt[i0] + frac[:, :, None] * (jt[i0 + 1] - jt[i0])
+    return rot, root, jt, cycles
+
+
+class Clip(Controller):
+    """Play ``motion`` from the activity's start.
+
+    - ``loop``: wrap around (the last frame meets the first); otherwise hold the last frame.
+    - ``speed``: playback rate (1 = as recorded); ``offset_s``: clip time at the activity's start.
+    - ``root_motion``: move the root as the clip does (else it stays at the clip's first root position).
+    - ``source_mapping``: the motion's own mapping, to retarget it when it is on another skeleton.
+    """
+
+    kind = "clip"
+    layer = Layer.BASE
+
+    def __init__(self, motion: Motion, loop: bool = True, speed: float = 1.0, offset_s: float = 0.0,
+                 root_motion: bool = True, source_mapping=None):
+        if not isinstance(motion, Motion) or motion.num_frames == 0:
+            raise UsageError("a clip needs a Motion with at least one frame")
+        if not (np.isfinite(speed) and speed > 0):
+            raise UsageError(f"clip speed must be positive, got {speed}")
+        self.motion = motion
+        self.loop = bool(loop)
+        self.speed = float(speed)
+        self.offset_s = float(offset_s)
+        self.root_motion = bool(root_motion)
+        self.source_mapping = source_mapping
+
+    def describe(self) -> str:
+        return f"clip {self.motion.name!r}"
+
+    def bind(self, rig, report):
+        motion = self.motion
+        if motion.skeleton is not rig.skeleton and motion.skeleton.names != rig.skeleton.names:
+            shared = [n for n in motion.skeleton.names if n in rig.skeleton.index]
+            if len(shared) < 0.5 * motion.skeleton.num_joints:
+                motion = self._retarget(rig)
+        src = motion.skeleton
+        if src.names == rig.skeleton.names:
+            columns = np.arange(src.num_joints)
+            targets = columns
+        else:
+            pairs = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if n in rig.skeleton.index]
+            columns = np.array([p[0] for p in pairs], dtype=np.int64)
+            targets = np.array([p[1] for p in pairs], dtype=np.int64)
+            missing = rig.skeleton.num_joints - len(targets)
+            if missing:
+                report(f"clip {motion.name!r} does not animate {missing} of its joints; they keep the pose below")
+        # The joint that travels: the root, or the first joint whose position channels move (a
+        # SmartBody "base" under a fixed "initial_base").
+        mover, travel = 0, motion.root_translations
+        if np.ptp(travel, axis=0).max() < 1e-6 and motion.joint_translations is not None:
+            moving = np.nonzero(np.ptp(motion.joint_translations, axis=0).max(axis=1) > 1e-6)[0]
+            if moving.size:
+                mover, travel = int(moving[0]), motion.joint_translations[:, moving[0]]
+        step = travel[-1] - travel[0]
+        step[1] = 0.0  # a cycle carries the character along the ground, not up
+        mover_name = src.names[mover]
+        moved = [] if motion.joint_translations is None else [
+            (i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and n in rig.skeleton.index]
+        return {"motion": motion, "columns": columns, "joints": targets, "step": step,
+                "mover": mover, "mover_target": rig.skeleton.index.get(mover_name),
+                "drives_root": src.names[0] == rig.skeleton.names[0],
+                "moved_columns": np.array([m[0] for m in moved], dtype=np.int64),
+                "moved_joints": np.array([m[1] for m in moved], dtype=np.int64)}
+
+    def _retarget(self, rig) -> Motion:
+        from .. import registry
+
+        table = registry.retargeters()
+        if self.source_mapping is None or not table:
+            raise UsageError(f"clip {self.motion.name!r} is on another skeleton: retarget it to {rig.name!r} first "
+                             "(or give source_mapping= with a retargeter installed)")
+        retargeter = next(iter(table.values()))
+        return retargeter.retarget(self.motion, self.source_mapping, rig.skeleton, rig.mapping)
+
+    def evaluate_one(self, job: Job, block: Block) -> None:
+        b = job.binding
+        motion = b["motion"]
+        local = self.offset_s + np.maximum(job.local_times, 0.0) * self.speed
+        rot, root, moved, cycles = sample_motion(motion, local, self.loop)
+        rot = rot[:, b["columns"]]
+        additive = job.mode is Mode.ADDITIVE
+        if additive:  # an additive clip adds its difference from its own rest pose
+            rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b["columns"]]), rot)
+        job.pose.set_rotations(b["joints"], rot, job.weight, job.mode)
+        first_root = motion.root_translations[0]
+        first_moved = None if moved is None else motion.joint_translations[0]
+        if b["mover"] == 0:
+            root = root + cycles[:, None] * b["step"] if self.root_motion else np.broadcast_to(first_root, root.shape)
+        elif moved is not None:
+            travel = moved[:, b["mover"]]
+            moved[:, b["mover"]] = travel + cycles[:, None] * b["step"] if self.root_motion else first_moved[b["mover"]]
+        if b["drives_root"]:
+            job.pose.set_root(root - first_root if additive else root, job.weight, job.mode)
+        if moved is not None and b["moved_joints"].size:
+            values = moved[:, b["moved_columns"]]
+            if additive:
+                values = values - first_moved[b["moved_columns"]]
+            job.pose.set_translations(b["moved_joints"], values, job.weight, job.mode)

@@ -1,0 +1,119 @@
+"""The controller contract: what a controller plugin builds and the runtime calls.
+
+A :class:`Controller` is one behaviour for one character (a gaze at a target, a nod, a clip). The
+runtime plays it as an :class:`~infuse.runtime.runtime.Activity` between two times, and evaluates
+frames in blocks: for each block, every activity of one controller class, layer and priority, over
+all characters, is handed to the class at once (``evaluate(jobs, block)``), so a controller can
+batch its work over characters and vectorize it over frames. A :class:`Job` is one activity's share
+of the block: its character's pose so far, its weight per frame and its persistent state.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar, Sequence
+
+import numpy as np
+
+from .layers import Layer, Mode
+from .pose import PoseBlock
+
+
+@dataclass
+class Block:
+    """The frames being evaluated: ``frames`` (F,) indices and ``times`` (F,) seconds (``frames / fps``)."""
+
+    runtime: Any
+    frames: np.ndarray
+    times: np.ndarray
+    fps: float
+    poses: dict
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.fps
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def pose(self, character: str) -> PoseBlock:
+        """The :class:`PoseBlock` of a character, as built so far in this block."""
+        return self.poses[character]
+
+
+@dataclass
+class Job:
+    """One activity in one block: ``pose`` to write, ``weight`` (F,) of the activity, ``local_times``
+    (F,) seconds since the activity's start."""
+
+    activity: Any
+    pose: PoseBlock
+    weight: np.ndarray
+    local_times: np.ndarray
+
+    @property
+    def controller(self) -> "Controller":
+        return self.activity.controller
+
+    @property
+    def rig(self):
+        return self.activity.rig
+
+    @property
+    def binding(self):
+        return self.activity.binding
+
+    @property
+    def state(self) -> dict:
+        return self.activity.state
+
+    @property
+    def mode(self) -> Mode:
+        return self.activity.mode
+
+    def report(self, message: str) -> None:
+        """Report something about this character once (see :meth:`Runtime.report`)."""
+        self.activity.runtime.report(self.rig.name, message)
+
+
+class Controller:
+    """Base class of runtime controllers.
+
+    Class attributes give the defaults an activity takes unless told otherwise: ``kind`` (the name
+    BML activations use), ``layer``, ``mode``, ``priority``, ``blend_in_s`` / ``blend_out_s``
+    (seconds), and ``settle_s``: how long after its end an activity is still evaluated (a smoothed
+    controller returning to rest). ``speaks`` marks controllers that make the character speak.
+
+    Subclasses implement :meth:`bind` (per character: which joints, what is missing) and either
+    :meth:`evaluate_one` (one job, vectorized over frames) or the class-level :meth:`evaluate` (all
+    jobs of the class at once, to batch over characters).
+    """
+
+    kind: ClassVar[str] = "controller"
+    layer: ClassVar[Layer] = Layer.BASE
+    mode: ClassVar[Mode] = Mode.OVERRIDE
+    priority: ClassVar[int] = 0
+    blend_in_s: ClassVar[float] = 0.3
+    blend_out_s: ClassVar[float] = 0.3
+    settle_s: ClassVar[float] = 0.0
+    speaks: ClassVar[bool] = False
+
+    def bind(self, rig, report) -> Any:
+        """Prepare for character ``rig``; return what :meth:`evaluate_one` needs (kept on the activity).
+
+        Call ``report(message)`` for a feature the character lacks (it is reported once); raise
+        :class:`~infuse.errors.MissingFeatureError` when the controller cannot act at all.
+        """
+        return None
+
+    @classmethod
+    def evaluate(cls, jobs: Sequence[Job], block: Block) -> None:
+        """Evaluate every job of this class in ``block`` (by default one at a time)."""
+        for job in jobs:
+            job.controller.evaluate_one(job, block)
+
+    def evaluate_one(self, job: Job, block: Block) -> None:
+        raise NotImplementedError(f"{type(self).__name__} implements neither evaluate nor evaluate_one")
+
+    def describe(self) -> str:
+        """A short human description (for reports and feedback)."""
+        return self.kind

@@ -1,0 +1,58 @@
+"""Evaluation layers, composition modes and blend weights.
+
+Each frame a character's pose is built bottom-up: every layer starts from the pose the layers
+below left, and within a layer controllers apply in order of priority (lowest first, so the highest
+has the last word), then of activation.
+"""
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+
+
+class Layer(enum.IntEnum):
+    """Where a controller acts, in evaluation order."""
+
+    BASE = 1      # base motion and blends (clips, locomotion)
+    POSTURE = 2   # posture and gestures (breathing, reaching, gestures)
+    GAZE = 3      # gaze and saccades
+    HEAD = 4      # head movements (nod, shake, toss, tilt)
+    FACE = 5      # face: blinks, lip sync, expressions (morph weights and face joints)
+
+
+class Mode(str, enum.Enum):
+    """How a controller's output meets the pose below it.
+
+    - ``OVERRIDE``: the output replaces the pose, blended by the activity's weight (slerp);
+    - ``ADDITIVE``: the output is an offset applied on top of the pose (a local rotation post-multiplied,
+      a translation or morph weight added), scaled by the weight.
+    """
+
+    OVERRIDE = "override"
+    ADDITIVE = "additive"
+
+
+def smoothstep(x) -> np.ndarray:
+    """3x² - 2x³ of ``x`` clipped to [0, 1]: a ramp with zero slope at both ends."""
+    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def blend_weights(times, start_s: float, end_s: float | None, blend_in_s: float, blend_out_s: float) -> np.ndarray:
+    """(F,) weights in [0, 1] of an activity at ``times`` (seconds).
+
+    The weight is 0 before ``start_s``, ramps up over ``blend_in_s``, and ramps down to reach 0 at
+    ``end_s`` (never, when ``end_s`` is None). Ramps are :func:`smoothstep`; a zero blend time is a step.
+    """
+    t = np.asarray(times, dtype=np.float64)
+    if blend_in_s > 0:
+        w = smoothstep((t - start_s) / blend_in_s)
+    else:
+        w = (t >= start_s - 1e-9).astype(np.float64)
+    if end_s is not None:
+        if blend_out_s > 0:
+            w = w * smoothstep((end_s - t) / blend_out_s)
+        else:
+            w = w * (t < end_s - 1e-9)
+    return w

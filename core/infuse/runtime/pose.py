@@ -1,0 +1,153 @@
+"""A character's pose over a block of frames, as controllers build it layer by layer.
+
+Arrays are frame-major and writable: ``local_rotations`` (F, J, 4) (x, y, z, w), ``root_translations``
+(F, 3) metres (joint 0's local translation), ``joint_translations`` (F, J, 3) or None (other joints'
+local translations, when a controller moves them) and ``morph_weights`` (F, M), the character's face
+channel state, one column per morph target. Controllers write through the methods below, which apply a
+:class:`~infuse.runtime.layers.Mode` and a per-frame weight in one vectorized step.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import quaternions as quat
+from ..kinematics import forward_kinematics
+from .layers import Mode
+
+
+def _weights(weight, frames: int) -> np.ndarray:
+    """(F, 1, 1) weights from None (1), a number or an (F,) array."""
+    if weight is None:
+        return np.ones((frames, 1, 1))
+    w = np.asarray(weight, dtype=np.float64)
+    return np.broadcast_to(w.reshape(-1, 1, 1) if w.ndim else w, (frames, 1, 1))
+
+
+def weighted_rotations(rotations: np.ndarray, weight) -> np.ndarray:
+    """Rotations (F, K, 4) scaled toward the identity by ``weight`` (F,) or a number (normalized lerp)."""
+    r = quat.canonical_sign(rotations)
+    w = _weights(weight, r.shape[0])
+    out = r * w
+    out[..., 3] += 1.0 - w[..., 0]
+    return quat.normalize(out)
+
+
+class PoseBlock:
+    """The pose of one character (its :class:`~infuse.runtime.rig.Rig`) on ``frames`` frames, starting at the rest pose."""
+
+    def __init__(self, rig, frames: int):
+        sk = rig.skeleton
+        self.rig = rig
+        self.frames = frames
+        self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0)
+        self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0)
+        self.joint_translations = None  # (F, J, 3) once a controller moves joints other than the root
+        self.morph_weights = np.zeros((frames, len(rig.morph_targets)))
+        self.morph_written = np.zeros(len(rig.morph_targets), dtype=bool)
+        self._fk = None
+
+    # -- joints ----------------------------------------------------------------------------------
+    def set_rotations(self, joints, rotations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
+        """Write local rotations (F, K, 4) of joint indices ``joints`` (K,).
+
+        OVERRIDE slerps from the current rotation to ``rotations`` by ``weight``; ADDITIVE treats
+        ``rotations`` as local offsets post-multiplied onto the current rotation, scaled by ``weight``.
+        """
+        joints = np.asarray(joints, dtype=np.int64)
+        if joints.size == 0:
+            return
+        current = self.local_rotations[:, joints]
+        if Mode(mode) is Mode.ADDITIVE:
+            self.local_rotations[:, joints] = quat.multiply(current, weighted_rotations(rotations, weight))
+        elif weight is None or np.all(np.asarray(weight) >= 1.0):
+            self.local_rotations[:, joints] = rotations
+        else:
+            w = _weights(weight, self.frames)[..., 0]
+            self.local_rotations[:, joints] = quat.slerp(current, rotations, np.broadcast_to(w, current.shape[:2]))
+        self._fk = None
+
+    def add_offsets(self, joints, offsets: np.ndarray, weight=None) -> None:
+        """Post-multiply local offsets (F, K, 4) onto joints ``joints``, scaled by ``weight``."""
+        self.set_rotations(joints, offsets, weight, Mode.ADDITIVE)
+
+    def set_translations(self, joints, translations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
+        """Write local translations (F, K, 3) metres of joints ``joints`` other than the root (a clip with
+        position channels on inner joints): replace (blended by ``weight``) or add (scaled)."""
+        joints = np.asarray(joints, dtype=np.int64)
+        if joints.size == 0:
+            return
+        if self.joint_translations is None:
+            rest = self.rig.skeleton.rest_translations
+            self.joint_translations = np.repeat(rest[None], self.frames, axis=0)
+        w = _weights(weight, self.frames)
+        current = self.joint_translations[:, joints]
+        target = current + translations if Mode(mode) is Mode.ADDITIVE else translations
+        self.joint_translations[:, joints] = current + w * (target - current)
+        self._fk = None
+
+    def set_root(self, translations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
+        """Write the root translation (F, 3) metres: replace (blended by ``weight``) or add (scaled)."""
+        w = _weights(weight, self.frames)[:, 0]
+        if Mode(mode) is Mode.ADDITIVE:
+            self.root_translations += w * translations
+        else:
+            self.root_translations += w * (translations - self.root_translations)
+        self._fk = None
+
+    # -- face channels ----------------------------------------------------------------------------
+    def set_morphs(self, columns, values: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
+        """Write morph weights (F, K) of morph columns ``columns`` (K,): replace (blended) or add;
+        results are clipped to [0, 1]."""
+        columns = np.asarray(columns, dtype=np.int64)
+        if columns.size == 0:
+            return
+        w = _weights(weight, self.frames)[:, 0]
+        current = self.morph_weights[:, columns]
+        if Mode(mode) is Mode.ADDITIVE:
+            current = current + w * values
+        else:
+            current = current + w * (values - current)
+        self.morph_weights[:, columns] = np.clip(current, 0.0, 1.0)
+        self.morph_written[columns] = True
+
+    # -- reading ------------------------------------------------------------------------------------
+    def global_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Global rotations (F, J, 4) and positions (F, J, 3) of the pose as it stands (cached until a write)."""
+        if self._fk is None:
+            self._fk = forward_kinematics(self.rig.skeleton, self.local_rotations, self.root_translations,
+                                          self.joint_translations)
+        return self._fk
+
+    def chain_pose(self, joints) -> tuple[np.ndarray, np.ndarray]:
+        """Global rotations (F, K, 4) and positions (F, K, 3) of joints ``joints`` only.
+
+        Runs forward kinematics down the joints' ancestor chains, so a few joints of a large skeleton
+        cost only their depth.
+        """
+        if self._fk is not None:
+            g_rot, g_pos = self._fk
+            return g_rot[:, joints], g_pos[:, joints]
+        sk = self.rig.skeleton
+        parents = sk.parents
+        needed: set[int] = set()
+        for j in joints:
+            while j >= 0 and j not in needed:
+                needed.add(int(j))
+                j = parents[j]
+        order = sorted(needed)
+        rot: dict[int, np.ndarray] = {}
+        pos: dict[int, np.ndarray] = {}
+        for j in order:
+            local = self.local_rotations[:, j]
+            if j == 0:
+                offset = self.root_translations
+            else:
+                offset = sk.rest_translations[j] if self.joint_translations is None else self.joint_translations[:, j]
+            p = parents[j]
+            if p < 0:
+                rot[j] = local
+                pos[j] = np.broadcast_to(offset, (self.frames, 3))
+            else:
+                rot[j] = quat.multiply(rot[p], local)
+                pos[j] = pos[p] + quat.rotate(rot[p], offset)
+        return (np.stack([rot[int(j)] for j in joints], axis=1), np.stack([pos[int(j)] for j in joints], axis=1))

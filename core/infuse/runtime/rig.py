@@ -1,0 +1,119 @@
+"""What the runtime knows about one character: its skeleton, its canonical joints and its axes.
+
+Controllers address joints by canonical name through the character's
+:class:`~infuse.mapping.Mapping`, and express rotations in *aligned frames*
+(:mod:`infuse.runtime.swing`): for joint ``j`` the constant rotation ``A_j = G_j⁻¹ · B``, with ``G_j``
+the joint's global rest rotation and ``B`` the character's body frame, turns the joint's frame so its
+axes are the character's left (+X), up (+Y) and forward (+Z) at rest. The body frame comes from the
+rest pose and the mapping: up from the pelvis to the head, left from the right hip to the left hip
+(or the shoulders, or the eyes), forward = left × up. So "forward" (of the eyes, of the head) is
+derived per character, never assumed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .. import quaternions as quat
+from ..asset import Character
+from ..mapping import Mapping
+from ..skeleton import Skeleton
+
+# Canonical joints tried, in order, for the top of the body and for the left-right axis.
+_UP_JOINTS = ("skullbase", "spine5", "spine4", "spine3", "spine2")
+_SIDE_PAIRS = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"), ("l_acromioclavicular", "r_acromioclavicular"),
+               ("eyeball_left", "eyeball_right"), ("l_knee", "r_knee"))
+
+
+def body_frame(skeleton: Skeleton, joints: dict[str, int]) -> tuple[np.ndarray, str | None]:
+    """The character's body frame at rest as a quaternion (x, y, z, w) taking +X to its left, +Y to
+    its up and +Z to its forward, and a note when it had to be assumed (None when derived)."""
+    pos = skeleton.rest_global_positions
+    base = joints.get("base")
+    top = next((joints[n] for n in _UP_JOINTS if n in joints), None)
+    pair = next(((joints[a], joints[b]) for a, b in _SIDE_PAIRS if a in joints and b in joints), None)
+    if base is None or top is None or pair is None:
+        return quat.IDENTITY.copy(), "the mapping lacks the pelvis, head or a left/right pair; the core axes are assumed"
+    up = pos[top] - pos[base]
+    left = pos[pair[0]] - pos[pair[1]]
+    if np.linalg.norm(up) < 1e-6 or np.linalg.norm(left) < 1e-6:
+        return quat.IDENTITY.copy(), "the rest pose is degenerate; the core axes are assumed"
+    up = up / np.linalg.norm(up)
+    left = left - np.dot(left, up) * up
+    if np.linalg.norm(left) < 1e-6:
+        return quat.IDENTITY.copy(), "the rest pose is degenerate; the core axes are assumed"
+    left = left / np.linalg.norm(left)
+    forward = np.cross(left, up)
+    return quat.from_matrix(np.stack((left, up, forward), axis=1)), None
+
+
+@dataclass
+class Rig:
+    """A character as the runtime drives it.
+
+    - ``name``: the character's name in the runtime; ``character``: the :class:`~infuse.Character`;
+    - ``mapping``: canonical name -> joint; ``joints``: canonical name -> joint index (mapped names only);
+    - ``body``: (4,) the body frame at rest (see the module doc); ``aligned``: (J, 4) every joint's ``A_j``;
+    - ``morph_targets``: the character's morph target names, the columns of its face channel state;
+    - ``notes``: what had to be assumed about the character.
+    """
+
+    name: str
+    character: Character
+    mapping: Mapping
+    joints: dict[str, int] = field(init=False)
+    body: np.ndarray = field(init=False)
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self):
+        self.joints = self.mapping.indices(self.skeleton)
+        self.body, note = body_frame(self.skeleton, self.joints)
+        if note:
+            self.notes.append(note)
+
+    @property
+    def skeleton(self) -> Skeleton:
+        return self.character.skeleton
+
+    @cached_property
+    def aligned(self) -> np.ndarray:
+        """(J, 4) rotations ``A_j = G_j⁻¹ · B`` from each joint's frame to its aligned frame."""
+        return quat.multiply(quat.conjugate(self.skeleton.rest_global_rotations), self.body)
+
+    @cached_property
+    def morph_targets(self) -> tuple[str, ...]:
+        return tuple(self.character.morph_targets or ())
+
+    @cached_property
+    def morph_index(self) -> dict[str, int]:
+        return {n: i for i, n in enumerate(self.morph_targets)}
+
+    def joint(self, canonical: str) -> int | None:
+        """The joint index of a canonical name, or None when the character has no such joint."""
+        return self.joints.get(canonical)
+
+    def present(self, canonicals) -> list[str]:
+        """The canonical names among ``canonicals`` this character has, in the given order."""
+        return [c for c in canonicals if c in self.joints]
+
+    def morph_named(self, *candidates: str) -> str | None:
+        """The first morph target named like one of ``candidates`` (case, separators and a mesh prefix
+        before a ``.`` ignored), or None."""
+        for c in candidates:
+            name = self._morph_keys.get(_name_key(c))
+            if name is not None:
+                return name
+        return None
+
+    @cached_property
+    def _morph_keys(self) -> dict[str, str]:
+        keys: dict[str, str] = {}
+        for name in self.morph_targets:
+            keys.setdefault(_name_key(name.rsplit(".", 1)[-1]), name)
+        return keys
+
+
+def _name_key(name: str) -> str:
+    return "".join(ch for ch in name.lower() if ch.isalnum())

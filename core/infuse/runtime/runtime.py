@@ -1,0 +1,326 @@
+"""The runtime: characters, the controllers active on them, and evaluation frame block by frame block.
+
+::
+
+    rt = Runtime(fps=30)
+    rt.add_character(character)                      # an infuse.Character (mapped on the way if needed)
+    rt.activate(character, Clip(walk), 0.0)           # a base layer
+    rt.activate(character, gaze, 1.0, end_s=4.0, blend_in_s=0.3)
+    rt.run(5.0)                                       # or rt.step() for one frame
+    motion = rt.motion(character)                     # a Motion on the character's own skeleton
+    tracks = rt.morph_tracks(character)               # {"times": (K,), "weights": {target: (K,)}}
+
+Frame ``i`` is at ``i / fps`` seconds. Evaluation runs block by block (up to ``block_frames`` frames
+at once): each character's pose starts at its rest pose, then activities apply in order of layer,
+priority and activation, each controller class batched over all characters (see
+:mod:`infuse.runtime.controller`).
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..asset import Asset, Character
+from ..errors import UsageError
+from ..motion import Motion
+from .controller import Block, Controller, Job
+from .layers import Layer, Mode, blend_weights
+from .pose import PoseBlock
+from .rig import Rig
+
+
+@dataclass(eq=False)
+class Activity:
+    """A controller active on one character.
+
+    ``start_s`` / ``end_s``: global seconds (``end_s`` None: until stopped); the weight ramps up over
+    ``blend_in_s`` from the start and down over ``blend_out_s`` to reach 0 at the end. ``binding`` is
+    what the controller prepared for the character; ``state`` persists between blocks.
+    ``source`` is what it was made from (a BML activation, if any).
+    """
+
+    id: int
+    runtime: Any
+    rig: Rig
+    controller: Controller
+    start_s: float
+    end_s: float | None
+    blend_in_s: float
+    blend_out_s: float
+    priority: int
+    mode: Mode
+    binding: Any = None
+    state: dict = field(default_factory=dict)
+    source: Any = None
+
+    @property
+    def character(self) -> str:
+        return self.rig.name
+
+    @property
+    def layer(self) -> Layer:
+        return self.controller.layer
+
+    def weights(self, times) -> np.ndarray:
+        """(F,) blend weights at ``times`` seconds."""
+        return blend_weights(times, self.start_s, self.end_s, self.blend_in_s, self.blend_out_s)
+
+    def active_between(self, t0: float, t1: float) -> bool:
+        """Whether frames between ``t0`` and ``t1`` (seconds) need this activity."""
+        if self.start_s > t1 + 1e-9:
+            return False
+        return self.end_s is None or self.end_s + self.controller.settle_s >= t0 - 1e-9
+
+
+@dataclass
+class _Track:
+    """One character's output so far: per-block arrays."""
+
+    rig: Rig
+    rotations: list = field(default_factory=list)
+    roots: list = field(default_factory=list)
+    translations: list = field(default_factory=list)
+    morphs: list = field(default_factory=list)
+    morph_written: np.ndarray | None = None
+
+
+class Runtime:
+    """Evaluates the controllers of many characters at ``fps`` frames per second.
+
+    ``block_frames``: most frames evaluated at once by :meth:`run`; ``report``: called as
+    ``report(character, message)`` for what a character lacks (default: one stderr line per message).
+    """
+
+    def __init__(self, fps: float = 30.0, block_frames: int = 150, report: Callable[[str, str], None] | None = None):
+        if not (np.isfinite(fps) and fps > 0):
+            raise UsageError(f"fps must be positive, got {fps}")
+        self.fps = float(fps)
+        self.block_frames = max(1, int(block_frames))
+        self.frame = 0
+        self.activities: list[Activity] = []
+        self.notes: list[tuple[str, str]] = []
+        self._report = report
+        self._tracks: dict[str, _Track] = {}
+        self._speech: dict[str, list[tuple[float, float]]] = {}
+        self._next_id = 0
+
+    # -- characters ------------------------------------------------------------------------------------
+    def add_character(self, character, name: str | None = None, mapping=None) -> str:
+        """Add a character (an :class:`~infuse.Character` or an :class:`~infuse.Asset`); returns its name.
+
+        The mapping is ``mapping``, else the character's own, else the default mapper's.
+        """
+        if isinstance(character, Asset):
+            stem = character.path.stem if character.path is not None else "character"
+            character = Character(stem, character)
+        if not isinstance(character, Character):
+            raise UsageError(f"add_character takes an infuse.Character or Asset, not {type(character).__name__}")
+        name = name or character.name
+        if name in self._tracks:
+            raise UsageError(f"a character named {name!r} is already in the runtime")
+        if mapping is None:
+            mapping = character.mapping
+        if mapping is None:
+            from ..mapping import map_skeleton
+
+            mapping = map_skeleton(character.asset)
+        rig = Rig(name, character, mapping)
+        self._tracks[name] = _Track(rig)
+        for note in rig.notes:
+            self.report(name, note)
+        return name
+
+    @property
+    def characters(self) -> tuple[str, ...]:
+        return tuple(self._tracks)
+
+    def rig(self, character) -> Rig:
+        """The :class:`Rig` of a character (its name, or the Character added)."""
+        return self._track(character).rig
+
+    def _track(self, character) -> _Track:
+        name = character if isinstance(character, str) else getattr(character, "name", None)
+        if name not in self._tracks:
+            raise UsageError(f"no character {name!r} in the runtime; added: {', '.join(self._tracks) or 'none'}")
+        return self._tracks[name]
+
+    def report(self, character: str, message: str) -> None:
+        """Report something about a character once: kept in :attr:`notes` and printed (or passed to ``report``)."""
+        if (character, message) in self.notes:
+            return
+        self.notes.append((character, message))
+        if self._report is not None:
+            self._report(character, message)
+        else:
+            print(f"infuse: warning: {character}: {message}", file=sys.stderr)
+
+    # -- activities ------------------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Seconds evaluated so far (the time of the next frame)."""
+        return self.frame / self.fps
+
+    def activate(self, character, controller: Controller, start_s: float | None = None, end_s: float | None = None, *,
+                 duration_s: float | None = None, blend_in_s: float | None = None, blend_out_s: float | None = None,
+                 priority: int | None = None, mode: Mode | str | None = None, source: Any = None) -> Activity:
+        """Play ``controller`` on ``character`` from ``start_s`` (default: now) to ``end_s`` (or for
+        ``duration_s``; neither: until :meth:`stop`). Unset options take the controller's defaults."""
+        if not isinstance(controller, Controller):
+            raise UsageError(f"activate takes a runtime Controller, not {type(controller).__name__}")
+        track = self._track(character)
+        start = self.time if start_s is None else float(start_s)
+        if duration_s is not None:
+            if end_s is not None:
+                raise UsageError("give end_s or duration_s, not both")
+            end_s = start + float(duration_s)
+        if end_s is not None and end_s < start:
+            raise UsageError(f"activity ends ({end_s:g} s) before it starts ({start:g} s)")
+        blend_in = controller.blend_in_s if blend_in_s is None else float(blend_in_s)
+        blend_out = controller.blend_out_s if blend_out_s is None else float(blend_out_s)
+        if blend_in < 0 or blend_out < 0:
+            raise UsageError("blend times must be >= 0 seconds")
+        rig = track.rig
+        binding = controller.bind(rig, lambda message: self.report(rig.name, message))
+        activity = Activity(self._next_id, self, rig, controller, start, None if end_s is None else float(end_s),
+                            blend_in, blend_out, controller.priority if priority is None else int(priority),
+                            Mode(mode) if mode is not None else controller.mode, binding, source=source)
+        self._next_id += 1
+        self.activities.append(activity)
+        return activity
+
+    def stop(self, activity: Activity, at_s: float | None = None, blend_out_s: float | None = None) -> None:
+        """Stop an activity: it blends out from ``at_s`` (default: now) over ``blend_out_s``."""
+        at = self.time if at_s is None else float(at_s)
+        if blend_out_s is not None:
+            activity.blend_out_s = float(blend_out_s)
+        end = max(at, activity.start_s) + activity.blend_out_s
+        activity.end_s = end if activity.end_s is None else min(activity.end_s, end)
+
+    def add_speech(self, character, start_s: float, end_s: float) -> None:
+        """Tell the runtime the character speaks from ``start_s`` to ``end_s`` seconds (saccades pause)."""
+        self._speech.setdefault(self._track(character).rig.name, []).append((float(start_s), float(end_s)))
+
+    def speech_intervals(self, character) -> list[tuple[float, float]]:
+        """(start, end) seconds when the character speaks: :meth:`add_speech` and speaking controllers."""
+        name = self._track(character).rig.name
+        spans = list(self._speech.get(name, ()))
+        spans += [(a.start_s, a.end_s if a.end_s is not None else np.inf)
+                  for a in self.activities if a.rig.name == name and a.controller.speaks]
+        return sorted(spans)
+
+    def realize(self, activation, character=None) -> Activity | None:
+        """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller of its kind.
+
+        The controller component's ``info["from_bml"](parameters, runtime, character)`` builds the
+        controller (else its factory is called with the parameters). Returns None, and reports why,
+        when no installed controller realizes that kind.
+        """
+        from . import controller_components
+
+        name = character if character is not None else activation.character
+        rig = self.rig(name)
+        component = controller_components().get(activation.controller)
+        if component is None:
+            self.report(rig.name, f"no installed controller realizes <{activation.element}> ({activation.controller!r}); skipped")
+            return None
+        build = component.info.get("from_bml")
+        try:
+            controller = build(dict(activation.parameters), self, rig.name) if build else component.factory(**activation.parameters)
+        except (UsageError, ValueError, TypeError) as exc:
+            self.report(rig.name, f"<{activation.element}> {activation.behaviour!r} cannot be realized: {exc}")
+            return None
+        if controller is None:
+            return None
+        end = None if activation.persistent else activation.end
+        if activation.stop_s is not None:
+            end = activation.stop_s if end is None else min(end, activation.stop_s)
+        blend = {}
+        for key, name_ in (("fade_in_s", "blend_in_s"), ("fade_out_s", "blend_out_s")):
+            if activation.parameters.get(key) is not None:
+                blend[name_] = float(activation.parameters[key])
+        if activation.stop_s is not None and activation.stop_s <= activation.start:
+            return None  # interrupted before it started
+        return self.activate(rig.name, controller, activation.start, end, source=activation, **blend)
+
+    # -- evaluation ------------------------------------------------------------------------------------
+    def run(self, seconds: float) -> None:
+        """Evaluate the next ``seconds`` of every character (rounded to whole frames)."""
+        frames = int(round(float(seconds) * self.fps))
+        if frames < 0:
+            raise UsageError("run() takes a duration >= 0 seconds")
+        while frames > 0:
+            n = min(frames, self.block_frames)
+            self._evaluate(n)
+            frames -= n
+
+    def step(self, frames: int = 1) -> None:
+        """Evaluate the next ``frames`` frames as one block."""
+        if frames > 0:
+            self._evaluate(int(frames))
+
+    def _evaluate(self, n: int) -> None:
+        frames = self.frame + np.arange(n)
+        times = frames / self.fps
+        poses = {name: PoseBlock(track.rig, n) for name, track in self._tracks.items()}
+        block = Block(self, frames, times, self.fps, poses)
+        groups: dict[tuple, list[Activity]] = {}
+        for a in self.activities:
+            if a.active_between(times[0], times[-1]):
+                groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(a)
+        for key in sorted(groups, key=lambda k: (k[0], k[1], groups[k][0].id)):
+            jobs = [Job(a, poses[a.rig.name], a.weights(times), times - a.start_s) for a in groups[key]]
+            key[2].evaluate(jobs, block)
+        for name, track in self._tracks.items():
+            pose = poses[name]
+            track.rotations.append(pose.local_rotations)
+            track.roots.append(pose.root_translations)
+            track.translations.append(pose.joint_translations)
+            track.morphs.append(pose.morph_weights)
+            written = pose.morph_written
+            track.morph_written = written if track.morph_written is None else track.morph_written | written
+        self.frame += n
+
+    # -- results ---------------------------------------------------------------------------------------
+    def motion(self, character, name: str = "runtime") -> Motion:
+        """Every frame evaluated so far, as a :class:`~infuse.Motion` on the character's skeleton."""
+        track = self._track(character)
+        sk = track.rig.skeleton
+        if not track.rotations:
+            return Motion(sk, self.fps, np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3)), name=name)
+        translations = None
+        if any(t is not None for t in track.translations):
+            rest = sk.rest_translations
+            translations = np.concatenate([np.repeat(rest[None], len(r), axis=0) if t is None else t
+                                           for t, r in zip(track.translations, track.roots)])
+        return Motion(sk, self.fps, np.concatenate(track.rotations), np.concatenate(track.roots), translations, name=name)
+
+    def morph_weights(self, character) -> np.ndarray:
+        """(F, M) morph weights of every frame evaluated so far (columns: the character's morph targets)."""
+        track = self._track(character)
+        if not track.morphs:
+            return np.zeros((0, len(track.rig.morph_targets)))
+        return np.concatenate(track.morphs)
+
+    def morph_tracks(self, character) -> dict:
+        """``{"times": (F,), "weights": {target: (F,)}}`` for the morph targets any controller wrote."""
+        track = self._track(character)
+        weights = self.morph_weights(character)
+        written = track.morph_written if track.morph_written is not None else np.zeros(weights.shape[1], dtype=bool)
+        targets = track.rig.morph_targets
+        return {"times": np.arange(len(weights)) / self.fps,
+                "weights": {targets[i]: weights[:, i].copy() for i in np.nonzero(written)[0]}}
+
+    def export(self, character, clip: str = "runtime") -> Asset:
+        """The character's asset with the evaluated frames as its only clip (and morph-weight tracks),
+        ready for :func:`infuse.save`."""
+        track = self._track(character)
+        asset = track.rig.character.asset
+        meta = dict(asset.meta)
+        tracks = self.morph_tracks(character)
+        meta.pop("morph_weight_tracks", None)
+        if tracks["weights"]:
+            meta["morph_weight_tracks"] = {clip: tracks}
+        return replace(asset, motions={clip: self.motion(character, clip)}, meta=meta)

@@ -1,0 +1,92 @@
+"""Rotations in a joint's *aligned frame*: heading, pitch and roll as a character would name them.
+
+A joint's aligned frame is the joint's own frame turned so that, in the rest pose, its axes are the
+character's: +X its left, +Y up, +Z forward (see :class:`~infuse.runtime.rig.Rig`). An offset in that
+frame means the same on every skeleton, whatever axes the joints were built with.
+
+- heading: radians about +Y, positive turns the forward axis to the character's left;
+- pitch: radians, positive tilts the forward axis up;
+- roll: radians about the (turned) forward axis, positive lifts the left side.
+
+``swing(h, p, r) = R_Y(h) R_X(-p) R_Z(r)`` maps +Z to the direction (cos p sin h, sin p, cos p cos h).
+Quaternions are (x, y, z, w); everything is vectorized over leading axes.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import quaternions as quat
+
+
+def swing(heading, pitch, roll=0.0) -> np.ndarray:
+    """Quaternions (..., 4) of heading, then pitch, then roll, in radians (see the module doc)."""
+    h = 0.5 * np.asarray(heading, dtype=np.float64)
+    p = -0.5 * np.asarray(pitch, dtype=np.float64)
+    r = 0.5 * np.asarray(roll, dtype=np.float64)
+    h, p, r = np.broadcast_arrays(h, p, r)
+    ch, sh, cp, sp, cr, sr = np.cos(h), np.sin(h), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
+    # (0, sh, 0, ch) * (sp, 0, 0, cp) * (0, 0, sr, cr), multiplied out.
+    x = ch * sp * cr + sh * cp * sr
+    y = sh * cp * cr - ch * sp * sr
+    z = ch * cp * sr - sh * sp * cr
+    w = ch * cp * cr + sh * sp * sr
+    return np.stack((x, y, z, w), axis=-1)
+
+
+def direction_angles(direction) -> tuple[np.ndarray, np.ndarray]:
+    """(heading, pitch) in radians of direction vectors (..., 3) given in an aligned frame."""
+    d = np.asarray(direction, dtype=np.float64)
+    horizontal = np.hypot(d[..., 0], d[..., 2])
+    return np.arctan2(d[..., 0], d[..., 2]), np.arctan2(d[..., 1], horizontal)
+
+
+def swing_angles(q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(heading, pitch, roll) in radians of quaternions (..., 4), the inverse of :func:`swing`."""
+    q = np.asarray(q, dtype=np.float64)
+    forward = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
+    heading, pitch = direction_angles(forward)
+    twist = quat.multiply(quat.conjugate(swing(heading, pitch)), q)  # a rotation about +Z only
+    roll = 2.0 * np.arctan2(twist[..., 2], twist[..., 3])
+    roll = (roll + np.pi) % (2.0 * np.pi) - np.pi
+    return heading, pitch, roll
+
+
+def wrap_angle(angle) -> np.ndarray:
+    """Angles in radians wrapped to [-pi, pi)."""
+    return (np.asarray(angle, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def ellipse_scale(heading, pitch, heading_limit, up_limit, down_limit) -> np.ndarray:
+    """How far (heading, pitch) lies in the elliptical limit: 1 on the border, > 1 outside.
+
+    Limits are radians; pitch uses ``up_limit`` when positive and ``down_limit`` when negative.
+    A zero limit allows no rotation about that axis.
+    """
+    heading = np.asarray(heading, dtype=np.float64)
+    pitch = np.asarray(pitch, dtype=np.float64)
+    vertical = np.where(pitch >= 0.0, up_limit, down_limit)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(heading == 0.0, 0.0, heading / np.where(heading_limit > 0, heading_limit, 0.0))
+        b = np.where(pitch == 0.0, 0.0, pitch / np.where(vertical > 0, vertical, 0.0))
+    return np.sqrt(a * a + b * b)
+
+
+def clamp_ellipse(heading, pitch, heading_limit, up_limit, down_limit) -> tuple[np.ndarray, np.ndarray]:
+    """(heading, pitch) scaled toward zero onto the elliptical limit when outside it (radians)."""
+    heading = np.asarray(heading, dtype=np.float64)
+    pitch = np.asarray(pitch, dtype=np.float64)
+    heading = np.where(np.asarray(heading_limit) > 0, heading, 0.0)
+    pitch = np.where(np.where(pitch >= 0.0, up_limit, down_limit) > 0, pitch, 0.0)
+    scale = ellipse_scale(heading, pitch, heading_limit, up_limit, down_limit)
+    factor = np.where(scale > 1.0, 1.0 / np.maximum(scale, 1e-12), 1.0)
+    return heading * factor, pitch * factor
+
+
+def local_offsets(aligned, offsets) -> np.ndarray:
+    """Local rotation offsets ``A Δ A⁻¹`` (..., 4) from offsets ``Δ`` (..., 4) in aligned frames ``A``.
+
+    Post-multiplied onto a joint's local rotation (``L · A Δ A⁻¹``) they turn everything below the
+    joint by ``Δ`` as seen in the joint's aligned frame.
+    """
+    aligned = np.asarray(aligned, dtype=np.float64)
+    return quat.multiply(quat.multiply(aligned, offsets), quat.conjugate(aligned))
