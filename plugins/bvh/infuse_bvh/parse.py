@@ -7,6 +7,7 @@ numpy: values per line are counted on the raw bytes and all numbers are converte
 """
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,7 +54,7 @@ def _numbers(file, lineno: int, what: str, words: list[str], count: int) -> list
         out = [float(w) for w in words]
     except ValueError:
         raise InputError(file, f"line {lineno}", f"{what} has a value that is not a number: {' '.join(words)!r}") from None
-    if not all(np.isfinite(out)):
+    if not all(math.isfinite(v) for v in out):
         raise InputError(file, f"line {lineno}", f"{what} has a value that is not finite: {' '.join(words)!r}")
     return out
 
@@ -105,14 +106,13 @@ def _parse_hierarchy(file, text: str):
             if pending is not None:
                 raise InputError(file, f"line {lineno}", f"expected '{{', found {key[:40]!r}")
             if upper in ("ROOT", "JOINT"):
-                rest = raw.split(None, 1)[1].strip() if len(raw.split(None, 1)) > 1 else ""
-                if rest.endswith("{"):  # "JOINT name {" on one line
-                    rest = rest[:-1].strip()
-                    opens = True
-                else:
-                    opens = False
-                if raw.split()[0] != key:
+                parts = raw.split(None, 1)
+                if parts[0] != key:
                     raise InputError(file, f"line {lineno}", f"{upper} must start its line")
+                rest = parts[1].strip() if len(parts) > 1 else ""  # names may contain spaces
+                opens = rest.endswith("{")  # "JOINT name {" on one line
+                if opens:
+                    rest = rest[:-1].strip()
                 if not rest:
                     raise InputError(file, f"line {lineno}", f"{upper} without a name")
                 if upper == "ROOT" and stack:
