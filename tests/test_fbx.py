@@ -339,3 +339,42 @@ def test_malformed_input_through_the_installed_command(tmp_path):
         for k, cut in enumerate((100, len(data) // 3)):
             paths.append(_write(tmp_path, f"cut{k}", data[:cut]))
     assert_cli_exits_2(paths)
+
+
+def test_inherit_type_rrs_ignores_the_parent_scale(tmp_path):
+    """InheritType 2: the child's frame skips its parent's own scale; its offset still follows it."""
+    objects = [
+        model(1, "Parent", "LimbNode", P("Lcl Scaling", 2.0, 3.0, 4.0)),
+        model(2, "Child", "LimbNode", P("Lcl Translation", 0.0, 10.0, 0.0), P("Lcl Rotation", 0.0, 0.0, 30.0),
+              P("InheritType", 2)),
+        model(3, "Tip", "LimbNode", P("Lcl Translation", 5.0, 0.0, 0.0)),
+    ]
+    connections = [C("OO", 1, 0), C("OO", 2, 1), C("OO", 3, 2)]
+    settings = [P("UpAxis", 1), P("UnitScaleFactor", 100.0)]
+    path = tmp_path / "rrs.fbx"
+    path.write_bytes(fbx_bytes(scene(objects, connections, settings)))
+    pos = infuse.load(path).skeleton.rest_global_positions
+    child = _S((2, 3, 4)) @ _T((0, 10, 0)) @ _S((1 / 2, 1 / 3, 1 / 4)) @ _R("z", 30)
+    assert np.allclose(pos, [[0, 0, 0], [0, 30, 0], (child @ [5, 0, 0, 1])[:3]], atol=1e-9)
+    assert np.allclose(pos[2], [5 * np.cos(np.radians(30)), 30 + 5 * np.sin(np.radians(30)), 0.0])  # parent scale undone
+
+
+def test_inherit_type_rrss_applies_the_parent_scale_after_the_child_rotation(tmp_path):
+    """RrSs (0) against RSrs (1) under a parent scaled (1, 3, 1), child rotated 40 degrees about z."""
+    objects = [model(2, "Parent", "LimbNode", P("Lcl Scaling", 1.0, 3.0, 1.0))]
+    connections = [C("OO", 2, 0)]
+    for base, mode in ((3, 0), (5, 1)):
+        objects += [model(base, f"Arm{mode}", "LimbNode", P("Lcl Translation", 0.0, 2.0, 0.0),
+                          P("Lcl Rotation", 0.0, 0.0, 40.0), P("InheritType", mode)),
+                    model(base + 1, f"Hand{mode}", "LimbNode", P("Lcl Translation", 0.0, 5.0, 0.0), P("InheritType", mode))]
+        connections += [C("OO", base, 2), C("OO", base + 1, base)]
+    path = tmp_path / "modes.fbx"
+    path.write_bytes(fbx_bytes(scene(objects, connections, [P("UpAxis", 1), P("UnitScaleFactor", 100.0)])))
+    sk = infuse.load(path).skeleton
+    pos = dict(zip(sk.names, sk.rest_global_positions))
+    c, s = np.cos(np.radians(40)), np.sin(np.radians(40))
+    # RrSs: the hand's offset is scaled by (1, 3, 1), then rotated with the arm.
+    assert np.allclose(pos["Hand0"], [-15 * s, 6 + 15 * c, 0.0], atol=1e-9)
+    # RSrs: plain products, the parent scale stretches the rotated offset.
+    assert np.allclose(pos["Hand1"], [-5 * s, 3 * (2 + 5 * c), 0.0], atol=1e-9)
+    assert np.allclose(pos["Arm0"], pos["Arm1"])

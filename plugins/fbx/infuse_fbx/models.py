@@ -7,8 +7,9 @@ A model's local matrix follows the FBX SDK::
 with T/R/S the ``Lcl Translation/Rotation/Scaling`` properties, Euler angles in degrees in the
 model's ``RotationOrder`` (``XYZ`` means X applied first), pre/post rotations in XYZ order, and
 the rotation/scaling offsets and pivots. As in Blender's importer, pre/post rotations and the
-rotation order apply only when ``RotationActive`` is set. Parents combine by plain matrix
-products (the RSrs inheritance rule). Geometric transforms affect meshes only and are ignored.
+rotation order apply only when ``RotationActive`` is set. Parents combine according to each
+model's ``InheritType`` (see :func:`world_matrices`). Geometric transforms affect meshes only
+and are ignored.
 """
 from __future__ import annotations
 
@@ -43,6 +44,7 @@ class Model:
     rotation_pivot: np.ndarray
     scaling_offset: np.ndarray
     scaling_pivot: np.ndarray
+    inherit: int  # InheritType: 0 RrSs (componentwise scale), 1 RSrs (plain products), 2 Rrs (parent scale ignored)
 
 
 def models(doc: Document) -> list[Model]:
@@ -86,6 +88,9 @@ def _model(doc: Document, o: FbxObject, parent: int) -> Model:
     if order_code not in ROTATION_ORDERS:
         raise doc.error(o.node, f"model {o.name!r}: unknown RotationOrder {order_code}")
     zero = (0.0, 0.0, 0.0)
+    inherit = int(number(doc, o.props, "InheritType", 1.0, o.node))  # files normally state it in their template
+    if inherit not in (0, 1, 2):
+        raise doc.error(o.node, f"model {o.name!r}: unknown InheritType {inherit}")
     pre = vector(doc, o, "PreRotation", zero) if active else np.zeros(3)
     post = vector(doc, o, "PostRotation", zero) if active else np.zeros(3)
     return Model(
@@ -96,6 +101,7 @@ def _model(doc: Document, o: FbxObject, parent: int) -> Model:
         Rotation.from_euler("xyz", post, degrees=True).inv().as_matrix(),
         vector(doc, o, "RotationOffset", zero), vector(doc, o, "RotationPivot", zero),
         vector(doc, o, "ScalingOffset", zero), vector(doc, o, "ScalingPivot", zero),
+        inherit,
     )
 
 
@@ -105,20 +111,71 @@ def euler_matrices(order: str, degrees: np.ndarray) -> np.ndarray:
     return Rotation.from_euler(order, np.asarray(degrees, dtype=np.float64)[:, axes], degrees=True).as_matrix()
 
 
-def local_matrices(m: Model, translation: np.ndarray, rotation: np.ndarray, scaling: np.ndarray) -> np.ndarray:
-    """Local matrices (F, 4, 4) of model ``m`` for per-frame T (F,3), R (F,3, degrees), S (F,3)."""
-    frames = len(translation)
+def local_parts(m: Model, translation: np.ndarray, rotation: np.ndarray, scaling: np.ndarray):
+    """Model ``m``'s local transform as parts (t (F,3), r (F,3,3), s (F,3)) with ``L = T(t) · r · S(s)``,
+    from per-frame T (F,3), R (F,3, degrees) and S (F,3): pivots and offsets only move the origin."""
     r3 = m.pre @ euler_matrices(m.order, rotation) @ m.post_inv
-    # Pivots and offsets only move the origin: L = [R S, t] with t gathering every translation.
     rs = r3 * scaling[:, None, :]
-    out = np.zeros((frames, 4, 4))
-    out[:, :3, :3] = rs
     rp, sp = m.rotation_pivot, m.scaling_pivot
     t = translation + m.rotation_offset + rp - r3 @ rp
     t = t + np.einsum("fij,j->fi", r3, m.scaling_offset + sp) - np.einsum("fij,j->fi", rs, sp)
-    out[:, :3, 3] = t
-    out[:, 3, 3] = 1.0
+    return t, r3, np.array(scaling, dtype=np.float64)
+
+
+def _trs(t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
+    out = np.zeros(t.shape[:-1] + (4, 4))
+    out[..., :3, :3] = r * s[..., None, :]
+    out[..., :3, 3] = t
+    out[..., 3, 3] = 1.0
     return out
+
+
+def world_matrices(ms: list[Model], t: np.ndarray, r: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Global matrices (F, N, 4, 4) from local parts (F, N, ...), honouring each model's InheritType.
+
+    RSrs (1, assumed when neither the model nor its template says): ``parent_world · L``. RrSs (0,
+    the usual template value) and Rrs (2) start from the parent's
+    world without its scale, scale the child's translation by the parent's scale, and give the
+    child the parent's scale componentwise after its own rotation (RrSs) or not at all (Rrs).
+    Vectorized over frames and over the models of one depth at a time.
+    """
+    frames, n = t.shape[:2]
+    parents = np.array([m.parent for m in ms], dtype=np.int64)
+    mode = np.array([m.inherit for m in ms], dtype=np.int64)
+    # Rrs models still take the scale accumulated above the nearest RrSs model of their chain.
+    source = np.full(n, -1, dtype=np.int64)
+    for i, m in enumerate(ms):
+        a = m.parent
+        while a >= 0 and mode[a] != 0:
+            a = ms[a].parent
+        source[i] = ms[a].parent if a >= 0 else -1
+    world = np.empty((frames, n, 4, 4))
+    unscaled = np.empty((frames, n, 4, 4))
+    inherit_scale = np.array(s, dtype=np.float64)
+    ones = np.ones((frames, 3))
+    depth = np.zeros(n, dtype=np.int64)
+    for i, p in enumerate(parents):
+        depth[i] = depth[p] + 1 if p >= 0 else 0
+    for level in range(int(depth.max(initial=0)) + 1):
+        idx = np.nonzero(depth == level)[0]
+        if level == 0:
+            world[:, idx] = _trs(t[:, idx], r[:, idx], s[:, idx])
+            unscaled[:, idx] = _trs(t[:, idx], r[:, idx], np.ones_like(s[:, idx]))
+            continue
+        for i in idx:  # few models per level; each step is vectorized over frames
+            p = parents[i]
+            if mode[i] == 1:
+                world[:, i] = world[:, p] @ _trs(t[:, i], r[:, i], s[:, i])
+                unscaled[:, i] = world[:, p] @ _trs(t[:, i], r[:, i], ones)
+                continue
+            extra = inherit_scale[:, p] if mode[i] == 0 else (inherit_scale[:, source[i]] if source[i] >= 0 else ones)
+            scale = s[:, i] * extra
+            if mode[i] == 0:
+                inherit_scale[:, i] = scale
+            moved = t[:, i] * inherit_scale[:, p]
+            unscaled[:, i] = unscaled[:, p] @ _trs(moved, r[:, i], ones)
+            world[:, i] = unscaled[:, p] @ _trs(moved, r[:, i], scale)
+    return world
 
 
 def joint_models(doc: Document, ms: list[Model]) -> list[int]:

@@ -16,7 +16,7 @@ import numpy as np
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import frame_change, global_matrices, sampled_motion, skeleton_from_globals
+from infuse.transforms import frame_change, sampled_motion, skeleton_from_globals
 
 from . import animation, ascii_format, binary, models
 from .document import Document, build, number
@@ -51,10 +51,10 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     joints = models.joint_models(doc, ms)
     if not joints:
         raise UnusableInputError(path, "no skeleton: the file has no LimbNode, Root or skinned models")
-    parents = np.array([m.parent for m in ms], dtype=np.int64)
     change = frame_change(scale, up)
-    rest_local = np.stack([models.local_matrices(m, m.translation[None], m.rotation[None], m.scaling[None])[0] for m in ms])
-    rest = change @ global_matrices(parents, rest_local[None])[0, joints]
+    rest_parts = [np.stack(part, axis=1) for part in
+                  zip(*[models.local_parts(m, m.translation[None], m.rotation[None], m.scaling[None]) for m in ms])]
+    rest = change @ models.world_matrices(ms, *rest_parts)[0, joints]
     skeleton = skeleton_from_globals(models.unique_names(ms, joints), models.joint_parents(ms, joints), rest)
 
     fps = animation.frame_rate(doc, settings)
@@ -67,13 +67,14 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
 
         def globals_between(a, b, take=take):
             t = take.start + np.arange(a, b) / fps
-            local = np.broadcast_to(rest_local, (b - a,) + rest_local.shape).copy()
+            parts = [np.broadcast_to(part, (b - a,) + part.shape[1:]).copy() for part in rest_parts]
             for i, m in enumerate(ms):
                 channels = [take.tracks.get((m.obj.id, c)) for c in range(3)]
                 if any(channels):
                     trs = [_channel(track, static, t) for track, static in zip(channels, (m.translation, m.rotation, m.scaling))]
-                    local[:, i] = models.local_matrices(m, *trs)
-            return change @ global_matrices(parents, local)[:, joints]
+                    for part, value in zip(parts, models.local_parts(m, *trs)):
+                        part[:, i] = value
+            return change @ models.world_matrices(ms, *parts)[:, joints]
 
         motions[take.name] = sampled_motion(skeleton, fps, frames, globals_between, name=take.name)
         takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
