@@ -218,6 +218,12 @@ def sample_poses(asset, count: int = 12) -> np.ndarray | None:
     return pos if np.all(np.isfinite(pos)) else None
 
 
+def resolve_pose(pose) -> np.ndarray | None:
+    """A mapper's ``pose`` option as an array: it may be given as a zero-argument callable so that
+    poses are computed only when a mapper needs them."""
+    return pose() if callable(pose) else pose
+
+
 def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
     """Hand-set entries of ``saved`` win over ``produced``; a joint given by hand to one name is taken
     away from any other name the mapper gave it to."""
@@ -247,7 +253,8 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
       the mapper fills in the names it leaves out (a complete file is used as is).
     - ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
       representative poses, for skeletons whose rest pose is arbitrary; sampled from an Asset's
-      first clip when not given (:func:`sample_poses`). ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
+      first clip when not given (:func:`sample_poses`). Mappers receive it as an array or as a
+      zero-argument callable returning one (see :func:`resolve_pose`). ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
 
     Raises :class:`UsageError` for an unknown mapper, :class:`InputError` for a map naming joints the
     skeleton does not have, :class:`~infuse.errors.NotHumanoidError` when the mapper refuses the skeleton.
@@ -260,7 +267,8 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
         file = file or getattr(source, "path", None)
         meta = dict(source.meta) if meta is None else meta
         if pose is None:
-            pose = sample_poses(source)
+            asset = source
+            pose = lambda: sample_poses(asset)  # noqa: E731 - computed only if the mapper asks
     saved = _as_saved(saved_map) if saved_map is not None else None
     if saved is not None:
         check_map(saved, skeleton)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .view import SkeletonView
+from .view import SkeletonView, length, lengths
 
 FINGER_ORDER = ("index", "middle", "ring", "pinky")
 _NOT_FINGER = ("prop", "control", "secondary", "face")
@@ -51,8 +51,8 @@ def _drop_metacarpal(view: SkeletonView, chain: list[int], wrist_pos: np.ndarray
     if len(chain) < 2:
         return chain
     tip = view.P[view.far[chain[0]]]
-    reach = float(np.linalg.norm(tip - wrist_pos))
-    if reach > 1e-9 and float(np.linalg.norm(view.P[chain[0]] - wrist_pos)) < 0.3 * reach:
+    reach = length(tip - wrist_pos)
+    if reach > 1e-9 and length(view.P[chain[0]] - wrist_pos) < 0.3 * reach:
         return chain[1:]
     return chain
 
@@ -99,9 +99,9 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
         dev = np.zeros(len(keys))
         for i in range(len(keys)):
             others = np.delete(dirs, i, axis=0).mean(axis=0)
-            others /= max(np.linalg.norm(others), 1e-9)
+            others /= max(length(others), 1e-9)
             dev[i] = np.degrees(np.arccos(np.clip(np.dot(dirs[i], others), -1, 1)))
-        dist = np.linalg.norm(bases - wrist_pos, axis=1)
+        dist = lengths(bases - wrist_pos)
         score = dev + 20.0 * (1.0 - dist / max(dist.max(), 1e-9))
         i = int(np.argmax(score))
         second = np.partition(score, -2)[-2] if len(score) > 1 else 0.0
@@ -159,13 +159,13 @@ def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos:
             by_name[r] = FINGER_ORDER.index(next(iter(roles)))
     if len(by_name) == len(others) and len(set(by_name.values())) == len(others):
         return sorted(others, key=lambda r: by_name[r])
-    axis = axis / max(np.linalg.norm(axis), 1e-9)
+    axis = axis / max(length(axis), 1e-9)
     side = view.P[thumb] - wrist_pos
     side = side - np.dot(side, axis) * axis
-    if np.linalg.norm(side) < 1e-9:
+    if length(side) < 1e-9:
         side = view.P[view.far[thumb]] - wrist_pos
         side = side - np.dot(side, axis) * axis
-    side /= max(np.linalg.norm(side), 1e-9)
+    side /= max(length(side), 1e-9)
     # knuckle positions: a finger chain's start, past any metacarpal
     def across(r: int) -> float:
         chain = _drop_metacarpal(view, view.main_chain(r, 6), wrist_pos)

@@ -24,7 +24,7 @@ from itertools import combinations
 
 import numpy as np
 
-from .view import SkeletonView
+from .view import SkeletonView, length, lengths
 
 UPPER_OVER_FORE = 1.0    # upper arm / forearm length between joints (rigs range 0.6 .. 1.6)
 THIGH_OVER_SHIN = 1.05   # thigh / shin length
@@ -32,12 +32,14 @@ VIRTUAL_COST = 2.2       # picking a predicted (missing) hand or foot instead of
 
 
 @lru_cache(maxsize=64)
-def _combos(m: int, k: int) -> np.ndarray:
+def _combos(m: int, k: int, lead: int = 3) -> np.ndarray:
     """(N, k) increasing index tuples into a chain of m points; the last slot may also take the
-    virtual index m, but only right after the last chain joint (the limb ends early)."""
+    virtual index m, but only right after the last chain joint (the limb ends early). The second
+    slot sits within the first ``lead + 1`` chain joints (a limb starts with at most a few helpers)."""
     rows = list(combinations(range(m), k))
     if m >= k - 1:
         rows += [c + (m,) for c in combinations(range(m), k - 1) if c[-1] == m - 1]
+    rows = [r for r in rows if k < 2 or r[1] <= lead]
     return np.array(rows, dtype=np.int64).reshape(-1, k)
 
 
@@ -48,8 +50,8 @@ def _bend(P: np.ndarray) -> np.ndarray:
         return out
     a = P[1:-1] - P[:-2]
     b = P[2:] - P[1:-1]
-    na = np.linalg.norm(a, axis=1)
-    nb = np.linalg.norm(b, axis=1)
+    na = lengths(a)
+    nb = lengths(b)
     ok = (na > 1e-9) & (nb > 1e-9)
     cos = np.ones(len(a))
     cos[ok] = np.einsum("ij,ij->i", a[ok], b[ok]) / (na[ok] * nb[ok])
@@ -120,9 +122,9 @@ def _skip_costs(view: SkeletonView, chain: list[int], scale: float) -> np.ndarra
 
 
 def _between(skip: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Sum of skip[lo+1 .. hi-1] for each row (vectorized with a cumulative sum)."""
-    cs = np.concatenate(([0.0], np.cumsum(skip)))
-    return np.where(hi > lo + 1, cs[np.maximum(hi, lo + 1)] - cs[np.minimum(lo + 1, hi)], 0.0)
+    """(B, N) sum of skip[:, lo+1 .. hi-1] per combination (a cumulative sum; ``skip`` is (B, m+1))."""
+    cs = np.concatenate((np.zeros((len(skip), 1)), np.cumsum(skip, axis=1)), axis=1)
+    return np.where(hi > lo + 1, cs[:, np.maximum(hi, lo + 1)] - cs[:, np.minimum(lo + 1, hi)], 0.0)
 
 
 def _prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, other: float) -> np.ndarray:
@@ -153,24 +155,52 @@ def _mirror_offsets(view: SkeletonView, chains: list[list[int]], anchor: np.ndar
     for i, chain in enumerate(chains):
         other = chains[1 - i] if len(chains) == 2 else None
         P = view.P[chain]
-        off = np.linalg.norm(P - anchor, axis=1)
+        off = lengths(P - anchor)
         if other is not None:
             m = min(len(chain), len(other))
-            off[:m] = 0.5 * np.linalg.norm(P[:m] - view.P[other[:m]], axis=1)
+            off[:m] = 0.5 * lengths(P[:m] - view.P[other[:m]])
         out.append(np.concatenate((off, [off[-1]])))
     return out
 
 
-def _pick(view, chains, costs, combos_list, names):
-    """Best combo per chain; chains of the same length share one combo (summed costs)."""
+def _stack(view: SkeletonView, chains: list[list[int]], fn) -> np.ndarray:
+    """(B, m+1) per-chain vectors from ``fn(view, chain)``."""
+    return np.stack([fn(chain) for chain in chains])
+
+
+def _batches(chains: list[list[int]]) -> list[list[int]]:
+    """Indices of chains scored together: mirror chains of one length share every numpy call, and
+    their summed cost gives left and right the same answer."""
     if len(chains) == 2 and len(chains[0]) == len(chains[1]):
-        total = costs[0] + costs[1]
-        best = int(np.argmin(total))
-        return [(best, _margins(combos_list[0], total / 2, best, names))] * 2
+        return [[0, 1]]
+    return [[i] for i in range(len(chains))]
+
+
+def _strongest_bend(P: np.ndarray) -> np.ndarray:
+    """(B,) index of the largest bend (> 25 degrees) inside each chain, or -1."""
+    out = np.full(len(P), -1)
+    for b, chain_p in enumerate(P):
+        bend = _bend(chain_p)
+        if len(bend) > 2:
+            i = int(np.argmax(bend[1:-1])) + 1
+            if bend[i] > np.radians(25):
+                out[b] = i
+    return out
+
+
+def _results(chains, group, combos, cost, predicted, slot_names, end_slot) -> list[LimbResult]:
+    total = cost.sum(axis=0)
+    best = int(np.argmin(total))
+    margins = _margins(combos, total / len(group), best, slot_names)
     out = []
-    for c, cost in zip(combos_list, costs):
-        best = int(np.argmin(cost))
-        out.append((best, _margins(c, cost, best, names)))
+    for b, i in enumerate(group):
+        chain = chains[i]
+        m = len(chain)
+        slots = {name: (chain[int(x)] if 0 <= int(x) < m else -1) for name, x in zip(slot_names, combos[best])}
+        r = LimbResult(slots, chain, float(cost[b, best]), margins)
+        if int(combos[best, -1]) == m:
+            r.predicted[end_slot] = predicted[b, best]
+        out.append(r)
     return out
 
 
@@ -178,62 +208,52 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
     """Hip (thigh), knee (shin) and ankle (foot) joints on each leg chain starting at ``roots``."""
     anchor = view.P[branch]
     scale = view.scale
-    chains = [view.main_chain(r, 12) for r in roots]
-    costs, combos_list, predicted = [], [], []
-    for chain in chains:
-        m = len(chain)
-        P = view.P[chain]
-        combos = _combos(m, 3)
+    chains = [view.main_chain(r, 9) for r in roots]
+    out: dict[int, LimbResult] = {}
+    for group in _batches(chains):
+        cs = [chains[i] for i in group]
+        m = len(cs[0])
+        P = view.P[np.array(cs)]  # (B, m, 3)
+        combos = _combos(m, 3, 4)
         h, k, a = combos.T
-        Ph, Pk = P[h], P[k]
         virtual = a == m
-        Pa = np.where(virtual[:, None], Pk + (Pk - Ph) / THIGH_OVER_SHIN, P[np.minimum(a, m - 1)])
-        thigh = np.linalg.norm(Pk - Ph, axis=1)
-        shin = np.linalg.norm(Pa - Pk, axis=1)
+        Ph, Pk = P[:, h], P[:, k]
+        Pa = np.where(virtual[None, :, None], Pk + (Pk - Ph) / THIGH_OVER_SHIN, P[:, np.minimum(a, m - 1)])
+        thigh_v, shin_v = Pk - Ph, Pa - Pk
+        thigh = np.sqrt(np.einsum("bnk,bnk->bn", thigh_v, thigh_v))
+        shin = np.sqrt(np.einsum("bnk,bnk->bn", shin_v, shin_v))
         ok = (thigh > 1e-6) & (shin > 1e-6)
         ratio = np.where(ok, thigh / np.where(ok, shin, 1.0), 1.0)
         cost = np.where(ok, ((np.log(ratio) - np.log(THIGH_OVER_SHIN)) / 0.35) ** 2, 1e6)
         if up is not None:  # thigh and shin point away from the head
-            for seg, length in ((Pk - Ph, thigh), (Pa - Pk, shin)):
-                down = -(seg @ up) / np.maximum(length, 1e-9)
+            for seg, seg_len in ((thigh_v, thigh), (shin_v, shin)):
+                down = -(seg @ up) / np.maximum(seg_len, 1e-9)
                 cost += np.where(down < 0.5, 6.0 * (0.5 - down), 0.0)
-        cost += _leg_prefix_costs(view, chain, anchor, scale, up)[h]
-        skip = _skip_costs(view, chain, scale)
+        cost += _stack(view, cs, lambda c: _leg_prefix_costs(view, c, anchor, scale, up))[:, h]
+        skip = _stack(view, cs, lambda c: _skip_costs(view, c, scale))
         cost += _between(skip, h, k) + _between(skip, k, a)
         # the foot past the ankle is short: its farthest chain joint (a heel may loop back) is near
-        diff = P[:, None, :] - P[None, :, :]
-        dist = np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
-        extent = np.array([dist[i, i + 1:].max() if i + 1 < m else 0.0 for i in range(m)] + [0.0])
-        rem = np.where(virtual, 0.0, extent[a])
+        diff = P[:, :, None, :] - P[:, None, :, :]
+        dist = np.sqrt(np.einsum("bijk,bijk->bij", diff, diff))
+        upper_tri = np.triu(np.ones((m, m), dtype=bool), 1)
+        extent = np.concatenate((np.where(upper_tri, dist, 0.0).max(axis=2), np.zeros((len(cs), 1))), axis=1)
+        rem = np.where(virtual, 0.0, extent[:, a])
         cost += np.where(rem > 0.9 * shin, ((rem / np.maximum(shin, 1e-9) - 0.9) / 0.25) ** 2, 0.0)
-        start = np.linalg.norm(Ph - anchor, axis=1)
+        start = np.sqrt(np.einsum("bnk,bnk->bn", Ph - anchor, Ph - anchor))
         cost += np.where(start < 0.02 * thigh, 0.6, 0.0)  # a joint at the pelvis is a helper, not the thigh
-        bend = np.concatenate((_bend(P), [0.0]))
-        strongest = max(range(1, m - 1), key=lambda i: bend[i], default=None)
-        if strongest is not None and bend[strongest] > np.radians(25):
-            inside = (h < strongest) & (np.minimum(a, m) > strongest)
-            cost += np.where(inside & (k != strongest), 1.0, 0.0)
+        strongest = _strongest_bend(P)[:, None]
+        inside = (h < strongest) & (np.minimum(a, m) > strongest) & (strongest > 0)
+        cost += np.where(inside & (k != strongest), 1.0, 0.0)
         cost += VIRTUAL_COST * virtual
-        cost += _role_cost(view, chain, {"thigh": 0.8, "shin": -0.8, "foot": -1.0, "toe": -1.0},
-                           {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8})[h]
-        cost += _role_cost(view, chain, {"shin": 0.8, "legpart": 0.4, "thigh": -0.8, "foot": -0.8, "toe": -1.0},
-                           {"twist": 1.0, "end": 0.8, "control": 0.6, "helper": 0.6})[k]
-        cost += _role_cost(view, chain, {"foot": 0.8, "thigh": -1.0, "shin": -0.8},
-                           {"twist": 0.8, "end": 0.6, "control": 0.3, "heel": 0.6})[a]
-        costs.append(cost)
-        combos_list.append(combos)
-        predicted.append(Pa)
-    out = {}
-    for root, chain, combos, (best, margins), Pa, cost in zip(roots, chains, combos_list,
-                                                              _pick(view, chains, costs, combos_list, ("hip", "knee", "ankle")),
-                                                              predicted, costs):
-        m = len(chain)
-        hb, kb, ab = (int(x) for x in combos[best])
-        r = LimbResult({"hip": chain[hb], "knee": chain[kb], "ankle": chain[ab] if ab < m else -1}, chain,
-                       float(cost[best]), margins)
-        if ab == m:
-            r.predicted["ankle"] = Pa[best]
-        out[root] = r
+        cost += _stack(view, cs, lambda c: _role_cost(view, c, {"thigh": 0.8, "shin": -0.8, "foot": -1.0, "toe": -1.0},
+                                                      {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, h]
+        cost += _stack(view, cs, lambda c: _role_cost(view, c, {"shin": 0.8, "legpart": 0.4, "thigh": -0.8,
+                                                                "foot": -0.8, "toe": -1.0},
+                                                      {"twist": 1.0, "end": 0.8, "control": 0.6, "helper": 0.6}))[:, k]
+        cost += _stack(view, cs, lambda c: _role_cost(view, c, {"foot": 0.8, "thigh": -1.0, "shin": -0.8},
+                                                      {"twist": 0.8, "end": 0.6, "control": 0.3, "heel": 0.6}))[:, a]
+        for i, r in zip(group, _results(chains, group, combos, cost, Pa, ("hip", "knee", "ankle"), "ankle")):
+            out[roots[i]] = r
     return out
 
 
@@ -241,88 +261,90 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
     """Clavicle, shoulder (upper arm), elbow (forearm) and wrist (hand) joints on each arm chain."""
     anchor = view.P[branch]
     scale = view.scale
-    chains = [view.main_chain(r, 14) for r in roots]
-    offsets = _mirror_offsets(view, chains, anchor)
-    costs, combos_list, predicted = [], [], []
-    for chain, offset in zip(chains, offsets):
-        m = len(chain)
-        P = view.P[chain]
-        chain_arr = np.array(chain)
-        with_c = _combos(m, 4)
-        without = _combos(m, 3)
+    chains = [view.main_chain(r, 10) for r in roots]
+    all_offsets = _mirror_offsets(view, chains, anchor)
+    out: dict[int, LimbResult] = {}
+    for group in _batches(chains):
+        cs = [chains[i] for i in group]
+        m = len(cs[0])
+        P = view.P[np.array(cs)]  # (B, m, 3)
+        offset = np.stack([all_offsets[i] for i in group])
+        with_c = _combos(m, 4, 3)
+        without = _combos(m, 3, 4)
         combos = np.concatenate((with_c, np.concatenate((np.full((len(without), 1), -1), without), axis=1)))
         c, s, e, w = combos.T
-        Ps, Pe = P[s], P[e]
+        has_c = c >= 0
+        c0 = np.maximum(c, 0)
         virtual = w == m
-        Pw = np.where(virtual[:, None], Pe + (Pe - Ps) / UPPER_OVER_FORE, P[np.minimum(w, m - 1)])
-        upper = np.linalg.norm(Pe - Ps, axis=1)
-        fore = np.linalg.norm(Pw - Pe, axis=1)
+        Ps, Pe = P[:, s], P[:, e]
+        Pw = np.where(virtual[None, :, None], Pe + (Pe - Ps) / UPPER_OVER_FORE, P[:, np.minimum(w, m - 1)])
+
+        def norm(v):
+            return np.sqrt(np.einsum("bnk,bnk->bn", v, v))
+        upper = norm(Pe - Ps)
+        fore = norm(Pw - Pe)
         ok = (upper > 1e-6) & (fore > 1e-6)
         ratio = np.where(ok, upper / np.where(ok, fore, 1.0), 1.0)
         cost = np.where(ok, ((np.log(ratio) - np.log(UPPER_OVER_FORE)) / 0.4) ** 2, 1e6)
-        has_c = c >= 0
-        Pc = P[np.maximum(c, 0)]
-        clav = np.linalg.norm(Ps - Pc, axis=1)
-        clav_ratio = np.where(has_c, clav / np.maximum(upper, 1e-9), 0.5)
-        log_c = np.log(np.maximum(clav_ratio, 1e-3))
+        clav = norm(Ps - P[:, c0])
+        log_c = np.log(np.maximum(np.where(has_c, clav / np.maximum(upper, 1e-9), 0.5), 1e-3))
         cost += np.where(has_c, (np.maximum(0.0, np.log(0.15) - log_c) / 0.5) ** 2
                          + (np.maximum(0.0, log_c - np.log(1.6)) / 0.5) ** 2, 0.0)
         # the upper arm starts well away from the middle plane, a clavicle near it
-        rel_s = offset[s] / np.maximum(upper, 1e-9)
-        rel_c = offset[np.maximum(c, 0)] / np.maximum(upper, 1e-9)
+        rel_s = offset[:, s] / np.maximum(upper, 1e-9)
+        rel_c = offset[:, c0] / np.maximum(upper, 1e-9)
         cost += np.where(rel_s < 0.45, 4.0 * (0.45 - rel_s), 0.0)
         cost += np.where(has_c & (rel_c > 0.75), 3.0 * (rel_c - 0.75), 0.0)
-        first = np.where(has_c, c, s)
-        cost += _prefix_costs(view, chain, anchor, scale, 0.6)[first]
-        skip = _skip_costs(view, chain, scale)
+        cost += _stack(view, cs, lambda ch: _prefix_costs(view, ch, anchor, scale, 0.6))[:, np.where(has_c, c, s)]
+        skip = _stack(view, cs, lambda ch: _skip_costs(view, ch, scale))
         cost += np.where(has_c, _between(skip, c, s) + 0.5 * (s > c + 1), 0.0)
         cost += _between(skip, s, e) + _between(skip, e, w)
         # the wrist: a short bone after it, fingers below it, no whole arm segment past it
-        nxt = np.minimum(w + 1, m - 1)
-        after = np.where((w + 1 < m) & ~virtual, np.linalg.norm(P[nxt] - Pw, axis=1), 0.0)
+        after = np.where((w + 1 < m) & ~virtual, norm(P[:, np.minimum(w + 1, m - 1)] - Pw), 0.0)
         cost += np.where(after > 0.7 * fore, 2.0, 0.0)
-        kids = [[ch for ch in view.children[j] if not view.info[ch].flagged("end", "twist", "control")] for j in chain]
-        branching = np.array([len(k) >= 3 or sum(view.size[ch] >= 2 for ch in k) >= 2 for k in kids] + [False])
-        many = np.array([len(k) >= 2 for k in kids] + [False])
-        cost -= np.where(~virtual & many[np.minimum(w, m)], 0.6, 0.0)
+        many, first_branch = _hand_structure(view, cs)
+        cost -= np.where(~virtual & many[:, np.minimum(w, m)], 0.6, 0.0)
         # the hand is where the fingers branch: a wrist past a branching joint is a finger
-        first_branch = next((i for i in range(m) if branching[i]), m)
-        cost += np.where((e < first_branch) & (w > first_branch) & (w < m), 1.5, 0.0)
-        rem = np.where(virtual, 0.0, view.reach[chain_arr[np.minimum(w, m - 1)]])
+        fb = first_branch[:, None]
+        cost += np.where((e < fb) & (w > fb) & (w < m), 1.5, 0.0)
+        reach = view.reach[np.array(cs)]
+        rem = np.where(virtual, 0.0, reach[:, np.minimum(w, m - 1)])
         cost += np.where(rem > 1.6 * fore, 0.6, 0.0)
-        bend = np.concatenate((_bend(P), [0.0]))
-        strongest = max(range(1, m - 1), key=lambda i: bend[i], default=None)
-        if strongest is not None and bend[strongest] > np.radians(25):
-            inside = (s < strongest) & (np.minimum(w, m) > strongest)
-            cost += np.where(inside & (e != strongest), 1.0, 0.0)
+        strongest = _strongest_bend(P)[:, None]
+        inside = (s < strongest) & (np.minimum(w, m) > strongest) & (strongest > 0)
+        cost += np.where(inside & (e != strongest), 1.0, 0.0)
         cost += VIRTUAL_COST * virtual
-        cost += np.where(has_c, _role_cost(view, chain, {"clavicle": 0.8, "shoulder": 0.4, "upperarm": -0.8,
-                                                         "forearm": -1.0, "hand": -1.0},
-                                           {"twist": 1.0, "end": 1.0, "control": 0.6})[np.maximum(c, 0)], 0.0)
-        cost += _role_cost(view, chain, {"upperarm": 0.8, "shoulder": 0.3, "forearm": -0.8, "hand": -1.0},
-                           {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8})[s]
-        clav_named = np.array([view.info[j].has("clavicle") for j in chain] + [False])
-        cost += np.where(~has_c & clav_named[s], 0.6, 0.0)
-        cost += _role_cost(view, chain, {"forearm": 0.8, "upperarm": -0.8, "clavicle": -1.0, "hand": -0.8},
-                           {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.6})[e]
-        cost += _role_cost(view, chain, {"hand": 0.8, "upperarm": -1.0, "clavicle": -1.0, "forearm": -0.5},
-                           {"twist": 0.8, "end": 0.6, "control": 0.3, "prop": 1.0, "metacarpal": 0.8})[w]
-        costs.append(cost)
-        combos_list.append(combos)
-        predicted.append(Pw)
-    out = {}
-    names = ("clavicle", "shoulder", "elbow", "wrist")
-    for root, chain, combos, (best, margins), Pw, cost in zip(roots, chains, combos_list,
-                                                              _pick(view, chains, costs, combos_list, names),
-                                                              predicted, costs):
-        m = len(chain)
-        cb, sb, eb, wb = (int(x) for x in combos[best])
-        r = LimbResult({"clavicle": chain[cb] if cb >= 0 else -1, "shoulder": chain[sb], "elbow": chain[eb],
-                        "wrist": chain[wb] if wb < m else -1}, chain, float(cost[best]), margins)
-        if wb == m:
-            r.predicted["wrist"] = Pw[best]
-        out[root] = r
+        cost += np.where(has_c, _stack(view, cs, lambda ch: _role_cost(
+            view, ch, {"clavicle": 0.8, "shoulder": 0.4, "upperarm": -0.8, "forearm": -1.0, "hand": -1.0},
+            {"twist": 1.0, "end": 1.0, "control": 0.6}))[:, c0], 0.0)
+        cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"upperarm": 0.8, "shoulder": 0.3, "forearm": -0.8,
+                                                                  "hand": -1.0},
+                                                       {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, s]
+        clav_named = _stack(view, cs, lambda ch: np.array([view.info[j].has("clavicle") for j in ch] + [False]))
+        cost += np.where(~has_c & clav_named[:, s], 0.6, 0.0)
+        cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"forearm": 0.8, "upperarm": -0.8, "clavicle": -1.0,
+                                                                  "hand": -0.8},
+                                                       {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.6}))[:, e]
+        cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"hand": 0.8, "upperarm": -1.0, "clavicle": -1.0,
+                                                                  "forearm": -0.5},
+                                                       {"twist": 0.8, "end": 0.6, "control": 0.3, "prop": 1.0,
+                                                        "metacarpal": 0.8}))[:, w]
+        for i, r in zip(group, _results(chains, group, combos, cost, Pw, ("clavicle", "shoulder", "elbow", "wrist"),
+                                        "wrist")):
+            out[roots[i]] = r
     return out
+
+
+def _hand_structure(view: SkeletonView, chains: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
+    """(B, m+1) "has two or more children" and (B,) index of the first joint where digits branch
+    (three children, or two that lead somewhere), m when none."""
+    many, first = [], []
+    for chain in chains:
+        kids = [[c for c in view.children[j] if not view.info[c].flagged("end", "twist", "control")] for j in chain]
+        branching = [len(k) >= 3 or sum(view.size[c] >= 2 for c in k) >= 2 for k in kids]
+        many.append([len(k) >= 2 for k in kids] + [False])
+        first.append(next((i for i, b in enumerate(branching) if b), len(chain)))
+    return np.array(many), np.array(first)
 
 
 def settle_coincident(view: SkeletonView, result: LimbResult) -> None:
@@ -337,10 +359,10 @@ def settle_coincident(view: SkeletonView, result: LimbResult) -> None:
             continue
         i = chain.index(j)
         lo = i
-        while lo > 0 and float(np.linalg.norm(view.P[chain[lo - 1]] - view.P[chain[i]])) < tol:
+        while lo > 0 and length(view.P[chain[lo - 1]] - view.P[chain[i]]) < tol:
             lo -= 1
         hi = i
-        while hi + 1 < len(chain) and float(np.linalg.norm(view.P[chain[hi + 1]] - view.P[chain[i]])) < tol:
+        while hi + 1 < len(chain) and length(view.P[chain[hi + 1]] - view.P[chain[i]]) < tol:
             hi += 1
         if lo == hi:
             continue
@@ -372,7 +394,7 @@ def forearm_twist(view: SkeletonView, result: LimbResult) -> int:
             if c in chain or view.size[c] > 2:
                 continue
             t = float(np.dot(view.P[c] - E, axis)) / length2
-            off = float(np.linalg.norm(view.P[c] - E - t * axis)) / np.sqrt(length2)
+            off = length(view.P[c] - E - t * axis) / np.sqrt(length2)
             if 0.05 < t < 0.98 and off < 0.2 and not view.info[c].flagged("control", "prop", "end"):
                 return c
     return -1
@@ -381,7 +403,7 @@ def forearm_twist(view: SkeletonView, result: LimbResult) -> int:
 def relocate(view: SkeletonView, target: np.ndarray, exclude: set[int], tolerance: float) -> int:
     """The joint (not in ``exclude``) nearest ``target`` within ``tolerance`` that looks like a hand
     or foot (has children, is named so), or -1."""
-    d = np.linalg.norm(view.P - target, axis=1)
+    d = lengths(view.P - target)
     best, best_score = -1, np.inf
     for j in np.nonzero(d < tolerance)[0]:
         j = int(j)

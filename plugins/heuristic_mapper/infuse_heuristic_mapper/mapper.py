@@ -19,12 +19,12 @@ from __future__ import annotations
 import numpy as np
 from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
 from infuse.errors import NotHumanoidError
-from infuse.mapping import Mapping
+from infuse.mapping import Mapping, resolve_pose
 
 from .body import LimbPair, choose_plan, legs_down, limb_pairs
 from .hands import assign_fingers
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
-from .view import SkeletonView
+from .view import SkeletonView, length, lengths
 
 NAME = "heuristic"
 #: cos(legs direction, spine direction) above which a body is not standing (about 140 degrees)
@@ -54,15 +54,26 @@ def _conf_from_margin(margin: float, base: float = 0.6) -> float:
     return base + (0.98 - base) * (1.0 - np.exp(-max(margin, 0.0) / 1.2))
 
 
-def _pose_frames(pose) -> np.ndarray | None:
-    if pose is None:
-        return None
-    arr = np.asarray(pose, dtype=np.float64)
-    if arr.ndim == 2:
-        arr = arr[None]
-    if arr.ndim != 3 or arr.shape[-1] != 3 or not np.all(np.isfinite(arr)):
-        return None
-    return arr
+class _Frames:
+    """The caller's poses as (F, J, 3), computed on first use (``pose`` may be a callable)."""
+
+    def __init__(self, pose, joints: int):
+        self._pose = pose
+        self._joints = joints
+        self._value = None
+        self._done = pose is None
+
+    def get(self) -> np.ndarray | None:
+        if not self._done:
+            self._done = True
+            arr = resolve_pose(self._pose)
+            if arr is not None:
+                arr = np.asarray(arr, dtype=np.float64)
+                if arr.ndim == 2:
+                    arr = arr[None]
+                if arr.ndim == 3 and arr.shape[1:] == (self._joints, 3) and np.all(np.isfinite(arr)):
+                    self._value = arr
+        return self._value
 
 
 def _plan_for(view: SkeletonView):
@@ -87,14 +98,12 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
     they are kept and the rest is mapped around them.
     """
     view = SkeletonView(skeleton, skeleton.rest_global_positions)
-    frames = _pose_frames(pose)
-    if frames is not None and frames.shape[1] != view.n:
-        frames = None
+    frames = _Frames(pose, view.n)
     plan = _plan_for(view)
     cos = _standing(view, plan)
     used_pose = "rest pose"
-    if (plan is None or cos > STANDING_COS) and frames is not None:
-        view_pose = SkeletonView(skeleton, frames[0])
+    if (plan is None or cos > STANDING_COS) and frames.get() is not None:
+        view_pose = SkeletonView(skeleton, frames.get()[0])
         plan_pose = _plan_for(view_pose)
         cos_pose = _standing(view_pose, plan_pose)
         if plan_pose is not None and (plan is None or cos_pose < cos):
@@ -122,7 +131,7 @@ def _hands_on_ground(view: SkeletonView, plan) -> bool:
     """True when the arms' far ends are as low as the feet (a quadruped's front legs)."""
     legs, arms = plan.legs, plan.arms
     up = view.P[arms.branch] - view.P[legs.branch]
-    norm = np.linalg.norm(up)
+    norm = length(up)
     if norm < 1e-9:
         return False
     up /= norm
@@ -190,7 +199,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         anchor = _upper_anchor(view, legs, arms)
         if anchor is not None:
             up_guess = view.P[anchor] - view.P[legs.branch]
-            up_guess = up_guess / max(np.linalg.norm(up_guess), 1e-12)
+            up_guess = up_guess / max(length(up_guess), 1e-12)
     leg_res = assign_legs(view, legs.branch, [legs.a, legs.b], up_guess) if legs is not None else {}
     arm_res = assign_arms(view, arms.branch, [arms.a, arms.b]) if arms is not None else {}
     body_chain: set[int] = set()
@@ -243,7 +252,7 @@ def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body
         return
     mid = view.P[r.slots[middle]]
     target = view.P[j] if j >= 0 else r.predicted[end]
-    seg = float(np.linalg.norm(target - mid))
+    seg = length(target - mid)
     exclude = body_chain
     new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
     if new >= 0:
@@ -283,13 +292,13 @@ def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, hips:
 
 def _up_axis(view, base, legs, arms, leg_res, arm_res) -> np.ndarray:
     P = view.P
-    if arms is not None and np.linalg.norm(P[arms.branch] - P[base]) > 1e-3 * view.scale:
+    if arms is not None and length(P[arms.branch] - P[base]) > 1e-3 * view.scale:
         up = P[arms.branch] - P[base]
     elif legs is not None:
         up = P[base] - P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
     else:
         up = np.array([0.0, 1.0, 0.0])
-    return up / max(np.linalg.norm(up), 1e-12)
+    return up / max(length(up), 1e-12)
 
 
 def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.ndarray) -> list[int]:
@@ -304,7 +313,7 @@ def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.nda
         def score(c: int) -> float:
             info = view.info[c]
             far = view.P[view.far[c]] - view.P[cur]
-            norm = np.linalg.norm(far)
+            norm = length(far)
             upness = float(np.dot(far, up) / norm) if norm > 1e-9 else 0.0
             s = upness + 0.5 * view.limb_length(cur, c) / view.scale
             s += 1.0 * bool(info.roles & {"neck", "head", "spine", "chest"})
@@ -340,7 +349,7 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
         s_mean = P[shoulders].mean(axis=0)
         t_len = max(float(np.dot(s_mean - P[base], up)), 1e-9)
         height = float(np.dot(P[top] - s_mean, up)) / t_len
-        to_next = float(np.linalg.norm(P[above[0]] - P[top])) / t_len if above else 1.0
+        to_next = length(P[above[0]] - P[top]) / t_len if above else 1.0
         info = view.info[top]
         named_neck = info.has("neck") and not info.roles & {"chest", "spine"}
         named_torso = bool(info.roles & {"chest", "spine", "hips"})
@@ -416,7 +425,7 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
             d = -d
         lateral = lateral + d
     lateral = lateral - np.dot(lateral, up) * up
-    lateral /= max(np.linalg.norm(lateral), 1e-12)
+    lateral /= max(length(lateral), 1e-12)
     # reference: lateral points from the first pair's b member to its a member
     ref = pairs[0]
     ref_res = leg_res if ref is legs else arm_res
@@ -467,26 +476,31 @@ def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[f
         if tip != ankle:
             feet.append((ankle, tip))
     knees = [(r.slots["hip"], r.slots["knee"], r.slots["ankle"]) for r in (ra, rb) if r.slots["ankle"] >= 0]
-    poses = [view.P[None]] if frames is None else [view.P[None], frames]
     toe_votes, knee_votes = [], []
-    for F in poses:
-        if F is view.P[None]:
-            fwd = forward[None]
-        else:  # the body's axes in every frame, oriented like the rest's
+    for F in (view.P[None], "frames"):
+        if isinstance(F, str):
+            # the pose at hand is clear enough: no need to compute frames of motion
+            if frames is None or (toe_votes and abs(np.mean(toe_votes)) >= 0.5):
+                break
+            F = frames.get()
+            if F is None:
+                break
             u = F[:, top] - F[:, base]
             lat = F[:, ra.slots["hip"]] - F[:, rb.slots["hip"]]
             fwd = np.cross(lat, u)
             fwd /= np.maximum(np.linalg.norm(fwd, axis=1, keepdims=True), 1e-12)
+        else:
+            fwd = forward[None]
         for ankle, tip in feet:
             v = F[:, tip] - F[:, ankle]
-            n = np.linalg.norm(v, axis=1)
+            n = lengths(v)
             ok = n > 1e-9
             toe_votes.extend((np.einsum("ij,ij->i", v[ok], fwd[ok]) / n[ok]).tolist())
         for h, k, a in knees:
             mid = 0.5 * (F[:, h] + F[:, a])
             off = np.einsum("ij,ij->i", F[:, k] - mid, fwd)
-            length = np.linalg.norm(F[:, k] - F[:, h], axis=1)
-            knee_votes.extend(np.clip(off / np.maximum(length, 1e-9) * 5.0, -1, 1).tolist())
+            thigh = lengths(F[:, k] - F[:, h])
+            knee_votes.extend(np.clip(off / np.maximum(thigh, 1e-9) * 5.0, -1, 1).tolist())
     toe = float(np.mean(toe_votes)) if toe_votes else 0.0
     knee = float(np.mean(knee_votes)) if knee_votes else 0.0
     if abs(toe) >= 0.3 or not knee_votes:
@@ -552,7 +566,7 @@ def _big_toe(view, toes, base, up) -> int:
     def lateral_distance(c):
         v = P[c] - ref
         v = v - np.dot(v, up) * up
-        return float(np.linalg.norm(v))
+        return length(v)
     # the big toe is the most medial one; the pelvis lies on the middle plane
     return min(toes, key=lateral_distance)
 
@@ -612,7 +626,7 @@ def _coincident_siblings(view: SkeletonView, j: int) -> list[int]:
         return []
     tol = 0.01 * view.scale
     return [c for c in view.children[p] if c != j and view.size[c] >= 2
-            and float(np.linalg.norm(view.P[c] - view.P[j])) < max(tol, 0.2 * float(np.linalg.norm(view.P[j] - view.P[p])))
+            and length(view.P[c] - view.P[j]) < max(tol, 0.2 * length(view.P[j] - view.P[p]))
             and not view.info[c].flagged(*_NOT_BODY)]
 
 
@@ -639,12 +653,12 @@ def _eye_pair(view, head, up, left) -> dict[str, int]:
     if not inside or len(inside) > 8:  # a face rig: too many look-alike pairs to tell the eyes by shape
         return {}
     forward = np.cross(left, up)
-    neck_len = max(float(np.linalg.norm(P[head] - P[int(view.parents[head])])), 1e-3 * view.scale)
+    neck_len = max(length(P[head] - P[int(view.parents[head])]), 1e-3 * view.scale)
     best, best_score = None, np.inf
     for i, a in enumerate(inside):
         for b in inside[i + 1:]:
             d = P[a] - P[b]
-            sep = float(np.linalg.norm(d))
+            sep = length(d)
             if sep < 1e-9:
                 continue
             across = abs(float(d @ left)) / sep

@@ -236,7 +236,9 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
     return NameInfo(tuple(joined), side, frozenset(roles), frozenset(flags), tuple(numbers))
 
 
-def analyse_all(names: tuple[str, ...]) -> list[NameInfo]:
-    """:func:`analyse` of every name of a skeleton, with their shared prefix removed."""
+@lru_cache(maxsize=256)
+def analyse_all(names: tuple[str, ...]) -> tuple[NameInfo, ...]:
+    """:func:`analyse` of every name of a skeleton, with their shared prefix removed (cached: many
+    files share one skeleton)."""
     prefix = common_prefix(list(names))
-    return [analyse(n, prefix) for n in names]
+    return tuple(analyse(n, prefix) for n in names)

@@ -5,9 +5,21 @@ the mapper finds the body's own axes from its structure (see :mod:`.body`).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .names import NameInfo, analyse_all
+
+
+def length(v: np.ndarray) -> float:
+    """Euclidean length of one vector (faster than ``np.linalg.norm`` for a 3-vector)."""
+    return math.sqrt(float(v @ v))
+
+
+def lengths(v: np.ndarray) -> np.ndarray:
+    """Row lengths of an (N, 3) array."""
+    return np.sqrt(np.einsum("ij,ij->i", v, v))
 
 
 class SkeletonView:
@@ -27,7 +39,7 @@ class SkeletonView:
         self.parents = np.asarray(skeleton.parents)
         self.n = len(self.names)
         self.children: tuple[tuple[int, ...], ...] = skeleton.children
-        self.info: list[NameInfo] = analyse_all(self.names)
+        self.info: tuple[NameInfo, ...] = analyse_all(tuple(self.names))
         # children a chain may follow: controls, props and secondary bones only when nothing else is there
         self.followable = tuple(
             tuple(c for c in kids if not self.info[c].flagged("control", "prop", "secondary")) or kids
@@ -66,7 +78,7 @@ class SkeletonView:
         par = self.parents
         has_parent = par >= 0
         bone = np.zeros(self.n)
-        bone[has_parent] = np.linalg.norm(P[has_parent] - P[par[has_parent]], axis=1)
+        bone[has_parent] = lengths(P[has_parent] - P[par[has_parent]])
         self.bone = bone
         reach = np.zeros(self.n)
         far = np.arange(self.n)

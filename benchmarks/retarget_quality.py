@@ -1,0 +1,86 @@
+"""Retargeting quality on real clips: foot skate, bone directions, ground contact, root speed.
+
+Pairs: Bandai walk, run and dash (normal, feminine, masculinity) onto SmartBody's Utah skeleton,
+Mixamo's X Bot, a CMU skeleton and RobotExpressive; SmartBody's MaleLocomotion walk and run onto
+the Bandai skeleton and X Bot. Every skeleton is mapped by the installed heuristic mapper.
+
+Columns: skate in cm per metre walked (source / plain transfer / paper's warped IK / final
+contact-pinned IK) and the target, source x 1.1 + 0.5; bone-direction error in degrees (mean over
+body bones and frames, plain and final); penetration and float of the feet in cm (mean; source /
+final); root speed over source speed x leg scale; the largest miss of a reachable IK goal in mm
+and the share of goals out of reach.
+
+Run: ``python benchmarks/retarget_quality.py`` (reads the corpus from ``INFUSE_CORPUS``, default
+``../shared/corpus``).
+"""
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import infuse
+from infuse.mapping import map_skeleton, sample_poses
+from infuse_retarget import RetargetPlan
+from infuse_retarget.quality import evaluate
+
+CORPUS = Path(os.environ.get("INFUSE_CORPUS", Path(__file__).resolve().parents[1].parent / "shared" / "corpus"))
+BANDAI = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_{}_{}_001.bvh"
+UTAH = "smartbody/behaviorsets/MaleLocomotion/"
+SOURCES_BANDAI = [BANDAI.format(kind, style) for kind in ("walk", "run", "dash") for style in ("normal", "feminine", "masculinity")]
+SOURCES_SMARTBODY = [UTAH + "motions/ChrUtah_Walk001.skm", UTAH + "motions/ChrUtah_Run001.skm"]
+TARGETS_BANDAI = [UTAH + "skeletons/test_utah.sk", "runxaway-models/Xbot.glb", "bvh11/resources/131_03.bvh",
+                  "adibkn1-robot/RobotExpressive.glb"]
+TARGETS_SMARTBODY = [BANDAI.format("walk", "normal"), "runxaway-models/Xbot.glb"]
+
+
+def load(rel: str):
+    """(asset, mapping over the whole skeleton, first clip or None)."""
+    asset = infuse.load(CORPUS / rel)
+    meta = {k: v for k, v in asset.meta.items() if k != "channel_joints"}
+    mapping = map_skeleton(asset.skeleton, pose=sample_poses(asset), meta=meta, file=asset.path)
+    return asset, mapping, next(iter(asset.motions.values()), None)
+
+
+def rows():
+    cache = {}
+
+    def get(rel):
+        if rel not in cache:
+            cache[rel] = load(rel)
+        return cache[rel]
+
+    for sources, targets in ((SOURCES_BANDAI, TARGETS_BANDAI), (SOURCES_SMARTBODY, TARGETS_SMARTBODY)):
+        for src in sources:
+            s_asset, s_map, clip = get(src)
+            for tgt in targets:
+                t_asset, t_map, t_clip = get(tgt)
+                plan = RetargetPlan(clip.skeleton, s_map, t_asset.skeleton, t_map, source_motion=clip, target_motion=t_clip)
+                yield Path(src).stem, Path(tgt).stem, evaluate(plan, clip)
+
+
+def main() -> int:
+    if not (CORPUS / "labels").is_dir():
+        print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
+        return 2
+    head = (f"{'source':<34} {'target':<17} {'scale':>5} | {'skate src/plain/paper/final':>28} {'limit':>5} | "
+            f"{'bones pl/fin':>12} | {'pen src/fin':>11} {'float src/fin':>13} | {'speed':>5} | {'IK mm':>6} {'out':>4}")
+    print(head)
+    print("-" * len(head))
+    failures = 0
+    start = time.perf_counter()
+    for src, tgt, q in rows():
+        ok = q.skate_final <= q.skate_limit() and q.bones_final <= 5.0 and q.residual_mm <= 1.0
+        failures += not ok
+        print(f"{src:<34} {tgt:<17} {q.scale:5.2f} | {q.skate_source:6.2f} {q.skate_plain:6.2f} {q.skate_paper:6.2f} "
+              f"{q.skate_final:6.2f} {q.skate_limit():5.2f} | {q.bones_plain:5.2f} {q.bones_final:6.2f} | "
+              f"{q.penetration_source:5.2f} {q.penetration_final:5.2f} {q.float_source:6.2f} {q.float_final:6.2f} | "
+              f"{q.speed_ratio:5.3f} | {q.residual_mm:6.3f} {100 * q.unreachable:3.0f}%" + ("" if ok else "  <- misses a target"))
+    print(f"\n{failures} pair(s) miss a target (skate <= source x 1.1 + 0.5 cm/m, bones <= 5 deg, reachable goals <= 1 mm); "
+          f"{time.perf_counter() - start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

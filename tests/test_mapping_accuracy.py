@@ -1,0 +1,135 @@
+"""The heuristic mapper on every labelled corpus file, and on generated variants of its skeletons.
+
+Targets (issue "automatic skeleton mapping"): at least 98% of labelled joints right overall, every
+body joint right on every humanoid file, at least 95% on generated variants, non-humanoids
+refused, a median of at most 5 ms per skeleton. The corpus is loaded once for the module.
+"""
+from __future__ import annotations
+
+import statistics
+import time
+
+import pytest
+
+import infuse
+from infuse.canonical import BODY_NAMES, CANONICAL_NAMES
+from infuse.mapping import map_skeleton, sample_poses
+
+import skeleton_variants
+from corpus_data import corpus_file, labels, require_corpus
+
+
+def score(joints: dict, expected: dict, alternatives: dict | None, names=CANONICAL_NAMES):
+    """(right, wrong entries): right when equal to the label or one of its alternatives."""
+    wrong = [(k, joints.get(k), expected.get(k)) for k in names
+             if joints.get(k) != expected.get(k) and joints.get(k) not in (alternatives or {}).get(k, [])]
+    return len(names) - len(wrong), wrong
+
+
+@pytest.fixture(scope="module")
+def corpus():
+    """(label, asset, mapping or None, refusal or None, cpu seconds) for every readable labelled file."""
+    require_corpus()
+    out = []
+    for label in labels():
+        try:
+            asset = infuse.load(corpus_file(label["file"]))
+        except infuse.MissingFeatureError:
+            continue  # FBX without its optional extra
+        t0 = time.process_time()
+        try:
+            mapping, refused = map_skeleton(asset), None
+        except infuse.NotHumanoidError as exc:
+            mapping, refused = None, exc
+        out.append((label, asset, mapping, refused, time.process_time() - t0))
+    return out
+
+
+def test_corpus_is_mostly_readable(corpus):
+    assert len(corpus) >= 219  # every plain-Python file; the FBX ones need the extra
+
+
+def test_overall_accuracy(corpus):
+    right = total = 0
+    for label, asset, mapping, refused, _ in corpus:
+        if label["humanoid"]:
+            r, _ = score(mapping.joints if mapping else {}, label["mapping"], label.get("alternatives"))
+            right += r
+            total += len(CANONICAL_NAMES)
+    assert right / total >= 0.98, f"{right}/{total}"
+
+
+def test_every_body_joint_on_every_humanoid_file(corpus):
+    failures = []
+    for label, asset, mapping, refused, _ in corpus:
+        if not label["humanoid"]:
+            continue
+        assert refused is None, f"{label['file']} refused: {refused}"
+        _, wrong = score(mapping.joints, label["mapping"], label.get("alternatives"), BODY_NAMES)
+        if wrong:
+            failures.append((label["file"], wrong))
+    assert not failures
+
+
+def test_non_humanoids_are_refused_with_a_reason(corpus):
+    refused = [(label["file"], r) for label, _, _, r, _ in corpus if not label["humanoid"]]
+    assert len(refused) == 2
+    for file, reason in refused:
+        assert reason is not None, f"{file} was mapped"
+        assert reason.reason
+
+
+def test_median_time_per_skeleton(corpus):
+    """CPU time of the mapper call (file already read), median over the corpus."""
+    times = [t for label, asset, *_ , t in corpus if 40 <= asset.skeleton.num_joints <= 120]
+    assert statistics.median(times) <= 0.005
+
+
+def test_confidences_and_reasons(corpus):
+    for label, asset, mapping, refused, _ in corpus:
+        if mapping is None:
+            continue
+        assert 0.0 <= mapping.overall_confidence <= 1.0
+        assert all(0.0 <= c <= 1.0 for c in mapping.confidence.values())
+        assert all(mapping.reasons[n] for n in CANONICAL_NAMES)
+        used = {v for v in mapping.joints.values() if v}
+        assert set(mapping.unmapped) == set(asset.skeleton.names) - used
+
+
+@pytest.fixture(scope="module")
+def distinct_skeletons(corpus):
+    """One labelled humanoid file per distinct skeleton (motion files share theirs)."""
+    seen, out = set(), []
+    for label, asset, mapping, refused, _ in corpus:
+        key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
+        if label["humanoid"] and key not in seen:
+            seen.add(key)
+            out.append((label, asset))
+    return out
+
+
+def test_generated_variants(distinct_skeletons):
+    """Renamed, rotated, rescaled, with extra joints, reordered, and all at once: >= 95% right."""
+    right = total = 0
+    per_kind: dict[str, list[int]] = {}
+    for label, asset in distinct_skeletons:
+        poses = sample_poses(asset)
+        animated = asset.meta.get("channel_joints")
+        for v in skeleton_variants.all_variants(asset.skeleton, poses, label):
+            meta = {"channel_joints": v.translate(animated)} if animated else {}
+            try:
+                joints = map_skeleton(v.skeleton, pose=v.poses, meta=meta).joints
+            except infuse.NotHumanoidError:
+                joints = {}
+            r, _ = score(joints, v.mapping, v.alternatives)
+            right += r
+            total += len(CANONICAL_NAMES)
+            kind = per_kind.setdefault(v.name, [0, 0])
+            kind[0] += r
+            kind[1] += len(CANONICAL_NAMES)
+    assert right / total >= 0.95, {k: round(a / b, 4) for k, (a, b) in per_kind.items()}
+    # turning, scaling and reordering never change the answer
+    for kind in ("rotated_z_up", "rotated_facing_-z", "rotated_facing_+x", "scaled_cm", "scaled_dm", "scaled_inch",
+                 "reordered"):
+        a, b = per_kind[kind]
+        assert a / b >= 0.995, (kind, a / b)
