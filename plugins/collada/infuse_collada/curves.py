@@ -26,11 +26,6 @@ class Curve:
     out_tangents: np.ndarray | None = None
 
 
-def sample(curve: Curve, t: np.ndarray) -> np.ndarray:
-    """Values (F, S) of ``curve`` at times ``t`` (F,)."""
-    return sample_all([curve], t)[0]
-
-
 def sample_all(curves: list[Curve], t: np.ndarray) -> list[np.ndarray]:
     """Values (F, S) of each curve at times ``t`` (F,)."""
     t = np.asarray(t, dtype=np.float64)
