@@ -50,7 +50,8 @@ def test_common_prefix():
     names = ["rig_Hips", "rig_Spine", "rig_Spine1", "rig_Neck", "rig_Head", "rig_LeftArm", "rig_RightArm",
              "rig_LeftLeg", "rig_RightLeg", "rig_LeftFoot", "Armature"]
     assert common_prefix(names) == "rig_"  # shared by at least 90% of the names
-    assert analyse("rig_LeftArm", "rig_").tokens == ("upperarm",)
+    info = analyse("rig_LeftArm", "rig_")
+    assert info.tokens == ("arm",) and info.side == 1 and "upperarm" in info.roles
     assert common_prefix(["Hips", "Spine", "Head"]) == ""
 
 
