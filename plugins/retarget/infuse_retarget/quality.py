@@ -1,0 +1,103 @@
+"""Quality figures of one retargeted clip against its source (built on :mod:`infuse.metrics`).
+
+:func:`evaluate` runs the plain transfer, the paper's warped-feet IK and the contact-pinned IK on
+one clip and measures each against the source, with the source's contact flags:
+
+- foot skate, cm per metre walked (source, plain, paper, final);
+- bone-direction agreement on the body joints, degrees (plain, final);
+- foot penetration and float relative to the ground, cm (source, plain, final);
+- root speed relative to the source's speed times the leg scale;
+- the largest distance left to a reachable IK goal, mm, and the share of goals out of reach
+  (constraints only: a swinging ball of the foot is a preference, not a goal).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from infuse import metrics
+from infuse.contacts import lowest_points
+from infuse.kinematics import motion_fk
+from infuse.motion import Motion
+
+from .retarget import RetargetResult, retarget_clip
+from .transfer import RetargetPlan
+
+
+@dataclass(frozen=True)
+class Quality:
+    """Figures for one (clip, target) pair; see the module docstring. Lengths in cm, angles in degrees."""
+
+    frames: int
+    scale: float
+    skate_source: float
+    skate_plain: float
+    skate_paper: float
+    skate_final: float
+    bones_plain: float
+    bones_final: float
+    bones_worst: float
+    penetration_source: float
+    penetration_plain: float
+    penetration_final: float
+    float_source: float
+    float_plain: float
+    float_final: float
+    speed_ratio: float
+    residual_mm: float
+    unreachable: float
+
+    def skate_limit(self) -> float:
+        """The foot-skate target for this pair: source x 1.1 + 0.5 cm/m."""
+        return self.skate_source * 1.1 + 0.5
+
+
+def _contact_points(plan: RetargetPlan, result: RetargetResult) -> np.ndarray:
+    """Target joints playing the source's contact points: ankle for ankle, ball for ball (the
+    ankle when the target foot has no ball)."""
+    out = []
+    for j, k in zip(result.contacts.points, result.contacts.foot_of_point):
+        src, tgt = plan.source.feet[k], plan.target.feet[k]
+        out.append(tgt.ankle if j == src.ankle or tgt.ball is None else tgt.ball)
+    return np.array(out, dtype=np.int64)
+
+
+def _measure(plan: RetargetPlan, result: RetargetResult, motion: Motion):
+    g, p = motion_fk(motion)
+    points = _contact_points(plan, result)
+    skate = metrics.foot_skate(p, result.contacts, plan.target.index["base"], points).per_metre
+    bones = metrics.bone_directions(result.source_positions, plan.source.index, p, plan.target.index)
+    lowest = lowest_points(plan.target.skeleton, plan.target.feet, g, p)
+    ground = metrics.ground_contact(lowest, result.contacts.foot_flags(), result.ground)
+    speed = metrics.mean_speed(p[:, plan.target.index["base"]], motion.fps)
+    return skate, bones, ground, speed
+
+
+def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
+    """Retarget ``motion`` three ways with ``plan`` and measure each (see the module docstring)."""
+    final = retarget_clip(plan, motion, ik="contacts")
+    paper = retarget_clip(plan, motion, ik="paper")
+    c = final.contacts
+    ps = final.source_positions
+    src_base = plan.source.index["base"]
+    skate_src = metrics.foot_skate(ps, c, src_base).per_metre
+    ground_src = metrics.ground_contact(c.lowest, c.foot_flags(), c.ground)
+    speed_src = metrics.mean_speed(ps[:, src_base], motion.fps)
+    skate_plain, bones_plain, ground_plain, _ = _measure(plan, final, final.plain)
+    skate_paper = _measure(plan, paper, paper.motion)[0]
+    skate_final, bones_final, ground_final, speed = _measure(plan, final, final.motion)
+    reached = [r[final.reachable[k] & final.hard[k]] for k, r in final.residual.items()]
+    residual = max((float(r.max()) for r in reached if r.size), default=0.0)
+    total = sum(int(h.sum()) for h in final.hard.values())
+    unreachable = sum(int((final.hard[k] & ~r).sum()) for k, r in final.reachable.items()) / max(total, 1)
+    return Quality(
+        frames=motion.num_frames, scale=plan.scale,
+        skate_source=skate_src, skate_plain=skate_plain, skate_paper=skate_paper, skate_final=skate_final,
+        bones_plain=bones_plain.mean, bones_final=bones_final.mean, bones_worst=bones_final.worst,
+        penetration_source=ground_src.penetration, penetration_plain=ground_plain.penetration,
+        penetration_final=ground_final.penetration,
+        float_source=ground_src.float, float_plain=ground_plain.float, float_final=ground_final.float,
+        speed_ratio=speed / (speed_src * plan.scale) if speed_src > 1e-9 else float("nan"),
+        residual_mm=1000.0 * residual, unreachable=unreachable,
+    )

@@ -1,0 +1,256 @@
+"""Retarget a clip: plain transfer, then constraint enforcement on the feet (and optionally the hands).
+
+``ik`` selects the constraint stage (paper, section 4.2 and beyond):
+
+- ``"none"``: the plain transfer (rotations and scaled root).
+- ``"paper"``: each foot point follows the paper's warped trajectory
+  ``p(0) + s·(p_s(t) − p_s(0))`` through the whole clip, enforced by damped pseudo-inverse IK on
+  hip–knee–ankle plus the ball of the foot.
+- ``"contacts"`` (default): the same IK, but foot contacts are detected on the source (speed and
+  height normalized by leg length) and planted points are pinned exactly, at the height they rest
+  at in the plain transfer, with the correction gliding between contacts.
+
+``limb_scaling`` adds per-limb scaling by extension for the arms: a straightening source arm
+brings the target's wrist to the source's reach scaled by the arm-length ratio.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from infuse import contacts as contact_detection
+from infuse import quaternions as quat
+from infuse.errors import UsageError
+from infuse.kinematics import motion_fk
+from infuse.motion import Motion
+from infuse.skeleton import Skeleton
+
+from . import goals, ik
+from .transfer import RetargetPlan, Transferred
+
+IK_MODES = ("none", "paper", "contacts")
+#: Canonical hinge axes in the T-pose frame: knees bend about +X, elbows about -Y (left) / +Y (right).
+HINGES = {"l_knee": (1.0, 0.0, 0.0), "r_knee": (1.0, 0.0, 0.0), "l_elbow": (0.0, -1.0, 0.0), "r_elbow": (0.0, 1.0, 0.0)}
+#: Seconds over which a ball contact's hold on the ankle goal fades in and out.
+BLEND_SECONDS = 0.12
+#: Margin (metres) inside the limb's reach for a goal to count as reachable.
+REACH_MARGIN = 5e-4
+
+
+@dataclass
+class RetargetResult:
+    """A retargeted clip and what it took.
+
+    - ``motion``: the result on the target skeleton; ``plain``: the plain transfer.
+    - ``scale``: leg-length ratio (target over source); ``ik``: the mode used.
+    - ``contacts``: the source's :class:`infuse.contacts.FootContacts`.
+    - ``goals`` / ``residual`` / ``reachable`` / ``hard``: per goal joint name, (F, 3) goal
+      positions, (F,) distance left after IK (metres), (F,) whether the goal was within the limb's
+      reach and (F,) whether it is a constraint rather than a preference (a swinging ball of the
+      foot only says where the foot points).
+    - ``ground``: metres, the target's ground: the level of its lowest foot joints while planted in
+      the plain transfer (the source's is ``contacts.ground``).
+    - ``source_positions``: (F, Js, 3) the source clip's global joint positions.
+    """
+
+    motion: Motion
+    plain: Motion
+    scale: float
+    ik: str
+    contacts: contact_detection.FootContacts
+    ground: float
+    source_positions: np.ndarray
+    goals: dict[str, np.ndarray] = field(default_factory=dict)
+    residual: dict[str, np.ndarray] = field(default_factory=dict)
+    reachable: dict[str, np.ndarray] = field(default_factory=dict)
+    hard: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+def _segments(plan: RetargetPlan, names) -> np.ndarray:
+    names = set(names)
+    return np.array([j for j, d in enumerate(plan.driver) if d in names], dtype=np.int64)
+
+
+def _rotate(state: Transferred, joints: np.ndarray, rotation: np.ndarray) -> None:
+    if len(joints):
+        state.rotations[:, joints] = quat.multiply(rotation[:, None], state.rotations[:, joints])
+
+
+def _reach_limit(upper: float, lower: np.ndarray, flexion: np.ndarray, min_flexion: float) -> np.ndarray:
+    lo = np.minimum(flexion, min_flexion)
+    return np.sqrt(upper * upper + lower * lower + 2.0 * upper * lower * np.cos(lo))
+
+
+class _Solver:
+    """Runs the IK stages on one transferred state (see the module docstring)."""
+
+    min_flexion = np.radians(1.0)
+
+    def __init__(self, plan: RetargetPlan, state: Transferred, result: RetargetResult):
+        self.plan, self.state, self.result = plan, state, result
+        self.names = plan.target.skeleton.names
+
+    def limb(self, root: str, middle: str, end: str, goal: np.ndarray, below_root, below_middle):
+        """Solve a two-bone limb and turn its segments (joints driven by ``below_root`` / ``below_middle``
+        canonical names, everything the root / middle joint moves); returns the solution."""
+        plan, state = self.plan, self.state
+        tgt = plan.target.index
+        pos = plan.positions(state, [tgt[root], tgt[middle], tgt[end]])
+        r, m, e = pos[tgt[root]], pos[tgt[middle]], pos[tgt[end]]
+        reference = quat.rotate(plan.canonical_delta(state.rotations, middle), np.array(HINGES[middle]))
+        axis, flexion = ik.hinge_axes(r, m, e, reference)
+        solution = ik.solve_limb(r, m, e, goal, axis, flexion, min_flexion=self.min_flexion)
+        _rotate(state, _segments(plan, below_root), solution.root)
+        _rotate(state, _segments(plan, below_middle), quat.multiply(solution.middle, quat.conjugate(solution.root)))
+        upper = float(np.linalg.norm(m[0] - r[0]))
+        limit = _reach_limit(upper, np.linalg.norm(e - m, axis=1), flexion, self.min_flexion)
+        lower = np.abs(upper - np.linalg.norm(e - m, axis=1))
+        dist = np.linalg.norm(goal - r, axis=1)
+        name = self.names[tgt[end]]
+        self.result.goals[name] = goal
+        self.result.residual[name] = solution.residual
+        self.result.reachable[name] = (dist <= limit - REACH_MARGIN) & (dist >= lower + REACH_MARGIN)
+        self.result.hard[name] = np.ones(len(goal), dtype=bool)
+        return solution
+
+    def foot(self, k: int, mode: str) -> None:
+        plan, state = self.plan, self.state
+        s = plan.scale
+        side = "lr"[k]
+        src_foot, tgt_foot = plan.source.feet[k], plan.target.feet[k]
+        ps = state.source_positions
+        ankle_s = ps[:, src_foot.ankle]
+        ball_s = ps[:, src_foot.ball] if src_foot.ball is not None else None
+        ball_t = tgt_foot.ball if ball_s is not None else None
+        joints = [tgt_foot.ankle] + ([ball_t] if ball_t is not None else []) + list(tgt_foot.joints)
+        pos = plan.positions(state, joints)
+        ankle_t = pos[tgt_foot.ankle]
+        if mode == "paper":
+            ankle_goal = goals.warp(ankle_t[0], ankle_s, s)
+            ball_goal = goals.warp(pos[ball_t][0], ball_s, s) if ball_t is not None else None
+        else:
+            ankle_goal, ball_goal = self._pinned_goals(k, pos, ankle_s, ball_s, ball_t)
+        below_knee = [f"{side}_knee", f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
+        solution = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"] + below_knee, below_knee)
+        if ball_t is None:
+            return
+        ball_now = solution.end_position + quat.rotate(solution.middle, pos[ball_t] - ankle_t)
+        turn, ball_end = ik.aim(solution.end_position, ball_now, ball_goal, solution.middle)
+        _rotate(state, _segments(plan, [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]), turn)
+        name = self.names[ball_t]
+        self.result.goals[name] = ball_goal
+        self.result.residual[name] = np.linalg.norm(ball_end - ball_goal, axis=1)
+        length = np.linalg.norm(pos[ball_t][0] - ankle_t[0])
+        self.result.reachable[name] = np.abs(np.linalg.norm(ball_goal - solution.end_position, axis=1) - length) < REACH_MARGIN
+        planted = self.result.contacts.flags[:, list(self.result.contacts.points).index(plan.source.feet[k].ball)]
+        self.result.hard[name] = np.ones(len(ball_goal), dtype=bool) if mode == "paper" else planted
+
+    def _pinned_goals(self, k: int, pos: dict, ankle_s: np.ndarray, ball_s, ball_t):
+        plan, found = self.plan, self.result.contacts
+        s = plan.scale
+        tgt_foot = plan.target.feet[k]
+        cols = np.nonzero(found.foot_of_point == k)[0]
+        ankle_flags = found.flags[:, cols[0]]
+        ball_flags = found.flags[:, cols[1]] if len(cols) > 1 else ankle_flags
+
+        def warped(target_path, source_path, flags):
+            # Planted heights come from the plain transfer (which stands the target on its own
+            # ground); the swing lifts off them by the source's lift, scaled.
+            rest = _planted(target_path[:, 1], flags)
+            out = goals.warp(target_path[0], source_path, s)
+            out[:, 1] = rest + s * (source_path[:, 1] - _planted(source_path[:, 1], flags))
+            return out, rest
+
+        ankle_w, ankle_h = warped(pos[tgt_foot.ankle], ankle_s, ankle_flags)
+        if ball_t is None:
+            return goals.pinned(ankle_w, ankle_flags, ankle_h)[0], None
+        # The ball rides on the ankle along the source foot's direction, so the foot keeps pointing
+        # the source's way whatever its length.
+        length = float(np.linalg.norm(pos[ball_t][0] - pos[tgt_foot.ankle][0]))
+        foot = ball_s - ankle_s
+        ball_w = ankle_w + length * foot / np.maximum(np.linalg.norm(foot, axis=1, keepdims=True), 1e-12)
+        ball_h = _planted(pos[ball_t][:, 1], ball_flags)
+        blend = BLEND_SECONDS * self.state.fps
+        return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, blend)
+
+    def arms(self) -> None:
+        plan, state = self.plan, self.state
+        src, tgt = plan.source, plan.target
+        ps = state.source_positions
+        for side in "lr":
+            names = [f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist"]
+            if not all(n in plan.common for n in names):
+                continue
+            s_j = [src.index[n] for n in names]
+            t_j = [tgt.index[n] for n in names]
+            arm_s = _chain_length(src.rig.positions, s_j)
+            arm_t = _chain_length(tgt.rig.positions, t_j)
+            pos = plan.positions(state, t_j)
+            goal, _ = goals.reach(pos[t_j[0]], ps[:, s_j[0]], ps[:, s_j[2]], pos[t_j[2]], arm_t / arm_s, arm_s)
+            self.limb(names[0], names[1], names[2], goal, [names[0], names[1], f"{side}_forearm"], [names[1], f"{side}_forearm"])
+
+
+def _planted(heights: np.ndarray, flags: np.ndarray) -> float:
+    """The height (m) a point rests at while planted: median over planted frames, else its 5th percentile."""
+    return float(np.median(heights[flags]) if flags.any() else np.percentile(heights, 5.0))
+
+
+def lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
+    """(F, 2) height of each target foot's lowest joint or end site, from a transferred state."""
+    sk = plan.target.skeleton
+    out = []
+    for foot in plan.target.feet:
+        pos = plan.positions(state, foot.joints)
+        low = np.min(np.stack([pos[j][:, 1] for j in foot.joints], axis=1), axis=1)
+        if foot.end_sites:
+            sites = list(foot.end_sites)
+            sp = sk.end_site_parents[sites]
+            ends = np.stack([pos[int(p)] for p in sp], axis=1) + quat.rotate(state.rotations[:, sp], sk.end_site_offsets[sites])
+            low = np.minimum(low, ends[..., 1].min(axis=1))
+        out.append(low)
+    return np.stack(out, axis=1)
+
+
+def _chain_length(positions: np.ndarray, joints) -> float:
+    return float(sum(np.linalg.norm(positions[b] - positions[a]) for a, b in zip(joints, joints[1:])))
+
+
+def retarget_clip(plan: RetargetPlan, motion: Motion, ik: str = "contacts", limb_scaling: bool = False,
+                  contact_options: dict | None = None) -> RetargetResult:
+    """Retarget ``motion`` (on the plan's source skeleton) with the constraint stage ``ik``."""
+    if ik not in IK_MODES:
+        raise UsageError(f"ik must be one of {', '.join(IK_MODES)}, got {ik!r}")
+    plan.check_source(motion)
+    fk = motion_fk(motion)
+    state = plan.transfer(motion, fk=fk)
+    plain = plan.to_motion(state, motion)
+    found = contact_detection.foot_contacts(motion, plan.source.index, fk=fk, **(contact_options or {}))
+    planted = found.foot_flags()
+    lowest = lowest_points(plan, state)
+    ground = float(np.median(lowest[planted]) if planted.any() else np.percentile(lowest.min(axis=1), 10.0))
+    result = RetargetResult(plain, plain, plan.scale, ik, found, ground, fk[1])
+    if ik == "none" and not limb_scaling:
+        return result
+    state = Transferred(state.rotations.copy(), state.base, state.source_rotations, state.source_positions, state.ground, state.fps)
+    solver = _Solver(plan, state, result)
+    if ik != "none":
+        for k in (0, 1):
+            solver.foot(k, ik)
+    if limb_scaling:
+        solver.arms()
+    result.motion = plan.to_motion(state, motion)
+    return result
+
+
+def retarget(motion: Motion, source_mapping, target_skeleton: Skeleton, target_mapping, *, ik: str = "contacts",
+             limb_scaling: bool = False, target_motion: Motion | None = None, source_file=None, target_file=None,
+             contact_options: dict | None = None) -> Motion:
+    """Retarget ``motion`` onto ``target_skeleton`` (mappings: :class:`~infuse.mapping.Mapping` or dicts).
+
+    See the module docstring for ``ik`` and ``limb_scaling``; ``target_motion`` is a clip on the
+    target whose most upright frame is its default pose when its rest is not a standing pose.
+    """
+    plan = RetargetPlan(motion.skeleton, source_mapping, target_skeleton, target_mapping, source_motion=motion,
+                        target_motion=target_motion, source_file=source_file, target_file=target_file)
+    return retarget_clip(plan, motion, ik=ik, limb_scaling=limb_scaling, contact_options=contact_options).motion

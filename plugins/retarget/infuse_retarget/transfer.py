@@ -1,0 +1,289 @@
+"""Motion data transfer (paper, section 4.1): rotations through the canonical frame, root by leg length.
+
+Both skeletons are aligned to the canonical T-pose (:mod:`.prepare`). A source joint's global
+rotation ``G_s`` becomes a canonical-frame rotation ``D = G_s · (A_s · G_s,ref)⁻¹`` (the paper's
+inverse re-orientation), and the target joint mapped to the same canonical name gets
+``G_t = D · A_t · G_t,ref``. Taken locally this is the paper's ``q' = q_init · R_G⁻¹ · q · R_G``
+with ``R_G = A_t · G_t,ref`` (see :mod:`.frames`); taken globally it needs no matching hierarchy in
+between, which is what makes any-to-any work:
+
+- a joint only one side has (a 5-joint spine against a 2-joint one, twist joints, a missing
+  clavicle) follows the nearest joint both sides map; on a limb or spine chain it also takes its
+  share of the twist between that joint and the next shared one, so twist joints share the
+  rotation;
+- a bone that spans joints the other side lacks is turned onto the source's actual direction
+  (``direction_fix``), so bones point the same way whatever lies between their ends;
+- a single clavicle faces a SmartBody pair: it plays ``l_sternoclavicular``, the joint that turns
+  the clavicle;
+- joints above the base (ground roots) and joints no shared joint carries keep their default pose.
+
+The root is placed by scaling the source's path by the leg-length ratio ``s``, measured where the
+legs attach (the midpoint of the hip joints): horizontally about its first position, vertically
+about the ground. The target base goes where that puts the target's own hip joints.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from infuse import contacts
+from infuse import quaternions as quat
+from infuse.canonical import ALL_NAMES, canonical_joint
+from infuse.errors import UnusableInputError, UsageError
+from infuse.kinematics import motion_fk
+from infuse.motion import Motion
+from infuse.skeleton import Skeleton
+
+from .prepare import Prepared, prepare
+from .rig import canonical_children
+
+#: Canonical names both skeletons must map.
+REQUIRED = ("base", "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle")
+#: Body groups whose joints form one chain for twist sharing.
+FAMILY = {"torso": "axial", "neck": "axial", "head": "axial", "arm": "arm", "hand": "hand", "leg": "leg",
+          "foot": "foot", "eye": "eye"}
+
+
+def match_clavicles(source: dict[str, int], target: dict[str, int]) -> tuple[dict[str, int], dict[str, int]]:
+    """Rename a lone clavicle ``s_acromioclavicular`` to ``s_sternoclavicular`` where the other side
+    maps both (SmartBody turns the clavicle at the sternal joint)."""
+    source, target = dict(source), dict(target)
+    for side in ("l", "r"):
+        sc, ac = f"{side}_sternoclavicular", f"{side}_acromioclavicular"
+        for one, other in ((source, target), (target, source)):
+            if ac in one and sc not in one and sc in other and ac in other:
+                one[sc] = one.pop(ac)
+    order = {n: k for k, n in enumerate(ALL_NAMES)}
+    return (dict(sorted(source.items(), key=lambda kv: order[kv[0]])),
+            dict(sorted(target.items(), key=lambda kv: order[kv[0]])))
+
+
+def twist_power(q: np.ndarray, axis: np.ndarray, fraction: np.ndarray) -> np.ndarray:
+    """``fraction`` of the twist of rotations ``q`` (..., 4) about unit ``axis`` (..., 3)."""
+    q = quat.canonical_sign(q)
+    s = np.sum(q[..., :3] * axis, axis=-1)
+    angle = 2.0 * np.arctan2(s, q[..., 3])
+    return quat.from_axis_angle(axis, angle * fraction)
+
+
+@dataclass
+class Transferred:
+    """The plain transfer of one clip: target global rotations (F, J, 4), the target base's path
+    (F, 3), the source's FK (F, Js, 4) / (F, Js, 3), the source's ground height (metres) and the
+    frame rate."""
+
+    rotations: np.ndarray
+    base: np.ndarray
+    source_rotations: np.ndarray
+    source_positions: np.ndarray
+    ground: float
+    fps: float
+
+
+class RetargetPlan:
+    """Everything about a (source skeleton, target skeleton) pair that does not depend on the clip.
+
+    Build it once and :meth:`transfer` many clips. ``*_mapping``: a
+    :class:`~infuse.mapping.Mapping` or {canonical: joint name or index}. ``*_motion``: a clip on
+    that skeleton whose most upright frame is the default pose when the rest is not a standing
+    pose (Bandai's). ``*_file`` names the input in errors.
+    """
+
+    def __init__(self, source_skeleton: Skeleton, source_mapping, target_skeleton: Skeleton, target_mapping, *,
+                 source_motion: Motion | None = None, target_motion: Motion | None = None,
+                 source_file=None, target_file=None):
+        s_idx = contacts.joint_index(source_skeleton, source_mapping)
+        t_idx = contacts.joint_index(target_skeleton, target_mapping)
+        s_idx, t_idx = match_clavicles(s_idx, t_idx)
+        for which, idx, file in (("source", s_idx, source_file), ("target", t_idx, target_file)):
+            missing = [n for n in REQUIRED if n not in idx]
+            if missing:
+                raise UnusableInputError(file, f"cannot retarget: the {which} mapping lacks {', '.join(missing)}")
+        self.source: Prepared = prepare(source_skeleton, s_idx, source_motion, source_file)
+        self.target: Prepared = prepare(target_skeleton, t_idx, target_motion, target_file)
+        self.source_file = source_file
+        self.common = tuple(n for n in ALL_NAMES if n in self.source.index and n in self.target.index)
+        #: Leg-length ratio, target over source.
+        self.scale = self.target.leg_height / self.source.leg_height
+        self._build()
+
+    # -- structure ---------------------------------------------------------------------------------
+    def _build(self) -> None:
+        src, tgt = self.source, self.target
+        sk = tgt.skeleton
+        j_count = sk.num_joints
+        parents = sk.parents
+        common = set(self.common)
+        driver = [None] * j_count  # canonical name whose motion drives each target joint
+        for j in range(j_count):
+            own = tgt.rig.canonical_of.get(j)
+            if own in common:
+                driver[j] = own
+            elif parents[j] >= 0:
+                driver[j] = driver[parents[j]]
+        self.driver = tuple(driver)
+        driven = [j for j in range(j_count) if tgt.rig.canonical_of.get(j) in common]
+        self._driven = np.array(driven, dtype=np.int64)
+        self._driven_source = np.array([src.index[tgt.rig.canonical_of[j]] for j in driven], dtype=np.int64)
+        self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])
+
+        # Direction fix for bones with one shared child.
+        kids = canonical_children(self.common)
+        fix = []
+        for name in self.common:
+            if name == "base" or len(kids[name]) != 1:
+                continue
+            child = kids[name][0]
+            u = tgt.aligned[tgt.index[child]] - tgt.aligned[tgt.index[name]]
+            if np.linalg.norm(u) < 1e-6:
+                continue
+            b = quat.rotate(quat.conjugate(src.frame[src.index[name]]), u)
+            fix.append((src.index[name], src.index[child], tgt.index[name], b))
+        self._fix_src = np.array([f[0] for f in fix], dtype=np.int64)
+        self._fix_child = np.array([f[1] for f in fix], dtype=np.int64)
+        self._fix_tgt = np.array([f[2] for f in fix], dtype=np.int64)
+        self._fix_vec = np.array([f[3] for f in fix]).reshape(-1, 3)
+
+        # Followers: joints carried by a driven joint above them, some taking part of a twist.
+        next_driven: list[set[int]] = [set() for _ in range(j_count)]
+        for j in range(j_count - 1, -1, -1):
+            p = parents[j]
+            if p >= 0:
+                next_driven[p] |= {j} if driver[j] is not None and tgt.rig.canonical_of.get(j) in common else next_driven[j]
+        ref = tgt.rig.positions
+        seg = np.zeros(j_count)
+        seg[1:] = [np.linalg.norm(ref[j] - ref[parents[j]]) if parents[j] >= 0 else 0.0 for j in range(1, j_count)]
+        rigid, twisted = [], []
+        for j in range(j_count):
+            if driver[j] is None or j in set(driven):
+                continue
+            a = tgt.index[driver[j]]
+            d_set = next_driven[j]
+            if len(d_set) == 1:
+                d = next(iter(d_set))
+                d_name = tgt.rig.canonical_of[d]
+                if FAMILY[canonical_joint(driver[j]).group] == FAMILY[canonical_joint(d_name).group]:
+                    up_to_j = _path_length(parents, seg, a, j)
+                    total = _path_length(parents, seg, a, d)
+                    axis = tgt.aligned[d] - tgt.aligned[a]
+                    if total > 1e-9 and np.linalg.norm(axis) > 1e-9:
+                        twisted.append((j, a, d, up_to_j / total, axis / np.linalg.norm(axis)))
+                        continue
+            rigid.append((j, a))
+        self._rigid = np.array([r[0] for r in rigid], dtype=np.int64)
+        self._rigid_driver = np.array([r[1] for r in rigid], dtype=np.int64)
+        self._rigid_offset = quat.multiply(quat.conjugate(tgt.frame[self._rigid_driver]), tgt.frame[self._rigid]).reshape(-1, 4)
+        self._tw = np.array([t[0] for t in twisted], dtype=np.int64)
+        self._tw_a = np.array([t[1] for t in twisted], dtype=np.int64)
+        self._tw_d = np.array([t[2] for t in twisted], dtype=np.int64)
+        self._tw_fraction = np.array([t[3] for t in twisted])
+        self._tw_axis = np.array([t[4] for t in twisted]).reshape(-1, 3)
+        self._static = np.array([j for j in range(j_count) if driver[j] is None], dtype=np.int64)
+
+        # Root: the base's top root carries the translation; joints between hold their default pose.
+        base = tgt.index["base"]
+        top = base
+        while parents[top] >= 0:
+            top = parents[top]
+        self._top_root = int(top)
+        at = tgt.rig.positions_of(tgt.rig.rotations[None], {top: np.zeros((1, 3))}, joints=[base])
+        self._base_offset = at[base][0]
+        self._detached = tuple(tgt.rig.detached)
+
+    # -- per clip ----------------------------------------------------------------------------------
+    def check_source(self, motion: Motion) -> None:
+        sk = self.source.skeleton
+        if motion.skeleton is not sk and (motion.skeleton.names != sk.names or not np.array_equal(motion.skeleton.parents, sk.parents)):
+            raise UsageError("the clip is not on the skeleton this retarget plan was built for")
+        if motion.num_frames == 0:
+            raise UnusableInputError(self.source_file, f"clip {motion.name!r} has no frames")
+
+    def transfer(self, motion: Motion, fk=None) -> Transferred:
+        """The plain transfer of ``motion`` (on the source skeleton): target global rotations and base path.
+
+        ``fk``: the source clip's ``(global_rotations, global_positions)`` if already computed.
+        """
+        self.check_source(motion)
+        tgt = self.target
+        gs, ps = motion_fk(motion) if fk is None else fk
+        frames = motion.num_frames
+        g = np.empty((frames, tgt.skeleton.num_joints, 4))
+        g[:, self._driven] = quat.multiply(gs[:, self._driven_source], self._driven_offset)
+        if len(self._fix_tgt):
+            current = quat.rotate(gs[:, self._fix_src], self._fix_vec)
+            wanted = ps[:, self._fix_child] - ps[:, self._fix_src]
+            g[:, self._fix_tgt] = quat.multiply(quat.between(current, wanted), g[:, self._fix_tgt])
+        if len(self._rigid):
+            g[:, self._rigid] = quat.multiply(g[:, self._rigid_driver], self._rigid_offset)
+        if len(self._tw):
+            frame = tgt.frame
+            d_a = quat.multiply(g[:, self._tw_a], quat.conjugate(frame[self._tw_a]))  # canonical-frame D of the driver
+            d_d = quat.multiply(g[:, self._tw_d], quat.conjugate(frame[self._tw_d]))
+            share = twist_power(quat.multiply(quat.conjugate(d_a), d_d), self._tw_axis, self._tw_fraction)
+            g[:, self._tw] = quat.multiply(d_a, quat.multiply(share, frame[self._tw]))
+        if len(self._static):
+            g[:, self._static] = tgt.rig.rotations[self._static]
+        ground = contacts.estimate_ground(contacts.lowest_points(self.source.skeleton, self.source.feet, gs, ps))
+        src = self.source.index
+        src_hips = 0.5 * (ps[:, src["l_hip"]] + ps[:, src["r_hip"]])
+        hips = np.empty_like(src_hips)
+        hips[:, [0, 2]] = src_hips[0, [0, 2]] + self.scale * (src_hips[:, [0, 2]] - src_hips[0, [0, 2]])
+        hips[:, 1] = ground + self.scale * (src_hips[:, 1] - ground)
+        legs = [tgt.index["l_hip"], tgt.index["r_hip"], tgt.index["base"]]
+        at = tgt.rig.positions_of(g, {self._top_root: np.zeros((frames, 3))}, legs)
+        base = hips - (0.5 * (at[legs[0]] + at[legs[1]]) - at[legs[2]])
+        return Transferred(g, base, gs, ps, ground, motion.fps)
+
+    def canonical_delta(self, rotations: np.ndarray, name: str) -> np.ndarray:
+        """(F, 4) canonical-frame rotation ``D`` of target joint ``name`` from global ``rotations``."""
+        j = self.target.index[name]
+        return quat.multiply(rotations[:, j], quat.conjugate(self.target.frame[j]))
+
+    def root_positions(self, base: np.ndarray) -> dict[int, np.ndarray]:
+        """{top root joint: (F, 3)} placing the target base on ``base`` (F, 3)."""
+        return {self._top_root: base - self._base_offset}
+
+    def positions(self, state: Transferred, joints=None) -> dict[int, np.ndarray]:
+        """Target global positions {joint: (F, 3)} of ``joints`` (default all) for a transferred state."""
+        return self.target.rig.positions_of(state.rotations, self.root_positions(state.base), joints)
+
+    def to_motion(self, state: Transferred, like: Motion) -> Motion:
+        """The target :class:`Motion` for global ``state`` (fps, name and sync points from ``like``)."""
+        sk = self.target.skeleton
+        g = state.rotations
+        parents = sk.parents
+        child = np.nonzero(parents >= 0)[0]
+        local = np.array(g)
+        local[:, child] = quat.multiply(quat.conjugate(g[:, parents[child]]), g[:, child])
+        local = quat.make_continuous(local, axis=0)
+        roots = self.root_positions(state.base)
+        joint_translations = None
+        if self._top_root == 0:
+            root_translations = roots[0]
+        else:
+            root_translations = np.broadcast_to(sk.rest_translations[0], (like.num_frames, 3))
+        if self._top_root != 0 or self._detached:
+            joint_translations = np.broadcast_to(sk.rest_translations, (like.num_frames,) + sk.rest_translations.shape).copy()
+            joint_translations[:, self._top_root] = roots[self._top_root]
+            if self._detached:
+                need = set(self._detached) | {int(parents[j]) for j in self._detached if parents[j] >= 0}
+                pos = self.target.rig.positions_of(g, roots, sorted(need))
+                for j in self._detached:
+                    p = parents[j]
+                    if p < 0:
+                        joint_translations[:, j] = pos[j]
+                    else:
+                        joint_translations[:, j] = quat.rotate(quat.conjugate(g[:, p]), pos[j] - pos[p])
+        if not (np.all(np.isfinite(local)) and np.all(np.isfinite(root_translations))):
+            raise UnusableInputError(self.source_file, "retargeting produced non-finite values (degenerate skeleton?)")
+        return Motion(sk, like.fps, local, root_translations, joint_translations, name=like.name,
+                      sync_points=dict(like.sync_points))
+
+
+def _path_length(parents: np.ndarray, seg: np.ndarray, ancestor: int, j: int) -> float:
+    total = 0.0
+    while j != ancestor and j >= 0:
+        total += seg[j]
+        j = parents[j]
+    return total
