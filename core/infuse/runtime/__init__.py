@@ -12,7 +12,7 @@ from .clip import Clip, sample_motion
 from .controller import Block, Controller, Job
 from .layers import Layer, Mode, blend_weights, smoothstep
 from .pose import PoseBlock
-from .rig import Rig, body_frame
+from .rig import Rig, body_frame, reference_pose
 from .runtime import Activity, Runtime
 from .targets import FunctionTarget, JointTarget, PointTarget, Target, TrackTarget, as_target
 from .tracks import Tracks
@@ -37,6 +37,6 @@ def controller(kind: str, **settings) -> Controller:
 
 __all__ = [
     "Clip", "sample_motion", "Block", "Controller", "Job", "Layer", "Mode", "blend_weights", "smoothstep", "PoseBlock",
-    "Rig", "body_frame", "Activity", "Runtime", "FunctionTarget", "JointTarget", "PointTarget", "Target", "TrackTarget",
+    "Rig", "body_frame", "reference_pose", "Activity", "Runtime", "FunctionTarget", "JointTarget", "PointTarget", "Target", "TrackTarget",
     "as_target", "Tracks", "controller_components", "controller",
 ]

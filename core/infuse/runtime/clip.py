@@ -29,15 +29,20 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
         return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
     span = f - 1  # the last frame closes the cycle: it is drawn like the first
     if loop:
-        cycles = np.floor(position / span)
+        cycles = np.floor(position / span + 1e-9)
         position = position - cycles * span
     position = np.clip(position, 0.0, span)
+    nearest = np.rint(position)
+    if np.all(np.abs(position - nearest) < 1e-6):  # on the clip's own frames: no interpolation
+        idx = nearest.astype(np.int64)
+        return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
     a = motion.local_rotations[i0]
     b = motion.local_rotations[i0 + 1]
     b = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0.0, -b, b)
-    rot = quat.normalize(a + frac[:, :, None] * (b - a))
+    rot = a + frac[:, :, None] * (b - a)
+    rot /= np.linalg.norm(rot, axis=-1, keepdims=True)
     root = motion.root_translations[i0] + frac * (motion.root_translations[i0 + 1] - motion.root_translations[i0])
     if jt is not None:
         jt = jt[i0] + frac[:, :, None] * (jt[i0 + 1] - jt[i0])
@@ -55,6 +60,9 @@ class Clip(Controller):
 
     kind = "clip"
     layer = Layer.BASE
+    # A base clip usually starts from nothing (the rest pose): no fade unless a transition asks for one.
+    blend_in_s = 0.0
+    blend_out_s = 0.0
 
     def __init__(self, motion: Motion, loop: bool = True, speed: float = 1.0, offset_s: float = 0.0,
                  root_motion: bool = True, source_mapping=None):
@@ -99,9 +107,13 @@ class Clip(Controller):
         step = travel[-1] - travel[0]
         step[1] = 0.0  # a cycle carries the character along the ground, not up
         mover_name = src.names[mover]
-        moved = [] if motion.joint_translations is None else [
-            (i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and n in rig.skeleton.index]
+        moved = []
+        if motion.joint_translations is not None:  # only joints whose channels leave the character's rest offset
+            rest = rig.skeleton.rest_translations
+            moved = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and n in rig.skeleton.index
+                     and np.abs(motion.joint_translations[:, i] - rest[rig.skeleton.index[n]]).max() > 1e-9]
         return {"motion": motion, "columns": columns, "joints": targets, "step": step,
+                "identity_columns": bool(np.array_equal(columns, np.arange(len(columns)))),
                 "mover": mover, "mover_target": rig.skeleton.index.get(mover_name),
                 "drives_root": src.names[0] == rig.skeleton.names[0],
                 "moved_columns": np.array([m[0] for m in moved], dtype=np.int64),
@@ -122,7 +134,8 @@ class Clip(Controller):
         motion = b["motion"]
         local = self.offset_s + np.maximum(job.local_times, 0.0) * self.speed
         rot, root, moved, cycles = sample_motion(motion, local, self.loop)
-        rot = rot[:, b["columns"]]
+        if not (b["columns"].size == rot.shape[1] and b["identity_columns"]):
+            rot = rot[:, b["columns"]]
         additive = job.mode is Mode.ADDITIVE
         if additive:  # an additive clip adds its difference from its own rest pose
             rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b["columns"]]), rot)

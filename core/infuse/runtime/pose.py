@@ -56,11 +56,20 @@ class PoseBlock:
         joints = np.asarray(joints, dtype=np.int64)
         if joints.size == 0:
             return
+        if weight is not None and not np.any(np.asarray(weight) > 0.0):
+            return
+        every = joints.size == self.local_rotations.shape[1] and np.array_equal(joints, np.arange(joints.size))
+        if every:
+            joints = slice(None)  # a slice writes in place, without gathering
+        full = weight is None or np.all(np.asarray(weight) >= 1.0)
+        if Mode(mode) is Mode.OVERRIDE and full:
+            self.local_rotations[:, joints] = rotations
+            self._fk = None
+            return
         current = self.local_rotations[:, joints]
         if Mode(mode) is Mode.ADDITIVE:
-            self.local_rotations[:, joints] = quat.multiply(current, weighted_rotations(rotations, weight))
-        elif weight is None or np.all(np.asarray(weight) >= 1.0):
-            self.local_rotations[:, joints] = rotations
+            offsets = rotations if full else weighted_rotations(rotations, weight)
+            self.local_rotations[:, joints] = quat.multiply(current, offsets)
         else:
             w = _weights(weight, self.frames)[..., 0]
             self.local_rotations[:, joints] = quat.slerp(current, rotations, np.broadcast_to(w, current.shape[:2]))
@@ -119,35 +128,53 @@ class PoseBlock:
         return self._fk
 
     def chain_pose(self, joints) -> tuple[np.ndarray, np.ndarray]:
-        """Global rotations (F, K, 4) and positions (F, K, 3) of joints ``joints`` only.
-
-        Runs forward kinematics down the joints' ancestor chains, so a few joints of a large skeleton
-        cost only their depth.
-        """
+        """Global rotations (F, K, 4) and positions (F, K, 3) of joints ``joints`` only (see :func:`chain_fk`)."""
         if self._fk is not None:
             g_rot, g_pos = self._fk
             return g_rot[:, joints], g_pos[:, joints]
-        sk = self.rig.skeleton
-        parents = sk.parents
-        needed: set[int] = set()
-        for j in joints:
-            while j >= 0 and j not in needed:
-                needed.add(int(j))
-                j = parents[j]
-        order = sorted(needed)
-        rot: dict[int, np.ndarray] = {}
-        pos: dict[int, np.ndarray] = {}
-        for j in order:
-            local = self.local_rotations[:, j]
-            if j == 0:
-                offset = self.root_translations
-            else:
-                offset = sk.rest_translations[j] if self.joint_translations is None else self.joint_translations[:, j]
-            p = parents[j]
-            if p < 0:
-                rot[j] = local
-                pos[j] = np.broadcast_to(offset, (self.frames, 3))
-            else:
-                rot[j] = quat.multiply(rot[p], local)
-                pos[j] = pos[p] + quat.rotate(rot[p], offset)
-        return (np.stack([rot[int(j)] for j in joints], axis=1), np.stack([pos[int(j)] for j in joints], axis=1))
+        return chain_fk(self.rig.skeleton, self.local_rotations, self.root_translations, self.joint_translations, joints)
+
+
+def ancestors(skeleton, joints) -> list[int]:
+    """The joints ``joints`` and all their ancestors, parents first."""
+    parents = skeleton.parents
+    needed: set[int] = set()
+    for j in joints:
+        j = int(j)
+        while j >= 0 and j not in needed:
+            needed.add(j)
+            j = int(parents[j])
+    return sorted(needed)
+
+
+def chain_fk(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations, joints,
+             columns=None):
+    """Global rotations (..., K, 4) and positions (..., K, 3) of joints ``joints`` (K,).
+
+    Forward kinematics down the joints' ancestor chains only, so a few joints of a large skeleton
+    cost their depth, not the skeleton's size. ``local_rotations`` is (..., J, 4) (any leading axes:
+    frames, characters), ``root_translations`` (..., 3), ``joint_translations`` (..., J, 3) or None.
+    With ``columns`` (the joints the arrays hold, in order; at least :func:`ancestors` of ``joints``)
+    the joint axis of ``local_rotations`` and ``joint_translations`` holds only those joints.
+    """
+    parents = skeleton.parents
+    column = {j: j for j in range(skeleton.num_joints)} if columns is None else {int(j): k for k, j in enumerate(columns)}
+    rot: dict[int, np.ndarray] = {}
+    pos: dict[int, np.ndarray] = {}
+    lead = local_rotations.shape[:-2]
+    for j in ancestors(skeleton, joints):
+        local = local_rotations[..., column[j], :]
+        if j == 0:
+            offset = root_translations
+        elif joint_translations is None:
+            offset = skeleton.rest_translations[j]
+        else:
+            offset = joint_translations[..., column[j], :]
+        p = int(parents[j])
+        if p < 0:
+            rot[j] = local
+            pos[j] = np.broadcast_to(offset, lead + (3,))
+        else:
+            rot[j] = quat.multiply(rot[p], local)
+            pos[j] = pos[p] + quat.rotate(rot[p], offset)
+    return (np.stack([rot[int(j)] for j in joints], axis=-2), np.stack([pos[int(j)] for j in joints], axis=-2))

@@ -3,11 +3,14 @@
 Controllers address joints by canonical name through the character's
 :class:`~infuse.mapping.Mapping`, and express rotations in *aligned frames*
 (:mod:`infuse.runtime.swing`): for joint ``j`` the constant rotation ``A_j = G_j⁻¹ · B``, with ``G_j``
-the joint's global rest rotation and ``B`` the character's body frame, turns the joint's frame so its
-axes are the character's left (+X), up (+Y) and forward (+Z) at rest. The body frame comes from the
-rest pose and the mapping: up from the pelvis to the head, left from the right hip to the left hip
-(or the shoulders, or the eyes), forward = left × up. So "forward" (of the eyes, of the head) is
-derived per character, never assumed.
+the joint's global rotation in the reference pose and ``B`` the character's body frame there, turns
+the joint's frame so its axes are the character's left (+X), up (+Y) and forward (+Z) in that pose. The body frame comes from the
+*reference pose* and the mapping: up from the pelvis to the head, left from the right hip to the
+left hip (or the shoulders, or the eyes), forward = left × up. So "forward" (of the eyes, of the
+head) is derived per character, never assumed.
+
+The reference pose is the rest pose when it stands upright (head above pelvis); some files keep
+every bone along one axis at rest, and then the first frame of the character's first clip is used.
 """
 from __future__ import annotations
 
@@ -27,26 +30,49 @@ _SIDE_PAIRS = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"), ("l_acromioclav
                ("eyeball_left", "eyeball_right"), ("l_knee", "r_knee"))
 
 
-def body_frame(skeleton: Skeleton, joints: dict[str, int]) -> tuple[np.ndarray, str | None]:
-    """The character's body frame at rest as a quaternion (x, y, z, w) taking +X to its left, +Y to
-    its up and +Z to its forward, and a note when it had to be assumed (None when derived)."""
-    pos = skeleton.rest_global_positions
+def body_frame(positions: np.ndarray, joints: dict[str, int]) -> tuple[np.ndarray, str | None]:
+    """The body frame of a pose with global joint ``positions`` (J, 3), as a quaternion (x, y, z, w)
+    taking +X to the character's left, +Y to its up and +Z to its forward, and a note when it had to
+    be assumed (None when derived)."""
     base = joints.get("base")
     top = next((joints[n] for n in _UP_JOINTS if n in joints), None)
     pair = next(((joints[a], joints[b]) for a, b in _SIDE_PAIRS if a in joints and b in joints), None)
     if base is None or top is None or pair is None:
         return quat.IDENTITY.copy(), "the mapping lacks the pelvis, head or a left/right pair; the core axes are assumed"
-    up = pos[top] - pos[base]
-    left = pos[pair[0]] - pos[pair[1]]
+    up = positions[top] - positions[base]
+    left = positions[pair[0]] - positions[pair[1]]
     if np.linalg.norm(up) < 1e-6 or np.linalg.norm(left) < 1e-6:
-        return quat.IDENTITY.copy(), "the rest pose is degenerate; the core axes are assumed"
+        return quat.IDENTITY.copy(), "the pose is degenerate; the core axes are assumed"
     up = up / np.linalg.norm(up)
     left = left - np.dot(left, up) * up
     if np.linalg.norm(left) < 1e-6:
-        return quat.IDENTITY.copy(), "the rest pose is degenerate; the core axes are assumed"
+        return quat.IDENTITY.copy(), "the pose is degenerate; the core axes are assumed"
     left = left / np.linalg.norm(left)
     forward = np.cross(left, up)
     return quat.from_matrix(np.stack((left, up, forward), axis=1)), None
+
+
+def reference_pose(character: Character, joints: dict[str, int]) -> tuple[np.ndarray, np.ndarray, str]:
+    """Global rotations (J, 4) and positions (J, 3) of the pose the character's axes are read from,
+    and which pose it is (``"rest"`` or ``"first frame of <clip>"``); see the module doc."""
+    sk = character.skeleton
+    rest = (sk.rest_global_rotations, sk.rest_global_positions, "rest")
+    base = joints.get("base")
+    top = next((joints[n] for n in _UP_JOINTS if n in joints), None)
+    if base is None or top is None:
+        return rest
+    up = sk.rest_global_positions[top] - sk.rest_global_positions[base]
+    if up[1] > 0.5 * np.linalg.norm(up):
+        return rest
+    clips = list(character.clips.values()) + list(character.asset.motions.values())
+    clip = next((m for m in clips if m.num_frames and m.skeleton.names == sk.names), None)
+    if clip is None:
+        return rest
+    from ..kinematics import motion_fk
+
+    g_rot, g_pos = motion_fk(clip.replace(local_rotations=clip.local_rotations[:1], root_translations=clip.root_translations[:1],
+                                          joint_translations=None if clip.joint_translations is None else clip.joint_translations[:1]))
+    return g_rot[0], g_pos[0], f"first frame of {clip.name or 'its clip'}"
 
 
 @dataclass
@@ -55,7 +81,8 @@ class Rig:
 
     - ``name``: the character's name in the runtime; ``character``: the :class:`~infuse.Character`;
     - ``mapping``: canonical name -> joint; ``joints``: canonical name -> joint index (mapped names only);
-    - ``body``: (4,) the body frame at rest (see the module doc); ``aligned``: (J, 4) every joint's ``A_j``;
+    - ``body``: (4,) the body frame in the reference pose (see the module doc); ``reference``: which pose
+      that is; ``reference_rotations``: (J, 4) its global rotations; ``aligned``: (J, 4) every joint's ``A_j``;
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
     - ``notes``: what had to be assumed about the character.
     """
@@ -65,13 +92,18 @@ class Rig:
     mapping: Mapping
     joints: dict[str, int] = field(init=False)
     body: np.ndarray = field(init=False)
+    reference: str = field(init=False)
+    reference_rotations: np.ndarray = field(init=False)
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self):
         self.joints = self.mapping.indices(self.skeleton)
-        self.body, note = body_frame(self.skeleton, self.joints)
+        self.reference_rotations, positions, self.reference = reference_pose(self.character, self.joints)
+        self.body, note = body_frame(positions, self.joints)
         if note:
             self.notes.append(note)
+        elif self.reference != "rest":
+            self.notes.append(f"the rest pose does not stand upright; the axes are read from the {self.reference}")
 
     @property
     def skeleton(self) -> Skeleton:
@@ -79,8 +111,9 @@ class Rig:
 
     @cached_property
     def aligned(self) -> np.ndarray:
-        """(J, 4) rotations ``A_j = G_j⁻¹ · B`` from each joint's frame to its aligned frame."""
-        return quat.multiply(quat.conjugate(self.skeleton.rest_global_rotations), self.body)
+        """(J, 4) rotations ``A_j = G_j⁻¹ · B`` from each joint's frame to its aligned frame
+        (``G_j``: the joint's global rotation in the reference pose)."""
+        return quat.multiply(quat.conjugate(self.reference_rotations), self.body)
 
     @cached_property
     def morph_targets(self) -> tuple[str, ...]:

@@ -105,6 +105,7 @@ class Runtime:
         self._report = report
         self._tracks: dict[str, _Track] = {}
         self._speech: dict[str, list[tuple[float, float]]] = {}
+        self._targets: dict = {}
         self._next_id = 0
 
     # -- characters ------------------------------------------------------------------------------------
@@ -198,6 +199,26 @@ class Runtime:
             activity.blend_out_s = float(blend_out_s)
         end = max(at, activity.start_s) + activity.blend_out_s
         activity.end_s = end if activity.end_s is None else min(activity.end_s, end)
+
+    def add_target(self, name: str, target) -> None:
+        """Name a target (a scene object: a point, a track, a function of time...) for gazes and BML."""
+        from .targets import as_target
+
+        self._targets[str(name)] = as_target(target)
+
+    def target(self, name: str):
+        """The target called ``name``: one added with :meth:`add_target`, ``"character:joint"``, or a
+        character (its face); :class:`UsageError` otherwise."""
+        from .targets import JointTarget, as_target
+
+        if name in self._targets:
+            return self._targets[name]
+        if ":" in name:
+            return as_target(name)
+        if name in self._tracks:
+            return JointTarget(name)
+        known = sorted(set(self._targets) | set(self._tracks))
+        raise UsageError(f"no target or character named {name!r}; known: {', '.join(known) or 'none'}")
 
     def add_speech(self, character, start_s: float, end_s: float) -> None:
         """Tell the runtime the character speaks from ``start_s`` to ``end_s`` seconds (saccades pause)."""

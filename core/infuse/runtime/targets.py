@@ -8,7 +8,10 @@ A target gives global positions (metres, core frame) at any times (seconds) at o
   (or ``TrackTarget(times, positions)`` for any sample times);
 - a callable ``f(times (F,)) -> (F, 3)`` (or ``f(t) -> (3,)``) -> :class:`FunctionTarget`;
 - ``"character:joint"`` or ``(character, joint)`` -> :class:`JointTarget`; the joint is a canonical
-  name (``"skullbase"``, ``"eyeball_left"``) or one of the character's own joint names.
+  name (``"skullbase"``, ``"eyeball_left"``), one of the character's own joint names, or ``"face"``.
+
+Names without a colon are resolved by the runtime (:meth:`Runtime.target`): a named target added with
+:meth:`Runtime.add_target`, or a character (its face).
 """
 from __future__ import annotations
 
@@ -86,26 +89,39 @@ class FunctionTarget(Target):
         return out
 
 
+#: The joint name of :class:`JointTarget` that means a character's face: the middle of its eyes, or its head.
+FACE = "face"
+
+
 @dataclass(frozen=True)
 class JointTarget(Target):
-    """A joint of a character in the same runtime: ``joint`` is canonical or the character's own name."""
+    """A joint of a character in the same runtime: ``joint`` is canonical, the character's own name,
+    or ``"face"`` (the middle of the eyes; the head when the character has no eyes)."""
 
     character: str
-    joint: str
+    joint: str = FACE
 
-    def resolve(self, runtime) -> tuple[Any, int]:
-        """(rig, joint index) of the target; :class:`UsageError` when either is unknown."""
+    def resolve(self, runtime) -> tuple[Any, list[int]]:
+        """(rig, joint indices whose mean is the target); :class:`UsageError` when unknown."""
         rig = runtime.rig(self.character)
+        if self.joint == FACE:
+            eyes = [rig.joint("eyeball_left"), rig.joint("eyeball_right")]
+            if None not in eyes:
+                return rig, eyes
+            head = next((rig.joint(n) for n in ("skullbase", "spine5", "spine4") if rig.joint(n) is not None), None)
+            if head is None:
+                raise UsageError(f"character {self.character!r} has neither eyes nor a head to look at")
+            return rig, [head]
         index = rig.joint(self.joint)
         if index is None:
             index = rig.skeleton.index.get(self.joint)
         if index is None:
             raise UsageError(f"character {self.character!r} has no joint {self.joint!r} (canonical or own name)")
-        return rig, index
+        return rig, [index]
 
     def positions(self, times, block) -> np.ndarray:
-        rig, index = self.resolve(block.runtime)
-        return block.pose(rig.name).chain_pose([index])[1][:, 0].copy()
+        rig, joints = self.resolve(block.runtime)
+        return block.pose(rig.name).chain_pose(joints)[1].mean(axis=1)
 
 
 def as_target(value) -> Target:

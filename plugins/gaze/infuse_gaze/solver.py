@@ -1,0 +1,193 @@
+"""The gaze solver: per frame, batched over every gazing character at once.
+
+Everything is expressed in the chain's *slots* (:data:`~infuse_gaze.model.SLOTS`, pelvis to eyes) and
+in their aligned frames (:mod:`infuse.runtime.swing`; a slot the character lacks repeats its parent).
+For each character and frame the caller gives, from the pose below the gaze, each slot's aligned
+frame and position relative to its parent's aligned frame (``chain_rot``, ``chain_pos``), and where
+the gaze starts and where the priority joint points as seen from each slot: the chain above a slot is
+rigid until its group is solved, so one matrix product per slot and frame gives the whole picture.
+
+Per frame, groups are solved bottom-up (Thiebaux et al. 2009): with the groups above still at the
+pose below, the turn left to do is the heading and pitch from where the priority joint points to
+where the target is (seen from the eyes, or the head), in the group's aligned frame. A group below
+the priority group takes 1/(p + 1 - i) of it (i its rank, p the priority's, among the groups that
+move), clamped to its elliptical limits; the priority group and the groups above take all of it.
+The result is weighted by the activity's blend weight, smoothed and speed-limited, and the chain is
+moved before the next group is solved, so the groups above make up for what lags below. Each eye
+finally aims from its own position. Outputs are (heading, pitch) offsets in radians per slot.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
+
+_S = len(SLOTS)
+_EYE_SLOTS = (7, 8)
+_FIRST_SLOT = {g: SLOT_GROUPS.index(g) for g in set(SLOT_GROUPS)}
+
+
+@dataclass
+class SolverInput:
+    """Arrays over C characters, F frames, S slots, G groups (angles in radians, lengths in metres).
+
+    - ``chain_rot`` (C, F, S, 3, 3), ``chain_pos`` (C, F, S, 3): each slot's aligned frame and position
+      relative to its parent slot's aligned frame (the first slot: relative to the world);
+    - ``origin_local`` (C, F, S, 3): where the gaze starts (the eyes, or the head) in each slot's
+      aligned frame; ``forward_angles`` (C, F, S, 2): heading and pitch of where the priority joint points;
+    - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
+    - ``targets`` (C, F, 3); ``weights`` (C, F) blend weights;
+    - ``active`` (C, G) bool: groups that move; ``fractions`` (C, G): share of the remaining turn;
+    - ``limits`` (C, G, 4): heading, up, down, roll; ``smoothing`` (C, G): share per frame;
+      ``max_step`` (C, G): radians per frame; ``offsets`` (C, 2): heading and pitch added to the target direction.
+    - ``refine``: (c, c2, slots) triples: character c looks at the mean of ``slots`` of character c2,
+      taken from the previous solved frame.
+    """
+
+    chain_rot: np.ndarray
+    chain_pos: np.ndarray
+    origin_local: np.ndarray
+    forward_angles: np.ndarray
+    present: np.ndarray
+    counts: np.ndarray
+    targets: np.ndarray
+    weights: np.ndarray
+    active: np.ndarray
+    fractions: np.ndarray
+    limits: np.ndarray
+    smoothing: np.ndarray
+    max_step: np.ndarray
+    offsets: np.ndarray
+    refine: tuple = ()
+
+
+def swing_matrices(heading: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) matrices of ``R_Y(heading) R_X(-pitch)``: +Z turned to (heading, pitch)."""
+    ch, sh, cv, sv = np.cos(heading), np.sin(heading), np.cos(pitch), np.sin(pitch)
+    out = np.empty(np.shape(heading) + (3, 3))
+    out[..., 0, 0] = ch
+    out[..., 0, 1] = -sh * sv
+    out[..., 0, 2] = sh * cv
+    out[..., 1, 0] = 0.0
+    out[..., 1, 1] = cv
+    out[..., 1, 2] = sv
+    out[..., 2, 0] = -sh
+    out[..., 2, 1] = -ch * sv
+    out[..., 2, 2] = ch * cv
+    return out
+
+
+def rotation_matrices(q: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) matrices of unit quaternions (..., 4) (x, y, z, w)."""
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(q.shape[:-1] + (3, 3))
+    out[..., 0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    out[..., 0, 1] = 2.0 * (x * y - z * w)
+    out[..., 0, 2] = 2.0 * (x * z + y * w)
+    out[..., 1, 0] = 2.0 * (x * y + z * w)
+    out[..., 1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    out[..., 1, 2] = 2.0 * (y * z - x * w)
+    out[..., 2, 0] = 2.0 * (x * z - y * w)
+    out[..., 2, 1] = 2.0 * (y * z + x * w)
+    out[..., 2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return out
+
+
+def _angles(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return np.arctan2(v[..., 0], v[..., 2]), np.arctan2(v[..., 1], np.hypot(v[..., 0], v[..., 2]))
+
+
+def _clamp(h, v, limits):
+    """(h, v) (C,) scaled onto the ellipse of ``limits`` (C, 4) when outside it (a zero limit allows nothing)."""
+    vert = np.where(v >= 0.0, limits[:, 1], limits[:, 2])
+    a = np.divide(h, limits[:, 0], out=np.where(h == 0.0, 0.0, np.inf), where=limits[:, 0] > 0)
+    b = np.divide(v, vert, out=np.where(v == 0.0, 0.0, np.inf), where=vert > 0)
+    r = np.sqrt(a * a + b * b)
+    f = np.where(r > 1.0, 1.0 / np.maximum(r, 1.0), 1.0)  # r = inf gives 0: no rotation about a locked axis
+    return np.where(np.isfinite(a), h * f, 0.0), np.where(np.isfinite(b), v * f, 0.0)
+
+
+def _follow(state, desired, smoothing, max_step):
+    """One smoothed, speed-limited step of ``state`` (..., 2) toward ``desired``."""
+    step = smoothing[..., None] * (desired - state)
+    norm = np.sqrt(np.sum(step * step, axis=-1))
+    scale = np.where(norm > max_step, max_step / np.maximum(norm, 1e-12), 1.0)
+    return state + step * scale[..., None]
+
+
+def _apply(m, v):
+    """Matrices (C, 3, 3) times vectors (C, 3)."""
+    return (m @ v[..., None])[..., 0]
+
+
+def _apply_t(m, v):
+    """Transposed matrices (C, 3, 3) times vectors (C, 3)."""
+    return (v[:, None, :] @ m)[:, 0]
+
+
+def _direction(frame, vector, forward_h, forward_v, fixed):
+    """Heading and pitch left to turn: from the forward angles to ``vector`` seen in ``frame``, plus the fixed offsets."""
+    ht, vt = _angles(_apply_t(frame, vector))
+    return (ht + fixed[:, 0] - forward_h + np.pi) % (2 * np.pi) - np.pi, vt + fixed[:, 1] - forward_v
+
+
+def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, last_positions: np.ndarray | None):
+    """Run the frames; returns (offsets (C, F, S, 2), positions (C, F, S, 3) of the solved chain).
+
+    ``groups_state`` (C, G, 2) and ``eyes_state`` (C, 2, 2) hold the current offsets and are updated
+    in place; ``last_positions`` (C, S, 3), the chain of the frame before, serves ``refine``.
+    """
+    c_count, frames = inp.targets.shape[:2]
+    out = np.zeros((c_count, frames, _S, 2))
+    positions = np.zeros((c_count, frames, _S, 3))
+    counts = np.maximum(inp.counts, 1)[..., None]
+    present = inp.present[..., None]
+    zero = np.zeros(c_count)
+    previous = last_positions
+    w_rot = np.empty((c_count, _S, 3, 3))
+    w_pos = np.empty((c_count, _S, 3))
+    for f in range(frames):
+        chain_rot = inp.chain_rot[:, f]
+        chain_pos = inp.chain_pos[:, f]
+        target = inp.targets[:, f]
+        if inp.refine and previous is not None:
+            target = target.copy()
+            for c, c2, slots in inp.refine:
+                target[c] = previous[c2, list(slots)].mean(axis=0)
+        weight = inp.weights[:, f]
+        share = None
+        for s in range(_S):
+            p = SLOT_PARENTS[s]
+            if p < 0:
+                pre = chain_rot[:, s]
+                w_pos[:, s] = chain_pos[:, s]
+            else:
+                pre = w_rot[:, p] @ chain_rot[:, s]
+                w_pos[:, s] = w_pos[:, p] + _apply(w_rot[:, p], chain_pos[:, s])
+            g = SLOT_GROUPS[s]
+            if g == EYES:  # each eye turns from its own position, all the way (within its limits)
+                dh, dv = _direction(pre, target - w_pos[:, s], zero, zero, inp.offsets)
+                k = s - _EYE_SLOTS[0]
+                gain = (inp.active[:, g] * inp.present[:, s] * weight)[:, None]
+                dh, dv = _clamp(dh, dv, inp.limits[:, g])
+                eyes_state[:, k] = _follow(eyes_state[:, k], np.stack((dh, dv), -1) * gain,
+                                           inp.smoothing[:, g], inp.max_step[:, g])
+                out[:, f, s] = np.where(present[:, s], eyes_state[:, k], 0.0)
+                continue
+            if _FIRST_SLOT[g] == s:
+                fwd = inp.forward_angles[:, f, s]
+                dh, dv = _direction(pre, target - w_pos[:, s] - _apply(pre, inp.origin_local[:, f, s]),
+                                    fwd[:, 0], fwd[:, 1], inp.offsets)
+                dh, dv = _clamp(dh * inp.fractions[:, g], dv * inp.fractions[:, g], inp.limits[:, g])
+                gain = (inp.active[:, g] * weight)[:, None]
+                groups_state[:, g] = _follow(groups_state[:, g], np.stack((dh, dv), -1) * gain,
+                                             inp.smoothing[:, g], inp.max_step[:, g])
+                share = groups_state[:, g] / counts[:, g]
+            hv = np.where(present[:, s], share, 0.0)
+            out[:, f, s] = hv
+            w_rot[:, s] = pre @ swing_matrices(hv[:, 0], hv[:, 1])
+        positions[:, f] = w_pos
+        previous = w_pos
+    return out, positions
