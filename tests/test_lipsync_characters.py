@@ -205,6 +205,8 @@ def test_speak_errors(tmp_path, utterance, capsys, monkeypatch):
     assert "empty text" in capsys.readouterr().err
     assert main(["speak", rpm_path, "bad \ue000 char", "-o", str(tmp_path / "b.glb")]) == 2
     assert "U+E000" in capsys.readouterr().err
+    assert main(["speak", rpm_path, "hello", "-o", str(tmp_path / "b.bvh")]) == 2
+    assert "only glTF" in capsys.readouterr().err
     monkeypatch.setenv("INFUSE_ESPEAK_LIBRARY", str(tmp_path / "missing" / "libespeak-ng.so.1"))
     assert main(["speak", rpm_path, "hello", "-o", str(tmp_path / "c.glb")]) == 3
     assert "apt-get install espeak-ng libespeak-ng1" in capsys.readouterr().err

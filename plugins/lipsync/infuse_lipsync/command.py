@@ -21,6 +21,9 @@ from .expressions import Expression
 from .lipsync import LipSyncSettings, choose_viseme_set, lipsync
 from .tables import VISEME_SETS
 
+#: Outputs whose writer takes morph-weight tracks.
+MORPH_TRACK_SUFFIXES = (".glb", ".gltf", ".vrm")
+
 
 def add_arguments(p) -> None:
     p.add_argument("character", help="the character file (glTF/VRM, FBX, SmartBody .sk, ...)")
@@ -72,25 +75,26 @@ def run(args) -> int:
     expressions = [_expression(e) for e in args.expression]
     asset = fileio.load(args.character, format=args.read_format, **read_options(args))
     face = detect_face(asset, args.map)
-    choose_viseme_set(face, args.viseme_set)  # before any file is written: fail early on a faceless character
+    set_name = choose_viseme_set(face, args.viseme_set)  # before any file is written: fail early on a faceless character
+    if set_name != "jaw" and face.kinds.get(set_name) == "morph" and out.suffix.lower() not in MORPH_TRACK_SUFFIXES:
+        raise UsageError(f"this character speaks with morph targets, which only glTF can carry: write "
+                         f"{', '.join(MORPH_TRACK_SUFFIXES)}, not {out.suffix or 'a file without extension'}")
     engine = _engine(args)
     wav = out.with_suffix(".wav")
-    utterance = engine.synthesize(args.text, wav)
-    result = lipsync(utterance, face, args.viseme_set, LipSyncSettings(fps=args.fps), asset.skeleton, expressions)
-
-    motion = result.motion(asset.skeleton, args.clip)
-    asset.motions = {args.clip: motion} if motion is not None else {}
-    tracks = {args.clip: result.morph_weight_track()} if result.morph_weights else {}
-    asset.meta = {k: v for k, v in asset.meta.items() if k != "morph_weight_tracks"}
-    if tracks:
-        asset.meta["morph_weight_tracks"] = tracks
-    fileio.save(asset, out)
-
-    doc = dict(result.timeline, wav=wav.name, animation=out.name, clip=args.clip,
-               character=str(args.character), joints=sorted(result.joint_rotations))
     timeline_path = out.with_name(out.stem + ".timeline.json")
-    with atomic_path(timeline_path) as tmp:
-        tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+    with atomic_path(wav) as wav_tmp:  # the WAV appears only once the animation is written too
+        utterance = engine.synthesize(args.text, wav_tmp)
+        result = lipsync(utterance, face, args.viseme_set, LipSyncSettings(fps=args.fps), asset.skeleton, expressions)
+        motion = result.motion(asset.skeleton, args.clip)
+        asset.motions = {args.clip: motion} if motion is not None else {}
+        asset.meta = {k: v for k, v in asset.meta.items() if k != "morph_weight_tracks"}
+        if result.morph_weights:
+            asset.meta["morph_weight_tracks"] = {args.clip: result.morph_weight_track()}
+        fileio.save(asset, out)
+        doc = dict(result.timeline, wav=wav.name, animation=out.name, clip=args.clip,
+                   character=str(args.character), joints=sorted(result.joint_rotations))
+        with atomic_path(timeline_path) as tmp:
+            tmp.write_text(json.dumps(doc, indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
 
     driven = (f"{len(result.morph_weights)} morph targets" if result.morph_weights
               else f"{len(result.joint_rotations)} face joints")
