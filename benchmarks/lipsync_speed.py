@@ -23,7 +23,7 @@ import numpy as np
 from infuse.speech import tts_engine
 from infuse_lipsync import coarticulation as co
 from infuse_lipsync.lipsync import LipSyncSettings, viseme_curves
-from infuse_lipsync.tables import dominance_arrays, viseme_set
+from infuse_lipsync.tables import dominance_arrays
 
 TEXT = (
     "Every morning the ferry leaves the harbour at seven, and every morning the same small crowd waits on the pier. "
