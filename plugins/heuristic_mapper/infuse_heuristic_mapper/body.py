@@ -48,7 +48,7 @@ def _chain_profile(view: SkeletonView, branch: int, child: int, depth: int = 6) 
     return np.cumsum(view.bone[chain])
 
 
-def limb_pairs(view: SkeletonView, min_fraction: float = 0.06) -> list[LimbPair]:
+def limb_pairs(view: SkeletonView, min_fraction: float = 0.1) -> list[LimbPair]:
     """Every pair of sibling subtrees that look like mirror-image limbs."""
     out: list[LimbPair] = []
     floor = min_fraction * view.scale
@@ -65,7 +65,7 @@ def limb_pairs(view: SkeletonView, min_fraction: float = 0.06) -> list[LimbPair]
             # compare the chains joint by joint: a prop in one hand lengthens only one limb
             px, py = profiles[x], profiles[y]
             m = min(len(px), len(py))
-            err = float(np.mean(np.abs(px[:m] - py[:m]))) / max(px[m - 1], py[m - 1], 1e-9)
+            err = float(np.abs(px[:m] - py[:m]).sum()) / m / max(px[m - 1], py[m - 1], 1e-9)
             size_ratio = min(view.size[x], view.size[y]) / max(view.size[x], view.size[y])
             symmetry = 0.55 * max(0.0, 1.0 - 3.0 * err) + 0.25 * ratio + 0.2 * size_ratio
             if symmetry < 0.6 or px[m - 1] < floor:

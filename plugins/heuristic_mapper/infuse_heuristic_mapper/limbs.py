@@ -43,22 +43,6 @@ def _combos(m: int, k: int, lead: int = 3) -> np.ndarray:
     return np.array(rows, dtype=np.int64).reshape(-1, k)
 
 
-def _bend(P: np.ndarray) -> np.ndarray:
-    """(m,) turning angle in radians at each chain point (0 at the ends)."""
-    out = np.zeros(len(P))
-    if len(P) < 3:
-        return out
-    a = P[1:-1] - P[:-2]
-    b = P[2:] - P[1:-1]
-    na = lengths(a)
-    nb = lengths(b)
-    ok = (na > 1e-9) & (nb > 1e-9)
-    cos = np.ones(len(a))
-    cos[ok] = np.einsum("ij,ij->i", a[ok], b[ok]) / (na[ok] * nb[ok])
-    out[1:-1] = np.arccos(np.clip(cos, -1.0, 1.0))
-    return out
-
-
 def _role_cost(view: SkeletonView, chain: list[int], good: dict[str, float], bad_flags: dict[str, float]) -> np.ndarray:
     """(m+1,) name cost of putting each chain joint in one slot (last entry: the virtual point).
 
@@ -127,11 +111,13 @@ def _between(skip: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.where(hi > lo + 1, cs[:, np.maximum(hi, lo + 1)] - cs[:, np.minimum(lo + 1, hi)], 0.0)
 
 
-def _prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, other: float) -> np.ndarray:
-    """(m+1,) cost of leaving all chain joints before index i unmapped."""
-    near = np.einsum("ij,ij->i", view.P[chain] - anchor, view.P[chain] - anchor) < (1e-3 * scale) ** 2
-    steps = [0.15 if (near[i] or view.info[j].flagged("helper")) else other for i, j in enumerate(chain)]
-    return np.concatenate(([0.0], np.cumsum(steps)))
+def _prefix_costs(view: SkeletonView, chains: list[list[int]], anchor: np.ndarray, scale: float, other: float) -> np.ndarray:
+    """(B, m+1) cost of leaving all chain joints before index i unmapped (helpers are cheap)."""
+    idx = np.array(chains)
+    d = view.P[idx] - anchor
+    cheap = (np.einsum("bij,bij->bi", d, d) < (1e-3 * scale) ** 2) | view.flag("helper")[idx]
+    steps = np.where(cheap, 0.15, other)
+    return np.concatenate((np.zeros((len(chains), 1)), np.cumsum(steps, axis=1)), axis=1)
 
 
 def _leg_prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, up) -> np.ndarray:
@@ -177,15 +163,18 @@ def _batches(chains: list[list[int]]) -> list[list[int]]:
 
 
 def _strongest_bend(P: np.ndarray) -> np.ndarray:
-    """(B,) index of the largest bend (> 25 degrees) inside each chain, or -1."""
-    out = np.full(len(P), -1)
-    for b, chain_p in enumerate(P):
-        bend = _bend(chain_p)
-        if len(bend) > 2:
-            i = int(np.argmax(bend[1:-1])) + 1
-            if bend[i] > np.radians(25):
-                out[b] = i
-    return out
+    """(B,) index of the largest bend (> 25 degrees) inside each chain of P (B, m, 3), or -1."""
+    if P.shape[1] < 3:
+        return np.full(len(P), -1)
+    a = P[:, 1:-1] - P[:, :-2]
+    b = P[:, 2:] - P[:, 1:-1]
+    na = np.sqrt(np.einsum("bij,bij->bi", a, a))
+    nb = np.sqrt(np.einsum("bij,bij->bi", b, b))
+    ok = (na > 1e-9) & (nb > 1e-9)
+    cos = np.where(ok, np.einsum("bij,bij->bi", a, b) / np.where(ok, na * nb, 1.0), 1.0)
+    i = np.argmin(cos, axis=1)
+    strong = cos[np.arange(len(P)), i] < np.cos(np.radians(25))
+    return np.where(strong, i + 1, -1)
 
 
 def _results(chains, group, combos, cost, predicted, slot_names, end_slot) -> list[LimbResult]:
@@ -295,7 +284,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         rel_c = offset[:, c0] / np.maximum(upper, 1e-9)
         cost += np.where(rel_s < 0.45, 4.0 * (0.45 - rel_s), 0.0)
         cost += np.where(has_c & (rel_c > 0.75), 3.0 * (rel_c - 0.75), 0.0)
-        cost += _stack(view, cs, lambda ch: _prefix_costs(view, ch, anchor, scale, 0.6))[:, np.where(has_c, c, s)]
+        cost += _prefix_costs(view, cs, anchor, scale, 0.6)[:, np.where(has_c, c, s)]
         skip = _stack(view, cs, lambda ch: _skip_costs(view, ch, scale))
         cost += np.where(has_c, _between(skip, c, s) + 0.5 * (s > c + 1), 0.0)
         cost += _between(skip, s, e) + _between(skip, e, w)
@@ -320,7 +309,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"upperarm": 0.8, "shoulder": 0.3, "forearm": -0.8,
                                                                   "hand": -1.0},
                                                        {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, s]
-        clav_named = _stack(view, cs, lambda ch: np.array([view.info[j].has("clavicle") for j in ch] + [False]))
+        clav_named = np.concatenate((view.role("clavicle")[np.array(cs)], np.zeros((len(cs), 1), dtype=bool)), axis=1)
         cost += np.where(~has_c & clav_named[:, s], 0.6, 0.0)
         cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"forearm": 0.8, "upperarm": -0.8, "clavicle": -1.0,
                                                                   "hand": -0.8},
@@ -338,13 +327,12 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
 def _hand_structure(view: SkeletonView, chains: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     """(B, m+1) "has two or more children" and (B,) index of the first joint where digits branch
     (three children, or two that lead somewhere), m when none."""
-    many, first = [], []
-    for chain in chains:
-        kids = [[c for c in view.children[j] if not view.info[c].flagged("end", "twist", "control")] for j in chain]
-        branching = [len(k) >= 3 or sum(view.size[c] >= 2 for c in k) >= 2 for k in kids]
-        many.append([len(k) >= 2 for k in kids] + [False])
-        first.append(next((i for i, b in enumerate(branching) if b), len(chain)))
-    return np.array(many), np.array(first)
+    kids, leading = view.digit_counts()
+    idx = np.array(chains)
+    many = np.concatenate((kids[idx] >= 2, np.zeros((len(chains), 1), dtype=bool)), axis=1)
+    branching = (kids[idx] >= 3) | (leading[idx] >= 2)
+    first = np.where(branching.any(axis=1), branching.argmax(axis=1), idx.shape[1])
+    return many, first
 
 
 def settle_coincident(view: SkeletonView, result: LimbResult) -> None:

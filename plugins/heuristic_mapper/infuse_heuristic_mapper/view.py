@@ -40,6 +40,7 @@ class SkeletonView:
         self.n = len(self.names)
         self.children: tuple[tuple[int, ...], ...] = skeleton.children
         self.info: tuple[NameInfo, ...] = analyse_all(tuple(self.names))
+        self._facts: dict[tuple, np.ndarray] = {}
         # children a chain may follow: controls, props and secondary bones only when nothing else is there
         self.followable = tuple(
             tuple(c for c in kids if not self.info[c].flagged("control", "prop", "secondary")) or kids
@@ -98,6 +99,39 @@ class SkeletonView:
         self.far = far
         self.scale = float(max(np.max(reach + best2), 1e-9))
         self._chains: dict[tuple[int, int], list[int]] = {}
+
+    # -- name facts as arrays ------------------------------------------------------------------------
+    def role(self, name: str) -> np.ndarray:
+        """(J,) bool: the joint's name says body part ``name``."""
+        key = ("role", name)
+        arr = self._facts.get(key)
+        if arr is None:
+            arr = self._facts[key] = np.array([name in i.roles for i in self.info], dtype=bool)
+        return arr
+
+    def flag(self, *names: str) -> np.ndarray:
+        """(J,) bool: the joint's name carries one of the warning flags ``names``."""
+        key = ("flag",) + names
+        arr = self._facts.get(key)
+        if arr is None:
+            arr = self._facts[key] = np.array([i.flagged(*names) for i in self.info], dtype=bool)
+        return arr
+
+    def digit_counts(self) -> tuple[np.ndarray, np.ndarray]:
+        """(J,) number of children that are not end/twist/control markers, and how many of those
+        lead somewhere (have children of their own)."""
+        key = ("digits",)
+        cached = self._facts.get(key)
+        if cached is None:
+            real = ~self.flag("end", "twist", "control")
+            kids = np.zeros(self.n, dtype=np.int64)
+            chains = np.zeros(self.n, dtype=np.int64)
+            par = self.parents
+            sel = (par >= 0) & real
+            np.add.at(kids, par[sel], 1)
+            np.add.at(chains, par[sel & (self.size >= 2)], 1)
+            cached = self._facts[key] = (kids, chains)
+        return cached
 
     # -- topology ------------------------------------------------------------------------------------
     def is_descendant(self, a: int, b: int) -> bool:

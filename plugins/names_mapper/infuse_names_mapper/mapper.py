@@ -43,18 +43,24 @@ def _expand(text: str, side: str | None) -> str:
     return text
 
 
-def _entries(table: dict[str, list[str]]):
-    """(canonical key or group, normalized joint name) for every template, both sides expanded."""
-    for key, names in table.items():
-        sides = ("l", "r") if "{" in key else (None,)
-        for side in sides:
-            for name in names:
-                yield _expand(key, side), normalize(_expand(name, side))
+def _entries(key: str, table: dict[str, list[str]]) -> tuple[tuple[str, str], ...]:
+    """(canonical key or group, normalized joint name) for every template of convention ``key``,
+    both sides expanded (computed once per convention)."""
+    cached = _ENTRIES.get(key)
+    if cached is None:
+        cached = tuple((_expand(k, side), normalize(_expand(name, side)))
+                       for k, names in table.items() for side in (("l", "r") if "{" in k else (None,))
+                       for name in names)
+        _ENTRIES[key] = cached
+    return cached
 
 
-def _hits(table: dict[str, list[str]], index: dict[str, str]) -> dict[str, list[str]]:
+_ENTRIES: dict[str, tuple[tuple[str, str], ...]] = {}
+
+
+def _hits(name: str, table: dict[str, list[str]], index: dict[str, str]) -> dict[str, list[str]]:
     out: dict[str, list[str]] = {}
-    for key, norm in _entries(table):
+    for key, norm in _entries(name, table):
         joint = index.get(norm)
         if joint is not None and joint not in out.get(key, []):
             out.setdefault(key, []).append(joint)
@@ -94,12 +100,11 @@ def _from_vrm_meta(humanoid, skeleton) -> dict[str, str]:
     """Canonical -> joint from a VRM humanoid map (VRM bone name -> node name)."""
     if not isinstance(humanoid, dict):
         return {}
-    table = dict(VRM)
     bones = {normalize(k) for k in humanoid}
-    if "leftthumbmetacarpal" not in bones and "leftthumbintermediate" in bones:
-        table.update(VRM0_THUMB)
+    version = "vrm0" if "leftthumbmetacarpal" not in bones and "leftthumbintermediate" in bones else "vrm"
+    table = {**VRM, **VRM0_THUMB} if version == "vrm0" else VRM
     by_bone = {}
-    for key, norm in _entries(table):
+    for key, norm in _entries(version, table):
         by_bone.setdefault(norm, key)
     hits: dict[str, list[str]] = {}
     for bone, node in humanoid.items():
@@ -120,7 +125,7 @@ def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options)
     if len(joints) < MIN_NAMES:
         best_name, best = "", {}
         for conv, table in CONVENTIONS.items():
-            found = _assemble(_hits(table, index), skeleton)
+            found = _assemble(_hits(conv, table, index), skeleton)
             if len(found) > len(best):
                 best_name, best = conv, found
         if len(best) < MIN_NAMES:
