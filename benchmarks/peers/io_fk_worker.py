@@ -1,16 +1,18 @@
-"""The peer side of io_fk.py: load + FK with bvhio and upc-pymotion, run in benchmarks/.venv.
+"""The peer side of benchmarks/io_fk.py: load + FK with bvhio and upc-pymotion, run in benchmarks/.venv.
 
-Usage (io_fk.py calls it): ``python peers_io_fk.py JOB.json``. The job names the peer, the files,
-the number of passes, an output folder for the global positions (one ``.npz`` per file, for the
-correctness check) and optionally an FK-only batch. Prints one JSON document on stdout. Each peer
-is used the way its documentation shows: pymotion's ``BVH.load`` + ``get_data`` + ``fk``; bvhio's
-``readAsHierarchy`` + ``loadPose`` per frame + ``PositionWorld`` per joint.
+Usage (io_fk.py calls it): ``python io_fk_worker.py JOB.json``. The job names the peer, the
+files, the number of passes, the clock (``cpu`` or ``wall``), an output folder for the global
+positions (one ``.npz`` per file, for the correctness check) and optionally an FK-only batch.
+Prints one JSON document on stdout. Each peer is used the way its documentation shows: pymotion's
+``BVH.load`` + ``get_data`` + ``fk``; bvhio's ``readAsHierarchy`` + ``loadPose`` per frame +
+``PositionWorld`` per joint. It lives in a subfolder so ``make bench`` does not run it on its own.
 """
 from __future__ import annotations
 
 import json
 import sys
 import time
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -59,20 +61,21 @@ BATCH_FK = {"upc-pymotion": pymotion_batch_fk}
 def main(job_path: str) -> None:
     job = json.loads(Path(job_path).read_text())
     peer, files, passes = job["peer"], job["files"], job["passes"]
+    clock = time.process_time if job.get("clock", "cpu") == "cpu" else time.perf_counter
     out_dir = Path(job["out"]) if job["out"] else None
     load_fk = LOADERS[peer]
-    result: dict = {"peer": peer, "errors": {}}
+    result: dict = {"peer": peer, "version": metadata.version(peer), "errors": {}}
     times = []
     for run in range(passes):
         total = 0.0
         for k, path in enumerate(files):
-            t0 = time.perf_counter()
+            t0 = clock()
             try:
                 positions, names = load_fk(path)
             except Exception as exc:  # a peer failing on a file counts against its correctness
                 result["errors"][path] = f"{type(exc).__name__}: {exc}"
                 continue
-            total += time.perf_counter() - t0
+            total += clock() - t0
             if run == 0 and out_dir is not None:
                 np.savez(out_dir / f"{peer}-{k}.npz", positions=positions, names=np.array(names))
         times.append(total)
@@ -83,9 +86,9 @@ def main(job_path: str) -> None:
         batch = dict(np.load(batch_path))
         best = float("inf")
         for _ in range(job.get("batch_passes", 3)):
-            t0 = time.perf_counter()
+            t0 = clock()
             positions = BATCH_FK[peer](batch)
-            best = min(best, time.perf_counter() - t0)
+            best = min(best, clock() - t0)
         np.save(Path(job["out"] or ".") / f"{peer}-batch.npy", positions)
         result["batch_seconds"] = best
     json.dump(result, sys.stdout)
