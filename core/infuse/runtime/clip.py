@@ -76,6 +76,8 @@ class Clip(Controller):
         self.offset_s = float(offset_s)
         self.root_motion = bool(root_motion)
         self.source_mapping = source_mapping
+        if not self.loop:
+            self.duration_s = max(motion.duration - self.offset_s, 0.0) / self.speed
 
     def describe(self) -> str:
         return f"clip {self.motion.name!r}"

@@ -81,7 +81,8 @@ class Controller:
     Class attributes give the defaults an activity takes unless told otherwise: ``kind`` (the name
     BML activations use), ``layer``, ``mode``, ``priority``, ``blend_in_s`` / ``blend_out_s``
     (seconds), and ``settle_s``: how long after its end an activity is still evaluated (a smoothed
-    controller returning to rest). ``speaks`` marks controllers that make the character speak.
+    controller returning to rest). ``speaks`` marks controllers that make the character speak;
+    ``duration_s`` (None: open-ended) is how long an activity given no end lasts.
 
     Subclasses implement :meth:`bind` (per character: which joints, what is missing) and either
     :meth:`evaluate_one` (one job, vectorized over frames) or the class-level :meth:`evaluate` (all
@@ -96,6 +97,8 @@ class Controller:
     blend_out_s: ClassVar[float] = 0.3
     settle_s: ClassVar[float] = 0.0
     speaks: ClassVar[bool] = False
+    #: Natural length in seconds (a nod, a clip played once): an activity without an end lasts this long.
+    duration_s: float | None = None
 
     def bind(self, rig, report) -> Any:
         """Prepare for character ``rig``; return what :meth:`evaluate_one` needs (kept on the activity).

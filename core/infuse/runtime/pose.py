@@ -121,18 +121,21 @@ class PoseBlock:
 
     # -- reading ------------------------------------------------------------------------------------
     def global_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Global rotations (F, J, 4) and positions (F, J, 3) of the pose as it stands (cached until a write)."""
+        """Global rotations (F, J, 4) and positions (F, J, 3) in the world, the character's placement
+        included, of the pose as it stands (cached until a write)."""
         if self._fk is None:
-            self._fk = forward_kinematics(self.rig.skeleton, self.local_rotations, self.root_translations,
-                                          self.joint_translations)
+            g_rot, g_pos = forward_kinematics(self.rig.skeleton, self.local_rotations, self.root_translations,
+                                              self.joint_translations)
+            self._fk = self.rig.place(g_rot, g_pos)
         return self._fk
 
     def chain_pose(self, joints) -> tuple[np.ndarray, np.ndarray]:
-        """Global rotations (F, K, 4) and positions (F, K, 3) of joints ``joints`` only (see :func:`chain_fk`)."""
+        """World rotations (F, K, 4) and positions (F, K, 3) of joints ``joints`` only (see :func:`chain_fk`)."""
         if self._fk is not None:
             g_rot, g_pos = self._fk
             return g_rot[:, joints], g_pos[:, joints]
-        return chain_fk(self.rig.skeleton, self.local_rotations, self.root_translations, self.joint_translations, joints)
+        return self.rig.place(*chain_fk(self.rig.skeleton, self.local_rotations, self.root_translations,
+                                        self.joint_translations, joints))
 
 
 def ancestors(skeleton, joints) -> list[int]:

@@ -81,6 +81,8 @@ class Rig:
 
     - ``name``: the character's name in the runtime; ``character``: the :class:`~infuse.Character`;
     - ``mapping``: canonical name -> joint; ``joints``: canonical name -> joint index (mapped names only);
+    - ``position`` (3,) metres and ``rotation`` (4,): where the character stands in the world; its
+      skeleton's own frame is moved by ``rotation``, then ``position`` (all else here is in its own frame);
     - ``body``: (4,) the body frame in the reference pose (see the module doc); ``reference``: which pose
       that is; ``reference_rotations``: (J, 4) its global rotations; ``aligned``: (J, 4) every joint's ``A_j``;
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
@@ -90,6 +92,8 @@ class Rig:
     name: str
     character: Character
     mapping: Mapping
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rotation: np.ndarray = field(default_factory=lambda: quat.IDENTITY.copy())
     joints: dict[str, int] = field(init=False)
     body: np.ndarray = field(init=False)
     reference: str = field(init=False)
@@ -108,6 +112,18 @@ class Rig:
     @property
     def skeleton(self) -> Skeleton:
         return self.character.skeleton
+
+    def place(self, rotations: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Global rotations (..., 4) and positions (..., 3) of the character's own frame moved to its
+        place in the world (``rotation`` then ``position``)."""
+        if not self.placed:
+            return rotations, positions
+        return quat.multiply(self.rotation, rotations), quat.rotate(self.rotation, positions) + self.position
+
+    @property
+    def placed(self) -> bool:
+        """Whether the character stands elsewhere than its file puts it."""
+        return bool(np.any(self.position != 0.0) or np.any(self.rotation != quat.IDENTITY))
 
     @cached_property
     def aligned(self) -> np.ndarray:

@@ -23,6 +23,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .. import quaternions as quat
 from ..asset import Asset, Character
 from ..errors import UsageError
 from ..motion import Motion
@@ -109,10 +110,13 @@ class Runtime:
         self._next_id = 0
 
     # -- characters ------------------------------------------------------------------------------------
-    def add_character(self, character, name: str | None = None, mapping=None) -> str:
+    def add_character(self, character, name: str | None = None, mapping=None, position=(0.0, 0.0, 0.0),
+                      heading_deg: float = 0.0) -> str:
         """Add a character (an :class:`~infuse.Character` or an :class:`~infuse.Asset`); returns its name.
 
-        The mapping is ``mapping``, else the character's own, else the default mapper's.
+        The mapping is ``mapping``, else the character's own, else the default mapper's. The character
+        stands at ``position`` (metres), turned by ``heading_deg`` about +Y (positive: its front turns
+        toward +X); its clips and controllers move it from there.
         """
         if isinstance(character, Asset):
             stem = character.path.stem if character.path is not None else "character"
@@ -128,7 +132,11 @@ class Runtime:
             from ..mapping import map_skeleton
 
             mapping = map_skeleton(character.asset)
-        rig = Rig(name, character, mapping)
+        position = np.asarray(position, dtype=np.float64).reshape(3)
+        if not (np.all(np.isfinite(position)) and np.isfinite(heading_deg)):
+            raise UsageError("a character's position and heading must be finite")
+        rotation = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), np.radians(heading_deg))
+        rig = Rig(name, character, mapping, position, rotation)
         self._tracks[name] = _Track(rig)
         for note in rig.notes:
             self.report(name, note)
@@ -168,7 +176,8 @@ class Runtime:
                  duration_s: float | None = None, blend_in_s: float | None = None, blend_out_s: float | None = None,
                  priority: int | None = None, mode: Mode | str | None = None, source: Any = None) -> Activity:
         """Play ``controller`` on ``character`` from ``start_s`` (default: now) to ``end_s`` (or for
-        ``duration_s``; neither: until :meth:`stop`). Unset options take the controller's defaults."""
+        ``duration_s``; neither: for the controller's own ``duration_s``, or until :meth:`stop`).
+        Unset options take the controller's defaults."""
         if not isinstance(controller, Controller):
             raise UsageError(f"activate takes a runtime Controller, not {type(controller).__name__}")
         track = self._track(character)
@@ -177,6 +186,8 @@ class Runtime:
             if end_s is not None:
                 raise UsageError("give end_s or duration_s, not both")
             end_s = start + float(duration_s)
+        elif end_s is None and controller.duration_s is not None:
+            end_s = start + float(controller.duration_s)
         if end_s is not None and end_s < start:
             raise UsageError(f"activity ends ({end_s:g} s) before it starts ({start:g} s)")
         blend_in = controller.blend_in_s if blend_in_s is None else float(blend_in_s)
@@ -308,15 +319,20 @@ class Runtime:
     def motion(self, character, name: str = "runtime") -> Motion:
         """Every frame evaluated so far, as a :class:`~infuse.Motion` on the character's skeleton."""
         track = self._track(character)
-        sk = track.rig.skeleton
+        rig = track.rig
+        sk = rig.skeleton
         if not track.rotations:
             return Motion(sk, self.fps, np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3)), name=name)
+        rotations = np.concatenate(track.rotations)
+        roots = np.concatenate(track.roots)
+        if rig.placed:  # the placement goes into the root joint (other roots, if any, stay where they are)
+            rotations[:, 0], roots = rig.place(rotations[:, 0], roots)
         translations = None
         if any(t is not None for t in track.translations):
             rest = sk.rest_translations
             translations = np.concatenate([np.repeat(rest[None], len(r), axis=0) if t is None else t
                                            for t, r in zip(track.translations, track.roots)])
-        return Motion(sk, self.fps, np.concatenate(track.rotations), np.concatenate(track.roots), translations, name=name)
+        return Motion(sk, self.fps, rotations, roots, translations, name=name)
 
     def morph_weights(self, character) -> np.ndarray:
         """(F, M) morph weights of every frame evaluated so far (columns: the character's morph targets)."""

@@ -32,7 +32,8 @@ def _interpolation(sample_times: np.ndarray, times: np.ndarray) -> tuple[np.ndar
 class Tracks(Controller):
     """Play keyed ``rotations`` and ``morph_weights`` sampled at ``times`` (see the module doc).
 
-    ``layer`` defaults to FACE; ``speaks=True`` marks lip-sync tracks (saccades pause meanwhile).
+    ``layer`` defaults to FACE; ``speaks=True`` marks lip-sync tracks (saccades pause meanwhile). An
+    activity given no end lasts until the last sample time.
     """
 
     kind = "tracks"
@@ -56,6 +57,7 @@ class Tracks(Controller):
             self.layer = Layer(layer)
         self.speaks = bool(speaks)
         self.name = name
+        self.duration_s = float(t[-1])
 
     def describe(self) -> str:
         return self.name

@@ -220,6 +220,8 @@ def _chain_frames(jobs):
         rest = skeleton.rest_translations[columns]
         translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, columns] for t in moved])
     rot, pos = chain_fk(skeleton, local, root, translations, joints, columns)
+    for c, job in enumerate(jobs):  # into the world: where each character stands
+        rot[c], pos[c] = job.rig.place(rot[c], pos[c])
     lead = local.shape[:2]
     g_rot = np.empty(lead + (len(SLOTS), 4))
     g_pos = np.empty(lead + (len(SLOTS), 3))

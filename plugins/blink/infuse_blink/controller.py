@@ -1,0 +1,151 @@
+"""Blinks: when (human rates per activity) and how (the closure curve), on whatever eyelids a character has.
+
+- Rates (Bentivoglio et al. 1997), blinks per minute: ``rest`` 17, ``conversation`` 26, ``reading`` 4.5.
+  Intervals are gamma distributed (shape 3: blinks neither come in bursts nor like a metronome) with
+  that mean, never shorter than a blink plus 0.1 s; a seeded generator makes runs repeatable.
+- The closure curve (SmartBody): 0 at 0 s, fully closed at 0.083 s, 0.33 at 0.167 s, open at 0.25 s,
+  linear in between; ``amount`` scales it.
+- Outputs, the first the character has: eyelid morph targets (ARKit / Ready Player Me ``eyeBlinkLeft``
+  and ``eyeBlinkRight``, VRM ``blinkLeft``/``blinkRight`` or ``Blink_L``/``Blink_R``, or one ``blink``
+  target for both eyes); else eyelid joints (canonical ``upper_eyelid_*``/``lower_eyelid_*``, or joints
+  named like upper/lower eyelids), the upper lid pitched down by ``eyelid_angle_deg`` when closed and the
+  lower lid up by a third of it. A character with neither is reported once and left alone.
+"""
+from __future__ import annotations
+
+import re
+import zlib
+
+import numpy as np
+
+from infuse.errors import UsageError
+from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.swing import local_offsets, swing
+
+RATES_PER_MIN = {"rest": 17.0, "conversation": 26.0, "reading": 4.5}
+#: (seconds, closure) points of one blink.
+CLOSURE_CURVE = ((0.0, 0.0), (0.083, 1.0), (0.167, 0.33), (0.25, 0.0))
+INTERVAL_SHAPE = 3.0
+
+_LEFT_TARGETS = ("eyeBlinkLeft", "blinkLeft", "Blink_L", "EyeBlink_L", "eyeBlink_L", "EyesClosed_L", "eye_close_L")
+_RIGHT_TARGETS = ("eyeBlinkRight", "blinkRight", "Blink_R", "EyeBlink_R", "eyeBlink_R", "EyesClosed_R", "eye_close_R")
+_BOTH_TARGETS = ("blink", "Blink", "eyeBlink", "eyesClosed", "EyesClosed", "eye_close", "Eye_Blink")
+
+
+def closure(t, curve=CLOSURE_CURVE) -> np.ndarray:
+    """Eyelid closure in [0, 1] at ``t`` seconds from a blink's start (0 outside the blink)."""
+    times, values = np.array(curve).T
+    t = np.asarray(t, dtype=np.float64)
+    return np.where((t >= 0.0) & (t <= times[-1]), np.interp(t, times, values), 0.0)
+
+
+class BlinkSchedule:
+    """Blink start times (seconds from the activity's start), generated on demand from a seed."""
+
+    def __init__(self, mean_interval_s: float, minimum_s: float, seed=None):
+        self.mean_interval_s = mean_interval_s
+        self.minimum_s = minimum_s
+        self.rng = np.random.default_rng(seed)
+        self.starts = np.zeros(0)
+        self._next = float(self._intervals(1)[0] * self.rng.uniform())  # the first blink comes part way into an interval
+
+    def _intervals(self, n: int) -> np.ndarray:
+        scale = self.mean_interval_s / INTERVAL_SHAPE
+        return np.maximum(self.rng.gamma(INTERVAL_SHAPE, scale, n), self.minimum_s)
+
+    def until(self, t_s: float) -> np.ndarray:
+        """Every blink start up to ``t_s`` seconds."""
+        while self._next <= t_s:
+            steps = np.cumsum(self._intervals(64))
+            new = self._next + np.concatenate(([0.0], steps[:-1]))
+            self.starts = np.concatenate((self.starts, new))
+            self._next = float(self._next + steps[-1])
+        return self.starts
+
+
+class Blink(Controller):
+    """Blink at a human rate: ``activity`` (rest, conversation, reading) or ``rate_per_min``;
+    ``seed`` for the random intervals; ``amount`` (0..1) how far the lids close."""
+
+    kind = "blink"
+    layer = Layer.FACE
+    mode = Mode.ADDITIVE
+    blend_in_s = 0.0
+    blend_out_s = 0.0
+
+    def __init__(self, activity: str = "rest", rate_per_min: float | None = None, seed: int | None = 0,
+                 amount: float = 1.0, eyelid_angle_deg: float = 30.0, curve=CLOSURE_CURVE):
+        if rate_per_min is None:
+            if activity not in RATES_PER_MIN:
+                raise UsageError(f"blink activity {activity!r}: expected one of {', '.join(RATES_PER_MIN)}")
+            rate_per_min = RATES_PER_MIN[activity]
+        if not (np.isfinite(rate_per_min) and 0.1 <= rate_per_min <= 120):
+            raise UsageError(f"blink rate must lie in [0.1, 120] per minute, got {rate_per_min}")
+        if not 0.0 <= amount <= 1.0:
+            raise UsageError("blink amount must lie in [0, 1]")
+        self.activity, self.rate_per_min, self.seed = activity, float(rate_per_min), seed
+        self.amount, self.eyelid_angle_deg, self.curve = float(amount), float(eyelid_angle_deg), tuple(curve)
+        self.blink_s = float(self.curve[-1][0])
+
+    def describe(self) -> str:
+        return f"blink ({self.rate_per_min:g}/min)"
+
+    def bind(self, rig, report):
+        # Each character draws its own blinks from the seed, so a crowd does not blink in step.
+        seed = None if self.seed is None else (int(self.seed), zlib.crc32(rig.name.encode("utf-8")))
+        schedule = BlinkSchedule(60.0 / self.rate_per_min, self.blink_s + 0.1, seed)
+        left, right = rig.morph_named(*_LEFT_TARGETS), rig.morph_named(*_RIGHT_TARGETS)
+        if left and right:
+            return {"schedule": schedule, "morphs": [rig.morph_index[left], rig.morph_index[right]]}
+        both = rig.morph_named(*_BOTH_TARGETS)
+        if both:
+            return {"schedule": schedule, "morphs": [rig.morph_index[both]]}
+        lids = _eyelid_joints(rig)
+        if lids:
+            joints = np.array([j for j, _ in lids])
+            pitch = np.radians([self.eyelid_angle_deg * share for _, share in lids])
+            return {"schedule": schedule, "morphs": [], "joints": joints, "aligned": rig.aligned[joints], "pitch": pitch}
+        report("has no eyelid morph targets or joints: blinks are not shown")
+        return {"schedule": schedule, "morphs": []}
+
+    def evaluate_one(self, job, block) -> None:
+        b = job.binding
+        t = job.local_times
+        starts = b["schedule"].until(float(t[-1]))
+        starts = starts[(starts <= t[-1]) & (starts + self.blink_s >= t[0])]
+        level = np.zeros(len(t))
+        for start in starts:  # at most a few blinks fall in a block
+            level = np.maximum(level, closure(t - start, self.curve))
+        level *= self.amount
+        if b["morphs"]:
+            values = np.repeat(level[:, None], len(b["morphs"]), axis=1)
+            job.pose.set_morphs(b["morphs"], values, job.weight, job.mode)
+        if "joints" in b:
+            angles = level[:, None] * b["pitch"][None]
+            delta = swing(np.zeros_like(angles), angles)
+            job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
+
+
+def _eyelid_joints(rig) -> list[tuple[int, float]]:
+    """(joint, pitch share) of the eyelids: upper lids close downward (-1), lower lids upward (+1/3)."""
+    found = []
+    for canonical, share in (("upper_eyelid_left", -1.0), ("upper_eyelid_right", -1.0),
+                             ("lower_eyelid_left", 1 / 3), ("lower_eyelid_right", 1 / 3)):
+        if rig.joint(canonical) is not None:
+            found.append((rig.joint(canonical), share))
+    if found:
+        return found
+    for index, name in enumerate(rig.skeleton.names):  # the mapping may leave these optional joints out
+        key = name.lower()
+        if re.search(r"eye_?lid|(?:^|[_.\-\s:|])lid(?:$|[_.\-\s])", key) and not re.search(r"(end|tip|nub)$", key):
+            if "upper" in key or "up" in re.split(r"[_.\-\s]", key) or "top" in key:
+                found.append((index, -1.0))
+            elif "lower" in key or "low" in re.split(r"[_.\-\s]", key) or "bottom" in key:
+                found.append((index, 1 / 3))
+    return found
+
+
+def blink_from_bml(parameters: dict, runtime, character: str) -> Blink:
+    """ASAP's blink emitter: ``mean_interval_s`` between blinks sets the rate (else the resting rate)."""
+    interval = float(parameters.get("mean_interval_s") or 0.0)
+    return Blink(rate_per_min=float(np.clip(60.0 / interval, 0.1, 120.0)) if interval > 0 else None)

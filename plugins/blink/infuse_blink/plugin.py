@@ -1,0 +1,13 @@
+"""Registers the blink controller (group ``infuse.controllers``)."""
+from __future__ import annotations
+
+from infuse import hookimpl
+from infuse.plugin_types import Component
+
+from .controller import Blink, blink_from_bml
+
+
+@hookimpl
+def infuse_controllers():
+    return [Component("blink", Blink, "blink at human rates through eyelid morph targets or joints",
+                      {"layer": int(Blink.layer), "from_bml": blink_from_bml})]

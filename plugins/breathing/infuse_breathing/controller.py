@@ -1,0 +1,93 @@
+"""Breathing: a slow, asymmetric rise and fall of the chest and shoulders.
+
+The breath curve b(t) in [0, 1] (0 exhaled, 1 inhaled) is a raised cosine over each cycle of
+60 / ``rate_bpm`` seconds, with the inhalation taking ``inhale_fraction`` of it (0.4: breathing
+in is quicker than breathing out). At ``depth`` 1 a full breath
+
+- pitches the spine up (it extends): spine1 0.5°, spine2 1°, spine3 2° (whichever exist);
+- rolls each clavicle (sternoclavicular, else acromioclavicular) 3° so the shoulders rise;
+- pitches the neck (spine4, else skullbase) down by the spine's total, so the head stays level.
+
+Depth scales all of these (default 0.5: a calm breath of about 1° of chest lift).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse.errors import MissingFeatureError, UsageError
+from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.swing import local_offsets, swing
+
+#: Degrees at depth 1: pitch of each spine joint, roll of the clavicles.
+SPINE_PITCH_DEG = {"spine1": 0.5, "spine2": 1.0, "spine3": 2.0}
+CLAVICLE_ROLL_DEG = 3.0
+
+
+def breath_curve(t, rate_bpm: float, inhale_fraction: float = 0.4, phase: float = 0.0) -> np.ndarray:
+    """(F,) breath level in [0, 1] at ``t`` seconds: 0 fully exhaled (cycle start), 1 at the end of inhaling."""
+    cycle = np.mod(np.asarray(t, dtype=np.float64) * rate_bpm / 60.0 + phase, 1.0)
+    # Warp the cycle so that the first ``inhale_fraction`` of it is the rising half of a cosine.
+    warped = np.where(cycle < inhale_fraction, 0.5 * cycle / inhale_fraction,
+                      0.5 + 0.5 * (cycle - inhale_fraction) / (1.0 - inhale_fraction))
+    return 0.5 - 0.5 * np.cos(2.0 * np.pi * warped)
+
+
+class Breathing(Controller):
+    """Breathe at ``rate_bpm`` breaths per minute (default 14) and ``depth`` (0..2, default 0.5);
+    ``phase`` (cycles, 0..1) offsets the cycle so characters do not breathe in step."""
+
+    kind = "breathing"
+    layer = Layer.POSTURE
+    mode = Mode.ADDITIVE
+    blend_in_s = 1.0
+    blend_out_s = 1.0
+
+    def __init__(self, rate_bpm: float = 14.0, depth: float = 0.5, inhale_fraction: float = 0.4, phase: float = 0.0):
+        if not (np.isfinite(rate_bpm) and 1.0 <= rate_bpm <= 60.0):
+            raise UsageError(f"breathing rate must lie in [1, 60] breaths per minute, got {rate_bpm}")
+        if not (np.isfinite(depth) and 0.0 <= depth <= 2.0):
+            raise UsageError(f"breathing depth must lie in [0, 2], got {depth}")
+        if not 0.1 <= inhale_fraction <= 0.9:
+            raise UsageError("inhale_fraction must lie in [0.1, 0.9]")
+        self.rate_bpm, self.depth, self.inhale_fraction, self.phase = float(rate_bpm), float(depth), float(inhale_fraction), float(phase)
+
+    def describe(self) -> str:
+        return f"breathing ({self.rate_bpm:g}/min)"
+
+    def bind(self, rig, report):
+        joints, heading, pitch, roll = [], [], [], []
+        for name, degrees in SPINE_PITCH_DEG.items():
+            if rig.joint(name) is not None:
+                joints.append(rig.joint(name))
+                heading.append(0.0), pitch.append(degrees), roll.append(0.0)
+        if not joints:
+            raise MissingFeatureError(f"{rig.name}: no spine joint is mapped to breathe with")
+        neck = rig.joint("spine4") if rig.joint("spine4") is not None else rig.joint("skullbase")
+        if neck is not None:  # keep the head level
+            joints.append(neck)
+            heading.append(0.0), pitch.append(-sum(pitch)), roll.append(0.0)
+        clavicles = 0
+        for side, sign in (("l", 1.0), ("r", -1.0)):
+            joint = rig.joint(f"{side}_sternoclavicular")
+            joint = rig.joint(f"{side}_acromioclavicular") if joint is None else joint
+            if joint is not None:
+                joints.append(joint)
+                heading.append(0.0), pitch.append(0.0), roll.append(sign * CLAVICLE_ROLL_DEG)
+                clavicles += 1
+        if clavicles < 2:
+            report("clavicles are not mapped; breathing moves the spine only")
+        return {"joints": np.array(joints), "aligned": rig.aligned[joints],
+                "angles": np.radians(np.stack((heading, pitch, roll), axis=1))}
+
+    def evaluate_one(self, job, block) -> None:
+        b = job.binding
+        level = self.depth * breath_curve(job.local_times, self.rate_bpm, self.inhale_fraction, self.phase)
+        angles = level[:, None, None] * b["angles"][None]  # (F, K, 3)
+        delta = swing(angles[..., 0], angles[..., 1], angles[..., 2])
+        job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
+
+
+def breathing_from_bml(parameters: dict, runtime, character: str) -> Breathing:
+    """ASAP's breathing emitter: ``mean_interval_s`` between breaths sets the rate."""
+    interval = float(parameters.get("mean_interval_s") or 0.0)
+    return Breathing(rate_bpm=float(np.clip(60.0 / interval, 1.0, 60.0)) if interval > 0 else 14.0)

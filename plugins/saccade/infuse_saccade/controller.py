@@ -1,0 +1,111 @@
+"""The saccade controller: quick eye jumps around the gaze direction, per :mod:`infuse_saccade.model`.
+
+It runs in the GAZE layer after the gaze (a higher priority), moving the eyes from wherever the gaze
+left them, and keeps them within the eye limits (heading 40°, pitch 35° up and down by default).
+While the character speaks (:meth:`Runtime.speech_intervals`) and for ``resume_s`` (2 s) after, it
+makes no saccades: the eyes return to the gaze direction when speech starts.
+"""
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.errors import UsageError
+from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.swing import clamp_ellipse, local_offsets, swing, swing_angles
+
+from .model import MODES, SaccadeSchedule, ease_out, saccade_duration
+
+RESUME_S = 2.0
+
+
+class Saccades(Controller):
+    """Saccades in ``mode`` talk, listen or think (see the model); ``seed`` makes them repeatable
+    (each character draws its own from it); ``max_magnitude_deg`` overrides the mode's limit;
+    ``eye_limits_deg`` = (heading, up, down)."""
+
+    kind = "saccade"
+    layer = Layer.GAZE
+    mode = Mode.ADDITIVE
+    priority = 10  # after the gaze, whose eye direction it moves around
+    blend_in_s = 0.2
+    blend_out_s = 0.2
+
+    def __init__(self, mode: str = "talk", seed: int | None = 0, max_magnitude_deg: float | None = None,
+                 eye_limits_deg=(40.0, 35.0, 35.0), resume_s: float = RESUME_S):
+        if mode not in MODES:
+            raise UsageError(f"saccade mode {mode!r}: expected one of {', '.join(MODES)}")
+        if max_magnitude_deg is not None and not (np.isfinite(max_magnitude_deg) and max_magnitude_deg > 0):
+            raise UsageError("the saccade magnitude limit must be a positive number of degrees")
+        self.saccade_mode = mode
+        self.seed = seed
+        self.max_magnitude_deg = max_magnitude_deg
+        self.eye_limits = np.radians(np.asarray(eye_limits_deg, dtype=np.float64))
+        self.resume_s = float(resume_s)
+
+    def describe(self) -> str:
+        return f"saccades ({self.saccade_mode})"
+
+    def schedule(self, character: str = "") -> SaccadeSchedule:
+        """The saccade events this controller plays for ``character`` (reproducible from the seed)."""
+        seed = None if self.seed is None else (int(self.seed), zlib.crc32(character.encode("utf-8")))
+        return SaccadeSchedule(MODES[self.saccade_mode], seed, self.max_magnitude_deg)
+
+    def bind(self, rig, report):
+        eyes = [rig.joint("eyeball_left"), rig.joint("eyeball_right")]
+        if None in eyes:
+            report("has no eyes: saccades are not shown")
+            return None
+        return {"eyes": np.array(eyes), "aligned": rig.aligned[eyes], "rest": rig.skeleton.rest_rotations[eyes],
+                "schedule": self.schedule(rig.name)}
+
+    def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
+        """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
+        saccade inside ``pauses`` ((start, end) seconds) and a return to the gaze direction at each pause start."""
+        count = schedule.until(float(t[-1]))
+        times, offsets = schedule.times[:count], schedule.offsets[:count]
+        keep = times <= t[-1]
+        for start, end in pauses:
+            keep &= ~((times >= start) & (times < end))
+        back = np.array([s for s, e in pauses if s <= t[-1]])
+        times = np.concatenate((times[keep], back))
+        offsets = np.concatenate((offsets[keep], np.zeros((len(back), 2))))
+        order = np.argsort(times, kind="stable")
+        times, offsets = times[order], offsets[order]
+        if len(times) == 0:
+            return np.zeros((len(t), 2))
+        before = np.vstack((np.zeros((1, 2)), offsets[:-1]))
+        durations = saccade_duration(np.linalg.norm(offsets - before, axis=1))
+        last = np.searchsorted(times, t, side="right") - 1
+        started = last >= 0
+        k = np.maximum(last, 0)
+        progress = ease_out((t - times[k]) / durations[k])[:, None]
+        return np.where(started[:, None], before[k] + progress * (offsets[k] - before[k]), 0.0)
+
+    def evaluate_one(self, job, block) -> None:
+        b = job.binding
+        if b is None:
+            return
+        start = job.activity.start_s
+        pauses = [(s - start, e - start + self.resume_s) for s, e in block.runtime.speech_intervals(job.rig.name)]
+        offsets = np.radians(self.offsets(b["schedule"], job.local_times, pauses)) * job.weight[:, None]
+        # The eyes' current turn from rest (the gaze's), in their aligned frames, plus the saccade.
+        current = job.pose.local_rotations[:, b["eyes"]]
+        aligned = b["aligned"]
+        turn = quat.multiply(quat.conjugate(aligned), quat.multiply(quat.multiply(quat.conjugate(b["rest"]), current), aligned))
+        heading, pitch, roll = swing_angles(turn)
+        heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
+        rotations = quat.multiply(b["rest"], local_offsets(aligned, swing(heading, pitch, roll)))
+        job.pose.set_rotations(b["eyes"], rotations)
+
+
+def saccade_from_bml(parameters: dict, runtime, character: str) -> Saccades | None:
+    """SmartBody's ``<saccade mode=... finish=...>``: None (nothing to play) when it finishes saccades."""
+    if parameters.get("enabled") is False:
+        for activity in runtime.activities:
+            if activity.rig.name == character and isinstance(activity.controller, Saccades) and activity.end_s is None:
+                runtime.stop(activity)
+        return None
+    return Saccades(parameters.get("mode") or "talk", max_magnitude_deg=parameters.get("angle_limit_deg"))
