@@ -19,12 +19,16 @@ def forward_kinematics(
     local_rotations: np.ndarray,
     root_translations: np.ndarray,
     joint_translations: np.ndarray | None = None,
+    *,
+    joint_major: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Global rotations (F, J, 4) and positions (F, J, 3) for every frame at once.
 
     ``local_rotations`` is (F, J, 4); ``root_translations`` (F, 3) is joint 0's local translation;
     ``joint_translations`` (F, J, 3), if given, replaces the rest offsets of the other joints.
     Roots other than joint 0 keep their rest translation unless ``joint_translations`` is given.
+    With ``joint_major`` the results come in the internal layout, (J, 4, F) and (J, 3, F): one
+    joint's components over all frames are contiguous rows (no final transpose).
     """
     local_rotations = np.asarray(local_rotations, dtype=np.float64)
     frames = local_rotations.shape[0]
@@ -69,6 +73,8 @@ def forward_kinematics(
         pos[:, 1] = p[:, 1] + vy + w * cy + (z * cx - x * cz)
         pos[:, 2] = p[:, 2] + vz + w * cz + (x * cy - y * cx)
         g_pos[idx] = pos
+    if joint_major:
+        return g_rot, g_pos
     return np.ascontiguousarray(g_rot.transpose(2, 0, 1)), np.ascontiguousarray(g_pos.transpose(2, 0, 1))
 
 

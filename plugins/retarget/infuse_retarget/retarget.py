@@ -8,7 +8,8 @@
   hip–knee–ankle plus the ball of the foot.
 - ``"contacts"`` (default): the same IK, but foot contacts are detected on the source (speed and
   height normalized by leg length) and planted points are pinned exactly, at the height they rest
-  at in the plain transfer, with the correction gliding between contacts.
+  at in the plain transfer, with the correction gliding between contacts; the ball of the foot
+  rides on the ankle along the source foot's direction.
 
 ``limb_scaling`` adds per-limb scaling by extension for the arms: a straightening source arm
 brings the target's wrist to the source's reach scaled by the arm-length ratio.
@@ -20,13 +21,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from infuse import contacts as contact_detection
-from infuse import quaternions as quat
 from infuse.errors import UsageError
-from infuse.kinematics import motion_fk
+from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
 
-from . import goals, ik
+from . import cq, goals, ik
 from .transfer import RetargetPlan, Transferred
 
 IK_MODES = ("none", "paper", "contacts")
@@ -36,6 +36,8 @@ HINGES = {"l_knee": (1.0, 0.0, 0.0), "r_knee": (1.0, 0.0, 0.0), "l_elbow": (0.0,
 BLEND_SECONDS = 0.12
 #: Margin (metres) inside the limb's reach for a goal to count as reachable.
 REACH_MARGIN = 5e-4
+#: The hinge of a limb never straightens past this (radians): no hyperextended knees.
+MIN_FLEXION = np.radians(1.0)
 
 
 @dataclass
@@ -44,21 +46,22 @@ class RetargetResult:
 
     - ``motion``: the result on the target skeleton; ``plain``: the plain transfer.
     - ``scale``: leg-length ratio (target over source); ``ik``: the mode used.
-    - ``contacts``: the source's :class:`infuse.contacts.FootContacts`.
+    - ``contacts``: the source's :class:`infuse.contacts.FootContacts` (``None`` for a plain
+      transfer, which does not need them).
+    - ``ground``: metres, the target's ground: the level of its lowest foot joints while planted in
+      the plain transfer (the source's is ``contacts.ground``).
+    - ``source_positions``: (F, Js, 3) the source clip's global joint positions.
     - ``goals`` / ``residual`` / ``reachable`` / ``hard``: per goal joint name, (F, 3) goal
       positions, (F,) distance left after IK (metres), (F,) whether the goal was within the limb's
       reach and (F,) whether it is a constraint rather than a preference (a swinging ball of the
       foot only says where the foot points).
-    - ``ground``: metres, the target's ground: the level of its lowest foot joints while planted in
-      the plain transfer (the source's is ``contacts.ground``).
-    - ``source_positions``: (F, Js, 3) the source clip's global joint positions.
     """
 
     motion: Motion
     plain: Motion
     scale: float
     ik: str
-    contacts: contact_detection.FootContacts
+    contacts: contact_detection.FootContacts | None
     ground: float
     source_positions: np.ndarray
     goals: dict[str, np.ndarray] = field(default_factory=dict)
@@ -67,84 +70,98 @@ class RetargetResult:
     hard: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-def _segments(plan: RetargetPlan, names) -> np.ndarray:
-    names = set(names)
-    return np.array([j for j, d in enumerate(plan.driver) if d in names], dtype=np.int64)
-
-
-def _rotate(state: Transferred, joints: np.ndarray, rotation: np.ndarray) -> None:
-    if len(joints):
-        state.rotations[:, joints] = quat.multiply(rotation[:, None], state.rotations[:, joints])
-
-
-def _reach_limit(upper: float, lower: np.ndarray, flexion: np.ndarray, min_flexion: float) -> np.ndarray:
-    lo = np.minimum(flexion, min_flexion)
-    return np.sqrt(upper * upper + lower * lower + 2.0 * upper * lower * np.cos(lo))
+def lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
+    """(F, 2) height of each target foot's lowest joint or end site, from a transferred state."""
+    sk = plan.target.skeleton
+    out = []
+    for foot in plan.target.feet:
+        pos = plan.positions(state, foot.joints)
+        low = np.min(np.stack([pos[j][1] for j in foot.joints]), axis=0)
+        if foot.end_sites:
+            for e in foot.end_sites:
+                p = int(sk.end_site_parents[e])
+                site = pos[p] + cq.rotate(state.rotations[p], sk.end_site_offsets[e][:, None])
+                low = np.minimum(low, site[1])
+        out.append(np.broadcast_to(low, (state.rotations.shape[-1],)))
+    return np.stack(out, axis=1)
 
 
 class _Solver:
     """Runs the IK stages on one transferred state (see the module docstring)."""
 
-    min_flexion = np.radians(1.0)
-
     def __init__(self, plan: RetargetPlan, state: Transferred, result: RetargetResult):
         self.plan, self.state, self.result = plan, state, result
         self.names = plan.target.skeleton.names
+        self._segments = {}
 
-    def limb(self, root: str, middle: str, end: str, goal: np.ndarray, below_root, below_middle):
-        """Solve a two-bone limb and turn its segments (joints driven by ``below_root`` / ``below_middle``
-        canonical names, everything the root / middle joint moves); returns the solution."""
+    def segment(self, names) -> np.ndarray:
+        """Target joints driven by any of the canonical ``names``."""
+        key = tuple(names)
+        if key not in self._segments:
+            wanted = set(names)
+            computed = self.plan.computed
+            self._segments[key] = np.array([j for j, d in enumerate(self.plan.driver) if d in wanted and computed[j]],
+                                           dtype=np.int64)
+        return self._segments[key]
+
+    def turn(self, names, rotation: np.ndarray) -> None:
+        joints = self.segment(names)
+        if len(joints):
+            self.state.rotations[joints] = cq.mul(rotation, self.state.rotations[joints])
+
+    def limb(self, root: str, middle: str, end: str, goal: np.ndarray, upper_segment, lower_segment):
+        """Solve a two-bone limb for ``goal`` (3, F) and turn its segments: joints driven by the
+        canonical names ``upper_segment`` (between root and middle) and ``lower_segment`` (below
+        the middle joint). Returns the :class:`ik.LimbSolution`."""
         plan, state = self.plan, self.state
         tgt = plan.target.index
         pos = plan.positions(state, [tgt[root], tgt[middle], tgt[end]])
         r, m, e = pos[tgt[root]], pos[tgt[middle]], pos[tgt[end]]
-        reference = quat.rotate(plan.canonical_delta(state.rotations, middle), np.array(HINGES[middle]))
+        reference = cq.rotate(plan.canonical_delta(state.rotations, middle), np.array(HINGES[middle])[:, None])
         axis, flexion = ik.hinge_axes(r, m, e, reference)
-        solution = ik.solve_limb(r, m, e, goal, axis, flexion, min_flexion=self.min_flexion)
-        _rotate(state, _segments(plan, below_root), solution.root)
-        _rotate(state, _segments(plan, below_middle), quat.multiply(solution.middle, quat.conjugate(solution.root)))
-        upper = float(np.linalg.norm(m[0] - r[0]))
-        limit = _reach_limit(upper, np.linalg.norm(e - m, axis=1), flexion, self.min_flexion)
-        lower = np.abs(upper - np.linalg.norm(e - m, axis=1))
-        dist = np.linalg.norm(goal - r, axis=1)
+        solution = ik.solve_limb(r, m, e, goal, axis, flexion, min_flexion=MIN_FLEXION)
+        self.turn(upper_segment, solution.root)
+        self.turn(lower_segment, solution.middle)
+        a, b = cq.norm(m - r), cq.norm(e - m)
+        straightest = np.minimum(flexion, MIN_FLEXION)
+        far = np.sqrt(a * a + b * b + 2.0 * a * b * np.cos(straightest))
+        dist = cq.norm(goal - r)
         name = self.names[tgt[end]]
-        self.result.goals[name] = goal
+        self.result.goals[name] = goal.T
         self.result.residual[name] = solution.residual
-        self.result.reachable[name] = (dist <= limit - REACH_MARGIN) & (dist >= lower + REACH_MARGIN)
-        self.result.hard[name] = np.ones(len(goal), dtype=bool)
+        self.result.reachable[name] = (dist <= far - REACH_MARGIN) & (dist >= np.abs(a - b) + REACH_MARGIN)
+        self.result.hard[name] = np.ones(len(dist), dtype=bool)
         return solution
 
     def foot(self, k: int, mode: str) -> None:
         plan, state = self.plan, self.state
-        s = plan.scale
         side = "lr"[k]
         src_foot, tgt_foot = plan.source.feet[k], plan.target.feet[k]
         ps = state.source_positions
-        ankle_s = ps[:, src_foot.ankle]
-        ball_s = ps[:, src_foot.ball] if src_foot.ball is not None else None
+        ankle_s = ps[src_foot.ankle]
+        ball_s = ps[src_foot.ball] if src_foot.ball is not None else None
         ball_t = tgt_foot.ball if ball_s is not None else None
-        joints = [tgt_foot.ankle] + ([ball_t] if ball_t is not None else []) + list(tgt_foot.joints)
-        pos = plan.positions(state, joints)
+        pos = plan.positions(state, [tgt_foot.ankle] + ([ball_t] if ball_t is not None else []))
         ankle_t = pos[tgt_foot.ankle]
         if mode == "paper":
-            ankle_goal = goals.warp(ankle_t[0], ankle_s, s)
-            ball_goal = goals.warp(pos[ball_t][0], ball_s, s) if ball_t is not None else None
+            ankle_goal = goals.warp(ankle_t[:, 0], ankle_s, plan.scale)
+            ball_goal = goals.warp(pos[ball_t][:, 0], ball_s, plan.scale) if ball_t is not None else None
         else:
             ankle_goal, ball_goal = self._pinned_goals(k, pos, ankle_s, ball_s, ball_t)
-        below_knee = [f"{side}_knee", f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
-        solution = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"] + below_knee, below_knee)
+        foot = [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
+        solution = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"], [f"{side}_knee"] + foot)
         if ball_t is None:
             return
-        ball_now = solution.end_position + quat.rotate(solution.middle, pos[ball_t] - ankle_t)
+        ball_now = solution.end_position + cq.rotate(solution.middle, pos[ball_t] - ankle_t)
         turn, ball_end = ik.aim(solution.end_position, ball_now, ball_goal, solution.middle)
-        _rotate(state, _segments(plan, [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]), turn)
+        self.turn(foot, turn)
         name = self.names[ball_t]
-        self.result.goals[name] = ball_goal
-        self.result.residual[name] = np.linalg.norm(ball_end - ball_goal, axis=1)
-        length = np.linalg.norm(pos[ball_t][0] - ankle_t[0])
-        self.result.reachable[name] = np.abs(np.linalg.norm(ball_goal - solution.end_position, axis=1) - length) < REACH_MARGIN
-        planted = self.result.contacts.flags[:, list(self.result.contacts.points).index(plan.source.feet[k].ball)]
-        self.result.hard[name] = np.ones(len(ball_goal), dtype=bool) if mode == "paper" else planted
+        length = float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
+        self.result.goals[name] = ball_goal.T
+        self.result.residual[name] = cq.norm(ball_end - ball_goal)
+        self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < REACH_MARGIN
+        planted = self.result.contacts.flags[:, list(self.result.contacts.points).index(src_foot.ball)]
+        self.result.hard[name] = np.ones(len(planted), dtype=bool) if mode == "paper" else planted
 
     def _pinned_goals(self, k: int, pos: dict, ankle_s: np.ndarray, ball_s, ball_t):
         plan, found = self.plan, self.result.contacts
@@ -153,26 +170,21 @@ class _Solver:
         cols = np.nonzero(found.foot_of_point == k)[0]
         ankle_flags = found.flags[:, cols[0]]
         ball_flags = found.flags[:, cols[1]] if len(cols) > 1 else ankle_flags
-
-        def warped(target_path, source_path, flags):
-            # Planted heights come from the plain transfer (which stands the target on its own
-            # ground); the swing lifts off them by the source's lift, scaled.
-            rest = _planted(target_path[:, 1], flags)
-            out = goals.warp(target_path[0], source_path, s)
-            out[:, 1] = rest + s * (source_path[:, 1] - _planted(source_path[:, 1], flags))
-            return out, rest
-
-        ankle_w, ankle_h = warped(pos[tgt_foot.ankle], ankle_s, ankle_flags)
+        ankle_t = np.broadcast_to(pos[tgt_foot.ankle], ankle_s.shape)
+        # Planted heights come from the plain transfer (which stands the target on its own ground);
+        # the swing lifts off them by the source's lift, scaled.
+        ankle_h = goals.planted(ankle_t[1], ankle_flags)
+        ankle_w = goals.warp(ankle_t[:, 0], ankle_s, s)
+        ankle_w[1] = ankle_h + s * (ankle_s[1] - goals.planted(ankle_s[1], ankle_flags))
         if ball_t is None:
             return goals.pinned(ankle_w, ankle_flags, ankle_h)[0], None
         # The ball rides on the ankle along the source foot's direction, so the foot keeps pointing
         # the source's way whatever its length.
-        length = float(np.linalg.norm(pos[ball_t][0] - pos[tgt_foot.ankle][0]))
-        foot = ball_s - ankle_s
-        ball_w = ankle_w + length * foot / np.maximum(np.linalg.norm(foot, axis=1, keepdims=True), 1e-12)
-        ball_h = _planted(pos[ball_t][:, 1], ball_flags)
-        blend = BLEND_SECONDS * self.state.fps
-        return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, blend)
+        length = float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
+        direction = ball_s - ankle_s
+        ball_w = ankle_w + length * direction / np.maximum(cq.norm(direction), 1e-12)
+        ball_h = goals.planted(np.broadcast_to(pos[ball_t], ankle_s.shape)[1], ball_flags)
+        return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
 
     def arms(self) -> None:
         plan, state = self.plan, self.state
@@ -187,29 +199,8 @@ class _Solver:
             arm_s = _chain_length(src.rig.positions, s_j)
             arm_t = _chain_length(tgt.rig.positions, t_j)
             pos = plan.positions(state, t_j)
-            goal, _ = goals.reach(pos[t_j[0]], ps[:, s_j[0]], ps[:, s_j[2]], pos[t_j[2]], arm_t / arm_s, arm_s)
-            self.limb(names[0], names[1], names[2], goal, [names[0], names[1], f"{side}_forearm"], [names[1], f"{side}_forearm"])
-
-
-def _planted(heights: np.ndarray, flags: np.ndarray) -> float:
-    """The height (m) a point rests at while planted: median over planted frames, else its 5th percentile."""
-    return float(np.median(heights[flags]) if flags.any() else np.percentile(heights, 5.0))
-
-
-def lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
-    """(F, 2) height of each target foot's lowest joint or end site, from a transferred state."""
-    sk = plan.target.skeleton
-    out = []
-    for foot in plan.target.feet:
-        pos = plan.positions(state, foot.joints)
-        low = np.min(np.stack([pos[j][:, 1] for j in foot.joints], axis=1), axis=1)
-        if foot.end_sites:
-            sites = list(foot.end_sites)
-            sp = sk.end_site_parents[sites]
-            ends = np.stack([pos[int(p)] for p in sp], axis=1) + quat.rotate(state.rotations[:, sp], sk.end_site_offsets[sites])
-            low = np.minimum(low, ends[..., 1].min(axis=1))
-        out.append(low)
-    return np.stack(out, axis=1)
+            goal, _ = goals.reach(pos[t_j[0]], ps[s_j[0]], ps[s_j[2]], pos[t_j[2]], arm_t / arm_s, arm_s)
+            self.limb(names[0], names[1], names[2], goal, [names[0]], [names[1], f"{side}_forearm"])
 
 
 def _chain_length(positions: np.ndarray, joints) -> float:
@@ -222,17 +213,20 @@ def retarget_clip(plan: RetargetPlan, motion: Motion, ik: str = "contacts", limb
     if ik not in IK_MODES:
         raise UsageError(f"ik must be one of {', '.join(IK_MODES)}, got {ik!r}")
     plan.check_source(motion)
-    fk = motion_fk(motion)
-    state = plan.transfer(motion, fk=fk)
+    gs, ps = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations,
+                                motion.joint_translations, joint_major=True)
+    state = plan.transfer(motion, fk=(gs, ps))
     plain = plan.to_motion(state, motion)
-    found = contact_detection.foot_contacts(motion, plan.source.index, fk=fk, **(contact_options or {}))
+    source_positions = ps.transpose(2, 0, 1)
+    if ik == "none" and not limb_scaling:
+        return RetargetResult(plain, plain, plan.scale, ik, None, float("nan"), source_positions)
+    found = contact_detection.foot_contacts(motion, plan.source.index, fk=(gs.transpose(2, 0, 1), source_positions),
+                                            **(contact_options or {}))
     planted = found.foot_flags()
     lowest = lowest_points(plan, state)
     ground = float(np.median(lowest[planted]) if planted.any() else np.percentile(lowest.min(axis=1), 10.0))
-    result = RetargetResult(plain, plain, plan.scale, ik, found, ground, fk[1])
-    if ik == "none" and not limb_scaling:
-        return result
-    state = Transferred(state.rotations.copy(), state.base, state.source_rotations, state.source_positions, state.ground, state.fps)
+    result = RetargetResult(plain, plain, plan.scale, ik, found, ground, source_positions)
+    state = Transferred(state.rotations.copy(), state.base, gs, ps, state.ground, state.fps)
     solver = _Solver(plan, state, result)
     if ik != "none":
         for k in (0, 1):

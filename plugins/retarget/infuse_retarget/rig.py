@@ -3,8 +3,8 @@
 Most rigs hang every joint from its parent. Some hang a mapped joint elsewhere (RobotExpressive's
 feet are children of the ground bone, moved by IK in the original rig); such a *detached* joint is
 placed relative to the joint of its canonical parent (its ankle follows the knee), at the offset it
-has in the reference pose. :meth:`Rig.positions` runs forward kinematics over this position tree,
-vectorized over frames.
+has in the reference pose. :meth:`Rig.positions_of` runs forward kinematics over this position
+tree, vectorized over frames.
 """
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.canonical import canonical_joint
 from infuse.skeleton import Skeleton
+
+from . import cq
 
 
 def canonical_parent(name: str, mapped) -> str | None:
@@ -100,16 +102,17 @@ class Rig:
         return tuple(order)
 
     def positions_of(self, rotations: np.ndarray, root_positions: dict[int, np.ndarray], joints=None) -> dict[int, np.ndarray]:
-        """Global positions {joint: (F, 3)} of ``joints`` (default all) from global ``rotations`` (F, J, 4).
+        """Global positions {joint: (3, F)} of ``joints`` (default all) from global ``rotations``
+        (J, 4, F), component-major (see :mod:`.cq`).
 
-        ``root_positions`` gives the position of every root (and may pin any other joint's position).
-        Only the joints needed for ``joints`` are computed.
+        ``root_positions`` gives the (3, F) position of roots (others stay at their reference
+        position) and may pin any other joint. Only the joints ``joints`` need are computed.
         """
         need = set(range(self.skeleton.num_joints)) if joints is None else set()
         if joints is not None:
             for j in joints:
                 while j >= 0 and j not in need:
-                    need.add(j)
+                    need.add(int(j))
                     j = self.position_parent[j]
         out: dict[int, np.ndarray] = {}
         for j in self.position_order:
@@ -120,7 +123,7 @@ class Rig:
                 continue
             p = self.position_parent[j]
             if p < 0:
-                out[j] = np.broadcast_to(self.positions[j], rotations.shape[:-2] + (3,))
+                out[j] = self.positions[j][:, None]
                 continue
-            out[j] = out[p] + quat.rotate(rotations[..., p, :], self.offsets[j])
+            out[j] = out[p] + cq.rotate(rotations[p], self.offsets[j][:, None])
         return out

@@ -30,11 +30,12 @@ import numpy as np
 from infuse import contacts
 from infuse import quaternions as quat
 from infuse.canonical import ALL_NAMES, canonical_joint
-from infuse.errors import UnusableInputError, UsageError
-from infuse.kinematics import motion_fk
+from infuse.errors import InputError, UnusableInputError, UsageError
+from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
 
+from . import cq
 from .prepare import Prepared, prepare
 from .rig import canonical_children
 
@@ -59,19 +60,11 @@ def match_clavicles(source: dict[str, int], target: dict[str, int]) -> tuple[dic
             dict(sorted(target.items(), key=lambda kv: order[kv[0]])))
 
 
-def twist_power(q: np.ndarray, axis: np.ndarray, fraction: np.ndarray) -> np.ndarray:
-    """``fraction`` of the twist of rotations ``q`` (..., 4) about unit ``axis`` (..., 3)."""
-    q = quat.canonical_sign(q)
-    s = np.sum(q[..., :3] * axis, axis=-1)
-    angle = 2.0 * np.arctan2(s, q[..., 3])
-    return quat.from_axis_angle(axis, angle * fraction)
-
-
 @dataclass
 class Transferred:
-    """The plain transfer of one clip: target global rotations (F, J, 4), the target base's path
-    (F, 3), the source's FK (F, Js, 4) / (F, Js, 3), the source's ground height (metres) and the
-    frame rate."""
+    """The plain transfer of one clip, joint-major (see :mod:`.cq`): target global rotations
+    (J, 4, F), the target base's path (3, F), the source's FK (Js, 4, F) / (Js, 3, F), the
+    source's ground height (metres) and the frame rate."""
 
     rotations: np.ndarray
     base: np.ndarray
@@ -126,7 +119,7 @@ class RetargetPlan:
         driven = [j for j in range(j_count) if tgt.rig.canonical_of.get(j) in common]
         self._driven = np.array(driven, dtype=np.int64)
         self._driven_source = np.array([src.index[tgt.rig.canonical_of[j]] for j in driven], dtype=np.int64)
-        self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])
+        self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])[:, :, None]
 
         # Direction fix for bones with one shared child.
         kids = canonical_children(self.common)
@@ -143,7 +136,7 @@ class RetargetPlan:
         self._fix_src = np.array([f[0] for f in fix], dtype=np.int64)
         self._fix_child = np.array([f[1] for f in fix], dtype=np.int64)
         self._fix_tgt = np.array([f[2] for f in fix], dtype=np.int64)
-        self._fix_vec = np.array([f[3] for f in fix]).reshape(-1, 3)
+        self._fix_vec = np.array([f[3] for f in fix]).reshape(-1, 3, 1)
 
         # Followers: joints carried by a driven joint above them, some taking part of a twist.
         next_driven: list[set[int]] = [set() for _ in range(j_count)]
@@ -173,12 +166,15 @@ class RetargetPlan:
             rigid.append((j, a))
         self._rigid = np.array([r[0] for r in rigid], dtype=np.int64)
         self._rigid_driver = np.array([r[1] for r in rigid], dtype=np.int64)
-        self._rigid_offset = quat.multiply(quat.conjugate(tgt.frame[self._rigid_driver]), tgt.frame[self._rigid]).reshape(-1, 4)
+        self._rigid_offset = quat.multiply(quat.conjugate(tgt.frame[self._rigid_driver]), tgt.frame[self._rigid]).reshape(-1, 4, 1)
         self._tw = np.array([t[0] for t in twisted], dtype=np.int64)
         self._tw_a = np.array([t[1] for t in twisted], dtype=np.int64)
         self._tw_d = np.array([t[2] for t in twisted], dtype=np.int64)
-        self._tw_fraction = np.array([t[3] for t in twisted])
-        self._tw_axis = np.array([t[4] for t in twisted]).reshape(-1, 3)
+        self._tw_fraction = np.array([t[3] for t in twisted]).reshape(-1, 1)
+        self._tw_axis = np.array([t[4] for t in twisted]).reshape(-1, 3, 1)
+        self._tw_frame = tgt.frame[self._tw].reshape(-1, 4, 1)
+        self._tw_a_frame_inv = quat.conjugate(tgt.frame[self._tw_a]).reshape(-1, 4, 1)
+        self._tw_d_frame_inv = quat.conjugate(tgt.frame[self._tw_d]).reshape(-1, 4, 1)
         self._static = np.array([j for j in range(j_count) if driver[j] is None], dtype=np.int64)
 
         # Root: the base's top root carries the translation; joints between hold their default pose.
@@ -187,9 +183,45 @@ class RetargetPlan:
         while parents[top] >= 0:
             top = parents[top]
         self._top_root = int(top)
-        at = tgt.rig.positions_of(tgt.rig.rotations[None], {top: np.zeros((1, 3))}, joints=[base])
-        self._base_offset = at[base][0]
+        at = tgt.rig.positions_of(tgt.rig.rotations[:, :, None], {top: np.zeros((3, 1))}, joints=[base])
+        self._base_offset = at[base][:, 0]
         self._detached = tuple(tgt.rig.detached)
+
+        # A joint carried rigidly with its parent (both by the same driven joint, or both holding
+        # their default pose) keeps its reference local rotation: only the others are computed.
+        group = np.full(j_count, -1, dtype=np.int64)
+        group[self._driven] = self._driven
+        group[self._rigid] = self._rigid_driver
+        group[self._tw] = self._tw
+        own = np.where(parents >= 0, group[np.maximum(parents, 0)], -1)
+        varying = (group != own) & ~((parents < 0) & (group == -1))
+        self._varying = np.nonzero(varying & (parents >= 0))[0]
+        self._varying_roots = np.nonzero(varying & (parents < 0))[0]
+        ref = tgt.rig.rotations
+        fixed_local = np.array(ref)
+        child = parents >= 0
+        fixed_local[child] = quat.multiply(quat.conjugate(ref[parents[child]]), ref[child])
+        self._fixed = np.nonzero(~varying)[0]
+        self._fixed_local = fixed_local[self._fixed][:, :, None]
+        # Global rotations are needed only where positions are asked for (legs, arms, feet, detached
+        # joints and the path to them) and for the parents of computed local rotations.
+        seeds = set(int(parents[j]) for j in self._varying) | set(self._varying.tolist()) | set(self._detached)
+        seeds |= {int(parents[j]) for j in self._detached if parents[j] >= 0}
+        for foot in tgt.feet:
+            seeds |= set(foot.joints) | {int(sk.end_site_parents[e]) for e in foot.end_sites}
+        seeds |= {tgt.index[n] for n in tgt.index if n.endswith(("_shoulder", "_elbow", "_wrist", "_hip", "_knee")) or n == "base"}
+        needed = np.zeros(j_count, dtype=bool)
+        for j in seeds:
+            while j >= 0 and not needed[j]:
+                needed[j] = True
+                j = int(tgt.rig.position_parent[j])
+        keep = needed[self._rigid]
+        self._rigid, self._rigid_driver, self._rigid_offset = self._rigid[keep], self._rigid_driver[keep], self._rigid_offset[keep]
+        self._static = self._static[needed[self._static]]
+        #: (J,) True for joints whose global rotation :meth:`transfer` computes.
+        self.computed = np.zeros(j_count, dtype=bool)
+        for arr in (self._driven, self._rigid, self._tw, self._static):
+            self.computed[arr] = True
 
     # -- per clip ----------------------------------------------------------------------------------
     def check_source(self, motion: Motion) -> None:
@@ -202,83 +234,89 @@ class RetargetPlan:
     def transfer(self, motion: Motion, fk=None) -> Transferred:
         """The plain transfer of ``motion`` (on the source skeleton): target global rotations and base path.
 
-        ``fk``: the source clip's ``(global_rotations, global_positions)`` if already computed.
+        ``fk``: the source clip's joint-major FK, ``(rotations (Js, 4, F), positions (Js, 3, F))``,
+        if already computed. Arrays in the result are joint-major too (see :mod:`.cq`).
         """
         self.check_source(motion)
         tgt = self.target
-        gs, ps = motion_fk(motion) if fk is None else fk
+        if fk is None:
+            fk = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations,
+                                    motion.joint_translations, joint_major=True)
+        gs, ps = fk
         frames = motion.num_frames
-        g = np.empty((frames, tgt.skeleton.num_joints, 4))
-        g[:, self._driven] = quat.multiply(gs[:, self._driven_source], self._driven_offset)
+        g = np.empty((tgt.skeleton.num_joints, 4, frames))
+        g[self._driven] = cq.mul(gs[self._driven_source], self._driven_offset)
         if len(self._fix_tgt):
-            current = quat.rotate(gs[:, self._fix_src], self._fix_vec)
-            wanted = ps[:, self._fix_child] - ps[:, self._fix_src]
-            g[:, self._fix_tgt] = quat.multiply(quat.between(current, wanted), g[:, self._fix_tgt])
+            current = cq.rotate(gs[self._fix_src], self._fix_vec)
+            wanted = ps[self._fix_child] - ps[self._fix_src]
+            g[self._fix_tgt] = cq.mul(cq.between(current, wanted), g[self._fix_tgt])
         if len(self._rigid):
-            g[:, self._rigid] = quat.multiply(g[:, self._rigid_driver], self._rigid_offset)
+            g[self._rigid] = cq.mul(g[self._rigid_driver], self._rigid_offset)
         if len(self._tw):
-            frame = tgt.frame
-            d_a = quat.multiply(g[:, self._tw_a], quat.conjugate(frame[self._tw_a]))  # canonical-frame D of the driver
-            d_d = quat.multiply(g[:, self._tw_d], quat.conjugate(frame[self._tw_d]))
-            share = twist_power(quat.multiply(quat.conjugate(d_a), d_d), self._tw_axis, self._tw_fraction)
-            g[:, self._tw] = quat.multiply(d_a, quat.multiply(share, frame[self._tw]))
+            d_a = cq.mul(g[self._tw_a], self._tw_a_frame_inv)  # canonical-frame D of the driver
+            d_d = cq.mul(g[self._tw_d], self._tw_d_frame_inv)
+            share = cq.twist_power(cq.mul(cq.conj(d_a), d_d), self._tw_axis, self._tw_fraction)
+            g[self._tw] = cq.mul(d_a, cq.mul(share, self._tw_frame))
         if len(self._static):
-            g[:, self._static] = tgt.rig.rotations[self._static]
-        ground = contacts.estimate_ground(contacts.lowest_points(self.source.skeleton, self.source.feet, gs, ps))
+            g[self._static] = tgt.rig.rotations[self._static][:, :, None]
         src = self.source.index
-        src_hips = 0.5 * (ps[:, src["l_hip"]] + ps[:, src["r_hip"]])
+        lowest = contacts.lowest_points(self.source.skeleton, self.source.feet, gs.transpose(2, 0, 1), ps.transpose(2, 0, 1))
+        ground = contacts.estimate_ground(lowest)
+        src_hips = 0.5 * (ps[src["l_hip"]] + ps[src["r_hip"]])
         hips = np.empty_like(src_hips)
-        hips[:, [0, 2]] = src_hips[0, [0, 2]] + self.scale * (src_hips[:, [0, 2]] - src_hips[0, [0, 2]])
-        hips[:, 1] = ground + self.scale * (src_hips[:, 1] - ground)
+        hips[[0, 2]] = src_hips[[0, 2], :1] + self.scale * (src_hips[[0, 2]] - src_hips[[0, 2], :1])
+        hips[1] = ground + self.scale * (src_hips[1] - ground)
         legs = [tgt.index["l_hip"], tgt.index["r_hip"], tgt.index["base"]]
-        at = tgt.rig.positions_of(g, {self._top_root: np.zeros((frames, 3))}, legs)
+        at = tgt.rig.positions_of(g, {self._top_root: np.zeros((3, 1))}, legs)
         base = hips - (0.5 * (at[legs[0]] + at[legs[1]]) - at[legs[2]])
         return Transferred(g, base, gs, ps, ground, motion.fps)
 
     def canonical_delta(self, rotations: np.ndarray, name: str) -> np.ndarray:
-        """(F, 4) canonical-frame rotation ``D`` of target joint ``name`` from global ``rotations``."""
+        """(4, F) canonical-frame rotation ``D`` of target joint ``name`` from global ``rotations`` (J, 4, F)."""
         j = self.target.index[name]
-        return quat.multiply(rotations[:, j], quat.conjugate(self.target.frame[j]))
+        return cq.mul(rotations[j], quat.conjugate(self.target.frame[j])[:, None])
 
     def root_positions(self, base: np.ndarray) -> dict[int, np.ndarray]:
-        """{top root joint: (F, 3)} placing the target base on ``base`` (F, 3)."""
-        return {self._top_root: base - self._base_offset}
+        """{top root joint: (3, F)} placing the target base on ``base`` (3, F)."""
+        return {self._top_root: base - self._base_offset[:, None]}
 
     def positions(self, state: Transferred, joints=None) -> dict[int, np.ndarray]:
-        """Target global positions {joint: (F, 3)} of ``joints`` (default all) for a transferred state."""
+        """Target global positions {joint: (3, F)} of ``joints`` (default all) for a transferred state."""
         return self.target.rig.positions_of(state.rotations, self.root_positions(state.base), joints)
 
     def to_motion(self, state: Transferred, like: Motion) -> Motion:
         """The target :class:`Motion` for global ``state`` (fps, name and sync points from ``like``)."""
         sk = self.target.skeleton
         g = state.rotations
+        frames = g.shape[-1]
         parents = sk.parents
-        child = np.nonzero(parents >= 0)[0]
-        local = np.array(g)
-        local[:, child] = quat.multiply(quat.conjugate(g[:, parents[child]]), g[:, child])
-        local = quat.make_continuous(local, axis=0)
+        local = np.empty_like(g)
+        local[self._fixed] = self._fixed_local
+        local[self._varying_roots] = g[self._varying_roots]
+        local[self._varying] = cq.mul_inv(g[parents[self._varying]], g[self._varying])
+        moving = np.concatenate((self._varying_roots, self._varying))
+        local[moving] = cq.make_continuous(local[moving])
         roots = self.root_positions(state.base)
         joint_translations = None
         if self._top_root == 0:
-            root_translations = roots[0]
+            root_translations = roots[0].T
         else:
-            root_translations = np.broadcast_to(sk.rest_translations[0], (like.num_frames, 3))
+            root_translations = np.broadcast_to(sk.rest_translations[0], (frames, 3))
         if self._top_root != 0 or self._detached:
-            joint_translations = np.broadcast_to(sk.rest_translations, (like.num_frames,) + sk.rest_translations.shape).copy()
-            joint_translations[:, self._top_root] = roots[self._top_root]
+            joint_translations = np.broadcast_to(sk.rest_translations, (frames,) + sk.rest_translations.shape).copy()
+            joint_translations[:, self._top_root] = roots[self._top_root].T
             if self._detached:
                 need = set(self._detached) | {int(parents[j]) for j in self._detached if parents[j] >= 0}
                 pos = self.target.rig.positions_of(g, roots, sorted(need))
                 for j in self._detached:
                     p = parents[j]
-                    if p < 0:
-                        joint_translations[:, j] = pos[j]
-                    else:
-                        joint_translations[:, j] = quat.rotate(quat.conjugate(g[:, p]), pos[j] - pos[p])
-        if not (np.all(np.isfinite(local)) and np.all(np.isfinite(root_translations))):
-            raise UnusableInputError(self.source_file, "retargeting produced non-finite values (degenerate skeleton?)")
-        return Motion(sk, like.fps, local, root_translations, joint_translations, name=like.name,
-                      sync_points=dict(like.sync_points))
+                    offset = pos[j] if p < 0 else cq.rotate(cq.conj(g[p]), pos[j] - pos[p])
+                    joint_translations[:, j] = np.broadcast_to(offset, (3, frames)).T
+        try:
+            return Motion(sk, like.fps, local.transpose(2, 0, 1), root_translations, joint_translations, name=like.name,
+                          sync_points=dict(like.sync_points))
+        except InputError as exc:  # NaN from a degenerate rig, not from the file
+            raise UnusableInputError(self.source_file, f"retargeting produced non-finite values ({exc.problem})") from None
 
 
 def _path_length(parents: np.ndarray, seg: np.ndarray, ancestor: int, j: int) -> float:
