@@ -86,7 +86,8 @@ class Rig:
     - ``body``: (4,) the body frame in the reference pose (see the module doc); ``reference``: which pose
       that is; ``reference_rotations``: (J, 4) its global rotations; ``aligned``: (J, 4) every joint's ``A_j``;
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
-    - ``notes``: what had to be assumed about the character.
+    - ``notes``: what had to be assumed about the character; ``state``: what controllers that act once
+      per character (one gaze at a time) keep between blocks.
     """
 
     name: str
@@ -99,6 +100,7 @@ class Rig:
     reference: str = field(init=False)
     reference_rotations: np.ndarray = field(init=False)
     notes: list[str] = field(default_factory=list)
+    state: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.joints = self.mapping.indices(self.skeleton)

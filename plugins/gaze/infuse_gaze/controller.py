@@ -140,69 +140,117 @@ class Gaze(Controller):
     # -- evaluation ----------------------------------------------------------------------------------
     @classmethod
     def evaluate(cls, jobs, block) -> None:
-        frames = len(block)
-        dt = block.dt
-        count = len(jobs)
+        """One solver row per character: its gaze activities take turns (see :func:`_in_charge`)."""
+        rows: dict[str, list] = {}
+        for job in jobs:
+            rows.setdefault(job.rig.name, []).append(job)
+        rows = {name: sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)) for name, row in rows.items()}
+        frames, dt = len(block), block.dt
+        count = len(rows)
         n_slots, n_groups = len(SLOTS), len(GROUPS)
-        chain_rot = np.empty((count, frames, n_slots, 3, 3))
-        chain_pos = np.empty((count, frames, n_slots, 3))
-        origin_local = np.empty((count, frames, n_slots, 3))
-        forward_angles = np.empty((count, frames, n_slots, 2))
-        targets = np.empty((count, frames, 3))
-        limits = np.empty((count, n_groups, 4))
-        smoothing = np.empty((count, n_groups))
-        max_step = np.empty((count, n_groups))
-        refine = []
-        index_of_rig = {job.rig.name: k for k, job in enumerate(jobs)}
+        shape = (count, frames)
+        arrays = {
+            "chain_rot": np.empty(shape + (n_slots, 3, 3)), "chain_pos": np.empty(shape + (n_slots, 3)),
+            "origin_local": np.empty(shape + (n_slots, 3)), "forward_angles": np.empty(shape + (n_slots, 2)),
+            "targets": np.empty(shape + (3,)), "weights": np.empty(shape), "active": np.empty(shape + (n_groups,)),
+            "fractions": np.empty(shape + (n_groups,)), "limits": np.empty(shape + (n_groups, 4)),
+            "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
+            "offsets": np.empty(shape + (2,)),
+        }
+        names = list(rows)
+        owners = []
         same_chain: dict[tuple, list[int]] = {}
-        for k, job in enumerate(jobs):
-            b, pose = job.binding, job.pose
-            if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
-                joints = b["slots"][b["present"]]
-                rest = pose.rig.skeleton.rest_rotations[joints]
-                pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight)
-            same_chain.setdefault((id(pose.rig.skeleton), tuple(b["slots"]), b["eyes_lead"]), []).append(k)
-            target = job.controller.target
-            if isinstance(target, str):  # a named scene object, resolved now that the runtime knows it
-                target = block.runtime.target(target)
-            targets[k] = target.positions(block.times, block)
-            if isinstance(target, JointTarget) and target.character in index_of_rig:
-                other = index_of_rig[target.character]
-                slots = _slots_of(target, jobs[other], block)
+        for c, name in enumerate(names):
+            row = rows[name]
+            owner, weight = _in_charge(row, block.times)
+            owners.append(owner)
+            arrays["weights"][c] = weight
+            for k, job in enumerate(row):
+                frames_k = owner == k
+                if not frames_k.any():
+                    continue
+                b, gaze = job.binding, job.controller
+                if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
+                    joints = b["slots"][b["present"]]
+                    rest = job.rig.skeleton.rest_rotations[joints]
+                    job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * frames_k)
+                target = gaze.target if not isinstance(gaze.target, str) else block.runtime.target(gaze.target)
+                arrays["targets"][c, frames_k] = target.positions(block.times, block)[frames_k]
+                arrays["active"][c, frames_k] = b["active"]
+                arrays["fractions"][c, frames_k] = b["fractions"]
+                arrays["offsets"][c, frames_k] = gaze.offset
+                for g, settings in enumerate(gaze.settings):
+                    arrays["limits"][c, frames_k, g] = settings.limits_rad
+                    arrays["smoothing"][c, frames_k, g] = smoothing_factor(settings.smooth, dt)
+                    arrays["max_step"][c, frames_k, g] = np.radians(settings.speed_deg_s) * dt
+            leads = tuple(sorted({row[k].binding["eyes_lead"] for k in np.unique(owner)}))
+            same_chain.setdefault((id(row[0].rig.skeleton), tuple(row[0].binding["slots"]), leads), []).append(c)
+        for (_, _, leads), members in same_chain.items():  # characters on one skeleton share the forward kinematics
+            parts = {lead: _chain_frames([rows[names[c]][0] for c in members], lead) for lead in leads}
+            first = parts[leads[0]]
+            for key, part in zip(("chain_rot", "chain_pos", "origin_local"), first[:3]):
+                arrays[key][members] = part
+            arrays["forward_angles"][members] = first[3]
+            for lead in leads[1:]:  # a gaze led by the head takes over from one led by the eyes, or back
+                for i, c in enumerate(members):
+                    row = rows[names[c]]
+                    frames_lead = np.array([row[k].binding["eyes_lead"] == lead for k in owners[c]])
+                    arrays["forward_angles"][c, frames_lead] = parts[lead][3][i, frames_lead]
+        refine = []
+        index = {name: c for c, name in enumerate(names)}
+        for c, name in enumerate(names):
+            row = rows[name]
+            if len(np.unique(owners[c])) != 1:
+                continue  # the gaze changes hands in this block: look at the other character's pose below
+            target = row[owners[c][0]].controller.target
+            target = block.runtime.target(target) if isinstance(target, str) else target
+            if isinstance(target, JointTarget) and target.character in index:
+                other = rows[target.character][0]
+                slots = _slots_of(target, other, block)
                 if slots:
-                    refine.append((k, other, slots))
-            for g, settings in enumerate(job.controller.settings):
-                limits[k, g] = settings.limits_rad
-                smoothing[k, g] = smoothing_factor(settings.smooth, dt)
-                max_step[k, g] = np.radians(settings.speed_deg_s) * dt
-        for members in same_chain.values():  # characters on one skeleton share the forward kinematics
-            parts = _chain_frames([jobs[k] for k in members])
-            for array, part in zip((chain_rot, chain_pos, origin_local, forward_angles), parts):
-                array[members] = part
-        inp = SolverInput(
-            chain_rot=chain_rot, chain_pos=chain_pos, origin_local=origin_local, forward_angles=forward_angles,
-            present=np.stack([j.binding["present"] for j in jobs]), counts=np.stack([j.binding["counts"] for j in jobs]),
-            targets=targets, weights=np.stack([j.weight for j in jobs]),
-            active=np.stack([j.binding["active"] for j in jobs]), fractions=np.stack([j.binding["fractions"] for j in jobs]),
-            limits=limits, smoothing=smoothing, max_step=max_step,
-            offsets=np.array([j.controller.offset for j in jobs]), refine=tuple(refine))
-        groups_state = np.stack([j.state.get("groups", np.zeros((n_groups, 2))) for j in jobs])
-        eyes_state = np.stack([j.state.get("eyes", np.zeros((2, 2))) for j in jobs])
+                    refine.append((c, index[target.character], slots))
+        inp = SolverInput(present=np.stack([rows[n][0].binding["present"] for n in names]),
+                          counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays)
+        states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
+        groups_state = np.stack([st.get("groups", np.zeros((n_groups, 2))) for st in states])
+        eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
         last = None
-        if refine and all("positions" in j.state for j in jobs):
-            last = np.stack([j.state["positions"] for j in jobs])
+        if refine and all("positions" in st for st in states):
+            last = np.stack([st["positions"] for st in states])
         offsets, positions = solve(inp, groups_state, eyes_state, last)
-        for k, job in enumerate(jobs):
-            job.state["groups"] = groups_state[k]
-            job.state["eyes"] = eyes_state[k]
-            job.state["positions"] = positions[k, -1]
+        for c, name in enumerate(names):
+            job = rows[name][0]
+            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "positions": positions[c, -1]}
             b = job.binding
             present = b["present"]
-            hv = offsets[k][:, present]
+            hv = offsets[c][:, present]
             job.pose.add_offsets(b["slots"][present], local_offsets(b["chain_aligned"][present], swing(hv[..., 0], hv[..., 1])))
 
 
-def _chain_frames(jobs):
+def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
+    """Which of a character's gaze activities (sorted by start) leads at each time, and the blend weight.
+
+    A character has one gaze at a time: the latest started that has not ended leads; the others stop
+    counting. When a new gaze takes over from one still running, it does not fade in from nothing:
+    the weight is the largest of the running gazes', and the turn moves from where it was to the new
+    target under the smoothing and speed limits. When none runs, the last one to lead keeps the
+    turn returning to rest (weight 0)."""
+    starts = np.array([j.activity.start_s for j in row])
+    ends = np.array([np.inf if j.activity.end_s is None else j.activity.end_s for j in row])
+    t = np.asarray(times)[None]
+    running = (starts[:, None] <= t + 1e-9) & (t < ends[:, None] - 1e-9)
+    started = starts[:, None] <= t + 1e-9
+    ranks = np.arange(len(row))[:, None]
+    latest_running = np.max(np.where(running, ranks, -1), axis=0)
+    latest_started = np.max(np.where(started, ranks, 0), axis=0)
+    owner = np.where(latest_running >= 0, latest_running, latest_started)
+    weights = np.stack([j.weight for j in row])
+    weight = np.max(np.where(running, weights, 0.0), axis=0)
+    own = weights[owner, np.arange(len(owner))]
+    return owner, np.where(latest_running >= 0, np.maximum(weight, own), own)
+
+
+def _chain_frames(jobs, eyes_lead: bool):
     """For characters on one skeleton with one chain, from the pose below: each slot's aligned frame
     (C, F, S, 3, 3) and position (C, F, S, 3) relative to its parent slot's aligned frame, the gaze
     origin in each slot's aligned frame (C, F, S, 3), and the heading and pitch (C, F, S, 2) of where
@@ -240,7 +288,7 @@ def _chain_frames(jobs):
     chain_rot = rotation_matrices(quat.multiply(inverse_parent, frames_w))
     chain_pos = quat.rotate(inverse_parent, g_pos - parent_p)
     eyes = [7, 8] if present[7] and present[8] else []
-    lead_slots = eyes if b["eyes_lead"] else [6]
+    lead_slots = eyes if eyes_lead and eyes else [6]
     origin = g_pos[..., eyes or [6], :].mean(axis=-2)
     forward = quat.rotate(frames_w[..., lead_slots, :], np.array([0.0, 0.0, 1.0])).mean(axis=-2)
     inverse = quat.conjugate(frames_w)

@@ -39,9 +39,10 @@ class SolverInput:
       aligned frame; ``forward_angles`` (C, F, S, 2): heading and pitch of where the priority joint points;
     - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
     - ``targets`` (C, F, 3); ``weights`` (C, F) blend weights;
-    - ``active`` (C, G) bool: groups that move; ``fractions`` (C, G): share of the remaining turn;
-    - ``limits`` (C, G, 4): heading, up, down, roll; ``smoothing`` (C, G): share per frame;
-      ``max_step`` (C, G): radians per frame; ``offsets`` (C, 2): heading and pitch added to the target direction.
+    - per frame (the gaze in charge may change within a block): ``active`` (C, F, G) bool: groups that
+      move; ``fractions`` (C, F, G): share of the remaining turn; ``limits`` (C, F, G, 4): heading, up,
+      down, roll; ``smoothing`` (C, F, G): share per frame; ``max_step`` (C, F, G): radians per frame;
+      ``offsets`` (C, F, 2): heading and pitch added to the target direction.
     - ``refine``: (c, c2, slots) triples: character c looks at the mean of ``slots`` of character c2,
       taken from the previous solved frame.
     """
@@ -100,13 +101,16 @@ def _angles(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _clamp(h, v, limits):
-    """(h, v) (C,) scaled onto the ellipse of ``limits`` (C, 4) when outside it (a zero limit allows nothing)."""
-    vert = np.where(v >= 0.0, limits[:, 1], limits[:, 2])
-    a = np.divide(h, limits[:, 0], out=np.where(h == 0.0, 0.0, np.inf), where=limits[:, 0] > 0)
-    b = np.divide(v, vert, out=np.where(v == 0.0, 0.0, np.inf), where=vert > 0)
+    """(h, v) (C,) scaled onto the ellipse of ``limits`` (C, 4) when outside it; an axis with a zero
+    limit does not turn at all."""
+    vertical = np.where(v >= 0.0, limits[:, 1], limits[:, 2])
+    h = np.where(limits[:, 0] > 0, h, 0.0)
+    v = np.where(vertical > 0, v, 0.0)
+    a = h / np.where(limits[:, 0] > 0, limits[:, 0], 1.0)
+    b = v / np.where(vertical > 0, vertical, 1.0)
     r = np.sqrt(a * a + b * b)
-    f = np.where(r > 1.0, 1.0 / np.maximum(r, 1.0), 1.0)  # r = inf gives 0: no rotation about a locked axis
-    return np.where(np.isfinite(a), h * f, 0.0), np.where(np.isfinite(b), v * f, 0.0)
+    f = np.where(r > 1.0, 1.0 / np.maximum(r, 1.0), 1.0)
+    return h * f, v * f
 
 
 def _follow(state, desired, smoothing, max_step):
@@ -157,6 +161,8 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, la
             for c, c2, slots in inp.refine:
                 target[c] = previous[c2, list(slots)].mean(axis=0)
         weight = inp.weights[:, f]
+        active, fractions, limits = inp.active[:, f], inp.fractions[:, f], inp.limits[:, f]
+        smoothing, max_step, fixed = inp.smoothing[:, f], inp.max_step[:, f], inp.offsets[:, f]
         share = None
         for s in range(_S):
             p = SLOT_PARENTS[s]
@@ -168,22 +174,20 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, la
                 w_pos[:, s] = w_pos[:, p] + _apply(w_rot[:, p], chain_pos[:, s])
             g = SLOT_GROUPS[s]
             if g == EYES:  # each eye turns from its own position, all the way (within its limits)
-                dh, dv = _direction(pre, target - w_pos[:, s], zero, zero, inp.offsets)
+                dh, dv = _direction(pre, target - w_pos[:, s], zero, zero, fixed)
                 k = s - _EYE_SLOTS[0]
-                gain = (inp.active[:, g] * inp.present[:, s] * weight)[:, None]
-                dh, dv = _clamp(dh, dv, inp.limits[:, g])
-                eyes_state[:, k] = _follow(eyes_state[:, k], np.stack((dh, dv), -1) * gain,
-                                           inp.smoothing[:, g], inp.max_step[:, g])
+                gain = (active[:, g] * inp.present[:, s] * weight)[:, None]
+                dh, dv = _clamp(dh, dv, limits[:, g])
+                eyes_state[:, k] = _follow(eyes_state[:, k], np.stack((dh, dv), -1) * gain, smoothing[:, g], max_step[:, g])
                 out[:, f, s] = np.where(present[:, s], eyes_state[:, k], 0.0)
                 continue
             if _FIRST_SLOT[g] == s:
                 fwd = inp.forward_angles[:, f, s]
                 dh, dv = _direction(pre, target - w_pos[:, s] - _apply(pre, inp.origin_local[:, f, s]),
-                                    fwd[:, 0], fwd[:, 1], inp.offsets)
-                dh, dv = _clamp(dh * inp.fractions[:, g], dv * inp.fractions[:, g], inp.limits[:, g])
-                gain = (inp.active[:, g] * weight)[:, None]
-                groups_state[:, g] = _follow(groups_state[:, g], np.stack((dh, dv), -1) * gain,
-                                             inp.smoothing[:, g], inp.max_step[:, g])
+                                    fwd[:, 0], fwd[:, 1], fixed)
+                dh, dv = _clamp(dh * fractions[:, g], dv * fractions[:, g], limits[:, g])
+                gain = (active[:, g] * weight)[:, None]
+                groups_state[:, g] = _follow(groups_state[:, g], np.stack((dh, dv), -1) * gain, smoothing[:, g], max_step[:, g])
                 share = groups_state[:, g] / counts[:, g]
             hv = np.where(present[:, s], share, 0.0)
             out[:, f, s] = hv
