@@ -247,3 +247,19 @@ def test_the_heuristic_mapper_agrees_with_the_labels_on_the_gaze_joints():
         mapping = corpus_character(key).mapping
         label = by_file[rel]["mapping"]
         assert {n: mapping[n] for n in chain} == {n: label.get(n) for n in chain}, key
+
+
+def test_gaze_command_renders_and_saves(tmp_path):
+    from infuse.cli import main
+
+    from corpus_data import corpus_file
+
+    out, saved = tmp_path / "gaze.png", tmp_path / "gaze.glb"
+    path = "0.8,1.6,1.5; -0.8,1.8,1.5; 0,1.2,1.2"
+    code = main(["gaze", str(corpus_file(CORPUS_CHARACTERS["rpm"])), "-o", str(out), "--strip", "3", "--duration", "2",
+                 "--target-path", path, "--blink", "--saccades", "talk", "--save", str(saved)])
+    assert code == 0 and out.stat().st_size > 10_000
+    back = infuse.load(saved)
+    assert back.motions["gaze"].num_frames == 60 and set(back.meta["morph_weight_tracks"]["gaze"]["weights"]) == {
+        "eyeBlinkLeft", "eyeBlinkRight"}
+    assert main(["gaze", str(corpus_file(CORPUS_CHARACTERS["rpm"])), "-o", str(out), "--target-path", "1,2"]) == 2
