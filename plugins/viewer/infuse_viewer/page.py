@@ -25,8 +25,13 @@ _OFFLINE_LOADER = """<script>
 (function () {
   var imports = {};
   document.querySelectorAll('script[data-module]').forEach(function (el) {
-    var binary = atob(el.textContent.trim()), bytes = new Uint8Array(binary.length);
-    for (var i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);
+    var text = el.textContent.trim(), bytes;
+    if (Uint8Array.fromBase64) bytes = Uint8Array.fromBase64(text);
+    else {
+      var binary = atob(text);
+      bytes = new Uint8Array(binary.length);
+      for (var i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);
+    }
     imports[el.dataset.module] = URL.createObjectURL(new Blob([bytes], {type: 'text/javascript'}));
   });
   var map = document.createElement('script');

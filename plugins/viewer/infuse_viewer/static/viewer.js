@@ -16,6 +16,7 @@ const api = window.infuseViewer = { ready: false, error: null, frame: 0 };
 // ---------------------------------------------------------------- data sources
 function blobBytes(id) {
   const text = $(id).textContent.trim();
+  if (Uint8Array.fromBase64) return Uint8Array.fromBase64(text);
   const binary = atob(text);
   const bytes = new Uint8Array(binary.length);
   for (let i = 0; i < binary.length; i++) bytes[i] = binary.charCodeAt(i);
@@ -434,7 +435,7 @@ function fillTargets() {
 function applyVisibility() {
   const showSkeleton = $('show-skeleton').checked;
   overlay.group.visible = showSkeleton || !state.hasMesh;
-  $('show-mesh').parentElement.style.display = state.hasMesh ? '' : 'none';
+  for (const id of ['show-mesh', 'show-skeleton']) $(id).parentElement.style.display = state.hasMesh ? '' : 'none';  // without a mesh the skeleton is the figure
   if (state.root) state.root.traverse((o) => { if (o.isMesh && !o.userData.infuseOverlay) o.visible = $('show-mesh').checked; });
   targetGroup.visible = $('show-targets').checked;
 }
@@ -463,22 +464,25 @@ function poseBox(box) {
   return box;
 }
 
-// Boxes over the clip: `path` holds every sampled pose, `pose` the current one.
+// Boxes over the clip: `path` holds every sampled pose, `pose` the current one, `travel` the root's path.
 function clipBoxes() {
   const path = new THREE.Box3();
+  const travel = new THREE.Box3();
   const saved = state.time;
   const samples = state.action ? 8 : 1;
   for (let k = 0; k < samples; k++) {
     state.time = samples > 1 ? state.duration * k / (samples - 1) : 0;
     applyTime();
     poseBox(path);
+    if (state.rootJoint) travel.expandByPoint(state.rootJoint.object.getWorldPosition(tmp.a));
   }
   state.time = saved;
   applyTime();
   const pose = poseBox(new THREE.Box3());
   if (path.isEmpty()) path.setFromObject(state.root);
   if (pose.isEmpty()) pose.copy(path);
-  return { path, pose };
+  if (travel.isEmpty()) travel.expandByPoint(tmp.a.set(0, 0, 0));
+  return { path, pose, travel };
 }
 
 // A ground grid drawn by a shader on a disc (minor lines every `step`, major every 5), fading out
@@ -516,7 +520,8 @@ function frameCharacter() {
   const boxes = clipBoxes();
   const pathSize = boxes.path.getSize(new THREE.Vector3());
   const poseSize = boxes.pose.getSize(new THREE.Vector3());
-  state.follow = Math.max(pathSize.x - poseSize.x, pathSize.z - poseSize.z) > 0.5 * Math.max(poseSize.y, 1e-3) && !!state.rootJoint;
+  const travel = boxes.travel.getSize(new THREE.Vector3());
+  state.follow = Math.max(travel.x, travel.z) > 0.5 * Math.max(poseSize.y, 1e-3);
   $('follow').checked = state.follow;
   followAnchor.copy(state.rootJoint ? state.rootJoint.object.getWorldPosition(tmp.a) : tmp.a.set(0, 0, 0));
   const box = boxes.path.clone();
@@ -722,7 +727,8 @@ Object.assign(api, {
     audio: { src: audio.dataset.src || null, currentTime: audio.currentTime, paused: audio.paused, blocked: audioBlocked },
     mapping: state.info?.mapping ?? null,
   }),
-  jointsOnScreen: () => jointsOnScreen().map((s) => ({ name: s.joint.name, canonical: s.joint.canonical, low: s.joint.low, x: s.x, y: s.y, visible: s.visible })),
+  jointsOnScreen: () => jointsOnScreen().map((s) => ({ name: s.joint.name, parent: state.joints[s.joint.parent]?.name ?? null,
+    canonical: s.joint.canonical, low: s.joint.low, x: s.x, y: s.y, visible: s.visible })),
   tip: () => (tip.hidden ? null : tip.textContent),
 });
 
