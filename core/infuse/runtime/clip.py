@@ -38,15 +38,31 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
         return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
-    a = motion.local_rotations[i0]
-    b = motion.local_rotations[i0 + 1]
-    b = np.where(np.sum(a * b, axis=-1, keepdims=True) < 0.0, -b, b)
-    rot = a + frac[:, :, None] * (b - a)
-    rot /= np.linalg.norm(rot, axis=-1, keepdims=True)
+    rotations, steps = _interpolation_table(motion)
+    rot = rotations[i0] + frac[:, :, None] * steps[i0]
+    rot *= 1.0 / np.sqrt(np.einsum("...i,...i->...", rot, rot))[..., None]
     root = motion.root_translations[i0] + frac * (motion.root_translations[i0 + 1] - motion.root_translations[i0])
     if jt is not None:
         jt = jt[i0] + frac[:, :, None] * (jt[i0 + 1] - jt[i0])
     return rot, root, jt, cycles
+
+
+_TABLES: dict[int, tuple] = {}
+
+
+def _interpolation_table(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
+    """The clip's rotations made sign-continuous over frames, and each frame's step to the next
+    (cached per clip: a crowd plays the same few clips)."""
+    key = id(motion)
+    cached = _TABLES.get(key)
+    if cached is None or cached[0] is not motion:
+        rotations = quat.make_continuous(motion.local_rotations, axis=0)
+        steps = np.diff(rotations, axis=0)
+        cached = (motion, rotations, steps)
+        if len(_TABLES) > 64:
+            _TABLES.clear()
+        _TABLES[key] = cached
+    return cached[1], cached[2]
 
 
 class Clip(Controller):

@@ -1,0 +1,122 @@
+"""Controller runtime speed: 1, 10 and 100 characters gazing, saccading, blinking and breathing over a
+looping walk.
+
+Every character is the SmartBody utah skeleton (113 joints) walking ChrUtah_Walk001 in a loop, each
+at its own place and phase, breathing, blinking (conversation rate), making talk-mode saccades and
+following its own moving gaze target with eyes, head and spine. The figure is frames per second of
+the whole scene (every character, one frame) and how many times faster than real time that is at
+30 fps. The reference is the same controllers evaluated the simple way: one character and one frame
+at a time (no batching over characters, no vectorizing over frames), run in the same process on a
+smaller share of the work; its output is checked equal to the batched one.
+
+Run: ``.venv/bin/python benchmarks/controllers_speed.py`` (needs the corpus, ``INFUSE_CORPUS``).
+"""
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import infuse
+from infuse import Character
+from infuse.runtime import Clip, Runtime, controller
+
+FPS = 30.0
+SECONDS = 10.0
+CORPUS = Path(os.environ.get("INFUSE_CORPUS", Path(__file__).resolve().parents[1].parent / "shared" / "corpus"))
+SKELETON = "smartbody/behaviorsets/MaleLocomotion/skeletons/test_utah.sk"
+WALK = "smartbody/behaviorsets/MaleLocomotion/motions/ChrUtah_Walk001.skm"
+
+
+def load():
+    asset = infuse.load(CORPUS / SKELETON)
+    walk = next(iter(infuse.load(CORPUS / WALK).motions.values()))
+    mapping = infuse.mapping.map_skeleton(asset)
+    return Character("utah", asset, mapping=mapping), walk
+
+
+def populate(rt: Runtime, character, walk, count: int, first: int = 0) -> list[str]:
+    """Add characters ``first`` .. ``first + count - 1`` with their controllers; returns their names."""
+    names = []
+    for i in range(first, first + count):
+        name = f"utah{i:03d}"
+        x, z = 2.0 * (i % 10), -2.0 * (i // 10)
+        rt.add_character(character, name=name, position=(x, 0.0, z))
+        rt.activate(name, Clip(walk, offset_s=(i * 0.137) % walk.duration), 0.0)
+        rt.activate(name, controller("breathing", phase=(i * 0.31) % 1.0), 0.0)
+        rt.activate(name, controller("blink", activity="conversation", seed=i), 0.0)
+        rt.activate(name, controller("saccade", mode="talk", seed=i), 0.0)
+        speed = 1.3  # the walk's speed, m/s: the target keeps ahead of the walker and sweeps side to side
+
+        def target(t, x=x, z=z, phase=i * 0.7):
+            t = np.asarray(t, dtype=np.float64)
+            return np.stack((x + 1.5 * np.sin(0.8 * t + phase), 1.5 + 0.3 * np.sin(1.3 * t + phase),
+                             z + 2.5 + speed * t), axis=-1)
+
+        rt.activate(name, controller("gaze", target=target), 0.0)
+        names.append(name)
+    return names
+
+
+def batched(character, walk, count: int, seconds: float = SECONDS) -> tuple[float, float, Runtime, list[str]]:
+    """Wall and CPU seconds to evaluate ``count`` characters for ``seconds``, batched; the runtime and names."""
+    rt = Runtime(fps=FPS)
+    names = populate(rt, character, walk, count)
+    start, cpu = time.perf_counter(), time.process_time()
+    rt.run(seconds)
+    return time.perf_counter() - start, time.process_time() - cpu, rt, names
+
+
+def one_at_a_time(character, walk, count: int, frames: int) -> tuple[float, float, list[Runtime]]:
+    """Wall and CPU seconds to evaluate ``count`` characters for ``frames`` frames, each alone, frame by frame."""
+    runtimes = []
+    for i in range(count):
+        rt = Runtime(fps=FPS, block_frames=1)
+        populate(rt, character, walk, 1, first=i)
+        runtimes.append(rt)
+    start, cpu = time.perf_counter(), time.process_time()
+    for _ in range(frames):
+        for rt in runtimes:
+            rt.step()
+    return time.perf_counter() - start, time.process_time() - cpu, runtimes
+
+
+def main() -> int:
+    if not (CORPUS / SKELETON).is_file():
+        print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
+        return 2
+    character, walk = load()
+    frames = int(SECONDS * FPS)
+    print(f"controller runtime: utah skeleton ({character.skeleton.num_joints} joints), walk loop + breathing + blink "
+          f"+ saccades + gaze, {SECONDS:g} s at {FPS:g} fps; {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} CPUs, Python {platform.python_version()}, numpy {np.__version__}")
+    batched(character, walk, 2, 1.0)  # warm up imports and caches
+    results = {}
+    for count in (1, 10, 100):
+        wall, cpu, rt, names = min((batched(character, walk, count) for _ in range(3)), key=lambda r: r[0])
+        results[count] = (wall, rt, names)
+        print(f"  {count:>3} characters: {frames / wall:8.1f} frames/s ({count * frames / wall:9.0f} character-frames/s), "
+              f"{SECONDS / wall:6.1f}x real time ({SECONDS / cpu:.1f}x by CPU time)")
+    ref_count, ref_frames = 10, 30
+    ref_wall, ref_cpu, runtimes = one_at_a_time(character, walk, ref_count, ref_frames)
+    ref_rate = ref_count * ref_frames / ref_wall
+    best100 = results[100][0]
+    rate100 = 100 * frames / best100
+    print(f"  reference, one character and one frame at a time ({ref_count} characters x {ref_frames} frames): "
+          f"{ref_rate:9.0f} character-frames/s, {ref_rate / 100 / FPS:.2f}x real time for 100 characters")
+    print(f"  batched / reference at 100 characters: {rate100 / ref_rate:.1f}x")
+    rt100, names100 = results[100][1], results[100][2]
+    worst = max(np.abs(rt100.motion(names100[i]).local_rotations[:ref_frames] - runtimes[i].motion(names100[i]).local_rotations).max()
+                for i in range(ref_count))
+    print(f"  largest difference between the two outputs: {worst:.1e} (quaternion components)")
+    ok = SECONDS / best100 > 1.0
+    print(f"  target (100 characters at 30 fps faster than real time): {'met' if ok else 'NOT met'}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
