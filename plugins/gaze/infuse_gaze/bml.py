@@ -8,6 +8,7 @@ a character, or ``character:joint``), ``target_position`` (x, y, z metres), ``in
 from __future__ import annotations
 
 from infuse.errors import UsageError
+from infuse.runtime.targets import JointTarget
 
 from .controller import Gaze
 from .model import GROUP_NAMES, group_name
@@ -21,7 +22,9 @@ def gaze_from_bml(parameters: dict, runtime, character: str) -> Gaze:
     elif target is None:
         target = _straight_ahead(runtime, character)
     else:
-        runtime.target(target)  # raise now if nothing has that name
+        resolved = runtime.target(target)  # raise now if nothing has that name
+        if isinstance(resolved, JointTarget):
+            resolved.resolve(runtime)  # or the character or joint named
     groups = None
     if parameters.get("joint_range"):
         groups = sorted({group_name(w) for w in parameters["joint_range"]}, key=GROUP_NAMES.index)

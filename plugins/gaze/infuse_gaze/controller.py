@@ -174,8 +174,13 @@ class Gaze(Controller):
                     joints = b["slots"][b["present"]]
                     rest = job.rig.skeleton.rest_rotations[joints]
                     job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * frames_k)
-                target = gaze.target if not isinstance(gaze.target, str) else block.runtime.target(gaze.target)
-                arrays["targets"][c, frames_k] = target.positions(block.times, block)[frames_k]
+                try:
+                    target = gaze.target if not isinstance(gaze.target, str) else block.runtime.target(gaze.target)
+                    arrays["targets"][c, frames_k] = target.positions(block.times, block)[frames_k]
+                except UsageError as exc:  # a target that names nothing in the scene: this gaze rests
+                    job.report(f"gaze target {gaze.target!r} cannot be found ({exc}); the gaze is skipped")
+                    arrays["targets"][c, frames_k] = 0.0
+                    arrays["weights"][c, frames_k] = 0.0
                 arrays["active"][c, frames_k] = b["active"]
                 arrays["fractions"][c, frames_k] = b["fractions"]
                 arrays["offsets"][c, frames_k] = gaze.offset
@@ -203,7 +208,10 @@ class Gaze(Controller):
             if len(np.unique(owners[c])) != 1:
                 continue  # the gaze changes hands in this block: look at the other character's pose below
             target = row[owners[c][0]].controller.target
-            target = block.runtime.target(target) if isinstance(target, str) else target
+            try:
+                target = block.runtime.target(target) if isinstance(target, str) else target
+            except UsageError:
+                continue
             if isinstance(target, JointTarget) and target.character in index:
                 other = rows[target.character][0]
                 slots = _slots_of(target, other, block)
