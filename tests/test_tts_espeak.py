@@ -68,6 +68,42 @@ def test_later_syntheses_are_timed_in_a_fresh_process(engine, spoken, tmp_path):
     assert (tmp_path / "again.wav").read_bytes() == first.wav_path.read_bytes()
 
 
+def _damage_first_wav(monkeypatch, damage):
+    """Let pyttsx3 write its WAV, then ``damage(samples)`` the first one, as its driver sometimes does."""
+    from infuse_tts_espeak import pyttsx3_writer
+    from infuse_tts_espeak.engine import read_wav_samples, write_wav
+
+    real_finish, calls = pyttsx3_writer.finish, []
+
+    def finish(proc, timeout_s):
+        code, err = real_finish(proc, timeout_s)
+        if not calls:
+            path = proc.args[proc.args.index("-m") + 2]
+            samples, rate = read_wav_samples(path)
+            write_wav(path, damage(samples), rate)
+        calls.append(code)
+        return code, err
+
+    monkeypatch.setattr(pyttsx3_writer, "finish", finish)
+    return calls
+
+
+def test_a_pyttsx3_wav_that_stops_short_is_written_again(engine, tmp_path, monkeypatch):
+    calls = _damage_first_wav(monkeypatch, lambda samples: samples[:-5000])
+    utterance = engine.synthesize("Open wide, papa.", tmp_path / "short.wav")
+    assert len(calls) == 2 and utterance.meta["pyttsx3_attempts"] == 2
+    assert utterance.meta["alignment"] == "WAV identical to the timed synthesis"
+
+
+def test_a_different_pyttsx3_wav_is_replaced_by_the_timed_audio(engine, tmp_path, monkeypatch):
+    _damage_first_wav(monkeypatch, lambda samples: samples[::-1].copy())
+    with pytest.warns(RuntimeWarning, match="differs from the timed synthesis"):
+        utterance = engine.synthesize("Open wide, papa.", tmp_path / "odd.wav")
+    assert utterance.meta["wav_writer"] == "libespeak"
+    with wave.open(str(tmp_path / "odd.wav"), "rb") as f:
+        assert f.getnframes() / f.getframerate() == pytest.approx(utterance.duration_s)
+
+
 def test_phonemes_cover_the_audio_contiguously(spoken):
     utterance, _, _ = spoken
     starts, ends, names = utterance.phoneme_arrays()

@@ -9,9 +9,10 @@ freshly initialised libespeak-ng:
   a fresh child process (:mod:`.isolated`).
 
 Both use the same library from the same fresh state, so the audio is the same; the engine checks
-that sample for sample and records the outcome in ``Utterance.meta["alignment"]``. Were they ever
-to differ (another pyttsx3 version, say) the WAV is rewritten from the timing pass's audio, with a
-warning, so the timings always belong to the WAV next to them. ``wav_writer="libespeak"`` skips
+that sample for sample and records the outcome in ``Utterance.meta["alignment"]``. A pyttsx3 WAV
+that stops short of the timed audio (its driver can drop the last block) is written again; were they
+still to differ, the WAV is rewritten from the timing pass's audio, with a warning, so the timings
+always belong to the WAV next to them. ``wav_writer="libespeak"`` skips
 pyttsx3 and writes that audio directly; without a WAV path the samples and timings come from one
 in-process synthesis.
 """
@@ -33,6 +34,9 @@ from . import library as espeak_library
 from .timeline import build_timeline
 
 WAV_WRITERS = ("pyttsx3", "libespeak")
+#: pyttsx3's espeak driver can drop the last block of audio (when the end-of-message event arrives in the
+#: same callback as that block); a WAV that is a strict prefix of the timed audio is asked for again.
+PYTTSX3_ATTEMPTS = 3
 
 
 def write_wav(path: str | Path, samples: np.ndarray, sample_rate: int) -> None:
@@ -141,21 +145,28 @@ class EspeakEngine:
                     writer.kill()
                     writer.communicate()
                     raise
-                self._check_pyttsx3_wav(writer, tmp, samples, rate, timeout, utterance)
+                self._check_pyttsx3_wav(writer, tmp, samples, rate, timeout, utterance, speech.plain)
         utterance.wav_path = wav_path
         return utterance
 
     def _check_pyttsx3_wav(self, writer, tmp: Path, samples: np.ndarray, rate: int, timeout: float,
-                           utterance: Utterance) -> None:
-        code, err = pyttsx3_writer.finish(writer, timeout)
-        if code == pyttsx3_writer.EXIT_MISSING:
-            raise MissingFeatureError(None, f"{err}; {espeak_library.INSTALL_HINT}, and pip install pyttsx3")
-        if code != 0:
-            raise UnusableInputError(None, f"pyttsx3 could not write the WAV: {err or f'exit code {code}'}")
-        wav, wav_rate = read_wav_samples(tmp)
-        if wav_rate == rate and np.array_equal(wav, samples):
-            utterance.meta.update(wav_writer="pyttsx3", alignment="WAV identical to the timed synthesis")
-            return
+                           utterance: Utterance, text: str) -> None:
+        for attempt in range(PYTTSX3_ATTEMPTS):
+            if attempt:  # pyttsx3 dropped the end of the audio: ask it again
+                writer = pyttsx3_writer.start(text, tmp, self.voice, self.rate, self.volume, timeout)
+            code, err = pyttsx3_writer.finish(writer, timeout)
+            if code == pyttsx3_writer.EXIT_MISSING:
+                raise MissingFeatureError(None, f"{err}; {espeak_library.INSTALL_HINT}, and pip install pyttsx3")
+            if code != 0:
+                raise UnusableInputError(None, f"pyttsx3 could not write the WAV: {err or f'exit code {code}'}")
+            wav, wav_rate = read_wav_samples(tmp)
+            if wav_rate == rate and np.array_equal(wav, samples):
+                utterance.meta.update(wav_writer="pyttsx3", alignment="WAV identical to the timed synthesis",
+                                      pyttsx3_attempts=attempt + 1)
+                return
+            truncated = wav_rate == rate and len(wav) < len(samples) and np.array_equal(wav, samples[:len(wav)])
+            if not truncated:
+                break
         problem = (f"pyttsx3's WAV ({len(wav)} samples at {wav_rate} Hz) differs from the timed synthesis "
                    f"({len(samples)} samples at {rate} Hz)")
         warnings.warn(f"{problem}; writing the timed synthesis instead so the timings match the WAV", RuntimeWarning, stacklevel=3)
