@@ -10,6 +10,10 @@ body bones and frames, plain and final); penetration and float of the feet in cm
 final); root speed over source speed x leg scale; the largest miss of a reachable IK goal in mm
 and the share of goals out of reach.
 
+A second table measures per-limb scaling by extension on SmartBody's reaching clips: how far the
+hand's offset from the shoulder, over the arm length, differs from the source's while the source
+arm is extended (percent of arm length), for the plain transfer and with limb scaling.
+
 Run: ``python benchmarks/retarget_quality.py`` (reads the corpus from ``INFUSE_CORPUS``, default
 ``../shared/corpus``).
 """
@@ -20,10 +24,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import infuse
 from infuse.mapping import map_skeleton, sample_poses
-from infuse_retarget import RetargetPlan
-from infuse_retarget.quality import evaluate
+from infuse_retarget import RetargetPlan, retarget_clip
+from infuse_retarget.quality import evaluate, reach_error
 
 CORPUS = Path(os.environ.get("INFUSE_CORPUS", Path(__file__).resolve().parents[1].parent / "shared" / "corpus"))
 BANDAI = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_{}_{}_001.bvh"
@@ -33,6 +39,8 @@ SOURCES_SMARTBODY = [UTAH + "motions/ChrUtah_Walk001.skm", UTAH + "motions/ChrUt
 TARGETS_BANDAI = [UTAH + "skeletons/test_utah.sk", "runxaway-models/Xbot.glb", "bvh11/resources/131_03.bvh",
                   "adibkn1-robot/RobotExpressive.glb"]
 TARGETS_SMARTBODY = [BANDAI.format("walk", "normal"), "runxaway-models/Xbot.glb"]
+REACHES = "smartbody/behaviorsets/reaching/motions"
+TARGETS_REACH = ["bvh11/resources/131_03.bvh", "runxaway-models/Xbot.glb"]
 
 
 def load(rel: str):
@@ -43,14 +51,16 @@ def load(rel: str):
     return asset, mapping, next(iter(asset.motions.values()), None)
 
 
+_cache: dict = {}
+
+
+def get(rel: str):
+    if rel not in _cache:
+        _cache[rel] = load(rel)
+    return _cache[rel]
+
+
 def rows():
-    cache = {}
-
-    def get(rel):
-        if rel not in cache:
-            cache[rel] = load(rel)
-        return cache[rel]
-
     for sources, targets in ((SOURCES_BANDAI, TARGETS_BANDAI), (SOURCES_SMARTBODY, TARGETS_SMARTBODY)):
         for src in sources:
             s_asset, s_map, clip = get(src)
@@ -79,6 +89,20 @@ def main() -> int:
               f"{q.speed_ratio:5.3f} | {q.residual_mm:6.3f} {100 * q.unreachable:3.0f}%" + ("" if ok else "  <- misses a target"))
     print(f"\n{failures} pair(s) miss a target (skate <= source x 1.1 + 0.5 cm/m, bones <= 5 deg, reachable goals <= 1 mm); "
           f"{time.perf_counter() - start:.1f} s")
+    print(f"\n{'reaching clips (arm extended > 0.9)':<40} {'target':<10} {'plain %':>8} {'scaled %':>9}")
+    for tgt in TARGETS_REACH:
+        t_asset, t_map, t_clip = get(tgt)
+        errors = []
+        for path in sorted((CORPUS / REACHES).glob("*.skm")):
+            s_asset, s_map, clip = load(str(path.relative_to(CORPUS)))
+            plan = RetargetPlan(clip.skeleton, s_map, t_asset.skeleton, t_map, source_motion=clip, target_motion=t_clip)
+            plain = retarget_clip(plan, clip, ik="contacts")
+            scaled = retarget_clip(plan, clip, ik="contacts", limb_scaling=True)
+            errors.append((reach_error(plan, plain.motion, plain.source_positions),
+                           reach_error(plan, scaled.motion, scaled.source_positions)))
+        errors = np.array(errors, dtype=float)
+        mean = np.nanmean(errors, axis=0)
+        print(f"{f'{len(errors)} SmartBody reaching clips':<40} {Path(tgt).stem:<10} {mean[0]:8.2f} {mean[1]:9.2f}")
     return 0
 
 

@@ -7,8 +7,9 @@ paper it works recursively from the base: the base is matched as a whole frame (
 hip, up along the spine), then each joint starts from its mapped parent's rotation and adds the
 shortest swing that lines its bone up, using the mean of its children's directions at branching
 joints. Starting from the parent keeps bone roll anatomical (a bent knee straightens about its
-hinge, a lowered arm rises about the body's forward axis). Zero-length bones keep the parent's
-rotation.
+hinge, a lowered arm rises about the body's forward axis); at a branching joint whose children
+spread (fingers, neck and clavicles) the spread sets the roll exactly. Zero-length bones keep the
+parent's rotation.
 
 Some files keep an arbitrary rest (Bandai's lies along X with the real pose in the clip); a pose
 whose legs and spine are far from upright after the base is matched is not a usable default pose,
@@ -29,6 +30,8 @@ SPINE_TOPS = ("spine3", "spine4", "spine5", "skullbase", "spine2", "spine1")
 UPRIGHT_BONES = (("l_hip", "l_knee"), ("l_knee", "l_ankle"), ("r_hip", "r_knee"), ("r_knee", "r_ankle"))
 #: Largest angle (degrees) between an upright bone and its canonical direction in a usable pose.
 UPRIGHT_LIMIT_DEG = 50.0
+#: Least spread (difference of unit directions) between two children of a joint that fixes its roll.
+SPREAD = 0.2
 
 
 def canonical_position(name: str) -> np.ndarray:
@@ -90,13 +93,35 @@ def align(index: dict[str, int], positions: np.ndarray) -> dict[str, np.ndarray]
             if np.linalg.norm(v) > 1e-4 * scale:  # a zero-length bone has no direction
                 pose_dirs.append(_unit(v))
                 canon_dirs.append(_unit(canonical_position(child) - canonical_position(name)))
-        u = np.sum(pose_dirs, axis=0) if pose_dirs else np.zeros(3)
-        t = np.sum(canon_dirs, axis=0) if canon_dirs else np.zeros(3)
-        if np.linalg.norm(u) < 1e-6 or np.linalg.norm(t) < 1e-6:
-            out[name] = carried
-            continue
-        out[name] = quat.normalize(quat.multiply(quat.between(quat.rotate(carried, u), t), carried))
+        out[name] = _bone_alignment(carried, np.array(pose_dirs).reshape(-1, 3), np.array(canon_dirs).reshape(-1, 3))
     return out
+
+
+def _bone_alignment(carried: np.ndarray, pose_dirs: np.ndarray, canon_dirs: np.ndarray) -> np.ndarray:
+    """Alignment of one joint from its children's unit directions in the pose and the T-pose.
+
+    The mean direction is matched by the shortest swing from the parent's rotation ``carried``;
+    where the children spread (a hand's fingers, a chest's clavicles) the line between the two
+    children furthest apart fixes the roll as well.
+    """
+    u = pose_dirs.sum(axis=0)
+    t = canon_dirs.sum(axis=0)
+    if np.linalg.norm(u) < 1e-6 or np.linalg.norm(t) < 1e-6:
+        return carried
+    swing = quat.normalize(quat.multiply(quat.between(quat.rotate(carried, u), t), carried))
+    if len(pose_dirs) < 2:
+        return swing
+    gaps = np.linalg.norm(canon_dirs[:, None] - canon_dirs[None], axis=-1)
+    i, j = np.unravel_index(int(np.argmax(gaps)), gaps.shape)  # the two children furthest apart
+    pose_side = pose_dirs[i] - pose_dirs[j]
+    canon_side = canon_dirs[i] - canon_dirs[j]
+    pose_side = pose_side - np.dot(pose_side, _unit(u)) * _unit(u)
+    canon_side = canon_side - np.dot(canon_side, _unit(t)) * _unit(t)
+    if np.linalg.norm(pose_side) < SPREAD or np.linalg.norm(canon_side) < SPREAD:
+        return swing
+    pose = _frame(pose_side, u)
+    canon = _frame(canon_side, t)
+    return quat.from_matrix(canon @ pose.T)
 
 
 def upright_error(index: dict[str, int], positions: np.ndarray) -> np.ndarray:

@@ -93,8 +93,8 @@ def pinned(
     distance of the target foot. Each planted run is pinned at one position (mean warped XZ); the
     offset from the warped path glides between runs. A ball planted while the ankle is too gets a
     pin exactly ``foot_length`` from the ankle's, in the direction the foot points, so both hold at
-    once; while the ball is planted the ankle goal is kept ``foot_length`` from it, with a smooth
-    ramp of ``blend_frames`` frames around the ball's contacts.
+    once; while only the ball is planted the ankle goal is kept ``foot_length`` from it, with a
+    smooth ramp of ``blend_frames`` frames around the ball's contacts.
     """
     ankle_goal = warped_ankle + glide(_pins(warped_ankle, ankle_flags, ankle_height) - warped_ankle, ankle_flags)
     if warped_ball is None:
@@ -112,7 +112,7 @@ def pinned(
         if size > 1e-9:
             ball_pins[[0, 2], a:b] = (ankle_goal[[0, 2], k] + across * direction / size)[:, None]
     ball_goal = warped_ball + glide(ball_pins - warped_ball, ball_flags)
-    w = weight_near(ball_flags, blend_frames)
+    w = weight_near(ball_flags, blend_frames) * ~ankle_flags  # a pinned ankle stays pinned
     away = ankle_goal - ball_goal
     on_sphere = ball_goal + foot_length * away / np.maximum(np.sqrt(np.sum(away * away, axis=0)), 1e-12)
     return ankle_goal * (1.0 - w) + on_sphere * w, ball_goal

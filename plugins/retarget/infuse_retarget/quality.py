@@ -101,3 +101,28 @@ def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
         speed_ratio=speed / (speed_src * plan.scale) if speed_src > 1e-9 else float("nan"),
         residual_mm=1000.0 * residual, unreachable=unreachable,
     )
+
+
+def reach_error(plan: RetargetPlan, motion: Motion, source_positions: np.ndarray, extended: float = 0.9) -> float:
+    """How far a retargeted hand reaches differently from the source, percent of arm length.
+
+    For each arm, the wrist's offset from its shoulder divided by the arm length (shoulder to elbow
+    to wrist at rest) is compared between the source (``source_positions`` (F, Js, 3)) and
+    ``motion``, over frames where the source arm is extended beyond ``extended``; NaN if never.
+    """
+    _, p = motion_fk(motion)
+    errors = []
+    for side in "lr":
+        names = [f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist"]
+        if not all(n in plan.common for n in names):
+            continue
+        s = [plan.source.index[n] for n in names]
+        t = [plan.target.index[n] for n in names]
+        arm_s = sum(np.linalg.norm(plan.source.rig.positions[b] - plan.source.rig.positions[a]) for a, b in zip(s, s[1:]))
+        arm_t = sum(np.linalg.norm(plan.target.rig.positions[b] - plan.target.rig.positions[a]) for a, b in zip(t, t[1:]))
+        src = (source_positions[:, s[2]] - source_positions[:, s[0]]) / arm_s
+        out = (p[:, t[2]] - p[:, t[0]]) / arm_t
+        mask = np.linalg.norm(src, axis=1) > extended
+        if mask.any():
+            errors.append(np.linalg.norm(src - out, axis=1)[mask].mean())
+    return 100.0 * float(np.mean(errors)) if errors else float("nan")
