@@ -209,3 +209,20 @@ def test_bvh_shows_bones(browser, tmp_path):
         lit = [luminance[int(y) - 1:int(y) + 2, int(x) - 1:int(x) + 2].max() > background + 60 for x, y in mids]
         assert np.mean(lit) > 0.9
         assert view.errors == []
+
+
+def test_screenshot_command(tmp_path, capsys):
+    from PIL import Image
+
+    robot = str(corpus_file(ROBOT))
+    out = tmp_path / "robot.png"
+    assert main(["view", robot, "--screenshot", str(out), "--clip", "Wave", "--time", "0.9", "--size", "640x400"]) == 0
+    pixels = np.asarray(Image.open(out).convert("RGB"))
+    assert pixels.shape == (400, 640, 3)
+    # the robot is there: many pixels of its yellow body
+    r, g, b = (pixels[..., k].astype(int) for k in range(3))
+    assert np.mean((r > 150) & (g > 90) & (b < 90) & (r > b + 80)) > 0.01
+    capsys.readouterr()
+    assert main(["view", robot, "--screenshot", str(tmp_path / "x.png"), "--clip", "Moonwalk"]) == 2
+    assert "no clip named 'Moonwalk'" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()

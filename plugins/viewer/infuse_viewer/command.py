@@ -1,7 +1,8 @@
-"""``infuse view FILE|FOLDER``: show characters and clips in a browser, or write the page as one HTML file."""
+"""``infuse view FILE|FOLDER``: show characters and clips in a browser, write the page as one HTML file, or a PNG of it."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import sys
 import threading
@@ -27,6 +28,10 @@ def add_arguments(p) -> None:
     p.add_argument("--port", type=int, help=f"port on {HOST} (default {DEFAULT_PORT}, or a free one when it is taken)")
     p.add_argument("--no-open", action="store_true", help="do not open a browser, only print the URL")
     p.add_argument("--html", metavar="OUT.html", help="write the page as one offline HTML file instead of serving it")
+    p.add_argument("--screenshot", metavar="OUT.png", help="write a PNG of the page (headless Chromium) instead of serving it")
+    p.add_argument("--time", type=float, default=0.0, metavar="SECONDS", help="with --screenshot: the time to show (default 0)")
+    p.add_argument("--clip", help="with --screenshot: the clip to show (default: the first)")
+    p.add_argument("--size", default="1000x640", metavar="WxH", help="with --screenshot: page size in pixels (default 1000x640)")
     p.add_argument("--targets", metavar="TARGETS.json", help="gaze/reach targets (default: <stem>.targets.json beside the file)")
     p.add_argument("--low-confidence", type=float, default=LOW_CONFIDENCE, metavar="C",
                    help=f"highlight joints mapped with a confidence below C (default {LOW_CONFIDENCE})")
@@ -59,6 +64,22 @@ def _write_html(args, found, options, title) -> int:
         handle.write(offline_page(title, vendor, prepared))
     print(f"wrote {args.html} ({len(prepared)} file{'s' if len(prepared) > 1 else ''}, "
           f"{Path(args.html).stat().st_size / 1e6:.1f} MB)")
+    return 0
+
+
+def _screenshot(args, found, options, title) -> int:
+    from . import screenshot
+
+    size = re.fullmatch(r"(\d+)x(\d+)", args.size)
+    if not size or not (100 <= int(size[1]) <= 8000 and 100 <= int(size[2]) <= 8000):
+        raise UsageError("--size must be WIDTHxHEIGHT in pixels, 100 to 8000 each (e.g. 1000x640)")
+    site = Site(found, ensure_vendor(), title, **options)
+    clips = site.prepared(0).info["clips"]  # a file that cannot be read stops here, with its exit code
+    if args.clip is not None and args.clip not in clips:
+        raise UsageError(f"{found[0].path}: no clip named {args.clip!r}; the file has: {', '.join(clips) or 'none'}")
+    with ViewerServer(site, 0, verbose=args.verbose) as server:
+        screenshot.take(server.url, args.screenshot, int(size[1]), int(size[2]), args.time, args.clip)
+    print(f"wrote {args.screenshot}")
     return 0
 
 
@@ -100,6 +121,10 @@ def run(args) -> int:
     saved_map = read_map(args.map_file) if args.map_file else None  # a bad map file stops before anything is shown
     options = {"mapper": args.mapper, "saved_map": saved_map, "low_confidence": args.low_confidence}
     title = Path(args.path).resolve().name
+    if args.html and args.screenshot:
+        raise UsageError("give --html or --screenshot, not both")
     if args.html:
         return _write_html(args, found, options, title)
+    if args.screenshot:
+        return _screenshot(args, found, options, title)
     return _serve(args, found, options, title)

@@ -534,7 +534,7 @@ function frameCharacter() {
   const tanHalf = Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2) / Math.max(canvas.clientHeight, 1);
   const fitH = (size.y / 2) / (tanHalf * free.height);
   const fitW = (Math.max(size.x, size.z) / 2) / (tanHalf * free.width);
-  const distance = Math.max(fitH, fitW) * 1.5 + Math.max(size.x, size.z) / 2;
+  const distance = Math.max(fitH, fitW) * 1.35 + Math.max(size.x, size.z) / 2;
   const dir = new THREE.Vector3(Math.sin(0.5), 0.22, Math.cos(0.5)).normalize();  // front, a little to the character's left
   camera.position.copy(center).addScaledVector(dir, distance);
   camera.near = distance / 200;
