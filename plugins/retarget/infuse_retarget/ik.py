@@ -24,6 +24,8 @@ from . import cq
 TOLERANCE = 1e-5
 #: Largest rotation (radians) of one IK iteration: the linearization holds for small steps only.
 MAX_STEP = 0.4
+#: Margin (metres) inside a limb's reach for a goal to count as reachable.
+REACH_MARGIN = 5e-4
 
 
 def solve_sym3(m: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -65,13 +67,15 @@ class LimbSolution:
 
     ``root``: applied to everything below the root joint; ``middle``: applied, instead, to
     everything below the middle joint (it includes ``root``); ``end_position`` (3, F) where the
-    end joint ends up; ``residual`` (F,) its distance from the goal, metres.
+    end joint ends up; ``residual`` (F,) its distance from the goal, metres; ``reachable`` (F,)
+    whether the goal lay inside the limb's reach by at least :data:`REACH_MARGIN`.
     """
 
     root: np.ndarray
     middle: np.ndarray
     end_position: np.ndarray
     residual: np.ndarray
+    reachable: np.ndarray
 
 
 def hinge_axes(root: np.ndarray, middle: np.ndarray, end: np.ndarray, reference_axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,11 +127,14 @@ def solve_limb(
     length = float(np.median(a + b))
     lam2 = (damping * max(length, 1e-9)) ** 2
     theta_min = np.minimum(0.0, min_flexion - flexion)
-    straightest = np.minimum(flexion, min_flexion)
+    # The hinge can reach any flexion from min(flexion, min_flexion) up: the straightest is that
+    # bound, or fully straight when the bound lies below zero (a limb bent against its hinge).
+    straightest = np.maximum(np.minimum(flexion, min_flexion), 0.0)
     far = np.sqrt(a * a + b * b + 2.0 * a * b * np.cos(straightest)) * (1.0 - 1e-6)
     near = np.abs(a - b) * (1.0 + 1e-6)
     offset = goal - root
     dist = cq.norm(offset)
+    reachable = (dist <= far - REACH_MARGIN) & (dist >= near + REACH_MARGIN)
     reach = np.clip(dist, near, far)
     target = root + offset * (reach / np.maximum(dist, 1e-12))
     # Warm start: bend the hinge to the flexion the goal distance needs (law of cosines), so the
@@ -159,7 +166,7 @@ def solve_limb(
         cap = np.minimum(1.0, MAX_STEP / np.maximum(np.maximum(cq.norm(d_rot), np.abs(d_hinge)), 1e-12))
         q_root = cq.normalize(cq.mul(cq.exp(d_rot * cap), q_root))
         theta = np.maximum(theta + d_hinge * cap, theta_min)
-    return LimbSolution(q_root, cq.mul(q_mid, q_root), e_pos, cq.norm(goal - e_pos))
+    return LimbSolution(q_root, cq.mul(q_mid, q_root), e_pos, cq.norm(goal - e_pos), reachable)
 
 
 def aim(

@@ -67,7 +67,7 @@ def _measure(plan: RetargetPlan, result: RetargetResult, motion: Motion):
     g, p = motion_fk(motion)
     points = _contact_points(plan, result)
     skate = metrics.foot_skate(p, result.contacts, plan.target.index["base"], points).per_metre
-    bones = metrics.bone_directions(result.source_positions, plan.source.index, p, plan.target.index)
+    bones = metrics.bone_directions(result.source_positions, plan.source_joints, p, plan.target.index)
     lowest = lowest_points(plan.target.skeleton, plan.target.feet, g, p)
     ground = metrics.ground_contact(lowest, result.contacts.foot_flags(), result.ground)
     speed = metrics.mean_speed(p[:, plan.target.index["base"]], motion.fps)
@@ -116,7 +116,7 @@ def reach_error(plan: RetargetPlan, motion: Motion, source_positions: np.ndarray
         names = [f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist"]
         if not all(n in plan.common for n in names):
             continue
-        s = [plan.source.index[n] for n in names]
+        s = [plan.source_joints[n] for n in names]
         t = [plan.target.index[n] for n in names]
         arm_s = sum(np.linalg.norm(plan.source.rig.positions[b] - plan.source.rig.positions[a]) for a, b in zip(s, s[1:]))
         arm_t = sum(np.linalg.norm(plan.target.rig.positions[b] - plan.target.rig.positions[a]) for a, b in zip(t, t[1:]))

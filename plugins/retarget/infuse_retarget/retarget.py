@@ -34,8 +34,6 @@ IK_MODES = ("none", "paper", "contacts")
 HINGES = {"l_knee": (1.0, 0.0, 0.0), "r_knee": (1.0, 0.0, 0.0), "l_elbow": (0.0, -1.0, 0.0), "r_elbow": (0.0, 1.0, 0.0)}
 #: Seconds over which a ball contact's hold on the ankle goal fades in and out.
 BLEND_SECONDS = 0.12
-#: Margin (metres) inside the limb's reach for a goal to count as reachable.
-REACH_MARGIN = 5e-4
 #: The hinge of a limb never straightens past this (radians): no hyperextended knees.
 MIN_FLEXION = np.radians(1.0)
 
@@ -122,15 +120,11 @@ class _Solver:
         solution = ik.solve_limb(r, m, e, goal, axis, flexion, min_flexion=MIN_FLEXION)
         self.turn(upper_segment, solution.root)
         self.turn(lower_segment, solution.middle)
-        a, b = cq.norm(m - r), cq.norm(e - m)
-        straightest = np.minimum(flexion, MIN_FLEXION)
-        far = np.sqrt(a * a + b * b + 2.0 * a * b * np.cos(straightest))
-        dist = cq.norm(goal - r)
         name = self.names[tgt[end]]
         self.result.goals[name] = goal.T
         self.result.residual[name] = solution.residual
-        self.result.reachable[name] = (dist <= far - REACH_MARGIN) & (dist >= np.abs(a - b) + REACH_MARGIN)
-        self.result.hard[name] = np.ones(len(dist), dtype=bool)
+        self.result.reachable[name] = solution.reachable
+        self.result.hard[name] = np.ones(len(solution.residual), dtype=bool)
         return solution
 
     def foot(self, k: int, mode: str) -> None:
@@ -159,7 +153,7 @@ class _Solver:
         length = float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
         self.result.goals[name] = ball_goal.T
         self.result.residual[name] = cq.norm(ball_end - ball_goal)
-        self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < REACH_MARGIN
+        self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < ik.REACH_MARGIN
         planted = self.result.contacts.flags[:, list(self.result.contacts.points).index(src_foot.ball)]
         self.result.hard[name] = np.ones(len(planted), dtype=bool) if mode == "paper" else planted
 
@@ -194,7 +188,7 @@ class _Solver:
             names = [f"{side}_shoulder", f"{side}_elbow", f"{side}_wrist"]
             if not all(n in plan.common for n in names):
                 continue
-            s_j = [src.index[n] for n in names]
+            s_j = [plan.source_joints[n] for n in names]
             t_j = [tgt.index[n] for n in names]
             arm_s = _chain_length(src.rig.positions, s_j)
             arm_t = _chain_length(tgt.rig.positions, t_j)

@@ -13,8 +13,9 @@ between, which is what makes any-to-any work:
   rotation;
 - a bone that spans joints the other side lacks is turned onto the source's actual direction
   (``direction_fix``), so bones point the same way whatever lies between their ends;
-- a single clavicle faces a SmartBody pair: it plays ``l_sternoclavicular``, the joint that turns
-  the clavicle;
+- a single clavicle faces a SmartBody pair (``l_sternoclavicular`` and ``l_acromioclavicular``; the
+  first is found even when the mapping names only the second): it plays ``l_sternoclavicular``,
+  the joint that turns the clavicle, so SmartBody reaches that shrug move it;
 - joints above the base (ground roots) and joints no shared joint carries keep their default pose.
 
 The root is placed by scaling the source's path by the leg-length ratio ``s``, measured where the
@@ -37,7 +38,7 @@ from infuse.skeleton import Skeleton
 
 from . import cq
 from .prepare import Prepared, prepare
-from .rig import canonical_children
+from .rig import canonical_children, canonical_parent
 
 #: Canonical names both skeletons must map.
 REQUIRED = ("base", "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle")
@@ -46,18 +47,44 @@ FAMILY = {"torso": "axial", "neck": "axial", "head": "axial", "arm": "arm", "han
           "foot": "foot", "eye": "eye"}
 
 
-def match_clavicles(source: dict[str, int], target: dict[str, int]) -> tuple[dict[str, int], dict[str, int]]:
-    """Rename a lone clavicle ``s_acromioclavicular`` to ``s_sternoclavicular`` where the other side
-    maps both (SmartBody turns the clavicle at the sternal joint)."""
-    source, target = dict(source), dict(target)
+def infer_sternoclavicular(skeleton: Skeleton, index: dict[str, int]) -> dict[str, int]:
+    """Name the sternal clavicle joint ``s_sternoclavicular`` where the mapping leaves it out: a
+    single unmapped joint between the chest and a mapped ``s_acromioclavicular`` (SmartBody's
+    skeletons; mapping rules send their lateral joint to ``s_acromioclavicular``)."""
+    out = dict(index)
+    mapped = set(index.values())
     for side in ("l", "r"):
         sc, ac = f"{side}_sternoclavicular", f"{side}_acromioclavicular"
-        for one, other in ((source, target), (target, source)):
-            if ac in one and sc not in one and sc in other and ac in other:
-                one[sc] = one.pop(ac)
-    order = {n: k for k, n in enumerate(ALL_NAMES)}
-    return (dict(sorted(source.items(), key=lambda kv: order[kv[0]])),
-            dict(sorted(target.items(), key=lambda kv: order[kv[0]])))
+        if ac not in index or sc in index:
+            continue
+        between = []
+        j = int(skeleton.parents[index[ac]])
+        while j >= 0 and j not in mapped:
+            between.append(j)
+            j = int(skeleton.parents[j])
+        chest = canonical_parent(ac, index)
+        if len(between) == 1 and chest is not None and j == index[chest]:
+            out[sc] = between[0]
+    return out
+
+
+def correspond(source: dict[str, int], target: dict[str, int]) -> dict[str, str]:
+    """Target canonical name -> the source canonical name that drives it, in table order.
+
+    Names mapped on both sides drive themselves. A lone clavicle facing a SmartBody pair plays its
+    sternal joint, the one that turns the clavicle: a target's only ``s_acromioclavicular`` follows
+    the source's ``s_sternoclavicular``, and a source's only clavicle drives the target's
+    ``s_sternoclavicular`` (the target's ``s_acromioclavicular`` then rides along).
+    """
+    pairs = {n: n for n in ALL_NAMES if n in source and n in target}
+    for side in ("l", "r"):
+        sc, ac = f"{side}_sternoclavicular", f"{side}_acromioclavicular"
+        if ac in target and sc not in target and sc in source and ac in source:
+            pairs[ac] = sc
+        elif ac in source and sc not in source and sc in target and ac in target:
+            pairs[sc] = ac
+            del pairs[ac]
+    return {n: pairs[n] for n in ALL_NAMES if n in pairs}
 
 
 @dataclass
@@ -88,7 +115,8 @@ class RetargetPlan:
                  source_file=None, target_file=None):
         s_idx = contacts.joint_index(source_skeleton, source_mapping)
         t_idx = contacts.joint_index(target_skeleton, target_mapping)
-        s_idx, t_idx = match_clavicles(s_idx, t_idx)
+        s_idx = infer_sternoclavicular(source_skeleton, s_idx)
+        t_idx = infer_sternoclavicular(target_skeleton, t_idx)
         for which, idx, file in (("source", s_idx, source_file), ("target", t_idx, target_file)):
             missing = [n for n in REQUIRED if n not in idx]
             if missing:
@@ -96,7 +124,12 @@ class RetargetPlan:
         self.source: Prepared = prepare(source_skeleton, s_idx, source_motion, source_file)
         self.target: Prepared = prepare(target_skeleton, t_idx, target_motion, target_file)
         self.source_file = source_file
-        self.common = tuple(n for n in ALL_NAMES if n in self.source.index and n in self.target.index)
+        #: Target canonical name -> source canonical name driving it (see :func:`correspond`).
+        self.pairs = correspond(self.source.index, self.target.index)
+        #: Target canonical names driven by the source.
+        self.common = tuple(self.pairs)
+        #: Target canonical name -> index of the source joint that drives it.
+        self.source_joints = {t: self.source.index[s] for t, s in self.pairs.items()}
         #: Leg-length ratio, target over source.
         self.scale = self.target.leg_height / self.source.leg_height
         self._build()
@@ -118,7 +151,7 @@ class RetargetPlan:
         self.driver = tuple(driver)
         driven = [j for j in range(j_count) if tgt.rig.canonical_of.get(j) in common]
         self._driven = np.array(driven, dtype=np.int64)
-        self._driven_source = np.array([src.index[tgt.rig.canonical_of[j]] for j in driven], dtype=np.int64)
+        self._driven_source = np.array([src.index[self.pairs[tgt.rig.canonical_of[j]]] for j in driven], dtype=np.int64)
         self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])[:, :, None]
 
         # Direction fix for bones with one shared child.
@@ -131,8 +164,9 @@ class RetargetPlan:
             u = tgt.aligned[tgt.index[child]] - tgt.aligned[tgt.index[name]]
             if np.linalg.norm(u) < 1e-6:
                 continue
-            b = quat.rotate(quat.conjugate(src.frame[src.index[name]]), u)
-            fix.append((src.index[name], src.index[child], tgt.index[name], b))
+            s_joint, s_child = src.index[self.pairs[name]], src.index[self.pairs[child]]
+            b = quat.rotate(quat.conjugate(src.frame[s_joint]), u)
+            fix.append((s_joint, s_child, tgt.index[name], b))
         self._fix_src = np.array([f[0] for f in fix], dtype=np.int64)
         self._fix_child = np.array([f[1] for f in fix], dtype=np.int64)
         self._fix_tgt = np.array([f[2] for f in fix], dtype=np.int64)
