@@ -245,3 +245,14 @@ def test_meaningless_names(fragment):
     asset = _asset(fragment)
     v = skeleton_variants.meaningless(asset.skeleton, sample_poses(asset), _label(fragment))
     _check_variant(v, BODY_NAMES)
+
+
+def test_extra_names_when_the_rig_has_them():
+    """Both ends of the clavicle (SmartBody) and eyelid joints: mapped to the optional extras."""
+    utah = map_skeleton(_asset("test_utah.sk"))
+    assert utah["l_sternoclavicular"] == "l_sternoclavicular" and utah["l_acromioclavicular"] == "l_acromioclavicular"
+    assert utah["upper_eyelid_right"] == "upper_eyelid_right"
+    brad = map_skeleton(_asset("ChrBrad/ChrBrad.sk"))
+    assert brad["lower_eyelid_left"] == "JtEyelidLowerLf"
+    assert brad["l_sternoclavicular"] is None  # one clavicle joint: it is the acromioclavicular one
+    assert "l_sternoclavicular" not in map_skeleton(_asset("Xbot.glb")).to_dict(extras=False)["mapping"]

@@ -537,8 +537,6 @@ def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> N
     forefoot = -1
     if toes:
         if len(toes) >= 3:  # one chain per toe: the big toe is the one nearest the body's middle plane
-            forefoot = min(toes, key=lambda c: abs(float(np.dot(view.P[c] - view.P[base],
-                                                                 np.cross(up, np.cross(view.P[c] - view.P[base], up))))) )
             forefoot = _big_toe(view, toes, base, up)
         else:
             forefoot = max(toes, key=lambda c: view.limb_length(ankle, c))
@@ -577,6 +575,10 @@ def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
     if clav >= 0:
         result.put(f"{s}_acromioclavicular", clav, min(side_conf, _conf_from_margin(m.get("clavicle", 0))),
                    f"clavicle: short bone from the chest to the shoulder; {side_why}")
+        i = r.chain.index(clav) if clav in r.chain else 0
+        if i > 0 and not view.info[r.chain[i - 1]].flagged("helper") and view.bone[clav] > 1e-3 * view.scale:
+            result.put(f"{s}_sternoclavicular", r.chain[i - 1], 0.6,
+                       "sternal end of the clavicle: the joint before the acromioclavicular one")
     else:
         result.put(f"{s}_acromioclavicular", None, _conf_from_margin(m.get("clavicle", 0)),
                    "no clavicle: the arm starts at the shoulder")
@@ -609,12 +611,15 @@ def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
     if wrist_pos is None or not hand_roots:
         return
     fingers, why = assign_fingers(view, hand_roots, wrist_pos)
+    order = {"index": "next to the thumb", "middle": "second from the thumb", "ring": "third from the thumb",
+             "pinky": "fourth from the thumb"}
     for finger in ("thumb", "index", "middle", "ring", "pinky"):
         chain = fingers.get(finger, [])
         for k in range(4):
             name = f"{s}_{finger}{k + 1}"
             if k < len(chain):
-                result.put(name, chain[k], 0.75, f"{finger} segment {k + 1} ({why})")
+                where = why if finger == "thumb" else f"the finger {order[finger]} across the palm"
+                result.put(name, chain[k], 0.75, f"{finger} segment {k + 1}: {where}")
             else:
                 result.put(name, None, 0.6, why if not fingers else f"the {finger} has {len(chain)} joint(s)")
 
@@ -643,6 +648,14 @@ def _put_eyes(view, result, head, up, left, below: list[int]) -> None:
             result.put(f"eyeball_{side}", eyes[side], 0.8 if why.startswith("named") else 0.55, why)
         else:
             result.put(f"eyeball_{side}", None, 0.6, "no eye joint below the head")
+    for j in view.subtree(head):  # eyelid joints, an extra: by name only
+        info = view.info[int(j)]
+        if "eyelid" in info.tokens or ("lid" in info.tokens and "eye" in info.roles):
+            level = "upper" if "upper" in info.tokens else "lower" if "lower" in info.tokens else None
+            if level and info.side:
+                name = f"{level}_eyelid_{'left' if info.side > 0 else 'right'}"
+                if name not in result.joint:
+                    result.put(name, int(j), 0.7, "named eyelid below the head")
 
 
 def _eye_pair(view, head, up, left) -> dict[str, int]:
