@@ -258,20 +258,29 @@ function updateHover() {
   tip.hidden = false;
 }
 
+// Target labels always show; joint names are placed low-confidence first, then root first, and
+// left out where they would cover a label already placed (fingers crowd).
 function updateLabels() {
   const wanted = [];
+  if ($('show-targets').checked) for (const t of state.targets) wanted.push([t.label, t.position, true]);
   if ($('show-names').checked && $('show-skeleton').checked) {
-    for (const j of state.joints) if (j.label && !j.hidden) wanted.push([j.label, j.world]);
+    const named = state.joints.filter((j) => j.label && !j.hidden);
+    for (const j of [...named.filter((j) => j.low), ...named.filter((j) => !j.low)]) wanted.push([j.label, j.world, false]);
   }
-  if ($('show-targets').checked) for (const t of state.targets) wanted.push([t.label, t.position]);
   const keep = new Set();
-  for (const [el, pos] of wanted) {
+  const placed = [];
+  for (const [el, pos, always] of wanted) {
     const p = project(pos);
     if (!p.visible) continue;
     el.style.left = `${p.x}px`;
     el.style.top = `${p.y}px`;
     if (el.parentNode !== labelLayer) labelLayer.append(el);
     keep.add(el);
+    const w = el.offsetWidth, h = el.offsetHeight;
+    const box = { l: p.x - w / 2, r: p.x + w / 2, t: p.y - 1.3 * h, b: p.y - 0.3 * h };
+    const covers = placed.some((o) => box.l < o.r && o.l < box.r && box.t < o.b && o.t < box.b);
+    el.style.visibility = covers && !always ? 'hidden' : '';
+    if (!covers || always) placed.push(box);
   }
   for (const el of [...labelLayer.children]) if (!keep.has(el)) el.remove();
 }
