@@ -1,0 +1,171 @@
+"""``infuse retarget``: BVH and GLB output through the installed mapper, and bad input (exit 2 or 3,
+one line, nothing written)."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse.cli import main
+from infuse.kinematics import motion_fk
+from infuse.mapping import map_skeleton
+from infuse_gltf import validate as validator
+from infuse_gltf.container import parse_file
+from infuse_retarget import RetargetPlan, retarget_clip
+from infuse_retarget.command import source_mapping
+
+from corpus_data import corpus_file, labels, require_corpus
+
+WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"
+XBOT = "runxaway-models/Xbot.glb"
+UTAH = "smartbody/behaviorsets/MaleLocomotion/skeletons/test_utah.sk"
+FOX = "projectlookingglass-glb/Fox.glb"
+INFUSE = Path(sys.executable).with_name("infuse")
+
+
+def answer_lines(stderr: str) -> list[str]:
+    return [ln for ln in stderr.splitlines() if ln.strip() and not ln.startswith("infuse: warning:")]
+
+
+def run(capsys, *argv) -> tuple[int, str, str]:
+    code = main(["retarget", *map(str, argv)])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def expected():
+    """The retargeted walk computed through the API with the mappings the command uses."""
+    require_corpus()
+    walk = infuse.load(corpus_file(WALK))
+    xbot = infuse.load(corpus_file(XBOT))
+    clip = next(iter(walk.motions.values()))
+    plan = RetargetPlan(clip.skeleton, source_mapping(walk, "heuristic", None), xbot.skeleton, map_skeleton(xbot),
+                        source_motion=clip, target_motion=next(iter(xbot.motions.values())))
+    return xbot, retarget_clip(plan, clip)
+
+
+def test_bvh_output_has_the_characters_names_and_rest(tmp_path, capsys, expected):
+    xbot, result = expected
+    out = tmp_path / "walk_xbot.bvh"
+    code, stdout, err = run(capsys, corpus_file(WALK), "--to", corpus_file(XBOT), "-o", out)
+    assert code == 0, err
+    assert "leg scale" in stdout and str(out) in stdout
+    back = infuse.load(out)
+    assert back.skeleton.names == xbot.skeleton.names
+    assert np.abs(back.skeleton.rest_global_positions - xbot.skeleton.rest_global_positions).max() < 1e-6
+    motion = next(iter(back.motions.values()))
+    assert motion.num_frames == result.motion.num_frames
+    assert np.abs(motion_fk(motion)[1] - motion_fk(result.motion)[1]).max() < 1e-5
+
+
+def test_glb_output_keeps_the_mesh_and_adds_the_clip(tmp_path, capsys, expected):
+    xbot, result = expected
+    out = tmp_path / "walk_xbot.glb"
+    code, _, err = run(capsys, corpus_file(WALK), "--to", corpus_file(XBOT), "-o", out, "--name", "walk")
+    assert code == 0, err
+    before, after = parse_file(corpus_file(XBOT)).json, parse_file(out).json
+    for key in ("meshes", "skins", "materials"):
+        assert json.dumps(after.get(key), sort_keys=True) == json.dumps(before.get(key), sort_keys=True), key
+    back = infuse.load(out)
+    assert set(back.motions) == set(xbot.motions) | {"walk"}
+    assert np.abs(motion_fk(back.motions["walk"])[1] - motion_fk(result.motion)[1]).max() < 1e-4
+    if not validator.available():
+        pytest.fail("the Khronos glTF validator is missing: run `make setup`")
+    assert validator.validate(out)["issues"]["numErrors"] == 0
+
+
+def test_no_ik_gives_the_plain_transfer(tmp_path, capsys, expected):
+    _, result = expected
+    out = tmp_path / "plain.bvh"
+    code, stdout, err = run(capsys, corpus_file(WALK), "--to", corpus_file(XBOT), "-o", out, "--no-ik")
+    assert code == 0 and "feet: none" in stdout, err
+    motion = next(iter(infuse.load(out).motions.values()))
+    assert np.abs(motion_fk(motion)[1] - motion_fk(result.plain)[1]).max() < 1e-5
+
+
+def _label_map_file(tmp_path: Path, rel: str, **changes) -> Path:
+    doc = next(d for d in labels() if d["file"] == rel)
+    mapping = dict(doc["mapping"], **changes)
+    path = tmp_path / f"{Path(rel).stem}.map.json"
+    path.write_text(json.dumps({"mapping": mapping}))
+    return path
+
+
+def _zero_leg_bvh(tmp_path: Path) -> Path:
+    text = corpus_file(WALK).read_text().splitlines()
+    out, inside = [], None
+    for line in text:
+        stripped = line.strip()
+        if stripped.startswith("JOINT"):
+            inside = stripped.split()[1]
+        if stripped.startswith("OFFSET") and inside in ("LowerLeg_L", "Foot_L", "LowerLeg_R", "Foot_R"):
+            line = line[: line.index("OFFSET")] + "OFFSET 0 0 0"
+        out.append(line)
+    path = tmp_path / "zero_legs.bvh"
+    path.write_text("\n".join(out) + "\n")
+    return path
+
+
+def _nan_bvh(tmp_path: Path) -> Path:
+    lines = corpus_file(WALK).read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("Frame Time")) + 3
+    values = lines[k].split()
+    values[7] = "nan"
+    lines[k] = " ".join(values)
+    path = tmp_path / "nan.bvh"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("case,code,phrase", [
+    ("non-humanoid motion", 3, "not a humanoid"),
+    ("non-humanoid character", 3, "not a humanoid"),
+    ("map naming a missing joint", 2, "not in the skeleton"),
+    ("target map without knees", 3, "lacks l_knee"),
+    ("zero-length legs", 3, "zero-length"),
+    ("NaN in the motion", 2, "not a finite number"),
+    ("no clip in the motion file", 3, "no motion clip"),
+    ("unknown output type", 2, "no installed writer"),
+])
+def test_bad_input_exits_with_one_line_and_writes_nothing(tmp_path, capsys, case, code, phrase):
+    require_corpus()
+    motion, character, extra = corpus_file(WALK), corpus_file(XBOT), []
+    out = tmp_path / "out" / "result.bvh"
+    if case == "non-humanoid motion":
+        motion = corpus_file(FOX)
+    elif case == "non-humanoid character":
+        character = corpus_file(FOX)
+    elif case == "map naming a missing joint":
+        extra = ["--map", _label_map_file(tmp_path, WALK, base="NoSuchJoint")]
+    elif case == "target map without knees":
+        extra = ["--target-map", _label_map_file(tmp_path, XBOT, l_knee=None)]
+    elif case == "zero-length legs":
+        motion = _zero_leg_bvh(tmp_path)
+        extra = ["--map", _label_map_file(tmp_path, WALK)]
+    elif case == "NaN in the motion":
+        motion = _nan_bvh(tmp_path)
+    elif case == "no clip in the motion file":
+        motion = corpus_file(UTAH)
+    else:
+        out = tmp_path / "out" / "result.xyz"
+    got, stdout, err = run(capsys, motion, "--to", character, "-o", out, *extra)
+    lines = answer_lines(err)
+    assert got == code and len(lines) == 1 and phrase in lines[0], err
+    assert "Traceback" not in err and stdout == ""
+    assert not out.exists() and not (out.parent.exists() and any(out.parent.iterdir()))
+
+
+def test_installed_command_answers_in_one_line(tmp_path):
+    require_corpus()
+    out = tmp_path / "fox.bvh"
+    result = subprocess.run([str(INFUSE), "retarget", str(corpus_file(FOX)), "--to", str(corpus_file(XBOT)), "-o", str(out)],
+                            capture_output=True, text=True, timeout=300)
+    lines = answer_lines(result.stderr)
+    assert result.returncode == 3 and len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert not out.exists()
