@@ -217,7 +217,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         if up is not None:  # thigh and shin point away from the head
             for seg, seg_len in ((thigh_v, thigh), (shin_v, shin)):
                 down = -(seg @ up) / np.maximum(seg_len, 1e-9)
-                cost += np.where(down < 0.5, 6.0 * (0.5 - down), 0.0)
+                cost += 6.0 * np.maximum(0.0, 0.5 - down)
         cost += _stack(view, cs, lambda c: _leg_prefix_costs(view, c, anchor, scale, up))[:, h]
         skip = _stack(view, cs, lambda c: _skip_costs(view, c, scale))
         cost += _between(skip, h, k) + _between(skip, k, a)
@@ -229,10 +229,10 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         rem = np.where(virtual, 0.0, extent[:, a])
         cost += np.where(rem > 0.9 * shin, ((rem / np.maximum(shin, 1e-9) - 0.9) / 0.25) ** 2, 0.0)
         start = np.sqrt(np.einsum("bnk,bnk->bn", Ph - anchor, Ph - anchor))
-        cost += np.where(start < 0.02 * thigh, 0.6, 0.0)  # a joint at the pelvis is a helper, not the thigh
+        cost += 0.6 * (start < 0.02 * thigh)  # a joint at the pelvis is a helper, not the thigh
         strongest = _strongest_bend(P)[:, None]
         inside = (h < strongest) & (np.minimum(a, m) > strongest) & (strongest > 0)
-        cost += np.where(inside & (k != strongest), 1.0, 0.0)
+        cost += 1.0 * (inside & (k != strongest))
         cost += VIRTUAL_COST * virtual
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"thigh": 0.8, "shin": -0.8, "foot": -1.0, "toe": -1.0},
                                                       {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, h]
@@ -282,26 +282,26 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         # the upper arm starts well away from the middle plane, a clavicle near it
         rel_s = offset[:, s] / np.maximum(upper, 1e-9)
         rel_c = offset[:, c0] / np.maximum(upper, 1e-9)
-        cost += np.where(rel_s < 0.45, 4.0 * (0.45 - rel_s), 0.0)
-        cost += np.where(has_c & (rel_c > 0.75), 3.0 * (rel_c - 0.75), 0.0)
+        cost += 4.0 * np.maximum(0.0, 0.45 - rel_s)
+        cost += 3.0 * has_c * np.maximum(0.0, rel_c - 0.75)
         cost += _prefix_costs(view, cs, anchor, scale, 0.6)[:, np.where(has_c, c, s)]
         skip = _stack(view, cs, lambda ch: _skip_costs(view, ch, scale))
         cost += np.where(has_c, _between(skip, c, s) + 0.5 * (s > c + 1), 0.0)
         cost += _between(skip, s, e) + _between(skip, e, w)
         # the wrist: a short bone after it, fingers below it, no whole arm segment past it
         after = np.where((w + 1 < m) & ~virtual, norm(P[:, np.minimum(w + 1, m - 1)] - Pw), 0.0)
-        cost += np.where(after > 0.7 * fore, 2.0, 0.0)
+        cost += 2.0 * (after > 0.7 * fore)
         many, first_branch = _hand_structure(view, cs)
-        cost -= np.where(~virtual & many[:, np.minimum(w, m)], 0.6, 0.0)
+        cost -= 0.6 * (~virtual & many[:, np.minimum(w, m)])
         # the hand is where the fingers branch: a wrist past a branching joint is a finger
         fb = first_branch[:, None]
-        cost += np.where((e < fb) & (w > fb) & (w < m), 1.5, 0.0)
+        cost += 1.5 * ((e < fb) & (w > fb) & (w < m))
         reach = view.reach[np.array(cs)]
         rem = np.where(virtual, 0.0, reach[:, np.minimum(w, m - 1)])
-        cost += np.where(rem > 1.6 * fore, 0.6, 0.0)
+        cost += 0.6 * (rem > 1.6 * fore)
         strongest = _strongest_bend(P)[:, None]
         inside = (s < strongest) & (np.minimum(w, m) > strongest) & (strongest > 0)
-        cost += np.where(inside & (e != strongest), 1.0, 0.0)
+        cost += 1.0 * (inside & (e != strongest))
         cost += VIRTUAL_COST * virtual
         cost += np.where(has_c, _stack(view, cs, lambda ch: _role_cost(
             view, ch, {"clavicle": 0.8, "shoulder": 0.4, "upperarm": -0.8, "forearm": -1.0, "hand": -1.0},
@@ -310,7 +310,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
                                                                   "hand": -1.0},
                                                        {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, s]
         clav_named = np.concatenate((view.role("clavicle")[np.array(cs)], np.zeros((len(cs), 1), dtype=bool)), axis=1)
-        cost += np.where(~has_c & clav_named[:, s], 0.6, 0.0)
+        cost += 0.6 * (~has_c & clav_named[:, s])
         cost += _stack(view, cs, lambda ch: _role_cost(view, ch, {"forearm": 0.8, "upperarm": -0.8, "clavicle": -1.0,
                                                                   "hand": -0.8},
                                                        {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.6}))[:, e]
