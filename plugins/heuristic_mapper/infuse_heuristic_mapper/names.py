@@ -124,6 +124,8 @@ class NameInfo:
     roles: frozenset[str]
     flags: frozenset[str]
     numbers: tuple[int, ...]
+    role_bits: int = 0  # the roles and flags as bit sets (see :func:`bits`), for array tests
+    flag_bits: int = 0
 
     def has(self, role: str) -> bool:
         return role in self.roles
@@ -173,6 +175,22 @@ def common_prefix(names: list[str]) -> str:
         if count >= 0.9 * len(stripped) and len(prefix) > len(best):
             best = prefix
     return best
+
+
+_BITS: dict[str, int] = {}
+
+
+def bits(words) -> int:
+    """A bit set of role or flag words (each word gets its own bit on first use)."""
+    out = 0
+    for w in words:
+        b = _BITS.get(w)
+        if b is None:
+            if len(_BITS) >= 62:  # the vocabulary is fixed; this guards the int64 arrays built from it
+                raise ValueError("too many distinct role and flag words")
+            b = _BITS[w] = 1 << len(_BITS)
+        out |= b
+    return out
 
 
 @lru_cache(maxsize=8192)
@@ -233,7 +251,8 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
         flags.add("helper")
     if "end" in flags and "toe" in roles:
         roles.add("toe_end")
-    return NameInfo(tuple(joined), side, frozenset(roles), frozenset(flags), tuple(numbers))
+    return NameInfo(tuple(joined), side, frozenset(roles), frozenset(flags), tuple(numbers),
+                    bits(roles), bits(flags))
 
 
 @lru_cache(maxsize=256)

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .names import NameInfo, analyse_all
+from .names import NameInfo, analyse_all, bits
 
 
 def length(v: np.ndarray) -> float:
@@ -41,10 +41,12 @@ class SkeletonView:
         self.children: tuple[tuple[int, ...], ...] = skeleton.children
         self.info: tuple[NameInfo, ...] = analyse_all(tuple(self.names))
         self._facts: dict[tuple, np.ndarray] = {}
+        self._role_bits = np.array([i.role_bits for i in self.info], dtype=np.int64)
+        self._flag_bits = np.array([i.flag_bits for i in self.info], dtype=np.int64)
         # children a chain may follow: controls, props and secondary bones only when nothing else is there
-        self.followable = tuple(
-            tuple(c for c in kids if not self.info[c].flagged("control", "prop", "secondary")) or kids
-            for kids in self.children)
+        odd = self.flag("control", "prop", "secondary")
+        self.followable = tuple((tuple(c for c in kids if not odd[c]) or kids) if kids else kids
+                                for kids in self.children)
         #: joints that carry an end site (BVH): a leaf with one is a real joint, not an end marker
         self.has_end_site = np.zeros(self.n, dtype=bool)
         self.has_end_site[np.asarray(skeleton.end_site_parents, dtype=np.int64)] = True
@@ -106,7 +108,7 @@ class SkeletonView:
         key = ("role", name)
         arr = self._facts.get(key)
         if arr is None:
-            arr = self._facts[key] = np.array([name in i.roles for i in self.info], dtype=bool)
+            arr = self._facts[key] = (self._role_bits & bits((name,))).astype(bool)
         return arr
 
     def flag(self, *names: str) -> np.ndarray:
@@ -114,7 +116,7 @@ class SkeletonView:
         key = ("flag",) + names
         arr = self._facts.get(key)
         if arr is None:
-            arr = self._facts[key] = np.array([i.flagged(*names) for i in self.info], dtype=bool)
+            arr = self._facts[key] = (self._flag_bits & bits(names)).astype(bool)
         return arr
 
     def digit_counts(self) -> tuple[np.ndarray, np.ndarray]:
