@@ -107,7 +107,7 @@ def _cos(u: np.ndarray, v: np.ndarray) -> float:
     return float(u @ v) / (nu * nv)
 
 
-def _upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> int | None:
+def upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> int | None:
     """The joint that stands for "up" from the legs' branch: the arms' branch, else the far end of
     the longest branch that is not a leg."""
     if arms is not None and arms.branch != legs.branch:

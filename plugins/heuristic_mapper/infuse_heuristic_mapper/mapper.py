@@ -21,7 +21,7 @@ from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
-from .body import LimbPair, choose_plan, legs_down, limb_pairs
+from .body import LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
 from .hands import assign_fingers
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
 from .view import SkeletonView, length, lengths
@@ -85,8 +85,7 @@ def _standing(view: SkeletonView, plan) -> float:
     """legs_down cosine for the plan in the view's current pose (-1 standing, 0 four-legged)."""
     if plan is None or plan.legs is None:
         return -1.0
-    from .body import _upper_anchor
-    return legs_down(view, plan.legs, _upper_anchor(view, plan.legs, plan.arms))
+    return legs_down(view, plan.legs, upper_anchor(view, plan.legs, plan.arms))
 
 
 def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options) -> Mapping:
@@ -195,8 +194,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     arms: LimbPair | None = plan.arms
     up_guess = None
     if legs is not None:
-        from .body import _upper_anchor
-        anchor = _upper_anchor(view, legs, arms)
+        anchor = upper_anchor(view, legs, arms)
         if anchor is not None:
             up_guess = view.P[anchor] - view.P[legs.branch]
             up_guess = up_guess / max(length(up_guess), 1e-12)
@@ -222,6 +220,8 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
     torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
 
+    if used_pose != "rest pose":
+        base_why += f"; geometry from the {used_pose}"
     result.put("base", base, 0.9, base_why)
     _put_torso(result, torso, chest_why)
     _put_neck(result, neck)
@@ -241,7 +241,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         _put_arm(view, result, s, r, side_why, side_conf)
     # eyes
     if head >= 0:
-        _put_eyes(view, result, head, up, left, [base] + torso + neck)
+        _put_eyes(view, result, head, up, left)
 
 
 def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body_chain: set[int]) -> None:
@@ -253,8 +253,7 @@ def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body
     mid = view.P[r.slots[middle]]
     target = view.P[j] if j >= 0 else r.predicted[end]
     seg = length(target - mid)
-    exclude = body_chain
-    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
+    new = relocate(view, target, body_chain, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
     if new >= 0:
         r.slots[end] = new
         r.notes[end] = "IK-driven: found where the limb ends, outside its chain"
@@ -435,7 +434,7 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
     forward = np.cross(lateral, up)  # the body's front if the "a" members are on its left
     top = arms.branch if arms is not None else base
     geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames if top != base else None, base, top)
-    names = _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs)
+    names = _name_votes(view, pairs, leg_res, arm_res, legs)
     if abs(geo) >= 0.3:
         a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
         if names and (names > 0) == a_left:
@@ -508,7 +507,7 @@ def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[f
     return float(np.clip(toe + 0.5 * knee, -1, 1)), "left = up x forward, forward from the toes and knees"
 
 
-def _name_votes(view, lateral, base, pairs, leg_res, arm_res, legs) -> float:
+def _name_votes(view, pairs, leg_res, arm_res, legs) -> float:
     """> 0 when the names put the "a" members on the left, < 0 right, 0 silent."""
     total = 0
     for p in pairs:
@@ -635,7 +634,7 @@ def _coincident_siblings(view: SkeletonView, j: int) -> list[int]:
             and not view.info[c].flagged(*_NOT_BODY)]
 
 
-def _put_eyes(view, result, head, up, left, below: list[int]) -> None:
+def _put_eyes(view, result, head, up, left) -> None:
     """Eyes: named ones below the head; else, in a head with few joints, a mirror-image pair of
     small joints in front of and above the head joint."""
     eyes = _named_eyes(view, view.subtree(head))
