@@ -42,15 +42,15 @@ def _map(args) -> int:
     mapping = mapping_from_args(args, asset)
     if args.save:
         mapping.save(args.save)
+    doc = mapping.to_dict(extras=False)
     if args.json:
-        json.dump(mapping.to_dict(extras=False), sys.stdout, indent=1, ensure_ascii=False)
+        json.dump(doc, sys.stdout, indent=1, ensure_ascii=False)
         print()
         return 0
-    count = len([n for n, v in mapping.to_dict(extras=False)["mapping"].items() if v is not None])
-    total = len(mapping.to_dict(extras=False)["mapping"])
-    print(f"{args.file}: {count} of {total} canonical joints mapped by {mapping.mapper} "
+    count = sum(v is not None for v in doc["mapping"].values())
+    print(f"{args.file}: {count} of {len(doc['mapping'])} canonical joints mapped by {mapping.mapper} "
           f"(overall confidence {mapping.overall_confidence:.2f})")
-    print(format_table(mapping, list(mapping.to_dict(extras=False)["mapping"])))
+    print(format_table(mapping, list(doc["mapping"])))
     if mapping.unmapped:
         print(f"  unmapped joints ({len(mapping.unmapped)}): {', '.join(mapping.unmapped)}")
     if args.save:
