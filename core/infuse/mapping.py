@@ -24,7 +24,7 @@ import numpy as np
 
 from . import registry
 from .atomic import atomic_path
-from .canonical import ALL_NAMES, CANONICAL_NAMES, is_canonical
+from .canonical import ALL_NAMES, CANONICAL_NAMES, EXTRA_NAMES, is_canonical
 from .errors import InputError, UsageError
 from .skeleton import Skeleton
 
@@ -95,8 +95,9 @@ class Mapping:
     # -- files ---------------------------------------------------------------------------------------
     def to_dict(self, extras: bool = True) -> dict[str, Any]:
         """The JSON document (``mapping``, ``confidence``, ``unmapped``, plus ``reasons``, ``mapper``,
-        ``overall_confidence``). Extra canonical names are written only when mapped, or with ``extras``."""
-        names = [n for n in ALL_NAMES if n in CANONICAL_NAMES or extras or self.joints.get(n) is not None]
+        ``overall_confidence``): the 69 required names first, then the extra names that are mapped
+        (all of them with ``extras``)."""
+        names = list(CANONICAL_NAMES) + [n for n in EXTRA_NAMES if extras or self.joints.get(n) is not None]
         return {
             "mapping": {n: self.joints.get(n) for n in names},
             "confidence": {n: round(self.confidence.get(n, 0.0), 3) for n in names},
