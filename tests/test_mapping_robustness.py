@@ -257,3 +257,15 @@ def test_extra_names_when_the_rig_has_them():
     assert brad["lower_eyelid_left"] == "JtEyelidLowerLf"
     assert brad["l_sternoclavicular"] is None  # one clavicle joint: it is the acromioclavicular one
     assert "l_sternoclavicular" not in map_skeleton(_asset("Xbot.glb")).to_dict(extras=False)["mapping"]
+
+
+ARMS = tuple(n for n in CANONICAL_NAMES if n[:2] in ("l_", "r_") and n[2:] not in ("hip", "knee", "ankle", "forefoot", "toe"))
+LEGS = tuple(f"{s}_{j}" for s in "lr" for j in ("hip", "knee", "ankle", "forefoot", "toe"))
+
+
+@pytest.mark.parametrize("drop", [ARMS, LEGS], ids=["no_arms", "no_legs"])
+@pytest.mark.parametrize("renamed", [False, True], ids=["named", "meaningless"])
+def test_partial_bodies_are_mapped_not_refused(drop, renamed):
+    """An upper body without legs, or a body without arms: what is there is mapped."""
+    names = {n: f"j{i}" for i, n in enumerate(CANONICAL_NAMES)} if renamed else None
+    _check_variant(_canonical_variant(names=names, drop=drop), CANONICAL_NAMES)

@@ -17,11 +17,11 @@ quadruped), raises :class:`~infuse.errors.NotHumanoidError` with the reason.
 from __future__ import annotations
 
 import numpy as np
-from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
+from infuse.canonical import ALL_NAMES, CANONICAL_NAMES, canonical_joint, is_canonical
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
-from .body import LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
+from .body import BodyPlan, LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
 from .hands import assign_fingers
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
 from .view import SkeletonView, length, lengths
@@ -113,6 +113,8 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
             return _finish(skeleton, result, fixed, 0.3)
         raise NotHumanoidError(file, f"no pair of mirror-image limbs among its {view.n} joints"
                                + (" (a single chain)" if all(len(c) <= 1 for c in view.children) else ""))
+    if plan.legs is not None and plan.arms is None and cos > STANDING_COS:
+        plan = BodyPlan(None, plan.legs, plan.score, "one pair of limbs that does not point down: arms")
     if plan.legs is not None and cos > STANDING_COS:
         angle = np.degrees(np.arccos(np.clip(cos, -1, 1)))
         raise NotHumanoidError(file, f"its legs do not point away from its head (they are {angle:.0f} degrees "
@@ -213,8 +215,12 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     # torso, neck and head
     if legs is not None and arms is not None:
         junction = view.lca(legs.branch, arms.branch)
-    else:
-        junction = (legs or arms).branch
+    elif legs is not None:
+        junction = legs.branch
+    else:  # an upper body: the pelvis is the lowest joint of the chain the arms hang from
+        junction = arms.branch
+        while view.parents[junction] >= 0 and not view.info[int(view.parents[junction])].flagged("root", "control"):
+            junction = int(view.parents[junction])
     up = _up_axis(view, junction, legs, arms, leg_res, arm_res)
     base, base_why = _choose_base(view, junction, legs, [r.slots["hip"] for r in leg_res.values()], up)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
@@ -361,7 +367,29 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
     if head < 0:
         return torso, chain if neck_from_top else [], -1, chest_why
     neck = chain[:chain.index(head)]
+    if arms is None and top == base:  # no arms to mark the chest: split the chain by names, else by height
+        torso, neck = _split_without_arms(view, neck, base, head)
+        chest_why = "chest: the last torso joint below the neck (no arms: by name or height)"
     return torso, neck, head, chest_why
+
+
+def _split_without_arms(view: SkeletonView, joints: list[int], base: int, head: int) -> tuple[list[int], list[int]]:
+    """Torso and neck joints of a body without arms: named ones by their names, the others by how
+    close they are to the head (a neck is about a third of the way from the head to the pelvis)."""
+    reach = length(view.P[head] - view.P[base])
+    torso, neck = [], []
+    for j in joints:
+        info = view.info[j]
+        if is_canonical(view.names[j]):  # the target's own names (SmartBody rigs)
+            is_neck = canonical_joint(view.names[j]).group == "neck"
+        elif info.has("neck"):
+            is_neck = True
+        elif info.roles & {"spine", "chest"}:
+            is_neck = False
+        else:
+            is_neck = length(view.P[head] - view.P[j]) < 0.35 * reach
+        (neck if is_neck or neck else torso).append(j)
+    return torso, neck
 
 
 def _pick_head(view: SkeletonView, chain: list[int], base: int, up: np.ndarray, top: int, neck_from_top: bool) -> int:
