@@ -228,3 +228,19 @@ def test_speak_with_a_recorded_voice(tmp_path, capsys):
     doc = json.loads((tmp_path / "rec.timeline.json").read_text())
     assert [v["viseme"] for v in doc["visemes"]] == ["sil", "PP", "aa", "PP", "sil"]
     assert (tmp_path / "rec.wav").read_bytes() == (tmp_path / "voice.wav").read_bytes()
+
+
+def test_lipsync_plays_in_the_controller_runtime(rpm, utterance):
+    from infuse.runtime import Runtime
+
+    result = lipsync(utterance, detect_face(rpm), skeleton=rpm.skeleton)
+    runtime = Runtime(fps=30)
+    name = runtime.add_character(rpm)
+    runtime.activate(name, result.controller(), start_s=0.0)
+    runtime.run(utterance.duration_s)
+    played = runtime.morph_tracks(name)
+    assert set(played["weights"]) == set(result.morph_weights)
+    inside = (played["times"] > 0.15) & (played["times"] < utterance.duration_s - 0.15)  # past the blend in and out
+    for target, weights in played["weights"].items():
+        expected = np.interp(played["times"][inside], result.times, result.morph_weights[target])
+        np.testing.assert_allclose(weights[inside], expected, atol=1e-9)

@@ -79,6 +79,13 @@ class LipSync:
         t = np.asarray(t, float)
         return {c: np.interp(t, self.times, self.channel_weights[:, i]) for i, c in enumerate(self.channels)}
 
+    def controller(self, name: str = "lipsync"):
+        """A runtime ``tracks`` controller (:class:`infuse.runtime.tracks.Tracks`, face layer) that plays these
+        morph weights and face-joint rotations as speech; face-joint translations are not carried."""
+        from infuse.runtime.tracks import Tracks
+
+        return Tracks(self.times, dict(self.joint_rotations), dict(self.morph_weights), speaks=True, name=name)
+
     def motion(self, skeleton: Skeleton, name: str = "speech") -> Motion | None:
         """The joint face as a clip of ``skeleton`` (rest pose elsewhere), or ``None`` without face joints."""
         if not self.joint_rotations:
