@@ -38,7 +38,8 @@ def test_rate_depth_and_level_head(key, rate, depth):
     assert chest.max() == pytest.approx(depth * spine, rel=0.02)
     head = aligned_pitch_deg(rt, key, "skullbase")
     assert np.ptp(head) < 0.02 * np.ptp(chest)
-    clavicle = rt.rig(key).joint("l_acromioclavicular")
+    rig = rt.rig(key)  # the sternoclavicular joint when mapped, else the acromioclavicular one
+    clavicle = rig.joint("l_sternoclavicular") if rig.joint("l_sternoclavicular") is not None else rig.joint("l_acromioclavicular")
     lift = np.degrees(quat.angle_between(rt.motion(key).local_rotations[:, clavicle],
                                          rt.motion(key).local_rotations[0, clavicle]))
     assert lift.max() == pytest.approx(3.0 * depth, rel=0.02)

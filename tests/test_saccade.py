@@ -128,3 +128,15 @@ def test_a_character_without_eyes_is_reported_once():
     rt.activate("xbot", Saccades("think"), 1.0)
     rt.run(2.0)
     assert [n for n in rt.notes if "saccade" in n[1]] == [("xbot", "has no eyes: saccades are not shown")]
+
+
+def test_bml_saccade_finish_stops_the_running_saccades():
+    from infuse.bml import Scheduler
+
+    rt = Runtime(fps=30)
+    rt.add_character(corpus_character("utah"), name="utah")
+    scheduler = Scheduler()
+    scheduler.submit('<act><bml id="b1"><saccade mode="listen"/></bml></act>', at=0.0, character="utah")
+    scheduler.submit('<act><bml id="b2"><saccade finish="true"/></bml></act>', at=2.0, character="utah")
+    played = [rt.realize(a) for a in scheduler.activations("utah")]
+    assert played[1] is None and played[0].end_s == pytest.approx(2.0 + played[0].blend_out_s)

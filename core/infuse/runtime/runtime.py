@@ -246,8 +246,9 @@ class Runtime:
     def realize(self, activation, character=None) -> Activity | None:
         """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller of its kind.
 
-        The controller component's ``info["from_bml"](parameters, runtime, character)`` builds the
-        controller (else its factory is called with the parameters). Returns None, and reports why,
+        The controller component's ``info["from_bml"](parameters, runtime, character, activation)`` builds
+        the controller (else its factory is called with the parameters); it may return None when the
+        activation asks for nothing to play (it may stop activities itself, e.g. finishing saccades). Returns None, and reports why,
         when no installed controller realizes that kind.
         """
         from . import controller_components
@@ -260,7 +261,8 @@ class Runtime:
             return None
         build = component.info.get("from_bml")
         try:
-            controller = build(dict(activation.parameters), self, rig.name) if build else component.factory(**activation.parameters)
+            controller = build(dict(activation.parameters), self, rig.name, activation) if build \
+                else component.factory(**activation.parameters)
         except (UsageError, ValueError, TypeError) as exc:
             self.report(rig.name, f"<{activation.element}> {activation.behaviour!r} cannot be realized: {exc}")
             return None

@@ -145,7 +145,7 @@ def _eyelid_joints(rig) -> list[tuple[int, float]]:
     return found
 
 
-def blink_from_bml(parameters: dict, runtime, character: str) -> Blink:
+def blink_from_bml(parameters: dict, runtime, character: str, activation=None) -> Blink:
     """ASAP's blink emitter: ``mean_interval_s`` between blinks sets the rate (else the resting rate)."""
     interval = float(parameters.get("mean_interval_s") or 0.0)
     return Blink(rate_per_min=float(np.clip(60.0 / interval, 0.1, 120.0)) if interval > 0 else None)

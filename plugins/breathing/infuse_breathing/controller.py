@@ -87,7 +87,7 @@ class Breathing(Controller):
         job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
 
 
-def breathing_from_bml(parameters: dict, runtime, character: str) -> Breathing:
+def breathing_from_bml(parameters: dict, runtime, character: str, activation=None) -> Breathing:
     """ASAP's breathing emitter: ``mean_interval_s`` between breaths sets the rate."""
     interval = float(parameters.get("mean_interval_s") or 0.0)
     return Breathing(rate_bpm=float(np.clip(60.0 / interval, 1.0, 60.0)) if interval > 0 else 14.0)

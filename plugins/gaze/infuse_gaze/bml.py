@@ -14,7 +14,7 @@ from .controller import Gaze
 from .model import GROUP_NAMES, group_name
 
 
-def gaze_from_bml(parameters: dict, runtime, character: str) -> Gaze:
+def gaze_from_bml(parameters: dict, runtime, character: str, activation=None) -> Gaze:
     """A :class:`Gaze` for one scheduled BML gaze activation of ``character`` in ``runtime``."""
     target = parameters.get("target")
     if parameters.get("target_position") is not None:

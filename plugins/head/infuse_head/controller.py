@@ -114,7 +114,7 @@ def _direction(words) -> tuple[float, float]:
     return (0.0, -1.0) if norm == 0 else (h / norm, v / norm)
 
 
-def head_from_bml(parameters: dict, runtime, character: str) -> HeadMovement:
+def head_from_bml(parameters: dict, runtime, character: str, activation=None) -> HeadMovement:
     """A :class:`HeadMovement` from a BML ``<head>`` activation's parameters."""
     return HeadMovement(parameters.get("lexeme") or "NOD", float(parameters.get("amount", 0.5)),
                         float(parameters.get("repeats", 1.0)), float(parameters.get("velocity_hz", 1.0)),

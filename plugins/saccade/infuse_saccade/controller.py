@@ -101,11 +101,13 @@ class Saccades(Controller):
         job.pose.set_rotations(b["eyes"], rotations)
 
 
-def saccade_from_bml(parameters: dict, runtime, character: str) -> Saccades | None:
-    """SmartBody's ``<saccade mode=... finish=...>``: None (nothing to play) when it finishes saccades."""
+def saccade_from_bml(parameters: dict, runtime, character: str, activation=None) -> Saccades | None:
+    """SmartBody's ``<saccade mode=... finish=...>``: ``finish`` stops the character's running saccades at
+    the activation's start and plays nothing (None)."""
     if parameters.get("enabled") is False:
+        at = activation.start if activation is not None else None
         for activity in runtime.activities:
             if activity.rig.name == character and isinstance(activity.controller, Saccades) and activity.end_s is None:
-                runtime.stop(activity)
+                runtime.stop(activity, at)
         return None
     return Saccades(parameters.get("mode") or "talk", max_magnitude_deg=parameters.get("angle_limit_deg"))
