@@ -6,7 +6,6 @@ bone along one axis at rest), held under the gaze.
 """
 from __future__ import annotations
 
-import json
 
 import numpy as np
 import pytest
@@ -18,7 +17,7 @@ from infuse.runtime.swing import ellipse_scale, swing_angles
 from infuse_gaze import GROUPS, Gaze
 from infuse_gaze.model import GROUP_NAMES
 
-from corpus_data import CORPUS, labels
+from corpus_data import labels
 from runtime_characters import CORPUS_CHARACTERS, body_axes, corpus_character, first_frame, reference_frame
 
 KEYS = tuple(CORPUS_CHARACTERS)

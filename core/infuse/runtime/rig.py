@@ -145,10 +145,6 @@ class Rig:
         """The joint index of a canonical name, or None when the character has no such joint."""
         return self.joints.get(canonical)
 
-    def present(self, canonicals) -> list[str]:
-        """The canonical names among ``canonicals`` this character has, in the given order."""
-        return [c for c in canonicals if c in self.joints]
-
     def morph_named(self, *candidates: str) -> str | None:
         """The first morph target named like one of ``candidates`` (case, separators and a mesh prefix
         before a ``.`` ignored), or None."""

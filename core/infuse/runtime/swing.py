@@ -51,11 +51,6 @@ def swing_angles(q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return heading, pitch, roll
 
 
-def wrap_angle(angle) -> np.ndarray:
-    """Angles in radians wrapped to [-pi, pi)."""
-    return (np.asarray(angle, dtype=np.float64) + np.pi) % (2.0 * np.pi) - np.pi
-
-
 def ellipse_scale(heading, pitch, heading_limit, up_limit, down_limit) -> np.ndarray:
     """How far (heading, pitch) lies in the elliptical limit: 1 on the border, > 1 outside.
 

@@ -50,7 +50,6 @@ GROUPS: tuple[GroupSettings, ...] = (
 )
 GROUP_NAMES: tuple[str, ...] = tuple(g.name for g in GROUPS)
 EYES = GROUP_NAMES.index("eyes")
-HEAD = GROUP_NAMES.index("head")
 
 #: BML influence -> the groups that move (eyes always do).
 INFLUENCES: dict[str, tuple[str, ...]] = {
