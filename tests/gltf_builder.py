@@ -24,6 +24,7 @@ ARMATURE_ROTATION = quat.from_axis_angle(np.array([1.0, 0.0, 0.0]), -np.pi / 2)
 
 class GltfBuilder:
     def __init__(self):
+        # "buffers" holds the buffers after the first (buffer 0, the GLB BIN chunk, is added on output).
         self.doc: dict = {"asset": {"version": "2.0", "generator": "test builder"}, "nodes": [], "buffers": [],
                           "bufferViews": [], "accessors": []}
         self.bin = bytearray()
@@ -78,7 +79,7 @@ class GltfBuilder:
 
     def _json(self, buffer: dict) -> dict:
         doc = json.loads(json.dumps(self.doc))
-        doc["buffers"] = [dict(buffer, byteLength=len(self.bin))]
+        doc["buffers"] = [dict(buffer, byteLength=len(self.bin))] + self.doc["buffers"]
         for key in ("bufferViews", "accessors"):
             if not doc[key]:
                 del doc[key]
@@ -161,3 +162,69 @@ def world_matrices(doc: dict) -> np.ndarray:
         return world(parent[i]) @ node_local_matrix(nodes[i]) if i in parent else node_local_matrix(nodes[i])
 
     return np.array([world(i) for i in range(len(nodes))])
+
+
+# -- an EXT_meshopt_compression encoder (vertex codec version 0, ATTRIBUTES mode), from the spec ------
+def _zigzag(delta: np.ndarray) -> np.ndarray:
+    d = delta.astype(np.int8).astype(np.int16)
+    return (((d << 1) ^ (d >> 7)) & 0xFF).astype(np.uint8)
+
+
+def _encode_lane(values: np.ndarray) -> bytes:
+    """One byte lane of a block: 2-bit group modes, then each group with the cheapest packing."""
+    padded = np.zeros(-(-len(values) // 16) * 16, dtype=np.uint8)
+    padded[:len(values)] = values
+    groups = padded.reshape(-1, 16)
+    header = bytearray((len(groups) + 3) // 4)
+    body = bytearray()
+    for g, group in enumerate(groups):
+        costs = {1: 4 + int(np.sum(group >= 3)), 2: 8 + int(np.sum(group >= 15)), 3: 16}
+        mode = 0 if not group.any() else min(costs, key=costs.get)
+        header[g // 4] |= mode << ((g % 4) * 2)
+        if mode == 3:
+            body += group.tobytes()
+        elif mode in (1, 2):
+            width, sentinel = (2, 3) if mode == 1 else (4, 15)
+            codes = np.minimum(group, sentinel)
+            packed = bytearray(16 * width // 8)
+            for i, c in enumerate(codes):
+                packed[i * width // 8] |= int(c) << (8 - width - (i * width) % 8)
+            body += packed + bytes(int(v) for v in group if v >= sentinel)
+    return bytes(header) + bytes(body)
+
+
+def meshopt_encode(elements: np.ndarray) -> bytes:
+    """Encode (count, stride) uint8 elements as a meshopt vertex stream."""
+    count, stride = elements.shape
+    block = min((8192 // stride) & ~15, 256)
+    out = bytearray([0xA0])
+    last = elements[0].copy()
+    for first in range(0, count, block):
+        chunk = elements[first:first + block]
+        previous = np.vstack((last[None], chunk[:-1]))
+        for k in range(stride):
+            out += _encode_lane(_zigzag(chunk[:, k].astype(np.int16) - previous[:, k]))
+        last = chunk[-1].copy()
+    tail = max(stride, 32)
+    out += bytes(tail - stride) + elements[0].tobytes()
+    return bytes(out)
+
+
+def exponential_filter(values: np.ndarray, exponent: int = -15) -> np.ndarray:
+    """float32 values -> meshopt EXPONENTIAL words (24-bit mantissa, 8-bit exponent) as bytes (n, 4*c)."""
+    mantissa = np.round(np.asarray(values, dtype=np.float64) * 2.0 ** -exponent).astype(np.int64)
+    words = ((exponent & 0xFF) << 24) | (mantissa & 0xFFFFFF)
+    return words.astype("<u4").view(np.uint8).reshape(len(values), -1)
+
+
+def quaternion_filter(quats: np.ndarray, bits: int = 12) -> np.ndarray:
+    """Unit quaternions -> meshopt QUATERNION int16 x4 (largest component dropped) as bytes (n, 8)."""
+    q = np.asarray(quats, dtype=np.float64)
+    largest = np.argmax(np.abs(q), axis=1)
+    q = np.where(q[np.arange(len(q)), largest][:, None] < 0, -q, q)
+    scale = (1 << bits) - 1
+    out = np.zeros((len(q), 4), dtype=np.int64)
+    for k in range(3):
+        out[:, k] = np.round(q[np.arange(len(q)), (largest + k + 1) & 3] * np.sqrt(2.0) * scale)
+    out[:, 3] = (scale & ~3) | largest
+    return out.astype("<i2").view(np.uint8).reshape(len(q), 8)

@@ -95,8 +95,11 @@ def test_corpus_facts(assets):
     brunette = assets["talkinghead/avatars/brunette-t.glb"]
     assert brunette.morph_targets[:2] == ["viseme_sil", "viseme_PP"] and len(brunette.morph_targets) == 67
     vroid = assets["talkinghead/avatars/vroid.glb"]
-    assert "EXT_meshopt_compression" in vroid.meta["compression"]  # mesh data only: the skeleton still reads
-    assert vroid.skeleton.num_joints == 244 and not vroid.meta["bind_pose"]["checked"]
+    assert "EXT_meshopt_compression" in vroid.meta["compression"]
+    assert vroid.skeleton.num_joints == 244
+    # Its inverse bind matrices are meshopt-compressed: decoded, they agree with the rest pose.
+    assert vroid.meta["bind_pose"]["checked"] and vroid.meta["bind_pose"]["matches_rest"]
+    assert vroid.meta["bind_pose"]["max_translation_deviation_m"] < 1e-4
     vrma = assets["three-vrm/packages/three-vrm-animation/examples/models/test.vrma"]
     assert vrma.format == "vrma" and vrma.meta["vrm_humanoid"]["rightUpperArm"] == "rightUpperArm"
     assert {"happy", "lookAt"}.isdisjoint(vrma.skeleton.names)  # expression and gaze nodes are not joints

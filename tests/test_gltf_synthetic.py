@@ -19,6 +19,7 @@ from infuse_gltf.accessors import AccessorReader
 from infuse_gltf.container import parse_bytes
 from infuse_gltf.sampling import detect_fps
 
+import gltf_builder as gb
 from gltf_builder import ARMATURE_ROTATION, GltfBuilder, mini_rig, world_matrices
 
 INFUSE_CLI = Path(sys.executable).with_name("infuse")
@@ -259,17 +260,70 @@ def test_untouched_clips_keep_their_animation_and_dropped_clips_go(tmp_path, min
         infuse.save(asset, out)
 
 
-def test_compressed_animation_data_is_refused_clearly(tmp_path):
-    b, _ = mini_rig()
-    anim_view = b.doc["accessors"][b.doc["animations"][0]["samplers"][0]["output"]]["bufferView"]
-    b.doc["bufferViews"][anim_view]["extensions"] = {"EXT_meshopt_compression": {
-        "buffer": 0, "byteOffset": 0, "byteLength": 16, "byteStride": 16, "count": 2, "mode": "ATTRIBUTES"}}
-    b.doc["extensionsUsed"] = ["EXT_meshopt_compression"]
-    path = b.write_glb(tmp_path / "packed.glb")
+def _meshopt_clip(tmp_path, filters: dict | None = None) -> tuple[Path, np.ndarray, np.ndarray]:
+    """A rig whose clip (times, QUATERNION-filtered rotations, EXPONENTIAL-filtered translations) sits in
+    meshopt-compressed views of a fallback buffer; returns the file and the rotations and translations."""
+    b = GltfBuilder()
+    joint = b.node("joint", translation=[0, 1, 0])
+    keys = 300  # more than one 256-element block
+    times = np.arange(keys, dtype=np.float32) / np.float32(30.0)
+    rng = np.random.default_rng(5)
+    rots = quat.normalize(quat.from_rotvec(np.cumsum(rng.normal(scale=0.05, size=(keys, 3)), axis=0)))
+    trans = np.cumsum(rng.normal(scale=0.01, size=(keys, 3)), axis=0) + [0, 1, 0]
+    b.doc["buffers"] = [{"byteLength": 0, "extensions": {"EXT_meshopt_compression": {"fallback": True}}}]
+    fallback_length = 0
+    streams = [(times.view(np.uint8).reshape(keys, 4), "NONE", 5126, "SCALAR", False),
+               (gb.quaternion_filter(rots), "QUATERNION", 5122, "VEC4", True),
+               (gb.exponential_filter(trans.astype(np.float32)), "EXPONENTIAL", 5126, "VEC3", False)]
+    accessors = []
+    for elements, flt, ctype, kind, normalized in streams:
+        flt = (filters or {}).get(flt, flt)
+        encoded = gb.meshopt_encode(elements)
+        b.bin += b"\0" * ((-len(b.bin)) % 4)
+        ext = {"buffer": 0, "byteOffset": len(b.bin), "byteLength": len(encoded), "byteStride": elements.shape[1],
+               "count": keys, "mode": "ATTRIBUTES", "filter": flt}
+        b.bin += encoded
+        view = {"buffer": 1, "byteOffset": fallback_length, "byteLength": elements.size, "extensions": {"EXT_meshopt_compression": ext}}
+        fallback_length += elements.size
+        b.doc["bufferViews"].append(view)
+        acc = {"bufferView": len(b.doc["bufferViews"]) - 1, "componentType": ctype, "count": keys, "type": kind}
+        if normalized:
+            acc["normalized"] = True
+        if kind == "SCALAR":
+            acc["min"], acc["max"] = [0.0], [float(times[-1])]
+        b.doc["accessors"].append(acc)
+        accessors.append(len(b.doc["accessors"]) - 1)
+    b.doc["buffers"][0]["byteLength"] = fallback_length
+    b.doc["animations"] = [{"name": "packed", "samplers": [{"input": accessors[0], "output": accessors[1]},
+                                                           {"input": accessors[0], "output": accessors[2]}],
+                            "channels": [{"sampler": 0, "target": {"node": joint, "path": "rotation"}},
+                                         {"sampler": 1, "target": {"node": joint, "path": "translation"}}]}]
+    b.doc["extensionsUsed"] = b.doc["extensionsRequired"] = ["EXT_meshopt_compression"]
+    return b.write_glb(tmp_path / "packed.glb"), rots, trans
+
+
+def test_meshopt_compressed_clip_is_decoded(tmp_path):
+    path, rots, trans = _meshopt_clip(tmp_path)
+    asset = infuse.load(path)
+    motion = asset.motions["packed"]
+    assert motion.fps == 30 and motion.num_frames == len(rots)
+    assert np.max(quat.angle_between(motion.local_rotations[:, 0], rots)) < 1e-3  # 12-bit quaternion components
+    np.testing.assert_allclose(motion.root_translations, trans, atol=2e-5)  # 2^-15 m steps
+    assert asset.meta["compression"] == ["EXT_meshopt_compression"]
+
+
+def test_undecodable_or_damaged_compression_is_refused_clearly(tmp_path):
+    path, _, _ = _meshopt_clip(tmp_path, filters={"QUATERNION": "OCTAHEDRAL"})
     with pytest.raises(MissingFeatureError, match="EXT_meshopt_compression"):
         infuse.load(path)
     run = subprocess.run([str(INFUSE_CLI), "info", str(path)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 3 and "EXT_meshopt_compression" in run.stderr and "Traceback" not in run.stderr
+    b, _ = mini_rig()
+    anim_view = b.doc["accessors"][b.doc["animations"][0]["samplers"][0]["output"]]["bufferView"]
+    b.doc["bufferViews"][anim_view]["extensions"] = {"EXT_meshopt_compression": {
+        "buffer": 0, "byteOffset": 0, "byteLength": 40, "byteStride": 16, "count": 2, "mode": "ATTRIBUTES"}}
+    with pytest.raises(InputError, match="EXT_meshopt_compression"):
+        infuse.load(b.write_glb(tmp_path / "garbled.glb"))
 
 
 def _bvh_like_skeleton() -> infuse.Skeleton:

@@ -12,6 +12,7 @@ import numpy as np
 
 from infuse.errors import InputError, MissingFeatureError
 
+from . import meshopt
 from .container import GltfDocument
 
 COMPONENT_DTYPES: dict[int, np.dtype] = {
@@ -60,15 +61,7 @@ class AccessorReader:
             raise InputError(self.file, "accessors" if not isinstance(self.accessors, list) else "bufferViews", "is not an array")
         self._cache: dict[int, np.ndarray] = {}
         self._finite: set[int] = set()
-
-    def is_readable(self, index: int) -> bool:
-        """False when the accessor's data sit in a compressed view (meshopt) that this reader cannot decode."""
-        valid = isinstance(index, int) and 0 <= index < len(self.accessors) and isinstance(self.accessors[index], dict)
-        acc = self.accessors[index] if valid else {}
-        sparse = acc.get("sparse") if isinstance(acc.get("sparse"), dict) else {}
-        views = [acc.get("bufferView")] + [(sparse.get(k) if isinstance(sparse.get(k), dict) else {}).get("bufferView")
-                                           for k in ("indices", "values")]
-        return not any(self._compression(v) for v in views if isinstance(v, int) and 0 <= v < len(self.views))
+        self._decoded: dict[int, memoryview] = {}
 
     def _compression(self, view_index: int) -> str | None:
         view = self.views[view_index]
@@ -83,22 +76,44 @@ class AccessorReader:
         if not isinstance(view, dict):
             raise InputError(self.file, vplace, "is not an object")
         compression = self._compression(view_index)
-        if compression:
-            raise MissingFeatureError(self.file, f"{vplace} is compressed with {compression}, which infuse does not decode; "
-                                                 "re-export the file without compression of animation/skin data "
-                                                 "(e.g. gltfpack -noq, or gltf-transform copy)")
         buffer_index = check_index(self.file, vplace, view.get("buffer"), len(self.doc.buffers), "buffer")
         data = self.doc.buffers[buffer_index]
-        if data is None:
-            raise InputError(self.file, vplace, f"buffers[{buffer_index}] has no data")
         offset = _int_field(self.file, vplace, view, "byteOffset", 0)
         length = _int_field(self.file, vplace, view, "byteLength", None, 1)
+        if compression:
+            data, offset = self._decompressed(view_index, view["extensions"][compression], length, vplace, compression), 0
+        elif data is None:
+            raise InputError(self.file, vplace, f"buffers[{buffer_index}] has no data")
         if offset + length > len(data):
             raise InputError(self.file, vplace, f"byteOffset {offset} + byteLength {length} runs past buffers[{buffer_index}] ({len(data)} bytes)")
         stride = view.get("byteStride")
         if stride is not None and (not isinstance(stride, int) or isinstance(stride, bool) or not 4 <= stride <= 252 or stride % 4):
             raise InputError(self.file, vplace, f"byteStride {stride!r} must be a multiple of 4 in [4, 252]")
         return data[offset:offset + length], stride
+
+    def _decompressed(self, view_index: int, ext, length: int, place: str, name: str) -> memoryview:
+        """The decoded bytes of a meshopt-compressed view (decoded once)."""
+        done = self._decoded.get(view_index)
+        if done is not None:
+            return done
+        if not isinstance(ext, dict):
+            raise InputError(self.file, f"{place}.extensions.{name}", "is not an object")
+        source_index = check_index(self.file, f"{place}.extensions.{name}", ext.get("buffer"), len(self.doc.buffers), "buffer")
+        source = self.doc.buffers[source_index]
+        start = _int_field(self.file, f"{place}.extensions.{name}", ext, "byteOffset", 0)
+        size = _int_field(self.file, f"{place}.extensions.{name}", ext, "byteLength", None, 1)
+        if source is None or start + size > len(source):
+            raise InputError(self.file, f"{place}.extensions.{name}", f"compressed bytes lie outside buffers[{source_index}]")
+        try:
+            decoded = meshopt.decode_view(ext, source[start:start + size])
+        except meshopt.MeshoptUnsupported as exc:
+            raise MissingFeatureError(self.file, f"{place} is compressed with {name}: {exc}") from None
+        except meshopt.MeshoptError as exc:
+            raise InputError(self.file, f"{place}.extensions.{name}", str(exc)) from None
+        if len(decoded) < length:
+            raise InputError(self.file, place, f"decodes to {len(decoded)} bytes, byteLength is {length}")
+        self._decoded[view_index] = memoryview(decoded)
+        return self._decoded[view_index]
 
     def read(self, index, place: str = "accessor", check_finite: bool = True) -> np.ndarray:
         """Accessor ``index`` as a read-only array: ``(count, n)`` for vectors/scalars (n = 1..4) or

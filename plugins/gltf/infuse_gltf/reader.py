@@ -37,9 +37,10 @@ Other facts
     ``vrm_version``, ``vrm_humanoid`` {VRM bone name: joint name}, ``vrm_expressions``.
     ``payload``: a :class:`GltfPayload` with the whole parsed document, for the writer.
 
-Compressed data: meshopt and Draco compress mesh data; the skeleton and clips are read as long as
-the accessors they need are not compressed, else :class:`~infuse.errors.MissingFeatureError` names
-the extension. Malformed input raises :class:`~infuse.errors.InputError` with places such as
+Compressed data: Draco and most meshopt views hold mesh data, which the reader never touches.
+meshopt-compressed views the skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES``
+mode with the ``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
+anything else raises :class:`~infuse.errors.MissingFeatureError` naming the extension. Malformed input raises :class:`~infuse.errors.InputError` with places such as
 ``nodes[12]`` or ``accessors[3]``.
 """
 from __future__ import annotations
@@ -52,7 +53,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
-from infuse.errors import InputError, UnusableInputError, UsageError
+from infuse.errors import InputError, MissingFeatureError, UnusableInputError, UsageError
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
 
@@ -446,9 +447,10 @@ def _bind_pose_check(skins, skin_joints, world, accessors: AccessorReader, unit:
         ibm_index = skin.get("inverseBindMatrices")
         if ibm_index is None:
             continue  # identity inverse bind matrices
-        if not accessors.is_readable(ibm_index):
-            return {"checked": False, "reason": f"skins[{s}] inverse bind matrices are in a compressed buffer view"}
-        ibm = accessors.read(ibm_index, f"skins[{s}].inverseBindMatrices")
+        try:
+            ibm = accessors.read(ibm_index, f"skins[{s}].inverseBindMatrices")
+        except MissingFeatureError as exc:
+            return {"checked": False, "reason": exc.problem}
         joints = skin_joints[s]
         if ibm.shape != (len(joints), 4, 4):
             raise InputError(accessors.file, f"skins[{s}].inverseBindMatrices", f"holds {ibm.shape[0]} matrices for {len(joints)} joints")
