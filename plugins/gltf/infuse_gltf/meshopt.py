@@ -46,6 +46,8 @@ def _decode_bytes(data: bytes, pos: int, size: int, out: bytearray) -> int:
     for g in range(groups):
         mode = (header[g // 4] >> ((g % 4) * 2)) & 3
         start = g * GROUP
+        if pos + (0, 4, 8, GROUP)[mode] > len(data):
+            raise MeshoptError("stream ends inside a group")
         if mode == 0:
             out[start:start + GROUP] = bytes(GROUP)
         elif mode == 3:
