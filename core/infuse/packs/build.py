@@ -1,0 +1,141 @@
+"""``infuse pack build FOLDER``: analyse a pack's clips and store the results in the pack.
+
+Writes the manifest's analysis file (JSON: mapping, per-clip contacts, steps, cycles, keys and
+parameters, the tessellations, a validation report and a fingerprint of the files) and an ``.npz``
+beside it holding the skeleton and clip arrays. See :mod:`infuse.packs.analysis` for what is measured.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__, fileio
+from ..atomic import atomic_path
+from ..errors import UnusableInputError
+from ..kinematics import batch_fk
+from ..mapping import map_skeleton
+from .analysis import analyse_clip, blend_groups, coordinates_of
+from .manifest import read_manifest
+from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
+from .tessellation import Tessellation
+
+#: A looping clip whose last frame turns a joint more than this from its first (degrees) does not loop.
+LOOP_TOLERANCE_DEG = 12.0
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.floating,)):
+        return float(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, float):
+        return round(value, 6)
+    return value
+
+
+def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, base: int) -> list[str]:
+    """Problems worth a person's attention, one sentence each (empty when all is well)."""
+    from .. import quaternions as quat
+
+    problems = []
+    for c in clips:
+        m = motions[c["name"]]
+        if c["loop"] and m.num_frames > 2:
+            # The pelvis and above carry the facing; below it, a loop's last frame repeats its first.
+            ang = np.degrees(quat.angle_between(m.local_rotations[0, base + 1:], m.local_rotations[-1, base + 1:])).max()
+            if ang > LOOP_TOLERANCE_DEG:
+                problems.append(f"{c['name']}: marked as a loop but its last frame differs from its first by {ang:.0f} deg")
+        if kind == "locomotion" and c["role"] == "cycle" and not c["steps"]:
+            problems.append(f"{c['name']}: no foot steps found")
+        for note in c.get("notes", []):
+            problems.append(f"{c['name']}: {note}")
+    for group, t in tessellations.items():
+        if len(t["labels"]) < 2:
+            problems.append(f"blend space {group!r} has fewer than two examples")
+    return problems
+
+
+def build_pack(folder, mapper: str | None = None) -> Pack:
+    """Analyse the pack at ``folder`` (or its manifest path) and write its analysis; returns the built :class:`Pack`."""
+    manifest = read_manifest(folder)
+    digest, records = fingerprint(manifest)
+    skeleton_asset = fileio.load(manifest.skeleton) if manifest.skeleton.suffix.lower() != ".skm" else None
+    motions = {}
+    for entry in manifest.clips:
+        m = load_clip(entry.file, manifest.skeleton)
+        if skeleton_asset is None:
+            skeleton_asset = fileio.load(entry.file)
+        motions[entry.name] = m
+    skeleton = skeleton_asset.skeleton
+    motions = {n: on_skeleton(m, skeleton, manifest.clip(n).file).replace(name=n) for n, m in motions.items()}
+    first = next(iter(motions.values()))
+    # A rest pose that does not stand (bone-along-one-axis rigs) is mapped on a clip frame.
+    mapping = map_skeleton(skeleton_asset if skeleton_asset.motions else skeleton_asset.__class__(
+        skeleton_asset.path, skeleton_asset.format, skeleton, {first.name: first}), mapper=mapper or "heuristic")
+    index = mapping.indices(skeleton)
+    missing = [n for n in ("base", "l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle") if n not in index]
+    if missing:
+        raise UnusableInputError(manifest.path, f"the pack skeleton lacks {', '.join(missing)} after mapping")
+    fks = batch_fk(list(motions.values()))
+    clips = [analyse_clip(motions[e.name], e, manifest.kind, index, mapping, fk) for e, fk in zip(manifest.clips, fks)]
+    coords = coordinates_of(manifest.kind)
+    tessellations = {}
+    for group, members in blend_groups(manifest.kind, clips).items():
+        if members:
+            t = Tessellation.build(coords, [c["name"] for c in members], [[c["parameters"][k] for k in coords] for c in members])
+            tessellations[group] = t.to_dict()
+    report = validate(manifest.kind, clips, motions, tessellations, index["base"])
+    doc = _jsonable({
+        "format": FORMAT_VERSION, "pack": manifest.name, "version": manifest.version, "kind": manifest.kind,
+        "built_with": __version__, "fingerprint": digest, "files": records,
+        "mapping": {"joints": mapping.mapped(), "confidence": {k: mapping.confidence[k] for k in mapping.mapped()},
+                    "mapper": mapping.mapper},
+        "coordinates": list(coords), "clips": clips, "tessellations": tessellations, "report": report,
+    })
+    names = list(motions)
+    bounds = np.cumsum([0] + [motions[n].num_frames for n in names])
+    arrays = dict(names=np.array(skeleton.names), parents=skeleton.parents, rest_translations=skeleton.rest_translations,
+                  rest_rotations=skeleton.rest_rotations, end_site_parents=skeleton.end_site_parents,
+                  end_site_offsets=skeleton.end_site_offsets, bounds=bounds,
+                  rotations=np.concatenate([motions[n].local_rotations for n in names]),
+                  roots=np.concatenate([motions[n].root_translations for n in names]))
+    if any(motions[n].joint_translations is not None for n in names):
+        arrays["joint_translations"] = np.concatenate([motions[n].local_translations() for n in names])
+    npz = manifest.analysis.with_suffix(".npz")
+    with atomic_path(npz) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez_compressed(f, **arrays)
+    with atomic_path(manifest.analysis) as tmp:
+        Path(tmp).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+    return Pack(manifest, doc)
+
+
+def summary(pack: Pack) -> str:
+    """A printable summary of a built pack: clips with their parameters, the tessellations, the report."""
+    doc = pack.require_built()
+    lines = [f"{pack.name} {pack.version} ({pack.kind}): {len(doc['clips'])} clips, mapped by {doc['mapping']['mapper']}"]
+    for c in doc["clips"]:
+        p = c["parameters"]
+        if pack.kind == "locomotion":
+            steps = len(c["steps"])
+            lines.append(f"  {c['name']:<28} {c['role']:<6} speed {p['speed']:5.2f} m/s  dir {np.degrees(p['direction']):7.1f} deg  "
+                         f"turn {np.degrees(p['turn_rate']):7.1f} deg/s  cycle {p['duration']:.2f} s  steps {steps}  "
+                         f"keys {', '.join(f'{k:.2f}' for k in c['keys'])}")
+        else:
+            lines.append(f"  {c['name']:<40} {c['role']:<6} {c['hand'] or '':<5} stroke {c.get('stroke', 0):.2f} s  "
+                         f"wrist ({p['x']:+.2f}, {p['y']:+.2f}, {p['z']:+.2f}) m")
+    for group, t in pack.tessellations().items():
+        lines.append(f"  blend space {group}: {t.describe()}")
+    for problem in doc["report"]:
+        lines.append(f"  check: {problem}")
+    if not doc["report"]:
+        lines.append("  check: all clips pass")
+    return "\n".join(lines)

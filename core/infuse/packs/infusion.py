@@ -1,0 +1,282 @@
+"""Infusing a character with behaviour packs: map it, retarget every clip, build its blend spaces, cache.
+
+::
+
+    from infuse.packs import infuse_character
+    infusion = infuse_character("Xbot.glb", ["locomotion-female", "reaching"], cache="~/.cache/infuse")
+    space = infusion.spaces["locomotion-female"]      # a BlendSpace on the character's skeleton
+
+Each clip of each pack is retargeted onto the character (all clips of a pack as one batch through the
+installed retargeter), its parameters are measured again on the character (a shorter character walks
+slower at the same cadence), and the parameter spaces are tessellated anew. The result is cached as an
+``.npz`` (clip arrays) and a ``.json`` (everything else) keyed by the character's file, its mapping,
+the packs' fingerprints and versions and infuse's version, so the next load skips all of it.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__, fileio, registry
+from ..asset import Asset, Character
+from ..atomic import atomic_path
+from ..contacts import feet, lowest_points
+from ..errors import MissingFeatureError, UsageError
+from ..kinematics import forward_kinematics
+from ..mapping import Mapping, map_skeleton
+from ..motion import Motion
+from ..skeleton import Skeleton
+from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters
+from .pack import Pack, file_digest, load_pack
+from .tessellation import Tessellation
+
+CACHE_FORMAT = 1
+
+
+@dataclass
+class BlendClip:
+    """One example of a blend space on the character.
+
+    ``motion``: the clip's cycle (locomotion) or whole clip (reach), retargeted; ``keys``: (3,) seconds
+    from the motion's start of left strike, right strike and next left strike (may pass the end of a
+    loop: they wrap); ``contacts``: (F, 2) planted flags, left and right; ``parameters``: measured on
+    the character; ``stroke``: seconds (reach).
+    """
+
+    name: str
+    role: str
+    hand: str | None
+    loop: bool
+    motion: Motion
+    keys: np.ndarray
+    contacts: np.ndarray
+    parameters: dict
+    stroke: float = 0.0
+
+    @property
+    def duration(self) -> float:
+        return self.motion.duration
+
+
+@dataclass
+class BlendSpace:
+    """A pack's clips on one character, and the tessellations that blend them (one per group:
+    ``"locomotion"``, or ``"left"``/``"right"`` hands for reaches)."""
+
+    pack: str
+    version: str
+    kind: str
+    clips: dict[str, BlendClip]
+    tessellations: dict[str, Tessellation]
+
+    @property
+    def coordinates(self) -> tuple[str, ...]:
+        return coordinates_of(self.kind)
+
+    def group(self, name: str) -> list[BlendClip]:
+        return [self.clips[n] for n in self.tessellations[name].labels]
+
+    def weights(self, group: str, query) -> tuple[np.ndarray, np.ndarray]:
+        """Blend weights (Q, N) over :meth:`group` ``group``'s clips for (Q, D) parameter points."""
+        return self.tessellations[group].weights(query)
+
+    def range(self, coordinate: str, group: str | None = None) -> tuple[float, float]:
+        """Smallest and largest value of a coordinate over a group's examples."""
+        t = self.tessellations[group or next(iter(self.tessellations))]
+        col = t.points[:, t.coordinates.index(coordinate)]
+        return float(col.min()), float(col.max())
+
+
+@dataclass
+class Infusion:
+    """A character infused with packs: ``spaces`` pack name -> :class:`BlendSpace`; ``seconds`` it took;
+    ``cached``: loaded from the cache."""
+
+    character: Character
+    mapping: Mapping
+    spaces: dict[str, BlendSpace]
+    seconds: float = 0.0
+    cached: bool = False
+    cache_file: Path | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+def as_character(source) -> Character:
+    if isinstance(source, Character):
+        return source
+    if isinstance(source, Asset):
+        return Character(source.path.stem if source.path else "character", source)
+    path = Path(source)
+    return Character(path.stem, fileio.load(path))
+
+
+def _retarget(pack: Pack, character: Character, mapping: Mapping, retargeter: str | None):
+    table = registry.retargeters()
+    if not table:
+        raise MissingFeatureError(None, "no retargeter installed: install infuse-retarget")
+    chosen = table.get(retargeter or "default") or next(iter(table.values()))
+    motions = list(pack.motions.values())
+    first = motions[0]
+    joined = Motion(first.skeleton, first.fps, np.concatenate([m.local_rotations for m in motions]),
+                    np.concatenate([m.root_translations for m in motions]),
+                    None if first.joint_translations is None else np.concatenate([m.local_translations() for m in motions]),
+                    name=pack.name)
+    out = chosen.retarget(joined, pack.mapping, character.skeleton, mapping)
+    bounds = np.cumsum([0] + [m.num_frames for m in motions])
+    return out, bounds
+
+
+def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeter: str | None = None) -> BlendSpace:
+    """Retarget ``pack`` onto ``character`` and build its :class:`BlendSpace`."""
+    doc = pack.require_built()
+    out, bounds = _retarget(pack, character, mapping, retargeter)
+    sk = character.skeleton
+    index = mapping.indices(sk)
+    _, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
+    heading = headings(g_pos, index)
+    root = g_pos[:, index["base"]]
+    pair = feet(sk, mapping)
+    lowest = lowest_points(sk, pair, *forward_kinematics(sk, out.local_rotations[:1], out.root_translations[:1],
+                                                          None if out.joint_translations is None else out.joint_translations[:1]))
+    ground = float(lowest.min())
+    clips = {}
+    for k, info in enumerate(doc["clips"]):
+        a, b = int(bounds[k]), int(bounds[k + 1])
+        contacts = np.asarray(info["contacts"], dtype=bool).T
+        fps = float(info["fps"])
+        if pack.kind == "locomotion":
+            c0, c1 = info["cycle"]
+            sl = slice(a + c0, a + c1 + 1)
+            params = locomotion_parameters(root[sl], heading[sl], (0, c1 - c0), fps)
+            keys = np.asarray(info["keys"], dtype=np.float64) - c0 / fps
+            contacts = contacts[c0:c1 + 1]
+            stroke = 0.0
+        else:
+            sl = slice(a, b)
+            stroke = float(info["stroke"])
+            wrist = g_pos[a + int(info["stroke_frame"]), index[f"{info['hand'][0]}_wrist"]]
+            p = body_frame_point(wrist, root[a], float(heading[a]), ground)
+            params = {"x": float(p[0]), "y": float(p[1]), "z": float(p[2]), "heading_start": float(heading[a])}
+            keys = np.array([0.0, stroke, info["duration"]])
+        m = Motion(sk, fps, out.local_rotations[sl], out.root_translations[sl],
+                   None if out.joint_translations is None else out.joint_translations[sl], name=info["name"])
+        clips[info["name"]] = BlendClip(info["name"], info["role"], info.get("hand"), bool(info["loop"]), m, keys, contacts,
+                                        params, stroke)
+    coords = coordinates_of(pack.kind)
+    tess = {}
+    for group, t in pack.tessellations().items():
+        tess[group] = Tessellation.build(coords, t.labels, [[clips[n].parameters[c] for c in coords] for n in t.labels])
+    return BlendSpace(pack.name, pack.version, pack.kind, clips, tess)
+
+
+def cache_key(character: Character, mapping: Mapping, packs: list[Pack], retargeter: str | None) -> str:
+    h = hashlib.sha256()
+    path = character.asset.path
+    if path is not None and Path(path).is_file():
+        h.update(file_digest(Path(path)).encode())
+    sk = character.skeleton
+    for arr in (sk.parents, sk.rest_translations, sk.rest_rotations):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(json.dumps(mapping.mapped(), sort_keys=True).encode())
+    for p in packs:
+        h.update(f"{p.name}|{p.version}|{p.require_built()['fingerprint']}".encode())
+    h.update(f"{__version__}|{CACHE_FORMAT}|{retargeter or 'default'}".encode())
+    return h.hexdigest()[:32]
+
+
+def _cache_paths(cache, key: str) -> tuple[Path, Path]:
+    path = Path(cache).expanduser()
+    if path.suffix == ".npz":
+        return path, path.with_suffix(".json")
+    return path / f"{key}.npz", path / f"{key}.json"
+
+
+def save_infusion(infusion: Infusion, key: str, cache) -> Path:
+    """Write the infusion's clips (.npz) and metadata (.json) atomically; returns the .npz path."""
+    npz, meta = _cache_paths(cache, key)
+    arrays = {}
+    doc = {"format": CACHE_FORMAT, "key": key, "infuse": __version__, "mapping": infusion.mapping.mapped(), "spaces": {}}
+    for name, space in infusion.spaces.items():
+        names = list(space.clips)
+        ms = [space.clips[n].motion for n in names]
+        arrays[f"{name}/rotations"] = np.concatenate([m.local_rotations for m in ms])
+        arrays[f"{name}/roots"] = np.concatenate([m.root_translations for m in ms])
+        if any(m.joint_translations is not None for m in ms):
+            arrays[f"{name}/joint_translations"] = np.concatenate([m.local_translations() for m in ms])
+        arrays[f"{name}/bounds"] = np.cumsum([0] + [m.num_frames for m in ms])
+        arrays[f"{name}/contacts"] = np.concatenate([space.clips[n].contacts for n in names]).astype(np.int8)
+        doc["spaces"][name] = {
+            "version": space.version, "kind": space.kind,
+            "clips": [{"name": c.name, "role": c.role, "hand": c.hand, "loop": c.loop, "fps": c.motion.fps,
+                       "keys": c.keys.tolist(), "parameters": c.parameters, "stroke": c.stroke} for c in (space.clips[n] for n in names)],
+            "tessellations": {g: t.to_dict() for g, t in space.tessellations.items()},
+        }
+    with atomic_path(npz) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+    with atomic_path(meta) as tmp:
+        Path(tmp).write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    return npz
+
+
+def load_infusion(character: Character, mapping: Mapping, key: str, cache) -> dict[str, BlendSpace] | None:
+    """The cached blend spaces for ``key``, or None when there is no matching cache."""
+    npz, meta = _cache_paths(cache, key)
+    if not (npz.is_file() and meta.is_file()):
+        return None
+    try:
+        doc = json.loads(meta.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        return None
+    if doc.get("key") != key or doc.get("format") != CACHE_FORMAT:
+        return None
+    sk: Skeleton = character.skeleton
+    spaces = {}
+    with np.load(npz, allow_pickle=False) as z:
+        for name, s in doc["spaces"].items():
+            rot, roots, bounds = z[f"{name}/rotations"], z[f"{name}/roots"], z[f"{name}/bounds"]
+            jt = z[f"{name}/joint_translations"] if f"{name}/joint_translations" in z.files else None
+            contacts = z[f"{name}/contacts"].astype(bool)
+            clips = {}
+            for k, c in enumerate(s["clips"]):
+                a, b = int(bounds[k]), int(bounds[k + 1])
+                m = Motion(sk, c["fps"], rot[a:b], roots[a:b], None if jt is None else jt[a:b], name=c["name"])
+                clips[c["name"]] = BlendClip(c["name"], c["role"], c["hand"], c["loop"], m, np.asarray(c["keys"]),
+                                             contacts[a:b], c["parameters"], c["stroke"])
+            tess = {g: Tessellation.from_dict(t) for g, t in s["tessellations"].items()}
+            spaces[name] = BlendSpace(name, s["version"], s["kind"], clips, tess)
+    return spaces
+
+
+def infuse_character(character, packs, mapping: Mapping | None = None, cache=None, retargeter: str | None = None,
+                     mapper: str | None = None) -> Infusion:
+    """Infuse ``character`` (a Character, Asset or file path) with ``packs`` (names, folders, manifests or
+    :class:`Pack` objects): map it (unless ``mapping`` is given), retarget every clip, build the blend
+    spaces. With ``cache`` (a folder, or an ``.npz`` path) the result is stored and reused."""
+    start = time.perf_counter()
+    character = as_character(character)
+    if not packs:
+        raise UsageError("name at least one behaviour pack to infuse")
+    loaded = [load_pack(p) for p in packs]
+    for p in loaded:
+        p.require_built()
+    if mapping is None:
+        mapping = character.mapping if character.mapping is not None else map_skeleton(character.asset, mapper=mapper or "heuristic")
+    character.mapping = mapping
+    key = cache_key(character, mapping, loaded, retargeter) if cache is not None else ""
+    spaces = load_infusion(character, mapping, key, cache) if cache is not None else None
+    cached = spaces is not None
+    if spaces is None:
+        spaces = {p.name: infuse_pack(p, character, mapping, retargeter) for p in loaded}
+    infusion = Infusion(character, mapping, spaces, cached=cached)
+    if cache is not None and not cached:
+        infusion.cache_file = save_infusion(infusion, key, cache)
+    elif cached:
+        infusion.cache_file = _cache_paths(cache, key)[0]
+    infusion.seconds = time.perf_counter() - start
+    return infusion

@@ -1,0 +1,120 @@
+"""An automatic tessellation of a parameter space and barycentric blend weights inside it.
+
+Example points (one per clip, in a few named coordinates such as forward speed, lateral speed and
+turn rate) are normalized by their range, reduced to the dimensions they actually span (0 to 3,
+from their singular values), and tessellated: sorted segments in 1D, scipy's Delaunay (Qhull) in 2D
+and 3D. A query point gets the barycentric weights of the simplex containing it; a point outside the
+hull gets those of the nearest point of the hull, and is reported as outside. Nothing is typed by hand.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Tessellation:
+    """Simplices over example points.
+
+    - ``coordinates``: names of the D coordinates; ``labels``: the N examples (clip names);
+    - ``points``: (N, D) example coordinates (units of each coordinate);
+    - ``origin`` (D,), ``scale`` (D,), ``basis`` (D, d): the normalized, reduced space
+      ``y = ((x - origin) / scale) @ basis`` of dimension d;
+    - ``simplices``: (S, d + 1) indices of examples.
+    """
+
+    coordinates: tuple[str, ...]
+    labels: tuple[str, ...]
+    points: np.ndarray
+    origin: np.ndarray
+    scale: np.ndarray
+    basis: np.ndarray
+    simplices: np.ndarray
+
+    @classmethod
+    def build(cls, coordinates, labels, points, tolerance: float = 1e-6) -> "Tessellation":
+        """Tessellate (N, D) ``points``; dimensions with no spread are left out."""
+        pts = np.asarray(points, dtype=np.float64).reshape(len(labels), len(coordinates))
+        if not len(pts):
+            raise ValueError("a tessellation needs at least one example")
+        origin = pts.mean(axis=0)
+        spread = np.ptp(pts, axis=0)
+        scale = np.where(spread > tolerance, spread, 1.0)
+        x = (pts - origin) / scale
+        _, sv, vt = np.linalg.svd(x, full_matrices=False) if len(pts) > 1 else (None, np.zeros(0), np.zeros((0, len(coordinates))))
+        rank = int(np.sum(sv > tolerance * max(float(sv.max(initial=0.0)), 1.0))) if len(sv) else 0
+        rank = min(rank, 3)
+        basis = vt[:rank].T if rank else np.zeros((len(coordinates), 0))
+        y = x @ basis
+        if rank == 0:
+            simplices = np.zeros((1, 1), dtype=np.int64)
+        elif rank == 1:
+            order = np.argsort(y[:, 0], kind="stable")
+            simplices = np.stack((order[:-1], order[1:]), axis=1)
+        else:
+            from scipy.spatial import Delaunay, QhullError
+
+            try:
+                tri = Delaunay(y)
+            except QhullError:
+                tri = Delaunay(y, qhull_options="QJ Qbb Qc Qz Q12")
+            simplices = tri.simplices
+            volume = np.abs(np.linalg.det(y[simplices[:, 1:]] - y[simplices[:, :1]]))
+            simplices = simplices[volume > 1e-12]
+        return cls(tuple(coordinates), tuple(labels), pts, origin, scale, basis, np.asarray(simplices, dtype=np.int64))
+
+    @property
+    def dimension(self) -> int:
+        return self.basis.shape[1]
+
+    def reduced(self, query) -> np.ndarray:
+        """(Q, d) coordinates of (Q, D) ``query`` points in the normalized, reduced space."""
+        q = np.atleast_2d(np.asarray(query, dtype=np.float64))
+        return ((q - self.origin) / self.scale) @ self.basis
+
+    def weights(self, query) -> tuple[np.ndarray, np.ndarray]:
+        """Blend weights (Q, N) of (Q, D) query points (each row sums to 1) and (Q,) inside-hull flags."""
+        y = self.reduced(query)
+        q, n = len(y), len(self.labels)
+        out = np.zeros((q, n))
+        if self.dimension == 0:
+            out[:, self.simplices[0, 0]] = 1.0
+            return out, np.ones(q, dtype=bool)
+        corners = self.reduced(self.points)[self.simplices]            # (S, d+1, d)
+        base = corners[:, 0]                                           # (S, d)
+        edges = np.swapaxes(corners[:, 1:] - base[:, None], 1, 2)      # (S, d, d)
+        inv = np.linalg.pinv(edges)                                    # (S, d, d)
+        rel = y[:, None, :] - base[None]                               # (Q, S, d)
+        lam = np.einsum("sij,qsj->qsi", inv, rel)                      # (Q, S, d)
+        bary = np.concatenate((1.0 - lam.sum(axis=-1, keepdims=True), lam), axis=-1)  # (Q, S, d+1)
+        inside_s = np.all(bary >= -1e-9, axis=-1)
+        # Outside every simplex: the clamped barycentric point nearest to the query.
+        clamped = np.clip(bary, 0.0, None)
+        clamped /= np.maximum(clamped.sum(axis=-1, keepdims=True), 1e-12)
+        recon = np.einsum("qsk,skd->qsd", clamped, corners)
+        dist = np.linalg.norm(recon - y[:, None, :], axis=-1)
+        dist = np.where(inside_s, -1.0, dist)
+        best = np.argmin(dist, axis=1)
+        inside = inside_s[np.arange(q), best]
+        chosen = np.where(inside[:, None], bary[np.arange(q), best], clamped[np.arange(q), best])
+        np.add.at(out, (np.repeat(np.arange(q), chosen.shape[1]), self.simplices[best].ravel()), chosen.ravel())
+        return out, inside
+
+    def to_dict(self) -> dict:
+        return {"coordinates": list(self.coordinates), "labels": list(self.labels), "points": self.points.tolist(),
+                "origin": self.origin.tolist(), "scale": self.scale.tolist(), "basis": self.basis.tolist(),
+                "simplices": self.simplices.tolist(), "dimension": self.dimension}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Tessellation":
+        dims = len(d["coordinates"])
+        return cls(tuple(d["coordinates"]), tuple(d["labels"]), np.asarray(d["points"], dtype=np.float64).reshape(-1, dims),
+                   np.asarray(d["origin"], dtype=np.float64), np.asarray(d["scale"], dtype=np.float64),
+                   np.asarray(d["basis"], dtype=np.float64).reshape(dims, -1), np.asarray(d["simplices"], dtype=np.int64))
+
+    def describe(self) -> str:
+        """One line: dimension, examples, simplices."""
+        kind = {0: "a single point", 1: "segments", 2: "triangles", 3: "tetrahedra"}[self.dimension]
+        return (f"{self.dimension}D over ({', '.join(self.coordinates)}): {len(self.labels)} examples, "
+                f"{len(self.simplices)} {kind}")
