@@ -238,7 +238,7 @@ def foot_track(body: Body, g: Gait, pelvis: Pelvis, t: np.ndarray, side: int, pl
     ankle_s = stance_ankle(body, flat0, yaw0, pitch_s)
     toe_s = np.clip(-pitch_s, 0.0, np.radians(60.0))
     # Swing: from toe off of footprint k to heel strike of footprint k+1.
-    w = np.clip((u - g.duty) / (1.0 - g.duty), 0.0, 1.0)
+    w = np.clip((u - g.duty) / max(1.0 - g.duty, 1e-9), 0.0, 1.0)
     pitch_off = reach_pitch(body, pelvis, name, t_off0, flat0, yaw0, np.full(len(t), -g.toe_off))
     a0 = stance_ankle(body, flat0, yaw0, pitch_off)
     a1 = stance_ankle(body, flat1, yaw1, np.full(len(t), g.heel_strike))

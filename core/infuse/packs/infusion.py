@@ -36,6 +36,9 @@ from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
 CACHE_FORMAT = 1
+#: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
+#: infusing needs only the transfer (rotations through the canonical frame, root scaled by leg length).
+RETARGET_OPTIONS = {"ik": "none"}
 
 
 @dataclass
@@ -115,26 +118,57 @@ def as_character(source) -> Character:
     return Character(path.stem, fileio.load(path))
 
 
-def _retarget(pack: Pack, character: Character, mapping: Mapping, retargeter: str | None):
+def _signature(pack: Pack) -> str:
+    """Packs with equal signatures share a skeleton and a mapping, so they retarget as one batch."""
+    sk = pack.skeleton
+    h = hashlib.sha256("|".join(sk.names).encode())
+    for arr in (sk.parents, sk.rest_translations, sk.rest_rotations):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(json.dumps(pack.mapping.mapped(), sort_keys=True).encode())
+    return h.hexdigest()
+
+
+def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, retargeter: str | None = None,
+                   **options) -> dict[str, tuple[Motion, np.ndarray]]:
+    """Every clip of ``packs`` on ``character``: pack name -> (all its clips joined, (N+1,) frame bounds).
+
+    Packs sharing a skeleton go through the retargeter as one clip (one plan, one batch).
+    """
     table = registry.retargeters()
     if not table:
         raise MissingFeatureError(None, "no retargeter installed: install infuse-retarget")
     chosen = table.get(retargeter or "default") or next(iter(table.values()))
-    motions = list(pack.motions.values())
-    first = motions[0]
-    joined = Motion(first.skeleton, first.fps, np.concatenate([m.local_rotations for m in motions]),
-                    np.concatenate([m.root_translations for m in motions]),
-                    None if first.joint_translations is None else np.concatenate([m.local_translations() for m in motions]),
-                    name=pack.name)
-    out = chosen.retarget(joined, pack.mapping, character.skeleton, mapping)
-    bounds = np.cumsum([0] + [m.num_frames for m in motions])
-    return out, bounds
+    groups: dict[str, list[Pack]] = {}
+    for p in packs:
+        groups.setdefault(_signature(p), []).append(p)
+    out = {}
+    for members in groups.values():
+        first_pack = members[0]
+        sk = first_pack.skeleton
+        motions = [m if m.skeleton is sk else m.replace(skeleton=sk) for p in members for m in p.motions.values()]
+        fps = motions[0].fps
+        moved = any(m.joint_translations is not None for m in motions)
+        joined = Motion(sk, fps, np.concatenate([m.local_rotations for m in motions]),
+                        np.concatenate([m.root_translations for m in motions]),
+                        np.concatenate([m.local_translations() for m in motions]) if moved else None, name=first_pack.name)
+        result = chosen.retarget(joined, first_pack.mapping, character.skeleton, mapping, **options)
+        start = 0
+        for p in members:
+            lengths = [m.num_frames for m in p.motions.values()]
+            total = int(sum(lengths))
+            jt = result.joint_translations
+            part = Motion(character.skeleton, fps, result.local_rotations[start:start + total],
+                          result.root_translations[start:start + total], None if jt is None else jt[start:start + total],
+                          name=p.name)
+            out[p.name] = (part, np.cumsum([0] + lengths))
+            start += total
+    return out
 
 
-def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeter: str | None = None) -> BlendSpace:
-    """Retarget ``pack`` onto ``character`` and build its :class:`BlendSpace`."""
+def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: tuple[Motion, np.ndarray]) -> BlendSpace:
+    """The :class:`BlendSpace` of ``pack`` on ``character`` from its ``retargeted`` clips (see :func:`retarget_packs`)."""
     doc = pack.require_built()
-    out, bounds = _retarget(pack, character, mapping, retargeter)
+    out, bounds = retargeted
     sk = character.skeleton
     index = mapping.indices(sk)
     _, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
@@ -272,7 +306,8 @@ def infuse_character(character, packs, mapping: Mapping | None = None, cache=Non
     spaces = load_infusion(character, mapping, key, cache) if cache is not None else None
     cached = spaces is not None
     if spaces is None:
-        spaces = {p.name: infuse_pack(p, character, mapping, retargeter) for p in loaded}
+        moved = retarget_packs(loaded, character, mapping, retargeter, **RETARGET_OPTIONS)
+        spaces = {p.name: infuse_pack(p, character, mapping, moved[p.name]) for p in loaded}
     infusion = Infusion(character, mapping, spaces, cached=cached)
     if cache is not None and not cached:
         infusion.cache_file = save_infusion(infusion, key, cache)

@@ -1,0 +1,20 @@
+"""Registers the reaching pack's manifest under the infuse.behaviour_packs group."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import infuse
+from infuse.plugin_types import Component
+
+MANIFEST = Path(__file__).resolve().parent / "pack" / "manifest.toml"
+
+
+def _load():
+    from infuse.packs import load_pack
+
+    return load_pack(MANIFEST)
+
+
+@infuse.hookimpl
+def infuse_behaviour_packs():
+    return [Component("reaching", _load, "standing reaches over a grid of targets for each hand, and a grasp (procedural)", {"manifest": str(MANIFEST)})]
