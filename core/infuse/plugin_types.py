@@ -49,11 +49,17 @@ class Retargeter:
     """Transfers a motion between skeletons through their mappings.
 
     ``retarget(motion, source_mapping, target_skeleton, target_mapping, **options) -> Motion``.
+
+    ``prepare`` (optional) does the per-pair work once for many clips on one source skeleton:
+    ``prepare(source_skeleton, source_mapping, target_skeleton, target_mapping, **options)`` returns
+    a callable ``(motion) -> Motion``; ``options`` may name ``source_motion`` (a clip on the source
+    skeleton, for its default pose), ``target_motion``, ``source_file`` and ``target_file``.
     """
 
     name: str
     retarget: Callable[..., Any]
     description: str = ""
+    prepare: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)
