@@ -1,13 +1,23 @@
-"""Registers ``infuse speak`` (entry point group ``infuse.commands``)."""
+"""Registers ``infuse speak`` (entry point group ``infuse.commands``) and the ``speech`` and ``face``
+runtime controllers (group ``infuse.controllers``)."""
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Command
+from infuse.plugin_types import Command, Component
 
 from . import command
+from .controllers import FaceExpression, Speech, face_from_bml, speech_from_bml
 
 
 @hookimpl
 def infuse_commands():
     return [Command("speak", "say a text with a character: writes the lip-sync animation, the WAV and the phoneme/viseme "
                              "timeline", command.add_arguments, command.run)]
+
+
+@hookimpl
+def infuse_controllers():
+    return [Component("speech", Speech, "lip sync of an utterance on the character's mouth (morphs, face poses or jaw)",
+                      {"layer": int(Speech.layer), "from_bml": speech_from_bml}),
+            Component("face", FaceExpression, "a facial lexeme or FACS action unit held on the character's face",
+                      {"layer": int(FaceExpression.layer), "from_bml": face_from_bml})]

@@ -1,0 +1,266 @@
+"""Runtime controllers for the face: ``speech`` (an utterance's lip sync) and ``face`` (an expression held
+over an activity), with the builders that realize BML ``<speech>``, ``<faceLexeme>``, ``<faceFacs>`` and
+``<face>`` activations.
+
+- :class:`Speech` plays the lip sync of an :class:`~infuse.speech.Utterance` on whatever mouth the
+  character has (morph targets, SmartBody face poses or a jaw joint; :mod:`.channels`). It is marked as
+  speaking, so saccades pause. A character without mouth channels is reported once and still speaks
+  (its audio is kept), without moving its mouth.
+- :class:`FaceExpression` holds a lexeme (``smile``, BML ``RAISE_BROWS``...) or a FACS action unit, on one
+  side or both, at an intensity, as an additive offset on the face layer: morph weights are added,
+  face-pose and jaw rotations are post-multiplied. It blends in over ``blend_in_s`` (BML: start to
+  attackPeak) and out over ``blend_out_s`` (relax to end).
+"""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.errors import InfuseError, UnusableInputError, UsageError
+from infuse.runtime import Layer, Mode
+from infuse.runtime.tracks import Tracks
+from infuse.runtime.controller import Controller
+from infuse.speech import Utterance
+
+from .channels import detect_face
+from .expressions import expression_targets
+from .joints import JawRig, PoseFace
+from .lipsync import LipSyncSettings, lipsync
+
+#: BML 1.0 facial lexemes (and a few other realizers' names) -> a lexeme of ``expressions.toml`` or action
+#: units, and the side they act on.
+BML_LEXEMES = {
+    "OBLIQUE_BROWS": ({"AU1": 1.0, "AU4": 0.5}, "BOTH"),
+    "RAISE_BROWS": ("raised_brows", "BOTH"), "RAISE_LEFT_BROW": ("raised_brows", "LEFT"),
+    "RAISE_RIGHT_BROW": ("raised_brows", "RIGHT"),
+    "LOWER_BROWS": ("AU4", "BOTH"), "LOWER_LEFT_BROW": ("AU4", "LEFT"), "LOWER_RIGHT_BROW": ("AU4", "RIGHT"),
+    "LOWER_MOUTH_CORNERS": ("AU15", "BOTH"), "LOWER_LEFT_MOUTH_CORNER": ("AU15", "LEFT"),
+    "LOWER_RIGHT_MOUTH_CORNER": ("AU15", "RIGHT"),
+    "RAISE_MOUTH_CORNERS": ("AU12", "BOTH"), "RAISE_LEFT_MOUTH_CORNER": ("AU12", "LEFT"),
+    "RAISE_RIGHT_MOUTH_CORNER": ("AU12", "RIGHT"),
+    "OPEN_MOUTH": ("AU26", "BOTH"), "OPEN_LIPS": ("AU25", "BOTH"), "WIDEN_EYES": ("AU5", "BOTH"),
+    "CLOSE_EYES": ("AU43", "BOTH"), "WINK": ("AU46L", "LEFT"),
+}
+# Words in other lexicons' names (Greta's Eyebrows_Raise, Smile_Small_Open, joy...) -> a lexeme.
+_LEXEME_WORDS = (
+    (("smile", "joy", "happy", "happiness"), "smile"), (("frown",), "frown"), (("surprise", "surprised"), "surprise"),
+    (("sad", "sadness"), "sad"), (("angry", "anger"), "angry"), (("blink",), "blink"),
+)
+_SIDE_SUFFIX = re.compile(r"(left|right|lf|rt|_l|_r|\.l|\.r)$")
+
+
+def expression_for(lexeme: str) -> tuple[str | dict, str]:
+    """(expression, side) for a lexeme name: a BML 1.0 lexeme, a lexeme of ``expressions.toml``, an action unit
+    (``AU12``), or a name whose words say it (``Eyebrows_Raise``, ``Smile_Small_Open``). Raises
+    :class:`UsageError` when nothing matches."""
+    key = lexeme.strip().upper().replace("-", "_").replace(" ", "_")
+    if key in BML_LEXEMES:
+        return BML_LEXEMES[key]
+    words = set(key.lower().split("_"))
+    side = "LEFT" if "left" in words else "RIGHT" if "right" in words else "BOTH"
+    if re.fullmatch(r"AU?\d+[LR]?", key):
+        return (key if key.startswith("AU") else f"AU{key[1:]}"), side
+    if "brow" in key.lower() or "eyebrow" in key.lower() or "eyebrows" in words:
+        if words & {"raise", "raised", "up", "raising"}:
+            return "raised_brows", side
+        if words & {"frown", "down", "lower", "lowered"}:
+            return "AU4", side
+    if "wink" in words:
+        return ("AU46R" if side == "RIGHT" else "AU46L"), side
+    for names, name in _LEXEME_WORDS:
+        if words & set(names) or key.lower() == name:
+            return name, side
+    if key.lower() in ("raised_brows", "questioning"):
+        return "raised_brows", side
+    raise UsageError(f"facial lexeme {lexeme!r} is unknown")
+
+
+def target_side(name: str) -> str | None:
+    """``"LEFT"``, ``"RIGHT"`` or None (both or unsided) from a morph target or face pose name."""
+    key = name.rsplit(".", 1)[-1].replace("-", "_").lower()
+    m = _SIDE_SUFFIX.search(key)
+    if m is None:
+        return None
+    return "LEFT" if m.group(1) in ("left", "lf", "_l", ".l") else "RIGHT"
+
+
+def face_channels(rig, map_file=None):
+    """The :class:`~.channels.FaceChannels` of a runtime character, detected once per map file."""
+    cache = rig.state.setdefault("face_channels", {})
+    key = str(map_file) if map_file is not None and not isinstance(map_file, dict) else id(map_file)
+    if key not in cache:
+        cache[key] = detect_face(rig.character.asset, map_file)
+    return cache[key]
+
+
+class Speech(Tracks):
+    """Lip sync of ``utterance`` (an :class:`~infuse.speech.Utterance`, times from its start) at ``fps``.
+
+    ``map_file`` declares face channels (see :mod:`.channels`); ``viseme_set`` picks one of the
+    character's sets. The activity lasts as long as the audio.
+    """
+
+    kind = "speech"
+    blend_in_s = 0.0  # the lip sync starts and ends at rest
+    blend_out_s = 0.0
+
+    def __init__(self, utterance: Utterance, fps: float = 30.0, map_file=None, viseme_set: str | None = None,
+                 name: str = "speech"):
+        if not isinstance(utterance, Utterance):
+            raise UsageError(f"speech needs an infuse.speech.Utterance, not {type(utterance).__name__}")
+        if not utterance.duration_s > 0:
+            raise UsageError("the utterance has no duration")
+        super().__init__([0.0, float(utterance.duration_s)], speaks=True, name=name)
+        self.utterance = utterance
+        self.settings = LipSyncSettings(fps=fps)
+        self.map_file = map_file
+        self.viseme_set = viseme_set
+        self.result = None
+
+    def describe(self) -> str:
+        return f"speech {self.utterance.text[:40]!r}"
+
+    def bind(self, rig, report):
+        try:
+            face = face_channels(rig, self.map_file)
+            self.result = lipsync(self.utterance, face, self.viseme_set, self.settings, rig.skeleton)
+        except UnusableInputError as exc:
+            report(f"{exc.problem}; it speaks without moving its mouth")
+            return None
+        Tracks.__init__(self, self.result.times, dict(self.result.joint_rotations), dict(self.result.morph_weights),
+                        speaks=True, name=self.name)
+        self.duration_s = float(self.utterance.duration_s)
+        return super().bind(rig, report)
+
+    def evaluate_one(self, job, block) -> None:
+        if job.binding is not None:
+            super().evaluate_one(job, block)
+
+
+class FaceExpression(Controller):
+    """Hold ``expression`` (a lexeme, an action unit such as ``"AU12"`` or ``{AU: weight}``) at ``amount``
+    (0..1) on ``side`` (``"LEFT"``, ``"RIGHT"`` or ``"BOTH"``; default both). ``lexeme`` names it the way
+    BML and other realizers do instead (``RAISE_LEFT_BROW``, ``Smile_Small_Open``; see :func:`expression_for`).
+    Additive on the face layer, after the lip sync (priority 5)."""
+
+    kind = "face"
+    layer = Layer.FACE
+    mode = Mode.ADDITIVE
+    priority = 5
+    blend_in_s = 0.3
+    blend_out_s = 0.3
+
+    def __init__(self, expression=None, amount: float = 1.0, side: str | None = None, map_file=None,
+                 duration_s: float | None = None, lexeme: str | None = None):
+        if not np.isfinite(amount):
+            raise UsageError("an expression's amount must be finite")
+        if lexeme is not None:  # a BML or other realizer's lexeme name: its expression and side
+            expression, lexeme_side = expression_for(lexeme)
+            side = side or lexeme_side
+        if expression is None:
+            raise UsageError("a face expression needs an expression or a lexeme")
+        side = str(side or "BOTH").upper()
+        if side not in ("LEFT", "RIGHT", "BOTH"):
+            raise UsageError(f"side must be LEFT, RIGHT or BOTH, not {side!r}")
+        self.expression = expression
+        self.amount = float(amount)
+        self.side = side
+        self.map_file = map_file
+        self.duration_s = duration_s
+
+    def describe(self) -> str:
+        return f"face {self.expression!r}"
+
+    def bind(self, rig, report):
+        face = face_channels(rig, self.map_file)
+        if self.amount < 0:
+            report(f"face {self.expression!r}: a negative amount ({self.amount:g}) is not shown; its size is used")
+        try:
+            targets = expression_targets(self.expression, face, min(abs(self.amount), 1.0))
+        except UsageError as exc:
+            report(f"face: {exc}; not shown")
+            return None
+        if self.side != "BOTH":
+            targets = {t: w for t, w in targets.items() if target_side(t) in (None, self.side)}
+        targets = {t: w for t, w in targets.items() if w > 0.0}
+        columns = [(rig.morph_index[t], w) for t, w in targets.items() if t in rig.morph_index]
+        joint_offsets = self._joint_offsets(rig, face, targets, report)
+        if not columns and not joint_offsets:
+            report(f"face {self.expression!r}: the character has no face channel for it; not shown")
+            return None
+        joints = sorted(joint_offsets)
+        return {"columns": np.array([c for c, _ in columns], dtype=np.int64), "values": np.array([w for _, w in columns]),
+                "joints": np.array(joints, dtype=np.int64),
+                "offsets": np.array([joint_offsets[j] for j in joints]).reshape(len(joints), 4)}
+
+    @staticmethod
+    def _joint_offsets(rig, face, targets: dict, report) -> dict[int, np.ndarray]:
+        """Joint index -> local offset (x, y, z, w) from rest for face poses and the jaw among ``targets``."""
+        sk = rig.skeleton
+        offsets: dict[int, np.ndarray] = {}
+        poses = [t for t in targets if t in face.poses]
+        if poses:
+            try:
+                pose_face = PoseFace.load(sk, face.poses, poses)
+            except InfuseError as exc:
+                report(f"face poses cannot be read ({exc}); not shown")
+                pose_face = None
+            if pose_face is not None and len(pose_face.joints):
+                rotations, _ = pose_face.blend(np.array([[targets[p] for p in poses]]), [[(p, 1.0)] for p in poses])
+                for m, j in enumerate(pose_face.joints):
+                    offsets[int(j)] = quat.multiply(quat.conjugate(sk.rest_rotations[j]), rotations[0, m])
+        if face.jaw is not None and face.jaw in targets:
+            rig_jaw = JawRig.from_skeleton(sk, face.jaw)
+            rotation = rig_jaw.rotations(np.array([targets[face.jaw]]), np.radians(LipSyncSettings().jaw_max_angle_deg))[0]
+            j = sk.index[face.jaw]
+            offsets[j] = quat.multiply(offsets.get(j, quat.identity()), quat.multiply(quat.conjugate(sk.rest_rotations[j]), rotation))
+        return offsets
+
+    def evaluate_one(self, job, block) -> None:
+        b = job.binding
+        if b is None:
+            return
+        n = len(job.local_times)
+        if b["columns"].size:
+            job.pose.set_morphs(b["columns"], np.broadcast_to(b["values"], (n, len(b["values"]))), job.weight, job.mode)
+        if b["joints"].size:
+            job.pose.set_rotations(b["joints"], np.broadcast_to(b["offsets"], (n,) + b["offsets"].shape), job.weight,
+                                   job.mode)
+
+
+def speech_from_bml(parameters: dict, runtime, character: str, activation=None) -> Speech | None:
+    """A :class:`Speech` from a BML ``<speech>`` activation. When the scheduler timed it with a TTS engine its
+    phonemes come with the activation (``parameters["tts"]``); otherwise the text is synthesized with the
+    default engine. Empty speech plays nothing."""
+    text = (parameters.get("text") or "").strip()
+    if not text:
+        return None
+    details = parameters.get("tts") or {}
+    if details.get("phonemes"):
+        utterance = Utterance(text, float(parameters["duration_s"]), [tuple(p) for p in details["phonemes"]],
+                              [tuple(w) for w in details.get("words", ())], dict(parameters.get("marks_s") or {}))
+    else:
+        from infuse.speech import tts_engine
+
+        voice = parameters.get("voice")
+        utterance = tts_engine(None, **({"voice": voice} if voice else {})).synthesize(text)
+    return Speech(utterance, fps=runtime.fps)
+
+
+def face_from_bml(parameters: dict, runtime, character: str, activation=None) -> FaceExpression:
+    """A :class:`FaceExpression` from a BML face activation (``kind`` ``"lexeme"`` or ``"facs"``); it blends
+    in from start to attackPeak and out from relax to end."""
+    amount = float(parameters.get("amount", 0.5))
+    if parameters.get("kind") == "facs":
+        controller = FaceExpression(f"AU{int(parameters['au'])}", amount, parameters.get("side"))
+    else:
+        controller = FaceExpression(amount=amount, lexeme=str(parameters.get("lexeme") or ""))
+    if activation is not None:
+        peak, relax = activation.time("attackPeak"), activation.time("relax")
+        if peak is not None:
+            controller.blend_in_s = max(peak - activation.start, 0.0)
+        if relax is not None and not activation.persistent:
+            controller.blend_out_s = max(activation.end - relax, 0.0)
+    return controller
