@@ -1,0 +1,79 @@
+"""Two-joint limb IK on a character's own joints, vectorized over frames (legs for planted feet,
+arms for reaches).
+
+The limb is three joints a (hip, shoulder), b (knee, elbow), c (ankle, wrist) anywhere in the
+hierarchy (twist joints between them are carried along). The interior angles at a and b are set by
+the law of cosines so that c lands at the goal, the bend staying in the limb's current plane (or
+toward ``pole`` when the limb is straight), and the end joint keeps its global rotation. Positions
+are metres in the character's own frame; quaternions (x, y, z, w).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import quaternions as quat
+from .pose import chain_fk
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+
+
+def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return np.arccos(np.clip(np.sum(_unit(u) * _unit(v), axis=-1), -1.0, 1.0))
+
+
+def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
+               joints: tuple[int, int, int], goal: np.ndarray, weight=None, pole: np.ndarray | None = None,
+               keep_end: bool = True) -> np.ndarray:
+    """Rotate joints a and b of ``joints`` so that c reaches ``goal`` (F, 3); writes ``local_rotations``
+    (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within reach).
+
+    ``weight`` (F,) in [0, 1] blends from the current pose to the solved one; ``pole`` (F, 3) or (3,)
+    is the bend direction used when the limb is straight.
+    """
+    a, b, c = joints
+    g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [a, b, c])
+    A, B, C = g_pos[:, 0], g_pos[:, 1], g_pos[:, 2]
+    T = np.asarray(goal, dtype=np.float64)
+    lab = np.linalg.norm(B - A, axis=-1)
+    lcb = np.linalg.norm(C - B, axis=-1)
+    lat = np.clip(np.linalg.norm(T - A, axis=-1), np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
+    ac_ab_0 = _angle(C - A, B - A)
+    ba_bc_0 = _angle(A - B, C - B)
+    ac_at_0 = _angle(C - A, T - A)
+    ac_ab_1 = np.arccos(np.clip((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat), -1.0, 1.0))
+    ba_bc_1 = np.arccos(np.clip((lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb), -1.0, 1.0))
+    axis1 = np.cross(C - A, T - A)
+    small = np.linalg.norm(axis1, axis=-1) < 1e-12
+    axis0 = np.cross(C - A, B - A)
+    flat = np.linalg.norm(axis0, axis=-1) < 1e-6 * np.maximum(lab * lcb, 1e-12)
+    if flat.any():  # a straight limb bends toward the pole, else toward the goal
+        if pole is not None:
+            fallback = np.cross(C - A, np.broadcast_to(pole, A.shape))
+        else:
+            other = np.cross(C - A, np.array([0.0, 1.0, 0.0]))
+            fallback = np.where(small[:, None], other, axis1)
+        axis0 = np.where(flat[:, None], fallback, axis0)
+    axis0 = _unit(axis0)
+    axis1 = _unit(np.where(small[:, None], axis0, axis1))
+    ga_inv = quat.conjugate(g_rot[:, 0])
+    gb_inv = quat.conjugate(g_rot[:, 1])
+    r0 = quat.from_axis_angle(quat.rotate(ga_inv, axis0), ac_ab_1 - ac_ab_0)
+    r1 = quat.from_axis_angle(quat.rotate(gb_inv, axis0), ba_bc_1 - ba_bc_0)
+    r2 = quat.from_axis_angle(quat.rotate(ga_inv, axis1), ac_at_0)
+    old_a, old_b = local_rotations[:, a].copy(), local_rotations[:, b].copy()
+    new_a = quat.multiply(old_a, quat.multiply(r0, r2))
+    new_b = quat.multiply(old_b, r1)
+    if weight is not None:
+        w = np.clip(np.asarray(weight, dtype=np.float64), 0.0, 1.0)
+        new_a = quat.slerp(old_a, new_a, w)
+        new_b = quat.slerp(old_b, new_b, w)
+    local_rotations[:, a] = new_a
+    local_rotations[:, b] = new_b
+    if keep_end:
+        parent = int(skeleton.parents[c])
+        g_par, _ = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [parent])
+        local_rotations[:, c] = quat.multiply(quat.conjugate(g_par[:, 0]), g_rot[:, 2])
+    _, g_new = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [c])
+    return np.linalg.norm(g_new[:, 0] - T, axis=-1)

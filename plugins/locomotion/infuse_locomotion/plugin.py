@@ -1,0 +1,13 @@
+"""Registers the ``locomotion`` controller."""
+from __future__ import annotations
+
+import infuse
+from infuse.plugin_types import Component
+
+from .controller import Locomotion
+
+
+@infuse.hookimpl
+def infuse_controllers():
+    return [Component("locomotion", Locomotion, "walk, run, turn and strafe by blending a locomotion pack (base layer)",
+                      {"layer": int(Locomotion.layer)})]
