@@ -42,7 +42,7 @@ if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "setup: installing infuse and its plugins into $VENV"
   args=""
   for d in $packages; do args="$args -e $d"; done
-  "$VENV/bin/python" -m pip install -q --no-build-isolation $args -e ".[test]"
+  "$VENV/bin/python" -m pip install -q --no-build-isolation $args -e ".[test,docs]"
   echo "$stamp" > "$VENV/.setup-stamp"
 fi
 
