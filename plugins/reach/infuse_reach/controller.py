@@ -1,0 +1,200 @@
+"""The ``reach`` controller: reach examples blended by target position, then IK to the exact target.
+
+The target (a point, a runtime target or a scene object's name) is expressed in the body frame the
+character has when the reach starts (origin on the ground under the pelvis, +Z its facing, +X its
+left). Its barycentric weights in the hand's tessellation blend the examples, each time-warped so
+their strokes coincide; the blend drives the spine, the arm and the hand. The wrist is then carried
+to the exact target by two-joint arm IK, the correction growing from the start to the stroke.
+``action``: ``"touch"`` (reach and return), ``"grab"`` (from the stroke the object named ``obj``
+follows the hand: the runtime target of that name becomes a :class:`HeldTarget`), ``"put"`` (the
+held object ``obj`` is left at the target at the stroke).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.errors import UsageError
+from infuse.runtime import Controller, Layer, Mode, sample_motion
+from infuse.runtime.layers import smoothstep
+from infuse.runtime.limb_ik import solve_limb
+from infuse.runtime.pose import chain_fk
+from infuse.runtime.targets import PointTarget, Target, as_target
+
+ACTIONS = ("touch", "grab", "put")
+_INFUSIONS: dict = {}
+_UPPER = ("spine1", "spine2", "spine3", "spine4", "spine5", "skullbase")
+
+
+def space_for(rig, pack):
+    from infuse.packs import BlendSpace, infuse_character
+
+    if isinstance(pack, BlendSpace):
+        return pack
+    key = (id(rig.character), id(rig.mapping), str(pack))
+    if key not in _INFUSIONS:
+        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
+        _INFUSIONS[key] = (rig.character, next(iter(infusion.spaces.values())))
+    return _INFUSIONS[key][1]
+
+
+class HeldTarget(Target):
+    """A scene object held in a character's hand: its world position follows the wrist, at the offset
+    (in the wrist's frame) it had when grabbed."""
+
+    def __init__(self, character: str, wrist: int, offset: np.ndarray, fallback: np.ndarray):
+        self.character, self.wrist = character, wrist
+        self.offset = np.asarray(offset, dtype=np.float64)
+        self.last = np.asarray(fallback, dtype=np.float64)
+
+    def positions(self, times, block=None) -> np.ndarray:
+        if block is not None and len(times) == len(block) and self.character in block.poses:
+            rot, pos = block.pose(self.character).chain_pose([self.wrist])
+            out = pos[:, 0] + quat.rotate(rot[:, 0], self.offset)
+            self.last = out[-1]
+            return out
+        return np.broadcast_to(self.last, (len(times), 3)).copy()
+
+
+class Reach(Controller):
+    """Reach ``target`` with ``hand`` ("left", "right" or "auto": the side the target is on).
+
+    ``pack``: a reaching pack (name, folder or BlendSpace); ``action``/``obj``: see the module doc;
+    ``hold_s``: seconds held at the stroke before the activity ends (and blends out).
+    """
+
+    kind = "reach"
+    layer = Layer.POSTURE
+    mode = Mode.OVERRIDE
+    blend_in_s = 0.2
+    blend_out_s = 0.6
+
+    def __init__(self, target, hand: str = "auto", pack="reaching", action: str = "touch", obj: str | None = None,
+                 hold_s: float = 0.4):
+        if hand not in ("auto", "left", "right"):
+            raise UsageError(f"hand must be left, right or auto, got {hand!r}")
+        if action not in ACTIONS:
+            raise UsageError(f"action must be one of {', '.join(ACTIONS)}, got {action!r}")
+        if action in ("grab", "put") and not obj:
+            raise UsageError(f"a {action} names the object (obj=)")
+        self.target, self.hand, self.pack, self.action, self.obj = target, hand, pack, action, obj
+        self.hold_s = float(hold_s)
+        self.duration_s = None
+
+    def describe(self) -> str:
+        return f"reach ({self.action})"
+
+    def bind(self, rig, report):
+        space = space_for(rig, self.pack)
+        if space.kind != "reach":
+            raise UsageError(f"pack {space.pack!r} is not a reaching pack")
+        hands = {}
+        for hand in ("left", "right"):
+            s = hand[0]
+            arm = [rig.joint(f"{s}_{n}") for n in ("shoulder", "elbow", "wrist")]
+            if hand in space.tessellations and None not in arm:
+                hands[hand] = tuple(arm)
+        if not hands:
+            raise UsageError("the character has no mapped shoulder, elbow and wrist for the pack's hands")
+        stroke = float(np.mean([c.stroke for c in space.clips.values() if c.role == "reach"]))
+        self.duration_s = stroke + self.hold_s
+        return {"space": space, "arms": hands, "stroke": stroke}
+
+    def _target_world(self, runtime, times, block) -> np.ndarray:
+        t = runtime.target(self.target) if isinstance(self.target, str) else as_target(self.target)
+        return t.positions(times, block)
+
+    def evaluate_one(self, job, block) -> None:
+        b, st, rig = job.binding, job.state, job.rig
+        active = np.nonzero((job.local_times >= -1e-9) & (job.weight > 0))[0]
+        if not active.size:
+            return
+        runtime = job.activity.runtime
+        world = self._target_world(runtime, block.times, block)
+        own = quat.rotate(quat.conjugate(rig.rotation), world - rig.position)
+        pose = job.pose
+        sk = rig.skeleton
+        if "frame" not in st:  # the body frame when the reach starts
+            g_rot, g_pos = chain_fk(sk, pose.local_rotations[active[:1]], pose.root_translations[active[:1]],
+                                    None if pose.joint_translations is None else pose.joint_translations[active[:1]],
+                                    [rig.joint("base"), rig.joint("l_hip"), rig.joint("r_hip")])
+            left = g_pos[0, 1] - g_pos[0, 2]
+            heading = float(np.arctan2(-left[2], left[0]))
+            st["frame"] = (g_pos[0, 0], heading, self._ground(rig, pose, active[0]))
+        base, heading, ground = st["frame"]
+        rel = own[active[0]] - np.array([base[0], ground, base[2]])
+        c, s = np.cos(heading), np.sin(heading)
+        point = np.array([c * rel[0] - s * rel[2], rel[1], s * rel[0] + c * rel[2]])
+        hand = self.hand if self.hand != "auto" else ("left" if point[0] >= 0 else "right")
+        if hand not in b["arms"]:
+            hand = next(iter(b["arms"]))
+        st.setdefault("hand", hand)
+        hand = st["hand"]
+        weights, inside = b["space"].weights(hand, point[None])
+        if not inside[0] and "outside" not in st:
+            st["outside"] = True
+            job.report(f"reach target {np.round(point, 2).tolist()} is outside the {hand} hand's examples; the nearest blend and IK are used")
+        clips = b["space"].group(hand)
+        stroke = b["stroke"]
+        t = job.local_times[active]
+        side = hand[0]
+        joints = [rig.joint(n) for n in _UPPER] + [j for j, name in enumerate(sk.names)
+                                                  if rig.mapping.inverse().get(name, "").startswith(f"{side}_")
+                                                  and rig.mapping.inverse()[name].split("_", 1)[1] not in
+                                                  ("hip", "knee", "ankle", "forefoot", "toe")]
+        joints = np.array([j for j in joints if j is not None and j > 0], dtype=np.int64)
+        blend = None
+        for i in np.nonzero(weights[0] > 1e-6)[0]:
+            clip = clips[i]
+            local = np.clip(t * clip.stroke / stroke, 0.0, clip.duration)
+            r, _, _, _ = sample_motion(clip.motion, local, loop=False)
+            r = r[:, joints] * weights[0, i]
+            if blend is None:
+                blend = r
+            else:
+                blend += np.where(np.sum(blend * r, axis=-1, keepdims=True) < 0, -r, r)
+        blend = quat.normalize(blend)
+        full = np.array(pose.local_rotations[:, joints])
+        full[active] = blend
+        weight = np.zeros(len(job.weight))
+        weight[active] = job.weight[active]
+        pose.set_rotations(joints, full, weight, job.mode)
+        arm = b["arms"][hand]
+        rot = pose.local_rotations[active]
+        jt = None if pose.joint_translations is None else pose.joint_translations[active]
+        _, wpos = chain_fk(sk, rot, pose.root_translations[active], jt, [arm[2]])
+        goal_pt = own[active]
+        ramp = smoothstep(t / max(stroke, 1e-6))[:, None]
+        goal = wpos[:, 0] + ramp * (goal_pt - wpos[:, 0])
+        solve_limb(sk, rot, pose.root_translations[active], jt, arm, goal, weight=job.weight[active])
+        pose.local_rotations[active] = rot
+        pose._fk = None
+        self._act(job, st, block, t, active, arm, world)
+
+    @staticmethod
+    def _ground(rig, pose, frame: int) -> float:
+        """Height of the lowest foot joint in the pose below (the ground the examples were measured on)."""
+        feet = [j for j in (rig.joint(n) for n in ("l_ankle", "r_ankle", "l_forefoot", "r_forefoot", "l_toe", "r_toe")) if j is not None]
+        if not feet:
+            return 0.0
+        jt = None if pose.joint_translations is None else pose.joint_translations[frame:frame + 1]
+        _, pos = chain_fk(rig.skeleton, pose.local_rotations[frame:frame + 1], pose.root_translations[frame:frame + 1], jt, feet)
+        return float(pos[0, :, 1].min())
+
+    def _act(self, job, st, block, t, active, arm, world) -> None:
+        """Grab or put down the object once the stroke is reached."""
+        if self.action == "touch" or st.get("done"):
+            return
+        reached = np.nonzero(t >= job.binding["stroke"] - 1e-9)[0]
+        if not reached.size:
+            return
+        runtime = job.activity.runtime
+        f = active[reached[0]]
+        if self.action == "grab":
+            rot, pos = job.pose.chain_pose([arm[2]])
+            obj = runtime.target(self.obj).positions(block.times[f:f + 1], None)[0]
+            offset = quat.rotate(quat.conjugate(rot[f, 0]), obj - pos[f, 0])
+            runtime.add_target(self.obj, HeldTarget(job.rig.name, arm[2], offset, obj))
+        else:
+            runtime.add_target(self.obj, PointTarget(tuple(float(v) for v in world[f])))
+        st["done"] = True

@@ -1,0 +1,12 @@
+"""Registers the ``reach`` controller."""
+from __future__ import annotations
+
+import infuse
+from infuse.plugin_types import Component
+
+from .controller import Reach
+
+
+@infuse.hookimpl
+def infuse_controllers():
+    return [Component("reach", Reach, "reach, touch, grab or put down with one hand (posture layer)", {"layer": int(Reach.layer)})]
