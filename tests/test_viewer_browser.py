@@ -3,6 +3,8 @@ targets, the offline HTML file, a folder of models and skeleton-only input."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -19,6 +21,7 @@ from infuse_viewer.vendor import ensure_vendor
 from viewer_support import (TARGETS, ViewerPage, add_wave_clip, changed_fraction, chromium_context, glb_animation_names,
                             write_tone)
 
+INFUSE = Path(sys.executable).with_name("infuse")
 ROBOT = "adibkn1-robot/RobotExpressive.glb"
 XBOT = "runxaway-models/Xbot.glb"
 BVH = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_002.bvh"
@@ -30,10 +33,23 @@ def browser():
         yield context
 
 
+@pytest.fixture(scope="module")
+def site_for():
+    """The server's content for a path, made once per path in this module (files are read and mapped once)."""
+    cache: dict[Path, Site] = {}
+
+    def site(path: Path) -> Site:
+        if path not in cache:
+            cache[path] = Site(sources(path), ensure_vendor(), path.name)
+        return cache[path]
+
+    return site
+
+
 @contextmanager
-def viewing(browser, path: Path):
-    """The viewer page of ``path`` (a file or a folder), served on 127.0.0.1 and open in ``browser``."""
-    with ViewerServer(Site(sources(path), ensure_vendor(), path.name)) as server, ViewerPage(browser, server.url) as view:
+def viewing(browser, site: Site):
+    """The page of ``site`` served on 127.0.0.1 and open in ``browser``."""
+    with ViewerServer(site) as server, ViewerPage(browser, server.url) as view:
         yield view
 
 
@@ -48,11 +64,11 @@ def xbot_folder(tmp_path_factory) -> Path:
     return folder
 
 
-def test_robot_clips_play_and_scrub(browser, tmp_path):
+def test_robot_clips_play_and_scrub(browser, site_for, tmp_path):
     robot = corpus_file(ROBOT)
     expected = glb_animation_names(robot)
     assert len(expected) == 14
-    with viewing(browser, robot) as view:
+    with viewing(browser, site_for(robot)) as view:
         assert view.clip_list() == expected
         state = view.state()
         assert state["clips"] == expected and state["clip"] == expected[0] and state["mode"] == "mesh"
@@ -72,7 +88,7 @@ def test_robot_clips_play_and_scrub(browser, tmp_path):
         assert view.errors == []
 
 
-def test_mapping_overlay_names_and_low_confidence(browser):
+def test_mapping_overlay_names_and_low_confidence(browser, site_for):
     robot = corpus_file(ROBOT)
     mapping = map_skeleton(infuse.load(robot))
     by_joint: dict[str, list[str]] = {}
@@ -81,7 +97,7 @@ def test_mapping_overlay_names_and_low_confidence(browser):
             by_joint.setdefault(joint, []).append(name)
     expected_low = {j for j, names in by_joint.items() if min(mapping.confidence[n] for n in names) < LOW_CONFIDENCE}
     assert expected_low, "the robot's mapping has low-confidence joints to show"
-    with viewing(browser, robot) as view:
+    with viewing(browser, site_for(robot)) as view:
         view.show_time(0.0)
         joints = view.page.evaluate("window.infuseViewer.jointsOnScreen()")
         assert {j["name"] for j in joints if j["low"]} == expected_low
@@ -102,8 +118,8 @@ def test_mapping_overlay_names_and_low_confidence(browser):
         assert view.errors == []
 
 
-def test_audio_follows_play_and_scrub(browser, xbot_folder):
-    with viewing(browser, xbot_folder / "Xbot_wave.glb") as view:
+def test_audio_follows_play_and_scrub(browser, site_for, xbot_folder):
+    with viewing(browser, site_for(xbot_folder / "Xbot_wave.glb")) as view:
         page = view.page
         page.evaluate("window.infuseViewer.pause()")
         assert view.state()["audio"]["src"].endswith(".wav")
@@ -125,8 +141,8 @@ def test_audio_follows_play_and_scrub(browser, xbot_folder):
         assert view.errors == []
 
 
-def test_gaze_and_reach_targets(browser, xbot_folder, tmp_path):
-    with viewing(browser, xbot_folder / "Xbot_wave.glb") as view:
+def test_gaze_and_reach_targets(browser, site_for, xbot_folder, tmp_path):
+    with viewing(browser, site_for(xbot_folder / "Xbot_wave.glb")) as view:
         view.show_time(0.5)
         targets = {t["name"]: t for t in view.state()["targets"]}
         assert set(targets) == set(TARGETS)
@@ -147,7 +163,7 @@ def test_gaze_and_reach_targets(browser, xbot_folder, tmp_path):
         assert view.errors == []
 
 
-def test_offline_html_file_works_from_file_url(browser, xbot_folder, tmp_path):
+def test_offline_html_file_works_from_file_url(browser, site_for, xbot_folder, tmp_path):
     out = tmp_path / "xbot.html"
     assert main(["view", str(xbot_folder / "Xbot_wave.glb"), "--html", str(out)]) == 0
     requests: list[str] = []
@@ -172,8 +188,8 @@ def test_offline_html_file_works_from_file_url(browser, xbot_folder, tmp_path):
     assert requests and all(u.startswith(("file:", "blob:", "data:")) for u in requests), requests
 
 
-def test_folder_lists_every_glb(browser, xbot_folder):
-    with viewing(browser, xbot_folder) as view:
+def test_folder_lists_every_glb(browser, site_for, xbot_folder):
+    with viewing(browser, site_for(xbot_folder)) as view:
         names = view.page.eval_on_selector_all("#files li", "items => items.map(li => li.textContent)")
         assert names == ["RobotExpressive", "Xbot_wave"]
         assert view.clip_list() == glb_animation_names(xbot_folder / "RobotExpressive.glb")
@@ -185,10 +201,10 @@ def test_folder_lists_every_glb(browser, xbot_folder):
         assert view.errors == []
 
 
-def test_bvh_shows_bones(browser, tmp_path):
+def test_bvh_shows_bones(browser, site_for, tmp_path):
     bvh = corpus_file(BVH)
     skeleton = infuse.load(bvh).skeleton
-    with viewing(browser, bvh) as view:
+    with viewing(browser, site_for(bvh)) as view:
         state = view.state()
         assert state["mode"] == "skeleton" and state["clips"] == [bvh.stem]
         # every link is drawn but those that stretch (the root left at the origin), plus the end sites
@@ -211,18 +227,22 @@ def test_bvh_shows_bones(browser, tmp_path):
         assert view.errors == []
 
 
-def test_screenshot_command(tmp_path, capsys):
+def test_screenshot_command(tmp_path):
+    # a process of its own: Playwright's sync API runs one browser session per thread, and this
+    # module's browser is open
     from PIL import Image
 
     robot = str(corpus_file(ROBOT))
     out = tmp_path / "robot.png"
-    assert main(["view", robot, "--screenshot", str(out), "--clip", "Wave", "--time", "0.9", "--size", "640x400"]) == 0
+    run = subprocess.run([str(INFUSE), "view", robot, "--screenshot", str(out), "--clip", "Wave", "--time", "0.9",
+                          "--size", "640x400"], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
     pixels = np.asarray(Image.open(out).convert("RGB"))
     assert pixels.shape == (400, 640, 3)
     # the robot is there: many pixels of its yellow body
     r, g, b = (pixels[..., k].astype(int) for k in range(3))
     assert np.mean((r > 150) & (g > 90) & (b < 90) & (r > b + 80)) > 0.01
-    capsys.readouterr()
-    assert main(["view", robot, "--screenshot", str(tmp_path / "x.png"), "--clip", "Moonwalk"]) == 2
-    assert "no clip named 'Moonwalk'" in capsys.readouterr().err
+    run = subprocess.run([str(INFUSE), "view", robot, "--screenshot", str(tmp_path / "x.png"), "--clip", "Moonwalk"],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 2 and "no clip named 'Moonwalk'" in run.stderr
     assert not (tmp_path / "x.png").exists()

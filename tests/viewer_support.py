@@ -25,7 +25,7 @@ CHROMIUM = Path("/usr/bin/chromium")
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 UNDER_CI = os.environ.get("CI", "").lower() == "true"
-VIEWPORT = {"width": 1000, "height": 640}
+VIEWPORT = {"width": 800, "height": 520}
 
 
 def require_browser():
@@ -76,10 +76,9 @@ class ViewerPage:
     def state(self) -> dict:
         return self.page.evaluate("window.infuseViewer.state()")
 
-    def frames(self, count: int = 3) -> None:
-        """Wait until ``count`` more frames have been drawn."""
-        start = self.page.evaluate("window.infuseViewer.frame")
-        self.page.wait_for_function(f"window.infuseViewer.frame >= {start + count}", timeout=60_000)
+    def frames(self) -> None:
+        """Wait for a frame drawn after everything done so far (the page draws only after a change)."""
+        self.page.evaluate("window.infuseViewer.nextFrame()")
 
     def show_time(self, seconds: float) -> None:
         self.page.evaluate(f"window.infuseViewer.pause(); window.infuseViewer.setTime({seconds})")

@@ -56,9 +56,8 @@ def take(url: str, out: str | Path, width: int = 1000, height: int = 640, time: 
                     if clip not in clips:
                         raise UsageError(f"no clip named {clip!r}; the file has: {', '.join(clips) or 'none'}")
                     page.evaluate("name => window.infuseViewer.selectClip(name)", clip)
-                page.evaluate("t => { window.infuseViewer.pause(); window.infuseViewer.setTime(t); }", time or 0.0)
-                start = page.evaluate("window.infuseViewer.frame")
-                page.wait_for_function(f"window.infuseViewer.frame >= {start + 3}", timeout=timeout_s * 1000)
+                page.evaluate("async t => { window.infuseViewer.pause(); window.infuseViewer.setTime(t); "
+                              "await window.infuseViewer.nextFrame(); }", time or 0.0)
                 with atomic_path(out) as tmp:
                     page.screenshot(path=str(tmp), type="png")
             finally:

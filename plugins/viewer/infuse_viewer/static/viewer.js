@@ -67,7 +67,7 @@ const hemi = new THREE.HemisphereLight(0xe8efff, 0x4a4036, 1.6);
 scene.add(hemi);
 const key = new THREE.DirectionalLight(0xffffff, 2.4);
 key.castShadow = true;
-key.shadow.mapSize.set(2048, 2048);
+key.shadow.mapSize.set(1024, 1024);
 key.shadow.bias = -0.0005;
 scene.add(key, key.target);
 const rim = new THREE.DirectionalLight(0x9ec9ff, 1.1);
@@ -82,6 +82,7 @@ const state = {
   time: 0, duration: 0, playing: false, hasMesh: false, joints: [], bones: [], targets: [], height: 1.7,
   loading: null,
 };
+let dirty = true;  // the next animation frame draws
 const audio = new Audio();
 audio.preload = 'auto';
 let audioBlocked = false;
@@ -318,6 +319,7 @@ function applyTime() {
 }
 
 function setTime(t, seekAudio = true) {
+  dirty = true;
   state.time = Math.min(Math.max(t, 0), state.duration);
   applyTime();
   if (seekAudio && audio.dataset.src) {
@@ -335,6 +337,7 @@ function play() {
 }
 
 function pause() {
+  dirty = true;
   state.playing = false;
   audio.pause();
   refreshBar();
@@ -647,6 +650,7 @@ async function selectEntry(index) {
   updateOverlay();
   frameCharacter();
   applyVisibility();
+  dirty = true;
   status.textContent = '';
 }
 
@@ -681,13 +685,14 @@ let lastSize = '';
 function resize() {
   const w = canvas.clientWidth, h = canvas.clientHeight;
   const size = `${w}x${h}`;
-  if (size === lastSize) return;
+  if (size === lastSize) return false;
   lastSize = size;
   renderer.setSize(w, h, false);
   camera.aspect = w / Math.max(h, 1);
   const off = freeAreaOffset(w, h);
   camera.setViewOffset(w, h, off.x, off.y, w, h);
   camera.updateProjectionMatrix();
+  return true;
 }
 
 const followAnchor = new THREE.Vector3();
@@ -702,21 +707,34 @@ function follow() {
 }
 
 const clock = new THREE.Timer();
+// Frames are drawn only while something changes (playing, the camera moving, any input), so an
+// idle page costs nothing.
+function redraw() { dirty = true; }
+const frameWaiters = [];
+for (const type of ['input', 'change', 'pointermove', 'pointerdown', 'pointerup', 'wheel', 'keydown', 'resize']) {
+  window.addEventListener(type, redraw, true);
+}
+
 function tick(timestamp) {
   clock.update(timestamp);
-  resize();
-  advance(Math.min(clock.getDelta(), 0.1));
-  if (state.root) {
-    updateOverlay();
-    updateTargets();
-    follow();
+  const dt = Math.min(clock.getDelta(), 0.1);
+  if (resize()) dirty = true;
+  if (state.playing) { advance(dt); dirty = true; }
+  if (controls.update()) dirty = true;
+  if (dirty) {
+    dirty = false;
+    if (state.root) {
+      updateOverlay();
+      updateTargets();
+      follow();
+    }
+    updateLabels();
+    updateHover();
+    renderer.render(scene, camera);
+    refreshBar();
+    api.frame++;
+    for (const resolve of frameWaiters.splice(0)) resolve(api.frame);
   }
-  controls.update();
-  updateLabels();
-  updateHover();
-  renderer.render(scene, camera);
-  refreshBar();
-  api.frame++;
   requestAnimationFrame(tick);
 }
 
@@ -726,6 +744,8 @@ Object.assign(api, {
   setTime: (t) => { setTime(t); refreshBar(); },
   selectClip: (name) => selectClip(name),
   selectEntry: (i) => selectEntry(i),
+  // a promise of the next frame drawn: it shows everything done before the call
+  nextFrame: () => new Promise((resolve) => { frameWaiters.push(resolve); dirty = true; }),
   frame: 0,
   state: () => ({
     entry: state.entryIndex, entries: DATA.entries.map((e) => e.name), file: state.info?.file,
