@@ -1,0 +1,154 @@
+"""How a scene realizes scheduled BML activations (:class:`~infuse.bml.Activation`) on its characters.
+
+| controller kind | realized by |
+|---|---|
+| ``speech`` | the ``speech`` controller (lip sync of the very utterance the scheduler timed); the character speaks, so saccades pause; its audio goes to the exported WAV |
+| ``face`` | the ``face`` controller: a lexeme or action unit on the character's morphs, face poses or jaw, in from start to attackPeak, out from relax to end |
+| ``gaze``, ``head``, ``saccade``, ``blink``, ``breathing`` and any other installed kind | the installed controller's BML builder (:meth:`~infuse.runtime.Runtime.realize`); targets name scene objects, characters or ``character:joint`` |
+| ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback |
+| ``locomotion``, ``reach``, ``grab``, ``ik_constraint``, ``pointing`` | the behaviour-pack controllers of that kind when installed; otherwise warningFeedback |
+| ``wait``, ``event`` | nothing to show (their sync points still give feedback) |
+
+A behaviour that cannot be realized, or only partly, gives warningFeedback; the rest of its block plays.
+"""
+from __future__ import annotations
+
+from ..bml import Activation
+from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR
+from ..errors import InfuseError
+from ..runtime import Clip, controller_components
+
+#: Kinds with nothing to show.
+SILENT_KINDS = frozenset({"wait", "event"})
+#: Kinds played from a clip of the character, and the priority of that clip on the base layer.
+CLIP_KINDS = {"gesture": 20, "animation": 20, "posture": 10, "blend": 10}
+#: Kinds behaviour packs provide, and what is missing when they are not installed.
+PACK_KINDS = {
+    "locomotion": "no locomotion pack infused: the character does not walk",
+    "reach": "no reaching pack infused: the character does not reach",
+    "grab": "no reaching pack infused: the character does not grab",
+    "ik_constraint": "no reaching pack infused: the effector is not held on its target",
+    "pointing": "no reaching pack infused: the character does not point",
+}
+#: Stances a character already has without any clip.
+_STANDING = {None, "STANDING"}
+
+
+def realize(scene, activation: Activation):
+    """Play ``activation`` on its character in ``scene``; returns the runtime activity, or None (then
+    warningFeedback says why, unless the kind has nothing to show)."""
+    kind = activation.controller
+    installed = controller_components()
+    if kind in SILENT_KINDS:
+        return None
+    if kind == "speech":
+        return _speech(scene, activation)
+    if kind == "face" and "face" in installed:
+        return _face(scene, activation)
+    if kind in CLIP_KINDS:
+        return _clip(scene, activation)
+    if kind in installed:
+        return _installed(scene, activation)
+    if kind in PACK_KINDS:
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: {PACK_KINDS[kind]}")
+        return None
+    scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
+               f"<{activation.element}>: no installed controller realizes {kind!r} behaviours")
+    return None
+
+
+def _end(activation: Activation) -> float | None:
+    """When the activity ends: the activation's end (None when persistent), cut at its interruption."""
+    end = None if activation.persistent else activation.end
+    if activation.stop_s is not None:
+        end = activation.stop_s if end is None else min(end, activation.stop_s)
+    return end
+
+
+def _installed(scene, activation: Activation):
+    parameters = dict(activation.parameters)
+    for key in ("target",):  # names are matched to the scene's without regard to case
+        if isinstance(parameters.get(key), str):
+            parameters[key] = scene.resolve_name(parameters[key])
+    if activation.controller in ("blink", "breathing"):  # an explicit emitter replaces the idle default
+        scene.stop_idle(activation.character, activation.controller, activation.start)
+    return scene.realize_with_runtime(activation if parameters == activation.parameters
+                                      else _with_parameters(activation, parameters))
+
+
+def _with_parameters(activation: Activation, parameters: dict) -> Activation:
+    from dataclasses import replace
+
+    return replace(activation, parameters=parameters)
+
+
+def _speech(scene, activation: Activation):
+    name = activation.character
+    text = (activation.parameters.get("text") or "").strip()
+    if not text:
+        return None  # the scheduler already warned about empty speech
+    utterance = scene.speech.utterance(activation.parameters)
+    if utterance is None:
+        scene.runtime.add_speech(name, activation.start, _end(activation) or activation.end)
+        reason = scene.speech.unavailable or "it was not synthesized"
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<speech> is shown without audio or lip sync: {reason}")
+        return None
+    if "speech" not in controller_components():
+        scene.runtime.add_speech(name, activation.start, _end(activation) or activation.end)
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, "<speech>: no lip-sync plugin is installed; only its audio is kept")
+        scene.keep_audio(name, activation, utterance, None)
+        return None
+    from ..runtime import controller
+
+    speech = controller("speech", utterance=utterance, fps=scene.fps, map_file=scene.character(name).map_file)
+    activity = scene.activate(activation, speech, _end(activation) or activation.start + utterance.duration_s)
+    scene.keep_audio(name, activation, utterance, activity)
+    return activity
+
+
+def _face(scene, activation: Activation):
+    from ..runtime import controller
+
+    p = activation.parameters
+    amount = float(p.get("amount", 0.5))
+    try:
+        what = {"expression": f"AU{int(p['au'])}", "side": p.get("side")} if p.get("kind") == "facs" \
+            else {"lexeme": str(p.get("lexeme") or "")}
+        face = controller("face", amount=amount, map_file=scene.character(activation.character).map_file, **what)
+    except (InfuseError, ValueError, KeyError) as exc:
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot be shown: {exc}")
+        return None
+    peak, relax = activation.time("attackPeak"), activation.time("relax")
+    blend = {}
+    if peak is not None:
+        blend["blend_in_s"] = max(peak - activation.start, 0.0)
+    if relax is not None and not activation.persistent:
+        blend["blend_out_s"] = max(activation.end - relax, 0.0)
+    return scene.activate(activation, face, _end(activation), **blend)
+
+
+def _clip(scene, activation: Activation):
+    p = activation.parameters
+    name = p.get("clip") or p.get("blend")
+    kind = activation.controller
+    if kind == "posture" and name is None:
+        if p.get("stance") in _STANDING and not p.get("poses"):
+            return None  # characters stand already
+        what = " ".join([p.get("stance") or ""] + [f"{q.get('part')}={q.get('lexeme')}" for q in p.get("poses") or ()]).strip()
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> {what}: no behaviour pack provides that posture")
+        return None
+    motion = scene.find_clip(activation.character, name) if name else None
+    if motion is None:
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR,
+                   f"<{activation.element}> {name!r}: no behaviour pack of the character provides that clip")
+        return None
+    end = _end(activation)
+    persistent = activation.persistent
+    span = (end if end is not None else activation.end) - activation.start
+    speed = float(p.get("speed") or 1.0)
+    if not persistent and span > 1e-6 and motion.duration > 0:
+        speed = motion.duration / span  # stretched or squeezed by the block's constraints
+    clip = Clip(motion, loop=persistent, speed=speed)
+    if kind in ("posture", "blend"):
+        scene.stop_postures(activation.character, activation.start)
+    return scene.activate(activation, clip, end, priority=CLIP_KINDS[kind], blend_in_s=0.3, blend_out_s=0.3)

@@ -1,0 +1,593 @@
+"""A scene: characters and objects, BML in, animation, audio and feedback out.
+
+::
+
+    from infuse.scene import Scene
+
+    scene = Scene(fps=30)
+    scene.add_character("Xbot.glb", name="bob", position=(0, 0, 0), facing="ann")
+    scene.add_character("avatar.glb", name="ann", position=(0, 0, 2.5), facing="bob")
+    scene.add_object("cup", (0.35, 1.0, 1.9), size=0.08)
+    scene.on("warningFeedback", print)
+    scene.gaze("bob", "ann")                       # builder calls write BML, like scene.bml(...)
+    scene.say("ann", 'Hello <sync id="tm1"/>Bob!', at=0.5)
+    scene.bml("bob", '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b1">'
+                     '<head id="h1" lexeme="NOD" stroke="0.4"/></bml>', at=1.0)
+    scene.run()                                    # to the end of everything scheduled (or run(seconds), step())
+    scene.export("ann", "ann.glb")                 # ann.glb (mesh, clip, morph tracks) and ann.wav
+    scene.render("scene.png", strip=6)             # a preview: characters, objects, gaze rays
+
+Time is global seconds from 0; frame ``i`` is at ``i / fps``. ``bml`` schedules a document's blocks at
+``at`` (default: now, the time of the next frame) and realizes their behaviours at once as runtime
+activities at their global times (:mod:`infuse.scene.realize`); ``run`` evaluates frames and delivers
+the BML feedback (blockProgress, syncPointProgress) up to the last frame evaluated. Warnings
+(warningFeedback) are delivered when a block is submitted, and printed to stderr unless ``quiet``.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+import sys
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .. import quaternions as quat
+from ..asset import Asset, Character
+from ..bml import BmlDocument, Scheduler, WarningFeedback, parse_bml, parse_bml_file
+from ..bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from ..errors import InfuseError, UsageError
+from ..runtime import Runtime, controller, controller_components
+from ..runtime.rig import Rig
+from . import builder
+from .realize import realize
+from .speech import SpeechCache, mix, utterance_samples, write_wav
+
+#: warningFeedback type of a behaviour realized only in part (what the character lacks is described).
+BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
+
+
+@dataclass
+class SceneCharacter:
+    """A character of a scene: its runtime name, the :class:`~infuse.Character` (asset, mapping and clips), the
+    file it came from, its map file (joint and face channels), behaviour packs, voice, the
+    :class:`~infuse.packs.Infusion` of its packs, and the activities it idles with."""
+
+    name: str
+    character: Character
+    source: Path | None = None
+    map_file: Path | None = None
+    packs: tuple[str, ...] = ()
+    voice: str | None = None
+    infusion: object = None
+    idle: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """A thing in the scene: ``position`` (3,) metres of its centre, ``size`` metres across."""
+
+    name: str
+    position: tuple[float, float, float]
+    size: float = 0.1
+
+
+@dataclass
+class _Spoken:
+    """An utterance a character says: when, cut where (an interruption), and the activity playing it."""
+
+    start_s: float
+    stop_s: float | None
+    utterance: object
+    activity: object
+
+
+class Scene:
+    """Characters, objects and BML, realized by the layered runtime (see the module doc).
+
+    - ``fps``: frames per second of the animation.
+    - ``tts``: the TTS engine name (``"espeak"``) or an engine object; ``tts_settings`` its settings
+      (``voice``, ``rate``...). Speech is timed, lip-synced and heard from the same synthesis.
+    - ``idle``: give every character blinks and breathing from the start (BML can change them).
+    - ``seed``: makes blinks and saccades repeatable (each character draws its own).
+    - ``quiet``: do not print warningFeedback to stderr (callbacks still get it).
+    - ``pack_cache``: a folder where infused behaviour packs are cached (next loads are instant).
+    """
+
+    def __init__(self, fps: float = 30.0, *, tts="espeak", tts_settings: dict | None = None, idle: bool = True,
+                 seed: int = 0, quiet: bool = False, pack_cache=None, block_frames: int = 150):
+        self.runtime = Runtime(fps, block_frames=block_frames, report=self._note)
+        self.fps = self.runtime.fps
+        self.idle = bool(idle)
+        self.seed = int(seed)
+        self.pack_cache = pack_cache
+        self._scheduling: str | None = None
+        self.speech = SpeechCache(tts, tts_settings, voice_of=self._voice, warn=self._speech_warning)
+        self.scheduler = Scheduler(speech_timer=self.speech, clip_timing=self._clip_timing, locate=self.locate)
+        self.feedback = self.scheduler.feedback
+        self.characters: dict[str, SceneCharacter] = {}
+        self.objects: dict[str, SceneObject] = {}
+        self.targets: set[str] = set()
+        self.activities: dict[tuple[str, str], object] = {}
+        self._spoken: dict[str, list[_Spoken]] = {}
+        self._interrupted: set[tuple[str, str]] = set()
+        self._realizing = None
+        self._realize_notes: list[str] = []
+        self._ids = itertools.count(1)
+        self._points = itertools.count(1)
+        if not quiet:
+            self.feedback.subscribe(_print_warning, kinds=["warningFeedback"])
+
+    # -- the cast -------------------------------------------------------------------------------------
+    def add_character(self, source, name: str | None = None, *, position=(0.0, 0.0, 0.0), facing=None,
+                      packs: Iterable[str] = (), map=None, mapper: str | None = None, voice: str | None = None,
+                      idle: bool | None = None, format: str | None = None, units: str | None = None,
+                      up_axis: str | None = None) -> str:
+        """Add a character and return its name.
+
+        ``source``: a file (any installed reader), an :class:`~infuse.Asset` or an :class:`~infuse.Character`.
+        It is mapped to the canonical joints (``mapper``, default the heuristic one; ``map``: a map file
+        whose entries win, and whose ``"face"`` entry declares face channels) and infused with ``packs``
+        (behaviour packs, when installed). ``position`` (metres) is where it stands; ``facing`` which way
+        its front looks: degrees about +Y (0 = +Z, 90 = +X), a point (x, z) or (x, y, z), or the name of
+        a character or object (default: as in its file). ``voice``: its TTS voice. ``idle``: blinks and
+        breathing (default: the scene's ``idle``). ``format``, ``units``, ``up_axis``: reader options.
+        """
+        from .. import fileio
+        from ..mapping import map_skeleton
+
+        path = None
+        if isinstance(source, Character):
+            character = source
+            asset = source.asset
+        elif isinstance(source, Asset):
+            asset, character = source, None
+        else:
+            path = Path(source)
+            options = {k: v for k, v in (("units", units), ("up_axis", up_axis)) if v is not None}
+            asset = fileio.load(path, format=format, **options)
+            character = None
+        name = name or (character.name if character is not None else (asset.path.stem if asset.path else "character"))
+        self._check_new_name(name)
+        map_file = Path(map) if map is not None else None
+        if character is None or character.mapping is None or map is not None or mapper is not None:
+            mapping = map_skeleton(asset, mapper=mapper, saved_map=map_file)
+        else:
+            mapping = character.mapping
+        character = Character(name, asset, mapping, dict(character.clips) if character is not None else {})
+        packs = tuple(packs)
+        infusion = self._infuse(character, packs) if packs else None
+        position = _point(position, "position")
+        heading = self._heading(character, mapping, position, facing)
+        self.runtime.add_character(character, name, mapping, position, heading)
+        entry = SceneCharacter(name, character, path or asset.path, map_file, packs, voice, infusion)
+        self.characters[name] = entry
+        self._start_base(name)
+        if self.idle if idle is None else idle:
+            self._start_idle(entry, len(self.characters) - 1)
+        return name
+
+    def add_object(self, name: str, position, size: float = 0.1) -> str:
+        """Add an object (something to look at, walk to or reach for) at ``position`` (x, y, z) metres, ``size``
+        metres across; returns its name."""
+        self._check_new_name(name)
+        if not (np.isfinite(size) and size > 0):
+            raise UsageError(f"object {name!r}: size must be a positive number of metres")
+        point = _point(position, f"object {name!r} position")
+        self.objects[name] = SceneObject(name, tuple(float(v) for v in point), float(size))
+        self.runtime.add_target(name, point)
+        return name
+
+    def add_target(self, name: str, target) -> str:
+        """Name a target that is not an object: a moving point (an (F, 3) track at the scene's frame rate, a
+        function of time) or ``"character:joint"``; BML and the builder can then refer to it by name."""
+        self._check_new_name(name)
+        self.runtime.add_target(name, target)
+        self.targets.add(name)
+        return name
+
+    def character(self, name: str) -> SceneCharacter:
+        """A character of the scene by name (:class:`UsageError` when there is none)."""
+        if name not in self.characters:
+            raise UsageError(f"no character {name!r} in the scene; characters: {', '.join(self.characters) or 'none'}")
+        return self.characters[name]
+
+    def _check_new_name(self, name: str) -> None:
+        if not isinstance(name, str) or not name or ":" in name or name != name.strip():
+            raise UsageError(f"{name!r} cannot name a scene character or object (non-empty, no ':' or outer spaces)")
+        if name in self.characters or name in self.objects or name in self.targets:
+            raise UsageError(f"the scene already has something named {name!r}")
+
+    def _heading(self, character: Character, mapping, position: np.ndarray, facing) -> float:
+        """Degrees to turn the character about +Y so its front looks toward ``facing``."""
+        if facing is None:
+            return 0.0
+        if isinstance(facing, str):
+            there = self.locate(self.resolve_name(facing))
+            if there is None:
+                raise UsageError(f"facing {facing!r}: no character or object of that name")
+            direction = np.asarray(there) - position
+        elif np.ndim(facing) == 0:
+            yaw = math.radians(float(facing))
+            direction = np.array([math.sin(yaw), 0.0, math.cos(yaw)])
+        else:
+            point = np.asarray(facing, dtype=np.float64).reshape(-1)
+            if point.shape not in ((2,), (3,)) or not np.all(np.isfinite(point)):
+                raise UsageError(f"facing {facing!r}: expected degrees, a point (x, z) or (x, y, z), or a name")
+            point = np.array([point[0], 0.0, point[-1]])
+            direction = point - position
+        if math.hypot(direction[0], direction[2]) < 1e-9:
+            raise UsageError(f"facing {facing!r}: the character stands there; cannot tell which way to face")
+        forward = quat.rotate(Rig("probe", character, mapping).body, np.array([0.0, 0.0, 1.0]))
+        turn = math.atan2(direction[0], direction[2]) - math.atan2(forward[0], forward[2])
+        return math.degrees((turn + math.pi) % (2 * math.pi) - math.pi)
+
+    def _infuse(self, character: Character, packs: tuple[str, ...]):
+        """Infuse ``character`` with behaviour packs: their clips join the character's (``clip`` and
+        ``pack/clip``), their blend spaces drive the pack controllers."""
+        from ..packs import infuse_character
+
+        infusion = infuse_character(character, list(packs), mapping=character.mapping, cache=self.pack_cache)
+        for space in infusion.spaces.values():
+            for clip in space.clips.values():
+                character.clips.setdefault(clip.name, clip.motion)
+                character.clips[f"{space.pack}/{clip.name}"] = clip.motion
+        return infusion
+
+    def _start_base(self, name: str) -> None:
+        """The base layer under everything: the idle clip of a behaviour pack, looping; else, for a character
+        whose rest pose does not stand (every bone along one axis), the first frame of its clip, the pose its
+        axes were read from; else the rest pose."""
+        from ..runtime import Clip
+
+        rig = self.runtime.rig(name)
+        idle = self.find_clip(name, "idle")
+        if idle is not None:
+            self.characters[name].idle["base"] = self.runtime.activate(name, Clip(idle, loop=True), 0.0)
+            return
+        if rig.reference == "rest":
+            return
+        clip = next(m for m in rig.character.asset.motions.values() if m.num_frames and m.skeleton.names == rig.skeleton.names)
+        jt = None if clip.joint_translations is None else clip.joint_translations[:1]
+        first = clip.replace(local_rotations=clip.local_rotations[:1], root_translations=clip.root_translations[:1],
+                             joint_translations=jt, name="reference pose")
+        self.runtime.activate(name, Clip(first), 0.0)
+
+    def _start_idle(self, entry: SceneCharacter, index: int) -> None:
+        installed = controller_components()
+        settings = {"blink": {"activity": "conversation", "seed": self.seed + 101 * index},
+                    "breathing": {"phase": (0.37 * index) % 1.0}}
+        for kind, options in settings.items():
+            if kind in installed:
+                entry.idle[kind] = self.runtime.activate(entry.name, controller(kind, **options), 0.0)
+
+    def stop_idle(self, name: str, kind: str, at_s: float) -> None:
+        """Stop a character's default ``kind`` (blink or breathing) at ``at_s``, when BML sets its own."""
+        activity = self.character(name).idle.pop(kind, None)
+        if activity is not None:
+            self.runtime.stop(activity, at_s)
+
+    def stop_postures(self, name: str, at_s: float) -> None:
+        """Stop a character's lasting posture clips at ``at_s`` (a new posture replaces them)."""
+        for activity in self.activities.values():
+            source = activity.source
+            if activity.rig.name == name and source is not None and source.controller in ("posture", "blend") \
+                    and activity.end_s is None and activity.start_s < at_s:
+                self.runtime.stop(activity, at_s)
+
+    # -- where things are -----------------------------------------------------------------------------
+    def resolve_name(self, name: str) -> str:
+        """``name`` as the scene spells it (characters and objects match without regard to case; so does the
+        character of ``"character:joint"``); unknown names are returned as they are."""
+        head, sep, tail = name.partition(":")
+        known = {n.lower(): n for n in itertools.chain(self.characters, self.objects, self.targets)}
+        return known.get(head.lower(), head) + sep + tail
+
+    def locate(self, name: str):
+        """(x, y, z) metres of an object, or where a character stands; None for an unknown name."""
+        if name in self.objects:
+            return self.objects[name].position
+        if name in self.characters:
+            return tuple(float(v) for v in self.runtime.rig(name).position)
+        return None
+
+    def find_clip(self, name: str, clip: str):
+        """The character's clip called ``clip`` (from its behaviour packs, else its own file; case and a
+        ``character@`` prefix ignored), or None."""
+        entry = self.character(name)
+        pools = [entry.character.clips, entry.character.asset.motions]
+        key = clip.lower()
+        for pool in pools:
+            for label, motion in pool.items():
+                if label.lower() == key or label.lower().rsplit("@", 1)[-1] == key.rsplit("@", 1)[-1]:
+                    if motion.num_frames and motion.skeleton.names == entry.character.skeleton.names:
+                        return motion
+        return None
+
+    def _clip_timing(self, clip: str):
+        if self._scheduling is None or self._scheduling not in self.characters:
+            return None
+        motion = self.find_clip(self._scheduling, clip)
+        if motion is None:
+            return None
+        points = {k: float(v) for k, v in motion.sync_points.items() if 0.0 <= float(v) <= motion.duration}
+        points.update(start=0.0, end=motion.duration)
+        return points
+
+    def _voice(self) -> str | None:
+        entry = self.characters.get(self._scheduling) if self._scheduling else None
+        return entry.voice if entry is not None else None
+
+    # -- BML ------------------------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Seconds evaluated so far: the time of the next frame."""
+        return self.runtime.time
+
+    def bml(self, character: str | None, bml, at: float | None = None):
+        """Schedule and realize BML (XML text or bytes, a :class:`~pathlib.Path` to a file, or a parsed document).
+
+        Its blocks play on ``character`` (None: the character each block names) from ``at`` seconds (default:
+        now). Returns the block id, or a list of ids for a document with several blocks. Malformed XML raises
+        :class:`~infuse.errors.InputError`; everything else it holds becomes warningFeedback.
+        """
+        if isinstance(bml, Path):
+            document = parse_bml_file(bml)
+        elif isinstance(bml, (str, bytes)):
+            document = parse_bml(bml)
+        elif isinstance(bml, BmlDocument):
+            document = bml
+        else:
+            raise UsageError(f"bml() takes XML text, a Path or a parsed document, not {type(bml).__name__}")
+        at = self.time if at is None else float(at)
+        if not math.isfinite(at):
+            raise UsageError("a block's start time must be finite")
+        blocks = []
+        for block in document.blocks:
+            name = character if character is not None else block.character_id
+            if name is None:
+                raise UsageError(f"block {block.id!r} names no character; pass the character to bml()")
+            name = self.resolve_name(name)
+            self.character(name)
+            blocks.append(replace(block, character_id=name))
+        ids = []
+        for block in blocks:
+            ids.append(block.id)
+            self._scheduling = block.character_id
+            try:
+                record = self.scheduler.schedule_block(block, at)
+            finally:
+                self._scheduling = None
+            if at < self.time - 0.5 / self.fps:
+                self.feedback.emit(WarningFeedback(block.id, "IMPOSSIBLE_TO_SCHEDULE",
+                                                   f"the block starts at {at:g} s, before the scene's current time "
+                                                   f"({self.time:g} s): what falls before now is not shown",
+                                                   block.character_id))
+            for activation in record.activations:
+                self._realize(activation)
+            self._apply_interruptions()
+        return ids[0] if len(ids) == 1 else ids
+
+    def _realize(self, activation) -> None:
+        self._realizing, self._realize_notes = activation, []
+        try:
+            activity = realize(self, activation)
+        except InfuseError as exc:
+            activity = None
+            self._realize_notes.append(str(exc))
+        finally:
+            self._realizing = None
+        if activity is not None:
+            self.activities[(activation.block, activation.behaviour)] = activity
+        for message in self._realize_notes:
+            kind = NO_SUCH_TARGET if ("no target or character named" in message or "has no joint" in message) \
+                else CANNOT_CREATE_BEHAVIOR if activity is None else BEHAVIOR_DEGRADED
+            self.warn(activation, kind, message)
+
+    def _apply_interruptions(self) -> None:
+        """Stop the activities of behaviours a later block interrupted (REPLACE, ``bmla:interrupt``)."""
+        for record in self.scheduler.blocks.values():
+            if record.interrupted_at is None:
+                continue
+            for activation in record.activations:
+                key = (activation.block, activation.behaviour)
+                if activation.stop_s is None or key in self._interrupted:
+                    continue
+                self._interrupted.add(key)
+                activity = self.activities.get(key)
+                if activity is not None:
+                    self.runtime.stop(activity, activation.stop_s)
+                for spoken in self._spoken.get(activation.character, ()):
+                    if spoken.activity is activity and activity is not None:
+                        spoken.stop_s = activation.stop_s
+
+    def realize_with_runtime(self, activation):
+        """Play an activation through the installed controller of its kind (see :meth:`Runtime.realize`)."""
+        return self.runtime.realize(activation, activation.character)
+
+    def activate(self, activation, controller_, end_s, **options):
+        """Start ``controller_`` for ``activation`` on its character at the activation's start, until ``end_s``."""
+        return self.runtime.activate(activation.character, controller_, activation.start, end_s, source=activation,
+                                     **options)
+
+    def keep_audio(self, name: str, activation, utterance, activity) -> None:
+        """Remember an utterance ``name`` says from the activation's start, for its WAV."""
+        self._spoken.setdefault(name, []).append(_Spoken(activation.start, activation.stop_s, utterance, activity))
+
+    def warn(self, activation, kind: str, message: str) -> None:
+        """warningFeedback about one behaviour (``block:behaviour``)."""
+        self.feedback.emit(WarningFeedback(f"{activation.block}:{activation.behaviour}", kind, message,
+                                           activation.character))
+
+    def _note(self, character: str, message: str) -> None:
+        if self._realizing is not None:
+            self._realize_notes.append(message)
+        else:
+            self.feedback.emit(WarningFeedback(character, BEHAVIOR_DEGRADED, message, character))
+
+    def _speech_warning(self, message: str) -> None:
+        self.feedback.emit(WarningFeedback(self._scheduling or "scene", CANNOT_CREATE_BEHAVIOR, message, self._scheduling))
+
+    def on(self, kinds: str | Iterable[str] | None, callback: Callable) -> Callable[[], None]:
+        """Call ``callback(event)`` for feedback of ``kinds`` (``"blockProgress"``, ``"syncPointProgress"``,
+        ``"warningFeedback"``, ``"blockPrediction"``; None: all); returns a function that unsubscribes."""
+        return self.feedback.subscribe(callback, kinds=[kinds] if isinstance(kinds, str) else kinds)
+
+    # -- the builder ----------------------------------------------------------------------------------
+    def _block_id(self, what: str) -> str:
+        while True:
+            block_id = f"{what}{next(self._ids)}"
+            if block_id not in self.scheduler.blocks:
+                return block_id
+
+    def _submit(self, character: str, what: str, behaviour: str, at, composition: str = "MERGE") -> str:
+        character = self.resolve_name(character)
+        self.character(character)
+        block_id = self._block_id(what)
+        return self.bml(character, builder.block(block_id, character, behaviour, composition), at)
+
+    def _target_name(self, target) -> str:
+        """A BML target for ``target``: a name (kept), or a point, which becomes a named scene target."""
+        if isinstance(target, str):
+            return self.resolve_name(target)
+        point = _point(target, "target")
+        name = f"point{next(self._points)}"
+        while name in self.characters or name in self.objects or name in self.targets:
+            name = f"point{next(self._points)}"
+        return self.add_target(name, point)
+
+    def say(self, character: str, text: str, at: float | None = None, voice: str | None = None) -> str:
+        """Speak ``text`` (BML ``<sync id="..."/>`` marks allowed); returns the block id."""
+        content = builder.element("text", {}, builder.speech_text(text))
+        return self._submit(character, "say", builder.element("speech", {"id": "s1", "voice": voice}, content), at)
+
+    def gaze(self, character: str, target, at: float | None = None, duration: float | None = None,
+             influence: str = "HEAD", offset_angle_deg: float | None = None, offset_direction: str | None = None) -> str:
+        """Look at ``target`` (a character, an object, ``"character:joint"`` or a point) with ``influence``
+        (EYES, HEAD, SHOULDER, WAIST, WHOLE): from now on (a gazeShift), or for ``duration`` seconds."""
+        attributes = {"id": "g1", "target": self._target_name(target), "influence": influence,
+                      "offsetAngle": offset_angle_deg, "offsetDirection": offset_direction}
+        if duration is None:
+            return self._submit(character, "gaze", builder.element("gazeShift", attributes), at)
+        if not duration > 0:
+            raise UsageError("a gaze lasts a positive number of seconds")
+        return self._submit(character, "gaze", builder.element("gaze", {**attributes, "start": 0.0, "end": float(duration)}), at)
+
+    def head(self, character: str, lexeme: str = "NOD", at: float | None = None, repeats: float = 1.0,
+             amount: float = 0.5, velocity_hz: float | None = None) -> str:
+        """A head movement: NOD, SHAKE, TOSS, TILT, WIGGLE, WAGGLE."""
+        attributes = {"id": "h1", "lexeme": lexeme, "repetition": float(repeats), "amount": float(amount),
+                      "sbm:velocity": None if velocity_hz is None else float(velocity_hz)}
+        return self._submit(character, "head", builder.element("head", attributes), at)
+
+    def nod(self, character: str, at: float | None = None, repeats: float = 1.0, amount: float = 0.5) -> str:
+        """Nod (down first)."""
+        return self.head(character, "NOD", at, repeats, amount)
+
+    def shake(self, character: str, at: float | None = None, repeats: float = 2.0, amount: float = 0.5) -> str:
+        """Shake the head (to the character's right first)."""
+        return self.head(character, "SHAKE", at, repeats, amount)
+
+    def expression(self, character: str, lexeme: str, at: float | None = None, amount: float = 0.7,
+                   duration: float | None = None) -> str:
+        """A facial expression (BML faceLexeme: ``smile``, ``RAISE_BROWS``...) for ``duration`` seconds (default
+        the natural 1.6 s)."""
+        attributes = {"id": "f1", "lexeme": lexeme, "amount": float(amount)}
+        if duration is not None:
+            attributes.update(start=0.0, end=float(duration))
+        return self._submit(character, "face", builder.element("faceLexeme", attributes), at)
+
+    def walk_to(self, character: str, target, at: float | None = None, manner: str = "walk",
+                speed: float | None = None) -> str:
+        """Walk (jog, run) to a point (x, z) / (x, y, z) or a named object or character (BML locomotion)."""
+        where = target if isinstance(target, str) else builder.point_text(target)
+        attributes = {"id": "l1", "target": where, "manner": manner, "speed": None if speed is None else float(speed)}
+        return self._submit(character, "walk", builder.element("locomotion", attributes), at)
+
+    def reach(self, character: str, target, at: float | None = None, action: str = "touch",
+              hand: str | None = None) -> str:
+        """Reach for an object (``action``: touch, pick-up, put-down, point-at; ``hand``: left or right)."""
+        attributes = {"id": "r1", "target": self._target_name(target), "sbm:action": action, "sbm:reach-type": hand}
+        return self._submit(character, "reach", builder.element("sbm:reach", attributes), at)
+
+    # -- evaluation -----------------------------------------------------------------------------------
+    @property
+    def end_time(self) -> float:
+        """When everything scheduled has ended (seconds; 0 for an empty scene)."""
+        return max([0.0] + [r.end_s if r.interrupted_at is None else r.interrupted_at
+                            for r in self.scheduler.blocks.values() if not r.failed])
+
+    def run(self, seconds: float | None = None, progress=None) -> None:
+        """Evaluate the next ``seconds`` (default: up to :attr:`end_time`, plus a frame) and deliver the
+        feedback up to the last frame; ``progress(frames_done, frames_total)`` is called per evaluated block."""
+        if seconds is None:
+            seconds = max(self.end_time - self.time, 0.0) + 1.0 / self.fps
+        frames = int(round(float(seconds) * self.fps))
+        if frames < 0:
+            raise UsageError("run() takes a duration >= 0 seconds")
+        done = 0
+        while done < frames:
+            n = min(self.runtime.block_frames, frames - done)
+            self.runtime.step(n)
+            done += n
+            self._deliver()
+            if progress is not None:
+                progress(done, frames)
+
+    def step(self, frames: int = 1) -> None:
+        """Evaluate the next ``frames`` frames and deliver their feedback."""
+        self.runtime.step(int(frames))
+        self._deliver()
+
+    def _deliver(self) -> None:
+        last = (self.runtime.frame - 1) / self.fps
+        self.scheduler.advance(last + 1e-9)
+
+    # -- results --------------------------------------------------------------------------------------
+    def motion(self, character: str, clip: str = "scene"):
+        """The character's animation so far, a :class:`~infuse.Motion` on its own skeleton (placed in the scene)."""
+        return self.runtime.motion(self.character(character).name, clip)
+
+    def audio(self, character: str) -> tuple[np.ndarray, int] | None:
+        """The character's speech as one mono int16 track as long as its animation so far, and its rate;
+        None when it has said nothing."""
+        pieces = []
+        for spoken in self._spoken.get(self.character(character).name, ()):
+            samples, rate = utterance_samples(spoken.utterance)
+            pieces.append((spoken.start_s, spoken.stop_s, samples, rate))
+        if not pieces:
+            return None
+        return mix(pieces, self.runtime.frame / self.fps)
+
+    def export(self, character: str, path, clip: str = "scene", audio: bool = True, **options) -> list[Path]:
+        """Write the character with its animation so far as one clip (``path``: .glb keeps its mesh and
+        carries the morph-weight tracks; .bvh and any other installed writer work too), and its speech
+        beside it as ``<stem>.wav`` (the WAV the viewer plays with the clip). Returns the files written."""
+        from .. import fileio
+
+        entry = self.character(character)
+        path = Path(path)
+        written = [fileio.save(self.runtime.export(entry.name, clip), path, **options)]
+        track = self.audio(entry.name) if audio else None
+        if track is not None:
+            written.append(write_wav(path.with_suffix(".wav"), *track))
+        return written
+
+    def render(self, path, **options) -> Path:
+        """A preview of the scene so far (see :func:`infuse.scene.preview.render_scene`)."""
+        from .preview import render_scene
+
+        return render_scene(self, path, **options)
+
+
+def _point(value, what: str) -> np.ndarray:
+    point = np.asarray(value, dtype=np.float64).reshape(-1)
+    if point.shape != (3,) or not np.all(np.isfinite(point)):
+        raise UsageError(f"{what} must be three finite numbers (x, y, z) in metres, got {value!r}")
+    return point
+
+
+def _print_warning(event) -> None:
+    print(f"infuse: warning: {event.id}: {event.description}", file=sys.stderr)
