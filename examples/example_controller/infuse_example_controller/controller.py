@@ -28,7 +28,8 @@ def shrug_curve(t, duration_s: float, rise_fraction: float = 0.25, fall_fraction
 
 
 class Shrug(Controller):
-    """Shrug both shoulders by ``amount`` (0..1, default 1) over ``duration_s`` seconds (default 1)."""
+    """Shrug both shoulders by ``amount`` (0..1, default 1) over ``duration_s`` seconds (default 1), rising
+    over the first ``rise_fraction`` of it and falling over the last ``fall_fraction``."""
 
     kind = "shrug"
     layer = Layer.POSTURE
@@ -36,13 +37,17 @@ class Shrug(Controller):
     blend_in_s = 0.0   # the curve itself starts and ends at rest
     blend_out_s = 0.0
 
-    def __init__(self, amount: float = 1.0, duration_s: float = 1.0):
+    def __init__(self, amount: float = 1.0, duration_s: float = 1.0, rise_fraction: float = 0.25,
+                 fall_fraction: float = 0.35):
         if not (np.isfinite(amount) and 0.0 <= amount <= 1.0):
             raise UsageError(f"shrug amount must lie in [0, 1], got {amount}")
         if not (np.isfinite(duration_s) and duration_s > 0.1):
             raise UsageError(f"shrug duration must be over 0.1 s, got {duration_s}")
+        if not (0.0 < rise_fraction and 0.0 < fall_fraction and rise_fraction + fall_fraction <= 1.0):
+            raise UsageError("shrug rise and fall fractions must be positive and add up to at most 1")
         self.amount = float(amount)
         self.duration_s = float(duration_s)  # an activity given no end lasts this long
+        self.rise_fraction, self.fall_fraction = float(rise_fraction), float(fall_fraction)
 
     def describe(self) -> str:
         return f"shrug ({self.amount:g})"
@@ -70,15 +75,22 @@ class Shrug(Controller):
     def evaluate_one(self, job, block) -> None:
         """Vectorized over the block's frames: one roll per joint per frame."""
         b = job.binding
-        lift = self.amount * shrug_curve(job.local_times, self.duration_s)
+        lift = self.amount * shrug_curve(job.local_times, self.duration_s, self.rise_fraction, self.fall_fraction)
         roll = lift[:, None] * b["rolls"][None, :]  # (F, K)
         offsets = local_offsets(b["aligned"], swing(0.0, 0.0, roll))
         job.pose.set_rotations(b["joints"], offsets, job.weight, job.mode)
 
 
 def shrug_from_bml(parameters: dict, runtime, character: str, activation=None) -> Shrug:
-    """A shrug from a scheduled BML activation: its ``amount``, lasting as long as it was scheduled."""
-    duration = float(parameters.get("duration_s", 1.0))
-    if activation is not None and activation.end > activation.start:
-        duration = float(activation.end - activation.start)
-    return Shrug(amount=float(parameters.get("amount", 1.0)), duration_s=duration)
+    """A shrug from a scheduled BML activation: its ``amount``, and the times the scheduler gave it: at
+    the top from ``ready`` to ``relax``, over from ``start`` to ``end``."""
+    amount = float(parameters.get("amount", 1.0))
+    if activation is None:
+        return Shrug(amount, float(parameters.get("duration_s", 1.0)))
+    start, end = activation.start, activation.end
+    duration = end - start
+    ready = activation.time("ready")
+    relax = activation.time("relax")
+    rise = (ready - start) / duration if ready is not None and duration > 0 else 0.25
+    fall = (end - relax) / duration if relax is not None and duration > 0 else 0.35
+    return Shrug(amount, duration, max(rise, 1e-3), max(fall, 1e-3))
