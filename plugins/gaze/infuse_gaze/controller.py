@@ -222,13 +222,10 @@ class Gaze(Controller):
         states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
         groups_state = np.stack([st.get("groups", np.zeros((n_groups, 2))) for st in states])
         eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
-        last = None
-        if refine and all("positions" in st for st in states):
-            last = np.stack([st["positions"] for st in states])
-        offsets, positions = solve(inp, groups_state, eyes_state, last)
+        offsets, _ = solve(inp, groups_state, eyes_state)
         for c, name in enumerate(names):
             job = rows[name][0]
-            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "positions": positions[c, -1]}
+            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c]}
             b = job.binding
             present = b["present"]
             hv = offsets[c][:, present]

@@ -1,4 +1,4 @@
-"""The gaze solver: per frame, batched over every gazing character at once.
+"""The gaze solver, batched over every gazing character and vectorized over the frames of a block.
 
 Everything is expressed in the chain's *slots* (:data:`~infuse_gaze.model.SLOTS`, pelvis to eyes) and
 in their aligned frames (:mod:`infuse.runtime.swing`; a slot the character lacks repeats its parent).
@@ -15,10 +15,13 @@ move), clamped to its elliptical limits; the priority group and the groups above
 The result is weighted by the activity's blend weight, smoothed and speed-limited, and the chain is
 moved before the next group is solved, so the groups above make up for what lags below. Each eye
 finally aims from its own position. Outputs are (heading, pitch) offsets in radians per slot.
+
+A group's wish at a frame depends only on the groups below it at that frame, so the solver runs
+group by group over all frames at once; only the smoothing (:func:`follow`) steps frame by frame.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -44,7 +47,7 @@ class SolverInput:
       down, roll; ``smoothing`` (C, F, G): share per frame; ``max_step`` (C, F, G): radians per frame;
       ``offsets`` (C, F, 2): heading and pitch added to the target direction.
     - ``refine``: (c, c2, slots) triples: character c looks at the mean of ``slots`` of character c2,
-      taken from the previous solved frame.
+      taken from a first solve of the block.
     """
 
     chain_rot: np.ndarray
@@ -101,97 +104,116 @@ def _angles(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _clamp(h, v, limits):
-    """(h, v) (C,) scaled onto the ellipse of ``limits`` (C, 4) when outside it; an axis with a zero
+    """(h, v) (...) scaled onto the ellipse of ``limits`` (..., 4) when outside it; an axis with a zero
     limit does not turn at all."""
-    vertical = np.where(v >= 0.0, limits[:, 1], limits[:, 2])
-    h = np.where(limits[:, 0] > 0, h, 0.0)
+    vertical = np.where(v >= 0.0, limits[..., 1], limits[..., 2])
+    h = np.where(limits[..., 0] > 0, h, 0.0)
     v = np.where(vertical > 0, v, 0.0)
-    a = h / np.where(limits[:, 0] > 0, limits[:, 0], 1.0)
+    a = h / np.where(limits[..., 0] > 0, limits[..., 0], 1.0)
     b = v / np.where(vertical > 0, vertical, 1.0)
     r = np.sqrt(a * a + b * b)
     f = np.where(r > 1.0, 1.0 / np.maximum(r, 1.0), 1.0)
     return h * f, v * f
 
 
-def _follow(state, desired, smoothing, max_step):
-    """One smoothed, speed-limited step of ``state`` (..., 2) toward ``desired``."""
-    step = smoothing[..., None] * (desired - state)
-    norm = np.sqrt(np.sum(step * step, axis=-1))
-    scale = np.where(norm > max_step, max_step / np.maximum(norm, 1e-12), 1.0)
-    return state + step * scale[..., None]
+def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, state: np.ndarray):
+    """Smoothed, speed-limited path (C, F, 2) toward ``desired`` (C, F, 2) from ``state`` (C, 2).
+
+    Each frame covers ``smoothing`` (C, F) of the distance left, at most ``max_step`` (C, F) radians.
+    Returns the final state (C, 2) and the path. The only loop over frames in the solver.
+    """
+    frames = desired.shape[1]
+    path = np.empty_like(desired)
+    if np.all(smoothing >= 1.0):  # no smoothing: the path is the target unless a step is too long
+        steps = np.diff(np.concatenate((state[:, None], desired), axis=1), axis=1)
+        if np.all(np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step):
+            path[:] = desired
+            return desired[:, -1].copy(), path
+    share = smoothing[..., None]
+    for f in range(frames):
+        step = share[:, f] * (desired[:, f] - state)
+        norm = np.sqrt(step[:, 0] * step[:, 0] + step[:, 1] * step[:, 1])
+        limit = max_step[:, f]
+        state = state + step * np.where(norm > limit, limit / np.maximum(norm, 1e-300), 1.0)[:, None]
+        path[:, f] = state
+    return state, path
 
 
 def _apply(m, v):
-    """Matrices (C, 3, 3) times vectors (C, 3)."""
+    """Matrices (..., 3, 3) times vectors (..., 3)."""
     return (m @ v[..., None])[..., 0]
 
 
 def _apply_t(m, v):
-    """Transposed matrices (C, 3, 3) times vectors (C, 3)."""
-    return (v[:, None, :] @ m)[:, 0]
+    """Transposed matrices (..., 3, 3) times vectors (..., 3)."""
+    return (v[..., None, :] @ m)[..., 0, :]
 
 
 def _direction(frame, vector, forward_h, forward_v, fixed):
     """Heading and pitch left to turn: from the forward angles to ``vector`` seen in ``frame``, plus the fixed offsets."""
     ht, vt = _angles(_apply_t(frame, vector))
-    return (ht + fixed[:, 0] - forward_h + np.pi) % (2 * np.pi) - np.pi, vt + fixed[:, 1] - forward_v
+    return (ht + fixed[..., 0] - forward_h + np.pi) % (2 * np.pi) - np.pi, vt + fixed[..., 1] - forward_v
 
 
-def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, last_positions: np.ndarray | None):
-    """Run the frames; returns (offsets (C, F, S, 2), positions (C, F, S, 3) of the solved chain).
+def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
+    """Run the block; returns (offsets (C, F, S, 2), positions (C, F, S, 3) of the solved chain).
 
     ``groups_state`` (C, G, 2) and ``eyes_state`` (C, 2, 2) hold the current offsets and are updated
-    in place; ``last_positions`` (C, S, 3), the chain of the frame before, serves ``refine``.
+    in place. Characters looking at another one's eyes or head (``refine``) get a second pass with
+    that character's solved positions.
     """
+    start_groups, start_eyes = groups_state.copy(), eyes_state.copy()
+    out, positions = _solve_once(inp, groups_state, eyes_state)
+    if inp.refine:
+        targets = inp.targets.copy()
+        for c, c2, slots in inp.refine:
+            targets[c] = positions[c2][:, list(slots)].mean(axis=1)
+        groups_state[:], eyes_state[:] = start_groups, start_eyes
+        out, positions = _solve_once(replace(inp, targets=targets), groups_state, eyes_state)
+    return out, positions
+
+
+def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
+    """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
+    groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`)."""
     c_count, frames = inp.targets.shape[:2]
     out = np.zeros((c_count, frames, _S, 2))
-    positions = np.zeros((c_count, frames, _S, 3))
-    counts = np.maximum(inp.counts, 1)[..., None]
-    present = inp.present[..., None]
-    zero = np.zeros(c_count)
-    previous = last_positions
-    w_rot = np.empty((c_count, _S, 3, 3))
-    w_pos = np.empty((c_count, _S, 3))
-    for f in range(frames):
-        chain_rot = inp.chain_rot[:, f]
-        chain_pos = inp.chain_pos[:, f]
-        target = inp.targets[:, f]
-        if inp.refine and previous is not None:
-            target = target.copy()
-            for c, c2, slots in inp.refine:
-                target[c] = previous[c2, list(slots)].mean(axis=0)
-        weight = inp.weights[:, f]
-        active, fractions, limits = inp.active[:, f], inp.fractions[:, f], inp.limits[:, f]
-        smoothing, max_step, fixed = inp.smoothing[:, f], inp.max_step[:, f], inp.offsets[:, f]
-        share = None
-        for s in range(_S):
-            p = SLOT_PARENTS[s]
-            if p < 0:
-                pre = chain_rot[:, s]
-                w_pos[:, s] = chain_pos[:, s]
-            else:
-                pre = w_rot[:, p] @ chain_rot[:, s]
-                w_pos[:, s] = w_pos[:, p] + _apply(w_rot[:, p], chain_pos[:, s])
-            g = SLOT_GROUPS[s]
-            if g == EYES:  # each eye turns from its own position, all the way (within its limits)
-                dh, dv = _direction(pre, target - w_pos[:, s], zero, zero, fixed)
-                k = s - _EYE_SLOTS[0]
-                gain = (active[:, g] * inp.present[:, s] * weight)[:, None]
-                dh, dv = _clamp(dh, dv, limits[:, g])
-                eyes_state[:, k] = _follow(eyes_state[:, k], np.stack((dh, dv), -1) * gain, smoothing[:, g], max_step[:, g])
-                out[:, f, s] = np.where(present[:, s], eyes_state[:, k], 0.0)
-                continue
-            if _FIRST_SLOT[g] == s:
-                fwd = inp.forward_angles[:, f, s]
-                dh, dv = _direction(pre, target - w_pos[:, s] - _apply(pre, inp.origin_local[:, f, s]),
-                                    fwd[:, 0], fwd[:, 1], fixed)
-                dh, dv = _clamp(dh * fractions[:, g], dv * fractions[:, g], limits[:, g])
-                gain = (active[:, g] * weight)[:, None]
-                groups_state[:, g] = _follow(groups_state[:, g], np.stack((dh, dv), -1) * gain, smoothing[:, g], max_step[:, g])
-                share = groups_state[:, g] / counts[:, g]
-            hv = np.where(present[:, s], share, 0.0)
-            out[:, f, s] = hv
-            w_rot[:, s] = pre @ swing_matrices(hv[:, 0], hv[:, 1])
-        positions[:, f] = w_pos
-        previous = w_pos
-    return out, positions
+    w_rot = np.empty((c_count, frames, _S, 3, 3))
+    w_pos = np.empty((c_count, frames, _S, 3))
+    counts = np.maximum(inp.counts, 1)[:, None, :, None]  # (C, 1, G, 1)
+    present = inp.present[:, None, :, None]  # (C, 1, S, 1)
+    target = inp.targets
+    zero = np.zeros((c_count, frames))
+    share = None
+    for s in range(_S):
+        p = SLOT_PARENTS[s]
+        if p < 0:
+            pre = inp.chain_rot[:, :, s]
+            w_pos[:, :, s] = inp.chain_pos[:, :, s]
+        else:
+            pre = w_rot[:, :, p] @ inp.chain_rot[:, :, s]
+            w_pos[:, :, s] = w_pos[:, :, p] + _apply(w_rot[:, :, p], inp.chain_pos[:, :, s])
+        g = SLOT_GROUPS[s]
+        if g == EYES:  # each eye turns from its own position, all the way (within its limits)
+            dh, dv = _direction(pre, target - w_pos[:, :, s], zero, zero, inp.offsets)
+            dh, dv = _clamp(dh, dv, inp.limits[:, :, g])
+            gain = (inp.active[:, :, g] * inp.weights * inp.present[:, None, s])[..., None]
+            k = s - _EYE_SLOTS[0]
+            eyes_state[:, k], path = follow(np.stack((dh, dv), -1) * gain, inp.smoothing[:, :, g],
+                                            inp.max_step[:, :, g], eyes_state[:, k])
+            out[:, :, s] = np.where(present[:, :, s], path, 0.0)
+            continue
+        if _FIRST_SLOT[g] == s:
+            fwd = inp.forward_angles[:, :, s]
+            dh, dv = _direction(pre, target - w_pos[:, :, s] - _apply(pre, inp.origin_local[:, :, s]),
+                                fwd[..., 0], fwd[..., 1], inp.offsets)
+            fraction = inp.fractions[:, :, g]
+            dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
+            gain = (inp.active[:, :, g] * inp.weights)[..., None]
+            groups_state[:, g], path = follow(np.stack((dh, dv), -1) * gain, inp.smoothing[:, :, g],
+                                              inp.max_step[:, :, g], groups_state[:, g])
+            share = path / counts[:, :, g]
+        hv = np.where(present[:, :, s], share, 0.0)
+        out[:, :, s] = hv
+        w_rot[:, :, s] = pre @ swing_matrices(hv[..., 0], hv[..., 1])
+    return out, w_pos
