@@ -138,6 +138,10 @@ class Locomotion(Controller):
         if not clips:
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
         p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
+        # Steer no harder than the pack's examples turn, so the realized path follows the steering's.
+        reach = 0.9 * float(np.abs(p("turn_rate")).max())
+        if reach > 0:
+            self.steering.max_turn_rate = min(self.steering.max_turn_rate, reach)
         return {"space": space, "clips": clips, "motions": [m for m, _ in prepared], "movers": [mv for _, mv in prepared],
                 "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
                 "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs}

@@ -38,6 +38,19 @@ def space_for(rig, pack):
     return _INFUSIONS[key][1]
 
 
+def _mean_stroke(pack) -> float:
+    """Mean stroke time (seconds) of a reaching pack's reach examples."""
+    from infuse.packs import BlendSpace, load_pack
+
+    if isinstance(pack, BlendSpace):
+        strokes = [c.stroke for c in pack.clips.values() if c.role == "reach"]
+    else:
+        strokes = [c["stroke"] for c in load_pack(pack).require_built()["clips"] if c["role"] == "reach"]
+    if not strokes:
+        raise UsageError("the reaching pack has no reach examples")
+    return float(np.mean(strokes))
+
+
 class HeldTarget(Target):
     """A scene object held in a character's hand: its world position follows the wrist, at the offset
     (in the wrist's frame) it had when grabbed."""
@@ -79,7 +92,9 @@ class Reach(Controller):
             raise UsageError(f"a {action} names the object (obj=)")
         self.target, self.hand, self.pack, self.action, self.obj = target, hand, pack, action, obj
         self.hold_s = float(hold_s)
-        self.duration_s = None
+        # Stroke times are the pack's (retargeting keeps timing), so the natural length is known now.
+        self.stroke_s = _mean_stroke(pack)
+        self.duration_s = self.stroke_s + self.hold_s + self.blend_out_s  # the weight falls to 0 at the end
 
     def describe(self) -> str:
         return f"reach ({self.action})"
@@ -96,9 +111,7 @@ class Reach(Controller):
                 hands[hand] = tuple(arm)
         if not hands:
             raise UsageError("the character has no mapped shoulder, elbow and wrist for the pack's hands")
-        stroke = float(np.mean([c.stroke for c in space.clips.values() if c.role == "reach"]))
-        self.duration_s = stroke + self.hold_s
-        return {"space": space, "arms": hands, "stroke": stroke}
+        return {"space": space, "arms": hands, "stroke": self.stroke_s}
 
     def _target_world(self, runtime, times, block) -> np.ndarray:
         t = runtime.target(self.target) if isinstance(self.target, str) else as_target(self.target)
