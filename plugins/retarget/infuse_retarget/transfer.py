@@ -11,8 +11,8 @@ between, which is what makes any-to-any work:
   clavicle) follows the nearest joint both sides map; on a limb or spine chain it also takes its
   share of the twist between that joint and the next shared one, so twist joints share the
   rotation;
-- a bone that spans joints the other side lacks is turned onto the source's actual direction
-  (``direction_fix``), so bones point the same way whatever lies between their ends;
+- a bone that spans joints the other side lacks is turned onto the source's actual direction, so
+  bones point the same way whatever lies between their ends;
 - a single clavicle faces a SmartBody pair (``l_sternoclavicular`` and ``l_acromioclavicular``; the
   first is found even when the mapping names only the second): it plays ``l_sternoclavicular``,
   the joint that turns the clavicle, so SmartBody reaches that shrug move it;
@@ -136,25 +136,34 @@ class RetargetPlan:
 
     # -- structure ---------------------------------------------------------------------------------
     def _build(self) -> None:
+        self._drivers()
+        self._direction_fixes()
+        self._followers()
+        self._root()
+        self._moving_joints()
+
+    def _drivers(self) -> None:
+        """Which shared canonical joint drives each target joint (``driver``), and the driven joints."""
         src, tgt = self.source, self.target
-        sk = tgt.skeleton
-        j_count = sk.num_joints
-        parents = sk.parents
+        parents = tgt.skeleton.parents
         common = set(self.common)
-        driver = [None] * j_count  # canonical name whose motion drives each target joint
-        for j in range(j_count):
+        driver: list[str | None] = [None] * len(parents)
+        for j in range(len(parents)):
             own = tgt.rig.canonical_of.get(j)
             if own in common:
                 driver[j] = own
             elif parents[j] >= 0:
                 driver[j] = driver[parents[j]]
+        #: (J,) canonical name whose motion drives each target joint (None: holds its default pose).
         self.driver = tuple(driver)
-        driven = [j for j in range(j_count) if tgt.rig.canonical_of.get(j) in common]
+        driven = [j for j in range(len(parents)) if tgt.rig.canonical_of.get(j) in common]
         self._driven = np.array(driven, dtype=np.int64)
         self._driven_source = np.array([src.index[self.pairs[tgt.rig.canonical_of[j]]] for j in driven], dtype=np.int64)
         self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])[:, :, None]
 
-        # Direction fix for bones with one shared child.
+    def _direction_fixes(self) -> None:
+        """Bones with one shared child: the target bone is turned onto the source bone's direction."""
+        src, tgt = self.source, self.target
         kids = canonical_children(self.common)
         fix = []
         for name in self.common:
@@ -165,38 +174,39 @@ class RetargetPlan:
             if np.linalg.norm(u) < 1e-6:
                 continue
             s_joint, s_child = src.index[self.pairs[name]], src.index[self.pairs[child]]
-            b = quat.rotate(quat.conjugate(src.frame[s_joint]), u)
+            b = quat.rotate(quat.conjugate(src.frame[s_joint]), u)  # the target bone, in the source joint's frame
             fix.append((s_joint, s_child, tgt.index[name], b))
         self._fix_src = np.array([f[0] for f in fix], dtype=np.int64)
         self._fix_child = np.array([f[1] for f in fix], dtype=np.int64)
         self._fix_tgt = np.array([f[2] for f in fix], dtype=np.int64)
         self._fix_vec = np.array([f[3] for f in fix]).reshape(-1, 3, 1)
 
-        # Followers: joints carried by a driven joint above them, some taking part of a twist.
+    def _followers(self) -> None:
+        """Joints carried by a driven joint above them: rigidly, or taking a share of the twist to
+        the one driven joint below them on the same limb or spine chain."""
+        tgt = self.target
+        parents = tgt.skeleton.parents
+        j_count = len(parents)
+        driven = set(self._driven.tolist())
         next_driven: list[set[int]] = [set() for _ in range(j_count)]
         for j in range(j_count - 1, -1, -1):
-            p = parents[j]
-            if p >= 0:
-                next_driven[p] |= {j} if driver[j] is not None and tgt.rig.canonical_of.get(j) in common else next_driven[j]
+            if parents[j] >= 0:
+                next_driven[parents[j]] |= {j} if j in driven else next_driven[j]
         ref = tgt.rig.positions
-        seg = np.zeros(j_count)
-        seg[1:] = [np.linalg.norm(ref[j] - ref[parents[j]]) if parents[j] >= 0 else 0.0 for j in range(1, j_count)]
+        seg = np.array([np.linalg.norm(ref[j] - ref[p]) if p >= 0 else 0.0 for j, p in enumerate(parents)])
         rigid, twisted = [], []
         for j in range(j_count):
-            if driver[j] is None or j in set(driven):
+            if self.driver[j] is None or j in driven:
                 continue
-            a = tgt.index[driver[j]]
-            d_set = next_driven[j]
-            if len(d_set) == 1:
-                d = next(iter(d_set))
-                d_name = tgt.rig.canonical_of[d]
-                if FAMILY[canonical_joint(driver[j]).group] == FAMILY[canonical_joint(d_name).group]:
-                    up_to_j = _path_length(parents, seg, a, j)
-                    total = _path_length(parents, seg, a, d)
-                    axis = tgt.aligned[d] - tgt.aligned[a]
-                    if total > 1e-9 and np.linalg.norm(axis) > 1e-9:
-                        twisted.append((j, a, d, up_to_j / total, axis / np.linalg.norm(axis)))
-                        continue
+            a = tgt.index[self.driver[j]]
+            if len(next_driven[j]) == 1:
+                d = next(iter(next_driven[j]))
+                same_chain = FAMILY[canonical_joint(self.driver[j]).group] == FAMILY[canonical_joint(tgt.rig.canonical_of[d]).group]
+                total = _path_length(parents, seg, a, d)
+                axis = tgt.aligned[d] - tgt.aligned[a]
+                if same_chain and total > 1e-9 and np.linalg.norm(axis) > 1e-9:
+                    twisted.append((j, a, d, _path_length(parents, seg, a, j) / total, axis / np.linalg.norm(axis)))
+                    continue
             rigid.append((j, a))
         self._rigid = np.array([r[0] for r in rigid], dtype=np.int64)
         self._rigid_driver = np.array([r[1] for r in rigid], dtype=np.int64)
@@ -209,9 +219,12 @@ class RetargetPlan:
         self._tw_frame = tgt.frame[self._tw].reshape(-1, 4, 1)
         self._tw_a_frame_inv = quat.conjugate(tgt.frame[self._tw_a]).reshape(-1, 4, 1)
         self._tw_d_frame_inv = quat.conjugate(tgt.frame[self._tw_d]).reshape(-1, 4, 1)
-        self._static = np.array([j for j in range(j_count) if driver[j] is None], dtype=np.int64)
+        self._static = np.array([j for j in range(j_count) if self.driver[j] is None], dtype=np.int64)
 
-        # Root: the base's top root carries the translation; joints between hold their default pose.
+    def _root(self) -> None:
+        """The base's top root carries the translation; joints between hold their default pose."""
+        tgt = self.target
+        parents = tgt.skeleton.parents
         base = tgt.index["base"]
         top = base
         while parents[top] >= 0:
@@ -221,8 +234,15 @@ class RetargetPlan:
         self._base_offset = at[base][:, 0]
         self._detached = tuple(tgt.rig.detached)
 
-        # A joint carried rigidly with its parent (both by the same driven joint, or both holding
-        # their default pose) keeps its reference local rotation: only the others are computed.
+    def _moving_joints(self) -> None:
+        """A joint carried rigidly with its parent (both by the same driven joint, or both holding
+        their default pose) keeps its reference local rotation: only the others are computed, and
+        global rotations only where positions are asked for (legs, arms, feet, detached joints and
+        the paths to them) or a computed local rotation needs them."""
+        tgt = self.target
+        sk = tgt.skeleton
+        parents = sk.parents
+        j_count = len(parents)
         group = np.full(j_count, -1, dtype=np.int64)
         group[self._driven] = self._driven
         group[self._rigid] = self._rigid_driver
@@ -237,9 +257,7 @@ class RetargetPlan:
         fixed_local[child] = quat.multiply(quat.conjugate(ref[parents[child]]), ref[child])
         self._fixed = np.nonzero(~varying)[0]
         self._fixed_local = fixed_local[self._fixed][:, :, None]
-        # Global rotations are needed only where positions are asked for (legs, arms, feet, detached
-        # joints and the path to them) and for the parents of computed local rotations.
-        seeds = set(int(parents[j]) for j in self._varying) | set(self._varying.tolist()) | set(self._detached)
+        seeds = set(self._varying.tolist()) | {int(parents[j]) for j in self._varying} | set(self._detached)
         seeds |= {int(parents[j]) for j in self._detached if parents[j] >= 0}
         for foot in tgt.feet:
             seeds |= set(foot.joints) | {int(sk.end_site_parents[e]) for e in foot.end_sites}
