@@ -220,3 +220,25 @@ def test_placed_characters_gaze_at_world_targets():
         forward = quat.rotate(g_rot[-1, j], np.array([0.0, 0.0, 1.0]))  # identity rest: the eye looks along +Z
         to_target = (target - g_pos[-1, j]) / np.linalg.norm(target - g_pos[-1, j])
         assert np.degrees(np.arccos(np.clip(forward @ to_target, -1, 1))) < 0.5
+
+
+def test_clip_on_another_skeleton_is_retargeted_and_gazes_on_top():
+    from infuse.mapping import map_skeleton
+    from infuse_gaze import Gaze
+
+    from corpus_data import corpus_file
+    from runtime_characters import corpus_character
+
+    bandai = infuse.load(corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"))
+    walk = next(iter(bandai.motions.values()))
+    rt = Runtime(fps=30)
+    rt.add_character(corpus_character("xbot"), name="xbot")
+    with pytest.raises(UsageError, match="retarget"):
+        rt.activate("xbot", Clip(walk), 0.0)
+    rt.activate("xbot", Clip(walk, source_mapping=map_skeleton(bandai)), 0.0)
+    rt.activate("xbot", Gaze(lambda t: np.stack((np.sin(t), 1.5 + 0 * t, 2.0 + 1.2 * t), -1)), 0.0)
+    rt.run(4.0)
+    _, g_pos = infuse.motion_fk(rt.motion("xbot"))
+    assert np.linalg.norm(g_pos[-1, 0, [0, 2]] - g_pos[0, 0, [0, 2]]) > 3.0  # it walked
+    head = rt.rig("xbot").joint("skullbase")
+    assert np.ptp(g_pos[:, head, 1]) < 0.2  # upright throughout
