@@ -1,10 +1,12 @@
-"""Every BML document of the corpus through parse and schedule.
+"""Every BML document of the corpus through parse, schedule and realize.
 
 Prints, per source folder: documents parsed and scheduled without a warning, with warnings, and invalid
-(refused with a clear error); the time taken; and how many of the expected timings stated in the
-OpenBMLParser documents' header comments the scheduler reproduces.
+(refused with a clear error); documents realized on a character (the Ready Player Me avatar, one
+scene per document, every frame evaluated to the end of its blocks) and the behaviours that became
+runtime activities; the time taken; and how many of the expected timings stated in the OpenBMLParser
+documents' header comments the scheduler reproduces.
 
-    python benchmarks/bml_corpus.py [--verbose]
+    python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30]
 
 The corpus is read from INFUSE_CORPUS (default ../shared/corpus from the repository root).
 """
@@ -23,15 +25,45 @@ from infuse.errors import InputError
 
 REPO = Path(__file__).resolve().parents[1]
 CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")).resolve()
+#: The character every document is realized on (a face with visemes and expressions, eyes, a full body).
+CHARACTER = "talkinghead/avatars/brunette-t.glb"
+#: Longest stretch of a document evaluated, seconds.
+MAX_SECONDS = 60.0
 
 
-def run(corpus: Path, verbose: bool = False) -> dict:
-    """Counts per folder, oracle outcomes and timings; also printed."""
+def shared_character(corpus: Path):
+    """The realizing character, loaded and mapped once."""
+    import infuse
+    from infuse.mapping import map_skeleton
+
+    asset = infuse.load(corpus / CHARACTER)
+    return infuse.Character("character", asset, map_skeleton(asset))
+
+
+def realize(document, character, fps: float) -> dict:
+    """Realize ``document`` on ``character`` in a scene of its own and evaluate it to its end: counts of
+    activities and warnings, frames evaluated, CPU seconds spent synthesizing speech."""
+    from infuse.scene import Scene
+
+    scene = Scene(fps=fps, quiet=True)
+    scene.add_character(character, "character")
+    scene.bml("character", document)
+    scene.run(min(scene.end_time, MAX_SECONDS) + 1.0 / fps)
+    scene.motion("character")
+    scene.audio("character")
+    warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
+    return {"activities": len(scene.activities), "warnings": warnings, "frames": scene.runtime.frame,
+            "synthesis_s": scene.speech.synthesis_s}
+
+
+def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -> dict:
+    """Counts per folder, oracle outcomes and timings; also printed. ``realize_fps`` None: no realizing."""
     files = sorted((corpus / "bml").glob("*/*.xml"))
     if not files:
         raise SystemExit(f"no BML documents under {corpus / 'bml'} (set INFUSE_CORPUS)")
     counts: dict[str, Counter] = {}
     outcomes = []
+    realized = []
     started = time.perf_counter()
     for path in files:
         folder = path.parent.name
@@ -55,14 +87,44 @@ def run(corpus: Path, verbose: bool = False) -> dict:
         if folder == "openbmlparser":
             expectations = expectations_from_comments(document.comments)
             outcomes += [(path.name, o) for o in check(expectations, document.blocks[0], records[0])]
+        if realize_fps:
+            realized.append((folder, path, document))
     elapsed = time.perf_counter() - started
 
-    print(f"{'folder':<15}{'documents':>10}{'ok':>6}{'warnings':>10}{'invalid':>9}{'behaviours':>12}")
+    realize_s = synthesis_s = 0.0
+    frames = 0
+    if realized:
+        character = shared_character(corpus)
+        cpu = time.process_time()
+        for folder, path, document in realized:
+            tally = counts[folder]
+            try:
+                outcome = realize(document, character, realize_fps)
+            except Exception as exc:  # a crash: the benchmark counts it and goes on
+                tally["crashed"] += 1
+                print(f"  CRASH    {folder}/{path.name}: {type(exc).__name__}: {exc}")
+                continue
+            tally["realized"] += 1
+            tally["activities"] += outcome["activities"]
+            frames += outcome["frames"]
+            synthesis_s += outcome["synthesis_s"]
+            if verbose:
+                for w in outcome["warnings"]:
+                    print(f"  realize  {folder}/{path.name}: {w.id} {w.type}: {w.description}")
+        realize_s = time.process_time() - cpu
+
+    print(f"{'folder':<15}{'documents':>10}{'ok':>6}{'warnings':>10}{'invalid':>9}{'behaviours':>12}"
+          + (f"{'realized':>10}{'crashed':>9}{'activities':>12}" if realized else ""))
     for folder, tally in sorted(counts.items()):
         total = tally["ok"] + tally["warnings"] + tally["invalid"]
-        print(f"{folder:<15}{total:>10}{tally['ok']:>6}{tally['warnings']:>10}{tally['invalid']:>9}{tally['behaviours']:>12}")
+        print(f"{folder:<15}{total:>10}{tally['ok']:>6}{tally['warnings']:>10}{tally['invalid']:>9}{tally['behaviours']:>12}"
+              + (f"{tally['realized']:>10}{tally['crashed']:>9}{tally['activities']:>12}" if realized else ""))
     print(f"{len(files)} documents parsed and scheduled in {elapsed * 1000:.0f} ms "
           f"({elapsed / len(files) * 1000:.2f} ms per document)")
+    if realized:
+        print(f"{len(realized)} documents realized on {CHARACTER} at {realize_fps:g} fps: {frames} frames "
+              f"({frames / realize_fps:.0f} s of animation) in {realize_s:.1f} CPU s, of which speech synthesis "
+              f"{synthesis_s:.1f} s")
 
     status = Counter(o.status for _, o in outcomes)
     checkable = status["matched"] + status["mismatched"]
@@ -80,8 +142,10 @@ def run(corpus: Path, verbose: bool = False) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--verbose", action="store_true", help="print every warning and error")
+    parser.add_argument("--no-realize", action="store_true", help="parse and schedule only")
+    parser.add_argument("--fps", type=float, default=30.0, help="frame rate of the realized animation (default 30)")
     args = parser.parse_args(argv)
-    run(CORPUS, args.verbose)
+    run(CORPUS, args.verbose, None if args.no_realize else args.fps)
     return 0
 
 

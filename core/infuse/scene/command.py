@@ -12,6 +12,7 @@ Writes into OUTDIR, each file atomically:
 from __future__ import annotations
 
 import json
+import math
 import sys
 from contextlib import contextmanager
 from dataclasses import asdict
@@ -89,8 +90,9 @@ def run_scene(args) -> int:
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o {out}: exists and is not a folder")
     scene = build_scene(spec, quiet=args.quiet)
-    seconds = spec.duration if spec.duration is not None else scene.end_time + 1.0 / scene.fps
-    frames = int(round(seconds * scene.fps))
+    frames = int(round(spec.duration * scene.fps)) if spec.duration is not None \
+        else math.ceil(scene.end_time * scene.fps - 1e-6) + 1
+    seconds = frames / scene.fps
     with Progress(frames, "realize") as bar:
         scene.run(seconds, progress=lambda done, total: bar.advance(done - bar.done))
     out.mkdir(parents=True, exist_ok=True)

@@ -6,7 +6,7 @@
 | ``face`` | the ``face`` controller: a lexeme or action unit on the character's morphs, face poses or jaw, in from start to attackPeak, out from relax to end |
 | ``gaze``, ``head``, ``saccade``, ``blink``, ``breathing`` and any other installed kind | the installed controller's BML builder (:meth:`~infuse.runtime.Runtime.realize`); targets name scene objects, characters or ``character:joint`` |
 | ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback |
-| ``locomotion``, ``reach``, ``grab``, ``ik_constraint``, ``pointing`` | the behaviour-pack controllers of that kind when installed; otherwise warningFeedback |
+| ``locomotion``, ``reach``, ``grab``, ``ik_constraint``, ``pointing`` | the behaviour-pack controllers of that kind, when installed and the character was infused with a pack of that kind (a locomotion pack, a reaching pack); otherwise warningFeedback |
 | ``wait``, ``event`` | nothing to show (their sync points still give feedback) |
 
 A behaviour that cannot be realized, or only partly, gives warningFeedback; the rest of its block plays.
@@ -30,6 +30,8 @@ PACK_KINDS = {
     "ik_constraint": "no reaching pack infused: the effector is not held on its target",
     "pointing": "no reaching pack infused: the character does not point",
 }
+#: The kind of blend space each of those kinds needs.
+PACK_SPACE = {"locomotion": "locomotion", "reach": "reach", "grab": "reach", "ik_constraint": "reach", "pointing": "reach"}
 #: Stances a character already has without any clip.
 _STANDING = {None, "STANDING"}
 
@@ -47,11 +49,11 @@ def realize(scene, activation: Activation):
         return _face(scene, activation)
     if kind in CLIP_KINDS:
         return _clip(scene, activation)
-    if kind in installed:
-        return _installed(scene, activation)
-    if kind in PACK_KINDS:
+    if kind in PACK_KINDS and (kind not in installed or scene.pack_space(activation.character, PACK_SPACE[kind]) is None):
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: {PACK_KINDS[kind]}")
         return None
+    if kind in installed:
+        return _installed(scene, activation)
     scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
                f"<{activation.element}>: no installed controller realizes {kind!r} behaviours")
     return None

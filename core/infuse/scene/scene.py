@@ -293,6 +293,13 @@ class Scene:
             return tuple(float(v) for v in self.runtime.rig(name).position)
         return None
 
+    def pack_space(self, name: str, kind: str):
+        """The :class:`~infuse.packs.BlendSpace` of ``kind`` (``"locomotion"``, ``"reach"``) the character was
+        infused with (the first of its packs), or None."""
+        infusion = self.character(name).infusion
+        spaces = infusion.spaces.values() if infusion is not None else ()
+        return next((s for s in spaces if s.kind == kind), None)
+
     def find_clip(self, name: str, clip: str):
         """The character's clip called ``clip`` (from its behaviour packs, else its own file; case and a
         ``character@`` prefix ignored), or None."""
@@ -520,11 +527,13 @@ class Scene:
                             for r in self.scheduler.blocks.values() if not r.failed])
 
     def run(self, seconds: float | None = None, progress=None) -> None:
-        """Evaluate the next ``seconds`` (default: up to :attr:`end_time`, plus a frame) and deliver the
-        feedback up to the last frame; ``progress(frames_done, frames_total)`` is called per evaluated block."""
+        """Evaluate the next ``seconds`` (default: up to the first frame at or after :attr:`end_time`) and
+        deliver the feedback up to the last frame; ``progress(frames_done, frames_total)`` is called per
+        evaluated block."""
         if seconds is None:
-            seconds = max(self.end_time - self.time, 0.0) + 1.0 / self.fps
-        frames = int(round(float(seconds) * self.fps))
+            frames = max(math.ceil(self.end_time * self.fps - 1e-6) + 1 - self.runtime.frame, 0)
+        else:
+            frames = int(round(float(seconds) * self.fps))
         if frames < 0:
             raise UsageError("run() takes a duration >= 0 seconds")
         done = 0

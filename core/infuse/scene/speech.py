@@ -9,6 +9,7 @@ once (:attr:`SpeechCache.unavailable`).
 """
 from __future__ import annotations
 
+import time
 import wave
 from pathlib import Path
 from typing import Callable
@@ -53,6 +54,7 @@ class SpeechCache:
         self.utterances: list[Utterance] = []
         self.unavailable: str | None = None if engine is not None else "no TTS engine was given"
         self.estimate = EstimatedSpeechTimer()
+        self.synthesis_s = 0.0  # CPU seconds this process spent synthesizing
 
     def engine(self, voice: str | None):
         """The engine for ``voice`` (built once per voice)."""
@@ -72,6 +74,7 @@ class SpeechCache:
         key = (text, tuple(marks), voice)
         if key not in self._keys:
             markup = speech_markup(text, marks)
+            started = time.process_time()
             try:
                 try:
                     utterance = self.engine(voice).synthesize(markup)
@@ -86,6 +89,8 @@ class SpeechCache:
                 self.unavailable = str(exc)
                 self._warn(f"speech is timed from its text, without audio or lip sync: {exc}")
                 return self.estimate.time_speech(text, marks, voice, language)
+            finally:
+                self.synthesis_s += time.process_time() - started
             self._keys[key] = len(self.utterances)
             self.utterances.append(utterance)
         index = self._keys[key]
