@@ -142,3 +142,25 @@ def test_limb_scaling_reaches_like_the_source(loaded):
     assert before > 0.5 and after < 0.1 * before
     # The relaxed arm hangs straight: its goals sit at the edge of reach, and are met.
     assert scaled.residual[t_map["l_wrist"]].max() < 1e-3
+
+
+def _distinct_rigs() -> list[str]:
+    """One labelled humanoid file per distinct (convention, mapping), legs mapped."""
+    seen, out = set(), []
+    for doc in labels():
+        mapping = {k: v for k, v in doc["mapping"].items() if v}
+        key = (doc["convention"], tuple(sorted(mapping.items())))
+        legs = all(f"{s}_{n}" in mapping for s in "lr" for n in ("hip", "knee", "ankle"))
+        if doc["humanoid"] and doc["meta"].get("plain_python") and legs and key not in seen:
+            seen.add(key)
+            out.append(doc["file"])
+    return out
+
+
+@pytest.mark.parametrize("rel", _distinct_rigs(), ids=lambda rel: rel.rsplit("/", 1)[-1])
+def test_walk_onto_every_kind_of_rig(loaded, rel):
+    """The Bandai walk onto one rig of every family in the corpus (VRM, Mixamo, Biped, Ogre rigs facing
+    -Z and +X, MakeHuman, CMU, SmartBody, Daz, glTF samples...): the targets hold on all of them."""
+    q = evaluate(*plan_for(loaded, BANDAI.format("walk_normal"), rel))
+    assert q.skate_final <= q.skate_limit() and q.bones_final <= 5.0 and q.residual_mm <= 1.0, q
+    assert abs(q.speed_ratio - 1.0) < 0.02, q

@@ -3,7 +3,8 @@
 :func:`evaluate` runs the plain transfer, the paper's warped-feet IK and the contact-pinned IK on
 one clip and measures each against the source, with the source's contact flags:
 
-- foot skate, cm per metre walked (source, plain, paper, final);
+- foot skate, cm per metre walked (source, plain, paper, final), over the source's contacts of the
+  points both feet have (a target foot without a ball has nothing to hold the source's ball contacts);
 - bone-direction agreement on the body joints, degrees (plain, final);
 - foot penetration and float relative to the ground, cm (source, plain, final);
 - root speed relative to the source's speed times the leg scale;
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from infuse import metrics
-from infuse.contacts import lowest_points
+from infuse.contacts import FootContacts, lowest_points
 from infuse.kinematics import motion_fk
 from infuse.motion import Motion
 
@@ -53,20 +54,27 @@ class Quality:
         return self.skate_source * 1.1 + 0.5
 
 
-def _contact_points(plan: RetargetPlan, result: RetargetResult) -> np.ndarray:
-    """Target joints playing the source's contact points: ankle for ankle, ball for ball (the
-    ankle when the target foot has no ball)."""
-    out = []
-    for j, k in zip(result.contacts.points, result.contacts.foot_of_point):
-        src, tgt = plan.source.feet[k], plan.target.feet[k]
-        out.append(tgt.ankle if j == src.ankle or tgt.ball is None else tgt.ball)
-    return np.array(out, dtype=np.int64)
+def _matched_contacts(plan: RetargetPlan, result: RetargetResult) -> tuple[FootContacts, np.ndarray]:
+    """The source's contacts restricted to points the target has (a target foot without a ball has
+    no counterpart for the source's ball), and the target joints playing them."""
+    keep, joints = [], []
+    for k, (j, foot) in enumerate(zip(result.contacts.points, result.contacts.foot_of_point)):
+        src, tgt = plan.source.feet[foot], plan.target.feet[foot]
+        if j == src.ankle:
+            keep.append(k)
+            joints.append(tgt.ankle)
+        elif tgt.ball is not None:
+            keep.append(k)
+            joints.append(tgt.ball)
+    c = result.contacts
+    matched = FootContacts(c.points[keep], c.foot_of_point[keep], c.flags[:, keep], c.ground, c.leg_length, c.lowest)
+    return matched, np.array(joints, dtype=np.int64)
 
 
 def _measure(plan: RetargetPlan, result: RetargetResult, motion: Motion):
     g, p = motion_fk(motion)
-    points = _contact_points(plan, result)
-    skate = metrics.foot_skate(p, result.contacts, plan.target.index["base"], points).per_metre
+    matched, points = _matched_contacts(plan, result)
+    skate = metrics.foot_skate(p, matched, plan.target.index["base"], points).per_metre
     bones = metrics.bone_directions(result.source_positions, plan.source_joints, p, plan.target.index)
     lowest = lowest_points(plan.target.skeleton, plan.target.feet, g, p)
     ground = metrics.ground_contact(lowest, result.contacts.foot_flags(), result.ground)
@@ -81,7 +89,7 @@ def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
     c = final.contacts
     ps = final.source_positions
     src_base = plan.source.index["base"]
-    skate_src = metrics.foot_skate(ps, c, src_base).per_metre
+    skate_src = metrics.foot_skate(ps, _matched_contacts(plan, final)[0], src_base).per_metre
     ground_src = metrics.ground_contact(c.lowest, c.foot_flags(), c.ground)
     speed_src = metrics.mean_speed(ps[:, src_base], motion.fps)
     skate_plain, bones_plain, ground_plain, _ = _measure(plan, final, final.plain)

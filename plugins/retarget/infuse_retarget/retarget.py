@@ -68,7 +68,7 @@ class RetargetResult:
     hard: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-def lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
+def target_lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
     """(F, 2) height of each target foot's lowest joint or end site, from a transferred state."""
     sk = plan.target.skeleton
     out = []
@@ -217,7 +217,7 @@ def retarget_clip(plan: RetargetPlan, motion: Motion, ik: str = "contacts", limb
     found = contact_detection.foot_contacts(motion, plan.source.index, fk=(gs.transpose(2, 0, 1), source_positions),
                                             **(contact_options or {}))
     planted = found.foot_flags()
-    lowest = lowest_points(plan, state)
+    lowest = target_lowest_points(plan, state)
     ground = float(np.median(lowest[planted]) if planted.any() else np.percentile(lowest.min(axis=1), 10.0))
     result = RetargetResult(plain, plain, plan.scale, ik, found, ground, source_positions)
     state = Transferred(state.rotations.copy(), state.base, gs, ps, state.ground, state.fps)
