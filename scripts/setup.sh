@@ -43,6 +43,8 @@ if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   args=""
   for d in $packages; do args="$args -e $d"; done
   "$VENV/bin/python" -m pip install -q --no-build-isolation $args -e ".[test,docs]"
+  # The optional extra the tests exercise: infuse batch on a real dask.distributed cluster.
+  "$VENV/bin/python" -m pip install -q --no-build-isolation -e "plugins/batch[dask]"
   echo "$stamp" > "$VENV/.setup-stamp"
 fi
 
