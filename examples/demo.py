@@ -1,8 +1,14 @@
-"""The main demo: load a character from the test corpus, print its joint tree, render a preview.
+"""The main demo: load a character from the test corpus, print its joint tree, render a preview; then a
+scene of two characters from two sources, realized from BML.
 
-Writes into ``out/demo/``: a preview PNG of the character, and a GIF plus a filmstrip PNG of a
-corpus walk. The corpus is found through env ``INFUSE_CORPUS``, else ``../shared/corpus`` beside
-the repository. Run it with ``make demo`` (or ``.venv/bin/python examples/demo.py``).
+Writes into ``out/demo/``: a preview PNG of the character, a GIF plus a filmstrip PNG of a corpus walk,
+and in ``out/demo/scene/`` the scene of ``examples/scenes/demo.toml`` (the same as ``infuse run
+examples/scenes/demo.toml -o out/demo/scene``): Bob (the Mixamo Xbot) walks up to Ann (a Ready Player
+Me avatar), they look at each other, Bob nods, Ann says a sentence with lip sync and reaches for a cup.
+Each character is exported as a glb with its animation (Ann's with morph-weight tracks and her WAV
+beside it), with the BML feedback log and preview renders. The corpus is found through env
+``INFUSE_CORPUS``, else ``../shared/corpus`` beside the repository. Run it with ``make demo`` (or
+``.venv/bin/python examples/demo.py``).
 """
 from __future__ import annotations
 
@@ -10,12 +16,17 @@ import os
 import sys
 from pathlib import Path
 
+import numpy as np
+
 import infuse
 from infuse.errors import InfuseError
 from infuse.render import Camera, Figure, render
+from infuse.scene.command import build_scene, write_feedback
+from infuse.scene.scenefile import read_scene_file
 
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "out" / "demo"
+SCENE = REPO / "examples" / "scenes" / "demo.toml"
 
 # Tried in order; the first one an installed reader can load is used.
 CHARACTERS = (
@@ -68,7 +79,7 @@ def main() -> int:
     sk = character.skeleton
     print(f"character: {path.relative_to(corpus)} ({character.format}, {sk.num_joints} joints, "
           f"height {sk.height():.2f} m, units {character.source_units} ({character.units_detected_by}))")
-    print(sk.describe_tree(max_lines=80))
+    print(sk.describe_tree(max_lines=24))
     preview = render([Figure.from_skeleton(sk, label="rest pose")], OUT / "character.png", camera=Camera(view="three-quarter"),
                      size=(520, 640), title=path.name)
     print(f"\npreview:   {preview}")
@@ -84,7 +95,45 @@ def main() -> int:
     strip = render([figure], OUT / "walk_strip.png", strip=6, title=f"{walk_path.name}: 6 frames")
     print(f"animation: {gif}")
     print(f"strip:     {strip}")
+    return scene_demo(corpus)
+
+
+def scene_demo(corpus: Path) -> int:
+    """Realize the demo scene file, export each character with its audio, write the feedback and previews."""
+    os.environ.setdefault("INFUSE_CORPUS", str(corpus))
+    out = OUT / "scene"
+    print(f"\nscene:     {SCENE.relative_to(REPO)}")
+    spec = read_scene_file(SCENE)
+    scene = build_scene(spec)  # loads, maps and infuses each character, schedules and realizes the BML
+    for entry in scene.characters.values():
+        print(f"  {entry.name}: {entry.source.name} ({entry.character.asset.format}, {entry.character.skeleton.num_joints} "
+              f"joints), packs {', '.join(entry.packs) or 'none'}")
+    scene.on("blockProgress", lambda e: print(f"  {e.global_time:5.2f} s  {e.character}: {e.block} {e.sync}s"))
+    scene.run(spec.duration)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in scene.characters:
+        written += scene.export(name, out / f"{name}.glb")
+    written += write_feedback(scene, out)
+    written.append(scene.render(out / "preview.png", strip=6))
+    written.append(scene.render(out / "scene.gif", fps=15, size=(720, 480)))
+    report(scene)
+    for path in written:
+        print(f"wrote      {path.relative_to(REPO)}")
     return 0
+
+
+def report(scene) -> None:
+    """What happened, measured on the output: how far Bob walked, Ann's speech and audio, the mutual gaze."""
+    bob = infuse.motion_fk(scene.motion("bob"))[1][:, 0]
+    print(f"  bob walked {np.linalg.norm(bob[-1, [0, 2]] - bob[0, [0, 2]]):.2f} m")
+    talk = next(a for r in scene.scheduler.blocks.values() for a in r.activations if a.controller == "speech")
+    samples, rate = scene.audio("ann")
+    print(f"  ann said {talk.parameters['text']!r} from {talk.start:.2f} s to {talk.end:.2f} s; "
+          f"her WAV lasts {len(samples) / rate:.2f} s, her clip {scene.runtime.frame / scene.fps:.2f} s")
+    warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
+    print(f"  {len(scene.feedback.log)} feedback events, {len(warnings)} warnings"
+          + "".join(f"\n    {e.id}: {e.description}" for e in warnings))
 
 
 if __name__ == "__main__":

@@ -19,6 +19,8 @@ OBJECT_COLOR = (230, 150, 20)
 #: The automatic view: this many degrees around from square to the line between the first two characters,
 #: and this high.
 AUTO_VIEW_TURN_DEG, AUTO_VIEW_ELEVATION_DEG = -20.0, 12.0
+#: Filmstrip tiles, pixels: wide, since a scene spreads along the ground.
+STRIP_TILE = (420, 320)
 
 
 def look_joints(rig) -> list[int]:
@@ -118,5 +120,7 @@ def render_scene(scene, path, *, strip: int | None = None, overlay: bool = True,
     if title is None:
         title = " · ".join(scene.characters)
     camera = Camera(view=auto_view(scene) if view is None else view, follow=False)
+    if size is None and strip is not None:
+        size = (STRIP_TILE[0] * (1 if overlay else len(figures)), STRIP_TILE[1])
     return render(figures, path, strip=strip, overlay=overlay, start=start, end=end, fps=fps, size=size,
                   camera=camera, title=title, progress=progress)

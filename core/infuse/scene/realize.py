@@ -14,9 +14,12 @@ A behaviour that cannot be realized, or only partly, gives warningFeedback; the 
 from __future__ import annotations
 
 from ..bml import Activation
-from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR
+import numpy as np
+
+from .. import quaternions as quat
+from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from ..errors import InfuseError
-from ..runtime import Clip, controller_components
+from ..runtime import Clip, controller, controller_components
 
 #: Kinds with nothing to show.
 SILENT_KINDS = frozenset({"wait", "event"})
@@ -52,6 +55,10 @@ def realize(scene, activation: Activation):
     if kind in PACK_KINDS and (kind not in installed or scene.pack_space(activation.character, PACK_SPACE[kind]) is None):
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: {PACK_KINDS[kind]}")
         return None
+    if kind == "locomotion":
+        return _locomotion(scene, activation)
+    if kind == "reach":
+        return _reach(scene, activation)
     if kind in installed:
         return _installed(scene, activation)
     scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
@@ -100,8 +107,6 @@ def _speech(scene, activation: Activation):
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, "<speech>: no lip-sync plugin is installed; only its audio is kept")
         scene.keep_audio(name, activation, utterance, None)
         return None
-    from ..runtime import controller
-
     speech = controller("speech", utterance=utterance, fps=scene.fps, map_file=scene.character(name).map_file)
     activity = scene.activate(activation, speech, _end(activation) or activation.start + utterance.duration_s)
     scene.keep_audio(name, activation, utterance, activity)
@@ -109,8 +114,6 @@ def _speech(scene, activation: Activation):
 
 
 def _face(scene, activation: Activation):
-    from ..runtime import controller
-
     p = activation.parameters
     amount = float(p.get("amount", 0.5))
     try:
@@ -154,3 +157,97 @@ def _clip(scene, activation: Activation):
     if kind in ("posture", "blend"):
         scene.stop_postures(activation.character, activation.start)
     return scene.activate(activation, clip, end, priority=CLIP_KINDS[kind], blend_in_s=0.3, blend_out_s=0.3)
+
+
+#: How far from a character a walk to that character stops, metres (when the BML gives no proximity).
+CHARACTER_PROXIMITY_M = 0.9
+#: SmartBody's braking factor 1 means this deceleration, m/s².
+DECELERATION_M_S2 = 2.5
+
+
+def _locomotion(scene, activation: Activation):
+    """Walk along the activation's path with the character's locomotion pack. The walk lasts: after the
+    last point the character idles there (the pack's idle) until another walk takes over, which starts
+    from where this one is."""
+    p = activation.parameters
+    name = activation.character
+    rig = scene.runtime.rig(name)
+    points = []
+    for point in p.get("path") or ():
+        if isinstance(point, str):
+            where = scene.locate(scene.resolve_name(point))
+            if where is None:
+                scene.warn(activation, NO_SUCH_TARGET, f"<{activation.element}>: no character or object named {point!r}")
+                return None
+            point = [where[0], where[2]]
+        points.append([float(point[0]), float(point[1])])
+    if not points:
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> has no point to walk to")
+        return None
+    last = points[-1]
+    proximity = float(p.get("proximity_m") or 0.0)
+    final = (p.get("path") or [None])[-1]
+    if proximity == 0.0 and isinstance(final, str) and scene.resolve_name(final) in scene.characters:
+        proximity = CHARACTER_PROXIMITY_M  # stop in front of a character, not inside it
+    if proximity > 0.0:
+        start = points[-2] if len(points) > 1 else scene.locate(name)[::2]
+        leg = np.subtract(last, start)
+        length = float(np.hypot(*leg))
+        points[-1] = list(np.asarray(start) + leg * max(length - proximity, 0.0) / max(length, 1e-9))
+    world = np.array([[x, 0.0, z] for x, z in points])
+    own = quat.rotate(quat.conjugate(rig.rotation), world - rig.position)[:, [0, 2]]
+    if p.get("facing_deg") is not None:
+        scene.warn(activation, "BEHAVIOR_DEGRADED", f"<{activation.element}>: the facing at the end is not realized; "
+                                                    "the character faces its last direction of travel")
+    walk = controller("locomotion", pack=scene.pack_space(name, "locomotion"), speed=float(p.get("speed_m_s") or 1.2),
+                      path=own, max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
+    previous = scene.walking(name)
+    activity = scene.activate(activation, walk, activation.stop_s, blend_in_s=0.3)
+    scene.continue_walk(name, activity, previous, points[-1])
+    return activity
+
+
+#: BML reach actions -> the reach controller's.
+REACH_ACTIONS = {"touch": "touch", "pick-up": "grab", "put-down": "put"}
+
+
+def _reach(scene, activation: Activation):
+    """Reach with the character's reaching pack: touch, pick up (the object then follows the hand) or put
+    down (the object it holds, at the target)."""
+    p = activation.parameters
+    name = activation.character
+    action = p.get("action")
+    if action == "finish":
+        scene.stop_reaches(name, activation.start)
+        return None
+    if action not in REACH_ACTIONS:
+        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> action {action!r} is not realized "
+                                                       f"(realized: {', '.join(REACH_ACTIONS)})")
+        return None
+    target = p.get("target")
+    if p.get("target_position") is not None:
+        target = tuple(float(v) for v in p["target_position"])
+    else:
+        target = scene.resolve_name(target)
+        if target not in scene.objects and target not in scene.targets and ":" not in target:
+            scene.warn(activation, NO_SUCH_TARGET, f"<{activation.element}>: no object named {target!r}")
+            return None
+    obj = None
+    if action == "pick-up":
+        if not isinstance(target, str) or target not in scene.objects:
+            scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: only a scene object can be picked up")
+            return None
+        obj = target
+    elif action == "put-down":
+        obj = scene.character(name).holding
+        if obj is None:
+            scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: the character holds nothing to put down")
+            return None
+    reach = controller("reach", target=target, hand=p.get("hand") or "auto", pack=scene.pack_space(name, "reach"),
+                       action=REACH_ACTIONS[action], obj=obj)
+    span = (_end(activation) or activation.end) - activation.start
+    if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
+        reach.hold_s = span - reach.stroke_s - reach.blend_out_s
+    activity = scene.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)
+    scene.character(name).holding = obj if action == "pick-up" else None if action == "put-down" else scene.character(name).holding
+    return activity

@@ -25,6 +25,7 @@ the BML feedback (blockProgress, syncPointProgress) up to the last frame evaluat
 """
 from __future__ import annotations
 
+import copy
 import itertools
 import math
 import sys
@@ -53,7 +54,8 @@ BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
 class SceneCharacter:
     """A character of a scene: its runtime name, the :class:`~infuse.Character` (asset, mapping and clips), the
     file it came from, its map file (joint and face channels), behaviour packs, voice, the
-    :class:`~infuse.packs.Infusion` of its packs, and the activities it idles with."""
+    :class:`~infuse.packs.Infusion` of its packs, the activities it idles with, its current walk and where
+    that walk ends ((x, z) metres), and the object it holds."""
 
     name: str
     character: Character
@@ -63,6 +65,9 @@ class SceneCharacter:
     voice: str | None = None
     infusion: object = None
     idle: dict = field(default_factory=dict)
+    walk: object = None
+    destination: tuple | None = None
+    holding: str | None = None
 
 
 @dataclass(frozen=True)
@@ -113,6 +118,7 @@ class Scene:
         self.activities: dict[tuple[str, str], object] = {}
         self._spoken: dict[str, list[_Spoken]] = {}
         self._interrupted: set[tuple[str, str]] = set()
+        self._handovers: list[tuple[int, object, object]] = []
         self._realizing = None
         self._realize_notes: list[str] = []
         self._ids = itertools.count(1)
@@ -269,6 +275,36 @@ class Scene:
         if activity is not None:
             self.runtime.stop(activity, at_s)
 
+    def walking(self, name: str):
+        """The character's current locomotion activity (it lasts after arriving: the character idles there)."""
+        return self.character(name).walk
+
+    def continue_walk(self, name: str, activity, previous, destination) -> None:
+        """Make ``activity`` the character's walk: the one before stops where it starts, and hands over where
+        the character is then (position, heading, speed, gait phase), so the new walk goes on from there."""
+        entry = self.character(name)
+        if previous is not None:
+            self.runtime.stop(previous, activity.start_s)
+        entry.walk, entry.destination = activity, (float(destination[0]), float(destination[1]))
+        self._handovers.append((max(math.ceil(activity.start_s * self.fps - 1e-9), 0), activity, previous))
+
+    def _hand_over(self) -> None:
+        """Hand the state of a walk that ends to the walk that starts now (see :meth:`continue_walk`)."""
+        due = [h for h in self._handovers if h[0] <= self.runtime.frame]
+        self._handovers = [h for h in self._handovers if h[0] > self.runtime.frame]
+        for _, activity, previous in due:
+            if previous is not None and previous.state and not activity.state:
+                # everything the walk carries (where it is, its heading, speed, gait phase, planted feet); the
+                # new path starts at its first point
+                activity.state.update(copy.deepcopy(previous.state), waypoint=0)
+
+    def stop_reaches(self, name: str, at_s: float) -> None:
+        """End the character's reaches at ``at_s`` (SmartBody's reach finish)."""
+        for activity in list(self.activities.values()):
+            if activity.rig.name == name and activity.controller.kind == "reach" and \
+                    (activity.end_s is None or activity.end_s > at_s):
+                self.runtime.stop(activity, at_s)
+
     def stop_postures(self, name: str, at_s: float) -> None:
         """Stop a character's lasting posture clips at ``at_s`` (a new posture replaces them)."""
         for activity in self.activities.values():
@@ -290,6 +326,9 @@ class Scene:
         if name in self.objects:
             return self.objects[name].position
         if name in self.characters:
+            entry = self.characters[name]
+            if entry.destination is not None:  # where its last walk takes it
+                return (entry.destination[0], 0.0, entry.destination[1])
             return tuple(float(v) for v in self.runtime.rig(name).position)
         return None
 
@@ -538,7 +577,8 @@ class Scene:
             raise UsageError("run() takes a duration >= 0 seconds")
         done = 0
         while done < frames:
-            n = min(self.runtime.block_frames, frames - done)
+            n = self._frames_to_next_handover(min(self.runtime.block_frames, frames - done))
+            self._hand_over()
             self.runtime.step(n)
             done += n
             self._deliver()
@@ -547,8 +587,18 @@ class Scene:
 
     def step(self, frames: int = 1) -> None:
         """Evaluate the next ``frames`` frames and deliver their feedback."""
-        self.runtime.step(int(frames))
+        frames = int(frames)
+        while frames > 0:
+            n = self._frames_to_next_handover(frames)
+            self._hand_over()
+            self.runtime.step(n)
+            frames -= n
         self._deliver()
+
+    def _frames_to_next_handover(self, most: int) -> int:
+        """How many frames to evaluate at once: at most ``most``, stopping before a walk that takes over."""
+        ahead = [f - self.runtime.frame for f, _, _ in self._handovers if f > self.runtime.frame]
+        return max(min([most] + ahead), 1)
 
     def _deliver(self) -> None:
         last = (self.runtime.frame - 1) / self.fps
