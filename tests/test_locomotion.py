@@ -7,6 +7,7 @@ import pytest
 import infuse
 from infuse.contacts import FootContacts, foot_contacts
 from infuse.metrics import foot_skate
+from infuse.packs.analysis import phase_contacts
 from infuse.runtime import Runtime
 
 from corpus_data import corpus_file, require_corpus
@@ -46,17 +47,28 @@ def test_realized_speed_matches_request_over_the_range(xbot, pack):
         assert realized == pytest.approx(v, rel=0.05), (pack, v, realized)
 
 
+def skate(mapping, m, g_rot, g_pos, phases: bool) -> float:
+    """cm of foot skate per metre walked after the first second, with the default contact detector or
+    with each point's flags narrowed to when it is on the ground (heel down, ball down)."""
+    found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
+    if phases:
+        found = phase_contacts(found, g_pos)
+    cut = FootContacts(found.points, found.foot_of_point, found.flags[30:], found.ground, found.leg_length, found.lowest[30:])
+    return foot_skate(g_pos[30:], cut, mapping.indices(m.skeleton)["base"]).per_metre
+
+
 @pytest.mark.parametrize("pack", ["locomotion-male", "locomotion-female"])
 def test_foot_skate_in_blended_walks(xbot, pack):
-    results = {}
-    for v in (1.2, 2.0, 3.0):  # between examples: every speed is a blend of two clips
-        mapping, m, g_rot, g_pos = walk(xbot, pack, 5.0, speed=v, max_accel=50.0)
-        found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
-        cut = FootContacts(found.points, found.foot_of_point, found.flags[30:], found.ground, found.leg_length, found.lowest[30:])
-        results[v] = foot_skate(g_pos[30:], cut, mapping.indices(m.skeleton)["base"]).per_metre
-    print(pack, {k: round(v, 2) for k, v in results.items()})
-    assert results[3.0] <= 2.0 and results[2.0] <= 2.0, results
-    assert results[1.2] <= 6.0, results  # walking blends: see docs/packs.md for the measured figures
+    detected, grounded = {}, {}
+    for v in (1.0, 1.2, 1.5, 2.0, 3.0):  # between examples: every speed is a blend of two clips
+        run = walk(xbot, pack, 5.0, speed=v, max_accel=50.0)
+        detected[v], grounded[v] = skate(*run, phases=False), skate(*run, phases=True)
+    print(pack, {k: round(v, 2) for k, v in detected.items()}, {k: round(v, 2) for k, v in grounded.items()})
+    assert detected[3.0] <= 2.0 and detected[2.0] <= 2.0, detected
+    # Walks: the ball is pinned through heel off, so the feet hold while on the ground; the default
+    # detector also counts the ankle rising about the ball (see docs/packs.md for the figures).
+    assert grounded[1.0] <= 2.0 and grounded[1.2] <= 2.0 and grounded[3.0] <= 2.0, grounded
+    assert max(detected[1.0], detected[1.2], detected[1.5], grounded[1.5]) <= 3.5, (detected, grounded)
 
 
 def test_turning_and_path_following_stop_at_the_end(xbot):

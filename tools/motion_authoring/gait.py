@@ -110,8 +110,10 @@ def foot_pitch_stance(g: Gait, s: np.ndarray) -> np.ndarray:
 
 def stance_ankle(body: Body, flat: np.ndarray, yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
     """Ankle positions (F, 3) of a foot whose ankle is at ``flat`` when flat, pitched by ``pitch``
-    about the heel (pitch > 0) or the ball (pitch < 0)."""
-    pivot = np.where((pitch > 0)[:, None], body.heel, body.ball)
+    about the heel (pitch > 0) or the ball (pitch < 0). The ball pivot is the forefoot joint itself
+    (the metatarsophalangeal hinge): the toes stay flat on the ground while the heel rises, so the
+    forefoot joint does not slide."""
+    pivot = np.where((pitch > 0)[:, None], body.heel, body.offset("l_forefoot"))
     r_flat = heading(yaw)
     r_foot = quat.multiply(r_flat, rot(X, -pitch))
     return flat + quat.rotate(r_flat, pivot) - quat.rotate(r_foot, pivot)

@@ -4,7 +4,10 @@ All from the motion itself (nothing typed by hand), in the core frame (metres, s
 forward, +X the character's left); angles in radians, headings about +Y (+ turns to the left).
 
 - **Contacts** from :mod:`infuse.contacts` (foot speed and height, normalized by leg length).
-- **Steps**: a heel strike is the start of a foot's contact, a toe off its end.
+- **Steps**: a heel strike is the start of a foot's contact, a toe off its end; between them the
+  foot flat (the ball comes down) and the heel off (the heel rises while the ball stays down).
+- **Contact phases** per foot: the heel (ankle) is down from heel strike to heel off, the ball from
+  foot flat to toe off; the controllers pin whichever is down (the ball once the heel rises).
 - **Cycle**: a looping clip is its own cycle; otherwise the stretch from one left heel strike to the next.
 - **Keys** (correspondence for time-warping): the times of left strike, right strike and the next left
   strike; they map to phases 0, 0.5 and 1 in every clip, so blended clips step together.
@@ -53,14 +56,75 @@ def _runs(flags: np.ndarray, loop: bool) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in runs]
 
 
-def steps(foot_flags: np.ndarray, fps: float, loop: bool) -> list[dict]:
-    """Heel strikes and toe offs of (F, 2) contact flags, in time order: ``{"foot", "strike", "off"}`` seconds."""
+#: How far (leg lengths) a contact point may rise above its planted height and still be down: about
+#: 8 mm on an adult, so the heel counts as off as soon as it starts to rise.
+DOWN_TOLERANCE = 0.01
+
+
+def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
+    """(F, 2, 2) flags of each foot (left, right) having its heel (ankle) and its ball down.
+
+    ``found``: :class:`~infuse.contacts.FootContacts` of the clip; ``positions`` (F, J, 3) metres.
+    A foot's ball is down while the foot is planted and the ball sits within ``tolerance`` leg
+    lengths of its planted height (its lower quartile while the foot is planted: the ball is down
+    for most of a stance); the heel is down while the foot is planted, except when the ball
+    is down and the ankle has risen (heel off, or a landing on the ball). During the heel rocker
+    (toes up after heel strike) only the heel is down. A foot without a ball point has its heel down
+    whenever it is planted.
+    """
+    planted = found.foot_flags()
+    out = np.zeros(planted.shape + (2,), dtype=bool)
+    eps = tolerance * found.leg_length
+    for k in (0, 1):
+        pts = found.points[found.foot_of_point == k]
+        ankle = positions[:, pts[0], 1]
+        raised = ankle - np.percentile(ankle[planted[:, k]] if planted[:, k].any() else ankle, 5.0) > eps
+        if len(pts) > 1:
+            y = positions[:, pts[1], 1]
+            ball = planted[:, k] & (y - np.percentile(y[planted[:, k]] if planted[:, k].any() else y, 25.0) <= eps)
+        else:
+            ball = np.zeros(len(planted), dtype=bool)
+        out[:, k, 0] = planted[:, k] & ~(ball & raised)
+        out[:, k, 1] = ball
+    return out
+
+
+def phase_contacts(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE):
+    """``found`` (:class:`~infuse.contacts.FootContacts`) with each point's flags narrowed to when it is
+    on the ground: the ankle while the heel is down, the ball while the ball is down (see
+    :func:`contact_phases`), e.g. for :func:`infuse.metrics.foot_skate`."""
+    from dataclasses import replace
+
+    phases = contact_phases(found, positions, tolerance)
+    flags = np.zeros_like(found.flags)
+    for k in (0, 1):
+        cols = np.nonzero(found.foot_of_point == k)[0]
+        for n, col in enumerate(cols[:2]):
+            flags[:, col] = phases[:, k, n]
+    return replace(found, flags=flags)
+
+
+def steps(foot_flags: np.ndarray, fps: float, loop: bool, phases: np.ndarray | None = None) -> list[dict]:
+    """Steps of (F, 2) contact flags, in time order: ``{"foot", "strike", "flat", "heel_off", "off"}``
+    seconds (heel strike, foot flat, heel off, toe off; from ``phases`` (F, 2, 2) of
+    :func:`contact_phases` when given, else flat = strike and heel off = toe off). In a loop a step
+    may run past the end: its times then pass the clip's duration."""
     out = []
+    f = len(foot_flags)
     for k, foot in enumerate(("left", "right")):
         for a, b in _runs(foot_flags[:, k], loop):
             if not loop and a == 0:
                 continue  # already planted when the clip starts: not a strike
-            out.append({"foot": foot, "strike": a / fps, "off": b / fps})
+            flat, heel_off = a, b
+            if phases is not None:
+                frames = np.arange(a, b)
+                wrapped = frames % max(f - 1, 1) if loop and b > f else frames
+                ball = np.nonzero(phases[wrapped, k, 1])[0]
+                if ball.size:
+                    flat = a + int(ball[0])
+                    lifted = np.nonzero(~phases[wrapped, k, 0][ball[0]:])[0]
+                    heel_off = flat + int(lifted[0]) if lifted.size else b
+            out.append({"foot": foot, "strike": a / fps, "flat": flat / fps, "heel_off": heel_off / fps, "off": b / fps})
     return sorted(out, key=lambda s: s["strike"])
 
 
@@ -136,13 +200,16 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk) -
     frames = motion.num_frames
     found = foot_contacts(motion, mapping, fk=fk)
     foot_flags = found.foot_flags()
+    phases = contact_phases(found, g_pos)
     loop = bool(entry.loop)
-    step_list = steps(foot_flags, fps, loop) if entry.role in ("cycle", "other") else []
+    step_list = steps(foot_flags, fps, loop, phases) if entry.role in ("cycle", "other") else []
     heading = headings(g_pos, index)
     root = g_pos[:, index["base"]]
     out = {"name": entry.name, "role": entry.role, "tags": list(entry.tags), "loop": loop, "hand": entry.hand,
            "frames": frames, "fps": fps, "duration": motion.duration, "ground": found.ground,
-           "leg_length": found.leg_length, "contacts": foot_flags.T.astype(int).tolist(), "steps": step_list, "notes": []}
+           "leg_length": found.leg_length, "contacts": foot_flags.T.astype(int).tolist(),
+           "heel_contacts": phases[:, :, 0].T.astype(int).tolist(), "ball_contacts": phases[:, :, 1].T.astype(int).tolist(),
+           "steps": step_list, "notes": []}
     if kind == "locomotion":
         cycle, keys, note = cycle_and_keys(step_list, frames, fps, loop)
         if entry.role == "idle":

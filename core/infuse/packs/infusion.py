@@ -35,7 +35,7 @@ from .analysis import body_frame_point, coordinates_of, headings, locomotion_par
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2
 #: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
 #: infusing needs only the transfer (rotations through the canonical frame, root scaled by leg length).
 RETARGET_OPTIONS = {"ik": "none"}
@@ -60,6 +60,11 @@ class BlendClip:
     contacts: np.ndarray
     parameters: dict
     stroke: float = 0.0
+    phases: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.phases is None:
+            self.phases = np.stack((self.contacts, np.zeros_like(self.contacts)), axis=-1)
 
     @property
     def duration(self) -> float:
@@ -182,6 +187,9 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
     for k, info in enumerate(doc["clips"]):
         a, b = int(bounds[k]), int(bounds[k + 1])
         contacts = np.asarray(info["contacts"], dtype=bool).T
+        phases = None  # a pack built without phases: the heel is down whenever the foot is
+        if "heel_contacts" in info:
+            phases = np.stack((np.asarray(info["heel_contacts"], dtype=bool).T, np.asarray(info["ball_contacts"], dtype=bool).T), axis=-1)
         fps = float(info["fps"])
         if pack.kind == "locomotion":
             c0, c1 = info["cycle"]
@@ -189,6 +197,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             params = locomotion_parameters(root[sl], heading[sl], (0, c1 - c0), fps)
             keys = np.asarray(info["keys"], dtype=np.float64) - c0 / fps
             contacts = contacts[c0:c1 + 1]
+            phases = None if phases is None else phases[c0:c1 + 1]
             stroke = 0.0
         else:
             sl = slice(a, b)
@@ -200,7 +209,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
         m = Motion(sk, fps, out.local_rotations[sl], out.root_translations[sl],
                    None if out.joint_translations is None else out.joint_translations[sl], name=info["name"])
         clips[info["name"]] = BlendClip(info["name"], info["role"], info.get("hand"), bool(info["loop"]), m, keys, contacts,
-                                        params, stroke)
+                                        params, stroke, phases)
     coords = coordinates_of(pack.kind)
     tess = {}
     for group, t in pack.tessellations().items():
@@ -244,6 +253,7 @@ def save_infusion(infusion: Infusion, key: str, cache) -> Path:
             arrays[f"{name}/joint_translations"] = np.concatenate([m.local_translations() for m in ms])
         arrays[f"{name}/bounds"] = np.cumsum([0] + [m.num_frames for m in ms])
         arrays[f"{name}/contacts"] = np.concatenate([space.clips[n].contacts for n in names]).astype(np.int8)
+        arrays[f"{name}/phases"] = np.concatenate([space.clips[n].phases for n in names]).astype(np.int8)
         doc["spaces"][name] = {
             "version": space.version, "kind": space.kind,
             "clips": [{"name": c.name, "role": c.role, "hand": c.hand, "loop": c.loop, "fps": c.motion.fps,
@@ -276,12 +286,13 @@ def load_infusion(character: Character, mapping: Mapping, key: str, cache) -> di
             rot, roots, bounds = z[f"{name}/rotations"], z[f"{name}/roots"], z[f"{name}/bounds"]
             jt = z[f"{name}/joint_translations"] if f"{name}/joint_translations" in z.files else None
             contacts = z[f"{name}/contacts"].astype(bool)
+            phases = z[f"{name}/phases"].astype(bool)
             clips = {}
             for k, c in enumerate(s["clips"]):
                 a, b = int(bounds[k]), int(bounds[k + 1])
                 m = Motion(sk, c["fps"], rot[a:b], roots[a:b], None if jt is None else jt[a:b], name=c["name"])
                 clips[c["name"]] = BlendClip(c["name"], c["role"], c["hand"], c["loop"], m, np.asarray(c["keys"]),
-                                             contacts[a:b], c["parameters"], c["stroke"])
+                                             contacts[a:b], c["parameters"], c["stroke"], phases[a:b])
             tess = {g: Tessellation.from_dict(t) for g, t in s["tessellations"].items()}
             spaces[name] = BlendSpace(name, s["version"], s["kind"], clips, tess)
     return spaces

@@ -7,8 +7,15 @@ phase runs through every cycle at once, advancing by ``dt / T`` with T the weigh
 and each clip maps it to its own time through its keys (left strike at phase 0, right strike at 0.5),
 so the blended clips step together. **Root motion** is the weighted clips' velocities (so the realized
 speed is the requested one inside the pack's range), turned by the integrated heading; each clip
-contributes its pelvis motion relative to its own straight or circular path. **Planted feet** (the
-weighted contacts of the clips) are pinned where they landed with two-joint leg IK.
+contributes its pelvis motion relative to its own straight or circular path.
+
+**Planted feet** follow the clips' weighted contact phases (heel down from heel strike to heel off,
+ball down from foot flat to toe off). From heel strike to heel off the ankle stays where it landed;
+from heel off to toe off the ball (``forefoot``, else ``toe``) stays put and the foot pivots about
+it: the ankle goal is the pinned ball plus the animated ball-to-ankle offset, which carries the
+foot's pitch, and the two-joint leg IK (``infuse.runtime.limb_ik``) reaches it with the foot keeping
+its animated rotation. The switch from ankle to ball carries the foot's correction over, so it is
+continuous, and at toe off the correction fades out over :data:`RELEASE_S`.
 """
 from __future__ import annotations
 
@@ -25,6 +32,11 @@ from infuse.runtime.pose import chain_fk
 from .steering import Steering
 
 _INFUSIONS: dict = {}
+
+#: Seconds over which a released foot's pin correction fades back to the animation.
+RELEASE_S = 0.15
+#: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
+FREE, ANKLE, BALL = 0, 1, 2
 
 
 def infusion_for(rig, pack: str, cache=None):
@@ -132,7 +144,9 @@ class Locomotion(Controller):
         for s in "lr":
             names = (f"{s}_hip", f"{s}_knee", f"{s}_ankle")
             if all(rig.joint(n) is not None for n in names):
-                legs.append(tuple(rig.joint(n) for n in names))
+                ball = rig.joint(f"{s}_forefoot")
+                ball = rig.joint(f"{s}_toe") if ball is None else ball
+                legs.append(tuple(rig.joint(n) for n in names) + (ball,))
         if self.pin_feet and len(legs) < 2:
             report("no mapped hips, knees and ankles: feet are not pinned")
         if not clips:
@@ -153,8 +167,8 @@ class Locomotion(Controller):
             return
         st = job.state
         if not st:
-            st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0, flags=np.zeros(2, bool),
-                      pins=np.zeros((2, 3)))
+            st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
+                      anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9))
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
@@ -185,7 +199,7 @@ class Locomotion(Controller):
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
         if self.pin_feet and len(b["legs"]) == 2:
-            self._pin(job, st, rot, root, jt, contact, heading)
+            self._pin(job, st, rot, root, jt, contact, heading, dt)
         pose = job.pose
         full = np.repeat(pose.local_rotations[:1], len(job.weight), axis=0)
         full[active] = rot
@@ -202,11 +216,12 @@ class Locomotion(Controller):
             pose.set_translations(np.arange(1, jt.shape[1]), moved[:, 1:], weight, job.mode)
 
     def _blend(self, b, w, phase):
-        """Weighted, sign-aligned rotations, root offsets, joint translations and foot contacts (F, 2)."""
+        """Weighted, sign-aligned rotations, root offsets, joint translations and foot contact phases
+        (F, 2, 2): the weight of the clips with each foot's heel and ball down."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
         rot = root = jt = None
-        contact = np.zeros((len(phase), 2))
+        contact = np.zeros((len(phase), 2, 2))
         for i in order:
             clip, motion = b["clips"][i], b["motions"][i]
             t = warp(clip.keys, phase) % max(motion.duration, 1e-9)
@@ -222,26 +237,61 @@ class Locomotion(Controller):
                 root += p * wi
                 if j is not None and jt is not None:
                     jt += j * wi[:, :, None]
-            frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.contacts) - 1)
-            contact += clip.contacts[frame] * wi
+            frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.phases) - 1)
+            contact += clip.phases[frame] * wi[:, :, None]
         rot = quat.normalize(rot)
-        return rot, root, jt, contact > 0.5
+        return rot, root, jt, contact
 
-    def _pin(self, job, st, rot, root, jt, contact, heading) -> None:
-        """Keep each planted foot's ankle where it landed (horizontally), by leg IK."""
+    def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
+        """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
+        (the foot pivoting about it); fade the correction out after toe off. ``contact`` (F, 2, 2)."""
         sk = job.rig.skeleton
-        frames = np.arange(len(contact))
         forward = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
-        for k, (hip, knee, ankle) in enumerate(job.binding["legs"]):
-            flags = contact[:, k]
-            _, pos = chain_fk(sk, rot, root, jt, [ankle])
+        for k, (hip, knee, ankle, ball) in enumerate(job.binding["legs"]):
+            heel_w, ball_w = contact[:, k, 0], contact[:, k, 1]
+            planted = np.maximum(heel_w, ball_w) > 0.5
+            anchor = np.where(planted, np.where((ball_w > heel_w) & (ball is not None), BALL, ANKLE), FREE)
+            joints = [ankle] if ball is None else [ankle, ball]
+            _, pos = chain_fk(sk, rot, root, jt, joints)
             ankle_pos = pos[:, 0]
-            prev = np.concatenate(([bool(st["flags"][k])], flags[:-1]))
-            idx = np.maximum.accumulate(np.where(flags & ~prev, frames, -1))
-            pins = np.where((idx >= 0)[:, None], ankle_pos[np.maximum(idx, 0)], st["pins"][k])
-            goal = np.where(flags[:, None], pins, ankle_pos)
+            point = np.where((anchor == BALL)[:, None], pos[:, -1], ankle_pos)  # the animated anchor
+            goal = ankle_pos.copy()
+            weight = np.zeros(len(anchor))
+            prev = int(st["anchor"][k])
+            offset, pin, released = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k])
+            change = np.nonzero(np.diff(np.concatenate(([prev], anchor))) != 0)[0]
+            bounds = np.concatenate((change, [len(anchor)]))
+            if not change.size or change[0] != 0:
+                bounds = np.concatenate(([0], bounds))
+            for s, e in zip(bounds[:-1], bounds[1:]):
+                kind = int(anchor[s])
+                if kind == FREE:
+                    if prev != FREE:
+                        released = 0.0
+                    age = released + dt * np.arange(1, e - s + 1)
+                    fade = 1.0 - _ease(age / RELEASE_S)
+                    goal[s:e] = ankle_pos[s:e] + offset * fade[:, None]
+                    weight[s:e] = fade > 0.0
+                    released = float(age[-1])
+                    if fade[-1] <= 0.0:
+                        offset = np.zeros(3)
+                else:
+                    if kind != prev:
+                        # The anchor lands, or switches: it stays where the corrected foot puts it now.
+                        carried = offset * (1.0 - _ease(released / RELEASE_S)) if prev == FREE else offset
+                        pin = point[s] + carried
+                    goal[s:e] = pin + ankle_pos[s:e] - point[s:e]
+                    weight[s:e] = 1.0
+                    offset = goal[e - 1] - ankle_pos[e - 1]
+                    offset[1] = 0.0
+                prev = kind
             goal[:, 1] = ankle_pos[:, 1]
-            if flags.any():
-                solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=flags.astype(np.float64), pole=forward)
-            st["flags"][k] = bool(flags[-1])
-            st["pins"][k] = pins[-1]
+            if weight.any():
+                solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=weight, pole=forward)
+            st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k] = prev, pin, offset, released
+
+
+def _ease(x) -> np.ndarray:
+    """Smoothstep 3x² - 2x³ of ``x`` clipped to [0, 1]."""
+    x = np.clip(x, 0.0, 1.0)
+    return x * x * (3.0 - 2.0 * x)
