@@ -3,7 +3,8 @@
     python tools/walk_path.py Xbot.glb -o walk_path.png --pack locomotion-female
 
 The speed rises from 0.8 to 2.2 m/s and falls again while the character follows a winding path and
-stops at its end; the result is saved as BVH beside the image and drawn with ``infuse render``.
+stops at its end; the result is saved as BVH beside the image and drawn with ``infuse render``, the
+camera following the walker so the figure stays large.
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ def main() -> int:
     bvh = Path(args.output).with_suffix(".bvh")
     infuse.save(rt.export(c, "walk_path"), bvh)
     extra = ["--strip", "8"] if Path(args.output).suffix == ".png" else []
-    return subprocess.call([sys.executable, "-c", "from infuse.cli import run; run()", "render", str(bvh), "-o", args.output, "--no-follow", *extra])
+    return subprocess.call([sys.executable, "-c", "from infuse.cli import run; run()", "render", str(bvh), "-o", args.output, "--follow", "--view", "three-quarter", *extra])
 
 
 if __name__ == "__main__":
