@@ -283,8 +283,8 @@ class Scene:
         """Make ``activity`` the character's walk: the one before stops where it starts, and hands over where
         the character is then (position, heading, speed, gait phase), so the new walk goes on from there."""
         entry = self.character(name)
-        if previous is not None:
-            self.runtime.stop(previous, activity.start_s)
+        if previous is not None:  # it plays on under the new walk until that has blended in, so no gap shows
+            self.runtime.stop(previous, activity.start_s + activity.blend_in_s, blend_out_s=0.0)
         entry.walk, entry.destination = activity, (float(destination[0]), float(destination[1]))
         self._handovers.append((max(math.ceil(activity.start_s * self.fps - 1e-9), 0), activity, previous))
 

@@ -1,0 +1,95 @@
+"""Behaviours from infused behaviour packs in a scene, measured on the output with FK: walks reach their
+spot in world coordinates, the character stays there and the next walk goes on from it; reaches touch
+the object; picked-up objects follow the hand and are put down where asked."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse.scene import Scene
+
+from runtime_characters import corpus_character
+
+BML = 'xmlns="http://www.bml-initiative.org/bml/bml-1.0" xmlns:sbm="http://ict.usc.edu"'
+
+
+@pytest.fixture(scope="module")
+def walked():
+    """Bob, placed at (1, 0, -1) and turned to face +X, walks to two spots ahead of him in turn (the
+    locomotion controller's steering is only exact for targets nearly ahead)."""
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(corpus_character("xbot"), "bob", position=(1.0, 0.0, -1.0), facing=90.0,
+                        packs=["locomotion-male"])
+    first = scene.walk_to("bob", (3.0, -0.9), at=0.2)
+    second = scene.walk_to("bob", (4.5, -0.8), at=5.0)
+    scene.run(9.0)
+    return scene, first, second
+
+
+def ground_path(scene, name):
+    """(F, 2) x, z of the character's pelvis on the output."""
+    rig = scene.runtime.rig(name)
+    _, pos = infuse.motion_fk(scene.motion(name))
+    return pos[:, rig.joint("base")][:, [0, 2]]
+
+
+def test_walks_reach_their_spots_in_the_world(walked):
+    scene, first, second = walked
+    path = ground_path(scene, "bob")
+    arrive_first = scene.scheduler.blocks[first].end_s
+    stay = slice(int(arrive_first * 30) + 15, int(5.0 * 30))
+    assert np.linalg.norm(path[stay] - (3.0, -0.9), axis=1).max() < 0.15  # there, and staying there
+    assert np.linalg.norm(path[-20:] - (4.5, -0.8), axis=1).max() < 0.15  # then at the second spot
+    assert np.linalg.norm(path[0] - (1.0, -1.0)) < 0.15  # from where it was placed
+    steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    assert steps.max() < 2.5 / 30  # no jump anywhere: the second walk went on from the first
+
+
+def test_the_scene_knows_where_a_walk_ends(walked):
+    scene, _, _ = walked
+    assert scene.locate("bob") == (4.5, 0.0, -0.8)
+
+
+@pytest.fixture(scope="module")
+def reached():
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(corpus_character("rpm"), "ann", packs=["reaching"])
+    rig = scene.runtime.rig("ann")
+    # in front of her, to her right, at chest height: inside the right hand's examples
+    scene.add_object("cup", (-0.2, 1.2, 0.3), size=0.08)
+    scene.add_object("shelf", (-0.3, 1.35, 0.25), size=0.2)
+    touch = scene.reach("ann", "cup", at=0.2, hand="right")
+    pick = scene.bml("ann", f'<bml {BML} id="pick"><sbm:reach id="r" target="cup" sbm:action="pick-up" '
+                            f'sbm:reach-type="right"/></bml>', at=3.0)
+    put = scene.bml("ann", f'<bml {BML} id="put"><sbm:reach id="r" target="shelf" sbm:action="put-down" '
+                           f'sbm:reach-type="right"/></bml>', at=6.0)
+    scene.run(9.0)
+    return scene, rig, touch, pick, put
+
+
+def test_reach_touches_the_object(reached):
+    scene, rig, touch, _, _ = reached
+    activity = scene.activities[(touch, "r1")]
+    stroke = int(round((activity.start_s + activity.controller.stroke_s) * 30))
+    _, pos = infuse.motion_fk(scene.motion("ann"))
+    wrist = pos[stroke, rig.joint("r_wrist")]
+    assert np.linalg.norm(wrist - (-0.2, 1.2, 0.3)) < 0.02
+
+
+def test_picked_up_objects_follow_the_hand_and_are_put_down(reached):
+    scene, rig, _, pick, put = reached
+    assert scene.character("ann").holding is None  # put down again
+    target = scene.runtime.target("cup")
+    assert np.allclose(target.positions(np.zeros(1), None)[0], (-0.3, 1.35, 0.25), atol=1e-6)  # on the shelf now
+    warned = [e for e in scene.feedback.log if e.kind == "warningFeedback" and e.id.startswith(("pick", "put"))]
+    assert not [e for e in warned if e.type == "CANNOT_CREATE_BEHAVIOR"]
+
+
+def test_putting_down_nothing_is_reported():
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(corpus_character("rpm"), "ann", packs=["reaching"])
+    scene.add_object("shelf", (-0.3, 1.35, 0.25))
+    scene.bml("ann", f'<bml {BML} id="put"><sbm:reach id="r" target="shelf" sbm:action="put-down"/></bml>')
+    (warning,) = [e for e in scene.feedback.log if e.kind == "warningFeedback" and e.id == "put:r"]
+    assert "holds nothing" in warning.description
