@@ -93,3 +93,15 @@ def test_putting_down_nothing_is_reported():
     scene.bml("ann", f'<bml {BML} id="put"><sbm:reach id="r" target="shelf" sbm:action="put-down"/></bml>')
     (warning,) = [e for e in scene.feedback.log if e.kind == "warningFeedback" and e.id == "put:r"]
     assert "holds nothing" in warning.description
+
+
+def test_carried_objects_are_tracked(reached):
+    scene, rig, _, pick, put = reached
+    track = scene.object_track("cup")
+    assert track.shape == (scene.runtime.frame, 3)
+    assert np.allclose(track[0], (-0.2, 1.2, 0.3)) and np.allclose(track[-1], (-0.3, 1.35, 0.25))
+    _, pos = infuse.motion_fk(scene.motion("ann"))
+    held = slice(int(4.5 * 30), int(6.3 * 30))  # picked up, not yet put down: it keeps to the wrist
+    gap = np.linalg.norm(track[held] - pos[held, rig.joint("r_wrist")], axis=1)
+    assert np.ptp(gap) < 1e-6 and gap.max() < 0.1
+    assert np.ptp(track[held], axis=0).max() > 0.05  # and the wrist moved it

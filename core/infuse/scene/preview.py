@@ -1,4 +1,5 @@
-"""Preview renders of a scene: its characters as stick figures where they stand, its objects as spheres, and
+"""Preview renders of a scene: its characters as stick figures where they stand, its objects as spheres where
+they are (carried ones move with the hand), and
 each character's gaze as a dashed ray from its eyes (or head) along where they point, ending at what it
 looks at (a character's face or an object within 15 degrees of the ray) or 1.2 m ahead."""
 from __future__ import annotations
@@ -19,7 +20,7 @@ OBJECT_COLOR = (230, 150, 20)
 #: The automatic view: this many degrees around from square to the line between the first two characters,
 #: and this high.
 AUTO_VIEW_TURN_DEG, AUTO_VIEW_ELEVATION_DEG = -20.0, 12.0
-#: Filmstrip tiles, pixels: wide, since a scene spreads along the ground.
+#: Filmstrip tiles of several characters, pixels: wide, since a scene spreads along the ground.
 STRIP_TILE = (420, 320)
 
 
@@ -57,7 +58,7 @@ def scene_figures(scene) -> list[Figure]:
     rays = {n: gaze_rays(scene.runtime.rig(n), *poses[n]) for n in names}
     frames = len(next(iter(motions.values())).local_rotations)
     faces = {n: r[0] for n, r in rays.items() if r is not None}
-    objects = {o.name: np.broadcast_to(np.asarray(o.position), (frames, 3)) for o in scene.objects.values()}
+    objects = {o: scene.object_track(o) for o in scene.objects}
     figures = []
     for k, name in enumerate(names):
         rig = scene.runtime.rig(name)
@@ -70,7 +71,7 @@ def scene_figures(scene) -> list[Figure]:
             markers.append(Marker(origin + direction * length[:, None], "", color=PALETTE[k % len(PALETTE)],
                                   style="cross", size=0.04, ray_from=joint))
         if k == 0:
-            markers += [Marker(np.asarray(o.position), o.name, color=OBJECT_COLOR, style="sphere", size=o.size / 2)
+            markers += [Marker(objects[o.name], o.name, color=OBJECT_COLOR, style="sphere", size=o.size / 2)
                         for o in scene.objects.values()]
         figures.append(Figure.from_motion(motions[name], label=name, color=PALETTE[k % len(PALETTE)],
                                           sides=sides_from_mapping(rig.skeleton, rig.mapping), markers=markers))
@@ -120,7 +121,7 @@ def render_scene(scene, path, *, strip: int | None = None, overlay: bool = True,
     if title is None:
         title = " · ".join(scene.characters)
     camera = Camera(view=auto_view(scene) if view is None else view, follow=False)
-    if size is None and strip is not None:
+    if size is None and strip is not None and len(figures) > 1:
         size = (STRIP_TILE[0] * (1 if overlay else len(figures)), STRIP_TILE[1])
     return render(figures, path, strip=strip, overlay=overlay, start=start, end=end, fps=fps, size=size,
                   camera=camera, title=title, progress=progress)

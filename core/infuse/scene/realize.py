@@ -249,5 +249,7 @@ def _reach(scene, activation: Activation):
     if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
         reach.hold_s = span - reach.stroke_s - reach.blend_out_s
     activity = scene.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)
+    if obj is not None:  # it follows the hand, or stays where it is put, from the stroke on
+        scene.note_object_move(obj, activation.start + reach.stroke_s)
     scene.character(name).holding = obj if action == "pick-up" else None if action == "put-down" else scene.character(name).holding
     return activity

@@ -119,6 +119,7 @@ class Scene:
         self._spoken: dict[str, list[_Spoken]] = {}
         self._interrupted: set[tuple[str, str]] = set()
         self._handovers: list[tuple[int, object, object]] = []
+        self._recorder = None
         self._realizing = None
         self._realize_notes: list[str] = []
         self._ids = itertools.count(1)
@@ -173,6 +174,7 @@ class Scene:
         self._start_base(name)
         if self.idle if idle is None else idle:
             self._start_idle(entry, len(self.characters) - 1)
+        self._record_objects()
         return name
 
     def add_object(self, name: str, position, size: float = 0.1) -> str:
@@ -184,7 +186,32 @@ class Scene:
         point = _point(position, f"object {name!r} position")
         self.objects[name] = SceneObject(name, tuple(float(v) for v in point), float(size))
         self.runtime.add_target(name, point)
+        self._record_objects()
         return name
+
+    def _record_objects(self) -> None:
+        """Start recording where the objects are (they move when characters carry them), once there are
+        objects and a character to run the recorder on."""
+        if self._recorder is None and self.objects and self.characters:
+            from .objects import ObjectRecorder, ObjectsBefore
+
+            self._recorder = ObjectRecorder(self)
+            first = next(iter(self.characters))
+            self.runtime.activate(first, ObjectsBefore(self._recorder), self.time)
+            self.runtime.activate(first, self._recorder, self.time)
+
+    def note_object_move(self, name: str, at_s: float) -> None:
+        """Object ``name`` is picked up or put down at ``at_s`` seconds (for :meth:`object_track`)."""
+        if self._recorder is not None:
+            self._recorder.switch(name, at_s)
+
+    def object_track(self, name: str):
+        """(F, 3) positions of object ``name`` at every frame evaluated so far, metres."""
+        if name not in self.objects:
+            raise UsageError(f"no object {name!r} in the scene; objects: {', '.join(self.objects) or 'none'}")
+        if self._recorder is None:
+            return np.broadcast_to(np.asarray(self.objects[name].position), (self.runtime.frame, 3)).copy()
+        return self._recorder.track(name, self.runtime.frame)
 
     def add_target(self, name: str, target) -> str:
         """Name a target that is not an object: a moving point (an (F, 3) track at the scene's frame rate, a
