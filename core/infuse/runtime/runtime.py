@@ -247,14 +247,17 @@ class Runtime:
         """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller of its kind.
 
         The controller component's ``info["from_bml"](parameters, runtime, character, activation)`` builds
-        the controller (else its factory is called with the parameters); it may return None when the
-        activation asks for nothing to play (it may stop activities itself, e.g. finishing saccades). Returns None, and reports why,
-        when no installed controller realizes that kind.
+        the controller (else its factory is called with the parameters). It may return None when the
+        activation asks for nothing to play, and may stop activities itself (finishing saccades).
+        Returns None, and reports why, when no installed controller realizes that kind. The activity
+        runs from the activation's start to its end (persistent ones: until stopped), cut at ``stop_s``.
         """
         from . import controller_components
 
         name = character if character is not None else activation.character
         rig = self.rig(name)
+        if activation.stop_s is not None and activation.stop_s <= activation.start:
+            return None  # interrupted before it started
         component = controller_components().get(activation.controller)
         if component is None:
             self.report(rig.name, f"no installed controller realizes <{activation.element}> ({activation.controller!r}); skipped")
@@ -275,8 +278,6 @@ class Runtime:
         for key, name_ in (("fade_in_s", "blend_in_s"), ("fade_out_s", "blend_out_s")):
             if activation.parameters.get(key) is not None:
                 blend[name_] = float(activation.parameters[key])
-        if activation.stop_s is not None and activation.stop_s <= activation.start:
-            return None  # interrupted before it started
         return self.activate(rig.name, controller, activation.start, end, source=activation, **blend)
 
     # -- evaluation ------------------------------------------------------------------------------------
