@@ -56,6 +56,11 @@ if want walk_path; then  # packs.md
   .venv/bin/python tools/walk_path.py "$XBOT" -o "$OUT/walk_path.png" --pack locomotion-female
 fi
 
+if want scene; then  # scenes.md
+  INFUSE_CORPUS=$(cd "$CORPUS" && pwd) "$INFUSE" run examples/scenes/demo.toml -o "$WORK/scene" --strip 6 --quiet
+  cp "$WORK/scene/preview.png" "$OUT/scene.png"
+fi
+
 for png in "$OUT"/*.png; do
   size=$(stat -c %s "$png")
   [ "$size" -lt 307200 ] || { echo "make_images: $png is $size bytes, over 300 KB" >&2; exit 1; }
