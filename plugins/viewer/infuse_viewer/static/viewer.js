@@ -80,7 +80,7 @@ scene.add(groundGroup);
 const state = {
   entryIndex: -1, info: null, audio: {}, root: null, mixer: null, clips: [], clip: null, action: null,
   time: 0, duration: 0, playing: false, hasMesh: false, joints: [], bones: [], targets: [], height: 1.7,
-  loading: null,
+  rootJoint: null, follow: false,
 };
 let dirty = true;  // the next animation frame draws
 const audio = new Audio();
@@ -88,7 +88,7 @@ audio.preload = 'auto';
 let audioBlocked = false;
 
 // ---------------------------------------------------------------- skeleton overlay
-const overlay = { group: new THREE.Group(), bones: null, spheres: null, lines: [] };
+const overlay = { group: new THREE.Group(), bones: null, spheres: null };
 scene.add(overlay.group);
 const unitCylinder = new THREE.CylinderGeometry(1, 1, 1, 10, 1).translate(0, 0.5, 0);
 const unitSphere = new THREE.SphereGeometry(1, 16, 12);
@@ -96,8 +96,11 @@ const tmp = { a: new THREE.Vector3(), b: new THREE.Vector3(), d: new THREE.Vecto
   s: new THREE.Vector3(), m: new THREE.Matrix4(), up: new THREE.Vector3(0, 1, 0), c: new THREE.Color() };
 
 function disposeGroup(group) {
-  group.traverse((o) => { if (o.geometry && o.geometry !== unitCylinder && o.geometry !== unitSphere) o.geometry.dispose();
-    if (o.material) [].concat(o.material).forEach((m) => m.dispose()); });
+  group.traverse((o) => {
+    if (o.isInstancedMesh) o.dispose();
+    if (o.geometry && o.geometry !== unitCylinder && o.geometry !== unitSphere) o.geometry.dispose();
+    if (o.material) [].concat(o.material).forEach((m) => m.dispose());
+  });
   group.clear();
 }
 
@@ -318,11 +321,11 @@ function applyTime() {
   state.root?.updateMatrixWorld(true);
 }
 
-function setTime(t, seekAudio = true) {
+function setTime(t) {
   dirty = true;
   state.time = Math.min(Math.max(t, 0), state.duration);
   applyTime();
-  if (seekAudio && audio.dataset.src) {
+  if (audio.dataset.src) {
     if (state.playing && state.time < (audio.duration || Infinity)) { if (audio.paused) startAudio(); else audio.currentTime = state.time; }
     else audio.currentTime = Math.min(state.time, audio.duration || state.time);
   }
@@ -448,7 +451,7 @@ function applyVisibility() {
   const showSkeleton = $('show-skeleton').checked;
   overlay.group.visible = showSkeleton || !state.hasMesh;
   for (const id of ['show-mesh', 'show-skeleton']) $(id).parentElement.style.display = state.hasMesh ? '' : 'none';  // without a mesh the skeleton is the figure
-  if (state.root) state.root.traverse((o) => { if (o.isMesh && !o.userData.infuseOverlay) o.visible = $('show-mesh').checked; });
+  if (state.root) state.root.traverse((o) => { if (o.isMesh) o.visible = $('show-mesh').checked; });
   targetGroup.visible = $('show-targets').checked;
 }
 for (const id of ['show-mesh', 'show-skeleton', 'show-names', 'show-targets']) $(id).addEventListener('change', applyVisibility);
