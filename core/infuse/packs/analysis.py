@@ -67,8 +67,9 @@ def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERAN
     ``found``: :class:`~infuse.contacts.FootContacts` of the clip; ``positions`` (F, J, 3) metres.
     A foot's ball is down while the foot is planted and the ball sits within ``tolerance`` leg
     lengths of its planted height (its lower quartile while the foot is planted: the ball is down
-    for most of a stance); the heel is down while the foot is planted, except when the ball
-    is down and the ankle has risen (heel off, or a landing on the ball). During the heel rocker
+    for most of a stance); the heel is down while the foot is planted, except when the ankle has
+    risen with the ball down, or after the ball was down in that stance (heel off, the push off on
+    the toes, or a landing on the ball). During the heel rocker
     (toes up after heel strike) only the heel is down. A foot without a ball point has its heel down
     whenever it is planted.
     """
@@ -84,7 +85,10 @@ def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERAN
             ball = planted[:, k] & (y - np.percentile(y[planted[:, k]] if planted[:, k].any() else y, 25.0) <= eps)
         else:
             ball = np.zeros(len(planted), dtype=bool)
-        out[:, k, 0] = planted[:, k] & ~(ball & raised)
+        frames = np.arange(len(ball))
+        stance_start = np.maximum.accumulate(np.where(planted[:, k] & ~np.roll(planted[:, k], 1), frames, 0))
+        ball_seen = np.maximum.accumulate(np.where(ball, frames, -1)) >= stance_start
+        out[:, k, 0] = planted[:, k] & ~(ball_seen & raised)
         out[:, k, 1] = ball
     return out
 

@@ -29,12 +29,15 @@ from infuse.runtime import Controller, Layer, Mode, sample_motion
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
+from .phase_keys import contact_of, foot_events, foot_phase, warp
 from .steering import Steering
 
 _INFUSIONS: dict = {}
 
 #: Seconds over which a released foot's pin correction fades back to the animation.
 RELEASE_S = 0.15
+#: Below this fraction of the slowest walk's speed the pose fades into the idle (standing, starts and stops).
+STAND_FRACTION = 0.2
 #: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
 FREE, ANKLE, BALL = 0, 1, 2
 
@@ -90,12 +93,6 @@ def canonical_clip(clip):
     jt = np.array(m.joint_translations)
     jt[:, mover] = offset
     return m.replace(local_rotations=rot, joint_translations=jt), mover
-
-
-def warp(keys: np.ndarray, phase: np.ndarray) -> np.ndarray:
-    """Clip times (seconds) of ``phase`` in [0, 1) through the clip's keys at phases 0, 0.5, 1."""
-    first = phase < 0.5
-    return np.where(first, keys[0] + (keys[1] - keys[0]) * phase * 2.0, keys[1] + (keys[2] - keys[1]) * (phase - 0.5) * 2.0)
 
 
 class Locomotion(Controller):
@@ -156,9 +153,35 @@ class Locomotion(Controller):
         reach = 0.9 * float(np.abs(p("turn_rate")).max())
         if reach > 0:
             self.steering.max_turn_rate = min(self.steering.max_turn_rate, reach)
-        return {"space": space, "clips": clips, "motions": [m for m, _ in prepared], "movers": [mv for _, mv in prepared],
+        events = [foot_events(c) if c.role != "idle" else None for c in clips]
+        idle = np.array([c.role == "idle" for c in clips])
+        speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
+        slowest = np.full(len(clips), 0.0)
+        moving = np.nonzero(~idle)[0]
+        slowest[moving[np.argmin(speeds[moving])]] = 1.0
+        motions = [m for m, _ in prepared]
+        sk = rig.skeleton
+        limbs = np.zeros(sk.num_joints, dtype=np.int64)  # 0 body, 1 left leg, 2 right leg
+        for k, leg in enumerate(legs[:2] if len(legs) == 2 else []):
+            limbs[leg[0]] = k + 1
+        for j in range(sk.num_joints):
+            if limbs[j] == 0 and sk.parents[j] >= 0:
+                limbs[j] = limbs[sk.parents[j]]
+        means = [mean_pose(m) for m in motions]
+        signs = [np.where(np.sum(m[0] * means[0][0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
+        ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
+        if len(legs) == 2:
+            for i, m in enumerate(motions):
+                _, pos = chain_fk(sk, m.local_rotations[:-1], m.root_translations[:-1],
+                                  None if m.joint_translations is None else m.joint_translations[:-1],
+                                  [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+                hips = 0.5 * (pos[:, 0] + pos[:, 1])
+                ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
+        return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
                 "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
-                "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs}
+                "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
+                "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
+                "means": means, "signs": signs, "ankle_means": ankle_means, "skeleton": sk}
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -184,11 +207,20 @@ class Locomotion(Controller):
         px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
         st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + vt[-1] * dt))
-        period = np.maximum(w @ b["durations"], 1e-3)
-        phase = st["phase"] + np.concatenate(([0.0], np.cumsum(dt / period[:-1])))
-        st["phase"] = float((phase[-1] + dt / period[-1]) % 1.0)
+        # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
+        # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
+        # cadence, stays about constant with speed), and show the idle only when nearly standing.
+        slow = np.clip(1.0 - w[:, b["idle"]].sum(axis=1), 0.0, 1.0)
+        wm = np.where(b["idle"][None], 0.0, w)
+        wm = np.where((slow > 1e-6)[:, None], wm / np.maximum(slow, 1e-6)[:, None], b["slowest"][None])
+        rate = np.sqrt(slow)
+        standing = 1.0 - _ease(slow / STAND_FRACTION) if b["idle"].any() else np.zeros_like(slow)
+        period = np.maximum(wm @ b["durations"], 1e-3)
+        advance = dt * rate / period
+        phase = st["phase"] + np.concatenate(([0.0], np.cumsum(advance[:-1])))
+        st["phase"] = float((phase[-1] + advance[-1]) % 1.0)
         phase = phase % 1.0
-        rot, root, jt, contact = self._blend(b, w, phase)
+        rot, root, jt, contact = self._blend(b, wm, phase, standing, times)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
@@ -198,6 +230,9 @@ class Locomotion(Controller):
             root = ground + quat.rotate(turn_q, root)
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
+        stride = slow / np.maximum(rate, 1e-9)
+        if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
+            self._shorten(b, wm, stride, rot, root, jt, heading)
         if self.pin_feet and len(b["legs"]) == 2:
             self._pin(job, st, rot, root, jt, contact, heading, dt)
         pose = job.pose
@@ -215,32 +250,75 @@ class Locomotion(Controller):
             moved[active] = jt
             pose.set_translations(np.arange(1, jt.shape[1]), moved[:, 1:], weight, job.mode)
 
-    def _blend(self, b, w, phase):
+    def _blend(self, b, w, phase, standing, times):
         """Weighted, sign-aligned rotations, root offsets, joint translations and foot contact phases
-        (F, 2, 2): the weight of the clips with each foot's heel and ball down."""
+        (F, 2, 2) of the moving clips (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by
+        its foot's events; then faded
+        into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
-        rot = root = jt = None
+        stepping = [i for i in used if b["events"][i] is not None]
+        if stepping:
+            ws = w[:, stepping]
+            events = np.einsum("fi,ikn->fkn", ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9),
+                               np.stack([b["events"][i] for i in stepping]))
+        acc = None
         contact = np.zeros((len(phase), 2, 2))
         for i in order:
             clip, motion = b["clips"][i], b["motions"][i]
-            t = warp(clip.keys, phase) % max(motion.duration, 1e-9)
-            r, p, j, _ = sample_motion(motion, t, loop=True)
-            wi = w[:, i][:, None]
-            if rot is None:
-                rot = r * wi[:, :, None]
-                root = p * wi
-                jt = None if j is None else j * wi[:, :, None]
-            else:
-                sign = np.where(np.sum(rot * r, axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
-                rot += sign * r * wi[:, :, None]
-                root += p * wi
-                if j is not None and jt is not None:
-                    jt += j * wi[:, :, None]
-            frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.phases) - 1)
-            contact += clip.phases[frame] * wi[:, :, None]
-        rot = quat.normalize(rot)
-        return rot, root, jt, contact
+            times_of = [warp(clip.keys, phase)]
+            if b["events"][i] is not None:
+                times_of += [warp(clip.keys, foot_phase(b["events"][i][k], events[:, k], phase)) for k in (0, 1)]
+            samples = [sample_motion(motion, t % max(motion.duration, 1e-9), loop=True)[:3] for t in times_of]
+            r, p, j = samples[0]
+            if len(samples) == 3:  # each leg from its own foot's time
+                r = np.array(r)
+                j = None if j is None else np.array(j)
+                for k in (1, 2):
+                    legs = b["limbs"] == k
+                    r[:, legs] = samples[k][0][:, legs]
+                    if j is not None:
+                        j[:, legs] = samples[k][2][:, legs]
+            acc = _accumulate(acc, r, p, j, w[:, i])
+            if b["events"][i] is None:
+                frame = np.minimum(np.rint((times_of[0] % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64), len(clip.phases) - 1)
+                contact += clip.phases[frame] * w[:, i][:, None, None]
+        if stepping:
+            contact += contact_of(events, phase) * ws.sum(axis=1)[:, None, None]
+        fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else []
+        if len(fade):
+            share = standing / len(fade)
+            acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 1)) for a in acc)
+            contact *= (1.0 - standing)[:, None, None]
+            for i in fade:
+                clip, motion = b["clips"][i], b["motions"][i]
+                t = times % max(motion.duration, 1e-9)
+                r, p, j, _ = sample_motion(motion, t, loop=True)
+                acc = _accumulate(acc, r, p, j, share)
+                frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.phases) - 1)
+                contact += clip.phases[frame] * share[:, None, None]
+        rot, root, jt = acc
+        return quat.normalize(rot), root, jt, contact
+
+    def _shorten(self, b, w, stride, rot, root, jt, heading) -> None:
+        """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
+        its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
+        IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing)."""
+        sk = b["skeleton"]
+        legs = b["legs"]
+        _, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+        hips = 0.5 * (pos[:, 0] + pos[:, 1])
+        turn_q = yaw(heading)
+        body = np.nonzero(b["limbs"] == 0)[0]
+        mean = np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body])
+        rot[:, body] = quat.slerp(quat.normalize(mean), rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
+        for k, (hip, knee, ankle, _) in enumerate(legs):
+            centre = quat.rotate(turn_q, w @ b["ankle_means"][:, k])
+            rel = pos[:, 2 + k] - hips
+            goal = hips + centre + stride[:, None] * (rel - centre)
+            goal[:, 1] = pos[:, 2 + k, 1]
+            solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
+                       pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1))
 
     def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
@@ -289,6 +367,30 @@ class Locomotion(Controller):
             if weight.any():
                 solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=weight, pole=forward)
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k] = prev, pin, offset, released
+
+
+def mean_pose(motion) -> tuple:
+    """A cycle's mean local rotations (J, 4), root offset (3,) and joint translations (J, 3) or None."""
+    rot = quat.make_continuous(np.array(motion.local_rotations[:-1] if motion.num_frames > 1 else motion.local_rotations))
+    sign = np.where(np.sum(rot * rot[:1], axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
+    jt = motion.joint_translations
+    frames = slice(0, max(motion.num_frames - 1, 1))
+    return (quat.normalize((rot * sign).mean(axis=0)), motion.root_translations[frames].mean(axis=0),
+            None if jt is None else jt[frames].mean(axis=0))
+
+
+def _accumulate(acc, rot, root, jt, weight):
+    """Add a weighted, sign-aligned pose to the running sums ``acc`` (None to start)."""
+    wi = weight[:, None]
+    if acc is None:
+        return rot * wi[:, :, None], root * wi, None if jt is None else jt * wi[:, :, None]
+    r0, p0, j0 = acc
+    sign = np.where(np.sum(r0 * rot, axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
+    r0 = r0 + sign * rot * wi[:, :, None]
+    p0 = p0 + root * wi
+    if jt is not None and j0 is not None:
+        j0 = j0 + jt * wi[:, :, None]
+    return r0, p0, j0
 
 
 def _ease(x) -> np.ndarray:

@@ -1,0 +1,69 @@
+"""Correspondence keys of each foot (heel strike, foot flat, heel off, toe off) and the phase maps they give.
+
+The blend runs one phase in [0, 1) (see :func:`warp`: left strike at 0, right strike at 0.5). Each
+clip's contact events are expressed in that phase; the blend's own events are the weighted means of
+the clips', and each clip maps the blend's phase to its own through the piecewise-linear map that
+sends the blend's events of a foot to the clip's. Played alone a clip maps onto itself; blended, every
+clip has each foot in the same support phase (heel rocker, foot flat, heel off, swing) at the same
+phase, so the blend's contact phases follow from its events alone.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse.packs.analysis import steps
+
+#: The events of a foot's stance, in time order.
+EVENTS = ("strike", "flat", "heel_off", "off")
+
+
+def warp(keys: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    """Clip times (seconds) of ``phase`` in [0, 1) through the clip's keys (left strike, right strike,
+    next left strike; seconds) at phases 0, 0.5, 1."""
+    first = phase < 0.5
+    return np.where(first, keys[0] + (keys[1] - keys[0]) * phase * 2.0, keys[1] + (keys[2] - keys[1]) * (phase - 0.5) * 2.0)
+
+
+def unwarp(keys: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The phase in [0, 1) of clip time ``t`` (seconds): the inverse of :func:`warp`."""
+    u = keys[0] + np.mod(np.asarray(t, dtype=np.float64) - keys[0], keys[2] - keys[0])
+    return np.where(u < keys[1], 0.5 * (u - keys[0]) / (keys[1] - keys[0]), 0.5 + 0.5 * (u - keys[1]) / (keys[2] - keys[1]))
+
+
+def foot_events(clip) -> np.ndarray | None:
+    """(2, 4) phases of each foot's (left, right) strike, flat, heel off and toe off in a looping
+    clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once."""
+    found = steps(clip.contacts, clip.motion.fps, True, clip.phases)
+    out = np.zeros((2, 4))
+    for k, foot in enumerate(("left", "right")):
+        mine = [s for s in found if s["foot"] == foot]
+        if len(mine) != 1:
+            return None
+        # A contact flag holds for its frame's half-frame either side (frames are sampled nearest).
+        ph = unwarp(clip.keys, np.array([mine[0][e] for e in EVENTS]) - 0.5 / clip.motion.fps)
+        ph = np.where(ph > 1.0 - 1e-6, ph - 1.0, ph)  # a strike on a key rounded just below it
+        ph[1:] += np.where(ph[1:] < ph[0], 1.0, 0.0)  # events past the cycle's end
+        out[k] = np.maximum.accumulate(ph)
+    return out
+
+
+def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    """Clip phases (F,) in [0, 1) of blend ``phase`` (F,) for one foot: piecewise linear from the
+    blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it."""
+    x = np.concatenate((theirs, theirs[:, :1] + 1.0), axis=1)  # (F, 5)
+    y = np.concatenate((mine, mine[:1] + 1.0))
+    p = x[:, 0] + np.mod(phase - x[:, 0], 1.0)
+    seg = np.clip((p[:, None] >= x[:, 1:]).sum(axis=1), 0, 3)
+    rows = np.arange(len(p))
+    x0, x1 = x[rows, seg], x[rows, seg + 1]
+    frac = np.clip((p - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
+    return np.mod(y[seg] + frac * (y[seg + 1] - y[seg]), 1.0)
+
+
+def contact_of(events: np.ndarray, phase: np.ndarray) -> np.ndarray:
+    """(F, 2, 2) flags of each foot's heel and ball being down at ``phase`` (F,) from the blend's
+    ``events`` (F, 2, 4): the heel from strike to heel off, the ball from foot flat to toe off."""
+    p = events[:, :, 0] + np.mod(phase[:, None] - events[:, :, 0], 1.0)  # (F, 2) from each foot's strike
+    heel = p < events[:, :, 2]
+    ball = (p >= events[:, :, 1]) & (p < events[:, :, 3])
+    return np.stack((heel, ball), axis=-1)
