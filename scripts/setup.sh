@@ -26,10 +26,20 @@ if [ -n "$missing" ]; then
   fi
 fi
 
+# pip's build warnings go to a log, shown only when an install fails.
+pip_install() {
+  local log="$VENV/setup-pip.log"
+  if ! "$VENV/bin/python" -m pip install -q "$@" >"$log" 2>&1; then
+    tail -n 30 "$log" >&2
+    echo "setup: pip install failed (full log: $log)" >&2
+    exit 1
+  fi
+}
+
 if [ ! -x "$VENV/bin/python" ]; then
   echo "setup: creating $VENV"
   "$PY" -m venv "$VENV"
-  "$VENV/bin/python" -m pip install -q --upgrade pip setuptools wheel
+  pip_install --upgrade pip setuptools wheel
 fi
 
 shopt -s nullglob
@@ -42,9 +52,9 @@ if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "setup: installing infuse and its plugins into $VENV"
   args=""
   for d in $packages; do args="$args -e $d"; done
-  "$VENV/bin/python" -m pip install -q --no-build-isolation $args -e ".[test,docs]"
+  pip_install --no-build-isolation $args -e ".[test,docs]"
   # The optional extra the tests exercise: infuse batch on a real dask.distributed cluster.
-  "$VENV/bin/python" -m pip install -q --no-build-isolation -e "plugins/batch[dask]"
+  pip_install --no-build-isolation -e "plugins/batch[dask]"
   echo "$stamp" > "$VENV/.setup-stamp"
 fi
 
