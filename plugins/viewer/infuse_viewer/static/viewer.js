@@ -450,7 +450,9 @@ function fillTargets() {
 function applyVisibility() {
   const showSkeleton = $('show-skeleton').checked;
   overlay.group.visible = showSkeleton || !state.hasMesh;
-  for (const id of ['show-mesh', 'show-skeleton']) $(id).parentElement.style.display = state.hasMesh ? '' : 'none';  // without a mesh the skeleton is the figure
+  const offered = { 'show-mesh': state.hasMesh, 'show-skeleton': state.hasMesh,  // without a mesh the skeleton is the figure
+    'show-targets': state.targets.length > 0, follow: state.clips.length > 0 };
+  for (const [id, shown] of Object.entries(offered)) $(id).parentElement.style.display = shown ? '' : 'none';
   if (state.root) state.root.traverse((o) => { if (o.isMesh) o.visible = $('show-mesh').checked; });
   targetGroup.visible = $('show-targets').checked;
 }
