@@ -30,7 +30,8 @@ class BatchResult:
       source frames (clip-frames), counted once per character.
     - ``failures``: what was not produced, each with the file at fault and the reason.
     - ``empty``: motion files that hold no clip (nothing to retarget; not failures).
-    - ``seconds``: wall time; ``cpu_seconds``: CPU time summed over the units, wherever they ran.
+    - ``seconds``: wall time; ``cpu_seconds``: CPU time summed over the units, wherever they ran;
+      ``worker_cpu``: the same per worker (host:process id).
     """
 
     out: Path
@@ -44,6 +45,7 @@ class BatchResult:
     empty: list[str] = field(default_factory=list)
     seconds: float = 0.0
     cpu_seconds: float = 0.0
+    worker_cpu: dict[str, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -169,6 +171,7 @@ def run_batch(characters: str | Iterable[str], *, out: str | Path, motions: str 
             result.clips += done.clips
             result.frames += done.frames
             result.cpu_seconds += done.cpu
+            result.worker_cpu[done.worker] = result.worker_cpu.get(done.worker, 0.0) + done.cpu
             bar.update(unit.pairs, done.frames)
     finally:
         bar.close()

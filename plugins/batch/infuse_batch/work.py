@@ -16,6 +16,7 @@ import dataclasses
 import hashlib
 import os
 import re
+import socket
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -51,7 +52,8 @@ class Failure:
 class UnitResult:
     """What one unit did: ``done`` manifest entries, ``failures``, ``written`` output files,
     ``clips`` and ``frames`` (source clip-frames, counted once per character) retargeted,
-    motion files without any clip (``empty``), and the unit's wall and CPU seconds."""
+    motion files without any clip (``empty``), the unit's wall and CPU seconds and the ``worker``
+    that ran it (host:process id)."""
 
     pairs: int
     done: list[dict] = field(default_factory=list)
@@ -62,6 +64,7 @@ class UnitResult:
     empty: list[str] = field(default_factory=list)
     wall: float = 0.0
     cpu: float = 0.0
+    worker: str = ""
 
 
 @dataclass
@@ -85,7 +88,7 @@ def warm() -> None:
 def failure(file, exc: BaseException, clip: str | None = None) -> Failure:
     """A :class:`Failure` from an exception: the file the error names (else ``file``) and its problem."""
     if isinstance(exc, InputError):
-        return Failure(exc.file or str(file), ":".join(p for p in (exc.place, exc.problem) if p), 2, clip)
+        return Failure(exc.file or str(file), ": ".join(p for p in (exc.place, exc.problem) if p), 2, clip)
     if isinstance(exc, UnusableInputError):
         return Failure(exc.file or str(file), exc.problem, exc.exit_code, clip)
     if isinstance(exc, InfuseError):
@@ -162,7 +165,7 @@ def _writable(loaded: _Loaded, name: str, motion) -> Asset:
 def run_unit(unit: Unit | PackUnit) -> UnitResult:
     """Run one unit (see :mod:`.jobs`); never raises for a bad input."""
     wall, cpu = time.perf_counter(), time.process_time()
-    result = UnitResult(unit.pairs)
+    result = UnitResult(unit.pairs, worker=f"{socket.gethostname()}:{os.getpid()}")
     try:
         if isinstance(unit, PackUnit):
             _infuse(unit, result)
