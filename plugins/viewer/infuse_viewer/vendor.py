@@ -163,7 +163,11 @@ def ensure_vendor(source: Path | None = None, target: Path = VENDOR_DIR) -> Vend
         source = None
     manifest = _read_manifest(target)
     if source is not None and (manifest is None or manifest.get("version") != _package_version(source)):
-        _write_vendor(source, target)
+        try:
+            _write_vendor(source, target)
+        except OSError as exc:
+            raise MissingFeatureError(target, f"cannot copy three.js here ({exc.strerror or exc}); "
+                                              f"run `make setup` as the owner of this folder") from None
         manifest = _read_manifest(target)
     if manifest is None:
         raise MissingFeatureError(None, f"the viewer needs three.js: run `make setup` (it installs the npm package "
