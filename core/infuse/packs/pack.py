@@ -33,9 +33,18 @@ def file_digest(path: Path) -> str:
     return h.hexdigest()
 
 
+def _record_key(path: Path, folder: Path) -> str:
+    """``path`` relative to the pack folder when it lies inside it, so a built pack names no machine path."""
+    try:
+        return path.relative_to(folder).as_posix()
+    except ValueError:
+        return str(path)
+
+
 def fingerprint(manifest: Manifest, known: dict | None = None) -> tuple[str, dict]:
     """A digest of the manifest and every file it names, and the per-file records ``{path: [size,
-    mtime_ns, sha256]}`` (a record in ``known`` with the same size and time is trusted without rehashing)."""
+    mtime_ns, sha256]}`` (paths relative to the pack folder when inside it; a record in ``known`` with the
+    same size and time is trusted without rehashing)."""
     known = known or {}
     records = {}
     h = hashlib.sha256(manifest.path.read_bytes())
@@ -43,9 +52,10 @@ def fingerprint(manifest: Manifest, known: dict | None = None) -> tuple[str, dic
         if not path.is_file():
             raise InputError(manifest.path, str(path), "file named by the manifest not found")
         st = path.stat()
-        old = known.get(str(path))
+        key = _record_key(path, manifest.folder)
+        old = known.get(key)
         digest = old[2] if old and old[0] == st.st_size and old[1] == st.st_mtime_ns else file_digest(path)
-        records[str(path)] = [st.st_size, st.st_mtime_ns, digest]
+        records[key] = [st.st_size, st.st_mtime_ns, digest]
         h.update(digest.encode())
     return h.hexdigest(), records
 
