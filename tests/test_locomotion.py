@@ -60,15 +60,18 @@ def skate(mapping, m, g_rot, g_pos, phases: bool) -> float:
 @pytest.mark.parametrize("pack", ["locomotion-male", "locomotion-female"])
 def test_foot_skate_in_blended_walks(xbot, pack):
     detected, grounded = {}, {}
-    for v in (1.0, 1.2, 1.5, 2.0, 3.0):  # between examples: every speed is a blend of two clips
+    # 0.5 and 0.8: the slow walk at a slower cadence with shorter steps; the others blend two clips
+    # (1.7 and 2.0 m/s: walk_fast with jog for the male pack, whose contact timings differ most).
+    for v in (0.5, 0.8, 1.2, 1.7, 2.0, 3.0):
         run = walk(xbot, pack, 5.0, speed=v, max_accel=50.0)
         detected[v], grounded[v] = skate(*run, phases=False), skate(*run, phases=True)
     print(pack, {k: round(v, 2) for k, v in detected.items()}, {k: round(v, 2) for k, v in grounded.items()})
-    assert detected[3.0] <= 2.0 and detected[2.0] <= 2.0, detected
-    # Walks: the ball is pinned through heel off, so the feet hold while on the ground; the default
-    # detector also counts the ankle rising about the ball (see docs/packs.md for the figures).
-    assert grounded[1.0] <= 2.0 and grounded[1.2] <= 2.0 and grounded[3.0] <= 2.0, grounded
-    assert max(detected[1.0], detected[1.2], detected[1.5], grounded[1.5]) <= 3.5, (detected, grounded)
+    # On the ground (heel down, ball down): the legs step together and the planted points hold.
+    assert max(g for v, g in grounded.items() if v >= 0.8) <= 1.5, grounded
+    assert grounded[0.5] <= 2.5, grounded  # the slow foot lands gently: the detector sees it down early
+    # The default detector also counts the ankle rising about the ball at heel off (docs/packs.md).
+    assert detected[2.0] <= 2.0 and detected[3.0] <= 2.0, detected
+    assert max(detected[0.8], detected[1.2], detected[1.7]) <= 3.5 and detected[0.5] <= 6.0, detected
 
 
 def test_turning_and_path_following_stop_at_the_end(xbot):
