@@ -95,14 +95,14 @@ def main() -> int:
     strip = render([figure], OUT / "walk_strip.png", strip=6, title=f"{walk_path.name}: 6 frames")
     print(f"animation: {gif}")
     print(f"strip:     {strip}")
-    return scene_demo(corpus)
+    return scene_demo()
 
 
-def scene_demo(corpus: Path) -> int:
-    """Realize the demo scene file, export each character with its audio, write the feedback and previews."""
-    os.environ.setdefault("INFUSE_CORPUS", str(corpus))
+def scene_demo() -> int:
+    """Realize the demo scene file, export each character with its audio, write the feedback and previews.
+    The scene file finds the corpus the same way (``INFUSE_CORPUS``, else ``../shared/corpus``)."""
     out = OUT / "scene"
-    print(f"\nscene:     {SCENE.relative_to(REPO)}")
+    print(f"\nscene:     {SCENE}")
     spec = read_scene_file(SCENE)
     scene = build_scene(spec)  # loads, maps and infuses each character, schedules and realizes the BML
     for entry in scene.characters.values():
@@ -119,7 +119,7 @@ def scene_demo(corpus: Path) -> int:
     written.append(scene.render(out / "scene.gif", fps=15, size=(720, 480)))
     report(scene)
     for path in written:
-        print(f"wrote      {path.relative_to(REPO)}")
+        print(f"wrote      {path}")
     return 0
 
 

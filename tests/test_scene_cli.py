@@ -138,3 +138,38 @@ def test_usage_errors(tmp_path, capsys):
     (tmp_path / "scene.json").write_text("{}")
     assert main(["run", str(tmp_path / "scene.json"), "-o", str(tmp_path / "o")]) == 2
     assert ".toml or .xml" in capsys.readouterr().err
+
+
+def test_the_demo_scene_and_infuse_run_agree(tmp_path, monkeypatch, capsys):
+    """``make demo``'s scene: Bob walks up to Ann, both look at each other, Bob nods, Ann speaks and reaches;
+    ``infuse run examples/scenes/demo.toml`` gives the same files."""
+    import importlib.util
+
+    from corpus_data import REPO, require_corpus
+
+    require_corpus()
+    spec = importlib.util.spec_from_file_location("infuse_demo_scene", REPO / "examples" / "demo.py")
+    demo = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(demo)
+    monkeypatch.setattr(demo, "OUT", tmp_path / "demo")
+    assert demo.scene_demo() == 0
+    printed = capsys.readouterr().out
+    assert "bob: bob_walk starts" in printed and "ann: ann_talk ends" in printed
+    made = tmp_path / "demo" / "scene"
+    assert {p.name for p in made.iterdir()} == {"bob.glb", "ann.glb", "ann.wav", "feedback.xml", "feedback.jsonl",
+                                                 "preview.png", "scene.gif"}
+    assert main(["run", str(REPO / "examples" / "scenes" / "demo.toml"), "-o", str(tmp_path / "run"), "--quiet"]) == 0
+    # espeak-ng's timings vary by some milliseconds from one synthesis in a process to the next, so the
+    # scene may end a frame or two apart; Bob's walk and nod do not depend on them
+    a, b = (infuse.load(folder / "bob.glb").motions["scene"] for folder in (made, tmp_path / "run"))
+    common = min(a.num_frames, b.num_frames)
+    assert abs(a.num_frames - b.num_frames) <= 2
+    assert np.allclose(a.local_rotations[:150], b.local_rotations[:150], atol=1e-6)  # the walk and the nod
+    assert np.allclose(a.root_translations[:common], b.root_translations[:common], atol=1e-6)
+    bob = infuse.load(made / "bob.glb").motions["scene"]
+    hips = infuse.motion_fk(bob)[1][:, 0]
+    assert np.linalg.norm(hips[-1, [0, 2]] - (0.0, 0.8)) < 0.15  # Bob walked to his spot
+    events = [json.loads(line) for line in (made / "feedback.jsonl").read_text().splitlines()]
+    kinds = {e["behaviour"] for e in events if e["kind"] == "syncPointProgress"}
+    assert {"walk", "nod", "speech", "reach", "smile", "look_cup"} <= kinds
+    assert not [e for e in events if e["kind"] == "warningFeedback" and e["type"] == "CANNOT_CREATE_BEHAVIOR"]
