@@ -50,8 +50,8 @@ bml = \'\'\'<bml xmlns="{BML_NS}" id="hello">
 at = 0.5
 file = "nod.xml"
 {blocks}'''
-    (tmp_path / "nod.xml").write_text(f'<act><bml id="nod" characterId="sam"><head id="h" type="NOD" repeats="2"/>'
-                                      f'<gaze id="g" target="ann" sbm:joint-range="NECK EYES"/></bml></act>')
+    (tmp_path / "nod.xml").write_text('<act><bml id="nod" characterId="sam"><head id="h" type="NOD" repeats="2"/>'
+                                      '<gaze id="g" target="ann" sbm:joint-range="NECK EYES"/></bml></act>')
     path = tmp_path / "scene.toml"
     path.write_text(text)
     return str(path)

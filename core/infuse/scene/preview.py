@@ -56,7 +56,6 @@ def scene_figures(scene) -> list[Figure]:
     motions = {n: scene.motion(n) for n in names}
     poses = {n: motion_fk(m) for n, m in motions.items()}
     rays = {n: gaze_rays(scene.runtime.rig(n), *poses[n]) for n in names}
-    frames = len(next(iter(motions.values())).local_rotations)
     faces = {n: r[0] for n, r in rays.items() if r is not None}
     objects = {o: scene.object_track(o) for o in scene.objects}
     figures = []

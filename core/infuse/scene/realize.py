@@ -13,14 +13,18 @@ A behaviour that cannot be realized, or only partly, gives warningFeedback; the 
 """
 from __future__ import annotations
 
-from ..bml import Activation
+from dataclasses import replace
+
 import numpy as np
 
 from .. import quaternions as quat
+from ..bml import Activation
 from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from ..errors import InfuseError
 from ..runtime import Clip, controller, controller_components
 
+#: warningFeedback type of a behaviour realized only in part (what the character lacks is described).
+BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
 #: Kinds with nothing to show.
 SILENT_KINDS = frozenset({"wait", "event"})
 #: Kinds played from a clip of the character, and the priority of that clip on the base layer.
@@ -75,20 +79,18 @@ def _end(activation: Activation) -> float | None:
 
 
 def _installed(scene, activation: Activation):
-    parameters = dict(activation.parameters)
-    for key in ("target",):  # names are matched to the scene's without regard to case
-        if isinstance(parameters.get(key), str):
-            parameters[key] = scene.resolve_name(parameters[key])
+    target = activation.parameters.get("target")
+    if isinstance(target, str) and scene.resolve_name(target) != target:  # names match without regard to case
+        activation = replace(activation, parameters={**activation.parameters, "target": scene.resolve_name(target)})
     if activation.controller in ("blink", "breathing"):  # an explicit emitter replaces the idle default
         scene.stop_idle(activation.character, activation.controller, activation.start)
-    return scene.realize_with_runtime(activation if parameters == activation.parameters
-                                      else _with_parameters(activation, parameters))
+    return scene.realize_with_runtime(activation)
 
 
-def _with_parameters(activation: Activation, parameters: dict) -> Activation:
-    from dataclasses import replace
-
-    return replace(activation, parameters=parameters)
+def _until(activation: Activation) -> float:
+    """When a behaviour that is not persistent stops: its end, or its interruption."""
+    end = _end(activation)
+    return activation.end if end is None else end
 
 
 def _speech(scene, activation: Activation):
@@ -98,17 +100,17 @@ def _speech(scene, activation: Activation):
         return None  # the scheduler already warned about empty speech
     utterance = scene.speech.utterance(activation.parameters)
     if utterance is None:
-        scene.runtime.add_speech(name, activation.start, _end(activation) or activation.end)
+        scene.runtime.add_speech(name, activation.start, _until(activation))
         reason = scene.speech.unavailable or "it was not synthesized"
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<speech> is shown without audio or lip sync: {reason}")
         return None
     if "speech" not in controller_components():
-        scene.runtime.add_speech(name, activation.start, _end(activation) or activation.end)
+        scene.runtime.add_speech(name, activation.start, _until(activation))
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, "<speech>: no lip-sync plugin is installed; only its audio is kept")
         scene.keep_audio(name, activation, utterance, None)
         return None
     speech = controller("speech", utterance=utterance, fps=scene.fps, map_file=scene.character(name).map_file)
-    activity = scene.activate(activation, speech, _end(activation) or activation.start + utterance.duration_s)
+    activity = scene.activate(activation, speech, _until(activation))
     scene.keep_audio(name, activation, utterance, activity)
     return activity
 
@@ -197,7 +199,7 @@ def _locomotion(scene, activation: Activation):
     world = np.array([[x, 0.0, z] for x, z in points])
     own = quat.rotate(quat.conjugate(rig.rotation), world - rig.position)[:, [0, 2]]
     if p.get("facing_deg") is not None:
-        scene.warn(activation, "BEHAVIOR_DEGRADED", f"<{activation.element}>: the facing at the end is not realized; "
+        scene.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: the facing at the end is not realized; "
                                                     "the character faces its last direction of travel")
     walk = controller("locomotion", pack=scene.pack_space(name, "locomotion"), speed=float(p.get("speed_m_s") or 1.2),
                       path=own, max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
@@ -245,7 +247,7 @@ def _reach(scene, activation: Activation):
             return None
     reach = controller("reach", target=target, hand=p.get("hand") or "auto", pack=scene.pack_space(name, "reach"),
                        action=REACH_ACTIONS[action], obj=obj)
-    span = (_end(activation) or activation.end) - activation.start
+    span = _until(activation) - activation.start
     if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
         reach.hold_s = span - reach.stroke_s - reach.blend_out_s
     activity = scene.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)

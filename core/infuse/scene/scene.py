@@ -43,11 +43,8 @@ from ..errors import InfuseError, UsageError
 from ..runtime import Runtime, controller, controller_components
 from ..runtime.rig import Rig
 from . import builder
-from .realize import realize
+from .realize import BEHAVIOR_DEGRADED, realize
 from .speech import SpeechCache, mix, utterance_samples, write_wav
-
-#: warningFeedback type of a behaviour realized only in part (what the character lacks is described).
-BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
 
 
 @dataclass
@@ -164,7 +161,7 @@ class Scene:
         else:
             mapping = character.mapping
         character = Character(name, asset, mapping, dict(character.clips) if character is not None else {})
-        packs = tuple(packs)
+        packs = (packs,) if isinstance(packs, str) else tuple(packs)
         infusion = self._infuse(character, packs) if packs else None
         position = _point(position, "position")
         heading = self._heading(character, mapping, position, facing)
