@@ -5,11 +5,15 @@ point (velocity along and across the facing, turn rate) gets barycentric weights
 tessellation, as infused onto the character. The blend is **phase-synchronized and time-warped**: one
 phase runs through every cycle at once, advancing by ``dt / T`` with T the weighted cycle duration,
 and each clip maps it to its own time through its keys (left strike at phase 0, right strike at 0.5),
-so the blended clips step together. **Root motion** is the weighted clips' velocities (so the realized
+so the blended clips step together; each leg is warped further by its foot's contact events (heel
+strike, foot flat, heel off, toe off; :mod:`.phase_keys`), so the clips' feet are in the same
+support phase at once. **Slow walking**: below the slowest walk the tessellation would mix in the
+idle; instead the walk plays at a slower cadence with shorter steps (both by the square root of the
+speed ratio), and the idle fades in only below :data:`STAND_FRACTION` of it. **Root motion** is the weighted clips' velocities (so the realized
 speed is the requested one inside the pack's range), turned by the integrated heading; each clip
 contributes its pelvis motion relative to its own straight or circular path.
 
-**Planted feet** follow the clips' weighted contact phases (heel down from heel strike to heel off,
+**Planted feet** follow the blend's contact phases (heel down from heel strike to heel off,
 ball down from foot flat to toe off). From heel strike to heel off the ankle stays where it landed;
 from heel off to toe off the ball (``forefoot``, else ``toe``) stays put and the foot pivots about
 it: the ankle goal is the pinned ball plus the animated ball-to-ankle offset, which carries the
