@@ -159,6 +159,10 @@ def test_speech_audio_matches_the_clip(conversation, tmp_path):
     assert np.allclose(tracks["mouthSmileLeft"][held], 0.8)  # the smile, held at its amount between peak and relax
     assert tracks["mouthSmileLeft"][: int(speech.start * 30)].max() < 1e-6
     assert back.skeleton.names == corpus_character("rpm").skeleton.names and back.morph_targets
+    from infuse_gltf import validate as validator  # the file plays in three.js and Blender: valid glTF
+
+    report = validator.validate(tmp_path / "ann.glb")
+    assert report["issues"]["numErrors"] == 0, validator.errors(report)
 
 
 def test_saccades_pause_while_speaking(conversation):
