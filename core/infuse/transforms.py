@@ -108,6 +108,22 @@ def rigid_locals(parents: np.ndarray, global_mats: np.ndarray) -> tuple[np.ndarr
     return local_rot, local_trans
 
 
+def nearest_joint_parents(node_parents, joints) -> np.ndarray:
+    """Parent of each joint within ``joints`` (node indices): its nearest ancestor that is a joint, -1 for none.
+
+    ``node_parents[n]`` is the parent node of node ``n`` (-1 for a scene root); intermediate non-joint
+    nodes are skipped.
+    """
+    position = {n: j for j, n in enumerate(joints)}
+    out = np.full(len(joints), -1, dtype=np.int64)
+    for j, n in enumerate(joints):
+        p = node_parents[n]
+        while p >= 0 and p not in position:
+            p = node_parents[p]
+        out[j] = position.get(p, -1)
+    return out
+
+
 def require_finite(names, global_mats: np.ndarray, where: str = "rest pose") -> None:
     """Raise :class:`InputError` naming the first joint whose matrix (..., J, 4, 4) is not finite.
 

@@ -15,11 +15,11 @@ import numpy as np
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import frame_change, global_matrices, sampled_motion, skeleton_from_globals
+from infuse.transforms import frame_change, global_matrices, nearest_joint_parents, sampled_motion, skeleton_from_globals
 
 from . import animation
 from .document import Document
-from .scene import flatten, joint_indices, joint_parents, local_matrices, unique_names, visual_scene
+from .scene import flatten, joint_indices, local_matrices, unique_names, visual_scene
 
 _UP_AXES = {"X_UP": "X", "Y_UP": "Y", "Z_UP": "Z"}
 
@@ -46,7 +46,7 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     node_parents = np.array([n.parent for n in nodes], dtype=np.int64)
     change = frame_change(scale, up)
     rest = change @ global_matrices(node_parents, local_matrices(nodes))[0, joints]
-    skeleton = skeleton_from_globals(unique_names(nodes, joints), joint_parents(nodes, joints), rest)
+    skeleton = skeleton_from_globals(unique_names(nodes, joints), nearest_joint_parents([n.parent for n in nodes], joints), rest)
 
     chs, skipped = animation.channels(doc, nodes)
     relevant = _joints_and_ancestors(nodes, joints)

@@ -178,18 +178,6 @@ def _find_joint(nodes, elements, index_of, roots, name: str) -> int | None:
     return None
 
 
-def joint_parents(nodes: list[SceneNode], joints: list[int]) -> np.ndarray:
-    """Parent of each joint within the joint list: its nearest joint ancestor, -1 for none."""
-    position = {n: j for j, n in enumerate(joints)}
-    parents = np.full(len(joints), -1, dtype=np.int64)
-    for j, n in enumerate(joints):
-        p = nodes[n].parent
-        while p >= 0 and p not in position:
-            p = nodes[p].parent
-        parents[j] = position.get(p, -1)
-    return parents
-
-
 def unique_names(nodes: list[SceneNode], joints: list[int]) -> list[str]:
     """Joint names (node ``name``, else id, else sid), made unique with the id or a ``#k`` suffix."""
     names = [nodes[n].name for n in joints]

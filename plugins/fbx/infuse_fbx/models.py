@@ -199,18 +199,6 @@ def joint_models(doc: Document, ms: list[Model]) -> list[int]:
     return sorted(chosen)
 
 
-def joint_parents(ms: list[Model], joints: list[int]) -> np.ndarray:
-    """Parent of each joint within the joint list: the nearest joint ancestor, -1 for none."""
-    position = {n: j for j, n in enumerate(joints)}
-    out = np.full(len(joints), -1, dtype=np.int64)
-    for j, n in enumerate(joints):
-        p = ms[n].parent
-        while p >= 0 and p not in position:
-            p = ms[p].parent
-        out[j] = position.get(p, -1)
-    return out
-
-
 def unique_names(ms: list[Model], joints: list[int]) -> list[str]:
     """Joint names, with ``#k`` appended to repeats."""
     seen: set[str] = set()

@@ -16,7 +16,7 @@ import numpy as np
 from infuse.asset import Asset
 from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS
 from infuse.errors import UnusableInputError, UsageError
-from infuse.transforms import frame_change, sampled_motion, skeleton_from_globals
+from infuse.transforms import frame_change, nearest_joint_parents, sampled_motion, skeleton_from_globals
 
 from . import animation, ascii_format, binary, models
 from .document import Document, build, number
@@ -55,7 +55,7 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     rest_parts = [np.stack(part, axis=1) for part in
                   zip(*[models.local_parts(m, m.translation[None], m.rotation[None], m.scaling[None]) for m in ms])]
     rest = change @ models.world_matrices(ms, *rest_parts)[0, joints]
-    skeleton = skeleton_from_globals(models.unique_names(ms, joints), models.joint_parents(ms, joints), rest)
+    skeleton = skeleton_from_globals(models.unique_names(ms, joints), nearest_joint_parents([m.parent for m in ms], joints), rest)
 
     fps = animation.frame_rate(doc, settings)
     motions = {}
