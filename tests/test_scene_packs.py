@@ -42,8 +42,10 @@ def test_walks_reach_their_spots_in_the_world(walked):
     assert np.linalg.norm(path[stay] - (3.0, -0.9), axis=1).max() < 0.15  # there, and staying there
     assert np.linalg.norm(path[-20:] - (4.5, -0.8), axis=1).max() < 0.15  # then at the second spot
     assert np.linalg.norm(path[0] - (1.0, -1.0)) < 0.15  # from where it was placed
+    first_walk, _ = scene.walks.walks["bob"]
+    assert first_walk.settled is not None  # it stood on the pack's idle in between
     steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
-    assert steps.max() < 2.5 / 30  # no jump anywhere: the second walk went on from the first
+    assert steps.max() < 2.5 / 30  # no jump anywhere: the idle took over there, the second walk went on from it
 
 
 def test_the_scene_knows_where_a_walk_ends(walked):
@@ -105,3 +107,24 @@ def test_carried_objects_are_tracked(reached):
     gap = np.linalg.norm(track[held] - pos[held, rig.joint("r_wrist")], axis=1)
     assert np.ptp(gap) < 1e-6 and gap.max() < 0.1
     assert np.ptp(track[held], axis=0).max() > 0.05  # and the wrist moved it
+
+
+def test_an_arrived_walk_hands_over_to_the_idle_where_it_stands():
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(corpus_character("xbot"), "bob", packs=["locomotion-male"])
+    scene.walk_to("bob", (0.2, 2.0), at=0.2)
+    scene.run(6.0)
+    (walk,) = scene.walks.walks["bob"]
+    assert walk.settled is not None and walk.activity.end_s is not None  # the idle clip took over
+    assert walk.settled.start_s >= walk.end_s
+    rig = scene.runtime.rig("bob")
+    _, pos = infuse.motion_fk(scene.motion("bob"))
+    after = int(round(walk.settled.start_s * 30))
+    assert np.linalg.norm(pos[after:, rig.joint("base")][:, [0, 2]] - (0.2, 2.0), axis=1).max() < 0.15
+    base = pos[:, rig.joint("base")][:, [0, 2]]
+    moving = np.nonzero(np.linalg.norm(np.diff(base, axis=0), axis=1) > 1e-3)[0]
+    assert after <= moving[moving < after].max() + 30  # within a second of standing still
+    around = slice(after - 5, after + 20)  # through the crossfade: no jump of the body; the feet step into place
+    for joint, most in (("base", 0.01), ("skullbase", 0.02), ("l_ankle", 0.05), ("r_ankle", 0.05)):
+        steps = np.linalg.norm(np.diff(pos[around, rig.joint(joint)], axis=0), axis=1)
+        assert steps.max() < most, joint

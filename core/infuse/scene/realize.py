@@ -27,8 +27,9 @@ from ..runtime import Clip, controller, controller_components
 BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
 #: Kinds with nothing to show.
 SILENT_KINDS = frozenset({"wait", "event"})
-#: Kinds played from a clip of the character, and the priority of that clip on the base layer.
-CLIP_KINDS = {"gesture": 20, "animation": 20, "posture": 10, "blend": 10}
+#: Kinds played from a clip of the character, and the priority of that clip on the base layer (above
+#: walks, whose priorities count up from 1 per character).
+CLIP_KINDS = {"gesture": 20_000, "animation": 20_000, "posture": 10_000, "blend": 10_000}
 #: Kinds behaviour packs provide, and what is missing when they are not installed.
 PACK_KINDS = {
     "locomotion": "no locomotion pack infused: the character does not walk",
@@ -168,9 +169,8 @@ DECELERATION_M_S2 = 2.5
 
 
 def _locomotion(scene, activation: Activation):
-    """Walk along the activation's path with the character's locomotion pack. The walk lasts: after the
-    last point the character idles there (the pack's idle) until another walk takes over, which starts
-    from where this one is."""
+    """Walk along the activation's path with the character's locomotion pack. After the last point the
+    character stands there (:mod:`infuse.scene.walks`) until another walk goes on from where it is."""
     p = activation.parameters
     name = activation.character
     rig = scene.runtime.rig(name)
@@ -203,9 +203,9 @@ def _locomotion(scene, activation: Activation):
                                                     "the character faces its last direction of travel")
     walk = controller("locomotion", pack=scene.pack_space(name, "locomotion"), speed=float(p.get("speed_m_s") or 1.2),
                       path=own, max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
-    previous = scene.walking(name)
-    activity = scene.activate(activation, walk, activation.stop_s, blend_in_s=0.3)
-    scene.continue_walk(name, activity, previous, points[-1])
+    activity = scene.activate(activation, walk, activation.stop_s, blend_in_s=0.3, priority=scene.walks.priority(name))
+    scene.walks.start(name, activity, activation.end)
+    scene.character(name).destination = (float(points[-1][0]), float(points[-1][1]))
     return activity
 
 

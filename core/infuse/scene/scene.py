@@ -25,7 +25,6 @@ the BML feedback (blockProgress, syncPointProgress) up to the last frame evaluat
 """
 from __future__ import annotations
 
-import copy
 import itertools
 import math
 import sys
@@ -45,14 +44,15 @@ from ..runtime.rig import Rig
 from . import builder
 from .realize import BEHAVIOR_DEGRADED, realize
 from .speech import SpeechCache, mix, utterance_samples, write_wav
+from .walks import Walks
 
 
 @dataclass
 class SceneCharacter:
     """A character of a scene: its runtime name, the :class:`~infuse.Character` (asset, mapping and clips), the
     file it came from, its map file (joint and face channels), behaviour packs, voice, the
-    :class:`~infuse.packs.Infusion` of its packs, the activities it idles with, its current walk and where
-    that walk ends ((x, z) metres), and the object it holds."""
+    :class:`~infuse.packs.Infusion` of its packs, the activities it idles with, where its last walk ends
+    ((x, z) metres), and the object it holds."""
 
     name: str
     character: Character
@@ -62,7 +62,6 @@ class SceneCharacter:
     voice: str | None = None
     infusion: object = None
     idle: dict = field(default_factory=dict)
-    walk: object = None
     destination: tuple | None = None
     holding: str | None = None
 
@@ -115,7 +114,7 @@ class Scene:
         self.activities: dict[tuple[str, str], object] = {}
         self._spoken: dict[str, list[_Spoken]] = {}
         self._interrupted: set[tuple[str, str]] = set()
-        self._handovers: list[tuple[int, object, object]] = []
+        self.walks = Walks(self)
         self._recorder = None
         self._realizing = None
         self._realize_notes: list[str] = []
@@ -298,29 +297,6 @@ class Scene:
         activity = self.character(name).idle.pop(kind, None)
         if activity is not None:
             self.runtime.stop(activity, at_s)
-
-    def walking(self, name: str):
-        """The character's current locomotion activity (it lasts after arriving: the character idles there)."""
-        return self.character(name).walk
-
-    def continue_walk(self, name: str, activity, previous, destination) -> None:
-        """Make ``activity`` the character's walk: the one before stops where it starts, and hands over where
-        the character is then (position, heading, speed, gait phase), so the new walk goes on from there."""
-        entry = self.character(name)
-        if previous is not None:  # it plays on under the new walk until that has blended in, so no gap shows
-            self.runtime.stop(previous, activity.start_s + activity.blend_in_s, blend_out_s=0.0)
-        entry.walk, entry.destination = activity, (float(destination[0]), float(destination[1]))
-        self._handovers.append((max(math.ceil(activity.start_s * self.fps - 1e-9), 0), activity, previous))
-
-    def _hand_over(self) -> None:
-        """Hand the state of a walk that ends to the walk that starts now (see :meth:`continue_walk`)."""
-        due = [h for h in self._handovers if h[0] <= self.runtime.frame]
-        self._handovers = [h for h in self._handovers if h[0] > self.runtime.frame]
-        for _, activity, previous in due:
-            if previous is not None and previous.state and not activity.state:
-                # everything the walk carries (where it is, its heading, speed, gait phase, planted feet); the
-                # new path starts at its first point
-                activity.state.update(copy.deepcopy(previous.state), waypoint=0)
 
     def stop_reaches(self, name: str, at_s: float) -> None:
         """End the character's reaches at ``at_s`` (SmartBody's reach finish)."""
@@ -601,8 +577,8 @@ class Scene:
             raise UsageError("run() takes a duration >= 0 seconds")
         done = 0
         while done < frames:
-            n = self._frames_to_next_handover(min(self.runtime.block_frames, frames - done))
-            self._hand_over()
+            self.walks.before_block()
+            n = self.walks.frames_until_handover(min(self.runtime.block_frames, frames - done))
             self.runtime.step(n)
             done += n
             self._deliver()
@@ -613,16 +589,11 @@ class Scene:
         """Evaluate the next ``frames`` frames and deliver their feedback."""
         frames = int(frames)
         while frames > 0:
-            n = self._frames_to_next_handover(frames)
-            self._hand_over()
+            self.walks.before_block()
+            n = self.walks.frames_until_handover(frames)
             self.runtime.step(n)
             frames -= n
         self._deliver()
-
-    def _frames_to_next_handover(self, most: int) -> int:
-        """How many frames to evaluate at once: at most ``most``, stopping before a walk that takes over."""
-        ahead = [f - self.runtime.frame for f, _, _ in self._handovers if f > self.runtime.frame]
-        return max(min([most] + ahead), 1)
 
     def _deliver(self) -> None:
         last = (self.runtime.frame - 1) / self.fps

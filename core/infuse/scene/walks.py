@@ -1,0 +1,138 @@
+"""Walks that go on from one another, and characters that stand where a walk left them.
+
+A locomotion activity starts from the character's own origin unless told otherwise. So when a character
+walks again, the new walk takes over the state of the one before (where it is, its heading, speed, gait
+phase, planted feet) at the frame it starts. Evaluation stops at that frame for the handover. The old
+walk plays on under the new one until the new one has blended in.
+
+A walk that has arrived would go on evaluating the pack's idle on the spot, frame by frame. Instead,
+once the character stands still past the walk's scheduled end, the pack's idle clip takes over, turned
+and moved to where the character stands. It is placed from the output pose, not from the controller's
+internals, and crossfaded over :data:`SETTLE_BLEND_S`.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import quaternions as quat
+from ..runtime import Clip
+
+#: Crossfade from a walk that has arrived to the idle clip, seconds.
+SETTLE_BLEND_S = 0.5
+#: The character counts as standing when its root moved less than this (metres) over the last
+#: :data:`STILL_S` seconds.
+STILL_M, STILL_S = 0.015, 0.5
+
+
+@dataclass
+class Walk:
+    """One walk of a character: the activity, its scheduled end (seconds), the frame at which to see
+    whether it stands still, and the idle that took over."""
+
+    activity: object
+    end_s: float
+    check_frame: int
+    settled: object = None
+
+
+class Walks:
+    """Walk continuity for the characters of one scene (see the module doc).
+
+    Base-layer priorities keep the order: a character's k-th walk plays at ``2k + 2`` and the idle that
+    settles it at ``2k + 3``, so each blends over the one before (the pack's first idle plays at 0).
+    """
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.walks: dict[str, list[Walk]] = {}
+        self._handovers: list[tuple[int, object, object]] = []
+
+    def priority(self, name: str) -> int:
+        """The base-layer priority of the character's next walk."""
+        return 2 * len(self.walks.get(name, ())) + 2
+
+    def start(self, name: str, activity, end_s: float) -> None:
+        """``activity`` (a locomotion, at :meth:`priority`) becomes the character's walk from its start."""
+        runtime = self.scene.runtime
+        walks = self.walks.setdefault(name, [])
+        previous = walks[-1] if walks else None
+        if previous is not None:  # the old pose shows until the new walk has blended in
+            until = activity.start_s + activity.blend_in_s
+            runtime.stop(previous.activity, until, blend_out_s=0.0)
+            if previous.settled is not None:
+                runtime.stop(previous.settled, until, blend_out_s=0.0)
+        fps = self.scene.fps
+        walks.append(Walk(activity, float(end_s), math.ceil((end_s + STILL_S) * fps - 1e-9)))
+        frame = max(math.ceil(activity.start_s * fps - 1e-9), 0)
+        self._handovers.append((frame, activity, previous.activity if previous is not None else None))
+
+    def _waiting(self):
+        """(character, walk, the walk after it or None) for walks that may still settle."""
+        for name, walks in self.walks.items():
+            for k, walk in enumerate(walks):
+                after = walks[k + 1] if k + 1 < len(walks) else None
+                if walk.settled is None and (after is None or after.activity.start_s > walk.end_s + STILL_S):
+                    yield name, walk, after
+
+    def frames_until_handover(self, most: int) -> int:
+        """How many frames to evaluate next: at most ``most``, stopping at the frame a walk takes over or
+        should be seen standing."""
+        frame = self.scene.runtime.frame
+        ahead = [f - frame for f, _, _ in self._handovers if f > frame]
+        ahead += [w.check_frame - frame for _, w, _ in self._waiting() if w.check_frame > frame]
+        return max(min([most] + ahead), 1)
+
+    def before_block(self) -> None:
+        """Hand over the walks that start now, and settle those that have arrived."""
+        frame = self.scene.runtime.frame
+        due = [h for h in self._handovers if h[0] <= frame]
+        self._handovers = [h for h in self._handovers if h[0] > frame]
+        for _, activity, previous in due:
+            if previous is not None and previous.state and not activity.state:
+                # the new path starts at its first point; everything else goes on
+                activity.state.update(copy.deepcopy(previous.state), waypoint=0)
+        for name, walk, after in list(self._waiting()):
+            started = walk.activity.start_s <= self.scene.time
+            if started and frame >= walk.check_frame and (after is None or after.activity.start_s > self.scene.time + SETTLE_BLEND_S):
+                self._settle(name, walk, after)
+
+    def _settle(self, name: str, walk: Walk, after: Walk | None) -> None:
+        scene, runtime = self.scene, self.scene.runtime
+        idle = scene.find_clip(name, "idle")
+        still = int(round(STILL_S * scene.fps))
+        walk.check_frame = runtime.frame + still  # unless it settles now, look again then
+        if idle is None or idle.skeleton.names != runtime.rig(name).skeleton.names or runtime.frame <= still:
+            return
+        if idle.joint_translations is not None and np.ptp(idle.joint_translations, axis=0).max() > 1e-6:
+            walk.check_frame = np.iinfo(np.int64).max  # its travel is on another joint than the root: it walks on the spot
+            return
+        rig = runtime.rig(name)
+        motion = runtime.motion(name)
+        root = quat.rotate(quat.conjugate(rig.rotation), motion.root_translations[-still:] - rig.position)
+        if np.linalg.norm(np.ptp(root[:, [0, 2]], axis=0)) > STILL_M:
+            return  # still on its way
+        heading_now = _heading(rig, quat.multiply(quat.conjugate(rig.rotation), motion.local_rotations[-1, 0]))
+        turn = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), heading_now - _heading(rig, idle.local_rotations[0, 0]))
+        rotations = np.array(idle.local_rotations)
+        rotations[:, 0] = quat.multiply(turn, rotations[:, 0])
+        start = idle.root_translations[0] * np.array([1.0, 0.0, 1.0])
+        here = root[-1] * np.array([1.0, 0.0, 1.0])
+        placed = idle.replace(local_rotations=rotations, root_translations=here + quat.rotate(turn, idle.root_translations - start),
+                              name="idle")
+        at = scene.time
+        walk.settled = runtime.activate(name, Clip(placed, loop=True), at, blend_in_s=SETTLE_BLEND_S,
+                                        priority=walk.activity.priority + 1)
+        runtime.stop(walk.activity, at + SETTLE_BLEND_S, blend_out_s=0.0)
+        if after is not None:  # until the next walk has blended in over it
+            runtime.stop(walk.settled, after.activity.start_s + after.activity.blend_in_s, blend_out_s=0.0)
+
+
+def _heading(rig, root_rotation: np.ndarray) -> float:
+    """Radians about +Y of the character's forward when its root joint has local rotation ``root_rotation``."""
+    forward_local = quat.rotate(quat.conjugate(rig.reference_rotations[0]), quat.rotate(rig.body, np.array([0.0, 0.0, 1.0])))
+    forward = quat.rotate(root_rotation, forward_local)
+    return math.atan2(forward[0], forward[2])
