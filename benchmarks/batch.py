@@ -7,9 +7,12 @@ the glTF characters, bvh for Utah). A clip-frame is one source frame retargeted 
 loading, mapping, planning and writing included.
 
 Configurations: the local process pool with 1 and with 2 workers, and a ``dask.distributed``
-LocalCluster of 2 worker processes (one thread each) on loopback. Pools and clusters are started
-and their workers have loaded the plugins before the clock starts; each character is still loaded
-and mapped once per worker inside the measured job. The configurations run in turn, ``--rounds``
+LocalCluster of 2 worker processes (one thread each) on loopback, once as Dask starts its workers
+and once without the ``MALLOC_TRIM_THRESHOLD_`` its nanny sets in their environment (with it, glibc
+returns every large numpy temporary to the system at once, which costs CPU; see docs/batch.md).
+Pools and clusters are started
+and have run a first, smaller job (the first Bandai folder) before the clock starts, so their
+workers have loaded the plugins and the characters. The configurations run in turn, ``--rounds``
 times; the best round of each counts.
 
 Columns: wall seconds and clip-frames per wall second; the CPU-bound time, the CPU seconds of the
@@ -54,10 +57,10 @@ def pool(workers: int) -> cf.ProcessPoolExecutor:
     return executor
 
 
-def measure(name: str, scratch: Path, **backend) -> dict:
+def measure(name: str, scratch: Path, motions=MOTIONS, **backend) -> dict:
     out = scratch / name
     load = os.getloadavg()[0]
-    result = run_batch([str(CORPUS / c) for c in CHARACTERS], motions=[str(CORPUS / m) for m in MOTIONS], out=out,
+    result = run_batch([str(CORPUS / c) for c in CHARACTERS], motions=[str(CORPUS / m) for m in motions], out=out,
                        resume=False, progress=False, **backend)
     if not result.ok:
         for f in result.failures:
@@ -74,18 +77,24 @@ def main() -> int:
     if not (CORPUS / "labels").is_dir():
         print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
         return 2
+    import dask
     import distributed
 
     scratch = Path(tempfile.mkdtemp(prefix="infuse-batch-bench-"))
     one, two = pool(1), pool(2)
-    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                       dashboard_address=None, protocol="tcp", silence_logs=40)
-    client = distributed.Client(cluster, set_as_default=False)
-    client.run(work.warm)
+    clusters, clients = [], []
+    for environ in ({}, {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        with dask.config.set(environ):
+            clusters.append(distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                                     dashboard_address=None, protocol="tcp", silence_logs=40))
+        clients.append(distributed.Client(clusters[-1], set_as_default=False))
+        clients[-1].run(work.warm)
     configs = [("pool, 1 worker", dict(executor=one)), ("pool, 2 workers", dict(executor=two)),
-               ("dask, 2 workers", dict(cluster=client))]
+               ("dask, 2 workers", dict(cluster=clients[0])), ("dask, no malloc trim", dict(cluster=clients[1]))]
     best: dict[str, dict] = {}
     try:
+        for name, backend in configs:
+            measure("warm-up", scratch, MOTIONS[:1], **backend)
         for r in range(args.rounds):
             for name, backend in configs:
                 row = measure(f"{name.replace(', ', '-').replace(' ', '')}-{r}", scratch, **backend)
@@ -101,8 +110,8 @@ def main() -> int:
                         if key == "wall":
                             best[name]["load"] = row["load"]
     finally:
-        client.close()
-        cluster.close()
+        for c in clients + clusters:
+            c.close()
         one.shutdown()
         two.shutdown()
         shutil.rmtree(scratch, ignore_errors=True)
@@ -115,10 +124,13 @@ def main() -> int:
     for row in best.values():
         print(f"| {row['name']} | {row['wall']:.2f} | {row['frames'] / row['wall']:,.0f} | {row['busiest']:.2f} | "
               f"{row['frames'] / row['busiest']:,.0f} | {row['cpu']:.2f} | {row['cpu'] / row['wall']:.2f} | {row['load']:.1f} |")
-    p1, p2, d2 = best["pool, 1 worker"], best["pool, 2 workers"], best["dask, 2 workers"]
+    p1, p2 = best["pool, 1 worker"], best["pool, 2 workers"]
     print(f"\nspeedup 1 -> 2 pool workers (target 1.7x): {p1['wall'] / p2['wall']:.2f}x wall, "
           f"{p1['busiest'] / p2['busiest']:.2f}x CPU-bound")
-    print(f"dask over the 2-worker pool: {p2['wall'] / d2['wall']:.2f}x wall, {p2['busiest'] / d2['busiest']:.2f}x CPU-bound")
+    for name in ("dask, 2 workers", "dask, no malloc trim"):
+        d = best[name]
+        print(f"{name} over the 2-worker pool: {p2['wall'] / d['wall']:.2f}x wall, "
+              f"{p2['busiest'] / d['busiest']:.2f}x CPU-bound")
     return 0
 
 
