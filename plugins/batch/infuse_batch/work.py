@@ -177,8 +177,20 @@ def run_unit(unit: Unit | PackUnit) -> UnitResult:
     return result
 
 
+def _once(cache: dict, key, make):
+    """``make()`` once per key; an exception it raised is kept and raised again on every later use."""
+    if key not in cache:
+        try:
+            cache[key] = make()
+        except Exception as exc:
+            cache[key] = exc
+    if isinstance(cache[key], Exception):
+        raise cache[key]
+    return cache[key]
+
+
 def _retarget(unit: Unit, result: UnitResult) -> None:
-    settings, out = unit.settings, Path(unit.out)
+    settings = unit.settings
     retargeter = _retargeter(settings.retargeter)
     characters: dict[int, _Loaded] = {}
     for k in sorted({k for k, _ in unit.todo}):
@@ -201,7 +213,7 @@ def _retarget(unit: Unit, result: UnitResult) -> None:
         except Exception as exc:
             if m in wanted:
                 result.failures.append(failure(source.path, exc))
-    groups: dict[str, int] = {}  # skeleton fingerprint -> first file of the group
+    first_of: dict[str, int] = {}  # skeleton fingerprint -> first file of the chunk with it
     group_of: dict[int, str] = {}
     for m, asset in assets.items():
         if not asset.motions:
@@ -209,36 +221,22 @@ def _retarget(unit: Unit, result: UnitResult) -> None:
                 result.empty.append(unit.motions[m].path)
             continue
         key = _fingerprint(asset.skeleton) + _fingerprint(next(iter(asset.motions.values())).skeleton)
-        groups.setdefault(key, m)
+        first_of.setdefault(key, m)
         group_of[m] = key
-    mappings: dict[str, Mapping | Exception] = {}
-    plans: dict[tuple[int, str], object] = {}
+    made: dict = {}  # source mappings per group, plans per (character, group)
     for k, m in unit.todo:
         if k not in characters or m not in group_of:
             continue
-        loaded, source, asset = characters[k], unit.motions[m], assets[m]
         key = group_of[m]
-        first = assets[groups[key]]
+        first = assets[first_of[key]]
         try:
-            if key not in mappings:
-                try:
-                    mappings[key] = _source_mapping(first, settings.mapper)
-                except Exception as exc:
-                    mappings[key] = exc
-            if isinstance(mappings[key], Exception):
-                raise mappings[key]
-            if (k, key) not in plans:
-                try:
-                    plans[(k, key)] = _planner(retargeter, next(iter(first.motions.values())), mappings[key], loaded,
-                                               first.path, unit.characters[k].path)
-                except Exception as exc:
-                    plans[(k, key)] = exc
-            if isinstance(plans[(k, key)], Exception):
-                raise plans[(k, key)]
+            src_map = _once(made, key, lambda: _source_mapping(first, settings.mapper))
+            plan = _once(made, (k, key), lambda: _planner(retargeter, next(iter(first.motions.values())), src_map,
+                                                          characters[k], first.path, unit.characters[k].path))
         except Exception as exc:
-            result.failures.append(failure(source.path, exc))
+            result.failures.append(failure(unit.motions[m].path, exc))
             continue
-        _write_clips(unit, k, m, loaded, asset, plans[(k, key)], signatures[m], result)
+        _write_clips(unit, k, m, characters[k], assets[m], plan, signatures[m], result)
 
 
 def _write_clips(unit: Unit, k: int, m: int, loaded: _Loaded, asset: Asset, plan, sig: dict, result: UnitResult) -> None:
