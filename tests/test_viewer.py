@@ -191,7 +191,7 @@ def test_view_serves_until_interrupted():
         status, _, _ = _get(url[0])
         assert status == 200
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=30)
+        out, err = proc.communicate(timeout=90)
     finally:
         if proc.poll() is None:
             proc.kill()

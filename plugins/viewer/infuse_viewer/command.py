@@ -93,13 +93,13 @@ def _serve(args, found, options, title) -> int:
         if args.port is not None:
             raise
         server = ViewerServer(site, 0, verbose=args.verbose)
-    print(f"infuse view: serving {title} at {server.url}  (Ctrl-C stops)", flush=True)
-    if not args.no_open and _has_display():
-        webbrowser.open(server.url)
     previous = None
     if threading.current_thread() is threading.main_thread():  # `kill` stops as cleanly as Ctrl-C
         previous = signal.signal(signal.SIGTERM, _interrupt)
-    try:
+    try:  # entered before the URL is printed, so an interrupt right after it still stops cleanly
+        print(f"infuse view: serving {title} at {server.url}  (Ctrl-C stops)", flush=True)
+        if not args.no_open and _has_display():
+            webbrowser.open(server.url)
         while server.thread.is_alive():
             server.thread.join(0.5)
     except KeyboardInterrupt:

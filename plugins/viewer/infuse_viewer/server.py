@@ -156,6 +156,7 @@ class ViewerServer:
         except OSError as exc:
             raise UsageError(f"cannot listen on {HOST}:{port}: {exc.strerror or exc}") from None
         self._httpd.daemon_threads = True
+        self._httpd.block_on_close = False  # closing must not wait for a browser's idle keep-alive connection
         self._httpd.site = site  # type: ignore[attr-defined]
         self._httpd.verbose = verbose  # type: ignore[attr-defined]
         self.port = self._httpd.server_address[1]
