@@ -202,8 +202,9 @@ def test_cli_progress_and_summary(tmp_path, capsys):
     stdout, stderr = capsys.readouterr()
     assert code == 0, stderr
     assert "wrote 2 files (2 clips" in stdout and "0 of 2 items already done" in stdout
-    bar = [ln for ln in stderr.splitlines() if ln.startswith("batch [")]
-    assert bar and "2/2 100%" in bar[-1] and "clip-frames/s" in bar[-1] and "left 0:00" in bar[-1]
+    bar = [ln for ln in stderr.splitlines() if ln.startswith("batch ")]
+    assert bar and bar[-1].startswith("batch 100% [") and "] 2/2 left 0:00 elapsed" in bar[-1], stderr
+    assert "items/s" in bar[-1] and "clip-frames/s" in bar[-1]
 
 
 def test_cluster_without_dask_says_what_to_install(tmp_path, monkeypatch):

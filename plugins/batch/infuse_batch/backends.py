@@ -17,6 +17,8 @@ from . import work
 
 #: Units in flight per worker slot: one running, one waiting, so no worker idles between units.
 WINDOW_PER_SLOT = 2
+#: Seconds to wait for a first worker on a Dask scheduler that has none.
+WORKER_WAIT = 60.0
 
 
 def cores() -> int:
@@ -102,7 +104,12 @@ class Dask:
         self.client = client
         threads = sum(client.nthreads().values())
         if threads == 0:
-            client.wait_for_workers(1, timeout=60)
+            try:
+                client.wait_for_workers(1, timeout=WORKER_WAIT)
+            except TimeoutError:
+                if self._own:
+                    client.close()
+                raise UnusableInputError(address, f"no Dask worker joined the scheduler in {WORKER_WAIT:g} s") from None
             threads = sum(client.nthreads().values())
         self.slots = WINDOW_PER_SLOT * max(threads, 1)
         self._finished = distributed.as_completed(loop=client.loop, raise_errors=False)

@@ -1,16 +1,18 @@
-"""A progress bar on stderr: items done of the total, clip-frames per second and the time left.
+"""A progress bar on stderr: the share and number of items done, the time left and elapsed, items
+and clip-frames per second.
 
 On a terminal it redraws one line (at most ten times a second); elsewhere (a log file, CI) it
 prints a line every :data:`LOG_EVERY` seconds and a last one at the end.
 """
 from __future__ import annotations
 
+import shutil
 import sys
 import time
 
 #: Seconds between lines when stderr is not a terminal.
 LOG_EVERY = 10.0
-WIDTH = 24
+WIDTH = 20
 
 
 def _clock(seconds: float) -> str:
@@ -39,8 +41,8 @@ class Progress:
         rate = self.items / elapsed
         eta = (self.total - self.items) / rate if rate > 0 else float("nan")
         left = _clock(eta) if eta == eta else "?"
-        return (f"{self.label} [{'#' * filled}{'.' * (WIDTH - filled)}] {self.items}/{self.total} {100 * share:3.0f}% "
-                f"{rate:.1f} items/s {self.frames / elapsed:,.0f} clip-frames/s elapsed {_clock(elapsed)} left {left}")
+        return (f"{self.label} {100 * share:3.0f}% [{'#' * filled}{'.' * (WIDTH - filled)}] {self.items}/{self.total} "
+                f"left {left} elapsed {_clock(elapsed)} {rate:.1f} items/s {self.frames / elapsed:,.0f} clip-frames/s")
 
     def update(self, items: int, frames: int) -> None:
         self.items += items
@@ -51,7 +53,10 @@ class Progress:
         if now - self._last < (0.1 if self.tty else LOG_EVERY) and self.items < self.total:
             return
         self._last = now
-        self.stream.write(("\r" + self.line() + "\x1b[K") if self.tty else self.line() + "\n")
+        if self.tty:  # one line that fits, or redrawing it would scroll
+            self.stream.write("\r" + self.line()[: shutil.get_terminal_size().columns - 1] + "\x1b[K")
+        else:
+            self.stream.write(self.line() + "\n")
         self.stream.flush()
 
     def close(self) -> None:
