@@ -63,9 +63,13 @@ def test_later_syntheses_are_timed_in_a_fresh_process(engine, spoken, tmp_path):
     first, _, _ = spoken
     assert not espeak().fresh
     again = engine.synthesize(TEXT, tmp_path / "again.wav")
-    assert again.meta["alignment"] == "WAV identical to the timed synthesis"
+    # pyttsx3's own WAV is used when it matches; under heavy load its driver may hand back different audio,
+    # and the engine then writes the timed synthesis instead. Either way the WAV is the timed audio.
+    alignment = again.meta["alignment"]
+    assert alignment == "WAV identical to the timed synthesis" or alignment.startswith("rewritten:"), alignment
     assert again.phonemes == first.phonemes and again.marks == first.marks
-    assert (tmp_path / "again.wav").read_bytes() == first.wav_path.read_bytes()
+    from infuse_tts_espeak.engine import read_wav_samples
+    assert np.array_equal(read_wav_samples(tmp_path / "again.wav")[0], read_wav_samples(first.wav_path)[0])
 
 
 def _damage_first_wav(monkeypatch, damage):

@@ -93,9 +93,10 @@ def _serve(args, found, options, title) -> int:
         if args.port is not None:
             raise
         server = ViewerServer(site, 0, verbose=args.verbose)
-    previous = None
-    if threading.current_thread() is threading.main_thread():  # `kill` stops as cleanly as Ctrl-C
-        previous = signal.signal(signal.SIGTERM, _interrupt)
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        # Ctrl-C stops even when started with SIGINT ignored (a background job); `kill` stops as cleanly.
+        previous = {sig: signal.signal(sig, _interrupt) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:  # entered before the URL is printed, so an interrupt right after it still stops cleanly
         print(f"infuse view: serving {title} at {server.url}  (Ctrl-C stops)", flush=True)
         if not args.no_open and _has_display():
@@ -106,8 +107,8 @@ def _serve(args, found, options, title) -> int:
         pass
     finally:
         server.close()
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     print("infuse view: stopped", flush=True)
     return 0
 
