@@ -135,13 +135,6 @@ def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options)
     conf = {n: (0.95 if n in joints else 0.7) for n in ALL_NAMES}
     reasons = {n: (f"{joints[n]!r} in {source}" if n in joints else f"no joint of that name in {source}")
                for n in ALL_NAMES}
-    if fixed:
-        for n, v in fixed.items():
-            if v is None:
-                joints.pop(n, None)
-            else:
-                joints[n] = v
-            conf[n] = 1.0
-            reasons[n] = "set by hand"
+    # Hand-set entries (``fixed``) are applied by infuse.mapping.complete after every mapper.
     return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME,
                          overall_confidence=0.95 if len(joints) >= 20 else 0.6)
