@@ -67,6 +67,7 @@ class Gait:
     finger_curl: float = np.radians(15.0)
     head_pitch: float = np.radians(-2.0)      # + up
     turn_lean: float = 1.0                    # share of the centripetal lean atan(v·ω/g)
+    strike_reach: float = 0.99                # hip-to-ankle distance at heel strike, leg lengths
 
     @property
     def stride(self) -> float:
@@ -100,9 +101,14 @@ def heading(psi) -> np.ndarray:
     return rot(Y, psi)
 
 
+def rockers(g: Gait) -> tuple[float, float]:
+    """Stance shares where the heel rocker ends (the foot is flat) and the heel starts to rise."""
+    return (0.12, 0.5) if not g.run else (0.08, 0.35)
+
+
 def foot_pitch_stance(g: Gait, s: np.ndarray) -> np.ndarray:
     """Foot pitch (+ toes up) over stance share ``s`` in [0, 1]: heel rocker, flat, forefoot rocker."""
-    heel_end, roll_start = (0.12, 0.5) if not g.run else (0.08, 0.35)
+    heel_end, roll_start = rockers(g)
     down = g.heel_strike * (1.0 - smooth(s / heel_end))
     up = -g.toe_off * np.clip((s - roll_start) / (1.0 - roll_start), 0.0, 1.0) ** 1.6
     return np.where(s < heel_end, down, np.where(s < roll_start, 0.0, up))
@@ -166,6 +172,10 @@ class Pelvis:
         return pos + quat.rotate(r, self.body.rest(f"{side}_hip") - self.body.rest("base"))
 
 
+#: A planted foot's ankle stays within this many leg lengths of the hip (the knee keeps a little
+#: flexion); beyond it the heel rises about the ball.
+STANCE_REACH = 0.99
+
 #: Heel-up foot pitches tried when the leg cannot otherwise reach its planted ball (radians).
 _PITCHES = -np.radians(np.arange(0.0, 66.0, 1.0))
 
@@ -175,7 +185,7 @@ def reach_pitch(body: Body, pelvis: Pelvis, side: str, t: np.ndarray, flat: np.n
     """Foot pitch (F,): ``pitch``, or the smallest heel rise about the ball that brings the ankle within
     reach of the hip at times ``t`` (the heel rises because the leg is at full length)."""
     hip = pelvis.hip(t, side)
-    limit = 0.975 * body.leg
+    limit = STANCE_REACH * body.leg
     cands = np.minimum(pitch[:, None], _PITCHES[None, :])  # (F, K), less than or equal to the profile
     f, k = cands.shape
     ankles = stance_ankle(body, np.repeat(flat, k, axis=0), np.repeat(yaw, k), cands.ravel()).reshape(f, k, 3)
@@ -216,7 +226,7 @@ def foot_track(body: Body, g: Gait, pelvis: Pelvis, t: np.ndarray, side: int, pl
             hip = placement.hip(t_hs, name)
             ground_hs, psi_hs = path(g, t_hs)
             drop = hip[:, 1] - (body.ankle_height + e0[:, 1])
-            ahead = np.sqrt(np.maximum((0.99 * body.leg) ** 2 - drop ** 2, 0.0)) * np.sign(np.cos(g.direction))
+            ahead = np.sqrt(np.maximum((g.strike_reach * body.leg) ** 2 - drop ** 2, 0.0)) * np.sign(np.cos(g.direction))
             hip_ground = hip.copy()
             hip_ground[:, 1] = 0.0
             strike = hip_ground + quat.rotate(heading(psi_hs), np.array([0.0, 0.0, 1.0])) * ahead[:, None]

@@ -56,20 +56,25 @@ def _runs(flags: np.ndarray, loop: bool) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in runs]
 
 
-#: How far (leg lengths) a contact point may rise above its planted height and still be down: about
-#: 8 mm on an adult, so the heel counts as off as soon as it starts to rise.
+#: How far (leg lengths) the ball may sit above its planted height and still be down: about 8 mm on
+#: an adult.
 DOWN_TOLERANCE = 0.01
+#: How far (leg lengths) the ankle may rise above its planted height, the ball down, before the heel
+#: counts as off: about 2.5 mm on an adult, a heel rise of about 1 degree, so the foot starts to
+#: pivot about its ball as soon as the heel starts to rise.
+RISE_TOLERANCE = 0.003
 
 
-def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
+def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE,
+                   rise: float = RISE_TOLERANCE) -> np.ndarray:
     """(F, 2, 2) flags of each foot (left, right) having its heel (ankle) and its ball down.
 
     ``found``: :class:`~infuse.contacts.FootContacts` of the clip; ``positions`` (F, J, 3) metres.
     A foot's ball is down while the foot is planted and the ball sits within ``tolerance`` leg
     lengths of its planted height (its lower quartile while the foot is planted: the ball is down
     for most of a stance); the heel is down while the foot is planted, except when the ankle has
-    risen with the ball down, or after the ball was down in that stance (heel off, the push off on
-    the toes, or a landing on the ball). During the heel rocker
+    risen more than ``rise`` leg lengths with the ball down, or after the ball was down in that
+    stance (heel off, the push off on the toes, or a landing on the ball). During the heel rocker
     (toes up after heel strike) only the heel is down. A foot without a ball point has its heel down
     whenever it is planted.
     """
@@ -79,7 +84,7 @@ def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERAN
     for k in (0, 1):
         pts = found.points[found.foot_of_point == k]
         ankle = positions[:, pts[0], 1]
-        raised = ankle - np.percentile(ankle[planted[:, k]] if planted[:, k].any() else ankle, 5.0) > eps
+        raised = ankle - np.percentile(ankle[planted[:, k]] if planted[:, k].any() else ankle, 5.0) > rise * found.leg_length
         if len(pts) > 1:
             y = positions[:, pts[1], 1]
             ball = planted[:, k] & (y - np.percentile(y[planted[:, k]] if planted[:, k].any() else y, 25.0) <= eps)
@@ -93,13 +98,13 @@ def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERAN
     return out
 
 
-def phase_contacts(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE):
+def phase_contacts(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE, rise: float = RISE_TOLERANCE):
     """``found`` (:class:`~infuse.contacts.FootContacts`) with each point's flags narrowed to when it is
     on the ground: the ankle while the heel is down, the ball while the ball is down (see
     :func:`contact_phases`), e.g. for :func:`infuse.metrics.foot_skate`."""
     from dataclasses import replace
 
-    phases = contact_phases(found, positions, tolerance)
+    phases = contact_phases(found, positions, tolerance, rise)
     flags = np.zeros_like(found.flags)
     for k in (0, 1):
         cols = np.nonzero(found.foot_of_point == k)[0]
