@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Sequence
 
+from .mesh import SkinnedMesh
 from .motion import Motion
 from .skeleton import Skeleton
 
@@ -22,6 +24,9 @@ class Asset:
     - ``meta``: format-specific facts (VRM humanoid map, channel orders, sync points...).
     - ``payload``: format-specific data a writer needs to keep what the core does not model
       (mesh, skin, materials); opaque to the core.
+    - ``mesh_loader``: a callable returning the file's :class:`~infuse.mesh.SkinnedMesh` surfaces,
+      called once, on first use of :attr:`meshes` (decoding geometry and textures costs more than
+      reading a skeleton, and most commands never draw). ``None`` for files without meshes.
     """
 
     path: Path | None
@@ -34,6 +39,16 @@ class Asset:
     units_detected_by: str = "file"
     meta: dict[str, Any] = field(default_factory=dict)
     payload: Any = None
+    mesh_loader: Callable[[], Sequence[SkinnedMesh]] | None = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def meshes(self) -> tuple[SkinnedMesh, ...]:
+        """The skinned surfaces bound to :attr:`skeleton` (core frame, bind pose; see :mod:`infuse.mesh`).
+
+        Empty for a file without meshes, or whose meshes the reader cannot decode (it says why in
+        ``meta["warnings"]``).
+        """
+        return tuple(self.mesh_loader()) if self.mesh_loader is not None else ()
 
     @property
     def num_frames(self) -> int:

@@ -1,4 +1,5 @@
-"""``infuse render``: stick-figure previews of character and motion files as PNG, GIF or MP4."""
+"""``infuse render``: previews of character and motion files as PNG, GIF or MP4: the character's
+shaded skinned mesh when the file has one, else a stick figure (``--style``)."""
 from __future__ import annotations
 
 import re
@@ -6,7 +7,7 @@ from pathlib import Path
 
 from .. import fileio, registry
 from ..cli.builtin import add_read_options, read_options
-from ..errors import InfuseError, InputError, UsageError
+from ..errors import InfuseError, InputError, UnusableInputError, UsageError
 from ..hookspecs import hookimpl
 from ..mapping import DEFAULT_MAPPER, map_skeleton
 from ..plugin_types import Command
@@ -15,6 +16,7 @@ from .output import check_suffix, render
 from .scene import Figure, sides_from_mapping
 
 MAX_SIDE = 8192
+STYLES = ("auto", "mesh", "stick")
 #: Mapping entries below this confidence are ringed by ``--canonical``.
 LOW_CONFIDENCE = 0.5
 
@@ -33,6 +35,8 @@ def parse_size(text: str) -> tuple[int, int]:
 def _arguments(p) -> None:
     p.add_argument("files", nargs="+", metavar="FILE", help="character or motion files; several render side by side")
     p.add_argument("-o", "--output", required=True, help="output file: .png (still or --strip), .gif or .mp4")
+    p.add_argument("--style", choices=STYLES, default="auto",
+                   help="mesh: the shaded skinned mesh; stick: the skeleton; auto (default): the mesh when the file has one")
     p.add_argument("--clip", help="name of the clip to play (default: each file's first clip, or its rest pose)")
     p.add_argument("--frame", type=int, help="PNG: the frame to draw (0-based, of the first file)")
     p.add_argument("--start", type=float, help="first time to draw, seconds")
@@ -98,9 +102,24 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
             names = {joint: canonical for canonical, joint in reversed(list(mapped.items()))}
             ringed += [joint for canonical, joint in mapped.items() if mapping.confidence.get(canonical, 1.0) < LOW_CONFIDENCE]
     options = dict(label=label, names=names, highlight=ringed or None, sides=sides)
+    meshes = _meshes(path, asset, motion, args.style)
     if motion is None:
-        return Figure.from_skeleton(asset.skeleton, **options)
-    return Figure.from_motion(motion, **options)
+        return Figure.from_skeleton(asset.skeleton, meshes=meshes, **options)
+    tracks = (asset.meta.get("morph_weight_tracks") or {}).get(motion.name) if meshes else None
+    return Figure.from_motion(motion, meshes=meshes, morph_weights=(tracks or {}).get("weights"), **options)
+
+
+def _meshes(path: Path, asset, motion, style: str) -> tuple:
+    """The surfaces to draw for ``style``: none for ``stick``; for ``mesh`` the file must have some."""
+    if style == "stick":
+        return ()
+    skeleton = asset.skeleton if motion is None else motion.skeleton
+    meshes = tuple(m for m in asset.meshes if m.num_triangles) if skeleton is asset.skeleton else ()
+    if not meshes and style == "mesh":
+        why = [w for w in asset.meta.get("warnings", []) if "not drawn" in w]
+        detail = f" ({why[0]})" if why else ""
+        raise UnusableInputError(path, f"has no skinned mesh to draw{detail}; use --style stick or auto")
+    return meshes
 
 
 def _run(args) -> int:
@@ -132,5 +151,5 @@ def _run(args) -> int:
 
 @hookimpl
 def infuse_commands():
-    return [Command("render", "draw a stick-figure preview of character/motion files as PNG, filmstrip, GIF or MP4",
+    return [Command("render", "draw character/motion files (shaded mesh or stick figure) as PNG, filmstrip, GIF or MP4",
                     _arguments, _run)]

@@ -2,9 +2,10 @@
 
 A :class:`Renderer` is built for a list of output times (seconds). It gathers every figure's
 joint positions at those times, frames the camera once for all of them (vectorized), and then
-draws any frame on request: ground grid, root trail, shadows, bones sorted far to near, markers,
-rays, contacts, highlights, names, a title and a time/frame counter. It draws at ``supersample``
-times the output size and downsamples, which antialiases lines and text.
+draws any frame on request: ground grid, root trail, shadows, bones sorted far to near (or, for a
+figure with a mesh, its skinned surfaces through a z-buffer), markers, rays, contacts, highlights,
+names, a title and a time/frame counter. It draws at ``supersample`` times the output size and
+downsamples, which antialiases lines, text and mesh edges.
 """
 from __future__ import annotations
 
@@ -16,6 +17,8 @@ from PIL import Image, ImageDraw
 
 from .camera import Camera, PanelView, frame_panels
 from .draw import RGB, LabelPlacer, capsule, dashed_line, disc, font, mix
+from .meshes import shade
+from .raster import coverage, rasterize
 from .scene import LEFT, PALETTE, RIGHT, Figure, to_rgb
 
 WHITE: RGB = (255, 255, 255)
@@ -24,6 +27,10 @@ BLACK: RGB = (0, 0, 0)
 #: Direction the light travels (core frame): from above, a little from the character's front-right,
 #: so shadows fall behind and to the left, visible from every named view.
 LIGHT = np.array([0.25, -1.0, -0.3]) / np.linalg.norm([0.25, -1.0, -0.3])
+
+
+#: Output frames posed at once when a mesh figure is drawn frame after frame.
+POSE_CHUNK = 8
 
 
 def on_ground(points: np.ndarray, ground: float) -> np.ndarray:
@@ -127,6 +134,11 @@ class Renderer:
         self.panels = [_Panel(g, (edges[k], 0, edges[k + 1] - edges[k], h)) for k, g in enumerate(groups)]
         self._blanks: dict[tuple[int, int], Image.Image] = {}
         self._points = [f.points()[fr] for f, fr in zip(self.figures, self.frames)]  # (T, N, 3) each
+        # a spread of mesh vertices per output frame: surfaces reach past the joints (head top, soles)
+        self._mesh_points = {i: f.mesh.sample_points(fr) for i, (f, fr) in enumerate(zip(self.figures, self.frames))
+                             if f.mesh is not None}
+        self._posed: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}  # figure -> (first output frame, positions, normals)
+        self._last_posed: dict[int, int] = {}
         self._frame_views()
         self._project()
 
@@ -164,7 +176,8 @@ class Renderer:
         pad = self.unit * 3
         for panel in self.panels:
             self._layout_labels(panel)
-            pts = np.concatenate([self._points[i][:, self.figures[i].visible] for i in panel.members], axis=1)
+            pts = np.concatenate([self._points[i][:, self.figures[i].visible] for i in panel.members]
+                                 + [self._mesh_points[i] for i in panel.members if i in self._mesh_points], axis=1)
             heights = [self.figures[i].skeleton.height() for i in panel.members]
             panel.height = max(max(heights), 0.1)
             lowest = float(pts[..., 1].min())
@@ -231,13 +244,13 @@ class Renderer:
         w, h = self.size
         if len(self.panels) == 1:
             canvas = self._blank(w * self.ss, h * self.ss)
-            self._draw_panel(ImageDraw.Draw(canvas), self.panels[0], t, labels)
+            self._draw_panel(canvas, self.panels[0], t, labels)
         else:  # each panel on its own image, so nothing spills into its neighbour
             canvas = Image.new("RGB", (w * self.ss, h * self.ss))
             for panel in self.panels:
                 x, y, pw, ph = panel.rect
                 sub = self._blank(pw, ph)
-                self._draw_panel(ImageDraw.Draw(sub), panel, t, labels)
+                self._draw_panel(sub, panel, t, labels)
                 canvas.paste(sub, (x, y))
         draw = ImageDraw.Draw(canvas)
         for panel in self.panels[1:]:  # a rule between side-by-side panels
@@ -268,7 +281,8 @@ class Renderer:
         base = self.colors[i]
         return {LEFT: mix(base, WHITE, 0.42), RIGHT: mix(base, BLACK, 0.3), 0: base}
 
-    def _draw_panel(self, draw: ImageDraw.ImageDraw, panel: _Panel, t: int, labels: bool) -> None:
+    def _draw_panel(self, canvas: Image.Image, panel: _Panel, t: int, labels: bool) -> None:
+        draw = ImageDraw.Draw(canvas)
         st, view, u = self.style, panel.view, self.unit
         bone_w = max(1.6 * u, 2.0 * self.ss)
         edge = max(0.28 * u, self.ss * 0.6)
@@ -285,16 +299,70 @@ class Renderer:
                 pix = view.project(root, t)[0]
                 draw.line([tuple(p) for p in pix], fill=mix(self.colors[i], st.background, 0.55),
                           width=max(int(round(0.5 * u)), 1), joint="curve")
-            if st.show_shadow and view.basis[2, 1] < 0.85:  # seen from nearly above, a shadow only clutters
+            if st.show_shadow and view.basis[2, 1] < 0.85 and fig.mesh is None:  # from nearly above, a shadow only clutters
                 sh = self._shadow[i][t]
                 for pa, ch in fig.bones:
                     capsule(draw, sh[pa], sh[ch], bone_w, st.shadow, st.shadow, 0)
             for j, flags in fig.contacts.items():
                 if flags[frame]:
                     self._contact_ring(draw, view, t, fig.positions[frame, j], panel, 0.08 * panel.height)
+        if any(self.figures[i].mesh is not None for i in panel.members):
+            self._draw_meshes(canvas, panel, t)
         self._draw_figures(draw, panel, t, bone_w, edge)
         if labels:
             self._draw_panel_label(draw, panel)
+
+    def _pose(self, i: int, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """Posed vertex positions and normals (V, 3) of figure ``i`` at output frame ``t``.
+
+        Frames drawn one after another (a GIF, a video) are skinned :data:`POSE_CHUNK` at a time.
+        """
+        cached = self._posed.get(i)
+        if cached is None or not cached[0] <= t < cached[0] + len(cached[1]):
+            count = POSE_CHUNK if self._last_posed.get(i) == t - 1 else 1
+            positions, normals = self.figures[i].mesh.pose(self.frames[i][t:t + count])
+            cached = self._posed[i] = (t, positions, normals)
+        self._last_posed[i] = t
+        return cached[1][t - cached[0]], cached[2][t - cached[0]]
+
+    def _draw_meshes(self, canvas: Image.Image, panel: _Panel, t: int) -> None:
+        """The panel's mesh figures at output frame ``t``: their ground shadow, then their surfaces
+        lit and z-buffered together, composited onto ``canvas`` (the panel's image)."""
+        view, st = panel.view, self.style
+        posed, triangles, colors, offset = [], [], [], 0
+        for i in panel.members:
+            mesh = self.figures[i].mesh
+            if mesh is not None:
+                posed.append(self._pose(i, t))
+                triangles.append(mesh.triangles + offset)
+                colors.append(mesh.colors)
+                offset += mesh.num_vertices
+        positions = np.concatenate([p for p, _ in posed]).astype(np.float64)
+        normals = np.concatenate([n for _, n in posed])
+        triangles, colors = np.concatenate(triangles), np.concatenate(colors)
+        width, height = canvas.size
+        image = np.array(canvas)
+        if st.show_shadow and view.basis[2, 1] < 0.85:
+            # a silhouette cast on the ground, at output resolution (it is soft and flat: no need for more)
+            low = (-(-width // self.ss), -(-height // self.ss))
+            cast = view.project(on_ground(positions, panel.ground), t)[0] / self.ss
+            mask = coverage(cast, triangles, low).repeat(self.ss, axis=0).repeat(self.ss, axis=1)[:height, :width]
+            darker = np.array(st.shadow, dtype=np.float32) / np.maximum(np.array(st.background, dtype=np.float32), 1.0)
+            image[mask] = np.clip(image[mask] * darker, 0, 255).astype(np.uint8)
+        cam = view.camera_space(positions, t)
+        pixels = view.to_pixels(cam)
+        depth = cam[:, 2]
+        if view.distance is not None:  # perspective: 1/distance is what varies linearly across the screen
+            behind = cam[:, 2] > 0.95 * view.distance
+            triangles = triangles[~behind[triangles].any(axis=1)]
+            depth = 1.0 / np.maximum(view.distance - cam[:, 2], 1e-6)
+        fragments = rasterize(pixels, depth, triangles, (width, height))
+        corner = pixels[triangles]
+        e1, e2 = corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0]
+        facing = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0  # counter-clockwise on screen (y runs down)
+        rgb = shade(fragments, triangles, normals, colors, facing, -LIGHT, view.basis[2])
+        image.reshape(-1, 3)[fragments.index] = rgb
+        canvas.paste(Image.fromarray(image))
 
     def _contact_ring(self, draw, view: PanelView, t: int, where: np.ndarray, panel: _Panel, radius: float) -> None:
         angles = np.linspace(0.0, 2.0 * np.pi, 25)
@@ -315,14 +383,14 @@ class Renderer:
             colors = self._side_colors(i)
             contact = {j for j, flags in fig.contacts.items() if flags[frame]}
             nj = fig.skeleton.num_joints
-            for pa, ch in fig.bones:
+            for pa, ch in fig.bones if fig.mesh is None else ():
                 side = fig.sides[ch] if ch < nj else fig.sides[pa]
                 color = st.contact if pa in contact else colors[int(side)]
                 z = (near[pa] + near[ch]) / 2.0
                 fill = self._fog(panel, color, z)
                 outline = mix(fill, BLACK, 0.45)
                 items.append((z, 0, lambda a=pix[pa], b=pix[ch], f=fill, o=outline: capsule(draw, a, b, bone_w, f, o, edge)))
-            for j in np.nonzero(fig.visible[:nj])[0]:
+            for j in np.nonzero(fig.visible[:nj] & (fig.mesh is None))[0]:
                 big = j in contact
                 r = bone_w * (0.85 if big else 0.32)
                 fill = st.contact if big else mix(self._fog(panel, colors[int(fig.sides[j])], near[j]), BLACK, 0.5)
@@ -369,15 +437,16 @@ class Renderer:
                 draw.line((pix[k][0], pix[k][1], pix[k + 3][0], pix[k + 3][1]), fill=colour, width=max(int(round(width)), 1))
 
     def _layout_labels(self, panel: _Panel) -> None:
-        """Place each figure's name and left/right legend in rows at the top of the panel."""
+        """Place each figure's name and left/right legend (stick figures only) in rows at the top of the panel."""
         fnt, small = font(self.font_px), font(round(self.font_px * 0.8))
         r = self.font_px * 0.32
-        legend = sum(2.6 * r + small.getlength(t) + self.font_px * 0.4 for t in "LR")
+        sides = sum(2.6 * r + small.getlength(t) + self.font_px * 0.4 for t in "LR")
         left = self.unit * 3
         room = panel.rect[2] - 2 * left
         x, y, row = left, self.header + self.font_px * 0.25, self.font_px * 1.4
         panel.labels = []
         for i in panel.members:
+            legend = sides if self.figures[i].mesh is None else 0.0
             label = self.figures[i].label or f"figure {i + 1}"
             fit = room - legend - self.font_px * 0.6
             if fnt.getlength(label) > fit:
@@ -392,11 +461,13 @@ class Renderer:
         panel.label_height = y + row - self.header
 
     def _draw_panel_label(self, draw: ImageDraw.ImageDraw, panel: _Panel) -> None:
-        """Each figure's name in its colour, with the left/right shades it uses."""
+        """Each figure's name in its colour, with the left/right shades a stick figure uses."""
         fnt, small = font(self.font_px), font(round(self.font_px * 0.8))
         r = self.font_px * 0.32
         for i, x, y, label in panel.labels:
             draw.text((x, y), label, font=fnt, fill=mix(self.colors[i], BLACK, 0.2), **self._halo(fnt))
+            if self.figures[i].mesh is not None:
+                continue  # a mesh shows its own colours, not the left/right shades
             x += draw.textlength(label, font=fnt) + self.font_px * 0.6
             colors = self._side_colors(i)
             for text, side in (("L", LEFT), ("R", RIGHT)):

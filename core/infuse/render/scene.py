@@ -13,8 +13,10 @@ import numpy as np
 from PIL import ImageColor
 
 from ..kinematics import end_site_positions, motion_fk
+from ..mesh import SkinnedMesh
 from ..motion import Motion
 from ..skeleton import Skeleton
+from .meshes import FigureMesh
 
 RGB = tuple[int, int, int]
 
@@ -142,6 +144,8 @@ class Figure:
     - ``contacts``: {joint name: (F,) bool}; the joint and its ground spot turn the contact colour
       on frames where it is True (foot contacts).
     - ``markers``: :class:`Marker` objects that belong to this figure (drawn in its panel).
+    - ``mesh``: a :class:`~infuse.render.meshes.FigureMesh` with one pose per frame: the figure is
+      drawn as its shaded skinned surfaces instead of a stick figure.
     """
 
     skeleton: Skeleton
@@ -155,6 +159,7 @@ class Figure:
     names: bool | Sequence[str] | Mapping[str, str] | None = None
     contacts: Mapping[str, np.ndarray] | None = None
     markers: list[Marker] = field(default_factory=list)
+    mesh: FigureMesh | None = None
 
     def __post_init__(self):
         sk = self.skeleton
@@ -193,21 +198,32 @@ class Figure:
         for marker in self.markers:
             if marker.ray_from is not None:
                 self._joint(marker.ray_from, f"marker {marker.label!r} ray_from")
+        if self.mesh is not None and (self.mesh.num_frames != len(pos) or self.mesh.rotations.shape[1] != j):
+            raise ValueError(f"figure {self.label!r}: its mesh has {self.mesh.num_frames} frames of "
+                             f"{self.mesh.rotations.shape[1]} joints, expected {len(pos)} of {j}")
 
     # -- construction ----------------------------------------------------------------------------
     @classmethod
-    def from_motion(cls, motion: Motion, **options) -> "Figure":
-        """A figure playing ``motion`` (FK of every frame at once, end sites included)."""
+    def from_motion(cls, motion: Motion, meshes: Sequence[SkinnedMesh] = (),
+                    morph_weights: Mapping[str, np.ndarray] | None = None, **options) -> "Figure":
+        """A figure playing ``motion`` (FK of every frame at once, end sites included).
+
+        With ``meshes`` (surfaces bound to the motion's skeleton, e.g. ``asset.meshes``) it is drawn
+        as those surfaces skinned by the motion; ``morph_weights`` {target name: (F,)} moves their
+        morph targets.
+        """
         g_rot, g_pos = motion_fk(motion)
         ends = end_site_positions(motion.skeleton, g_rot, g_pos) if len(motion.skeleton.end_site_parents) else None
         options.setdefault("label", motion.name)
-        return cls(motion.skeleton, g_pos, fps=motion.fps, end_sites=ends, **options)
+        mesh = FigureMesh(meshes, g_rot, g_pos, morph_weights) if meshes else None
+        return cls(motion.skeleton, g_pos, fps=motion.fps, end_sites=ends, mesh=mesh, **options)
 
     @classmethod
-    def from_skeleton(cls, skeleton: Skeleton, **options) -> "Figure":
-        """A one-frame figure in the skeleton's rest pose."""
+    def from_skeleton(cls, skeleton: Skeleton, meshes: Sequence[SkinnedMesh] = (), **options) -> "Figure":
+        """A one-frame figure in the skeleton's rest pose (drawn as ``meshes`` when given)."""
         ends = skeleton.rest_end_site_positions[None] if len(skeleton.end_site_parents) else None
-        return cls(skeleton, skeleton.rest_global_positions[None], end_sites=ends, **options)
+        mesh = FigureMesh(meshes, skeleton.rest_global_rotations[None], skeleton.rest_global_positions[None]) if meshes else None
+        return cls(skeleton, skeleton.rest_global_positions[None], end_sites=ends, mesh=mesh, **options)
 
     # -- derived ---------------------------------------------------------------------------------
     @property

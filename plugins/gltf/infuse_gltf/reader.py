@@ -36,10 +36,11 @@ Other facts
     fps and how it was found, interpolations, ignored channels), ``warnings``, and for VRM files
     ``vrm_version``, ``vrm_humanoid`` {VRM bone name: joint name}, ``vrm_expressions``.
     ``payload``: a :class:`GltfPayload` with the whole parsed document, for the writer.
+    ``meshes`` (decoded on first use): the skinned surfaces, see :mod:`infuse_gltf.mesh`.
 
-Compressed data: Draco and most meshopt views hold mesh data, which the reader never touches.
-meshopt-compressed views the skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES``
-mode with the ``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
+Compressed data: Draco and most meshopt views hold mesh data, which the skeleton and clips never
+touch (the mesh surfaces skip such primitives, with a warning). meshopt-compressed views the
+skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES`` mode with the ``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
 anything else raises :class:`~infuse.errors.MissingFeatureError` naming the extension. Malformed input raises :class:`~infuse.errors.InputError` with places such as
 ``nodes[12]`` or ``accessors[3]``.
 """
@@ -60,6 +61,7 @@ from infuse.skeleton import Skeleton
 from .accessors import AccessorReader, check_index, compression_extensions
 from .container import GltfDocument, parse_file
 from .graph import compose, global_matrices, node_graph, node_rest_trs, trs_matrices
+from .mesh import MeshLoader
 from .morph import mesh_target_names, unique_in_order
 from .sampling import INTERPOLATIONS, detect_fps, frame_times, sample
 from .vrm import VrmInfo, vrm_info
@@ -247,10 +249,12 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
         meta["morph_weight_tracks"] = tracks_by_clip
 
     fmt = "vrma" if vrm and vrm.version.startswith("vrma") else "vrm" if vrm else doc.container
+    has_mesh = any(isinstance(n.get("mesh"), int) for n in nodes)
+    meshes = MeshLoader(doc, accessors, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
     return Asset(
         path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets,
         source_units=units or "m", source_up_axis=up_axis or "Y",
-        units_detected_by="override" if units else "file", meta=meta, payload=payload,
+        units_detected_by="override" if units else "file", meta=meta, payload=payload, mesh_loader=meshes,
     )
 
 

@@ -1,0 +1,154 @@
+"""Skinned meshes in the core frame, and linear blend skinning vectorized over frames and vertices.
+
+A :class:`SkinnedMesh` is one drawable triangle surface (one material) bound to a skeleton.
+Conventions, stated once:
+
+- Positions are metres in the core frame (right-handed, +Y up, +Z the character's forward, +X its
+  left), in the **bind pose**: the pose the mesh was modelled in.
+- Triangles list vertex indices counter-clockwise when seen from the surface's front (glTF's rule).
+- A vertex follows bone ``b`` (``bind_joints[b]`` is a skeleton joint index) through the matrix
+  ``G @ inverse_bind[b]``, with ``G`` the joint's global rigid transform from forward kinematics
+  (its global rotation and position, see :func:`infuse.kinematics.forward_kinematics`). So
+  ``inverse_bind`` takes a bind-pose point into the joint's frame, and any unit scale of the file is
+  already in it. Skinning blends those matrices with each vertex's weights.
+- Colours are linear RGBA in 0..1 (glTF's base colour factors are linear; sRGB textures are
+  converted when sampled).
+- Morph targets are position offsets (metres, bind pose) added before skinning, weighted 0..1.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import quaternions as quat
+
+
+def _array(value, dtype, shape: tuple, what: str, name: str) -> np.ndarray:
+    out = np.array(value, dtype=dtype, copy=True)
+    if out.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, out.shape)):
+        raise ValueError(f"mesh {name!r}: {what} has shape {out.shape}, expected {shape}")
+    if out.dtype.kind == "f" and not np.all(np.isfinite(out)):
+        raise ValueError(f"mesh {name!r}: {what} holds NaN or infinity")
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class SkinnedMesh:
+    """One triangle surface bound to skeleton joints (see the module doc for the conventions).
+
+    - ``positions``: (V, 3) float32, metres, bind pose; ``normals``: (V, 3) float32 unit vectors.
+    - ``triangles``: (T, 3) int32 vertex indices, counter-clockwise seen from the front.
+    - ``joints``: (V, K) int32 indices into ``bind_joints``; ``weights``: (V, K) float32, rows sum to 1.
+    - ``bind_joints``: (B,) int64 skeleton joint index of each bone; ``inverse_bind``: (B, 4, 4) float64.
+    - ``base_color``: (4,) linear RGBA of the material; ``colors``: (V, 4) linear RGBA per vertex
+      (the base colour texture sampled at the vertex, times the base colour) or ``None``.
+    - ``double_sided``: the material shows both faces.
+    - ``morph_names``: M target names; ``morph_positions``: (M, V, 3) float32 offsets, metres.
+    """
+
+    name: str
+    positions: np.ndarray
+    normals: np.ndarray
+    triangles: np.ndarray
+    joints: np.ndarray
+    weights: np.ndarray
+    bind_joints: np.ndarray
+    inverse_bind: np.ndarray
+    base_color: np.ndarray = field(default_factory=lambda: np.array([0.8, 0.8, 0.8, 1.0]))
+    colors: np.ndarray | None = None
+    double_sided: bool = False
+    morph_names: tuple[str, ...] = ()
+    morph_positions: np.ndarray | None = None
+
+    def __post_init__(self):
+        name = self.name
+        put = lambda key, value: object.__setattr__(self, key, value)  # noqa: E731 - frozen dataclass
+        put("positions", _array(self.positions, np.float32, (None, 3), "positions", name))
+        v = len(self.positions)
+        normals = _array(self.normals, np.float32, (v, 3), "normals", name)
+        put("normals", normals)
+        put("triangles", _array(self.triangles, np.int32, (None, 3), "triangles", name))
+        if self.triangles.size and (self.triangles.min() < 0 or self.triangles.max() >= v):
+            raise ValueError(f"mesh {name!r}: a triangle names a vertex out of range (there are {v})")
+        put("bind_joints", _array(self.bind_joints, np.int64, (None,), "bind_joints", name))
+        b = len(self.bind_joints)
+        put("inverse_bind", _array(self.inverse_bind, np.float64, (b, 4, 4), "inverse_bind", name))
+        put("joints", _array(self.joints, np.int32, (v, None), "joints", name))
+        put("weights", _array(self.weights, np.float32, self.joints.shape, "weights", name))
+        if self.joints.size and (self.joints.min() < 0 or self.joints.max() >= b):
+            raise ValueError(f"mesh {name!r}: a vertex names a bone out of range (there are {b})")
+        put("base_color", _array(self.base_color, np.float32, (4,), "base_color", name))
+        if self.colors is not None:
+            put("colors", _array(self.colors, np.float32, (v, 4), "colors", name))
+        put("morph_names", tuple(str(n) for n in self.morph_names))
+        if self.morph_positions is not None:
+            put("morph_positions", _array(self.morph_positions, np.float32, (len(self.morph_names), v, 3), "morph_positions", name))
+        elif self.morph_names:
+            raise ValueError(f"mesh {name!r}: morph_names without morph_positions")
+
+    @property
+    def num_vertices(self) -> int:
+        return len(self.positions)
+
+    @property
+    def num_triangles(self) -> int:
+        return len(self.triangles)
+
+    def vertex_colors(self) -> np.ndarray:
+        """(V, 4) linear RGBA of every vertex: ``colors``, else the base colour."""
+        if self.colors is not None:
+            return self.colors
+        return np.broadcast_to(self.base_color, (self.num_vertices, 4))
+
+    def skin(self, global_rotations: np.ndarray, global_positions: np.ndarray,
+             morph_weights: np.ndarray | None = None, vertices: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Posed positions and normals, (F, V, 3) float32 each, for every frame at once.
+
+        ``global_rotations`` (F, J, 4) and ``global_positions`` (F, J, 3) are the skeleton's FK
+        results (core frame, metres); ``morph_weights`` (F, M) weights of ``morph_names``;
+        ``vertices``: indices of the vertices to pose (default all), e.g. a sample for framing.
+        """
+        matrices = skinning_matrices(self, global_rotations, global_positions)  # (F, B, 3, 4)
+        frames = len(matrices)
+        sel = slice(None) if vertices is None else np.asarray(vertices)
+        joints, weights = self.joints[sel], self.weights[sel]
+        flat = matrices.reshape(frames, -1, 12)
+        blend = np.zeros((frames, len(joints), 12), dtype=np.float32)
+        for k in range(joints.shape[1]):  # a handful of influences per vertex, not a loop over vertices
+            w = weights[:, k]
+            if np.any(w):
+                blend += w[:, None] * flat[:, joints[:, k]]
+        blend = blend.reshape(frames, -1, 3, 4)
+        rest = self.positions[sel]
+        if morph_weights is not None and self.morph_positions is not None and np.any(morph_weights):
+            mw = np.asarray(morph_weights, dtype=np.float32).reshape(frames, -1)
+            rest = rest + np.einsum("fm,mvc->fvc", mw, self.morph_positions[:, sel], optimize=True)
+            positions = np.einsum("fvij,fvj->fvi", blend[..., :3], rest) + blend[..., 3]
+        else:
+            positions = np.einsum("fvij,vj->fvi", blend[..., :3], rest) + blend[..., 3]
+        normals = np.einsum("fvij,vj->fvi", blend[..., :3], self.normals[sel])
+        normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
+        return positions, normals
+
+
+def rigid_matrices(global_rotations: np.ndarray, global_positions: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) matrices of rigid transforms from rotations (..., 4) and positions (..., 3)."""
+    rot = np.asarray(global_rotations, dtype=np.float64)
+    out = np.zeros(rot.shape[:-1] + (4, 4))
+    out[..., :3, :3] = quat.to_matrix(rot)
+    out[..., :3, 3] = global_positions
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def skinning_matrices(mesh: SkinnedMesh, global_rotations: np.ndarray, global_positions: np.ndarray) -> np.ndarray:
+    """(F, B, 3, 4) float32: bind pose -> posed, per bone of ``mesh`` and frame (``G @ inverse_bind``)."""
+    rot = np.asarray(global_rotations, dtype=np.float64)
+    pos = np.asarray(global_positions, dtype=np.float64)
+    if rot.ndim == 2:
+        rot, pos = rot[None], pos[None]
+    g = rigid_matrices(rot[:, mesh.bind_joints], pos[:, mesh.bind_joints])
+    return np.matmul(g, mesh.inverse_bind)[..., :3, :].astype(np.float32)
+
