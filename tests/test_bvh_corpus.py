@@ -74,7 +74,7 @@ def test_units_and_up_axis_are_sensible(assets):
         body = pos[:, 1:] if rel.startswith("bandai/") else pos  # Bandai's joint_Root stays at the origin
         spread = np.ptp(body, axis=1).mean(axis=0)
         assert spread[1] >= spread[2], rel  # upright: taller along +Y than deep along Z
-        assert 0.5 < spread[1] < 3.0, (rel, spread)  # human-sized once in metres (CMU units are read as dm)
+        assert 0.5 < spread[1] < 3.0, (rel, spread)  # human-sized once in metres (tests/test_bvh_units.py: adult-sized)
     makehuman = assets["rgbdacquisition/Motions/makehuman.bvh"]
     assert makehuman.source_up_axis == "Z" and makehuman.source_units == "dm"
 

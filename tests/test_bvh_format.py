@@ -169,7 +169,8 @@ def _small_motion_document(joints, frames=6, head_size=10.0):
     return text.split("MOTION\n")[0] + f"MOTION\nFrames: {frames}\nFrame Time: 0.04\n{rows}\n"
 
 
-@pytest.mark.parametrize("unit,scale", [("cm", 1.0), ("m", 0.01), ("mm", 10.0), ("dm", 0.1)])
+@pytest.mark.parametrize("unit,scale", [("cm", 1.0), ("m", 0.01), ("mm", 10.0), ("dm", 0.1), ("inch", 1 / 2.54),
+                                        ("cmu", 0.45 / 2.54), ("ft", 1 / 30.48)])
 def test_unit_is_guessed_from_the_figure_size(tmp_path, unit, scale):
     asset = _load_text(tmp_path, _small_motion_document(_human(scale=scale), head_size=10 * scale))
     assert (asset.source_units, asset.units_detected_by, asset.source_up_axis) == (unit, "guess", "Y")

@@ -5,11 +5,12 @@ Xrotation Yrotation`` means ``R = Rz · Rx · Ry``), in degrees. Position channe
 matching components of a joint's OFFSET (as in Blender and most mocap tools); any joint may have
 them (Bandai files animate every joint) and they then become ``Motion.joint_translations``.
 
-BVH declares no unit and no up axis. The unit is the one of metres, decimetres (MakeHuman's),
-centimetres and millimetres that gives the figure a human size
-(:func:`infuse.conventions.guess_unit` on the rest pose); the up axis is +Y unless the figure is
-clearly taller along Z (:func:`infuse.conventions.guess_up_axis` on its extent averaged over a few
-frames, or on the rest pose when there is no motion). Both measure the body only: leading
+BVH declares no unit and no up axis. The up axis is +Y unless the figure is clearly taller along
+Z (:func:`infuse.conventions.guess_up_axis` on its extent averaged over a few frames, or on the
+rest pose when there is no motion). The unit is the one of :data:`UNIT_CANDIDATES` that gives the
+figure an adult's standing height (:func:`infuse.conventions.guess_unit` on
+:func:`infuse.conventions.figure_height`: head-to-toe extent and hip height of the rest pose, or
+of a few frames when the rest pose does not stand). Both measure the body only: leading
 single-child joints such as a ground-projected root are left out. ``units=`` and ``up_axis=``
 override both. ``Asset.meta`` keeps what a writer needs to reproduce the file: channels per
 joint, the frame time and the unit scale.
@@ -23,7 +24,7 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.asset import Asset
-from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, guess_unit, guess_up_axis
+from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, figure_height, guess_unit, guess_up_axis
 from infuse.errors import InputError
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
@@ -31,10 +32,12 @@ from infuse.skeleton import Skeleton
 from .parse import BvhDocument, parse
 
 _AXIS = {"X": 0, "Y": 1, "Z": 2}
-#: Units a BVH file is guessed to use. Decimetres are MakeHuman's; inches and CMU units are
-#: too close to centimetres to tell apart by size, so they are only taken as ``units=`` overrides.
-UNIT_CANDIDATES = ("m", "dm", "cm", "mm")
-#: Frames whose poses decide the up axis (evenly spread over the clip).
+#: Units a BVH file is guessed to use, the most common first (ties go to the earlier): centimetres
+#: (MotionBuilder, Mixamo, Bandai), metres, CMU units (1/0.45 inch: the CMU database's amc2bvh and
+#: cgspeed conversions), inches (Biovision, Poser), decimetres (MakeHuman), millimetres, feet.
+UNIT_CANDIDATES = ("cm", "m", "cmu", "inch", "dm", "mm", "ft")
+#: Frames whose poses decide the up axis, and the unit when the rest pose does not stand
+#: (evenly spread over the clip).
 UP_AXIS_SAMPLE_FRAMES = 8
 
 
@@ -157,14 +160,20 @@ def rest_positions(doc: BvhDocument) -> tuple[np.ndarray, np.ndarray]:
     return joints, joints[doc.end_site_parents] + doc.end_site_offsets
 
 
-def _unit(doc: BvhDocument, body: np.ndarray, units: str | None) -> str:
+def _unit(doc: BvhDocument, body: np.ndarray, axis: str, poses: np.ndarray | None,
+          units: str | None) -> tuple[str, str | None]:
+    """(unit, how it was guessed or None): ``units``, or the guess from the body's standing height."""
     if units is not None:
         if units not in UNIT_SCALES:
             raise InputError(None, "units", f"unknown unit {units!r}; known: {', '.join(UNIT_SCALES)}")
-        return units
+        return units, None
+    up = UP_AXIS_ROTATIONS[axis]
     joints, sites = rest_positions(doc)
-    points = np.concatenate((joints[body], sites[np.isin(doc.end_site_parents, body)]))
-    return guess_unit(float(np.max(np.ptp(points, axis=0))), UNIT_CANDIDATES)
+    rest = quat.rotate(up, np.concatenate((joints[body], sites[np.isin(doc.end_site_parents, body)])))
+    frames = None if poses is None else quat.rotate(up, poses[:, body])
+    height = figure_height(rest, 0, frames)  # body[0], the joint the body branches from, is the pelvis
+    unit = guess_unit(height, UNIT_CANDIDATES)
+    return unit, f"standing height {height:.4g} file units: {height * UNIT_SCALES[unit]:.2f} m in {unit}"
 
 
 def _up_axis(doc: BvhDocument, body: np.ndarray, poses: np.ndarray | None, up_axis: str | None) -> str:
@@ -195,13 +204,13 @@ def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: st
         root[:, position_columns[1]] = doc.values[:, position_columns[2]]
     body = body_joints(doc.parents)
     poses = None
-    if frames and up_axis is None:
+    if frames and (up_axis is None or units is None):
         sample = np.unique(np.linspace(0, frames - 1, min(frames, UP_AXIS_SAMPLE_FRAMES)).astype(np.int64))
         sample_trans = np.broadcast_to(doc.offsets, (len(sample), joints, 3)).copy() if trans is None else trans[sample]
         sample_trans[:, 0] = root[sample]
         poses = sampled_positions(doc.parents, rots[sample], sample_trans)
-    unit = _unit(doc, body, units)
     axis = _up_axis(doc, body, poses, up_axis)
+    unit, unit_guess = _unit(doc, body, axis, poses, units)
     scale = UNIT_SCALES[unit]
     up = UP_AXIS_ROTATIONS[axis]
     roots = np.flatnonzero(doc.parents < 0)
@@ -229,6 +238,8 @@ def to_asset(path: Path, doc: BvhDocument, units: str | None = None, up_axis: st
         "frame_time": doc.frame_time,
         "unit_scale_m": scale,
     }
+    if unit_guess is not None:
+        meta["units_guess"] = unit_guess
     return Asset(path=path, format="bvh", skeleton=skeleton, motions=motions, source_units=unit,
                  source_up_axis=axis, units_detected_by="override" if units is not None else "guess", meta=meta)
 
