@@ -118,3 +118,17 @@ def test_third_party_mapper_is_picked_up(capsys, tmp_path):
     doc = json.loads(capsys.readouterr().out)
     assert doc["mapping"]["base"] == "c_base" and doc["mapping"]["l_wrist"] == "c_l_wrist"
     assert doc["mapping"]["l_elbow"] == "L_ELBOW" and doc["mapping"]["r_hip"] == "R_HIP"
+
+
+def test_third_party_mapper_never_gives_a_studio_joint_twice():
+    """A studio name that contradicts the geometry wins, and the default mapper's pick of that joint goes."""
+    sk = canonical_skeleton(extras=False)
+    names = ["c_l_wrist" if n == "l_forearm" else n.upper() for n in sk.names]  # the twist joint called the wrist
+    studio = infuse.Skeleton(tuple(names), sk.parents, sk.rest_translations, sk.rest_rotations)
+    plain = map_skeleton(studio, mapper="heuristic")
+    assert plain["l_forearm"] == "c_l_wrist"  # by geometry, without the studio's word
+    mapping = map_skeleton(studio, mapper="studio-prefix")
+    assert mapping["l_wrist"] == "c_l_wrist" and mapping.reasons["l_wrist"] == "studio name 'c_l_wrist'"
+    assert mapping["l_forearm"] is None and "by hand" in mapping.reasons["l_forearm"]
+    used = list(mapping.mapped().values())
+    assert len(used) == len(set(used))

@@ -93,8 +93,8 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
 
     ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
     representative poses; used when the rest pose is not a standing body, and to tell the body's
-    front from frames of motion. ``fixed``: canonical name -> joint name (or None) set by hand;
-    they are kept and the rest is mapped around them.
+    front from frames of motion. Hand-set entries (``fixed``) are applied by
+    :func:`infuse.mapping.complete` after every mapper.
     """
     view = SkeletonView(skeleton, skeleton.rest_global_positions)
     frames = _Frames(pose, view.n)
@@ -110,7 +110,7 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
     result = _Result(view)
     if plan is None:
         if _map_face_only(view, result):
-            return _finish(skeleton, result, fixed, 0.3)
+            return _finish(skeleton, result, 0.3)
         raise NotHumanoidError(file, f"no pair of mirror-image limbs among its {view.n} joints"
                                + (" (a single chain)" if all(len(c) <= 1 for c in view.children) else ""))
     if plan.legs is not None and plan.arms is None and cos > STANDING_COS:
@@ -125,7 +125,7 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
         raise NotHumanoidError(file, "neither legs nor arms found")
     _map_body(view, plan, result, frames, used_pose)
     overall = np.mean([result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
-    return _finish(skeleton, result, fixed, float(overall))
+    return _finish(skeleton, result, float(overall))
 
 
 def _hands_on_ground(view: SkeletonView, plan) -> bool:
@@ -142,7 +142,7 @@ def _hands_on_ground(view: SkeletonView, plan) -> bool:
     return leg_height > 0 and float(hands.mean() - feet.mean()) < 0.2 * leg_height
 
 
-def _finish(skeleton, result: _Result, fixed, overall: float) -> Mapping:
+def _finish(skeleton, result: _Result, overall: float) -> Mapping:
     names = skeleton.names
     joints = {n: names[j] for n, j in result.joint.items()}
     conf = dict(result.conf)
@@ -151,20 +151,6 @@ def _finish(skeleton, result: _Result, fixed, overall: float) -> Mapping:
         if n not in conf:
             conf[n] = 0.5
             reasons[n] = reasons.get(n) or "no counterpart found"
-    if fixed:
-        taken = {v for v in fixed.values() if v is not None}
-        for n, v in list(joints.items()):
-            if n not in fixed and v in taken:
-                del joints[n]
-                conf[n] = 0.3
-                reasons[n] = f"{v!r} is set by hand to another name"
-        for n, v in fixed.items():
-            if v is None:
-                joints.pop(n, None)
-            else:
-                joints[n] = v
-            conf[n] = 1.0
-            reasons[n] = "set by hand"
     return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME, overall_confidence=overall)
 
 
