@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import io
+import os
 import shutil
 import subprocess
 
@@ -331,16 +332,34 @@ def test_mp4_without_ffmpeg_says_how_to_install(tmp_path, walk, monkeypatch):
     assert not (tmp_path / "walk.mp4").exists()
 
 
-def test_progress_reports_frames_rate_and_eta():
+def test_progress_reports_frames_rate_and_time_left():
     stream = io.StringIO()
     with Progress(4, "render x", enabled=True, stream=stream) as bar:
         for _ in range(4):
             bar.advance()
-    text = stream.getvalue()
-    assert "render x" in text and "4/4 frames" in text and "fps" in text and "ETA" in text
+    lines = stream.getvalue().splitlines()
+    # asked for on a log stream: the first line at once, the last when done, none in between
+    assert len(lines) == 2 and lines[0].startswith("render x  25% [#####...............] 1/4 left ")
+    assert lines[-1].startswith("render x 100% [") and "] 4/4 left 0:00 elapsed 0:00" in lines[-1] and "frames/s" in lines[-1]
     quiet = io.StringIO()
     Progress(4, stream=quiet).advance()  # not a terminal and not asked for: silent
     assert quiet.getvalue() == ""
+
+
+def test_progress_on_a_terminal_redraws_one_line_that_fits(monkeypatch):
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr("shutil.get_terminal_size", lambda *a: os.terminal_size((40, 20)))
+    stream = Terminal()
+    with Progress(3, "batch", stream=stream, unit="items", also=("clip-frames",)) as bar:
+        bar.advance(1, 500)
+        bar.advance(2, 1000)
+    text = stream.getvalue()
+    assert text.endswith("\n") and text.count("\n") == 1  # redrawn in place, one newline at the end
+    drawn = [part.removesuffix("\x1b[K") for part in text.strip().split("\r") if part]
+    assert drawn[-1].startswith("batch 100% [") and all(len(part) <= 39 for part in drawn)
 
 
 def test_figure_validates_shapes(skeleton):

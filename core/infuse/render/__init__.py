@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from .camera import PROJECTIONS, VIEWS, Camera
 from .output import SUFFIXES, check_suffix, ffmpeg_path, filmstrip, render, select_times, write_gif, write_mp4, write_png, write_strip
-from .progress import Progress
+from ..progress import Progress
 from .renderer import Renderer, Style
 from .scene import LEFT, PALETTE, RIGHT, Figure, Marker, default_sides, sides_from_mapping
 

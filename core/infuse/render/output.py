@@ -19,7 +19,7 @@ from ..atomic import atomic_path
 from ..errors import MissingFeatureError, UnusableInputError, UsageError
 from .camera import Camera
 from .draw import font
-from .progress import Progress
+from ..progress import Progress
 from .renderer import Renderer, Style
 from .scene import Figure
 

@@ -13,10 +13,10 @@ from pathlib import Path
 from typing import Iterable
 
 from infuse.errors import UsageError
+from infuse.progress import Progress
 
 from . import backends, jobs
 from .manifest import Manifest
-from .progress import Progress
 from .work import Failure, UnitResult
 
 
@@ -154,7 +154,7 @@ def run_batch(characters: str | Iterable[str], *, out: str | Path, motions: str 
     todo = sum(u.pairs for u in units)
     result.skipped = result.items - todo
     result.units = len(units)
-    bar = Progress(todo, enabled=progress)
+    bar = Progress(todo, "batch", enabled=progress, unit="items", also=("clip-frames",))
     seen: set = set()
     backend = _backend(workers, cluster, executor) if units else None
     try:
@@ -172,7 +172,7 @@ def run_batch(characters: str | Iterable[str], *, out: str | Path, motions: str 
             result.frames += done.frames
             result.cpu_seconds += done.cpu
             result.worker_cpu[done.worker] = result.worker_cpu.get(done.worker, 0.0) + done.cpu
-            bar.update(unit.pairs, done.frames)
+            bar.advance(unit.pairs, done.frames)
     finally:
         bar.close()
         if backend is not None:
