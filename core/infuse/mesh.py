@@ -18,6 +18,7 @@ Conventions, stated once:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Sequence
 
 import numpy as np
 
@@ -152,3 +153,51 @@ def skinning_matrices(mesh: SkinnedMesh, global_rotations: np.ndarray, global_po
     g = rigid_matrices(rot[:, mesh.bind_joints], pos[:, mesh.bind_joints])
     return np.matmul(g, mesh.inverse_bind)[..., :3, :].astype(np.float32)
 
+
+
+def merge(meshes: Sequence[SkinnedMesh], name: str = "merged", morph_names: Sequence[str] | None = None) -> SkinnedMesh:
+    """One surface holding all of ``meshes`` (bound to the same skeleton), so they are skinned in one pass.
+
+    Colours become per vertex; bones that two surfaces share (same joint, same inverse bind matrix)
+    are stored once; ``double_sided`` is True when any surface is. ``morph_names``: the targets to
+    keep (default: every target of any surface; a surface without one does not move with it).
+    """
+    meshes = list(meshes)
+    if not meshes:
+        raise ValueError("merge needs at least one mesh")
+    offsets = np.cumsum([0] + [m.num_vertices for m in meshes])
+    keys: dict[tuple, int] = {}
+    bone_joints, bone_matrices, joint_maps = [], [], []
+    for m in meshes:
+        table = np.empty(len(m.bind_joints), dtype=np.int32)
+        for b, (j, ib) in enumerate(zip(m.bind_joints, m.inverse_bind)):
+            key = (int(j), ib.tobytes())
+            if key not in keys:
+                keys[key] = len(bone_joints)
+                bone_joints.append(int(j))
+                bone_matrices.append(ib)
+            table[b] = keys[key]
+        joint_maps.append(table)
+    k = max(m.joints.shape[1] for m in meshes)
+    joints = np.zeros((int(offsets[-1]), k), dtype=np.int32)
+    weights = np.zeros((int(offsets[-1]), k), dtype=np.float32)
+    for m, table, a in zip(meshes, joint_maps, offsets):
+        joints[a:a + m.num_vertices, :m.joints.shape[1]] = table[m.joints]
+        weights[a:a + m.num_vertices, :m.joints.shape[1]] = m.weights
+    if morph_names is None:
+        morph_names = list(dict.fromkeys(n for m in meshes for n in m.morph_names))
+    morph_names = tuple(morph_names)
+    morph_positions = None
+    if morph_names:
+        morph_positions = np.zeros((len(morph_names), int(offsets[-1]), 3), dtype=np.float32)
+        row = {n: i for i, n in enumerate(morph_names)}
+        for m, a in zip(meshes, offsets):
+            for i, n in enumerate(m.morph_names):
+                if n in row:
+                    morph_positions[row[n], a:a + m.num_vertices] = m.morph_positions[i]
+    return SkinnedMesh(
+        name, np.concatenate([m.positions for m in meshes]), np.concatenate([m.normals for m in meshes]),
+        np.concatenate([m.triangles + a for m, a in zip(meshes, offsets)]), joints, weights,
+        np.array(bone_joints, dtype=np.int64), np.array(bone_matrices).reshape(-1, 4, 4),
+        base_color=np.ones(4), colors=np.concatenate([m.vertex_colors() for m in meshes]),
+        double_sided=any(m.double_sided for m in meshes), morph_names=morph_names, morph_positions=morph_positions)

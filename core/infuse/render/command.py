@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from .. import fileio, registry
 from ..cli.builtin import add_read_options, read_options
 from ..errors import InfuseError, InputError, UnusableInputError, UsageError
@@ -17,6 +19,8 @@ from .scene import Figure, sides_from_mapping
 
 MAX_SIDE = 8192
 STYLES = ("auto", "mesh", "stick")
+#: A mesh spanning less than this share of the skeleton's height does not show the character.
+MIN_MESH_SIZE = 0.25
 #: Mapping entries below this confidence are ringed by ``--canonical``.
 LOW_CONFIDENCE = 0.5
 
@@ -110,11 +114,22 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
 
 
 def _meshes(path: Path, asset, motion, style: str) -> tuple:
-    """The surfaces to draw for ``style``: none for ``stick``; for ``mesh`` the file must have some."""
+    """The surfaces to draw for ``style``: none for ``stick``; for ``mesh`` the file must have some.
+
+    A mesh much smaller than the skeleton (a placeholder plane in a skeleton-only file) does not
+    show the character: ``auto`` draws the stick figure instead.
+    """
     if style == "stick":
         return ()
     skeleton = asset.skeleton if motion is None else motion.skeleton
     meshes = tuple(m for m in asset.meshes if m.num_triangles) if skeleton is asset.skeleton else ()
+    if meshes:
+        extent = float(np.ptp(np.concatenate([m.positions for m in meshes]), axis=0).max())
+        if extent < MIN_MESH_SIZE * skeleton.height():
+            if style == "mesh":
+                raise UnusableInputError(path, f"its mesh is {extent:.3g} m across, too small to show a "
+                                               f"{skeleton.height():.3g} m skeleton; use --style stick or auto")
+            return ()
     if not meshes and style == "mesh":
         why = [w for w in asset.meta.get("warnings", []) if "not drawn" in w]
         detail = f" ({why[0]})" if why else ""

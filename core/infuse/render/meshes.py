@@ -12,7 +12,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..mesh import SkinnedMesh
+from ..mesh import SkinnedMesh, merge
 from .raster import Fragments
 
 #: Vertices posed per frame to frame the camera (spread evenly over the surfaces).
@@ -23,7 +23,8 @@ AMBIENT, KEY, FILL = 0.32, 0.62, 0.22
 class FigureMesh:
     """The surfaces of one figure and its joints' global transforms at each of its frames.
 
-    - ``meshes``: the surfaces (bind pose, core frame), bound to the figure's skeleton.
+    - ``meshes``: the surfaces (bind pose, core frame), bound to the figure's skeleton; they are
+      merged into one (:func:`infuse.mesh.merge`) so a frame is skinned in one pass.
     - ``rotations`` (F, J, 4) and ``positions`` (F, J, 3): global joint rotations and positions,
       e.g. from :func:`infuse.kinematics.motion_fk`.
     - ``morph_weights``: {target name: (F,) weight} played on the surfaces that have that target.
@@ -31,60 +32,48 @@ class FigureMesh:
 
     def __init__(self, meshes: Sequence[SkinnedMesh], rotations: np.ndarray, positions: np.ndarray,
                  morph_weights: Mapping[str, np.ndarray] | None = None):
-        self.meshes = tuple(m for m in meshes if m.num_triangles)
-        if not self.meshes:
+        meshes = [m for m in meshes if m.num_triangles]
+        if not meshes:
             raise ValueError("a figure mesh needs at least one surface with triangles")
         self.rotations = np.asarray(rotations, dtype=np.float64)
         self.positions = np.asarray(positions, dtype=np.float64)
         if self.rotations.ndim != 3 or self.positions.shape != self.rotations.shape[:2] + (3,):
             raise ValueError("figure mesh: rotations must be (F, J, 4) and positions (F, J, 3)")
         joints = self.rotations.shape[1]
-        if any(m.bind_joints.max() >= joints for m in self.meshes):
+        if any(m.bind_joints.max() >= joints for m in meshes):
             raise ValueError(f"figure mesh: a surface is bound to a joint beyond the skeleton's {joints}")
         self.num_frames = len(self.rotations)
-        counts = [m.num_vertices for m in self.meshes]
-        self.offsets = np.concatenate([[0], np.cumsum(counts)])
-        self.triangles = np.concatenate([m.triangles.astype(np.int64) + o for m, o in zip(self.meshes, self.offsets)])
-        self.colors = np.concatenate([m.vertex_colors()[:, :3] for m in self.meshes]).astype(np.float32)
-        self.morphs = [self._weights(m, morph_weights) for m in self.meshes]
-        total = int(self.offsets[-1])
-        pick = np.unique(np.linspace(0, total - 1, min(FRAMING_SAMPLES, total)).astype(np.int64))
-        self._samples = [pick[(pick >= a) & (pick < b)] - a for a, b in zip(self.offsets[:-1], self.offsets[1:])]
-
-    def _weights(self, mesh: SkinnedMesh, weights: Mapping[str, np.ndarray] | None) -> np.ndarray | None:
-        """(F, M) weights of the mesh's targets (0 for those the clip does not move), or None."""
-        if not weights or not mesh.morph_names:
-            return None
-        out = np.zeros((self.num_frames, len(mesh.morph_names)), dtype=np.float32)
-        moved = False
-        for k, name in enumerate(mesh.morph_names):
-            track = weights.get(name)
-            if track is not None:
-                track = np.asarray(track, dtype=np.float32).reshape(-1)
+        targets = {n for m in meshes for n in m.morph_names}
+        moved = [n for n in (morph_weights or {}) if n in targets and np.any(np.asarray(morph_weights[n]) != 0)]
+        self.mesh = merge(meshes, "figure", moved)
+        self.weights = None
+        if moved:
+            self.weights = np.zeros((self.num_frames, len(moved)), dtype=np.float32)
+            for k, name in enumerate(moved):
+                track = np.asarray(morph_weights[name], dtype=np.float32).reshape(-1)
                 n = min(len(track), self.num_frames)
-                out[:n, k] = track[:n]
-                out[n:, k] = track[n - 1] if n else 0.0
-                moved = True
-        return out if moved else None
+                self.weights[:n, k] = track[:n]
+                self.weights[n:, k] = track[n - 1]  # held after a track that ends early
+        self.triangles = self.mesh.triangles.astype(np.int64)
+        self.colors = np.ascontiguousarray(self.mesh.vertex_colors()[:, :3])
+        total = self.mesh.num_vertices
+        self._samples = np.unique(np.linspace(0, total - 1, min(FRAMING_SAMPLES, total)).astype(np.int64))
 
     @property
     def num_vertices(self) -> int:
-        return int(self.offsets[-1])
+        return self.mesh.num_vertices
 
     def pose(self, frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Positions and normals (n, V, 3) float32 of every vertex at figure frames ``frames`` (n,)."""
         frames = np.asarray(frames, dtype=np.int64)
-        rot, pos = self.rotations[frames], self.positions[frames]
-        parts = [m.skin(rot, pos, None if w is None else w[frames]) for m, w in zip(self.meshes, self.morphs)]
-        return np.concatenate([p for p, _ in parts], axis=1), np.concatenate([n for _, n in parts], axis=1)
+        weights = None if self.weights is None else self.weights[frames]
+        return self.mesh.skin(self.rotations[frames], self.positions[frames], weights)
 
     def sample_points(self, frames: np.ndarray) -> np.ndarray:
         """(n, S, 3) a fixed spread of vertices posed at ``frames``: enough to frame the camera."""
         frames = np.asarray(frames, dtype=np.int64)
-        rot, pos = self.rotations[frames], self.positions[frames]
-        parts = [m.skin(rot, pos, None if w is None else w[frames], vertices=s)[0]
-                 for m, w, s in zip(self.meshes, self.morphs, self._samples) if len(s)]
-        return np.concatenate(parts, axis=1).astype(np.float64)
+        weights = None if self.weights is None else self.weights[frames]
+        return self.mesh.skin(self.rotations[frames], self.positions[frames], weights, self._samples)[0].astype(np.float64)
 
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:

@@ -67,6 +67,7 @@ class MeshLoader:
         names = mesh_target_names(js)
         rest = rigid_matrices(self.skeleton.rest_global_rotations, self.skeleton.rest_global_positions)
         out: list[SkinnedMesh] = []
+        skipped: dict[str, list[str]] = {}  # why -> primitives
         for n in self._scene_nodes():
             m = nodes[n].get("mesh")
             if not isinstance(m, int) or not 0 <= m < len(meshes) or not isinstance(meshes[m], dict):
@@ -80,10 +81,13 @@ class MeshLoader:
                 try:
                     surface = self._primitive(prim, f"meshes[{m}].primitives[{p}]", label, bones, names[m])
                 except MissingFeatureError as exc:
-                    self.warnings.append(f"meshes[{m}].primitives[{p}] is not drawn: {exc.problem}")
+                    skipped.setdefault(exc.problem, []).append(f"meshes[{m}].primitives[{p}]")
                     continue
                 if surface is not None:
                     out.append(surface)
+        for why, places in skipped.items():
+            more = f" and {len(places) - 1} more primitives" if len(places) > 1 else ""
+            self.warnings.append(f"{places[0]}{more} not drawn: {why}")
         return out
 
     # -- where the vertices go ----------------------------------------------------------------------
