@@ -108,19 +108,28 @@ def rigid_locals(parents: np.ndarray, global_mats: np.ndarray) -> tuple[np.ndarr
     return local_rot, local_trans
 
 
-def nearest_joint_parents(node_parents, joints) -> np.ndarray:
+def nearest_joint_parents(node_parents, joints, return_folded: bool = False):
     """Parent of each joint within ``joints`` (node indices): its nearest ancestor that is a joint, -1 for none.
 
     ``node_parents[n]`` is the parent node of node ``n`` (-1 for a scene root); intermediate non-joint
-    nodes are skipped.
+    nodes are skipped. With ``return_folded``, returns ``(parents, folded)``: ``folded`` holds the
+    skipped nodes, sorted, i.e. every non-joint ancestor of a joint (nodes whose transforms the
+    joints absorb, whose animation still moves them).
     """
     position = {n: j for j, n in enumerate(joints)}
+    nearest: dict[int, int] = {}  # skipped node -> position of its nearest joint ancestor (-1: none)
     out = np.full(len(joints), -1, dtype=np.int64)
     for j, n in enumerate(joints):
+        path = []
         p = node_parents[n]
-        while p >= 0 and p not in position:
+        while p >= 0 and p not in position and p not in nearest:
+            path.append(p)
             p = node_parents[p]
-        out[j] = position.get(p, -1)
+        found = -1 if p < 0 else position[p] if p in position else nearest[p]
+        nearest.update(dict.fromkeys(path, found))
+        out[j] = found
+    if return_folded:
+        return out, np.array(sorted(nearest), dtype=np.int64)
     return out
 
 

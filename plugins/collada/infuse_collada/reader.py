@@ -46,14 +46,15 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     node_parents = np.array([n.parent for n in nodes], dtype=np.int64)
     change = frame_change(scale, up)
     rest = change @ global_matrices(node_parents, local_matrices(nodes))[0, joints]
-    skeleton = skeleton_from_globals(unique_names(nodes, joints), nearest_joint_parents([n.parent for n in nodes], joints), rest)
+    parents, folded = nearest_joint_parents(node_parents, joints, return_folded=True)
+    skeleton = skeleton_from_globals(unique_names(nodes, joints), parents, rest)
 
     chs, skipped = animation.channels(doc, nodes)
-    relevant = _joints_and_ancestors(nodes, joints)
+    relevant = set(joints).union(folded.tolist())  # nodes whose animation moves a joint
     chs = [c for c in chs if any(n in relevant for n in c.nodes)]
     motions = {}
     meta: dict = {"unit_meter": _declared_scale(doc),
-                  "folded_nodes": [nodes[n].name for n in sorted(relevant - set(joints))],
+                  "folded_nodes": [nodes[n].name for n in folded],
                   "skins": sum(len(el.findall("instance_controller")) for el in elements),
                   "authoring_tool": (doc.root.findtext("asset/contributor/authoring_tool") or "").strip()}
     if chs:
@@ -111,16 +112,6 @@ def _up_axis(doc: Document, override: str | None) -> str:
     if text not in _UP_AXES:
         raise doc.error(element, f"up_axis {text[:20]!r} is not X_UP, Y_UP or Z_UP")
     return _UP_AXES[text]
-
-
-def _joints_and_ancestors(nodes, joints) -> set[int]:
-    out = set(joints)
-    for j in joints:
-        p = nodes[j].parent
-        while p >= 0 and p not in out:
-            out.add(p)
-            p = nodes[p].parent
-    return out
 
 
 def _clips(doc: Document, chs: list[animation.Channel]):

@@ -55,7 +55,8 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     rest_parts = [np.stack(part, axis=1) for part in
                   zip(*[models.local_parts(m, m.translation[None], m.rotation[None], m.scaling[None]) for m in ms])]
     rest = change @ models.world_matrices(ms, *rest_parts)[0, joints]
-    skeleton = skeleton_from_globals(models.unique_names(ms, joints), nearest_joint_parents([m.parent for m in ms], joints), rest)
+    parents, folded = nearest_joint_parents([m.parent for m in ms], joints, return_folded=True)
+    skeleton = skeleton_from_globals(models.unique_names(ms, joints), parents, rest)
 
     fps = animation.frame_rate(doc, settings)
     motions = {}
@@ -80,7 +81,7 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
         takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
     meta = {"fbx_version": version, "unit_scale_factor_cm": number(doc, settings, "UnitScaleFactor", 1.0),
             "axes": _axis_meta(doc, settings), "takes": takes_meta,
-            "folded_models": [ms[i].obj.name for i in sorted(_ancestors(ms, joints) - set(joints))]}
+            "folded_models": [ms[i].obj.name for i in folded]}
     return Asset(path, "fbx", skeleton, motions, _morph_targets(doc), source_units=unit_name, source_up_axis=up,
                  units_detected_by=units_by, meta=meta)
 
@@ -131,16 +132,6 @@ def _axis_meta(doc: Document, settings: dict) -> dict:
         axis = int(number(doc, settings, f"{key}Axis", -1.0))
         if axis in (0, 1, 2):
             out[key.lower()] = ("-" if number(doc, settings, f"{key}AxisSign", 1.0) < 0 else "+") + _AXES[axis]
-    return out
-
-
-def _ancestors(ms: list[models.Model], joints: list[int]) -> set[int]:
-    out = set(joints)
-    for j in joints:
-        p = ms[j].parent
-        while p >= 0 and p not in out:
-            out.add(p)
-            p = ms[p].parent
     return out
 
 
