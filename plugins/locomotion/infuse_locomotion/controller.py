@@ -39,9 +39,11 @@ from .steering import Steering
 _INFUSIONS: dict = {}
 
 #: Seconds over which a released foot's pin correction fades back to the animation.
-RELEASE_S = 0.15
+RELEASE_S = 0.3
 #: Below this fraction of the slowest walk's speed the pose fades into the idle (standing, starts and stops).
 STAND_FRACTION = 0.2
+#: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
+HANDOVER = 0.5
 #: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
 FREE, ANKLE, BALL = 0, 1, 2
 
@@ -195,7 +197,8 @@ class Locomotion(Controller):
         st = job.state
         if not st:
             st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
-                      anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9))
+                      anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
+                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)))
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
@@ -288,7 +291,7 @@ class Locomotion(Controller):
                 frame = np.minimum(np.rint((times_of[0] % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64), len(clip.phases) - 1)
                 contact += clip.phases[frame] * w[:, i][:, None, None]
         if stepping:
-            contact += contact_of(events, phase) * ws.sum(axis=1)[:, None, None]
+            contact += contact_of(events, phase, HANDOVER) * ws.sum(axis=1)[:, None, None]
         fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else []
         if len(fade):
             share = standing / len(fade)
@@ -310,7 +313,7 @@ class Locomotion(Controller):
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing)."""
         sk = b["skeleton"]
         legs = b["legs"]
-        _, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+        feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
         turn_q = yaw(heading)
         body = np.nonzero(b["limbs"] == 0)[0]
@@ -322,11 +325,16 @@ class Locomotion(Controller):
             goal = hips + centre + stride[:, None] * (rel - centre)
             goal[:, 1] = pos[:, 2 + k, 1]
             solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
-                       pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1))
+                       pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1), keep_end=False)
+            # The foot keeps its animated orientation, not the one the calmer pelvis would give it
+            # (a planted foot would turn about its pinned ankle).
+            parent, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[ankle])])
+            rot[:, ankle] = quat.multiply(quat.conjugate(parent[:, 0]), feet_rot[:, 2 + k])
 
     def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
-        (the foot pivoting about it); fade the correction out after toe off. ``contact`` (F, 2, 2)."""
+        (the foot pivoting about it, its heel rising further when the leg would not reach); fade the
+        correction out after toe off. ``contact`` (F, 2, 2)."""
         sk = job.rig.skeleton
         forward = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
         for k, (hip, knee, ankle, ball) in enumerate(job.binding["legs"]):
@@ -337,10 +345,14 @@ class Locomotion(Controller):
             _, pos = chain_fk(sk, rot, root, jt, joints)
             ankle_pos = pos[:, 0]
             point = np.where((anchor == BALL)[:, None], pos[:, -1], ankle_pos)  # the animated anchor
+            # The same anchor one frame earlier (from the last block at the first frame).
+            before = np.concatenate((st["last"][k][None], pos[:-1, [0, -1]]))
+            point_before = np.where((anchor == BALL)[:, None], before[:, 1], before[:, 0])
             goal = ankle_pos.copy()
             weight = np.zeros(len(anchor))
+            rise = np.zeros((len(anchor), 3))  # extra heel rise about the ball, rotation vector in the foot's frame
             prev = int(st["anchor"][k])
-            offset, pin, released = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k])
+            offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
             change = np.nonzero(np.diff(np.concatenate(([prev], anchor))) != 0)[0]
             bounds = np.concatenate((change, [len(anchor)]))
             if not change.size or change[0] != 0:
@@ -353,24 +365,72 @@ class Locomotion(Controller):
                     age = released + dt * np.arange(1, e - s + 1)
                     fade = 1.0 - _ease(age / RELEASE_S)
                     goal[s:e] = ankle_pos[s:e] + offset * fade[:, None]
+                    rise[s:e] = lifted * fade[:, None]
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:
-                        offset = np.zeros(3)
+                        offset, lifted = np.zeros(3), np.zeros(3)
                 else:
-                    if kind != prev:
-                        # The anchor lands, or switches: it stays where the corrected foot puts it now.
-                        carried = offset * (1.0 - _ease(released / RELEASE_S)) if prev == FREE else offset
-                        pin = point[s] + carried
+                    if kind != prev and prev == FREE:
+                        # The anchor lands: it stays where the corrected foot puts it now.
+                        pin = point[s] + offset * (1.0 - _ease(released / RELEASE_S))
+                        pin[1] = 0.0
+                    elif kind != prev:
+                        # The anchor passes from the ankle to the ball (or back): the new one stays
+                        # where the corrected foot had it a frame ago, so the foot does not move on
+                        # with the blend's drift at the switch.
+                        pin = point_before[s] + offset
+                        pin[1] = 0.0
                     goal[s:e] = pin + ankle_pos[s:e] - point[s:e]
+                    goal[s:e, 1] = ankle_pos[s:e, 1]
                     weight[s:e] = 1.0
-                    offset = goal[e - 1] - ankle_pos[e - 1]
-                    offset[1] = 0.0
+                    if kind == BALL:
+                        goal[s:e], rise[s:e] = _heel_rise(sk, rot[s:e], root[s:e], None if jt is None else jt[s:e],
+                                                          (hip, knee, ankle, ball), goal[s:e], goal[s:e] + pos[s:e, 1] - ankle_pos[s:e])
+                    offset, lifted = goal[e - 1] - ankle_pos[e - 1], rise[e - 1]
                 prev = kind
-            goal[:, 1] = ankle_pos[:, 1]
+            if np.any(rise != 0.0):
+                _turn_foot(sk, rot, ankle, ball, rise)
             if weight.any():
                 solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=weight, pole=forward)
-            st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k] = prev, pin, offset, released
+            st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
+            st["last"][k] = pos[-1, [0, -1]]
+
+
+#: A leg pinned by its ball reaches at most this share of its length; beyond it the heel rises further.
+REACH = 0.99
+#: Extra heel rises tried about the ball, radians.
+_RISES = np.radians(np.arange(0.0, 61.0, 1.0))
+
+
+def _heel_rise(sk, rot, root, jt, leg, goal, ball_goal):
+    """Ankle goals (F, 3) for a foot pinned at ``ball_goal`` (F, 3) with its ankle at ``goal``: where
+    the hip cannot reach the ankle, the smallest further heel rise about the ball (1 degree steps)
+    that brings it within :data:`REACH` of the leg's length; and that rise as rotation vectors (F, 3)
+    in the foot's frame."""
+    hip, knee, ankle, ball = leg
+    g_rot, g_pos = chain_fk(sk, rot, root, jt, [hip, knee, ankle])
+    length = np.linalg.norm(g_pos[:, 1] - g_pos[:, 0], axis=-1) + np.linalg.norm(g_pos[:, 2] - g_pos[:, 1], axis=-1)
+    v = goal - ball_goal
+    axis = np.cross(v, np.array([0.0, 1.0, 0.0]))
+    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
+    up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
+    c, s = np.cos(_RISES), np.sin(_RISES)
+    cand = ball_goal[:, None] + v[:, None] * c[None, :, None] + up[:, None] * s[None, :, None]  # (F, K, 3)
+    ok = np.linalg.norm(cand - g_pos[:, None, 0], axis=-1) <= REACH * length[:, None]
+    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
+    rows = np.arange(len(goal))
+    local = quat.rotate(quat.conjugate(g_rot[:, 2]), axis * _RISES[pick][:, None])
+    return cand[rows, pick], local
+
+
+def _turn_foot(sk, rot, ankle, ball, rise) -> None:
+    """Turn the foot by ``rise`` (F, 3) rotation vectors in its own frame, in place, the toes keeping
+    their orientation when the ball joint hangs from the ankle."""
+    delta = quat.from_rotvec(rise)
+    rot[:, ankle] = quat.multiply(rot[:, ankle], delta)
+    if ball is not None and int(sk.parents[ball]) == ankle:
+        rot[:, ball] = quat.multiply(quat.conjugate(delta), rot[:, ball])
 
 
 def mean_pose(motion) -> tuple:

@@ -60,10 +60,15 @@ def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.nd
     return np.mod(y[seg] + frac * (y[seg + 1] - y[seg]), 1.0)
 
 
-def contact_of(events: np.ndarray, phase: np.ndarray) -> np.ndarray:
+def contact_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0) -> np.ndarray:
     """(F, 2, 2) flags of each foot's heel and ball being down at ``phase`` (F,) from the blend's
-    ``events`` (F, 2, 4): the heel from strike to heel off, the ball from foot flat to toe off."""
+    ``events`` (F, 2, 4): the heel from strike to heel off, the ball from foot flat to toe off.
+
+    ``handover`` < 1 ends the heel's flag that share of the way from foot flat to heel off instead,
+    for a controller that pins the ball from there on: in the middle of foot flat the foot rests
+    still, so the anchor changes while nothing moves (at foot flat the foot is still rolling down
+    about its heel, at heel off it has started to roll about its ball)."""
     p = events[:, :, 0] + np.mod(phase[:, None] - events[:, :, 0], 1.0)  # (F, 2) from each foot's strike
-    heel = p < events[:, :, 2]
+    heel = p < events[:, :, 1] + handover * (events[:, :, 2] - events[:, :, 1])
     ball = (p >= events[:, :, 1]) & (p < events[:, :, 3])
     return np.stack((heel, ball), axis=-1)
