@@ -33,7 +33,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     is the bend direction used when the limb is straight.
     """
     a, b, c = joints
-    g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [a, b, c])
+    parent_a = int(skeleton.parents[a])
+    g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations,
+                            [a, b, c] if parent_a < 0 else [a, b, c, parent_a])
     A, B, C = g_pos[:, 0], g_pos[:, 1], g_pos[:, 2]
     T = np.asarray(goal, dtype=np.float64)
     lab = np.linalg.norm(B - A, axis=-1)
@@ -71,9 +73,26 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         new_b = quat.slerp(old_b, new_b, w)
     local_rotations[:, a] = new_a
     local_rotations[:, b] = new_b
+    # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
+    rotation = new_a if parent_a < 0 else quat.multiply(g_rot[:, 3], new_a)
+    position = A
+    for j in _path_below(skeleton, a, c):
+        offset = skeleton.rest_translations[j] if joint_translations is None else joint_translations[:, j]
+        position = position + quat.rotate(rotation, offset)
+        if j != c:
+            rotation = quat.multiply(rotation, local_rotations[:, j])
     if keep_end:
-        parent = int(skeleton.parents[c])
-        g_par, _ = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [parent])
-        local_rotations[:, c] = quat.multiply(quat.conjugate(g_par[:, 0]), g_rot[:, 2])
-    _, g_new = chain_fk(skeleton, local_rotations, root_translations, joint_translations, [c])
-    return np.linalg.norm(g_new[:, 0] - T, axis=-1)
+        local_rotations[:, c] = quat.multiply(quat.conjugate(rotation), g_rot[:, 2])
+    return np.linalg.norm(position - T, axis=-1)
+
+
+def _path_below(skeleton, top: int, bottom: int) -> list[int]:
+    """The joints from just below ``top`` down to ``bottom`` (a descendant of ``top``), in order."""
+    path = []
+    j = int(bottom)
+    while j != top:
+        if j < 0:
+            raise ValueError(f"joint {bottom} is not below joint {top}")
+        path.append(j)
+        j = int(skeleton.parents[j])
+    return path[::-1]

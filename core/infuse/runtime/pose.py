@@ -8,6 +8,9 @@ channel state, one column per morph target. Controllers write through the method
 """
 from __future__ import annotations
 
+import functools
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import quaternions as quat
@@ -150,6 +153,59 @@ def ancestors(skeleton, joints) -> list[int]:
     return sorted(needed)
 
 
+@dataclass(frozen=True)
+class ChainPlan:
+    """How :func:`chain_fk` walks down to some joints of a skeleton; indices are into ``chain``.
+
+    - ``chain`` (N,): the joints and their ancestors, parents first; ``source`` (N,): their columns in
+      the input arrays;
+    - ``levels``: (members, parents) per depth below the roots, an int when a level is one joint (a
+      view, not a copy); ``inner`` / ``inner_parents``: the chain joints below a root and their parents;
+    - ``roots``: chain roots other than joint 0, ``root``: joint 0's place in the chain or None;
+    - ``paths`` (N, N): 1 where a column is the row's joint or one of its ancestors, so each joint's
+      position is ``paths @`` (the root translation and every rotated offset on the way);
+    - ``out`` (K,): the requested joints.
+    """
+
+    chain: np.ndarray
+    source: np.ndarray
+    levels: tuple
+    inner: np.ndarray
+    inner_parents: np.ndarray
+    roots: np.ndarray
+    root: int | None
+    paths: np.ndarray
+    out: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def chain_plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None = None) -> ChainPlan:
+    """The :class:`ChainPlan` of ``joints`` (made once per skeleton, joints and columns)."""
+    chain = ancestors(skeleton, joints)
+    place = {j: k for k, j in enumerate(chain)}
+    column = {j: j for j in chain} if columns is None else {int(j): k for k, j in enumerate(columns)}
+    parent = [place.get(int(skeleton.parents[j]), -1) for j in chain]
+    depth: list[int] = []
+    for k in range(len(chain)):
+        depth.append(0 if parent[k] < 0 else depth[parent[k]] + 1)
+    levels = []
+    for d in range(1, max(depth) + 1):
+        members = [k for k in range(len(chain)) if depth[k] == d]
+        parents = [parent[k] for k in members]
+        levels.append((members[0], parents[0]) if len(members) == 1 else (np.array(members), np.array(parents)))
+    paths = np.zeros((len(chain), len(chain)))
+    for k in range(len(chain)):
+        a = k
+        while a >= 0:
+            paths[k, a] = 1.0
+            a = parent[a]
+    inner = [k for k in range(len(chain)) if parent[k] >= 0]
+    return ChainPlan(np.array(chain), np.array([column[j] for j in chain]), tuple(levels), np.array(inner, dtype=np.int64),
+                     np.array([parent[k] for k in inner], dtype=np.int64),
+                     np.array([k for k in range(len(chain)) if parent[k] < 0 and chain[k] != 0], dtype=np.int64),
+                     place.get(0), paths, np.array([place[int(j)] for j in joints], dtype=np.int64))
+
+
 def chain_fk(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations, joints,
              columns=None):
     """Global rotations (..., K, 4) and positions (..., K, 3) of joints ``joints`` (K,).
@@ -159,25 +215,22 @@ def chain_fk(skeleton, local_rotations: np.ndarray, root_translations: np.ndarra
     frames, characters), ``root_translations`` (..., 3), ``joint_translations`` (..., J, 3) or None.
     With ``columns`` (the joints the arrays hold, in order; at least :func:`ancestors` of ``joints``)
     the joint axis of ``local_rotations`` and ``joint_translations`` holds only those joints.
+
+    Rotations compose depth by depth (all joints of one depth at once); the offsets are then rotated
+    by their parents' rotations in one step and summed along each joint's path.
     """
-    parents = skeleton.parents
-    column = {j: j for j in range(skeleton.num_joints)} if columns is None else {int(j): k for k, j in enumerate(columns)}
-    rot: dict[int, np.ndarray] = {}
-    pos: dict[int, np.ndarray] = {}
-    lead = local_rotations.shape[:-2]
-    for j in ancestors(skeleton, joints):
-        local = local_rotations[..., column[j], :]
-        if j == 0:
-            offset = root_translations
-        elif joint_translations is None:
-            offset = skeleton.rest_translations[j]
-        else:
-            offset = joint_translations[..., column[j], :]
-        p = int(parents[j])
-        if p < 0:
-            rot[j] = local
-            pos[j] = np.broadcast_to(offset, lead + (3,))
-        else:
-            rot[j] = quat.multiply(rot[p], local)
-            pos[j] = pos[p] + quat.rotate(rot[p], offset)
-    return (np.stack([rot[int(j)] for j in joints], axis=-2), np.stack([pos[int(j)] for j in joints], axis=-2))
+    plan = chain_plan(skeleton, tuple(int(j) for j in joints), None if columns is None else tuple(int(c) for c in columns))
+    rot = np.asarray(local_rotations, dtype=np.float64)[..., plan.source, :]  # a gathered copy, composed in place below
+    for members, parents in plan.levels:
+        rot[..., members, :] = quat.multiply(rot[..., parents, :], rot[..., members, :])
+    if joint_translations is None:
+        offsets = skeleton.rest_translations[plan.chain]
+    else:
+        offsets = joint_translations[..., plan.source, :]
+    steps = np.empty(rot.shape[:-1] + (3,))
+    steps[..., plan.inner, :] = quat.rotate(rot[..., plan.inner_parents, :], offsets[..., plan.inner, :])
+    steps[..., plan.roots, :] = offsets[..., plan.roots, :]
+    if plan.root is not None:
+        steps[..., plan.root, :] = root_translations
+    pos = plan.paths @ steps
+    return rot[..., plan.out, :], pos[..., plan.out, :]
