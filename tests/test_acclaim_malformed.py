@@ -6,18 +6,15 @@ wrong value counts, missing begin/end, unknown bones, hierarchy cycles, empty fi
 from __future__ import annotations
 
 import random
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from infuse.cli import main
-from corpus_data import REPO, corpus_file
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
+from corpus_data import corpus_file
 
 ASF = "fairmotion/tests/data/11.asf"
 AMC = "fairmotion/tests/data/11_01.amc"
-INFUSE = Path(sys.executable).with_name("infuse")
 
 
 def asf_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
@@ -91,14 +88,6 @@ AMC_CASES = [f"truncated_{i}" for i in range(8)] + [
     "value_extra", "unknown_bone", "bone_twice", "frame_number_jump", "unknown_header", "bone_before_first_frame"]
 
 
-def _write(path: Path, content: str | bytes) -> Path:
-    if isinstance(content, bytes):
-        path.write_bytes(content)
-    else:
-        path.write_text(content, newline="")
-    return path
-
-
 @pytest.fixture(scope="module")
 def malformed(tmp_path_factory) -> dict[str, Path]:
     """ASF cases each in their own file; AMC cases beside a link to the real 11.asf."""
@@ -106,16 +95,12 @@ def malformed(tmp_path_factory) -> dict[str, Path]:
     rng = random.Random(8675309)
     asf_text = corpus_file(ASF).read_bytes().decode()
     amc_text = corpus_file(AMC).read_bytes().decode()
-    files = {f"asf_{k}": _write(root / f"{k}.asf", v) for k, v in asf_cases(asf_text, rng).items()}
+    files = {f"asf_{k}": write_case(root, k, v, ".asf") for k, v in asf_cases(asf_text, rng).items()}
     motions = root / "motions"
     motions.mkdir()
     (motions / "11.asf").symlink_to(corpus_file(ASF))
-    files.update({f"amc_{k}": _write(motions / f"11_{k}.amc", v) for k, v in amc_cases(amc_text, rng).items()})
+    files.update({f"amc_{k}": write_case(motions, f"11_{k}", v, ".amc") for k, v in amc_cases(amc_text, rng).items()})
     return files
-
-
-def _errors(stderr: str) -> list[str]:
-    return [l for l in stderr.splitlines() if l.strip() and not l.startswith("infuse: warning:")]
 
 
 def test_generator_covers_every_listed_case(malformed):
@@ -130,19 +115,9 @@ def test_cases_differ_from_the_original(malformed):
 
 @pytest.mark.parametrize("case", [f"asf_{c}" for c in ASF_CASES] + [f"amc_{c}" for c in AMC_CASES])
 def test_cli_rejects_malformed_file(case, malformed, capsys):
-    path = malformed[case]
-    code = main(["info", str(path)])
-    err = _errors(capsys.readouterr().err)
-    assert code == 2, err
-    assert len(err) == 1 and str(path) in err[0], err
-    assert "Traceback" not in err[0] and "internal error" not in err[0]
+    assert_info_exits_2(malformed[case], capsys)
 
 
 @pytest.mark.parametrize("case", ["asf_cycle", "amc_truncated_5"])
 def test_real_cli_process(case, malformed):
-    path = malformed[case]
-    run = subprocess.run([str(INFUSE), "info", str(path), "--json"], capture_output=True, text=True, cwd=REPO, timeout=120)
-    err = _errors(run.stderr)
-    assert run.returncode == 2
-    assert len(err) == 1 and str(path) in err[0] and "Traceback" not in run.stderr
-    assert run.stdout == ""
+    assert_cli_exits_2([malformed[case]], "--json")

@@ -7,20 +7,16 @@ channel counts, unbalanced braces, bad headers, duplicate names, empty files and
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import infuse
-from infuse.cli import main as cli_main
-from infuse.errors import InputError
 
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, load_error, write_case
 from corpus_data import CORPUS, corpus_available
 
-INFUSE_CLI = Path(sys.executable).with_name("infuse")
 BANDAI_FILE = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_dash_normal_001.bvh"
 
 VALID = """HIERARCHY
@@ -154,28 +150,14 @@ CASES = malformed_cases()
 
 
 def _write(tmp_path: Path, name: str, data: bytes) -> Path:
-    path = tmp_path / f"{name.replace('@', '_at_')}.bvh"
-    path.write_bytes(data)
-    return path
-
-
-def _error_lines(stderr: str) -> list[str]:
-    # Warnings about other broken plugins are not this file's error.
-    return [line for line in stderr.splitlines() if line.strip() and not line.startswith("infuse: warning:")]
+    return write_case(tmp_path, name.replace("@", "_at_"), data, ".bvh")
 
 
 @pytest.mark.parametrize("name,data", CASES, ids=[c[0] for c in CASES])
 def test_malformed_file_is_an_input_error(tmp_path, capsys, name, data):
     path = _write(tmp_path, name, data)
-    with pytest.raises(InputError) as info:
-        infuse.load(path)
-    assert info.value.file == str(path) and info.value.problem
-    code = cli_main(["info", str(path)])
-    err = capsys.readouterr().err
-    assert code == 2
-    lines = _error_lines(err)
-    assert len(lines) == 1 and str(path) in lines[0] and lines[0].startswith("infuse: error:"), err
-    assert "Traceback" not in err
+    load_error(path)
+    assert_info_exits_2(path, capsys)
 
 
 # One case of each kind through the installed command, as a user runs it.
@@ -187,21 +169,12 @@ CLI_CASES = [c for c in CASES if c[0].split("@")[0] in CLI_KINDS]
 
 @pytest.mark.parametrize("name,data", CLI_CASES, ids=[c[0] for c in CLI_CASES])
 def test_cli_answers_malformed_file_with_exit_2(tmp_path, name, data):
-    path = _write(tmp_path, name, data)
-    run = subprocess.run([str(INFUSE_CLI), "info", "--json", str(path)], capture_output=True, text=True, timeout=120)
-    assert run.returncode == 2, run.stderr
-    lines = _error_lines(run.stderr)
-    assert len(lines) == 1 and str(path) in lines[0], run.stderr
-    assert "Traceback" not in run.stderr and run.stdout == ""
+    assert_cli_exits_2([_write(tmp_path, name, data)], "--json")
 
 
 def test_errors_name_the_place(tmp_path):
-    def problem(text: str) -> InputError:
-        path = tmp_path / "case.bvh"
-        path.write_text(text)
-        with pytest.raises(InputError) as info:
-            infuse.load(path)
-        return info.value
+    def problem(text: str):
+        return load_error(write_case(tmp_path, "case", text, ".bvh"))
 
     nan = problem(_replace_value(VALID, 2, 7, "nan"))
     assert nan.place == "line 35 (frame 2)" and "Spine" in nan.problem

@@ -8,7 +8,7 @@ import infuse
 from infuse.cli.builtin import asset_summary
 from infuse.kinematics import motion_fk
 
-from cli_errors import assert_cli_exits_2, assert_info_exits_2
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
 from corpus_data import corpus_file, labels
 
 COLLADA_LABELS = [lab for lab in labels() if lab["file"].lower().endswith(".dae")]
@@ -106,12 +106,6 @@ SCENE = """<?xml version="1.0" encoding="utf-8"?>
 """
 
 
-def _write(tmp_path, text, name="scene.dae"):
-    path = tmp_path / name
-    path.write_text(text)
-    return path
-
-
 def _expected_positions(t):
     """Global joint positions (core frame) at time t, by an explicit matrix chain."""
     def T(x, y, z):
@@ -132,7 +126,7 @@ def _expected_positions(t):
 
 
 def test_synthetic_scene_matches_an_independent_matrix_chain(tmp_path):
-    asset = infuse.load(_write(tmp_path, SCENE))
+    asset = infuse.load(write_case(tmp_path, "scene", SCENE, ".dae"))
     sk = asset.skeleton
     assert sk.names == ("Hips", "Spine", "Head", "LeftThigh")  # the skin makes the untyped thigh a joint
     assert list(sk.parents) == [-1, 0, 1, 0]  # Helper is folded into LeftThigh
@@ -148,7 +142,7 @@ def test_synthetic_scene_matches_an_independent_matrix_chain(tmp_path):
 
 
 def test_overrides_replace_file_units_and_up_axis(tmp_path):
-    path = _write(tmp_path, SCENE)
+    path = write_case(tmp_path, "scene", SCENE, ".dae")
     base = infuse.load(path)
     asset = infuse.load(path, units="m", up_axis="Y")
     assert (asset.source_units, asset.source_up_axis, asset.units_detected_by) == ("m", "Y", "override")
@@ -177,7 +171,7 @@ def test_bezier_and_step_keys_are_sampled_as_curves(tmp_path):
     text = SCENE.replace('<library_animations>', '<library_animations>' + curve, 1)
     text = text.replace('target="hips-node/rotateZ.ANGLE"/>\n    </animation>\n    <animation id="grow">',
                         'target="helper/nothing"/>\n    </animation>\n    <animation id="grow">')
-    motion = infuse.load(_write(tmp_path, text)).motions["scene"]
+    motion = infuse.load(write_case(tmp_path, "scene", text, ".dae")).motions["scene"]
     angles = np.degrees(2 * np.arctan2(motion.local_rotations[:, 0, 1], motion.local_rotations[:, 0, 3]))
     # Tangents at thirds of the segment with the key values: an ease-in/ease-out 0 -> 90 over 1 s.
     s = np.linspace(0, 1, 31)
@@ -219,14 +213,13 @@ MALFORMED = dict(_malformed_cases())
 
 @pytest.mark.parametrize("name", sorted(MALFORMED))
 def test_malformed_input_exits_2_with_one_line(tmp_path, capsys, name):
-    assert_info_exits_2(_write(tmp_path, MALFORMED[name], f"{name}.dae"), capsys)
+    assert_info_exits_2(write_case(tmp_path, name, MALFORMED[name], ".dae"), capsys)
 
 
 def test_malformed_input_through_the_installed_command(tmp_path):
-    paths = [_write(tmp_path, MALFORMED[name], f"{name}.dae") for name in ("truncated", "nan-translate", "cycle", "no-scene")]
+    paths = [write_case(tmp_path, name, MALFORMED[name], ".dae") for name in ("truncated", "nan-translate", "cycle", "no-scene")]
     label = COLLADA_LABELS[0] if COLLADA_LABELS else None
     if label:
         data = corpus_file(label["file"]).read_bytes()
-        paths.append(tmp_path / "cut.dae")
-        paths[-1].write_bytes(data[: len(data) // 3])
+        paths.append(write_case(tmp_path, "cut", data[: len(data) // 3], ".dae"))
     assert_cli_exits_2(paths)

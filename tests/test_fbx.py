@@ -10,7 +10,7 @@ import infuse
 from infuse.cli.builtin import asset_summary
 from infuse.kinematics import motion_fk
 
-from cli_errors import assert_cli_exits_2, assert_info_exits_2
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
 from corpus_data import corpus_file, labels
 
 FBX_LABELS = [lab for lab in labels() if lab["file"].lower().endswith(".fbx")]
@@ -320,24 +320,18 @@ def _cases():
 CASES = _cases()
 
 
-def _write(tmp_path, name, data):
-    path = tmp_path / f"{name}.fbx"
-    path.write_bytes(data)
-    return path
-
-
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_malformed_input_exits_2_with_one_line(tmp_path, capsys, name):
-    assert_info_exits_2(_write(tmp_path, name, CASES[name]), capsys)
+    assert_info_exits_2(write_case(tmp_path, name, CASES[name], ".fbx"), capsys)
 
 
 def test_malformed_input_through_the_installed_command(tmp_path):
     names = ("garbage", "nan-translation", "cycle", "corrupt-zlib")
-    paths = [_write(tmp_path, name, CASES[name]) for name in names]
+    paths = [write_case(tmp_path, name, CASES[name], ".fbx") for name in names]
     if FBX_LABELS:
         data = corpus_file(FBX_LABELS[0]["file"]).read_bytes()
         for k, cut in enumerate((100, len(data) // 3)):
-            paths.append(_write(tmp_path, f"cut{k}", data[:cut]))
+            paths.append(write_case(tmp_path, f"cut{k}", data[:cut], ".fbx"))
     assert_cli_exits_2(paths)
 
 

@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import json
 import struct
-import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -12,12 +10,9 @@ import numpy as np
 import pytest
 
 import infuse
-from infuse.cli import main
-from infuse.errors import InputError
 
+from cli_errors import assert_info_exits_2, assert_one_error_line, load_error, run_info, write_case
 from gltf_builder import mini_rig
-
-INFUSE_CLI = Path(sys.executable).with_name("infuse")
 
 
 def _glb_bytes(mutate=None) -> bytes:
@@ -111,9 +106,7 @@ THROUGH_PROGRAM = ["truncated_bin", "garbage", "json_garbage", "nan_in_accessor"
 
 def _write(folder: Path, name: str) -> Path:
     suffix, data = CASES[name]
-    path = folder / f"{name}{suffix}"
-    path.write_bytes(data)
-    return path
+    return write_case(folder, name, data, suffix)
 
 
 @pytest.fixture(scope="module")
@@ -123,33 +116,21 @@ def program_runs(tmp_path_factory):
 
     def run(name):
         path = _write(folder, name)
-        return name, (path, subprocess.run([str(INFUSE_CLI), "info", str(path)], capture_output=True, text=True, timeout=120))
+        return name, (path, run_info(path))
 
     with ThreadPoolExecutor(max_workers=3) as pool:
         return dict(pool.map(run, THROUGH_PROGRAM))
 
 
-def _check_one_line(path: Path, code: int, stdout: str, stderr: str) -> None:
-    # "infuse: warning:" lines come from other installed plugins (a broken one is reported, not fatal).
-    lines = [line for line in stderr.strip().splitlines() if not line.startswith("infuse: warning:")]
-    assert code == 2, (code, stderr)
-    assert len(lines) == 1 and "Traceback" not in stderr
-    assert str(path) in lines[0] and lines[0].startswith("infuse: error:")
-    assert stdout == ""
-
-
 @pytest.mark.parametrize("name", THROUGH_PROGRAM)
 def test_program_reports_malformed_input_in_one_line(program_runs, name):
     path, done = program_runs[name]
-    _check_one_line(path, done.returncode, done.stdout, done.stderr)
+    assert_one_error_line(path, done.returncode, done.stdout, done.stderr)
 
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_cli_reports_malformed_input_in_one_line(tmp_path, capsys, name):
-    path = _write(tmp_path, name)
-    code = main(["info", str(path)])
-    out = capsys.readouterr()
-    _check_one_line(path, code, out.out, out.err)
+    assert_info_exits_2(_write(tmp_path, name), capsys)
 
 
 PLACES = {
@@ -163,12 +144,7 @@ PLACES = {
 
 @pytest.mark.parametrize("name", list(PLACES))
 def test_error_names_the_place(tmp_path, name):
-    suffix, data = CASES[name]
-    path = tmp_path / f"{name}{suffix}"
-    path.write_bytes(data)
-    with pytest.raises(InputError) as err:
-        infuse.load(path)
-    assert PLACES[name] in str(err.value) and err.value.file == str(path)
+    assert PLACES[name] in str(load_error(_write(tmp_path, name)))
 
 
 def _mutations(doc: dict, rng: np.random.Generator, count: int):

@@ -8,7 +8,7 @@ import infuse
 from infuse.cli.builtin import asset_summary
 from infuse.kinematics import motion_fk
 
-from cli_errors import assert_cli_exits_2, assert_info_exits_2
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
 from corpus_data import corpus_file, labels
 
 OGRE_LABELS = [lab for lab in labels() if lab["file"].lower().endswith(".skeleton.xml")]
@@ -164,24 +164,18 @@ def _malformed_cases():
 MALFORMED = dict(_malformed_cases())
 
 
-def _write(tmp_path, name, text):
-    path = tmp_path / f"{name}.skeleton.xml"
-    path.write_text(text)
-    return path
-
-
 @pytest.mark.parametrize("name", sorted(MALFORMED))
 def test_malformed_input_exits_2_with_one_line(tmp_path, capsys, name):
-    assert_info_exits_2(_write(tmp_path, name, MALFORMED[name]), capsys)
+    assert_info_exits_2(write_case(tmp_path, name, MALFORMED[name], ".skeleton.xml"), capsys)
 
 
 def test_malformed_input_through_the_installed_command(tmp_path):
-    paths = [_write(tmp_path, name, MALFORMED[name]) for name in ("garbage", "nan-position", "cycle", "unknown-parent")]
+    paths = [write_case(tmp_path, name, MALFORMED[name], ".skeleton.xml")
+             for name in ("garbage", "nan-position", "cycle", "unknown-parent")]
     label = OGRE_LABELS[0] if OGRE_LABELS else None
     if label:
         data = corpus_file(label["file"]).read_bytes()
-        paths.append(tmp_path / "cut.skeleton.xml")
-        paths[-1].write_bytes(data[: len(data) // 3])
+        paths.append(write_case(tmp_path, "cut", data[: len(data) // 3], ".skeleton.xml"))
     assert_cli_exits_2(paths)
 
 

@@ -6,19 +6,16 @@ wrong channel counts, missing braces, unknown joints and channel types, empty fi
 from __future__ import annotations
 
 import random
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from infuse.cli import main
-from corpus_data import REPO, corpus_file
+from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
+from corpus_data import corpus_file
 
 SK = "smartbody/ChrBrad/ChrBrad.sk"
 SKM_SKELETON = "smartbody/behaviorsets/MaleLocomotion/skeletons/test_utah.sk"
 SKM = "smartbody/behaviorsets/MaleLocomotion/motions/ChrUtah_Walk001.skm"
-INFUSE = Path(sys.executable).with_name("infuse")
 
 
 def _nth_replace(text: str, old: str, new: str, n: int) -> str:
@@ -87,15 +84,6 @@ def skm_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
     return cases
 
 
-def _write(folder: Path, name: str, content: str | bytes) -> Path:
-    path = folder / name
-    if isinstance(content, bytes):
-        path.write_bytes(content)
-    else:
-        path.write_text(content)
-    return path
-
-
 @pytest.fixture(scope="module")
 def malformed(tmp_path_factory) -> dict[str, Path]:
     """Malformed files in a scratch folder laid out like a SmartBody behaviour set."""
@@ -104,8 +92,8 @@ def malformed(tmp_path_factory) -> dict[str, Path]:
     (root / "motions").mkdir()
     (root / "skeletons" / "utah.sk").symlink_to(corpus_file(SKM_SKELETON))
     rng = random.Random(20240611)
-    files = {f"sk_{k}": _write(root, f"{k}.sk", v) for k, v in sk_cases(corpus_file(SK).read_text(), rng).items()}
-    files.update({f"skm_{k}": _write(root / "motions", f"{k}.skm", v)
+    files = {f"sk_{k}": write_case(root, k, v, ".sk") for k, v in sk_cases(corpus_file(SK).read_text(), rng).items()}
+    files.update({f"skm_{k}": write_case(root / "motions", k, v, ".skm")
                   for k, v in skm_cases(corpus_file(SKM).read_text(), rng).items()})
     return files
 
@@ -121,19 +109,9 @@ SKM_CASES = ["truncated_%d" % i for i in range(8)] + [
     "unknown_channel_type", "duplicate_channel", "no_signature", "bad_timing"]
 
 
-def _errors(stderr: str) -> list[str]:
-    """The error lines (other plugins' load warnings are not this reader's business)."""
-    return [l for l in stderr.splitlines() if l.strip() and not l.startswith("infuse: warning:")]
-
-
 @pytest.mark.parametrize("case", [f"sk_{c}" for c in SK_CASES] + [f"skm_{c}" for c in SKM_CASES])
 def test_cli_rejects_malformed_file(case, malformed, capsys):
-    path = malformed[case]
-    code = main(["info", str(path)])
-    err = _errors(capsys.readouterr().err)
-    assert code == 2, err
-    assert len(err) == 1 and str(path) in err[0], err
-    assert "Traceback" not in err[0] and "internal error" not in err[0]
+    assert_info_exits_2(malformed[case], capsys)
 
 
 def test_generator_covers_every_listed_case(malformed):
@@ -142,9 +120,4 @@ def test_generator_covers_every_listed_case(malformed):
 
 @pytest.mark.parametrize("case", ["sk_truncated_3", "skm_unknown_joint"])
 def test_real_cli_process(case, malformed):
-    path = malformed[case]
-    run = subprocess.run([str(INFUSE), "info", str(path), "--json"], capture_output=True, text=True, cwd=REPO, timeout=120)
-    err = _errors(run.stderr)
-    assert run.returncode == 2
-    assert len(err) == 1 and str(path) in err[0] and "Traceback" not in run.stderr
-    assert run.stdout == ""
+    assert_cli_exits_2([malformed[case]], "--json")
