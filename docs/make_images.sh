@@ -30,6 +30,13 @@ if want quickstart-walk; then  # index.md, quickstart.md
   "$INFUSE" render "$WORK/xbot_walk.glb" --clip dataset-1_walk_normal_001 -o "$OUT/quickstart-walk.png" --strip 6
 fi
 
+if want render-mesh; then  # render.md
+  "$INFUSE" retarget "$WALK" --to "$AVATAR" -o "$WORK/avatar_walk.glb"
+  "$INFUSE" retarget "$WALK" --to "$XBOT" -o "$WORK/xbot_walk.glb"
+  "$INFUSE" render "$WORK/avatar_walk.glb" "$WORK/xbot_walk.glb" --clip dataset-1_walk_normal_001 \
+      -o "$OUT/render-mesh.png" --frame 40 --size 800x420 --title ""
+fi
+
 if want quickstart-view; then  # quickstart.md
   "$INFUSE" speak "$AVATAR" "Hello, I am infused." -o "$WORK/hello.glb"
   "$INFUSE" view "$WORK/hello.glb" --screenshot "$OUT/quickstart-view.png" --time 0.6 --size 900x560

@@ -166,5 +166,5 @@ def _run(args) -> int:
 
 @hookimpl
 def infuse_commands():
-    return [Command("render", "draw character/motion files (shaded mesh or stick figure) as PNG, filmstrip, GIF or MP4",
+    return [Command("render", "draw the mesh or skeleton of character/motion files as PNG, filmstrip, GIF or MP4",
                     _arguments, _run)]
