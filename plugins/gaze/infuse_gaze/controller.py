@@ -27,7 +27,7 @@ from .model import (
     DEFAULT_INFLUENCE, EYES, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOT_GROUPS, SLOT_PARENTS, SLOTS,
     group_name, smoothing_factor,
 )
-from .solver import SolverInput, rotation_matrices, solve
+from .solver import SolverInput, apply, rotation_matrices, solve
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
     """(heading, pitch) radians of an offset of ``angle_deg`` toward ``direction``: a BML word
@@ -85,11 +85,23 @@ class Gaze(Controller):
             if g.speed_deg_s <= 0 or not 0 <= g.smooth < 1 or min(g.heading_deg, g.up_deg, g.down_deg, g.roll_deg) < 0:
                 raise UsageError(f"gaze group {g.name!r}: speeds must be > 0, smooth in [0, 1), limits >= 0")
         self.settings = tuple(settings)
+        self.limits = np.array([g.limits_rad for g in self.settings])  # (G, 4) radians
+        self._rates: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         # Evaluated after its end until the slowest group is back: its largest turn at its speed.
         self.settle_s = max(g.heading_deg / g.speed_deg_s for g in self.settings) + 0.5
 
     def describe(self) -> str:
         return f"gaze ({self.influence.lower()})"
+
+    def rates(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per group (G,): the share of the distance left covered in a frame of ``dt`` seconds, and the
+        largest step in radians."""
+        rates = self._rates.get(dt)
+        if rates is None:
+            rates = (np.array([smoothing_factor(g.smooth, dt) for g in self.settings]),
+                     np.array([np.radians(g.speed_deg_s) * dt for g in self.settings]))
+            self._rates[dt] = rates
+        return rates
 
     # -- binding -------------------------------------------------------------------------------------
     def bind(self, rig, report):
@@ -134,8 +146,13 @@ class Gaze(Controller):
                 chain_aligned[s] = rig.aligned[slots[s]]
             else:
                 chain_aligned[s] = chain_aligned[parent] if parent >= 0 else rig.body
+        # Each slot's joint among the present ones (an absent slot takes its parent's; -1: the world).
+        source = np.full(len(SLOTS), -1)
+        for s, parent in enumerate(SLOT_PARENTS):
+            source[s] = np.count_nonzero(present[:s]) if present[s] else (source[parent] if parent >= 0 else -1)
         return {"slots": slots, "present": present, "counts": counts, "active": active, "fractions": fractions,
-                "eyes_lead": bool(priority == EYES and has_eyes), "chain_aligned": chain_aligned}
+                "eyes_lead": bool(priority == EYES and has_eyes), "chain_aligned": chain_aligned,
+                "columns": ancestors(rig.skeleton, slots[present]), "slot_source": source}
 
     # -- evaluation ----------------------------------------------------------------------------------
     @classmethod
@@ -146,9 +163,9 @@ class Gaze(Controller):
             rows.setdefault(job.rig.name, []).append(job)
         rows = {name: sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)) for name, row in rows.items()}
         frames, dt = len(block), block.dt
-        count = len(rows)
+        names = list(rows)
         n_slots, n_groups = len(SLOTS), len(GROUPS)
-        shape = (count, frames)
+        shape = (len(names), frames)
         arrays = {
             "chain_rot": np.empty(shape + (n_slots, 3, 3)), "chain_pos": np.empty(shape + (n_slots, 3)),
             "origin_local": np.empty(shape + (n_slots, 3)), "forward_angles": np.empty(shape + (n_slots, 2)),
@@ -157,66 +174,69 @@ class Gaze(Controller):
             "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
             "offsets": np.empty(shape + (2,)),
         }
-        names = list(rows)
-        owners = []
-        same_chain: dict[tuple, list[int]] = {}
+        owners, spans = [], []
         for c, name in enumerate(names):
             row = rows[name]
-            owner, weight = _in_charge(row, block.times)
+            owner, arrays["weights"][c] = _in_charge(row, block.times)
             owners.append(owner)
-            arrays["weights"][c] = weight
-            for k, job in enumerate(row):
-                frames_k = owner == k
-                if not frames_k.any():
-                    continue
+            # (job, the frames it leads): a slice when one gaze leads the whole block
+            spans.append([(row[0], slice(None))] if len(row) == 1 else
+                         [(job, owner == k) for k, job in enumerate(row) if np.any(owner == k)])
+            for job, these in spans[c]:
                 b, gaze = job.binding, job.controller
                 if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
                     joints = b["slots"][b["present"]]
                     rest = job.rig.skeleton.rest_rotations[joints]
-                    job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * frames_k)
-                try:
-                    target = gaze.target if not isinstance(gaze.target, str) else block.runtime.target(gaze.target)
-                    arrays["targets"][c, frames_k] = target.positions(block.times, block)[frames_k]
-                except UsageError as exc:  # a target that names nothing in the scene: this gaze rests
-                    job.report(f"gaze target {gaze.target!r} cannot be found ({exc}); the gaze is skipped")
-                    arrays["targets"][c, frames_k] = 0.0
-                    arrays["weights"][c, frames_k] = 0.0
-                arrays["active"][c, frames_k] = b["active"]
-                arrays["fractions"][c, frames_k] = b["fractions"]
-                arrays["offsets"][c, frames_k] = gaze.offset
-                for g, settings in enumerate(gaze.settings):
-                    arrays["limits"][c, frames_k, g] = settings.limits_rad
-                    arrays["smoothing"][c, frames_k, g] = smoothing_factor(settings.smooth, dt)
-                    arrays["max_step"][c, frames_k, g] = np.radians(settings.speed_deg_s) * dt
-            leads = tuple(sorted({row[k].binding["eyes_lead"] for k in np.unique(owner)}))
-            same_chain.setdefault((id(row[0].rig.skeleton), tuple(row[0].binding["slots"]), leads), []).append(c)
-        for (_, _, leads), members in same_chain.items():  # characters on one skeleton share the forward kinematics
-            parts = {lead: _chain_frames([rows[names[c]][0] for c in members], lead) for lead in leads}
-            first = parts[leads[0]]
-            for key, part in zip(("chain_rot", "chain_pos", "origin_local"), first[:3]):
-                arrays[key][members] = part
-            arrays["forward_angles"][members] = first[3]
-            for lead in leads[1:]:  # a gaze led by the head takes over from one led by the eyes, or back
-                for i, c in enumerate(members):
-                    row = rows[names[c]]
-                    frames_lead = np.array([row[k].binding["eyes_lead"] == lead for k in owners[c]])
-                    arrays["forward_angles"][c, frames_lead] = parts[lead][3][i, frames_lead]
-        refine = []
-        index = {name: c for c, name in enumerate(names)}
+                    leads = np.zeros(frames, dtype=bool)
+                    leads[these] = True
+                    job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * leads)
+                arrays["active"][c, these] = b["active"]
+                arrays["fractions"][c, these] = b["fractions"]
+                arrays["offsets"][c, these] = gaze.offset
+                arrays["limits"][c, these] = gaze.limits
+                arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
+        # The pose below, along each chain; characters on one skeleton share the forward kinematics.
+        positions = np.empty(shape + (n_slots, 3))  # each slot's joint in the world
+        same_chain: dict[tuple, list[int]] = {}
         for c, name in enumerate(names):
-            row = rows[name]
-            if len(np.unique(owners[c])) != 1:
-                continue  # the gaze changes hands in this block: look at the other character's pose below
-            target = row[owners[c][0]].controller.target
-            try:
-                target = block.runtime.target(target) if isinstance(target, str) else target
-            except UsageError:
-                continue
-            if isinstance(target, JointTarget) and target.character in index:
-                other = rows[target.character][0]
-                slots = _slots_of(target, other, block)
-                if slots:
-                    refine.append((c, index[target.character], slots))
+            first = rows[name][0]
+            same_chain.setdefault((id(first.rig.skeleton), tuple(first.binding["slots"])), []).append(c)
+        for members in same_chain.values():
+            row_jobs = [rows[names[c]][0] for c in members]
+            frames_w, *parts = _chain_frames(row_jobs)
+            for key, part in zip(("chain_rot", "chain_pos", "origin_local"), parts):
+                arrays[key][members] = part
+            positions[members] = parts[-1]
+            present = row_jobs[0].binding["present"]
+            by_lead: dict[bool, np.ndarray] = {}
+            for i, c in enumerate(members):  # where the priority joint points: the eyes, or the head
+                leads = np.array([job.binding["eyes_lead"] for job in rows[names[c]]])[owners[c]]
+                for lead in np.unique(leads):
+                    if lead not in by_lead:
+                        by_lead[lead] = _forward_angles(frames_w, present, bool(lead))
+                    arrays["forward_angles"][c, leads == lead] = by_lead[lead][i, leads == lead]
+        # Targets. A character looking at another gazing one (its eyes or head) takes that character's
+        # joints from the chain above, and again from its solved chain (``refine``).
+        index = {name: c for c, name in enumerate(names)}
+        refine = []
+        for c, name in enumerate(names):
+            for job, these in spans[c]:
+                target = job.controller.target
+                try:
+                    target = block.runtime.target(target) if isinstance(target, str) else target
+                    slots = ()
+                    if len(spans[c]) == 1 and isinstance(target, JointTarget) and target.character in index:
+                        slots = _slots_of(target, rows[target.character][0], block)
+                    if slots:
+                        other = index[target.character]
+                        refine.append((c, other, slots))
+                        arrays["targets"][c] = positions[other][:, list(slots)].mean(axis=1)
+                    else:
+                        arrays["targets"][c, these] = target.positions(block.times, block)[these]
+                except UsageError as exc:  # a target that names nothing in the scene: this gaze rests
+                    job.report(f"gaze target {job.controller.target!r} cannot be found ({exc}); the gaze is skipped")
+                    arrays["targets"][c, these] = 0.0
+                    arrays["weights"][c, these] = 0.0
         inp = SolverInput(present=np.stack([rows[n][0].binding["present"] for n in names]),
                           counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays)
         states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
@@ -240,6 +260,8 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
     the weight is the largest of the running gazes', and the turn moves from where it was to the new
     target under the smoothing and speed limits. When none runs, the last one to lead keeps the
     turn returning to rest (weight 0)."""
+    if len(row) == 1:
+        return np.zeros(len(times), dtype=np.int64), row[0].weight
     starts = np.array([j.activity.start_s for j in row])
     ends = np.array([np.inf if j.activity.end_s is None else j.activity.end_s for j in row])
     t = np.asarray(times)[None]
@@ -255,16 +277,14 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
     return owner, np.where(latest_running >= 0, np.maximum(weight, own), own)
 
 
-def _chain_frames(jobs, eyes_lead: bool):
-    """For characters on one skeleton with one chain, from the pose below: each slot's aligned frame
-    (C, F, S, 3, 3) and position (C, F, S, 3) relative to its parent slot's aligned frame, the gaze
-    origin in each slot's aligned frame (C, F, S, 3), and the heading and pitch (C, F, S, 2) of where
-    the priority joint points, seen from each slot."""
+def _chain_frames(jobs):
+    """For characters on one skeleton with one chain, from the pose below: each slot's aligned frame in
+    the world (C, F, S, 3, 3); relative to its parent slot's aligned frame, each slot's aligned frame
+    (C, F, S, 3, 3) and position (C, F, S, 3); the gaze origin in each slot's aligned frame (C, F, S, 3);
+    and each slot's position in the world (C, F, S, 3). Frames are matrices acting on column vectors."""
     b = jobs[0].binding
-    slots, present = b["slots"], b["present"]
     skeleton = jobs[0].pose.rig.skeleton
-    joints = slots[present]
-    columns = ancestors(skeleton, joints)
+    present, columns = b["present"], b["columns"]
     local = np.stack([j.pose.local_rotations[:, columns] for j in jobs])
     root = np.stack([j.pose.root_translations for j in jobs])
     moved = [j.pose.joint_translations for j in jobs]
@@ -272,34 +292,40 @@ def _chain_frames(jobs, eyes_lead: bool):
     if any(t is not None for t in moved):
         rest = skeleton.rest_translations[columns]
         translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, columns] for t in moved])
-    rot, pos = chain_fk(skeleton, local, root, translations, joints, columns)
+    rot, pos = chain_fk(skeleton, local, root, translations, b["slots"][present], columns)
     for c, job in enumerate(jobs):  # into the world: where each character stands
         rot[c], pos[c] = job.rig.place(rot[c], pos[c])
-    lead = local.shape[:2]
-    g_rot = np.empty(lead + (len(SLOTS), 4))
-    g_pos = np.empty(lead + (len(SLOTS), 3))
-    g_rot[..., present, :] = rot
-    g_pos[..., present, :] = pos
-    for s, parent in enumerate(SLOT_PARENTS):  # an absent slot repeats its parent (the world: identity, origin)
-        if not present[s]:
-            g_rot[..., s, :] = g_rot[..., parent, :] if parent >= 0 else quat.IDENTITY
-            g_pos[..., s, :] = g_pos[..., parent, :] if parent >= 0 else 0.0
+    source = b["slot_source"]
+    if source[0] < 0:  # no pelvis: the chain starts from the world (identity, origin), index -1 below
+        rot = np.concatenate((rot, np.broadcast_to(quat.IDENTITY, rot.shape[:-2] + (1, 4))), axis=-2)
+        pos = np.concatenate((pos, np.zeros(pos.shape[:-2] + (1, 3))), axis=-2)
+    g_pos = pos[..., source, :]
     aligned = np.stack([j.binding["chain_aligned"] for j in jobs])[:, None]  # (C, 1, S, 4)
-    frames_w = quat.multiply(g_rot, aligned)  # each slot's aligned frame in the pose below
-    parents = np.array(SLOT_PARENTS)
-    parent_w = np.where((parents >= 0)[:, None], frames_w[..., np.maximum(parents, 0), :], quat.IDENTITY)
-    parent_p = np.where((parents >= 0)[:, None], g_pos[..., np.maximum(parents, 0), :], 0.0)
-    inverse_parent = quat.conjugate(parent_w)
-    chain_rot = rotation_matrices(quat.multiply(inverse_parent, frames_w))
-    chain_pos = quat.rotate(inverse_parent, g_pos - parent_p)
-    eyes = [7, 8] if present[7] and present[8] else []
-    lead_slots = eyes if eyes_lead and eyes else [6]
-    origin = g_pos[..., eyes or [6], :].mean(axis=-2)
-    forward = quat.rotate(frames_w[..., lead_slots, :], np.array([0.0, 0.0, 1.0])).mean(axis=-2)
-    inverse = quat.conjugate(frames_w)
-    origin_local = quat.rotate(inverse, origin[..., None, :] - g_pos)
-    heading, pitch = direction_angles(quat.rotate(inverse, np.broadcast_to(forward[..., None, :], g_pos.shape)))
-    return chain_rot, chain_pos, origin_local, np.stack((heading, pitch), axis=-1)
+    frames_w = rotation_matrices(quat.multiply(rot[..., source, :], aligned))
+    inverse = np.swapaxes(frames_w, -1, -2)
+    parents = np.array(SLOT_PARENTS[1:])  # slot 0's parent is the world
+    chain_rot = np.empty_like(frames_w)
+    chain_pos = np.empty_like(g_pos)
+    chain_rot[..., 0, :, :], chain_pos[..., 0, :] = frames_w[..., 0, :, :], g_pos[..., 0, :]
+    chain_rot[..., 1:, :, :] = inverse[..., parents, :, :] @ frames_w[..., 1:, :, :]
+    chain_pos[..., 1:, :] = apply(inverse[..., parents, :, :], g_pos[..., 1:, :] - g_pos[..., parents, :])
+    origin = g_pos[..., _eyes(present) or [6], :].mean(axis=-2)
+    origin_local = apply(inverse, origin[..., None, :] - g_pos)
+    return frames_w, chain_rot, chain_pos, origin_local, g_pos
+
+
+def _eyes(present) -> list[int]:
+    """The eye slots, when both eyes are present."""
+    return [7, 8] if present[7] and present[8] else []
+
+
+def _forward_angles(frames_w: np.ndarray, present, eyes_lead: bool) -> np.ndarray:
+    """Heading and pitch (C, F, S, 2), seen from each slot's aligned frame (``frames_w``, world), of where
+    the priority joint points: the mean forward (+Z) axis of the eyes when they lead, else the head's."""
+    lead = (_eyes(present) if eyes_lead else []) or [6]
+    forward = frames_w[..., 2][..., lead, :].mean(axis=-2)  # the forward (+Z) axis is the third column: (C, F, 3)
+    heading, pitch = direction_angles(apply(np.swapaxes(frames_w, -1, -2), forward[..., None, :]))
+    return np.stack((heading, pitch), axis=-1)
 
 
 def _slots_of(target: JointTarget, job, block) -> tuple[int, ...]:

@@ -124,15 +124,20 @@ def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, sta
     Each frame covers ``smoothing`` (C, F) of the distance left, at most ``max_step`` (C, F) radians.
     Returns the final state (C, 2) and the path. The only loop over frames in the solver.
     """
-    frames = desired.shape[1]
-    path = np.empty_like(desired)
     if np.all(smoothing >= 1.0):  # no smoothing: the path is the target unless a step is too long
         steps = np.diff(np.concatenate((state[:, None], desired), axis=1), axis=1)
         if np.all(np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step):
-            path[:] = desired
-            return desired[:, -1].copy(), path
+            return desired[:, -1].copy(), desired.copy()
+    moving = np.any(desired != 0.0, axis=(1, 2)) | np.any(state != 0.0, axis=1)
+    if not moving.all():  # rows at rest with nothing to follow stay at rest
+        final, path = state.copy(), np.zeros_like(desired)
+        if moving.any():
+            final[moving], path[moving] = follow(desired[moving], smoothing[moving], max_step[moving], state[moving])
+        return final, path
     if desired.shape[0] <= SCALAR_FOLLOW_MAX_CHARACTERS:
         return _follow_scalar(desired, smoothing, max_step, state)
+    frames = desired.shape[1]
+    path = np.empty_like(desired)
     share = smoothing[..., None]
     for f in range(frames):
         step = share[:, f] * (desired[:, f] - state)
@@ -170,7 +175,7 @@ def _follow_scalar(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndar
     return np.array(finals, dtype=np.float64).reshape(state.shape), np.array(paths, dtype=np.float64).reshape(desired.shape)
 
 
-def _apply(m, v):
+def apply(m, v):
     """Matrices (..., 3, 3) times vectors (..., 3)."""
     return (m @ v[..., None])[..., 0]
 
@@ -206,7 +211,8 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
 
 def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
-    groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`)."""
+    groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
+    no character turns (and none is on its way back) is skipped: its joints stay as they are."""
     c_count, frames = inp.targets.shape[:2]
     out = np.zeros((c_count, frames, _S, 2))
     w_rot = np.empty((c_count, frames, _S, 3, 3))
@@ -214,37 +220,46 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
     counts = np.maximum(inp.counts, 1)[:, None, :, None]  # (C, 1, G, 1)
     present = inp.present[:, None, :, None]  # (C, 1, S, 1)
     target = inp.targets
-    zero = np.zeros((c_count, frames))
+    gains = inp.active * inp.weights[..., None]  # (C, F, G)
+    turning = (np.any(gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
     share = None
-    for s in range(_S):
+    for s in range(_EYE_SLOTS[0]):
         p = SLOT_PARENTS[s]
         if p < 0:
             pre = inp.chain_rot[:, :, s]
             w_pos[:, :, s] = inp.chain_pos[:, :, s]
         else:
             pre = w_rot[:, :, p] @ inp.chain_rot[:, :, s]
-            w_pos[:, :, s] = w_pos[:, :, p] + _apply(w_rot[:, :, p], inp.chain_pos[:, :, s])
+            w_pos[:, :, s] = w_pos[:, :, p] + apply(w_rot[:, :, p], inp.chain_pos[:, :, s])
         g = SLOT_GROUPS[s]
-        if g == EYES:  # each eye turns from its own position, all the way (within its limits)
-            dh, dv = _direction(pre, target - w_pos[:, :, s], zero, zero, inp.offsets)
-            dh, dv = _clamp(dh, dv, inp.limits[:, :, g])
-            gain = (inp.active[:, :, g] * inp.weights * inp.present[:, None, s])[..., None]
-            k = s - _EYE_SLOTS[0]
-            eyes_state[:, k], path = follow(np.stack((dh, dv), -1) * gain, inp.smoothing[:, :, g],
-                                            inp.max_step[:, :, g], eyes_state[:, k])
-            out[:, :, s] = np.where(present[:, :, s], path, 0.0)
+        if not turning[g]:
+            w_rot[:, :, s] = pre
             continue
         if _FIRST_SLOT[g] == s:
             fwd = inp.forward_angles[:, :, s]
-            dh, dv = _direction(pre, target - w_pos[:, :, s] - _apply(pre, inp.origin_local[:, :, s]),
+            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply(pre, inp.origin_local[:, :, s]),
                                 fwd[..., 0], fwd[..., 1], inp.offsets)
             fraction = inp.fractions[:, :, g]
             dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
-            gain = (inp.active[:, :, g] * inp.weights)[..., None]
-            groups_state[:, g], path = follow(np.stack((dh, dv), -1) * gain, inp.smoothing[:, :, g],
+            groups_state[:, g], path = follow(np.stack((dh, dv), -1) * gains[:, :, g, None], inp.smoothing[:, :, g],
                                               inp.max_step[:, :, g], groups_state[:, g])
             share = path / counts[:, :, g]
         hv = np.where(present[:, :, s], share, 0.0)
         out[:, :, s] = hv
         w_rot[:, :, s] = pre @ swing_matrices(hv[..., 0], hv[..., 1])
+    # The eyes, side by side: each turns from its own position, all the way (within its limits).
+    eyes, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
+    parent = w_rot[:, :, p, None]
+    w_pos[:, :, eyes] = w_pos[:, :, p, None] + apply(parent, inp.chain_pos[:, :, eyes])
+    if not (inp.present[:, eyes].any() or eyes_state.any()):
+        return out, w_pos
+    dh, dv = _direction(parent @ inp.chain_rot[:, :, eyes], target[:, :, None] - w_pos[:, :, eyes], 0.0, 0.0,
+                        inp.offsets[:, :, None])
+    dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
+    gain = gains[:, :, EYES, None] * inp.present[:, None, eyes]  # (C, F, 2)
+    desired = (np.stack((dh, dv), -1) * gain[..., None]).transpose(0, 2, 1, 3)  # (C, 2, F, 2): one row per eye
+    final, path = follow(desired.reshape(2 * c_count, frames, 2), np.repeat(inp.smoothing[:, :, EYES], 2, axis=0),
+                         np.repeat(inp.max_step[:, :, EYES], 2, axis=0), eyes_state.reshape(2 * c_count, 2))
+    eyes_state[:] = final.reshape(c_count, 2, 2)
+    out[:, :, eyes] = np.where(present[:, :, eyes], path.reshape(c_count, 2, frames, 2).transpose(0, 2, 1, 3), 0.0)
     return out, w_pos
