@@ -115,8 +115,10 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
 def normalize(q: np.ndarray) -> np.ndarray:
     """Unit-length quaternions; a zero quaternion becomes the identity."""
     q = np.asarray(q, dtype=np.float64)
-    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    n = np.sqrt(np.einsum("...i,...i->...", q, q))[..., None]
     safe = n > 1e-12
+    if safe.all():
+        return q / n
     return np.where(safe, q / np.where(safe, n, 1.0), IDENTITY)
 
 

@@ -22,6 +22,10 @@ def swing(heading, pitch, roll=0.0) -> np.ndarray:
     """Quaternions (..., 4) of heading, then pitch, then roll, in radians (see the module doc)."""
     h = 0.5 * np.asarray(heading, dtype=np.float64)
     p = -0.5 * np.asarray(pitch, dtype=np.float64)
+    if np.ndim(roll) == 0 and roll == 0.0:  # no roll: cos 1, sin 0 in the products below
+        h, p = np.broadcast_arrays(h, p)
+        ch, sh, cp, sp = np.cos(h), np.sin(h), np.cos(p), np.sin(p)
+        return np.stack((ch * sp, sh * cp, -(sh * sp), ch * cp), axis=-1)
     r = 0.5 * np.asarray(roll, dtype=np.float64)
     h, p, r = np.broadcast_arrays(h, p, r)
     ch, sh, cp, sp, cr, sr = np.cos(h), np.sin(h), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
@@ -81,7 +85,12 @@ def local_offsets(aligned, offsets) -> np.ndarray:
     """Local rotation offsets ``A Δ A⁻¹`` (..., 4) from offsets ``Δ`` (..., 4) in aligned frames ``A``.
 
     Post-multiplied onto a joint's local rotation (``L · A Δ A⁻¹``) they turn everything below the
-    joint by ``Δ`` as seen in the joint's aligned frame.
+    joint by ``Δ`` as seen in the joint's aligned frame. (``A Δ A⁻¹`` is ``Δ`` with its axis turned by
+    ``A``: the same angle, so the scalar part stays.)
     """
     aligned = np.asarray(aligned, dtype=np.float64)
-    return quat.multiply(quat.multiply(aligned, offsets), quat.conjugate(aligned))
+    offsets = np.asarray(offsets, dtype=np.float64)
+    out = np.empty(np.broadcast_shapes(aligned.shape, offsets.shape))
+    out[..., :3] = quat.rotate(aligned, offsets[..., :3])
+    out[..., 3] = offsets[..., 3]
+    return out
