@@ -15,12 +15,28 @@ from .. import quaternions as quat
 from .pose import chain_fk
 
 
+# Small vector helpers over (F, 3) arrays: numpy's generic cross and norm cost more than the arithmetic.
+_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+
+
+def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return np.einsum("...i,...i->...", u, v)
+
+
+def _norm(v: np.ndarray) -> np.ndarray:
+    return np.sqrt(_dot(v, v))
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return u[..., _NEXT] * v[..., _AFTER] - u[..., _AFTER] * v[..., _NEXT]
+
+
 def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+    return v / np.maximum(_norm(v), 1e-12)[..., None]
 
 
 def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.arccos(np.clip(np.sum(_unit(u) * _unit(v), axis=-1), -1.0, 1.0))
+    return np.arccos(np.clip(_dot(_unit(u), _unit(v)), -1.0, 1.0))
 
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
@@ -38,23 +54,23 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                             [a, b, c] if parent_a < 0 else [a, b, c, parent_a])
     A, B, C = g_pos[:, 0], g_pos[:, 1], g_pos[:, 2]
     T = np.asarray(goal, dtype=np.float64)
-    lab = np.linalg.norm(B - A, axis=-1)
-    lcb = np.linalg.norm(C - B, axis=-1)
-    lat = np.clip(np.linalg.norm(T - A, axis=-1), np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
+    lab = _norm(B - A)
+    lcb = _norm(C - B)
+    lat = np.clip(_norm(T - A), np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
     ac_ab_0 = _angle(C - A, B - A)
     ba_bc_0 = _angle(A - B, C - B)
     ac_at_0 = _angle(C - A, T - A)
     ac_ab_1 = np.arccos(np.clip((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat), -1.0, 1.0))
     ba_bc_1 = np.arccos(np.clip((lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb), -1.0, 1.0))
-    axis1 = np.cross(C - A, T - A)
-    small = np.linalg.norm(axis1, axis=-1) < 1e-12
-    axis0 = np.cross(C - A, B - A)
-    flat = np.linalg.norm(axis0, axis=-1) < 1e-6 * np.maximum(lab * lcb, 1e-12)
+    axis1 = _cross(C - A, T - A)
+    small = _norm(axis1) < 1e-12
+    axis0 = _cross(C - A, B - A)
+    flat = _norm(axis0) < 1e-6 * np.maximum(lab * lcb, 1e-12)
     if flat.any():  # a straight limb bends toward the pole, else toward the goal
         if pole is not None:
-            fallback = np.cross(C - A, np.broadcast_to(pole, A.shape))
+            fallback = _cross(C - A, np.broadcast_to(pole, A.shape))
         else:
-            other = np.cross(C - A, np.array([0.0, 1.0, 0.0]))
+            other = _cross(C - A, np.array([0.0, 1.0, 0.0]))
             fallback = np.where(small[:, None], other, axis1)
         axis0 = np.where(flat[:, None], fallback, axis0)
     axis0 = _unit(axis0)
@@ -83,7 +99,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
             rotation = quat.multiply(rotation, local_rotations[:, j])
     if keep_end:
         local_rotations[:, c] = quat.multiply(quat.conjugate(rotation), g_rot[:, 2])
-    return np.linalg.norm(position - T, axis=-1)
+    return _norm(position - T)
 
 
 def _path_below(skeleton, top: int, bottom: int) -> list[int]:
