@@ -18,6 +18,7 @@ import infuse
 from corpus_data import corpus_file, require_corpus
 from infuse import quaternions as quat
 from infuse.cli import main
+from infuse.mapping import map_skeleton
 from infuse.mesh import SkinnedMesh, merge
 from infuse.render import Camera, Figure, Renderer, Style
 from infuse.render.meshes import FigureMesh
@@ -26,6 +27,7 @@ from infuse.render.raster import coverage, rasterize
 WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"
 XBOT = "runxaway-models/Xbot.glb"
 AVATAR = "talkinghead/avatars/brunette-t.glb"
+VROID = "talkinghead/avatars/vroid.glb"  # meshopt-compressed: triangle codes, octahedral normals, quantized
 CLIP = "dataset-1_walk_normal_001"
 BARE = Style(show_grid=False, show_shadow=False, show_trail=False)  # only the figure differs from the background
 
@@ -89,6 +91,26 @@ def test_avatar_colours_come_from_its_textures(walkers):
     assert all(m.colors is not None for m in asset.meshes)  # every surface has a base colour texture
     hair, skin = colours["Wolf3D_Hair"], colours["Wolf3D_Head"]
     assert hair.sum() < 0.2 < skin.sum() and skin[0] > skin[2]  # dark hair, warm skin
+
+
+def test_meshopt_compressed_surfaces_are_decoded():
+    require_corpus()
+    avatar = infuse.load(corpus_file(VROID))
+    meshes = avatar.meshes
+    assert meshes and not [w for w in avatar.meta["warnings"] if "not drawn" in w]
+    body = max(meshes, key=lambda m: m.num_triangles if m.name.startswith("Body") else 0)
+    edges = np.sort(body.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, uses = np.unique(edges, axis=0, return_counts=True)
+    assert (uses == 2).mean() > 0.75  # a closed skin: most edges join two triangles (a wrong decode joins none)
+    assert np.allclose(np.linalg.norm(body.normals, axis=1), 1.0, atol=1e-3)
+    figure = Figure.from_skeleton(avatar.skeleton, meshes=meshes)
+    renderer = Renderer([figure], np.zeros(1), size=(400, 300), style=BARE, counter=False, title="")
+    mask = silhouette(renderer.image(0, labels=False))
+    # the body's joints (the rig also has skirt and coat bones this outfit has no cloth for)
+    body_joints = [avatar.skeleton.index[j] for j in map_skeleton(avatar).mapped().values()]
+    assert len(body_joints) > 30
+    x, y = np.clip(np.rint(renderer.joint_pixels(0, 0)[body_joints]).astype(int), 0, [399, 299]).T
+    assert distance_transform_edt(~mask)[y, x].max() <= 5.0
 
 
 def test_rest_pose_is_upright_and_skinning_reproduces_the_bind_pose():
@@ -291,3 +313,21 @@ def test_skinned_mesh_checks_its_arrays():
     with pytest.raises(ValueError, match="bone out of range"):
         SkinnedMesh("bad", mesh.positions, mesh.normals, mesh.triangles, mesh.joints + 1, mesh.weights,
                     mesh.bind_joints, mesh.inverse_bind)
+
+
+def test_meshopt_index_codecs_on_small_streams():
+    from infuse_gltf import meshopt
+
+    # a quad: three new vertices (code 0xfe, explicit byte 0: restart), then the last edge (0, 2) and a new vertex
+    quad = bytes([0xE1, 0xFE, 0x00, 0x00]) + bytes(16)
+    assert meshopt.decode_triangles(quad, 6).tolist() == [0, 1, 2, 0, 2, 3]
+    # index sequence: deltas +0, +1, +1, +3, -1 against baseline 0 (zigzag, shifted past the baseline bit)
+    sequence = bytes([0xD1, 0x00, 0x04, 0x04, 0x0C, 0x02]) + bytes(4)
+    assert meshopt.decode_indices(sequence, 5).tolist() == [0, 1, 2, 5, 4]
+    with pytest.raises(meshopt.MeshoptError, match="left over"):
+        meshopt.decode_triangles(bytes([0xE1, 0xFE, 0x00, 0x00, 0x07]) + bytes(16), 3)
+    # index data never stands for a skeleton or a clip
+    with pytest.raises(meshopt.MeshoptUnsupported, match="mesh data"):
+        meshopt.decode_view({"mode": "TRIANGLES", "count": 6, "byteStride": 2}, quad)
+    assert np.frombuffer(meshopt.decode_view({"mode": "TRIANGLES", "count": 6, "byteStride": 2}, quad, mesh=True),
+                         "<u2").tolist() == [0, 1, 2, 0, 2, 3]

@@ -50,10 +50,14 @@ def _int_field(file, place: str, obj: dict, key: str, default=None, minimum: int
 
 
 class AccessorReader:
-    """Reads the accessors of one :class:`GltfDocument`, caching decoded arrays by index."""
+    """Reads the accessors of one :class:`GltfDocument`, caching decoded arrays by index.
 
-    def __init__(self, doc: GltfDocument):
+    ``mesh``: the reads are mesh data, so meshopt views in the index modes or with the octahedral
+    filter are decoded (they are refused for skeleton and clip data)."""
+
+    def __init__(self, doc: GltfDocument, mesh: bool = False):
         self.doc = doc
+        self.mesh = mesh
         self.file = doc.path
         self.accessors = doc.json.get("accessors", [])
         self.views = doc.json.get("bufferViews", [])
@@ -105,7 +109,7 @@ class AccessorReader:
         if source is None or start + size > len(source):
             raise InputError(self.file, f"{place}.extensions.{name}", f"compressed bytes lie outside buffers[{source_index}]")
         try:
-            decoded = meshopt.decode_view(ext, source[start:start + size])
+            decoded = meshopt.decode_view(ext, source[start:start + size], mesh=self.mesh)
         except meshopt.MeshoptUnsupported as exc:
             raise MissingFeatureError(self.file, f"{place} is compressed with {name}: {exc}") from None
         except meshopt.MeshoptError as exc:

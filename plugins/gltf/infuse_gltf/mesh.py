@@ -15,8 +15,8 @@ Colour: the material's base colour factor, times the base colour texture sampled
 (bilinear, on the texture reduced to at most :data:`TEXTURE_SIZE` pixels, sRGB converted to linear),
 times ``COLOR_0``. Triangles whose three vertices fall under the alpha cutoff (``MASK``) or are
 mostly transparent (``BLEND``) are dropped. Morph targets keep their position offsets; default mesh
-weights are not applied. Primitives the reader cannot decode (Draco, meshopt-compressed indices)
-are skipped with a warning in ``meta["warnings"]``; points and lines are not surfaces and are left out.
+weights are not applied. meshopt-compressed mesh data is decoded (indices, octahedral normals);
+primitives the reader cannot decode (Draco) are skipped with a warning in ``meta["warnings"]``; points and lines are not surfaces and are left out.
 """
 from __future__ import annotations
 
@@ -51,9 +51,9 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
 class MeshLoader:
     """Builds the surfaces of one document on demand (see the module doc); called by ``Asset.meshes``."""
 
-    def __init__(self, doc, accessors: AccessorReader, graph, world: np.ndarray, joint_nodes, core_from_file,
-                 skeleton, warnings: list[str]):
-        self.doc, self.accessors, self.graph, self.world = doc, accessors, graph, world
+    def __init__(self, doc, graph, world: np.ndarray, joint_nodes, core_from_file, skeleton, warnings: list[str]):
+        self.doc, self.graph, self.world = doc, graph, world
+        self.accessors = AccessorReader(doc, mesh=True)
         self.joint_of_node = {n: j for j, n in enumerate(joint_nodes)}
         self.core = similarity_matrix(*core_from_file)
         self.skeleton = skeleton

@@ -1,15 +1,18 @@
-"""Decoding ``EXT_meshopt_compression`` / ``KHR_meshopt_compression`` attribute views (vertex codec v0).
+"""Decoding ``EXT_meshopt_compression`` / ``KHR_meshopt_compression`` buffer views (codecs v0 and v1).
 
-The format (meshoptimizer's vertex codec, as the extension specifies it): a header byte ``0xa0``,
-then blocks of up to 256 elements; in a block every byte lane of the element is stored as groups
-of 16 deltas, each group packed with 0, 2, 4 or 8 bits per value (a 2-bit mode per group in a
-header; the largest 2- or 4-bit value escapes to a following full byte). Deltas are zigzag coded
-and accumulate, per lane, from the previous element (the first from the tail that closes the
-stream). Filters then turn the bytes into values: ``EXPONENTIAL`` (24-bit mantissa and 8-bit
-exponent per float) and ``QUATERNION`` (three 16-bit components and the index of the dropped largest one).
+Attributes (vertex codec v0): a header byte ``0xa0``, then blocks of up to 256 elements; in a
+block every byte lane of the element is stored as groups of 16 deltas, each group packed with 0,
+2, 4 or 8 bits per value (a 2-bit mode per group in a header; the largest 2- or 4-bit value
+escapes to a following full byte). Deltas are zigzag coded and accumulate, per lane, from the
+previous element (the first from the tail that closes the stream). Filters then turn the bytes
+into values: ``EXPONENTIAL`` (24-bit mantissa and 8-bit exponent per float), ``QUATERNION`` (three
+16-bit components and the index of the dropped largest one) and ``OCTAHEDRAL`` (unit vectors,
+normals and tangents).
 
-Only ``mode: ATTRIBUTES`` with the filters animation and skin data use is decoded; index buffers
-and octahedral normals only ever hold mesh data, which infuse does not read.
+Triangles (index codec v1, header ``0xe1``): one code byte per triangle that reuses an edge and
+vertex of recent triangles (16-entry FIFOs), the next new vertex, or an index stored as a zigzag
+LEB128 delta. Indices (``0xd1``): LEB128 zigzag deltas against one of two baselines. Both are
+sequential state machines, decoded triangle by triangle.
 """
 from __future__ import annotations
 
@@ -124,15 +127,163 @@ def _unfilter_quaternion(raw: np.ndarray) -> np.ndarray:
     return out.astype(itype).view(np.uint8).reshape(raw.shape)
 
 
-def decode_view(ext: dict, source: bytes) -> bytes:
-    """The bytes of a compressed buffer view, from its extension object and the compressed bytes."""
+def _leb128(data: bytes, pos: int) -> tuple[int, int]:
+    """An unsigned LEB128 value at ``pos`` and the position after it."""
+    value = shift = 0
+    while True:
+        byte = data[pos]
+        pos += 1
+        value |= (byte & 0x7F) << shift
+        if byte < 0x80:
+            return value, pos
+        shift += 7
+        if shift > 28:
+            raise MeshoptError("index varint longer than 5 bytes")
+
+
+def decode_triangles(data: bytes, count: int) -> np.ndarray:
+    """The ``count`` triangle-list indices (uint32) of an index codec stream (mode ``TRIANGLES``)."""
+    if count % 3:
+        raise MeshoptError(f"TRIANGLES count {count} is not a multiple of 3")
+    if len(data) < 1 + count // 3 + 16:
+        raise MeshoptError("stream shorter than its codes and tail")
+    if data[0] & 0xF0 != 0xE0:
+        raise MeshoptError(f"not a meshopt triangle stream (header byte 0x{data[0]:02x})")
+    if data[0] & 0x0F != 1:
+        raise MeshoptUnsupported(f"index codec version {data[0] & 0x0F} (only version 1 is decoded)")
+    codes = data[1:1 + count // 3]
+    aux = data[len(data) - 16:]
+    pos, end = 1 + count // 3, len(data) - 16
+    edges = [(0, 0)] * 16
+    verts = [0] * 16
+    eo = vo = nxt = last = 0
+    out = [0] * count
+    try:
+        for i, code in enumerate(codes):
+            if code < 0xF0:  # an edge of a recent triangle, and a third vertex
+                a, b = edges[(eo - 1 - (code >> 4)) & 15]
+                y = code & 15
+                if y == 0:
+                    c, nxt = nxt, nxt + 1
+                elif y < 0xD:
+                    c = verts[(vo - 1 - y) & 15]
+                elif y < 0xF:
+                    c = last = last + (1 if y == 0xE else -1)
+                else:
+                    v, pos = _leb128(data, pos)
+                    c = last = last + ((v >> 1) ^ -(v & 1))
+                if y == 0 or y >= 0xD:
+                    verts[vo] = c
+                    vo = (vo + 1) & 15
+                edges[eo] = (c, b)
+                edges[(eo + 1) & 15] = (a, c)
+                eo = (eo + 2) & 15
+            else:  # three vertices: new, recent (from the FIFO) or explicit
+                if code < 0xFE:
+                    z, w = aux[code & 15] >> 4, aux[code & 15] & 15
+                    explicit_a = False
+                else:
+                    byte = data[pos]
+                    pos += 1
+                    if byte == 0:
+                        nxt = 0
+                    z, w = byte >> 4, byte & 15
+                    explicit_a = code == 0xFF
+                if explicit_a:
+                    v, pos = _leb128(data, pos)
+                    a = last = last + ((v >> 1) ^ -(v & 1))
+                else:
+                    a, nxt = nxt, nxt + 1
+                picked = []
+                for k in (z, w):
+                    if k == 0:
+                        value, nxt = nxt, nxt + 1
+                    elif k < 0xF or code < 0xFE:
+                        value = verts[(vo - k) & 15]
+                    else:
+                        v, pos = _leb128(data, pos)
+                        value = last = last + ((v >> 1) ^ -(v & 1))
+                    picked.append(value)
+                b, c = picked
+                verts[vo] = a
+                vo = (vo + 1) & 15
+                for k, value in ((z, b), (w, c)):
+                    if k == 0 or (k == 0xF and code >= 0xFE):
+                        verts[vo] = value
+                        vo = (vo + 1) & 15
+                edges[eo] = (b, a)
+                edges[(eo + 1) & 15] = (c, b)
+                edges[(eo + 2) & 15] = (a, c)
+                eo = (eo + 3) & 15
+            out[3 * i:3 * i + 3] = (a, b, c)
+    except IndexError:
+        raise MeshoptError("stream ends inside the triangle data") from None
+    if pos != end:
+        raise MeshoptError(f"{end - pos} bytes of triangle data left over")
+    return np.array(out, dtype=np.int64).astype(np.uint32)
+
+
+def decode_indices(data: bytes, count: int) -> np.ndarray:
+    """The ``count`` indices (uint32) of an index sequence stream (mode ``INDICES``)."""
+    if len(data) < 1 + 4:
+        raise MeshoptError("stream shorter than its header and tail")
+    if data[0] & 0xF0 != 0xD0:
+        raise MeshoptError(f"not a meshopt index stream (header byte 0x{data[0]:02x})")
+    if data[0] & 0x0F != 1:
+        raise MeshoptUnsupported(f"index sequence codec version {data[0] & 0x0F} (only version 1 is decoded)")
+    base = [0, 0]
+    out = [0] * count
+    pos = 1
+    try:
+        for i in range(count):
+            v, pos = _leb128(data, pos)
+            k = v & 1
+            base[k] += (v >> 2) ^ -((v >> 1) & 1)
+            out[i] = base[k]
+    except IndexError:
+        raise MeshoptError("stream ends inside the index data") from None
+    if len(data) - pos != 4:
+        raise MeshoptError(f"stream has {len(data) - pos} bytes after the indices, expected a 4-byte tail")
+    return np.array(out, dtype=np.int64).astype(np.uint32)
+
+
+def _unfilter_octahedral(raw: np.ndarray, stride: int) -> np.ndarray:
+    itype = np.dtype("<i1") if stride == 4 else np.dtype("<i2")
+    v = raw.view(itype).reshape(len(raw), 4).astype(np.float64)
+    one = np.where(v[:, 2] != 0, v[:, 2], 1.0)
+    x, y = v[:, 0] / one, v[:, 1] / one
+    z = 1.0 - np.abs(x) - np.abs(y)
+    t = np.minimum(z, 0.0)
+    x, y = x - np.copysign(t, x), y - np.copysign(t, y)
+    length = np.maximum(np.sqrt(x * x + y * y + z * z), 1e-12)
+    top = 127.0 if stride == 4 else 32767.0
+    out = np.empty((len(raw), 4), dtype=itype)
+    out[:, :3] = np.rint(np.stack([x, y, z], axis=1) / length[:, None] * top)
+    out[:, 3] = v[:, 3]
+    return out.view(np.uint8).reshape(raw.shape)
+
+
+def decode_view(ext: dict, source: bytes, mesh: bool = False) -> bytes:
+    """The bytes of a compressed buffer view, from its extension object and the compressed bytes.
+
+    Index modes and the octahedral filter only ever hold mesh data (indices, normals, tangents):
+    they are decoded for ``mesh`` reads only; elsewhere (a skeleton, a clip) they are refused.
+    """
     mode = ext.get("mode")
     flt = ext.get("filter", "NONE")
     count, stride = ext.get("count"), ext.get("byteStride")
     if not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (count, stride)):
         raise MeshoptError("count and byteStride must be positive integers")
+    if not mesh and (mode != "ATTRIBUTES" or flt == "OCTAHEDRAL"):
+        what = f"mode {mode!r}" if mode != "ATTRIBUTES" else f"filter {flt!r}"
+        raise MeshoptUnsupported(f"{what} holds mesh data (indices or normals), not skeleton or clip data")
+    if mode in ("TRIANGLES", "INDICES"):
+        if stride not in (2, 4):
+            raise MeshoptError(f"{mode} needs a byteStride of 2 or 4")
+        indices = (decode_triangles if mode == "TRIANGLES" else decode_indices)(bytes(source), count)
+        return indices.astype("<u2" if stride == 2 else "<u4").tobytes()
     if mode != "ATTRIBUTES":
-        raise MeshoptUnsupported(f"mode {mode!r} holds mesh indices, which infuse does not decode")
+        raise MeshoptUnsupported(f"mode {mode!r} is not a meshopt mode")
     raw = decode_vertex_buffer(bytes(source), count, stride)
     if flt == "NONE":
         return raw.tobytes()
@@ -144,4 +295,8 @@ def decode_view(ext: dict, source: bytes) -> bytes:
         if stride != 8:
             raise MeshoptError("QUATERNION filter needs a byteStride of 8")
         return _unfilter_quaternion(raw).tobytes()
-    raise MeshoptUnsupported(f"filter {flt!r} is not decoded (it holds mesh normals or tangents)")
+    if flt == "OCTAHEDRAL":
+        if stride not in (4, 8):
+            raise MeshoptError("OCTAHEDRAL filter needs a byteStride of 4 or 8")
+        return _unfilter_octahedral(raw, stride).tobytes()
+    raise MeshoptUnsupported(f"filter {flt!r} is not decoded")

@@ -39,10 +39,11 @@ Other facts
     ``meshes`` (decoded on first use): the skinned surfaces, see :mod:`infuse_gltf.mesh`.
 
 Compressed data: Draco and most meshopt views hold mesh data, which the skeleton and clips never
-touch (the mesh surfaces skip such primitives, with a warning). meshopt-compressed views the
-skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES`` mode with the ``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
-anything else raises :class:`~infuse.errors.MissingFeatureError` naming the extension. Malformed input raises :class:`~infuse.errors.InputError` with places such as
-``nodes[12]`` or ``accessors[3]``.
+touch (the mesh surfaces decode meshopt and skip Draco primitives, with a warning). meshopt views
+the skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES`` mode with the
+``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
+anything else raises :class:`~infuse.errors.MissingFeatureError` naming the extension. Malformed
+input raises :class:`~infuse.errors.InputError` with places such as ``nodes[12]`` or ``accessors[3]``.
 """
 from __future__ import annotations
 
@@ -250,7 +251,7 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
 
     fmt = "vrma" if vrm and vrm.version.startswith("vrma") else "vrm" if vrm else doc.container
     has_mesh = any(isinstance(n.get("mesh"), int) for n in nodes)
-    meshes = MeshLoader(doc, accessors, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
+    meshes = MeshLoader(doc, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
     return Asset(
         path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets,
         source_units=units or "m", source_up_axis=up_axis or "Y",
