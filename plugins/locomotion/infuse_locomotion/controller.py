@@ -40,8 +40,19 @@ _INFUSIONS: dict = {}
 
 #: Seconds over which a released foot's pin correction fades back to the animation.
 RELEASE_S = 0.3
-#: Below this fraction of the slowest walk's speed the pose fades into the idle (standing, starts and stops).
+#: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
+#: Share of the slowest walk mixed into the moving clips' weights as the speed nears zero.
+SLOW_EPS = 1e-3
+#: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
+#: (per second), and the phase past the last landing at which they end (double support, both feet down).
+STOP_CADENCE = 0.8
+CADENCE_RAMP = 2.0
+SETTLE_PHASE = 0.05
+#: Turning on the spot faster than this (rad/s) beyond what the blend shows, the feet step.
+SPIN_STEP = 0.15
+#: Seconds over which a stopped character fades into the pack's idle.
+SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
 HANDOVER = 0.5
 #: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
@@ -155,16 +166,16 @@ class Locomotion(Controller):
         if not clips:
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
         p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
-        # Steer no harder than the pack's examples turn, so the realized path follows the steering's.
-        reach = 0.9 * float(np.abs(p("turn_rate")).max())
-        if reach > 0:
-            self.steering.max_turn_rate = min(self.steering.max_turn_rate, reach)
         events = [foot_events(c) if c.role != "idle" else None for c in clips]
         idle = np.array([c.role == "idle" for c in clips])
         speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
+        # The slowest straight walk forward (not a strafe or a turn): what slow walks and stops play.
         slowest = np.full(len(clips), 0.0)
         moving = np.nonzero(~idle)[0]
-        slowest[moving[np.argmin(speeds[moving])]] = 1.0
+        ahead = moving[(p("forward_speed")[moving] > 2.0 * np.abs(p("lateral_speed")[moving]))
+                       & (np.abs(p("turn_rate")[moving]) < math.radians(10.0))]
+        pool = ahead if ahead.size else moving
+        slowest[pool[np.argmin(speeds[pool])]] = 1.0
         motions = [m for m, _ in prepared]
         sk = rig.skeleton
         limbs = np.zeros(sk.num_joints, dtype=np.int64)  # 0 body, 1 left leg, 2 right leg
@@ -176,6 +187,7 @@ class Locomotion(Controller):
         means = [mean_pose(m) for m in motions]
         signs = [np.where(np.sum(m[0] * means[0][0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
         ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
+        ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
         if len(legs) == 2:
             for i, m in enumerate(motions):
                 _, pos = chain_fk(sk, m.local_rotations[:-1], m.root_translations[:-1],
@@ -183,11 +195,12 @@ class Locomotion(Controller):
                                   [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
                 hips = 0.5 * (pos[:, 0] + pos[:, 1])
                 ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
+                ankle_low[i] = pos[:, 2:, 1].min(axis=0)
         return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
                 "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
                 "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
                 "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
-                "means": means, "signs": signs, "ankle_means": ankle_means, "skeleton": sk}
+                "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "skeleton": sk}
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -198,35 +211,34 @@ class Locomotion(Controller):
         if not st:
             st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
                       anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
-                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)))
+                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
         req = self.steering.run(st, times, dt)
-        speed, turn, direction = req[:, 0], req[:, 1], req[:, 2]
-        query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
-        w, _ = b["space"].weights("locomotion", query)
+        speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
+        w = _weights(b["space"], speed, direction, turn)
         vf, vl, vt = w @ b["forward"], w @ b["lateral"], w @ b["turn"]
-        # Root motion: integrate the blend's own velocities from where the last block ended.
-        heading = h0 + np.concatenate(([0.0], np.cumsum(vt[:-1] * dt)))
+        # Root motion: integrate the blend's own velocities from where the last block ended; the heading
+        # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
+        # turning examples) spun at the root.
+        heading = h0 + np.concatenate(([0.0], np.cumsum(turn[:-1] * dt)))
         step_x = (vf * np.sin(heading) + vl * np.cos(heading)) * dt
         step_z = (vf * np.cos(heading) - vl * np.sin(heading)) * dt
         px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
-        st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + vt[-1] * dt))
+        st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + turn[-1] * dt))
+        spinning = np.abs(turn - vt) > SPIN_STEP
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
         slow = np.clip(1.0 - w[:, b["idle"]].sum(axis=1), 0.0, 1.0)
         wm = np.where(b["idle"][None], 0.0, w)
-        wm = np.where((slow > 1e-6)[:, None], wm / np.maximum(slow, 1e-6)[:, None], b["slowest"][None])
-        rate = np.sqrt(slow)
-        standing = 1.0 - _ease(slow / STAND_FRACTION) if b["idle"].any() else np.zeros_like(slow)
+        wm = (wm + SLOW_EPS * b["slowest"][None]) / (slow + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
-        advance = dt * rate / period
-        phase = st["phase"] + np.concatenate(([0.0], np.cumsum(advance[:-1])))
-        st["phase"] = float((phase[-1] + advance[-1]) % 1.0)
-        phase = phase % 1.0
+        phase, stride, standing = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
+        settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0)  # how far into a stop
+        stride = stride + (1.0 - stride) * standing  # the idle plays as it is
         rot, root, jt, contact = self._blend(b, wm, phase, standing, times)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
@@ -237,9 +249,8 @@ class Locomotion(Controller):
             root = ground + quat.rotate(turn_q, root)
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
-        stride = slow / np.maximum(rate, 1e-9)
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, heading)
+            self._shorten(b, wm, stride, rot, root, jt, heading, settle)
         if self.pin_feet and len(b["legs"]) == 2:
             self._pin(job, st, rot, root, jt, contact, heading, dt)
         pose = job.pose
@@ -307,23 +318,31 @@ class Locomotion(Controller):
         rot, root, jt = acc
         return quat.normalize(rot), root, jt, contact
 
-    def _shorten(self, b, w, stride, rot, root, jt, heading) -> None:
+    def _shorten(self, b, w, stride, rot, root, jt, heading, settle) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
-        IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing)."""
+        IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
+        stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
+        land where the feet stand) and halves the lift of the foot."""
         sk = b["skeleton"]
         legs = b["legs"]
         feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
         turn_q = yaw(heading)
         body = np.nonzero(b["limbs"] == 0)[0]
-        mean = np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body])
-        rot[:, body] = quat.slerp(quat.normalize(mean), rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
+        mean = quat.normalize(np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body]))
+        mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
+        rot[:, body] = quat.slerp(mean, rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
+        stance = b["ankle_means"][np.argmax(b["idle"])] if b["idle"].any() else None
         for k, (hip, knee, ankle, _) in enumerate(legs):
-            centre = quat.rotate(turn_q, w @ b["ankle_means"][:, k])
+            mean = w @ b["ankle_means"][:, k]
+            if stance is not None:
+                mean = mean + settle[:, None] * (stance[k] - mean)
+            centre = quat.rotate(turn_q, mean)
             rel = pos[:, 2 + k] - hips
             goal = hips + centre + stride[:, None] * (rel - centre)
-            goal[:, 1] = pos[:, 2 + k, 1]
+            low = w @ b["ankle_low"][:, k]
+            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - 0.5 * settle)
             solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
                        pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1), keep_end=False)
             # The foot keeps its animated orientation, not the one the calmer pelvis would give it
@@ -431,6 +450,99 @@ def _turn_foot(sk, rot, ankle, ball, rise) -> None:
     rot[:, ankle] = quat.multiply(rot[:, ankle], delta)
     if ball is not None and int(sk.parents[ball]) == ankle:
         rot[:, ball] = quat.multiply(quat.conjugate(delta), rot[:, ball])
+
+
+def _weights(space, speed, direction, turn) -> np.ndarray:
+    """Blend weights (F, N) for the requests: the turn rate cut down (in eighths) to what the
+    tessellation holds at that speed and direction, where the full request lies outside it."""
+    query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
+    w, inside = space.weights("locomotion", query)
+    out = np.nonzero(~inside)[0]
+    if out.size:
+        shares = np.linspace(1.0, 0.0, 9)
+        tried = np.repeat(query[out, None], len(shares), axis=1)
+        tried[..., 2] *= shares
+        wt, ok = space.weights("locomotion", tried.reshape(-1, 3))
+        ok = ok.reshape(len(out), len(shares))
+        pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), 0)
+        w[out] = wt.reshape(len(out), len(shares), -1)[np.arange(len(out)), pick]
+    return w
+
+
+def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The blend's phase (F,) in [0, 1), stride factor (F,) and idle share (F,) for moving shares
+    ``slow`` (F,) of the slowest walk, the steering's ``stopping`` (F,) flags, ``spinning`` (F,)
+    flags (the root turns on the spot) and cycle durations ``period`` (F,) seconds; updates ``st``.
+
+    Walking, cadence and stride are both the slowest walk's times the square root of ``slow``.
+    Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
+    fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
+    ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
+    character nearly still: both then stand under the body; the phase holds in the double support
+    after that landing and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it steps
+    the same way and settles again once the turn is over."""
+    f = len(slow)
+    stop = (slow < STAND_FRACTION) | stopping
+    rate = np.sqrt(slow)
+    stride = np.sqrt(slow)
+    advance = np.zeros(f)
+    settled = np.zeros(f, dtype=bool)
+    key = stop.astype(np.int8) * 2 + spinning.astype(np.int8)
+    bounds = np.concatenate(([0], np.nonzero(np.diff(key))[0] + 1, [f]))
+    done = st["phase"]  # the (unwrapped) phase at the start of each run
+    for a, e in zip(bounds[:-1], bounds[1:]):
+        if not stop[a]:
+            advance[a:e] = dt * rate[a:e] / period[a:e]
+            st.update(settled=False, landings=-1, to_go=-1.0)
+        elif st["settled"] and not spinning[a]:
+            rate[a:e] = 0.0
+            stride[a:e] = slow[a:e] / STOP_CADENCE
+            settled[a:e] = True
+        else:
+            if st["landings"] < 0:  # the stop (or the turn on the spot) begins
+                st.update(landings=0, floor=float(rate[a]) if not st["settled"] else 0.0, stop_age=0.0)
+            if spinning[a]:
+                st.update(settled=False, landings=0, to_go=-1.0)
+            age = st["stop_age"] + dt * np.arange(e - a)
+            r = np.maximum(rate[a:e], np.minimum(STOP_CADENCE, st["floor"] + CADENCE_RAMP * age))
+            step = dt * r / period[a:e]
+            ph = done + np.cumsum(step)  # after each frame's step
+            before = ph - step
+            goal = done + st["to_go"] if st["to_go"] >= 0.0 else None
+            if goal is None and not spinning[a]:
+                landed = np.floor(2.0 * ph) > np.floor(2.0 * before)  # strikes at phases 0 and 0.5
+                count = st["landings"] + np.cumsum(landed)
+                ready = landed & (count >= 2) & (slow[a:e] < STAND_FRACTION)
+                if ready.any():
+                    goal = np.floor(2.0 * ph[int(np.argmax(ready))]) / 2.0 + SETTLE_PHASE
+                st["landings"] = int(count[-1])
+            stride[a:e] = slow[a:e] / r
+            if goal is not None:
+                over = ph >= goal
+                if over.any():
+                    j = int(np.argmax(over))
+                    step[j] = goal - before[j]
+                    step[j + 1:] = 0.0
+                    r[j + 1:] = 0.0
+                    settled[a + j + 1:e] = True
+                    st.update(settled=True, to_go=-1.0)
+                else:
+                    st["to_go"] = float(goal - ph[-1])
+            st["stop_age"] = float(age[-1] + dt)
+            rate[a:e] = r
+            advance[a:e] = step
+        done += float(advance[a:e].sum())
+    phase = st["phase"] + np.concatenate(([0.0], np.cumsum(advance[:-1])))
+    st["phase"] = float((phase[-1] + advance[-1]) % 1.0)
+    # The idle's share follows the settled flag at 1 / SETTLE_S per second.
+    level = np.empty(f)
+    edges = np.concatenate(([0], np.nonzero(np.diff(settled.astype(np.int8)))[0] + 1, [f]))
+    for a, e in zip(edges[:-1], edges[1:]):
+        ramp = st["stand"] + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
+        level[a:e] = np.clip(ramp, 0.0, 1.0)
+        st["stand"] = float(level[e - 1])
+    standing = _ease(level) if idle else np.zeros(f)
+    return phase % 1.0, np.minimum(stride, 1.0), standing
 
 
 def mean_pose(motion) -> tuple:

@@ -3,7 +3,14 @@
 Either constant or time-varying requests (``speed``, ``turn_rate``, ``direction`` as numbers or
 functions of seconds), or a path to follow (ground points, metres, in the character's own frame;
 one point is a target to go to). Speed changes are limited to ``max_accel`` / ``max_decel`` m/s²,
-turn-rate changes to ``max_turn_accel`` rad/s²; a path ends with a stop on its last point.
+turn-rate changes to ``max_turn_accel`` rad/s² and turn rates to ``max_turn_rate``.
+
+Following a path the character **turns, then goes**: the farther a point lies off its facing, the
+slower it walks (not at all from :data:`TURN_IN_PLACE` off, where it turns on the spot), and never
+faster than the turn rate lets it bend onto the point (the circle through it, tangent to the
+facing, has radius d / (2 sin e) for a point d metres away, e off the facing), so it neither
+circles a point nor overshoots it. A path ends with a stop on its last point: the speed falls off
+as the braking distance runs out, and the character stands once within ``arrive`` metres.
 The state (position, heading, speed, turn rate) carries from one block of frames to the next.
 """
 from __future__ import annotations
@@ -12,6 +19,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+#: Off the facing by this much or more (radians), the character turns on the spot before it walks.
+TURN_IN_PLACE = math.radians(75.0)
+#: Turn rate asked per radian off the facing (1/s), before the turn-rate limit.
+TURN_GAIN = 3.0
+#: A character standing within this many metres of a path's last point stays there.
+STAY = 0.15
 
 
 def _value(v, t: float) -> float:
@@ -45,14 +59,17 @@ class Steering:
             self.path = p
 
     def run(self, state: dict, times: np.ndarray, dt: float) -> np.ndarray:
-        """(F, 3) requests (speed, turn rate, direction) for ``times``; updates ``state`` (``x``, ``z``,
-        ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the requests themselves."""
-        out = np.empty((len(times), 3))
+        """(F, 4) requests (speed, turn rate, direction, stopping) for ``times``; updates ``state``
+        (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
+        requests themselves. ``stopping`` is 1 on the way into a path's last point: braking for it,
+        or there."""
+        out = np.empty((len(times), 4))
         x, z, h = state["x"], state["z"], state["heading"]
         v, w = state["speed"], state["turn"]
         k = state.get("waypoint", 0)
         for i, t in enumerate(times):
             direction = _value(self.direction, t)
+            stopping = 0.0
             if self.path is None:
                 v_goal, w_goal = _value(self.speed, t), _value(self.turn_rate, t)
             else:
@@ -61,17 +78,26 @@ class Steering:
                     k += 1
                 px, pz = self.path[k]
                 dist = math.hypot(px - x, pz - z)
-                want = math.atan2(px - x, pz - z) - direction
-                err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
-                w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, 2.5 * err))
-                v_goal = _value(self.speed, t) * max(0.25, math.cos(min(abs(err), math.pi / 2)))
-                if k == len(self.path) - 1:
-                    v_goal = min(v_goal, math.sqrt(2.0 * self.max_decel * max(dist - self.arrive, 0.0)))
-                    if dist < self.arrive:
-                        w_goal = 0.0
+                last = k == len(self.path) - 1
+                # There, or standing close by (it stopped there: the blend realizes the steering's
+                # motion to a few millimetres, not exactly).
+                arrived = last and (dist < self.arrive or (v < 1e-3 and dist < STAY))
+                if arrived:
+                    v_goal, w_goal = 0.0, 0.0
+                else:
+                    want = math.atan2(px - x, pz - z) - direction
+                    err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
+                    w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, TURN_GAIN * err))
+                    ahead = (math.cos(err) - math.cos(TURN_IN_PLACE)) / (1.0 - math.cos(TURN_IN_PLACE))
+                    v_goal = _value(self.speed, t) * min(max(ahead, 0.0), 1.0)
+                    if abs(math.sin(err)) > 1e-6:  # stay on a circle that meets the point
+                        v_goal = min(v_goal, self.max_turn_rate * dist / (2.0 * abs(math.sin(err))))
+                    if last:
+                        v_goal = min(v_goal, math.sqrt(2.0 * self.max_decel * max(dist - self.arrive, 0.0)))
+                stopping = float(last and (arrived or v_goal < v))
             v += max(-self.max_decel * dt, min(self.max_accel * dt, v_goal - v))
             w += max(-self.max_turn_accel * dt, min(self.max_turn_accel * dt, w_goal - w))
-            out[i] = (v, w, direction)
+            out[i] = (v, w, direction, stopping)
             h += w * dt
             x += v * math.sin(h + direction) * dt
             z += v * math.cos(h + direction) * dt
