@@ -174,11 +174,10 @@ class Gaze(Controller):
             "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
             "offsets": np.empty(shape + (2,)),
         }
-        owners, spans = [], []
+        spans = []
         for c, name in enumerate(names):
             row = rows[name]
             owner, arrays["weights"][c] = _in_charge(row, block.times)
-            owners.append(owner)
             # (job, the frames it leads): a slice when one gaze leads the whole block
             spans.append([(row[0], slice(None))] if len(row) == 1 else
                          [(job, owner == k) for k, job in enumerate(row) if np.any(owner == k)])
@@ -210,11 +209,11 @@ class Gaze(Controller):
             present = row_jobs[0].binding["present"]
             by_lead: dict[bool, np.ndarray] = {}
             for i, c in enumerate(members):  # where the priority joint points: the eyes, or the head
-                leads = np.array([job.binding["eyes_lead"] for job in rows[names[c]]])[owners[c]]
-                for lead in np.unique(leads):
+                for job, these in spans[c]:
+                    lead = job.binding["eyes_lead"]
                     if lead not in by_lead:
-                        by_lead[lead] = _forward_angles(frames_w, present, bool(lead))
-                    arrays["forward_angles"][c, leads == lead] = by_lead[lead][i, leads == lead]
+                        by_lead[lead] = _forward_angles(frames_w, present, lead)
+                    arrays["forward_angles"][c, these] = by_lead[lead][i, these]
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}

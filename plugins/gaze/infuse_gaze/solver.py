@@ -113,8 +113,7 @@ def _clamp(h, v, limits):
     v = np.where(vertical > 0, v, 0.0)
     a = h / np.where(limits[..., 0] > 0, limits[..., 0], 1.0)
     b = v / np.where(vertical > 0, vertical, 1.0)
-    r = np.sqrt(a * a + b * b)
-    f = np.where(r > 1.0, 1.0 / np.maximum(r, 1.0), 1.0)
+    f = 1.0 / np.maximum(np.sqrt(a * a + b * b), 1.0)
     return h * f, v * f
 
 
@@ -198,21 +197,21 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
     in place. Characters looking at another one's eyes or head (``refine``) get a second pass with
     that character's solved positions.
     """
-    start_groups, start_eyes = groups_state.copy(), eyes_state.copy()
-    out, positions = _solve_once(inp, groups_state, eyes_state)
-    if inp.refine:
-        targets = inp.targets.copy()
-        for c, c2, slots in inp.refine:
-            targets[c] = positions[c2][:, list(slots)].mean(axis=1)
-        groups_state[:], eyes_state[:] = start_groups, start_eyes
-        out, positions = _solve_once(replace(inp, targets=targets), groups_state, eyes_state)
-    return out, positions
+    if not inp.refine:
+        return _solve_once(inp, groups_state, eyes_state)
+    # The first pass only places the chains (no joint's position depends on the eyes' turn).
+    _, positions = _solve_once(inp, groups_state.copy(), eyes_state, eyes=False)
+    targets = inp.targets.copy()
+    for c, c2, slots in inp.refine:
+        targets[c] = positions[c2][:, list(slots)].mean(axis=1)
+    return _solve_once(replace(inp, targets=targets), groups_state, eyes_state)
 
 
-def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
+def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
     groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
-    no character turns (and none is on its way back) is skipped: its joints stay as they are."""
+    no character turns (and none is on its way back) is skipped: its joints stay as they are. Without
+    ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was)."""
     c_count, frames = inp.targets.shape[:2]
     out = np.zeros((c_count, frames, _S, 2))
     w_rot = np.empty((c_count, frames, _S, 3, 3))
@@ -248,18 +247,18 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
         out[:, :, s] = hv
         w_rot[:, :, s] = pre @ swing_matrices(hv[..., 0], hv[..., 1])
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
-    eyes, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
+    pair, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
     parent = w_rot[:, :, p, None]
-    w_pos[:, :, eyes] = w_pos[:, :, p, None] + apply(parent, inp.chain_pos[:, :, eyes])
-    if not (inp.present[:, eyes].any() or eyes_state.any()):
+    w_pos[:, :, pair] = w_pos[:, :, p, None] + apply(parent, inp.chain_pos[:, :, pair])
+    if not (eyes and (inp.present[:, pair].any() or eyes_state.any())):
         return out, w_pos
-    dh, dv = _direction(parent @ inp.chain_rot[:, :, eyes], target[:, :, None] - w_pos[:, :, eyes], 0.0, 0.0,
+    dh, dv = _direction(parent @ inp.chain_rot[:, :, pair], target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
                         inp.offsets[:, :, None])
     dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
-    gain = gains[:, :, EYES, None] * inp.present[:, None, eyes]  # (C, F, 2)
+    gain = gains[:, :, EYES, None] * inp.present[:, None, pair]  # (C, F, 2)
     desired = (np.stack((dh, dv), -1) * gain[..., None]).transpose(0, 2, 1, 3)  # (C, 2, F, 2): one row per eye
     final, path = follow(desired.reshape(2 * c_count, frames, 2), np.repeat(inp.smoothing[:, :, EYES], 2, axis=0),
                          np.repeat(inp.max_step[:, :, EYES], 2, axis=0), eyes_state.reshape(2 * c_count, 2))
     eyes_state[:] = final.reshape(c_count, 2, 2)
-    out[:, :, eyes] = np.where(present[:, :, eyes], path.reshape(c_count, 2, frames, 2).transpose(0, 2, 1, 3), 0.0)
+    out[:, :, pair] = np.where(present[:, :, pair], path.reshape(c_count, 2, frames, 2).transpose(0, 2, 1, 3), 0.0)
     return out, w_pos
