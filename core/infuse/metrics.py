@@ -20,6 +20,11 @@ def horizontal_path(points: np.ndarray) -> float:
     return float(np.linalg.norm(d, axis=-1).sum())
 
 
+#: Height (leg lengths) above a contact point's planted height at which its travel stops counting as
+#: skate: 2.5 cm on a leg of about 0.85 m, the threshold of Zhang et al. 2018.
+SKATE_LIFT = 0.03
+
+
 @dataclass(frozen=True)
 class Skate:
     """Horizontal travel of the feet while planted: ``travel`` metres over ``distance`` metres walked
@@ -33,23 +38,42 @@ class Skate:
         return 100.0 * self.travel / self.distance if self.distance > 1e-6 else float("nan")
 
 
-def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points: np.ndarray | None = None) -> Skate:
+def skate_weight(height: np.ndarray, threshold: float) -> np.ndarray:
+    """Share of a planted point's horizontal travel that counts as skate at ``height`` above its
+    planted height: ``2 - 2^(h / H)`` clipped to [0, 1] (Zhang et al. 2018, *Mode-adaptive neural
+    networks for quadruped motion control*), 1 on the ground, 0 from ``threshold`` H up."""
+    h = np.maximum(np.asarray(height, dtype=np.float64), 0.0) / max(threshold, 1e-12)
+    return np.clip(2.0 - np.exp2(h), 0.0, 1.0)
+
+
+def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points: np.ndarray | None = None,
+               lift: float = SKATE_LIFT) -> Skate:
     """Foot skate of a clip whose contact flags are ``contacts`` (found on this clip or its source).
 
     For each foot and each pair of consecutive frames in which some of its points are planted, the
-    foot travels the mean horizontal distance those points move. ``points`` (P,) gives the joints of
-    ``positions`` that play the contact points (default ``contacts.points``: the same skeleton);
-    ``root`` is the joint whose horizontal path is the distance walked.
+    foot travels the mean horizontal distance those points move, each weighted by
+    :func:`skate_weight` of its height above its planted height (its 5th-percentile height while
+    planted), with H = ``lift`` x the leg length: a point sliding on the ground counts fully, a
+    point lifting off (the ankle rising as the foot rolls over its ball) less the higher it is, and
+    not at all from H up. ``lift=inf`` counts every planted frame fully. ``points`` (P,) gives the
+    joints of ``positions`` that play the contact points (default ``contacts.points``: the same
+    skeleton); ``root`` is the joint whose horizontal path is the distance walked.
     """
     pos = np.asarray(positions, dtype=np.float64)
     pts = contacts.points if points is None else np.asarray(points)
-    step = np.linalg.norm(np.diff(pos[:, pts][..., [0, 2]], axis=0), axis=-1)  # (F-1, P)
+    p = pos[:, pts]
+    step = np.linalg.norm(np.diff(p[..., [0, 2]], axis=0), axis=-1)  # (F-1, P)
     held = contacts.flags[1:] & contacts.flags[:-1]
+    y = p[..., 1]
+    ever = contacts.flags.any(axis=0)  # a point never planted: its heights over the whole clip
+    planted = np.nanpercentile(np.where(contacts.flags | ~ever, y, np.nan), 5.0, axis=0)
+    rise = 0.5 * (y[1:] + y[:-1]) - planted
+    weight = skate_weight(rise, lift * contacts.leg_length) if np.isfinite(lift) else np.ones_like(step)
     travel = 0.0
     for k in (0, 1):
         cols = contacts.foot_of_point == k
         n = held[:, cols].sum(axis=1)
-        moved = (step[:, cols] * held[:, cols]).sum(axis=1)
+        moved = (step[:, cols] * weight[:, cols] * held[:, cols]).sum(axis=1)
         travel += float(np.sum(np.where(n > 0, moved / np.maximum(n, 1), 0.0)))
     return Skate(travel, horizontal_path(pos[:, root]))
 
