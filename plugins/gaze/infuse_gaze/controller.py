@@ -27,7 +27,7 @@ from .model import (
     DEFAULT_INFLUENCE, EYES, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOT_GROUPS, SLOT_PARENTS, SLOTS,
     group_name, smoothing_factor,
 )
-from .solver import SolverInput, apply, rotation_matrices, solve
+from .solver import SolverInput, apply_matrices, rotation_matrices, solve
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
     """(heading, pitch) radians of an offset of ``angle_deg`` toward ``direction``: a BML word
@@ -307,9 +307,9 @@ def _chain_frames(jobs):
     chain_pos = np.empty_like(g_pos)
     chain_rot[..., 0, :, :], chain_pos[..., 0, :] = frames_w[..., 0, :, :], g_pos[..., 0, :]
     chain_rot[..., 1:, :, :] = inverse[..., parents, :, :] @ frames_w[..., 1:, :, :]
-    chain_pos[..., 1:, :] = apply(inverse[..., parents, :, :], g_pos[..., 1:, :] - g_pos[..., parents, :])
+    chain_pos[..., 1:, :] = apply_matrices(inverse[..., parents, :, :], g_pos[..., 1:, :] - g_pos[..., parents, :])
     origin = g_pos[..., _eyes(present) or [6], :].mean(axis=-2)
-    origin_local = apply(inverse, origin[..., None, :] - g_pos)
+    origin_local = apply_matrices(inverse, origin[..., None, :] - g_pos)
     return frames_w, chain_rot, chain_pos, origin_local, g_pos
 
 
@@ -323,7 +323,7 @@ def _forward_angles(frames_w: np.ndarray, present, eyes_lead: bool) -> np.ndarra
     the priority joint points: the mean forward (+Z) axis of the eyes when they lead, else the head's."""
     lead = (_eyes(present) if eyes_lead else []) or [6]
     forward = frames_w[..., 2][..., lead, :].mean(axis=-2)  # the forward (+Z) axis is the third column: (C, F, 3)
-    heading, pitch = direction_angles(apply(np.swapaxes(frames_w, -1, -2), forward[..., None, :]))
+    heading, pitch = direction_angles(apply_matrices(np.swapaxes(frames_w, -1, -2), forward[..., None, :]))
     return np.stack((heading, pitch), axis=-1)
 
 

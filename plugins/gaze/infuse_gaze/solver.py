@@ -174,7 +174,7 @@ def _follow_scalar(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndar
     return np.array(finals, dtype=np.float64).reshape(state.shape), np.array(paths, dtype=np.float64).reshape(desired.shape)
 
 
-def apply(m, v):
+def apply_matrices(m, v):
     """Matrices (..., 3, 3) times vectors (..., 3)."""
     return (m @ v[..., None])[..., 0]
 
@@ -229,14 +229,14 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
             w_pos[:, :, s] = inp.chain_pos[:, :, s]
         else:
             pre = w_rot[:, :, p] @ inp.chain_rot[:, :, s]
-            w_pos[:, :, s] = w_pos[:, :, p] + apply(w_rot[:, :, p], inp.chain_pos[:, :, s])
+            w_pos[:, :, s] = w_pos[:, :, p] + apply_matrices(w_rot[:, :, p], inp.chain_pos[:, :, s])
         g = SLOT_GROUPS[s]
         if not turning[g]:
             w_rot[:, :, s] = pre
             continue
         if _FIRST_SLOT[g] == s:
             fwd = inp.forward_angles[:, :, s]
-            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply(pre, inp.origin_local[:, :, s]),
+            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply_matrices(pre, inp.origin_local[:, :, s]),
                                 fwd[..., 0], fwd[..., 1], inp.offsets)
             fraction = inp.fractions[:, :, g]
             dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
@@ -249,7 +249,7 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
     pair, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
     parent = w_rot[:, :, p, None]
-    w_pos[:, :, pair] = w_pos[:, :, p, None] + apply(parent, inp.chain_pos[:, :, pair])
+    w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, inp.chain_pos[:, :, pair])
     if not (eyes and (inp.present[:, pair].any() or eyes_state.any())):
         return out, w_pos
     dh, dv = _direction(parent @ inp.chain_rot[:, :, pair], target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
