@@ -337,6 +337,22 @@ class Runtime:
                                            for t, r in zip(track.translations, track.roots)])
         return Motion(sk, self.fps, rotations, roots, translations, name=name)
 
+    def last_frames(self, character, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """Local rotations (n, J, 4) and root translations (n, 3) of the last ``count`` frames evaluated
+        (n = fewer when fewer were), in the character's own frame: its placement is not applied."""
+        track = self._track(character)
+        rotations, roots, n = [], [], 0
+        for rot, root in zip(reversed(track.rotations), reversed(track.roots)):
+            if n >= count:
+                break
+            rotations.append(rot[-(count - n):])
+            roots.append(root[-(count - n):])
+            n += len(rotations[-1])
+        sk = track.rig.skeleton
+        if not rotations:
+            return np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3))
+        return np.concatenate(rotations[::-1]), np.concatenate(roots[::-1])
+
     def morph_weights(self, character) -> np.ndarray:
         """(F, M) morph weights of every frame evaluated so far (columns: the character's morph targets)."""
         track = self._track(character)

@@ -111,11 +111,10 @@ class Walks:
             walk.check_frame = np.iinfo(np.int64).max  # its travel is on another joint than the root: it walks on the spot
             return
         rig = runtime.rig(name)
-        motion = runtime.motion(name)
-        root = quat.rotate(quat.conjugate(rig.rotation), motion.root_translations[-still:] - rig.position)
+        rotations, root = runtime.last_frames(name, still)  # in the character's own frame
         if np.linalg.norm(np.ptp(root[:, [0, 2]], axis=0)) > STILL_M:
             return  # still on its way
-        heading_now = _heading(rig, quat.multiply(quat.conjugate(rig.rotation), motion.local_rotations[-1, 0]))
+        heading_now = _heading(rig, rotations[-1, 0])
         turn = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), heading_now - _heading(rig, idle.local_rotations[0, 0]))
         rotations = np.array(idle.local_rotations)
         rotations[:, 0] = quat.multiply(turn, rotations[:, 0])
