@@ -67,8 +67,9 @@ class Saccades(Controller):
         count = schedule.until(float(t[-1]))
         times, offsets = schedule.times[:count], schedule.offsets[:count]
         keep = times <= t[-1]
-        for start, end in pauses:
-            keep &= ~((times >= start) & (times < end))
+        if len(pauses):
+            starts, ends = np.asarray(pauses, dtype=np.float64).reshape(-1, 2).T
+            keep &= ~np.any((times >= starts[:, None]) & (times < ends[:, None]), axis=0)
         back = np.array([s for s, e in pauses if s <= t[-1]])
         times = np.concatenate((times[keep], back))
         offsets = np.concatenate((offsets[keep], np.zeros((len(back), 2))))
