@@ -168,6 +168,7 @@ class Gaze(Controller):
         shape = (len(names), frames)
         arrays = {
             "chain_rot": np.empty(shape + (n_slots, 3, 3)), "chain_pos": np.empty(shape + (n_slots, 3)),
+            "frames_world": np.empty(shape + (n_slots, 3, 3)), "positions": np.empty(shape + (n_slots, 3)),
             "origin_local": np.empty(shape + (n_slots, 3)), "forward_angles": np.empty(shape + (n_slots, 2)),
             "targets": np.empty(shape + (3,)), "weights": np.empty(shape), "active": np.empty(shape + (n_groups,)),
             "fractions": np.empty(shape + (n_groups,)), "limits": np.empty(shape + (n_groups, 4)),
@@ -195,7 +196,7 @@ class Gaze(Controller):
                 arrays["limits"][c, these] = gaze.limits
                 arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
         # The pose below, along each chain; characters on one skeleton share the forward kinematics.
-        positions = np.empty(shape + (n_slots, 3))  # each slot's joint in the world
+        positions = arrays["positions"]  # each slot's joint in the world
         same_chain: dict[tuple, list[int]] = {}
         for c, name in enumerate(names):
             first = rows[name][0]
@@ -203,9 +204,9 @@ class Gaze(Controller):
         for members in same_chain.values():
             row_jobs = [rows[names[c]][0] for c in members]
             frames_w, *parts = _chain_frames(row_jobs)
-            for key, part in zip(("chain_rot", "chain_pos", "origin_local"), parts):
+            arrays["frames_world"][members] = frames_w
+            for key, part in zip(("chain_rot", "chain_pos", "origin_local", "positions"), parts):
                 arrays[key][members] = part
-            positions[members] = parts[-1]
             present = row_jobs[0].binding["present"]
             by_lead: dict[bool, np.ndarray] = {}
             for i, c in enumerate(members):  # where the priority joint points: the eyes, or the head

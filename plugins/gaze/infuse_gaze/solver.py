@@ -40,6 +40,8 @@ class SolverInput:
 
     - ``chain_rot`` (C, F, S, 3, 3), ``chain_pos`` (C, F, S, 3): each slot's aligned frame and position
       relative to its parent slot's aligned frame (the first slot: relative to the world);
+      ``frames_world`` (C, F, S, 3, 3), ``positions`` (C, F, S, 3): the same in the world, where the chain
+      stands until a slot below turns;
     - ``origin_local`` (C, F, S, 3): where the gaze starts (the eyes, or the head) in each slot's
       aligned frame; ``forward_angles`` (C, F, S, 2): heading and pitch of where the priority joint points;
     - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
@@ -54,6 +56,8 @@ class SolverInput:
 
     chain_rot: np.ndarray
     chain_pos: np.ndarray
+    frames_world: np.ndarray
+    positions: np.ndarray
     origin_local: np.ndarray
     forward_angles: np.ndarray
     present: np.ndarray
@@ -221,20 +225,22 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
     target = inp.targets
     gains = inp.active * inp.weights[..., None]  # (C, F, G)
     turning = (np.any(gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
+    absent = (~inp.present.any(axis=0)).tolist()  # slots no character has: they repeat their parent
+    moved = False  # until a slot turns, the chain stands as in the pose below
     share = None
     for s in range(_EYE_SLOTS[0]):
         p = SLOT_PARENTS[s]
-        if p < 0:
-            pre = inp.chain_rot[:, :, s]
-            w_pos[:, :, s] = inp.chain_pos[:, :, s]
+        if not moved:
+            pre = inp.frames_world[:, :, s]
+            w_pos[:, :, s] = inp.positions[:, :, s]
+        elif absent[s]:
+            pre = w_rot[:, :, p]
+            w_pos[:, :, s] = w_pos[:, :, p]
         else:
             pre = w_rot[:, :, p] @ inp.chain_rot[:, :, s]
             w_pos[:, :, s] = w_pos[:, :, p] + apply_matrices(w_rot[:, :, p], inp.chain_pos[:, :, s])
         g = SLOT_GROUPS[s]
-        if not turning[g]:
-            w_rot[:, :, s] = pre
-            continue
-        if _FIRST_SLOT[g] == s:
+        if turning[g] and _FIRST_SLOT[g] == s:
             fwd = inp.forward_angles[:, :, s]
             dh, dv = _direction(pre, target - w_pos[:, :, s] - apply_matrices(pre, inp.origin_local[:, :, s]),
                                 fwd[..., 0], fwd[..., 1], inp.offsets)
@@ -243,16 +249,24 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
             groups_state[:, g], path = follow(np.stack((dh, dv), -1) * gains[:, :, g, None], inp.smoothing[:, :, g],
                                               inp.max_step[:, :, g], groups_state[:, g])
             share = path / counts[:, :, g]
+        if not turning[g] or absent[s]:
+            w_rot[:, :, s] = pre
+            continue
         hv = np.where(present[:, :, s], share, 0.0)
         out[:, :, s] = hv
         w_rot[:, :, s] = pre @ swing_matrices(hv[..., 0], hv[..., 1])
+        moved = True
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
     pair, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
-    parent = w_rot[:, :, p, None]
-    w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, inp.chain_pos[:, :, pair])
+    if moved:
+        parent = w_rot[:, :, p, None]
+        w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, inp.chain_pos[:, :, pair])
+    else:
+        w_pos[:, :, pair] = inp.positions[:, :, pair]
     if not (eyes and (inp.present[:, pair].any() or eyes_state.any())):
         return out, w_pos
-    dh, dv = _direction(parent @ inp.chain_rot[:, :, pair], target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
+    pre = parent @ inp.chain_rot[:, :, pair] if moved else inp.frames_world[:, :, pair]
+    dh, dv = _direction(pre, target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
                         inp.offsets[:, :, None])
     dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
     gain = gains[:, :, EYES, None] * inp.present[:, None, pair]  # (C, F, 2)
