@@ -46,8 +46,8 @@ STAND_FRACTION = 0.2
 SLOW_EPS = 1e-3
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
-STOP_CADENCE = 0.8
-CADENCE_RAMP = 2.0
+STOP_CADENCE = 1.2
+CADENCE_RAMP = 3.0
 SETTLE_PHASE = 0.05
 #: Turning on the spot faster than this (rad/s) beyond what the blend shows, the feet step.
 SPIN_STEP = 0.15
@@ -196,11 +196,19 @@ class Locomotion(Controller):
                 hips = 0.5 * (pos[:, 0] + pos[:, 1])
                 ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
                 ankle_low[i] = pos[:, 2:, 1].min(axis=0)
+        # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down.
+        stance_feet = None
+        if len(legs) == 2 and idle.any() and all(leg[3] is not None for leg in legs):
+            m = motions[int(np.argmax(idle))]
+            g_rot, _ = chain_fk(sk, m.local_rotations[:1], m.root_translations[:1],
+                                None if m.joint_translations is None else m.joint_translations[:1],
+                                [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+            stance_feet = g_rot[0].reshape(2, 2, 4)
         return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
                 "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
                 "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
                 "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
-                "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "skeleton": sk}
+                "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "skeleton": sk}
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -250,7 +258,7 @@ class Locomotion(Controller):
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, heading, settle)
+            self._shorten(b, wm, stride, rot, root, jt, heading, settle, contact)
         if self.pin_feet and len(b["legs"]) == 2:
             self._pin(job, st, rot, root, jt, contact, heading, dt)
         pose = job.pose
@@ -318,17 +326,27 @@ class Locomotion(Controller):
         rot, root, jt = acc
         return quat.normalize(rot), root, jt, contact
 
-    def _shorten(self, b, w, stride, rot, root, jt, heading, settle) -> None:
+    def _shorten(self, b, w, stride, rot, root, jt, heading, settle, contact) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
         stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
-        land where the feet stand) and halves the lift of the foot."""
+        land where the feet stand), halves the lift of a swinging foot and lays a planted foot (heel
+        and ball down in ``contact`` (F, 2, 2)) flat as it stands in the idle."""
         sk = b["skeleton"]
         legs = b["legs"]
         feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
-        hips = 0.5 * (pos[:, 0] + pos[:, 1])
         turn_q = yaw(heading)
+        if b["stance_feet"] is not None:
+            # (F, 2, 2, 4): the animated ankle and ball rotations, turned toward the idle's as a stop settles.
+            flat = quat.multiply(turn_q[:, None, None], np.broadcast_to(b["stance_feet"], (len(heading),) + b["stance_feet"].shape))
+            toes = np.stack([leg[3] for leg in legs])
+            animated = np.stack((feet_rot[:, 2:], chain_fk(sk, rot, root, jt, toes)[0]), axis=2)
+            down = (contact.max(axis=2) > 0.5) * settle[:, None]
+            feet = quat.slerp(animated, flat, np.broadcast_to(down[:, :, None], animated.shape[:3]))
+        else:
+            feet, down = np.stack((feet_rot[:, 2:], feet_rot[:, 2:]), axis=2), np.zeros((len(heading), 2))
+        hips = 0.5 * (pos[:, 0] + pos[:, 1])
         body = np.nonzero(b["limbs"] == 0)[0]
         mean = quat.normalize(np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body]))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
@@ -342,13 +360,15 @@ class Locomotion(Controller):
             rel = pos[:, 2 + k] - hips
             goal = hips + centre + stride[:, None] * (rel - centre)
             low = w @ b["ankle_low"][:, k]
-            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - 0.5 * settle)
+            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - 0.5 * settle) * (1.0 - down[:, k])
             solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
                        pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1), keep_end=False)
             # The foot keeps its animated orientation, not the one the calmer pelvis would give it
             # (a planted foot would turn about its pinned ankle).
             parent, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[ankle])])
-            rot[:, ankle] = quat.multiply(quat.conjugate(parent[:, 0]), feet_rot[:, 2 + k])
+            rot[:, ankle] = quat.multiply(quat.conjugate(parent[:, 0]), feet[:, k, 0])
+            if b["stance_feet"] is not None and int(sk.parents[legs[k][3]]) == ankle:
+                rot[:, legs[k][3]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
@@ -478,7 +498,7 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
     Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
     ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
-    character nearly still: both then stand under the body; the phase holds in the double support
+    character nearly still (below :data:`STAND_FRACTION`): both then stand under the body; the phase holds in the double support
     after that landing and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it steps
     the same way and settles again once the turn is over."""
     f = len(slow)
@@ -510,9 +530,10 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
             before = ph - step
             goal = done + st["to_go"] if st["to_go"] >= 0.0 else None
             if goal is None and not spinning[a]:
-                landed = np.floor(2.0 * ph) > np.floor(2.0 * before)  # strikes at phases 0 and 0.5
+                # Strikes (phases 0 and 0.5) with the character nearly still: the foot lands by the body.
+                landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[a:e] < STAND_FRACTION)
                 count = st["landings"] + np.cumsum(landed)
-                ready = landed & (count >= 2) & (slow[a:e] < STAND_FRACTION)
+                ready = landed & (count >= 2)
                 if ready.any():
                     goal = np.floor(2.0 * ph[int(np.argmax(ready))]) / 2.0 + SETTLE_PHASE
                 st["landings"] = int(count[-1])
