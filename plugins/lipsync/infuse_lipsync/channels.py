@@ -22,6 +22,7 @@ Declared vocabularies replace detected ones of the same name.
 from __future__ import annotations
 
 import json
+import functools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,9 +35,13 @@ from .tables import VISEME_SETS, names_table, viseme_set
 Binding = list[tuple[str, float]]
 
 
+_SEPARATORS = re.compile(r"[\s_\-.:|]+")
+
+
+@functools.lru_cache(maxsize=4096)
 def normalized(name: str) -> str:
-    """Lower case without ``_ - . : |`` and spaces, for comparing names."""
-    return re.sub(r"[\s_\-.:|]+", "", name).lower()
+    """Lower case without ``_ - . : |`` and spaces, for comparing names (the same few names recur)."""
+    return _SEPARATORS.sub("", name).lower()
 
 
 def _name_keys(name: str) -> list[str]:
