@@ -68,8 +68,7 @@ class SkinnedMesh:
         put = lambda key, value: object.__setattr__(self, key, value)  # noqa: E731 - frozen dataclass
         put("positions", _array(self.positions, np.float32, (None, 3), "positions", name))
         v = len(self.positions)
-        normals = _array(self.normals, np.float32, (v, 3), "normals", name)
-        put("normals", normals)
+        put("normals", _array(self.normals, np.float32, (v, 3), "normals", name))
         put("triangles", _array(self.triangles, np.int32, (None, 3), "triangles", name))
         if self.triangles.size and (self.triangles.min() < 0 or self.triangles.max() >= v):
             raise ValueError(f"mesh {name!r}: a triangle names a vertex out of range (there are {v})")
@@ -85,7 +84,8 @@ class SkinnedMesh:
             put("colors", _array(self.colors, np.float32, (v, 4), "colors", name))
         put("morph_names", tuple(str(n) for n in self.morph_names))
         if self.morph_positions is not None:
-            put("morph_positions", _array(self.morph_positions, np.float32, (len(self.morph_names), v, 3), "morph_positions", name))
+            shape = (len(self.morph_names), v, 3)
+            put("morph_positions", _array(self.morph_positions, np.float32, shape, "morph_positions", name))
         elif self.morph_names:
             raise ValueError(f"mesh {name!r}: morph_names without morph_positions")
 

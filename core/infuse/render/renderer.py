@@ -343,7 +343,7 @@ class Renderer:
         width, height = canvas.size
         image = np.array(canvas)
         if st.show_shadow and view.basis[2, 1] < 0.85:
-            # a silhouette cast on the ground, at output resolution (it is soft and flat: no need for more)
+            # the surfaces' silhouette cast on the ground, at output resolution: a flat patch needs no more
             low = (-(-width // self.ss), -(-height // self.ss))
             cast = view.project(on_ground(positions, panel.ground), t)[0] / self.ss
             mask = coverage(cast, triangles, low).repeat(self.ss, axis=0).repeat(self.ss, axis=1)[:height, :width]

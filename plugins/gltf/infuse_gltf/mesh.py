@@ -16,7 +16,8 @@ Colour: the material's base colour factor, times the base colour texture sampled
 times ``COLOR_0``. Triangles whose three vertices fall under the alpha cutoff (``MASK``) or are
 mostly transparent (``BLEND``) are dropped. Morph targets keep their position offsets; default mesh
 weights are not applied. meshopt-compressed mesh data is decoded (indices, octahedral normals);
-primitives the reader cannot decode (Draco) are skipped with a warning in ``meta["warnings"]``; points and lines are not surfaces and are left out.
+primitives the reader cannot decode (Draco) are skipped with a warning in ``meta["warnings"]``;
+points and lines are not surfaces and are left out.
 """
 from __future__ import annotations
 
