@@ -33,13 +33,15 @@ from infuse.runtime import Controller, Layer, Mode, sample_motion
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from .phase_keys import contact_of, foot_events, foot_phase, warp
+from .phase_keys import contact_of, foot_events, foot_phase, support_of, warp
 from .steering import Steering
 
 _INFUSIONS: dict = {}
 
-#: Seconds over which a released foot's pin correction fades back to the animation.
+#: Seconds over which a released foot's pin correction fades back to the animation, and its extra
+#: heel rise (a leg that could not reach its pinned ball) in the early swing.
 RELEASE_S = 0.3
+RISE_RELEASE_S = 0.1
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
 #: Share of the slowest walk mixed into the moving clips' weights as the speed nears zero.
@@ -247,7 +249,7 @@ class Locomotion(Controller):
         phase, stride, standing = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0)  # how far into a stop
         stride = stride + (1.0 - stride) * standing  # the idle plays as it is
-        rot, root, jt, contact = self._blend(b, wm, phase, standing, times)
+        rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
@@ -258,7 +260,7 @@ class Locomotion(Controller):
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, heading, settle, contact)
+            self._shorten(b, wm, stride, rot, root, jt, heading, settle, support)
         if self.pin_feet and len(b["legs"]) == 2:
             self._pin(job, st, rot, root, jt, contact, heading, dt)
         pose = job.pose
@@ -277,10 +279,10 @@ class Locomotion(Controller):
             pose.set_translations(np.arange(1, jt.shape[1]), moved[:, 1:], weight, job.mode)
 
     def _blend(self, b, w, phase, standing, times):
-        """Weighted, sign-aligned rotations, root offsets, joint translations and foot contact phases
-        (F, 2, 2) of the moving clips (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by
-        its foot's events; then faded
-        into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
+        """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
+        (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.support_of`) of the moving clips
+        (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
+        faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
         stepping = [i for i in used if b["events"][i] is not None]
@@ -290,6 +292,7 @@ class Locomotion(Controller):
                                np.stack([b["events"][i] for i in stepping]))
         acc = None
         contact = np.zeros((len(phase), 2, 2))
+        support = np.zeros((len(phase), 2))
         for i in order:
             clip, motion = b["clips"][i], b["motions"][i]
             times_of = [warp(clip.keys, phase)]
@@ -309,13 +312,16 @@ class Locomotion(Controller):
             if b["events"][i] is None:
                 frame = np.minimum(np.rint((times_of[0] % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64), len(clip.phases) - 1)
                 contact += clip.phases[frame] * w[:, i][:, None, None]
+                support += clip.phases[frame].max(axis=2) * w[:, i][:, None]
         if stepping:
             contact += contact_of(events, phase, HANDOVER) * ws.sum(axis=1)[:, None, None]
+            support += support_of(events, phase) * ws.sum(axis=1)[:, None]
         fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else []
         if len(fade):
             share = standing / len(fade)
             acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 1)) for a in acc)
             contact *= (1.0 - standing)[:, None, None]
+            support *= (1.0 - standing)[:, None]
             for i in fade:
                 clip, motion = b["clips"][i], b["motions"][i]
                 t = times % max(motion.duration, 1e-9)
@@ -323,36 +329,36 @@ class Locomotion(Controller):
                 acc = _accumulate(acc, r, p, j, share)
                 frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.phases) - 1)
                 contact += clip.phases[frame] * share[:, None, None]
+                support += clip.phases[frame].max(axis=2) * share[:, None]
         rot, root, jt = acc
-        return quat.normalize(rot), root, jt, contact
+        return quat.normalize(rot), root, jt, contact, support
 
-    def _shorten(self, b, w, stride, rot, root, jt, heading, settle, contact) -> None:
+    def _shorten(self, b, w, stride, rot, root, jt, heading, settle, support) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
         stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
-        land where the feet stand), halves the lift of a swinging foot and lays a planted foot (heel
-        and ball down in ``contact`` (F, 2, 2)) flat as it stands in the idle."""
+        land where the feet stand) and lays the feet down: each foot turns toward lying as in the
+        idle, its ankle toward its lowest height, fully in the middle of a stance and 60% in the
+        swing (a low step), by its stance share ``support`` (F, 2), so nothing jumps at strike or toe off."""
         sk = b["skeleton"]
         legs = b["legs"]
         feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
         turn_q = yaw(heading)
+        down = settle[:, None] * (0.6 + 0.4 * support)  # (F, 2)
+        feet = np.stack((feet_rot[:, 2:], feet_rot[:, 2:]), axis=2)  # (F, 2, 2, 4) ankle and ball rotations
         if b["stance_feet"] is not None:
-            # (F, 2, 2, 4): the animated ankle and ball rotations, turned toward the idle's as a stop settles.
             flat = quat.multiply(turn_q[:, None, None], np.broadcast_to(b["stance_feet"], (len(heading),) + b["stance_feet"].shape))
             toes = np.stack([leg[3] for leg in legs])
             animated = np.stack((feet_rot[:, 2:], chain_fk(sk, rot, root, jt, toes)[0]), axis=2)
-            down = (contact.max(axis=2) > 0.5) * settle[:, None]
             feet = quat.slerp(animated, flat, np.broadcast_to(down[:, :, None], animated.shape[:3]))
-        else:
-            feet, down = np.stack((feet_rot[:, 2:], feet_rot[:, 2:]), axis=2), np.zeros((len(heading), 2))
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
         body = np.nonzero(b["limbs"] == 0)[0]
         mean = quat.normalize(np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body]))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
         rot[:, body] = quat.slerp(mean, rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
         stance = b["ankle_means"][np.argmax(b["idle"])] if b["idle"].any() else None
-        for k, (hip, knee, ankle, _) in enumerate(legs):
+        for k, (hip, knee, ankle, ball) in enumerate(legs):
             mean = w @ b["ankle_means"][:, k]
             if stance is not None:
                 mean = mean + settle[:, None] * (stance[k] - mean)
@@ -360,15 +366,15 @@ class Locomotion(Controller):
             rel = pos[:, 2 + k] - hips
             goal = hips + centre + stride[:, None] * (rel - centre)
             low = w @ b["ankle_low"][:, k]
-            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - 0.5 * settle) * (1.0 - down[:, k])
+            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - down[:, k])
             solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
                        pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1), keep_end=False)
             # The foot keeps its animated orientation, not the one the calmer pelvis would give it
             # (a planted foot would turn about its pinned ankle).
             parent, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[ankle])])
             rot[:, ankle] = quat.multiply(quat.conjugate(parent[:, 0]), feet[:, k, 0])
-            if b["stance_feet"] is not None and int(sk.parents[legs[k][3]]) == ankle:
-                rot[:, legs[k][3]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
+            if b["stance_feet"] is not None and int(sk.parents[ball]) == ankle:
+                rot[:, ball] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
@@ -404,7 +410,7 @@ class Locomotion(Controller):
                     age = released + dt * np.arange(1, e - s + 1)
                     fade = 1.0 - _ease(age / RELEASE_S)
                     goal[s:e] = ankle_pos[s:e] + offset * fade[:, None]
-                    rise[s:e] = lifted * fade[:, None]
+                    rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:

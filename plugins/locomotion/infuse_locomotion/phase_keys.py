@@ -72,3 +72,11 @@ def contact_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0) -> 
     heel = p < events[:, :, 1] + handover * (events[:, :, 2] - events[:, :, 1])
     ball = (p >= events[:, :, 1]) & (p < events[:, :, 3])
     return np.stack((heel, ball), axis=-1)
+
+
+def support_of(events: np.ndarray, phase: np.ndarray, ramp: float = 0.05) -> np.ndarray:
+    """(F, 2) how much each foot is in its stance at ``phase`` (F,), from the blend's ``events``
+    (F, 2, 4): 1 from ``ramp`` after heel strike to ``ramp`` before toe off, 0 in the swing, linear
+    in between (continuous in the phase, for adjustments that must not jump at strike or toe off)."""
+    p = events[:, :, 0] + np.mod(phase[:, None] - events[:, :, 0], 1.0)
+    return np.clip((p - events[:, :, 0]) / ramp, 0.0, 1.0) * np.clip((events[:, :, 3] - p) / ramp, 0.0, 1.0)
