@@ -16,10 +16,10 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 # The product and the rotation are quadratic: each output entry is a signed sum of products of one
 # input component by another. On a few quaternions (a block of frames of one joint) numpy's cost per
-# call outweighs the arithmetic, so they run as one outer product (..., 4, 4) times a constant table;
+# call outweighs the arithmetic, so they run as one outer product (..., 16) times a constant table;
 # on many, the written-out component formulas stream through memory faster. Both agree to rounding.
 #: Largest batch (quaternions in the broadcast result) computed as one outer product and one table product.
-SMALL_BATCH = 128
+SMALL_BATCH = 256
 _X, _Y, _Z, _W = range(4)
 # Entry -> (sign, i, j) terms, meaning sign * a_i * b_j: the Hamilton product a * b ...
 _PRODUCT_TERMS = {
@@ -49,10 +49,12 @@ _PRODUCT = _table(_PRODUCT_TERMS, (4,))  # (16, 4)
 _ROTATION = _table(_ROTATION_TERMS, (3, 3))  # (16, 3, 3)
 
 
+_OUTER_I, _OUTER_J = np.repeat(np.arange(4), 4), np.tile(np.arange(4), 4)
+
+
 def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(..., 16) products ``a_i b_j`` at ``4 i + j`` of quaternions (..., 4), broadcast."""
-    out = a[..., :, None] * b[..., None, :]
-    return out.reshape(out.shape[:-2] + (16,))
+    return a[..., _OUTER_I] * b[..., _OUTER_J]
 
 
 def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
