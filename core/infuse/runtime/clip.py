@@ -39,7 +39,9 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
     rotations, steps = _interpolation_table(motion)
-    rot = rotations[i0] + frac[:, :, None] * steps[i0]
+    rot = steps[i0]  # a gathered copy: the interpolation runs in place on it
+    rot *= frac[:, :, None]
+    rot += rotations[i0]
     rot *= 1.0 / np.sqrt(np.einsum("...i,...i->...", rot, rot))[..., None]
     root = motion.root_translations[i0] + frac * (motion.root_translations[i0 + 1] - motion.root_translations[i0])
     if jt is not None:
