@@ -8,18 +8,24 @@ and each clip maps it to its own time through its keys (left strike at phase 0, 
 so the blended clips step together; each leg is warped further by its foot's contact events (heel
 strike, foot flat, heel off, toe off; :mod:`.phase_keys`), so the clips' feet are in the same
 support phase at once. **Slow walking**: below the slowest walk the tessellation would mix in the
-idle; instead the walk plays at a slower cadence with shorter steps (both by the square root of the
-speed ratio), and the idle fades in only below :data:`STAND_FRACTION` of it. **Root motion** is the weighted clips' velocities (so the realized
-speed is the requested one inside the pack's range), turned by the integrated heading; each clip
+idle; instead the slowest straight walk plays at a slower cadence with shorter steps (both by the
+square root of the speed ratio). **Stops** (below :data:`STAND_FRACTION` of it, or braking for the
+end of a path): the feet keep stepping with strides shrinking to nothing until each has landed once
+more with the character nearly still, at the idle's stance and laid flat, then the idle fades in
+(:func:`_clock`); turning on the spot steps the same way. **Root motion** is the weighted clips'
+velocities (so the realized speed is the requested one inside the pack's range), along the heading
+the steering asks for; the part of its turn the blend does not show is spun at the root. Each clip
 contributes its pelvis motion relative to its own straight or circular path.
 
 **Planted feet** follow the blend's contact phases (heel down from heel strike to heel off,
-ball down from foot flat to toe off). From heel strike to heel off the ankle stays where it landed;
-from heel off to toe off the ball (``forefoot``, else ``toe``) stays put and the foot pivots about
-it: the ankle goal is the pinned ball plus the animated ball-to-ankle offset, which carries the
-foot's pitch, and the two-joint leg IK (``infuse.runtime.limb_ik``) reaches it with the foot keeping
-its animated rotation. The switch from ankle to ball carries the foot's correction over, so it is
-continuous, and at toe off the correction fades out over :data:`RELEASE_S`.
+ball down from foot flat to toe off). From heel strike the ankle stays where it landed; from
+halfway through foot flat (:data:`HANDOVER`, the foot resting still) to toe off the ball
+(``forefoot``, else ``toe``) stays put and the foot pivots about it: the ankle goal is the pinned
+ball plus the animated ball-to-ankle offset, which carries the foot's pitch, and the two-joint leg
+IK (``infuse.runtime.limb_ik``) reaches it with the foot keeping its animated rotation; where the
+hip cannot reach it, the heel rises further about the ball. The ball takes over where the corrected
+foot had it a frame earlier, so the switch is continuous, and at toe off the correction fades out
+over :data:`RELEASE_S`.
 """
 from __future__ import annotations
 
