@@ -125,18 +125,24 @@ def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, sta
     """Smoothed, speed-limited path (C, F, 2) toward ``desired`` (C, F, 2) from ``state`` (C, 2).
 
     Each frame covers ``smoothing`` (C, F) of the distance left, at most ``max_step`` (C, F) radians.
-    Returns the final state (C, 2) and the path. The only loop over frames in the solver.
+    Returns the final state (C, 2) and the path. The only loop over frames in the solver; rows at
+    rest with nothing to follow stay at rest without it.
     """
-    if np.all(smoothing >= 1.0):  # no smoothing: the path is the target unless a step is too long
+    if (smoothing >= 1.0).all():  # no smoothing: the path is the target unless a step is too long
         steps = np.diff(np.concatenate((state[:, None], desired), axis=1), axis=1)
-        if np.all(np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step):
+        if (np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step).all():
             return desired[:, -1].copy(), desired.copy()
-    moving = np.any(desired != 0.0, axis=(1, 2)) | np.any(state != 0.0, axis=1)
-    if not moving.all():  # rows at rest with nothing to follow stay at rest
-        final, path = state.copy(), np.zeros_like(desired)
-        if moving.any():
-            final[moving], path[moving] = follow(desired[moving], smoothing[moving], max_step[moving], state[moving])
-        return final, path
+    rows = np.flatnonzero((desired != 0.0).any(axis=(1, 2)) | (state != 0.0).any(axis=1))
+    if rows.size == len(state):
+        return _step_frames(desired, smoothing, max_step, state)
+    final, path = state.copy(), np.zeros_like(desired)
+    if rows.size:
+        final[rows], path[rows] = _step_frames(desired[rows], smoothing[rows], max_step[rows], state[rows])
+    return final, path
+
+
+def _step_frames(desired, smoothing, max_step, state):
+    """:func:`follow` frame by frame: on Python floats for a few rows, else on arrays over the rows."""
     if desired.shape[0] <= SCALAR_FOLLOW_MAX_CHARACTERS:
         return _follow_scalar(desired, smoothing, max_step, state)
     frames = desired.shape[1]
@@ -186,6 +192,14 @@ def apply_matrices(m, v):
 def _apply_t(m, v):
     """Transposed matrices (..., 3, 3) times vectors (..., 3)."""
     return (v[..., None, :] @ m)[..., 0, :]
+
+
+def _pairs(h, v, gain):
+    """(..., 2) heading and pitch (...) times ``gain`` (...)."""
+    out = np.empty(h.shape + (2,))
+    np.multiply(h, gain, out=out[..., 0])
+    np.multiply(v, gain, out=out[..., 1])
+    return out
 
 
 def _direction(frame, vector, forward_h, forward_v, fixed):
@@ -246,7 +260,7 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
                                 fwd[..., 0], fwd[..., 1], inp.offsets)
             fraction = inp.fractions[:, :, g]
             dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
-            groups_state[:, g], path = follow(np.stack((dh, dv), -1) * gains[:, :, g, None], inp.smoothing[:, :, g],
+            groups_state[:, g], path = follow(_pairs(dh, dv, gains[:, :, g]), inp.smoothing[:, :, g],
                                               inp.max_step[:, :, g], groups_state[:, g])
             share = path / counts[:, :, g]
         if not turning[g] or absent[s]:
@@ -270,7 +284,7 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
                         inp.offsets[:, :, None])
     dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
     gain = gains[:, :, EYES, None] * inp.present[:, None, pair]  # (C, F, 2)
-    desired = (np.stack((dh, dv), -1) * gain[..., None]).transpose(0, 2, 1, 3)  # (C, 2, F, 2): one row per eye
+    desired = _pairs(dh, dv, gain).transpose(0, 2, 1, 3)  # (C, 2, F, 2): one row per eye
     final, path = follow(desired.reshape(2 * c_count, frames, 2), np.repeat(inp.smoothing[:, :, EYES], 2, axis=0),
                          np.repeat(inp.max_step[:, :, EYES], 2, axis=0), eyes_state.reshape(2 * c_count, 2))
     eyes_state[:] = final.reshape(c_count, 2, 2)
