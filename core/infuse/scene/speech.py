@@ -148,7 +148,9 @@ def mix(pieces, duration_s: float, fade_s: float = 0.01) -> tuple[np.ndarray, in
             x, first = x[-first:], 0
         x = x[:max(len(track) - first, 0)]
         track[first:first + len(x)] += x
-    return np.clip(np.round(track), -32768, 32767).astype(np.int16), rate
+    np.rint(track, out=track)
+    np.clip(track, -32768, 32767, out=track)
+    return track.astype(np.int16), rate
 
 
 def write_wav(path: str | Path, samples: np.ndarray, rate: int) -> Path:
