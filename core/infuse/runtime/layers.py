@@ -46,6 +46,8 @@ def blend_weights(times, start_s: float, end_s: float | None, blend_in_s: float,
     ``end_s`` (never, when ``end_s`` is None). Ramps are :func:`smoothstep`; a zero blend time is a step.
     """
     t = np.asarray(times, dtype=np.float64)
+    if t.size and _fully_on(float(t.min()), float(t.max()), start_s, end_s, blend_in_s, blend_out_s):
+        return np.ones(t.shape)
     if blend_in_s > 0:
         w = smoothstep((t - start_s) / blend_in_s)
     else:
@@ -56,3 +58,12 @@ def blend_weights(times, start_s: float, end_s: float | None, blend_in_s: float,
         else:
             w = w * (t < end_s - 1e-9)
     return w
+
+
+def _fully_on(first: float, last: float, start_s: float, end_s: float | None, blend_in_s: float, blend_out_s: float) -> bool:
+    """Whether every time from ``first`` to ``last`` lies past the blend-in and before the blend-out
+    (the weights are then exactly 1, as :func:`blend_weights` computes them)."""
+    started = (first - start_s) / blend_in_s >= 1.0 if blend_in_s > 0 else first >= start_s - 1e-9
+    if end_s is None or not started:
+        return started
+    return (end_s - last) / blend_out_s >= 1.0 if blend_out_s > 0 else last < end_s - 1e-9
