@@ -152,7 +152,7 @@ def test_blocks_of_any_size_give_the_same_frames():
             rt.activate(name, Clip(clip), 0.0)
             rt.activate(name, Gaze(target, influence="WAIST"), 0.2)
             rt.activate(name, Saccades("talk"), 0.0)
-        rt.activate(a, Gaze((2.0, 1.5, 1.0), influence="HEAD"), 0.6)  # takes over within a block
+        rt.activate(a, Gaze((2.0, 1.5, 1.0), influence="HEAD", priority="head"), 0.6)  # takes over within a block
         rt.run(1.5)
         out.append(np.stack([rt.motion(n).local_rotations for n in (a, b)]))
     assert np.allclose(out[0], out[1], atol=1e-12) and np.allclose(out[0], out[2], atol=1e-12)

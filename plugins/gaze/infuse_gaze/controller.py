@@ -164,12 +164,9 @@ class Gaze(Controller):
         rows = {name: sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)) for name, row in rows.items()}
         frames, dt = len(block), block.dt
         names = list(rows)
-        n_slots, n_groups = len(SLOTS), len(GROUPS)
+        n_groups = len(GROUPS)
         shape = (len(names), frames)
         arrays = {
-            "chain_rot": np.empty(shape + (n_slots, 3, 3)), "chain_pos": np.empty(shape + (n_slots, 3)),
-            "frames_world": np.empty(shape + (n_slots, 3, 3)), "positions": np.empty(shape + (n_slots, 3)),
-            "origin_local": np.empty(shape + (n_slots, 3)), "forward_angles": np.empty(shape + (n_slots, 2)),
             "targets": np.empty(shape + (3,)), "weights": np.empty(shape), "active": np.empty(shape + (n_groups,)),
             "fractions": np.empty(shape + (n_groups,)), "limits": np.empty(shape + (n_groups, 4)),
             "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
@@ -196,25 +193,16 @@ class Gaze(Controller):
                 arrays["limits"][c, these] = gaze.limits
                 arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
         # The pose below, along each chain; characters on one skeleton share the forward kinematics.
-        positions = arrays["positions"]  # each slot's joint in the world
-        same_chain: dict[tuple, list[int]] = {}
-        for c, name in enumerate(names):
-            first = rows[name][0]
-            same_chain.setdefault((id(first.rig.skeleton), tuple(first.binding["slots"])), []).append(c)
-        for members in same_chain.values():
-            row_jobs = [rows[names[c]][0] for c in members]
-            frames_w, *parts = _chain_frames(row_jobs)
-            arrays["frames_world"][members] = frames_w
-            for key, part in zip(("chain_rot", "chain_pos", "origin_local", "positions"), parts):
-                arrays[key][members] = part
-            present = row_jobs[0].binding["present"]
-            by_lead: dict[bool, np.ndarray] = {}
-            for i, c in enumerate(members):  # where the priority joint points: the eyes, or the head
-                for job, these in spans[c]:
-                    lead = job.binding["eyes_lead"]
-                    if lead not in by_lead:
-                        by_lead[lead] = _forward_angles(frames_w, present, lead)
-                    arrays["forward_angles"][c, these] = by_lead[lead][i, these]
+        first_jobs = [rows[name][0] for name in names]
+        chain = dict(zip(("frames_world", "chain_rot", "chain_pos", "origin_local", "positions"), _chain_frames(first_jobs)))
+        positions = chain["positions"]  # each slot's joint in the world
+        leads = np.array([_lead_weights(span[0][0]) for span in spans])
+        chain["forward_angles"] = _forward_angles(chain["frames_world"], leads)
+        for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
+            for job, these in spans[c][1:]:
+                lead = _lead_weights(job)
+                if not np.array_equal(lead, leads[c]):
+                    chain["forward_angles"][c, these] = _forward_angles(chain["frames_world"][c:c + 1], lead[None])[0, these]
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}
@@ -238,7 +226,7 @@ class Gaze(Controller):
                     arrays["targets"][c, these] = 0.0
                     arrays["weights"][c, these] = 0.0
         inp = SolverInput(present=np.stack([rows[n][0].binding["present"] for n in names]),
-                          counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays)
+                          counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays, **chain)
         states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
         groups_state = np.stack([st.get("groups", np.zeros((n_groups, 2))) for st in states])
         eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
@@ -278,13 +266,47 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _chain_frames(jobs):
-    """For characters on one skeleton with one chain, from the pose below: each slot's aligned frame in
-    the world (C, F, S, 3, 3); relative to its parent slot's aligned frame, each slot's aligned frame
+    """For the gazing characters (one job each), from the pose below: each slot's aligned frame in the
+    world (C, F, S, 3, 3); relative to its parent slot's aligned frame, each slot's aligned frame
     (C, F, S, 3, 3) and position (C, F, S, 3); the gaze origin in each slot's aligned frame (C, F, S, 3);
-    and each slot's position in the world (C, F, S, 3). Frames are matrices acting on column vectors."""
+    and each slot's position in the world (C, F, S, 3). Frames are matrices acting on column vectors.
+    Characters on one skeleton share one forward kinematics; all else runs on every character at once."""
+    frames = len(jobs[0].pose.root_translations)
+    rot = np.empty((len(jobs), frames, len(SLOTS), 4))
+    pos = np.empty((len(jobs), frames, len(SLOTS), 3))
+    same_chain: dict[tuple, list[int]] = {}
+    for c, job in enumerate(jobs):
+        same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding["slots"])), []).append(c)
+    for members in same_chain.values():
+        rot[members], pos[members] = _slot_poses([jobs[c] for c in members])
+    # Into the world, where each character stands; the world itself (no pelvis) stays put.
+    placement = np.stack([job.rig.rotation for job in jobs])[:, None, None]
+    rot = quat.multiply(placement, rot)
+    pos = quat.rotate(placement, pos) + np.stack([job.rig.position for job in jobs])[:, None, None]
+    world = np.stack([job.binding["slot_source"] < 0 for job in jobs])[:, None, :, None]  # (C, 1, S, 1)
+    if world.any():
+        rot = np.where(world, quat.IDENTITY, rot)
+        pos = np.where(world, 0.0, pos)
+    aligned = np.stack([job.binding["chain_aligned"] for job in jobs])[:, None]  # (C, 1, S, 4)
+    frames_w = rotation_matrices(quat.multiply(rot, aligned))
+    inverse = np.swapaxes(frames_w, -1, -2)
+    parents = np.array(SLOT_PARENTS[1:])  # slot 0's parent is the world
+    chain_rot = np.empty_like(frames_w)
+    chain_pos = np.empty_like(pos)
+    chain_rot[..., 0, :, :], chain_pos[..., 0, :] = frames_w[..., 0, :, :], pos[..., 0, :]
+    chain_rot[..., 1:, :, :] = inverse[..., parents, :, :] @ frames_w[..., 1:, :, :]
+    chain_pos[..., 1:, :] = apply_matrices(inverse[..., parents, :, :], pos[..., 1:, :] - pos[..., parents, :])
+    origin = _weighted_slots(np.array([_origin_weights(job.binding["present"]) for job in jobs]), pos)
+    origin_local = apply_matrices(inverse, origin[..., None, :] - pos)
+    return frames_w, chain_rot, chain_pos, origin_local, pos
+
+
+def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:
+    """Rotations (C, F, S, 4) and positions (C, F, S, 3) of each slot's joint in the characters' own
+    frames, for characters on one skeleton with one chain (an absent slot repeats its parent's joint)."""
     b = jobs[0].binding
-    skeleton = jobs[0].pose.rig.skeleton
-    present, columns = b["present"], b["columns"]
+    skeleton = jobs[0].rig.skeleton
+    columns = b["columns"]
     local = np.stack([j.pose.local_rotations[:, columns] for j in jobs])
     root = np.stack([j.pose.root_translations for j in jobs])
     moved = [j.pose.joint_translations for j in jobs]
@@ -292,38 +314,36 @@ def _chain_frames(jobs):
     if any(t is not None for t in moved):
         rest = skeleton.rest_translations[columns]
         translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, columns] for t in moved])
-    rot, pos = chain_fk(skeleton, local, root, translations, b["slots"][present], columns)
-    for c, job in enumerate(jobs):  # into the world: where each character stands
-        rot[c], pos[c] = job.rig.place(rot[c], pos[c])
-    source = b["slot_source"]
-    if source[0] < 0:  # no pelvis: the chain starts from the world (identity, origin), index -1 below
-        rot = np.concatenate((rot, np.broadcast_to(quat.IDENTITY, rot.shape[:-2] + (1, 4))), axis=-2)
-        pos = np.concatenate((pos, np.zeros(pos.shape[:-2] + (1, 3))), axis=-2)
-    g_pos = pos[..., source, :]
-    aligned = np.stack([j.binding["chain_aligned"] for j in jobs])[:, None]  # (C, 1, S, 4)
-    frames_w = rotation_matrices(quat.multiply(rot[..., source, :], aligned))
-    inverse = np.swapaxes(frames_w, -1, -2)
-    parents = np.array(SLOT_PARENTS[1:])  # slot 0's parent is the world
-    chain_rot = np.empty_like(frames_w)
-    chain_pos = np.empty_like(g_pos)
-    chain_rot[..., 0, :, :], chain_pos[..., 0, :] = frames_w[..., 0, :, :], g_pos[..., 0, :]
-    chain_rot[..., 1:, :, :] = inverse[..., parents, :, :] @ frames_w[..., 1:, :, :]
-    chain_pos[..., 1:, :] = apply_matrices(inverse[..., parents, :, :], g_pos[..., 1:, :] - g_pos[..., parents, :])
-    origin = g_pos[..., _eyes(present) or [6], :].mean(axis=-2)
-    origin_local = apply_matrices(inverse, origin[..., None, :] - g_pos)
-    return frames_w, chain_rot, chain_pos, origin_local, g_pos
+    rot, pos = chain_fk(skeleton, local, root, translations, b["slots"][b["present"]], columns)
+    source = np.maximum(b["slot_source"], 0)  # the world's slots are set apart by the caller
+    return rot[..., source, :], pos[..., source, :]
 
 
-def _eyes(present) -> list[int]:
-    """The eye slots, when both eyes are present."""
-    return [7, 8] if present[7] and present[8] else []
+def _origin_weights(present) -> np.ndarray:
+    """(S,) weights of the slots whose mean is where the gaze starts: the eyes, else the head."""
+    weights = np.zeros(len(SLOTS))
+    weights[[7, 8] if present[7] and present[8] else [6]] = 1.0
+    return weights / weights.sum()
 
 
-def _forward_angles(frames_w: np.ndarray, present, eyes_lead: bool) -> np.ndarray:
+def _lead_weights(job) -> np.ndarray:
+    """(S,) weights of the slots whose mean forward axis the gaze points: the eyes when they lead, else the head."""
+    if job.binding["eyes_lead"]:
+        return _origin_weights(job.binding["present"])
+    weights = np.zeros(len(SLOTS))
+    weights[6] = 1.0
+    return weights
+
+
+def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """(C, F, 3) sums of ``values`` (C, F, S, 3) over the slots, weighted by ``weights`` (C, S)."""
+    return np.einsum("cs,cfsk->cfk", weights, values)
+
+
+def _forward_angles(frames_w: np.ndarray, leads: np.ndarray) -> np.ndarray:
     """Heading and pitch (C, F, S, 2), seen from each slot's aligned frame (``frames_w``, world), of where
-    the priority joint points: the mean forward (+Z) axis of the eyes when they lead, else the head's."""
-    lead = (_eyes(present) if eyes_lead else []) or [6]
-    forward = frames_w[..., 2][..., lead, :].mean(axis=-2)  # the forward (+Z) axis is the third column: (C, F, 3)
+    the priority joint points: the mean forward (+Z) axis of the slots weighted by ``leads`` (C, S)."""
+    forward = _weighted_slots(leads, frames_w[..., 2])  # the forward (+Z) axis is the third column
     heading, pitch = direction_angles(apply_matrices(np.swapaxes(frames_w, -1, -2), forward[..., None, :]))
     return np.stack((heading, pitch), axis=-1)
 
