@@ -239,8 +239,9 @@ class Locomotion(Controller):
         # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
         # turning examples) spun at the root.
         heading = h0 + np.concatenate(([0.0], np.cumsum(turn[:-1] * dt)))
-        step_x = (vf * np.sin(heading) + vl * np.cos(heading)) * dt
-        step_z = (vf * np.cos(heading) - vl * np.sin(heading)) * dt
+        ahead = heading + turn * dt  # each frame's step along the heading it turns to, as the steering integrates
+        step_x = (vf * np.sin(ahead) + vl * np.cos(ahead)) * dt
+        step_z = (vf * np.cos(ahead) - vl * np.sin(ahead)) * dt
         px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
         st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + turn[-1] * dt))
@@ -253,8 +254,9 @@ class Locomotion(Controller):
         wm = (wm + SLOW_EPS * b["slowest"][None]) / (slow + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
         phase, stride, standing = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
-        settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0)  # how far into a stop
-        stride = stride + (1.0 - stride) * standing  # the idle plays as it is
+        # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
+        settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
+        stride = stride + (1.0 - stride) * standing
         rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
