@@ -35,8 +35,8 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(_norm(v), 1e-12)[..., None]
 
 
-def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.arccos(np.clip(_dot(_unit(u), _unit(v)), -1.0, 1.0))
+def _arccos(cosine: np.ndarray) -> np.ndarray:
+    return np.arccos(np.clip(cosine, -1.0, 1.0))
 
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
@@ -54,23 +54,24 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                             [a, b, c] if parent_a < 0 else [a, b, c, parent_a])
     A, B, C = g_pos[:, 0], g_pos[:, 1], g_pos[:, 2]
     T = np.asarray(goal, dtype=np.float64)
-    lab = _norm(B - A)
-    lcb = _norm(C - B)
-    lat = np.clip(_norm(T - A), np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
-    ac_ab_0 = _angle(C - A, B - A)
-    ba_bc_0 = _angle(A - B, C - B)
-    ac_at_0 = _angle(C - A, T - A)
-    ac_ab_1 = np.arccos(np.clip((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat), -1.0, 1.0))
-    ba_bc_1 = np.arccos(np.clip((lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb), -1.0, 1.0))
-    axis1 = _cross(C - A, T - A)
+    ab, cb, ca, ta = B - A, C - B, C - A, T - A
+    lab, lcb, lca, lta = _norm(ab), _norm(cb), _norm(ca), _norm(ta)
+    lat = np.clip(lta, np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
+    u_ab, u_cb, u_ca, u_ta = (v / np.maximum(n, 1e-12)[:, None] for v, n in ((ab, lab), (cb, lcb), (ca, lca), (ta, lta)))
+    ac_ab_0 = _arccos(_dot(u_ca, u_ab))
+    ba_bc_0 = _arccos(-_dot(u_ab, u_cb))  # the angle at b, between b->a and b->c
+    ac_at_0 = _arccos(_dot(u_ca, u_ta))
+    ac_ab_1 = _arccos((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat))
+    ba_bc_1 = _arccos((lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb))
+    axis1 = _cross(ca, ta)
     small = _norm(axis1) < 1e-12
-    axis0 = _cross(C - A, B - A)
+    axis0 = _cross(ca, ab)
     flat = _norm(axis0) < 1e-6 * np.maximum(lab * lcb, 1e-12)
     if flat.any():  # a straight limb bends toward the pole, else toward the goal
         if pole is not None:
-            fallback = _cross(C - A, np.broadcast_to(pole, A.shape))
+            fallback = _cross(ca, np.broadcast_to(pole, A.shape))
         else:
-            other = _cross(C - A, np.array([0.0, 1.0, 0.0]))
+            other = _cross(ca, np.array([0.0, 1.0, 0.0]))
             fallback = np.where(small[:, None], other, axis1)
         axis0 = np.where(flat[:, None], fallback, axis0)
     axis0 = _unit(axis0)
@@ -80,13 +81,12 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     r0 = quat.from_axis_angle(quat.rotate(ga_inv, axis0), ac_ab_1 - ac_ab_0)
     r1 = quat.from_axis_angle(quat.rotate(gb_inv, axis0), ba_bc_1 - ba_bc_0)
     r2 = quat.from_axis_angle(quat.rotate(ga_inv, axis1), ac_at_0)
-    old_a, old_b = local_rotations[:, a].copy(), local_rotations[:, b].copy()
-    new_a = quat.multiply(old_a, quat.multiply(r0, r2))
-    new_b = quat.multiply(old_b, r1)
-    if weight is not None:
+    old = local_rotations[:, [a, b]]  # (F, 2, 4), a copy
+    new_a = quat.multiply(old[:, 0], quat.multiply(r0, r2))
+    new_b = quat.multiply(old[:, 1], r1)
+    if weight is not None:  # both joints in one interpolation
         w = np.clip(np.asarray(weight, dtype=np.float64), 0.0, 1.0)
-        new_a = quat.slerp(old_a, new_a, w)
-        new_b = quat.slerp(old_b, new_b, w)
+        new_a, new_b = np.moveaxis(quat.slerp(old, np.stack((new_a, new_b), axis=1), w[:, None]), 1, 0)
     local_rotations[:, a] = new_a
     local_rotations[:, b] = new_b
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
