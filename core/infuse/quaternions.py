@@ -224,13 +224,16 @@ def slerp(a: np.ndarray, b: np.ndarray, t: np.ndarray) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)[..., None]
-    d = np.sum(a * b, axis=-1, keepdims=True)
+    d = np.einsum("...i,...i->...", a, b)[..., None]
     b = np.where(d < 0.0, -b, b)
-    d = np.abs(d)
-    theta = np.arccos(np.clip(d, -1.0, 1.0))
+    theta = np.arccos(np.minimum(np.abs(d), 1.0))
     s = np.sin(theta)
-    near = s < 1e-6
-    safe_s = np.where(near, 1.0, s)
-    wa = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe_s)
-    wb = np.where(near, t, np.sin(t * theta) / safe_s)
+    near = s < 1e-6  # (nearly) the same rotation: a plain lerp
+    if near.any():
+        safe_s = np.where(near, 1.0, s)
+        wa = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / safe_s)
+        wb = np.where(near, t, np.sin(t * theta) / safe_s)
+    else:
+        wa = np.sin((1.0 - t) * theta) / s
+        wb = np.sin(t * theta) / s
     return normalize(wa * a + wb * b)
