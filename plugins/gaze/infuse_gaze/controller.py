@@ -20,14 +20,14 @@ from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
 from infuse.runtime.pose import ancestors, chain_fk
-from infuse.runtime.swing import direction_angles, local_offsets, swing
+from infuse.runtime.swing import local_offsets, swing
 from infuse.runtime.targets import JointTarget
 
 from .model import (
     DEFAULT_INFLUENCE, EYES, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOT_GROUPS, SLOT_PARENTS, SLOTS,
     group_name, smoothing_factor,
 )
-from .solver import SolverInput, apply_matrices, rotation_matrices, solve
+from .solver import SolverInput, rotation_matrices, solve
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
     """(heading, pitch) radians of an offset of ``angle_deg`` toward ``direction``: a BML word
@@ -194,15 +194,14 @@ class Gaze(Controller):
                 arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
         # The pose below, along each chain; characters on one skeleton share the forward kinematics.
         first_jobs = [rows[name][0] for name in names]
-        chain = dict(zip(("frames_world", "chain_rot", "chain_pos", "origin_local", "positions"), _chain_frames(first_jobs)))
+        chain = dict(zip(("frames_world", "positions", "origin"), _chain_frames(first_jobs)))
         positions = chain["positions"]  # each slot's joint in the world
-        leads = np.array([_lead_weights(span[0][0]) for span in spans])
-        chain["forward_angles"] = _forward_angles(chain["frames_world"], leads)
+        # Where the priority joint points: the mean forward (+Z, the third column) axis of the eyes or the head.
+        forward_axes = chain["frames_world"][..., 2]
+        chain["forward"] = _weighted_slots(np.array([_lead_weights(span[0][0]) for span in spans]), forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
             for job, these in spans[c][1:]:
-                lead = _lead_weights(job)
-                if not np.array_equal(lead, leads[c]):
-                    chain["forward_angles"][c, these] = _forward_angles(chain["frames_world"][c:c + 1], lead[None])[0, these]
+                chain["forward"][c, these] = _weighted_slots(_lead_weights(job)[None], forward_axes[c:c + 1, these])[0]
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}
@@ -266,11 +265,10 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _chain_frames(jobs):
-    """For the gazing characters (one job each), from the pose below: each slot's aligned frame in the
-    world (C, F, S, 3, 3); relative to its parent slot's aligned frame, each slot's aligned frame
-    (C, F, S, 3, 3) and position (C, F, S, 3); the gaze origin in each slot's aligned frame (C, F, S, 3);
-    and each slot's position in the world (C, F, S, 3). Frames are matrices acting on column vectors.
-    Characters on one skeleton share one forward kinematics; all else runs on every character at once."""
+    """For the gazing characters (one job each), from the pose below: each slot's aligned frame
+    (C, F, S, 3, 3, matrices acting on column vectors) and position (C, F, S, 3) in the world, and where
+    the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all else runs
+    on every character at once."""
     frames = len(jobs[0].pose.root_translations)
     rot = np.empty((len(jobs), frames, len(SLOTS), 4))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
@@ -289,16 +287,8 @@ def _chain_frames(jobs):
         pos = np.where(world, 0.0, pos)
     aligned = np.stack([job.binding["chain_aligned"] for job in jobs])[:, None]  # (C, 1, S, 4)
     frames_w = rotation_matrices(quat.multiply(rot, aligned))
-    inverse = np.swapaxes(frames_w, -1, -2)
-    parents = np.array(SLOT_PARENTS[1:])  # slot 0's parent is the world
-    chain_rot = np.empty_like(frames_w)
-    chain_pos = np.empty_like(pos)
-    chain_rot[..., 0, :, :], chain_pos[..., 0, :] = frames_w[..., 0, :, :], pos[..., 0, :]
-    chain_rot[..., 1:, :, :] = inverse[..., parents, :, :] @ frames_w[..., 1:, :, :]
-    chain_pos[..., 1:, :] = apply_matrices(inverse[..., parents, :, :], pos[..., 1:, :] - pos[..., parents, :])
     origin = _weighted_slots(np.array([_origin_weights(job.binding["present"]) for job in jobs]), pos)
-    origin_local = apply_matrices(inverse, origin[..., None, :] - pos)
-    return frames_w, chain_rot, chain_pos, origin_local, pos
+    return frames_w, pos, origin
 
 
 def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:
@@ -338,14 +328,6 @@ def _lead_weights(job) -> np.ndarray:
 def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
     """(C, F, 3) sums of ``values`` (C, F, S, 3) over the slots, weighted by ``weights`` (C, S)."""
     return np.einsum("cs,cfsk->cfk", weights, values)
-
-
-def _forward_angles(frames_w: np.ndarray, leads: np.ndarray) -> np.ndarray:
-    """Heading and pitch (C, F, S, 2), seen from each slot's aligned frame (``frames_w``, world), of where
-    the priority joint points: the mean forward (+Z) axis of the slots weighted by ``leads`` (C, S)."""
-    forward = _weighted_slots(leads, frames_w[..., 2])  # the forward (+Z) axis is the third column
-    heading, pitch = direction_angles(apply_matrices(np.swapaxes(frames_w, -1, -2), forward[..., None, :]))
-    return np.stack((heading, pitch), axis=-1)
 
 
 def _slots_of(target: JointTarget, job, block) -> tuple[int, ...]:

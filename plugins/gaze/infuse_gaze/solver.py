@@ -27,6 +27,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from infuse.runtime.swing import direction_angles
+
 from .model import EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
 
 _S = len(SLOTS)
@@ -38,12 +40,10 @@ _FIRST_SLOT = {g: SLOT_GROUPS.index(g) for g in set(SLOT_GROUPS)}
 class SolverInput:
     """Arrays over C characters, F frames, S slots, G groups (angles in radians, lengths in metres).
 
-    - ``chain_rot`` (C, F, S, 3, 3), ``chain_pos`` (C, F, S, 3): each slot's aligned frame and position
-      relative to its parent slot's aligned frame (the first slot: relative to the world);
-      ``frames_world`` (C, F, S, 3, 3), ``positions`` (C, F, S, 3): the same in the world, where the chain
-      stands until a slot below turns;
-    - ``origin_local`` (C, F, S, 3): where the gaze starts (the eyes, or the head) in each slot's
-      aligned frame; ``forward_angles`` (C, F, S, 2): heading and pitch of where the priority joint points;
+    - ``frames_world`` (C, F, S, 3, 3), ``positions`` (C, F, S, 3): each slot's aligned frame (a matrix
+      acting on column vectors) and position in the world, in the pose below the gaze;
+    - ``origin`` (C, F, 3): where the gaze starts (the eyes, or the head); ``forward`` (C, F, 3): where the
+      priority joint points (a unit vector), both in the world and the pose below;
     - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
     - ``targets`` (C, F, 3); ``weights`` (C, F) blend weights;
     - per frame (the gaze in charge may change within a block): ``active`` (C, F, G) bool: groups that
@@ -54,12 +54,10 @@ class SolverInput:
       taken from a first solve of the block.
     """
 
-    chain_rot: np.ndarray
-    chain_pos: np.ndarray
     frames_world: np.ndarray
     positions: np.ndarray
-    origin_local: np.ndarray
-    forward_angles: np.ndarray
+    origin: np.ndarray
+    forward: np.ndarray
     present: np.ndarray
     counts: np.ndarray
     targets: np.ndarray
@@ -208,6 +206,37 @@ def _direction(frame, vector, forward_h, forward_v, fixed):
     return (ht + fixed[..., 0] - forward_h + np.pi) % (2 * np.pi) - np.pi, vt + fixed[..., 1] - forward_v
 
 
+class _PoseBelow:
+    """What the solver reads from the pose below, per slot, computed when first asked (the slots below
+    the first that turns need none of it) and shared by both passes of a block."""
+
+    def __init__(self, inp: SolverInput):
+        self.inp = inp
+        self._relative: dict = {}
+        self._views: dict = {}
+
+    def relative(self, slots: list[int]):
+        """Sibling slots' aligned frames (C, F, K, 3, 3) and positions (C, F, K, 3) relative to their
+        parent slot's aligned frame."""
+        key = tuple(slots)
+        if key not in self._relative:
+            frames, positions = self.inp.frames_world, self.inp.positions
+            p = SLOT_PARENTS[slots[0]]
+            inverse = np.swapaxes(frames[:, :, p, None], -1, -2)  # (C, F, 1, 3, 3)
+            self._relative[key] = (inverse @ frames[:, :, slots],
+                                   apply_matrices(inverse, positions[:, :, slots] - positions[:, :, p, None]))
+        return self._relative[key]
+
+    def view(self, slot: int):
+        """Where the gaze starts (C, F, 3), and the heading and pitch (C, F) of where the priority joint
+        points, seen from a slot's aligned frame."""
+        if slot not in self._views:
+            inverse = np.swapaxes(self.inp.frames_world[:, :, slot], -1, -2)
+            origin = apply_matrices(inverse, self.inp.origin - self.inp.positions[:, :, slot])
+            self._views[slot] = (origin, direction_angles(apply_matrices(inverse, self.inp.forward)))
+        return self._views[slot]
+
+
 def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
     """Run the block; returns (offsets (C, F, S, 2), positions (C, F, S, 3) of the solved chain).
 
@@ -215,17 +244,19 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
     in place. Characters looking at another one's eyes or head (``refine``) get a second pass with
     that character's solved positions.
     """
+    below = _PoseBelow(inp)
     if not inp.refine:
-        return _solve_once(inp, groups_state, eyes_state)
+        return _solve_once(inp, below, groups_state, eyes_state)
     # The first pass only places the chains (no joint's position depends on the eyes' turn).
-    _, positions = _solve_once(inp, groups_state.copy(), eyes_state, eyes=False)
+    _, positions = _solve_once(inp, below, groups_state.copy(), eyes_state, eyes=False)
     targets = inp.targets.copy()
     for c, c2, slots in inp.refine:
         targets[c] = positions[c2][:, list(slots)].mean(axis=1)
-    return _solve_once(replace(inp, targets=targets), groups_state, eyes_state)
+    return _solve_once(replace(inp, targets=targets), below, groups_state, eyes_state)
 
 
-def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True):
+def _solve_once(inp: SolverInput, below: _PoseBelow, groups_state: np.ndarray, eyes_state: np.ndarray,
+                eyes: bool = True):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
     groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
     no character turns (and none is on its way back) is skipped: its joints stay as they are. Without
@@ -251,13 +282,14 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
             pre = w_rot[:, :, p]
             w_pos[:, :, s] = w_pos[:, :, p]
         else:
-            pre = w_rot[:, :, p] @ inp.chain_rot[:, :, s]
-            w_pos[:, :, s] = w_pos[:, :, p] + apply_matrices(w_rot[:, :, p], inp.chain_pos[:, :, s])
+            rotation, position = below.relative([s])
+            pre = w_rot[:, :, p] @ rotation[:, :, 0]
+            w_pos[:, :, s] = w_pos[:, :, p] + apply_matrices(w_rot[:, :, p], position[:, :, 0])
         g = SLOT_GROUPS[s]
         if turning[g] and _FIRST_SLOT[g] == s:
-            fwd = inp.forward_angles[:, :, s]
-            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply_matrices(pre, inp.origin_local[:, :, s]),
-                                fwd[..., 0], fwd[..., 1], inp.offsets)
+            origin, (forward_h, forward_v) = below.view(s)
+            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply_matrices(pre, origin), forward_h, forward_v,
+                                inp.offsets)
             fraction = inp.fractions[:, :, g]
             dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
             groups_state[:, g], path = follow(_pairs(dh, dv, gains[:, :, g]), inp.smoothing[:, :, g],
@@ -274,12 +306,13 @@ def _solve_once(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarr
     pair, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
     if moved:
         parent = w_rot[:, :, p, None]
-        w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, inp.chain_pos[:, :, pair])
+        rotation, position = below.relative(pair)
+        w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, position)
     else:
         w_pos[:, :, pair] = inp.positions[:, :, pair]
     if not (eyes and (inp.present[:, pair].any() or eyes_state.any())):
         return out, w_pos
-    pre = parent @ inp.chain_rot[:, :, pair] if moved else inp.frames_world[:, :, pair]
+    pre = parent @ rotation if moved else inp.frames_world[:, :, pair]
     dh, dv = _direction(pre, target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
                         inp.offsets[:, :, None])
     dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
