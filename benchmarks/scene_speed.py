@@ -123,6 +123,9 @@ def main(argv=None) -> int:
     ratio = args.seconds / best["realize"] if best["realize"] > 0 else float("inf")
     print(f"realize (without synthesis): {best['realize']:.3f} s = {ratio:.0f}x faster than real time "
           f"(target: 100x) {'met' if ratio >= 100 else 'NOT met'}")
+    spread = [args.seconds / r["realize"] for r in runs if r["realize"] > 0]
+    if len(spread) > 1:
+        print(f"all runs: {min(spread):.0f}x to {max(spread):.0f}x; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
     if best["warnings"]:
         print(f"{len(best['warnings'])} warnings, e.g. {best['warnings'][0].id}: {best['warnings'][0].description}")
     sys.stdout.flush()
