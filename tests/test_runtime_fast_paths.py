@@ -12,7 +12,7 @@ from infuse import quaternions as quat
 from infuse.runtime import Clip, Runtime
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
-from infuse.runtime.swing import local_offsets, swing
+from infuse.runtime.swing import SWING_AXES, local_axes, local_offsets, local_turns, swing
 
 from runtime_characters import synthetic_character
 
@@ -87,6 +87,16 @@ def test_local_offsets_and_swing_without_roll():
     assert np.allclose(local_offsets(aligned, delta), expected, atol=1e-15)
     h, p = rng.normal(size=(20, 5)), rng.normal(size=(20, 5))
     assert np.array_equal(swing(h, p), swing(h, p, np.zeros((20, 5))))
+
+
+@pytest.mark.parametrize("component", [0, 1, 2])
+def test_turns_about_one_axis_match_local_offsets_of_a_swing(component):
+    aligned, angles = unit_quats(4), rng.normal(size=(30, 4))
+    hpr = [np.zeros((30, 4))] * 3
+    hpr[component] = angles
+    expected = local_offsets(aligned, swing(*hpr))
+    turns = local_turns(local_axes(aligned, SWING_AXES[component]), angles)
+    assert np.allclose(turns, expected, atol=1e-15)
 
 
 def test_limb_ik_reaches_and_keeps_the_end_rotation():

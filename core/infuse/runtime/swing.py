@@ -81,6 +81,26 @@ def clamp_ellipse(heading, pitch, heading_limit, up_limit, down_limit) -> tuple[
     return heading * factor, pitch * factor
 
 
+#: The aligned-frame axis each of heading, pitch and roll turns about, with its sign (see :func:`swing`).
+SWING_AXES = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def local_axes(aligned, axes) -> np.ndarray:
+    """Axes (..., 3) of aligned frames ``A`` (..., 4) in their joints' own frames (``A a``)."""
+    return quat.rotate(aligned, np.asarray(axes, dtype=np.float64))
+
+
+def local_turns(axes, angles) -> np.ndarray:
+    """Local rotation offsets (..., K, 4) turning joints by ``angles`` (..., K) radians about their
+    local ``axes`` (K, 3) (unit; see :func:`local_axes`): the same as :func:`local_offsets` of a
+    :func:`swing` with one angle, where the whole turn is about one axis."""
+    half = 0.5 * np.asarray(angles, dtype=np.float64)
+    out = np.empty(half.shape + (4,))
+    out[..., :3] = np.sin(half)[..., None] * axes
+    out[..., 3] = np.cos(half)
+    return out
+
+
 def local_offsets(aligned, offsets) -> np.ndarray:
     """Local rotation offsets ``A Δ A⁻¹`` (..., 4) from offsets ``Δ`` (..., 4) in aligned frames ``A``.
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
-from infuse.runtime.swing import local_offsets, swing
+from infuse.runtime.swing import SWING_AXES, local_axes, local_turns
 
 #: Degrees at depth 1: pitch of each spine joint, roll of the clavicles.
 SPINE_PITCH_DEG = {"spine1": 0.5, "spine2": 1.0, "spine3": 2.0}
@@ -76,15 +76,16 @@ class Breathing(Controller):
                 clavicles += 1
         if clavicles < 2:
             report("clavicles are not mapped; breathing moves the spine only")
-        return {"joints": np.array(joints), "aligned": rig.aligned[joints],
-                "angles": np.radians(np.stack((heading, pitch, roll), axis=1))}
+        # Each joint turns about one axis of its aligned frame (pitch or roll): a full breath's angle about it.
+        angles = np.radians(np.stack((heading, pitch, roll), axis=1))  # (K, 3)
+        axis = np.argmax(np.abs(angles), axis=1)
+        return {"joints": np.array(joints), "axes": local_axes(rig.aligned[joints], SWING_AXES[axis]),
+                "angles": angles[np.arange(len(joints)), axis]}
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
         level = self.depth * breath_curve(job.local_times, self.rate_bpm, self.inhale_fraction, self.phase)
-        angles = level[:, None, None] * b["angles"][None]  # (F, K, 3)
-        delta = swing(angles[..., 0], angles[..., 1], angles[..., 2])
-        job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
+        job.pose.set_rotations(b["joints"], local_turns(b["axes"], level[:, None] * b["angles"]), job.weight, job.mode)
 
 
 def breathing_from_bml(parameters: dict, runtime, character: str, activation=None) -> Breathing:

@@ -18,7 +18,7 @@ import numpy as np
 
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode, smoothstep
-from infuse.runtime.swing import local_offsets, swing
+from infuse.runtime.swing import SWING_AXES, local_axes, local_offsets, local_turns, swing
 
 #: Peak angle per unit amount, degrees.
 AMPLITUDE_DEG = {"NOD": 30.0, "SHAKE": 45.0, "TOSS": 30.0, "TILT": 30.0, "WIGGLE": 30.0, "WAGGLE": 30.0,
@@ -81,23 +81,21 @@ class HeadMovement(Controller):
         joints = [rig.joint(n) for n in NECK_JOINTS if rig.joint(n) is not None]
         if not joints:
             raise MissingFeatureError(f"{rig.name}: no neck or head joint is mapped for a head movement")
-        return {"joints": np.array(joints), "aligned": rig.aligned[joints]}
+        axis = AXES[self.lexeme]
+        if axis != "direction":  # one axis of each joint's aligned frame
+            axis = SWING_AXES[("heading", "pitch", "roll").index(axis)]
+        return {"joints": np.array(joints), "aligned": rig.aligned[joints],
+                "axes": None if isinstance(axis, str) else local_axes(rig.aligned[joints], axis)}
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
         share = (self.angle(job.local_times) / len(b["joints"]))[:, None]  # (F, 1), the same for each joint
-        zero = np.zeros_like(share)
-        axis = AXES[self.lexeme]
-        if axis == "pitch":
-            delta = swing(zero, share)
-        elif axis == "heading":
-            delta = swing(share, zero)
-        elif axis == "roll":
-            delta = swing(zero, zero, share)
+        if b["axes"] is not None:
+            offsets = local_turns(b["axes"], np.broadcast_to(share, (len(share), len(b["joints"]))))
         else:
             delta = swing(share * self.direction[0], share * self.direction[1])
-        delta = np.broadcast_to(delta, (len(share), len(b["joints"]), 4))
-        job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
+            offsets = local_offsets(b["aligned"], np.broadcast_to(delta, (len(share), len(b["joints"]), 4)))
+        job.pose.set_rotations(b["joints"], offsets, job.weight, job.mode)
 
 
 def _direction(words) -> tuple[float, float]:
