@@ -58,8 +58,9 @@ class Saccades(Controller):
         if None in eyes:
             report("has no eyes: saccades are not shown")
             return None
-        return {"eyes": np.array(eyes), "aligned": rig.aligned[eyes], "rest": rig.skeleton.rest_rotations[eyes],
-                "schedule": self.schedule(rig.name)}
+        aligned, rest = rig.aligned[eyes], rig.skeleton.rest_rotations[eyes]
+        return {"eyes": np.array(eyes), "aligned": aligned, "rest": rest, "schedule": self.schedule(rig.name),
+                "from_rest": quat.conjugate(quat.multiply(rest, aligned))}  # (rest A)⁻¹: a pose into the rest's aligned frame
 
     def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
         """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
@@ -77,8 +78,8 @@ class Saccades(Controller):
         times, offsets = times[order], offsets[order]
         if len(times) == 0:
             return np.zeros((len(t), 2))
-        before = np.vstack((np.zeros((1, 2)), offsets[:-1]))
-        durations = saccade_duration(np.linalg.norm(offsets - before, axis=1))
+        before = np.concatenate((np.zeros((1, 2)), offsets[:-1]))
+        durations = saccade_duration(np.hypot(*(offsets - before).T))
         last = np.searchsorted(times, t, side="right") - 1
         started = last >= 0
         k = np.maximum(last, 0)
@@ -95,7 +96,7 @@ class Saccades(Controller):
         # The eyes' current turn from rest (the gaze's), in their aligned frames, plus the saccade.
         current = job.pose.local_rotations[:, b["eyes"]]
         aligned = b["aligned"]
-        turn = quat.multiply(quat.conjugate(aligned), quat.multiply(quat.multiply(quat.conjugate(b["rest"]), current), aligned))
+        turn = quat.multiply(quat.multiply(b["from_rest"], current), aligned)  # A⁻¹ rest⁻¹ L A
         heading, pitch, roll = swing_angles(turn)
         heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
         rotations = quat.multiply(b["rest"], local_offsets(aligned, swing(heading, pitch, roll)))
