@@ -59,18 +59,21 @@ class PoseBlock:
         joints = np.asarray(joints, dtype=np.int64)
         if joints.size == 0:
             return
-        if weight is not None and not np.any(np.asarray(weight) > 0.0):
-            return
-        every = joints.size == self.local_rotations.shape[1] and np.array_equal(joints, np.arange(joints.size))
+        if weight is not None:
+            weight = np.asarray(weight, dtype=np.float64)
+            if not (weight > 0.0).any():
+                return
+        every = joints.size == self.local_rotations.shape[1] and bool((joints == np.arange(joints.size)).all())
         if every:
             joints = slice(None)  # a slice writes in place, without gathering
-        full = weight is None or np.all(np.asarray(weight) >= 1.0)
-        if Mode(mode) is Mode.OVERRIDE and full:
+        full = weight is None or bool((weight >= 1.0).all())
+        additive = Mode(mode) is Mode.ADDITIVE
+        if not additive and full:
             self.local_rotations[:, joints] = rotations
             self._fk = None
             return
         current = self.local_rotations[:, joints]
-        if Mode(mode) is Mode.ADDITIVE:
+        if additive:
             offsets = rotations if full else weighted_rotations(rotations, weight)
             self.local_rotations[:, joints] = quat.multiply(current, offsets)
         else:
