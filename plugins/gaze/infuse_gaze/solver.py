@@ -3,9 +3,10 @@
 Everything is expressed in the chain's *slots* (:data:`~infuse_gaze.model.SLOTS`, pelvis to eyes) and
 in their aligned frames (:mod:`infuse.runtime.swing`; a slot the character lacks repeats its parent).
 For each character and frame the caller gives, from the pose below the gaze, each slot's aligned
-frame and position relative to its parent's aligned frame (``chain_rot``, ``chain_pos``), and where
-the gaze starts and where the priority joint points as seen from each slot: the chain above a slot is
-rigid until its group is solved, so one matrix product per slot and frame gives the whole picture.
+frame and position in the world, where the gaze starts and where the priority joint points. The
+solver derives each slot's frame relative to its parent slot and its view of the gaze origin and
+direction when it first reaches the slot: the chain above a slot is rigid until its group is solved,
+so one matrix product per slot and frame gives the whole picture.
 
 Per frame, groups are solved bottom-up (Thiebaux et al. 2009): with the groups above still at the
 pose below, the turn left to do is the heading and pitch from where the priority joint points to
