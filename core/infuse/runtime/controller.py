@@ -117,6 +117,13 @@ class Controller:
     def evaluate_one(self, job: Job, block: Block) -> None:
         raise NotImplementedError(f"{type(self).__name__} implements neither evaluate nor evaluate_one")
 
+    def handover(self, state: dict) -> dict:
+        """The state an activity of this controller starts from when it takes over from another activity
+        of the same kind on the same character (a walk following a walk): given that one's ``state``
+        (left untouched), return what to put into the new activity's empty state. Default ``{}``: start
+        afresh."""
+        return {}
+
     def describe(self) -> str:
         """A short human description (for reports and feedback)."""
         return self.kind

@@ -2,7 +2,7 @@
 
 A locomotion activity starts from the character's own origin unless told otherwise. So when a character
 walks again, the new walk takes over the state of the one before (where it is, its heading, speed, gait
-phase, planted feet) at the frame it starts. Evaluation stops at that frame for the handover. The old
+phase, planted feet) at the frame it starts, as the controller's ``handover`` gives it. Evaluation stops at that frame for the handover. The old
 walk plays on under the new one until the new one has blended in.
 
 A walk that has arrived would go on evaluating the pack's idle on the spot, frame by frame. Instead,
@@ -12,7 +12,6 @@ internals, and crossfaded over :data:`SETTLE_BLEND_S`.
 """
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
@@ -93,8 +92,7 @@ class Walks:
         self._handovers = [h for h in self._handovers if h[0] > frame]
         for _, activity, previous in due:
             if previous is not None and previous.state and not activity.state:
-                # the new path starts at its first point; everything else goes on
-                activity.state.update(copy.deepcopy(previous.state), waypoint=0)
+                activity.state.update(activity.controller.handover(previous.state))
         for name, walk, after in list(self._waiting()):
             started = walk.activity.start_s <= self.scene.time
             if started and frame >= walk.check_frame and (after is None or after.activity.start_s > self.scene.time + SETTLE_BLEND_S):

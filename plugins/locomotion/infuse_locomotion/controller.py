@@ -29,6 +29,7 @@ over :data:`RELEASE_S`.
 """
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -153,6 +154,11 @@ class Locomotion(Controller):
 
     def describe(self) -> str:
         return f"locomotion ({getattr(self.pack, 'pack', self.pack)})"
+
+    def handover(self, state: dict) -> dict:
+        """A walk following another goes on from its state (where it is, heading, speed, gait phase,
+        planted feet); only its path starts afresh, at its first point."""
+        return dict(copy.deepcopy(state), waypoint=0)
 
     def bind(self, rig, report):
         from infuse.packs import BlendSpace
