@@ -81,10 +81,7 @@ class Tessellation:
         if self.dimension == 0:
             out[:, self.simplices[0, 0]] = 1.0
             return out, np.ones(q, dtype=bool)
-        corners = self.reduced(self.points)[self.simplices]            # (S, d+1, d)
-        base = corners[:, 0]                                           # (S, d)
-        edges = np.swapaxes(corners[:, 1:] - base[:, None], 1, 2)      # (S, d, d)
-        inv = np.linalg.pinv(edges)                                    # (S, d, d)
+        corners, base, inv = self._frames()
         rel = y[:, None, :] - base[None]                               # (Q, S, d)
         lam = np.einsum("sij,qsj->qsi", inv, rel)                      # (Q, S, d)
         bary = np.concatenate((1.0 - lam.sum(axis=-1, keepdims=True), lam), axis=-1)  # (Q, S, d+1)
@@ -100,6 +97,19 @@ class Tessellation:
         chosen = np.where(inside[:, None], bary[np.arange(q), best], clamped[np.arange(q), best])
         np.add.at(out, (np.repeat(np.arange(q), chosen.shape[1]), self.simplices[best].ravel()), chosen.ravel())
         return out, inside
+
+    def _frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each simplex's corners (S, d+1, d), first corner (S, d) and inverted edge matrix (S, d, d) in
+        the reduced space (computed once: a controller asks for weights every block)."""
+        key = (self.points, self.simplices, self.origin, self.scale, self.basis)
+        cached = self.__dict__.get("_cached_frames")
+        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+            corners = self.reduced(self.points)[self.simplices]            # (S, d+1, d)
+            base = corners[:, 0]                                           # (S, d)
+            edges = np.swapaxes(corners[:, 1:] - base[:, None], 1, 2)      # (S, d, d)
+            cached = (key, corners, base, np.linalg.pinv(edges))
+            self.__dict__["_cached_frames"] = cached
+        return cached[1], cached[2], cached[3]
 
     def to_dict(self) -> dict:
         return {"coordinates": list(self.coordinates), "labels": list(self.labels), "points": self.points.tolist(),

@@ -44,6 +44,8 @@ from .phase_keys import contact_of, foot_events, foot_phase, support_of, warp
 from .steering import Steering
 
 _INFUSIONS: dict = {}
+#: What :meth:`Locomotion.bind` prepared, by (blend space, skeleton, legs): walks of a character reuse it.
+_BINDINGS: dict = {}
 
 #: Seconds over which a released foot's pin correction fades back to the animation, and its extra
 #: heel rise (a leg that could not reach its pinned ball) in the early swing.
@@ -167,7 +169,6 @@ class Locomotion(Controller):
         if space.kind != "locomotion" or "locomotion" not in space.tessellations:
             raise UsageError(f"pack {space.pack!r} is not a locomotion pack")
         clips = space.group("locomotion")
-        prepared = [canonical_clip(c) for c in clips]
         legs = []
         for s in "lr":
             names = (f"{s}_hip", f"{s}_knee", f"{s}_ankle")
@@ -179,50 +180,13 @@ class Locomotion(Controller):
             report("no mapped hips, knees and ankles: feet are not pinned")
         if not clips:
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
-        p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
-        events = [foot_events(c) if c.role != "idle" else None for c in clips]
-        idle = np.array([c.role == "idle" for c in clips])
-        speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
-        # The slowest straight walk forward (not a strafe or a turn): what slow walks and stops play.
-        slowest = np.full(len(clips), 0.0)
-        moving = np.nonzero(~idle)[0]
-        ahead = moving[(p("forward_speed")[moving] > 2.0 * np.abs(p("lateral_speed")[moving]))
-                       & (np.abs(p("turn_rate")[moving]) < math.radians(10.0))]
-        pool = ahead if ahead.size else moving
-        slowest[pool[np.argmin(speeds[pool])]] = 1.0
-        motions = [m for m, _ in prepared]
-        sk = rig.skeleton
-        limbs = np.zeros(sk.num_joints, dtype=np.int64)  # 0 body, 1 left leg, 2 right leg
-        for k, leg in enumerate(legs[:2] if len(legs) == 2 else []):
-            limbs[leg[0]] = k + 1
-        for j in range(sk.num_joints):
-            if limbs[j] == 0 and sk.parents[j] >= 0:
-                limbs[j] = limbs[sk.parents[j]]
-        means = [mean_pose(m) for m in motions]
-        signs = [np.where(np.sum(m[0] * means[0][0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
-        ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
-        ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
-        if len(legs) == 2:
-            for i, m in enumerate(motions):
-                _, pos = chain_fk(sk, m.local_rotations[:-1], m.root_translations[:-1],
-                                  None if m.joint_translations is None else m.joint_translations[:-1],
-                                  [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
-                hips = 0.5 * (pos[:, 0] + pos[:, 1])
-                ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
-                ankle_low[i] = pos[:, 2:, 1].min(axis=0)
-        # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down.
-        stance_feet = None
-        if len(legs) == 2 and idle.any() and all(leg[3] is not None for leg in legs):
-            m = motions[int(np.argmax(idle))]
-            g_rot, _ = chain_fk(sk, m.local_rotations[:1], m.root_translations[:1],
-                                None if m.joint_translations is None else m.joint_translations[:1],
-                                [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
-            stance_feet = g_rot[0].reshape(2, 2, 4)
-        return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
-                "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
-                "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
-                "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
-                "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "skeleton": sk}
+        key = (id(space), id(rig.skeleton), tuple(legs))
+        cached = _BINDINGS.get(key)
+        if cached is None or cached[0] is not space or cached[1] is not rig.skeleton:
+            if len(_BINDINGS) > 32:
+                _BINDINGS.clear()
+            cached = _BINDINGS[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs))
+        return dict(cached[2])
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -454,6 +418,56 @@ class Locomotion(Controller):
                 solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=weight, pole=forward)
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
             st["last"][k] = pos[-1, [0, -1]]
+
+
+def _prepare(space, clips, sk, legs) -> dict:
+    """What walking needs of a pack's locomotion ``clips`` on skeleton ``sk`` with ``legs`` ((hip, knee,
+    ankle, ball) joints): the canonical clips, their mean poses, foot events and the legs' stances. The
+    same for every walk of a character with that pack, so :meth:`Locomotion.bind` keeps it."""
+    prepared = [canonical_clip(c) for c in clips]
+    p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
+    events = [foot_events(c) if c.role != "idle" else None for c in clips]
+    idle = np.array([c.role == "idle" for c in clips])
+    speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
+    # The slowest straight walk forward (not a strafe or a turn): what slow walks and stops play.
+    slowest = np.full(len(clips), 0.0)
+    moving = np.nonzero(~idle)[0]
+    ahead = moving[(p("forward_speed")[moving] > 2.0 * np.abs(p("lateral_speed")[moving]))
+                   & (np.abs(p("turn_rate")[moving]) < math.radians(10.0))]
+    pool = ahead if ahead.size else moving
+    slowest[pool[np.argmin(speeds[pool])]] = 1.0
+    motions = [m for m, _ in prepared]
+    limbs = np.zeros(sk.num_joints, dtype=np.int64)  # 0 body, 1 left leg, 2 right leg
+    for k, leg in enumerate(legs[:2] if len(legs) == 2 else []):
+        limbs[leg[0]] = k + 1
+    for j in range(sk.num_joints):
+        if limbs[j] == 0 and sk.parents[j] >= 0:
+            limbs[j] = limbs[sk.parents[j]]
+    means = [mean_pose(m) for m in motions]
+    signs = [np.where(np.sum(m[0] * means[0][0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
+    ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
+    ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
+    if len(legs) == 2:
+        for i, m in enumerate(motions):
+            _, pos = chain_fk(sk, m.local_rotations[:-1], m.root_translations[:-1],
+                              None if m.joint_translations is None else m.joint_translations[:-1],
+                              [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+            hips = 0.5 * (pos[:, 0] + pos[:, 1])
+            ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
+            ankle_low[i] = pos[:, 2:, 1].min(axis=0)
+    # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down.
+    stance_feet = None
+    if len(legs) == 2 and idle.any() and all(leg[3] is not None for leg in legs):
+        m = motions[int(np.argmax(idle))]
+        g_rot, _ = chain_fk(sk, m.local_rotations[:1], m.root_translations[:1],
+                            None if m.joint_translations is None else m.joint_translations[:1],
+                            [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+        stance_feet = g_rot[0].reshape(2, 2, 4)
+    return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
+            "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
+            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
+            "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
+            "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "skeleton": sk}
 
 
 #: A leg pinned by its ball reaches at most this share of its length; beyond it the heel rises further.

@@ -151,9 +151,10 @@ class Reach(Controller):
         stroke = b["stroke"]
         t = job.local_times[active]
         side = hand[0]
+        canonical = rig.mapping.inverse()
         joints = [rig.joint(n) for n in _UPPER] + [j for j, name in enumerate(sk.names)
-                                                  if rig.mapping.inverse().get(name, "").startswith(f"{side}_")
-                                                  and rig.mapping.inverse()[name].split("_", 1)[1] not in
+                                                  if canonical.get(name, "").startswith(f"{side}_")
+                                                  and canonical[name].split("_", 1)[1] not in
                                                   ("hip", "knee", "ankle", "forefoot", "toe")]
         joints = np.array([j for j in joints if j is not None and j > 0], dtype=np.int64)
         blend = None
