@@ -17,10 +17,10 @@ from .camera import PROJECTIONS, VIEWS, Camera
 from .output import SUFFIXES, check_suffix, ffmpeg_path, filmstrip, render, select_times, write_gif, write_mp4, write_png, write_strip
 from ..progress import Progress
 from .renderer import Renderer, Style
-from .scene import LEFT, PALETTE, RIGHT, Figure, Marker, default_sides, sides_from_mapping
+from .scene import LEFT, PALETTE, RIGHT, STYLES, Figure, Marker, default_sides, drawable_meshes, sides_from_mapping
 
 __all__ = [
     "PROJECTIONS", "VIEWS", "Camera", "SUFFIXES", "check_suffix", "ffmpeg_path", "filmstrip", "render", "select_times",
     "write_gif", "write_mp4", "write_png", "write_strip", "Progress", "Renderer", "Style", "LEFT", "PALETTE", "RIGHT",
-    "Figure", "Marker", "default_sides", "sides_from_mapping",
+    "STYLES", "Figure", "Marker", "default_sides", "drawable_meshes", "sides_from_mapping",
 ]

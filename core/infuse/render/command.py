@@ -5,22 +5,18 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import numpy as np
 
 from .. import fileio, registry
 from ..cli.builtin import add_read_options, read_options
-from ..errors import InfuseError, InputError, UnusableInputError, UsageError
+from ..errors import InfuseError, InputError, UsageError
 from ..hookspecs import hookimpl
 from ..mapping import DEFAULT_MAPPER, map_skeleton
 from ..plugin_types import Command
 from .camera import VIEWS, Camera
 from .output import check_suffix, render
-from .scene import Figure, sides_from_mapping
+from .scene import STYLES, Figure, drawable_meshes, sides_from_mapping
 
 MAX_SIDE = 8192
-STYLES = ("auto", "mesh", "stick")
-#: A mesh spanning less than this share of the skeleton's height does not show the character.
-MIN_MESH_SIZE = 0.25
 #: Mapping entries below this confidence are ringed by ``--canonical``.
 LOW_CONFIDENCE = 0.5
 
@@ -106,35 +102,11 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
             names = {joint: canonical for canonical, joint in reversed(list(mapped.items()))}
             ringed += [joint for canonical, joint in mapped.items() if mapping.confidence.get(canonical, 1.0) < LOW_CONFIDENCE]
     options = dict(label=label, names=names, highlight=ringed or None, sides=sides)
-    meshes = _meshes(path, asset, motion, args.style)
+    meshes = drawable_meshes(asset, asset.skeleton if motion is None else motion.skeleton, args.style, path)
     if motion is None:
         return Figure.from_skeleton(asset.skeleton, meshes=meshes, **options)
     tracks = (asset.meta.get("morph_weight_tracks") or {}).get(motion.name) if meshes else None
     return Figure.from_motion(motion, meshes=meshes, morph_weights=(tracks or {}).get("weights"), **options)
-
-
-def _meshes(path: Path, asset, motion, style: str) -> tuple:
-    """The surfaces to draw for ``style``: none for ``stick``; for ``mesh`` the file must have some.
-
-    A mesh much smaller than the skeleton (a placeholder plane in a skeleton-only file) does not
-    show the character: ``auto`` draws the stick figure instead.
-    """
-    if style == "stick":
-        return ()
-    skeleton = asset.skeleton if motion is None else motion.skeleton
-    meshes = tuple(m for m in asset.meshes if m.num_triangles) if skeleton is asset.skeleton else ()
-    if meshes:
-        extent = float(np.ptp(np.concatenate([m.positions for m in meshes]), axis=0).max())
-        if extent < MIN_MESH_SIZE * skeleton.height():
-            if style == "mesh":
-                raise UnusableInputError(path, f"its mesh is {extent:.3g} m across, too small to show a "
-                                               f"{skeleton.height():.3g} m skeleton; use --style stick or auto")
-            return ()
-    if not meshes and style == "mesh":
-        why = [w for w in asset.meta.get("warnings", []) if "not drawn" in w]
-        detail = f" ({why[0]})" if why else ""
-        raise UnusableInputError(path, f"has no skinned mesh to draw{detail}; use --style stick or auto")
-    return meshes
 
 
 def _run(args) -> int:

@@ -19,6 +19,11 @@ from ..skeleton import Skeleton
 from .meshes import FigureMesh
 
 RGB = tuple[int, int, int]
+#: What a figure is drawn as: ``mesh`` (the shaded skinned mesh), ``stick`` (the skeleton) or ``auto``
+#: (the mesh when there is one that shows the character, else the skeleton).
+STYLES = ("auto", "mesh", "stick")
+#: A mesh spanning less than this share of the skeleton's height does not show the character.
+MIN_MESH_SIZE = 0.25
 
 #: Base colours given to figures that do not choose one, in order.
 PALETTE: tuple[RGB, ...] = (
@@ -309,3 +314,31 @@ class Figure:
         if isinstance(value, Mapping):
             return {self._joint(k, "names"): str(v) for k, v in value.items()}
         return {self._joint(k, "names"): k for k in value}
+
+
+def drawable_meshes(asset, skeleton: Skeleton, style: str = "auto", path=None) -> tuple[SkinnedMesh, ...]:
+    """The surfaces of ``asset`` to draw a figure on ``skeleton`` with, for ``style`` (:data:`STYLES`).
+
+    None for ``stick``, or when ``skeleton`` is not the asset's own (its meshes are bound to that). A mesh
+    much smaller than the skeleton (a placeholder plane in a skeleton-only file) does not show the
+    character: ``auto`` draws the stick figure instead, ``mesh`` raises :class:`UnusableInputError`
+    naming ``path`` (default: the asset's file), as it does for an asset without a mesh.
+    """
+    from ..errors import UnusableInputError
+
+    if style == "stick":
+        return ()
+    path = asset.path if path is None else path
+    meshes = tuple(m for m in asset.meshes if m.num_triangles) if skeleton is asset.skeleton else ()
+    if meshes:
+        extent = float(np.ptp(np.concatenate([m.positions for m in meshes]), axis=0).max())
+        if extent < MIN_MESH_SIZE * skeleton.height():
+            if style == "mesh":
+                raise UnusableInputError(path, f"its mesh is {extent:.3g} m across, too small to show a "
+                                               f"{skeleton.height():.3g} m skeleton; use --style stick or auto")
+            return ()
+    if not meshes and style == "mesh":
+        why = [w for w in asset.meta.get("warnings", []) if "not drawn" in w]
+        detail = f" ({why[0]})" if why else ""
+        raise UnusableInputError(path, f"has no skinned mesh to draw{detail}; use --style stick or auto")
+    return meshes

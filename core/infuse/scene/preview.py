@@ -1,5 +1,6 @@
-"""Preview renders of a scene: its characters as stick figures where they stand, its objects as spheres where
-they are (carried ones move with the hand), and
+"""Preview renders of a scene: its characters where they stand (their meshes, with the morph targets the
+controllers moved, else stick figures), its objects as spheres where they are (carried ones move with the
+hand), and
 each character's gaze as a dashed ray from its eyes (or head) along where they point, ending at what it
 looks at (a character's face or an object within 15 degrees of the ray) or 1.2 m ahead."""
 from __future__ import annotations
@@ -10,7 +11,7 @@ import numpy as np
 
 from .. import quaternions as quat
 from ..kinematics import motion_fk
-from ..render import PALETTE, Camera, Figure, Marker, render, sides_from_mapping
+from ..render import PALETTE, Camera, Figure, Marker, drawable_meshes, render, sides_from_mapping
 
 #: How far off the ray a character's face or an object may be and still end it, degrees.
 LOOK_AT_CONE_DEG = 15.0
@@ -47,9 +48,9 @@ def gaze_rays(rig, g_rot: np.ndarray, g_pos: np.ndarray) -> tuple[np.ndarray, np
     return g_pos[:, joints].mean(axis=1), direction
 
 
-def scene_figures(scene) -> list[Figure]:
-    """One figure per character of ``scene`` (every frame so far), with its gaze ray; the objects go with
-    the first figure."""
+def scene_figures(scene, style: str = "auto") -> list[Figure]:
+    """One figure per character of ``scene`` (every frame so far), with its gaze ray, drawn as ``style``
+    (see :data:`infuse.render.STYLES`); the objects go with the first figure."""
     names = list(scene.characters)
     if not names or scene.runtime.frame == 0:
         return []
@@ -72,7 +73,11 @@ def scene_figures(scene) -> list[Figure]:
         if k == 0:
             markers += [Marker(objects[o.name], o.name, color=OBJECT_COLOR, style="sphere", size=o.size / 2)
                         for o in scene.objects.values()]
-        figures.append(Figure.from_motion(motions[name], label=name, color=PALETTE[k % len(PALETTE)],
+        asset = rig.character.asset
+        meshes = drawable_meshes(asset, motions[name].skeleton, style)
+        morphs = scene.runtime.morph_tracks(name)["weights"] if meshes else None
+        figures.append(Figure.from_motion(motions[name], meshes=meshes, morph_weights=morphs, label=name,
+                                          color=PALETTE[k % len(PALETTE)],
                                           sides=sides_from_mapping(rig.skeleton, rig.mapping), markers=markers))
     return figures
 
@@ -108,13 +113,14 @@ def auto_view(scene) -> tuple[float, float] | str:
 def render_scene(scene, path, *, strip: int | None = None, overlay: bool = True, start: float | None = None,
                  end: float | None = None, fps: float | None = None, size: tuple[int, int] | None = None,
                  view: str | tuple[float, float] | None = None, title: str | None = None,
-                 progress: bool | None = None) -> Path:
+                 progress: bool | None = None, style: str = "auto") -> Path:
     """Render the scene so far to ``path`` (.png still or filmstrip with ``strip=N``, .gif, .mp4): every
     character in one panel (``overlay``, default) or side by side, objects as spheres, gaze rays. ``view``:
-    a named view or (azimuth, elevation) degrees (default :func:`auto_view`)."""
+    a named view or (azimuth, elevation) degrees (default :func:`auto_view`); ``style``: each character as its
+    mesh, a stick figure, or ``auto`` (the mesh where it has one)."""
     from ..errors import UsageError
 
-    figures = scene_figures(scene)
+    figures = scene_figures(scene, style)
     if not figures:
         raise UsageError("nothing to render: the scene has no character or no frame evaluated yet (run it first)")
     if title is None:
