@@ -16,17 +16,24 @@ from .controller import Block, Controller, Job
 from .layers import Layer, Mode
 
 
-def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
+def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     """Local rotations (T, J, 4), root translations (T, 3), joint translations (T, J, 3) or None, and
     completed cycles (T,) of ``motion`` at ``times`` seconds from its start; held at the ends, or
-    wrapped over its duration when ``loop``."""
+    wrapped over its duration when ``loop``. ``joints`` (K,) indices: only those joints are sampled
+    (J = K in the results), the same values as the full sampling's columns."""
     f = motion.num_frames
     position = np.asarray(times, dtype=np.float64) * motion.fps
     cycles = np.zeros(len(position))
     jt = motion.joint_translations
+    columns = slice(None) if joints is None else np.asarray(joints, dtype=np.int64)
+
+    def held(idx):  # the clip's own frames, no interpolation
+        frames = idx if joints is None else idx[:, None]
+        return (motion.local_rotations[frames, columns], motion.root_translations[idx],
+                None if jt is None else jt[frames, columns], cycles)
+
     if f == 1:
-        idx = np.zeros(len(position), dtype=np.int64)
-        return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
+        return held(np.zeros(len(position), dtype=np.int64))
     span = f - 1  # the last frame closes the cycle: it is drawn like the first
     if loop:
         cycles = np.floor(position / span + 1e-9)
@@ -34,18 +41,18 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool):
     position = np.clip(position, 0.0, span)
     nearest = np.rint(position)
     if np.all(np.abs(position - nearest) < 1e-6):  # on the clip's own frames: no interpolation
-        idx = nearest.astype(np.int64)
-        return motion.local_rotations[idx], motion.root_translations[idx], None if jt is None else jt[idx], cycles
+        return held(nearest.astype(np.int64))
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
     rotations, steps = _interpolation_table(motion)
-    rot = steps[i0]  # a gathered copy: the interpolation runs in place on it
+    frames = i0 if joints is None else i0[:, None]
+    rot = steps[frames, columns]  # a gathered copy: the interpolation runs in place on it
     rot *= frac[:, :, None]
-    rot += rotations[i0]
+    rot += rotations[frames, columns]
     rot *= 1.0 / np.sqrt(np.einsum("...i,...i->...", rot, rot))[..., None]
     root = motion.root_translations[i0] + frac * (motion.root_translations[i0 + 1] - motion.root_translations[i0])
     if jt is not None:
-        jt = jt[i0] + frac[:, :, None] * (jt[i0 + 1] - jt[i0])
+        jt = jt[frames, columns] + frac[:, :, None] * (jt[frames + 1, columns] - jt[frames, columns])
     return rot, root, jt, cycles
 
 

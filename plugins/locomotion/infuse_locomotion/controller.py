@@ -276,16 +276,13 @@ class Locomotion(Controller):
             times_of = [warp(clip.keys, phase)]
             if b["events"][i] is not None:
                 times_of += [warp(clip.keys, foot_phase(b["events"][i][k], events[:, k], phase)) for k in (0, 1)]
-            samples = [sample_motion(motion, t % max(motion.duration, 1e-9), loop=True)[:3] for t in times_of]
-            r, p, j = samples[0]
-            if len(samples) == 3:  # each leg from its own foot's time
-                r = np.array(r)
-                j = None if j is None else np.array(j)
-                for k in (1, 2):
-                    legs = b["limbs"] == k
-                    r[:, legs] = samples[k][0][:, legs]
+            span = max(motion.duration, 1e-9)
+            r, p, j, _ = sample_motion(motion, times_of[0] % span, loop=True)  # fresh arrays
+            for t, joints in zip(times_of[1:], b["leg_joints"]):  # each leg from its own foot's time
+                if joints.size:
+                    r[:, joints], _, jl, _ = sample_motion(motion, t % span, loop=True, joints=joints)
                     if j is not None:
-                        j[:, legs] = samples[k][2][:, legs]
+                        j[:, joints] = jl
             acc = _accumulate(acc, r, p, j, w[:, i])
             if b["events"][i] is None:
                 frame = np.minimum(np.rint((times_of[0] % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64), len(clip.phases) - 1)
@@ -467,6 +464,7 @@ def _prepare(space, clips, sk, legs) -> dict:
             "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
             "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
             "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
+            "leg_joints": [np.nonzero(limbs == k)[0] for k in (1, 2)],
             "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "skeleton": sk}
 
 
