@@ -318,14 +318,14 @@ class Locomotion(Controller):
         swing (a low step), by its stance share ``support`` (F, 2), so nothing jumps at strike or toe off."""
         sk = b["skeleton"]
         legs = b["legs"]
-        feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+        toes = [leg[3] for leg in legs] if b["stance_feet"] is not None else []
+        feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + toes)
         turn_q = yaw(heading)
         down = settle[:, None] * (0.6 + 0.4 * support)  # (F, 2)
-        feet = np.stack((feet_rot[:, 2:], feet_rot[:, 2:]), axis=2)  # (F, 2, 2, 4) ankle and ball rotations
+        feet = np.stack((feet_rot[:, 2:4], feet_rot[:, 2:4]), axis=2)  # (F, 2, 2, 4) ankle and ball rotations
         if b["stance_feet"] is not None:
             flat = quat.multiply(turn_q[:, None, None], np.broadcast_to(b["stance_feet"], (len(heading),) + b["stance_feet"].shape))
-            toes = np.stack([leg[3] for leg in legs])
-            animated = np.stack((feet_rot[:, 2:], chain_fk(sk, rot, root, jt, toes)[0]), axis=2)
+            animated = np.stack((feet_rot[:, 2:4], feet_rot[:, 4:6]), axis=2)
             feet = quat.slerp(animated, flat, np.broadcast_to(down[:, :, None], animated.shape[:3]))
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
         body = np.nonzero(b["limbs"] == 0)[0]
@@ -333,6 +333,8 @@ class Locomotion(Controller):
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
         rot[:, body] = quat.slerp(mean, rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
         stance = b["ankle_means"][np.argmax(b["idle"])] if b["idle"].any() else None
+        pole = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
+        bent = (stride < 1.0 - 1e-6).astype(float)
         for k, (hip, knee, ankle, ball) in enumerate(legs):
             mean = w @ b["ankle_means"][:, k]
             if stance is not None:
@@ -342,12 +344,12 @@ class Locomotion(Controller):
             goal = hips + centre + stride[:, None] * (rel - centre)
             low = w @ b["ankle_low"][:, k]
             goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - down[:, k])
-            solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=(stride < 1.0 - 1e-6).astype(float),
-                       pole=np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1), keep_end=False)
-            # The foot keeps its animated orientation, not the one the calmer pelvis would give it
-            # (a planted foot would turn about its pinned ankle).
-            parent, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[ankle])])
-            rot[:, ankle] = quat.multiply(quat.conjugate(parent[:, 0]), feet[:, k, 0])
+            solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=bent, pole=pole, keep_end=False)
+        # The feet keep their animated orientation, not the one the calmer pelvis would give them (a
+        # planted foot would turn about its pinned ankle). The legs are apart: one FK for both.
+        parents, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[leg[2]]) for leg in legs])
+        for k, (hip, knee, ankle, ball) in enumerate(legs):
+            rot[:, ankle] = quat.multiply(quat.conjugate(parents[:, k]), feet[:, k, 0])
             if b["stance_feet"] is not None and int(sk.parents[ball]) == ankle:
                 rot[:, ball] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
@@ -357,12 +359,15 @@ class Locomotion(Controller):
         correction out after toe off. ``contact`` (F, 2, 2)."""
         sk = job.rig.skeleton
         forward = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
-        for k, (hip, knee, ankle, ball) in enumerate(job.binding["legs"]):
+        legs = job.binding["legs"]
+        # Both feet before either is pinned (each leg's IK leaves the other leg as it is).
+        _, both = chain_fk(sk, rot, root, jt, [j for leg in legs for j in ((leg[2],) if leg[3] is None else leg[2:])])
+        starts = np.cumsum([0] + [1 if leg[3] is None else 2 for leg in legs])
+        for k, (hip, knee, ankle, ball) in enumerate(legs):
             heel_w, ball_w = contact[:, k, 0], contact[:, k, 1]
             planted = np.maximum(heel_w, ball_w) > 0.5
             anchor = np.where(planted, np.where((ball_w > heel_w) & (ball is not None), BALL, ANKLE), FREE)
-            joints = [ankle] if ball is None else [ankle, ball]
-            _, pos = chain_fk(sk, rot, root, jt, joints)
+            pos = both[:, starts[k]:starts[k + 1]]
             ankle_pos = pos[:, 0]
             point = np.where((anchor == BALL)[:, None], pos[:, -1], ankle_pos)  # the animated anchor
             # The same anchor one frame earlier (from the last block at the first frame).

@@ -63,22 +63,27 @@ class Steering:
         (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
         requests themselves. ``stopping`` is 1 on the way into a path's last point: braking for it,
         or there."""
-        out = np.empty((len(times), 4))
-        x, z, h = state["x"], state["z"], state["heading"]
-        v, w = state["speed"], state["turn"]
+        # Plain floats in the loop: it runs once per frame, and numpy scalars cost more than the maths.
+        rows = []
+        x, z, h = float(state["x"]), float(state["z"]), float(state["heading"])
+        v, w = float(state["speed"]), float(state["turn"])
         k = state.get("waypoint", 0)
-        for i, t in enumerate(times):
+        path = None if self.path is None else self.path.tolist()
+        last_k = -1 if path is None else len(path) - 1
+        accel, decel = self.max_accel * dt, self.max_decel * dt
+        turn_accel = self.max_turn_accel * dt
+        for t in times.tolist():
             direction = _value(self.direction, t)
             stopping = 0.0
             if self.path is None:
                 v_goal, w_goal = _value(self.speed, t), _value(self.turn_rate, t)
             else:
                 # Advance along the path while the next point is within the look-ahead distance.
-                while k < len(self.path) - 1 and math.hypot(self.path[k, 0] - x, self.path[k, 1] - z) < max(self.lookahead, 0.5 * v):
+                while k < last_k and math.hypot(path[k][0] - x, path[k][1] - z) < max(self.lookahead, 0.5 * v):
                     k += 1
-                px, pz = self.path[k]
+                px, pz = path[k]
                 dist = math.hypot(px - x, pz - z)
-                last = k == len(self.path) - 1
+                last = k == last_k
                 # There, or standing close by (it stopped there: the blend realizes the steering's
                 # motion to a few millimetres, not exactly).
                 arrived = last and (dist < self.arrive or (v < 1e-3 and dist < STAY))
@@ -95,11 +100,11 @@ class Steering:
                     if last:
                         v_goal = min(v_goal, math.sqrt(2.0 * self.max_decel * max(dist - self.arrive, 0.0)))
                 stopping = float(last and (arrived or v_goal < v))
-            v += max(-self.max_decel * dt, min(self.max_accel * dt, v_goal - v))
-            w += max(-self.max_turn_accel * dt, min(self.max_turn_accel * dt, w_goal - w))
-            out[i] = (v, w, direction, stopping)
+            v += max(-decel, min(accel, v_goal - v))
+            w += max(-turn_accel, min(turn_accel, w_goal - w))
+            rows.append((v, w, direction, stopping))
             h += w * dt
             x += v * math.sin(h + direction) * dt
             z += v * math.cos(h + direction) * dt
         state.update(x=x, z=z, heading=h, speed=v, turn=w, waypoint=k)
-        return out
+        return np.array(rows, dtype=np.float64).reshape(len(rows), 4)
