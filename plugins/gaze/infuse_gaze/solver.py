@@ -22,6 +22,7 @@ group by group over all frames at once; only the smoothing (:func:`follow`) step
 """
 from __future__ import annotations
 
+import functools
 import math
 
 from dataclasses import dataclass, replace
@@ -124,13 +125,17 @@ def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, sta
     """Smoothed, speed-limited path (C, F, 2) toward ``desired`` (C, F, 2) from ``state`` (C, 2).
 
     Each frame covers ``smoothing`` (C, F) of the distance left, at most ``max_step`` (C, F) radians.
-    Returns the final state (C, 2) and the path. The only loop over frames in the solver; rows at
-    rest with nothing to follow stay at rest without it.
+    Returns the final state (C, 2) and the path. Without the speed limit at work and with one share
+    per row the path is a linear filter (:func:`_follow_linear`); else it is stepped frame by frame,
+    the only loop over frames in the solver (rows at rest with nothing to follow stay at rest without it).
     """
     if (smoothing >= 1.0).all():  # no smoothing: the path is the target unless a step is too long
         steps = np.diff(np.concatenate((state[:, None], desired), axis=1), axis=1)
         if (np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step).all():
             return desired[:, -1].copy(), desired.copy()
+    linear = _follow_linear(desired, smoothing, max_step, state)
+    if linear is not None:
+        return linear
     rows = np.flatnonzero((desired != 0.0).any(axis=(1, 2)) | (state != 0.0).any(axis=1))
     if rows.size == len(state):
         return _step_frames(desired, smoothing, max_step, state)
@@ -138,6 +143,34 @@ def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, sta
     if rows.size:
         final[rows], path[rows] = _step_frames(desired[rows], smoothing[rows], max_step[rows], state[rows])
     return final, path
+
+
+@functools.lru_cache(maxsize=64)
+def _smoothing_filter(shares: tuple[float, ...], frames: int) -> tuple[np.ndarray, np.ndarray]:
+    """The smoothing over ``frames`` frames as a linear map, per row of constant share s per frame
+    (a = 1 - s): the path is ``x_f = a^(f+1) x_0 + sum_(k<=f) s a^(f-k) d_k``. Returns the (R, F, F)
+    lower triangular matrices of ``s a^(f-k)`` and the (R, F) powers ``a^(f+1)`` (read-only, cached)."""
+    share = np.array(shares)[:, None, None]
+    lag = np.arange(frames)[:, None] - np.arange(frames)[None]
+    matrix = np.where(lag >= 0, share * (1.0 - share) ** np.maximum(lag, 0), 0.0)
+    powers = (1.0 - share[:, 0]) ** np.arange(1, frames + 1)
+    matrix.flags.writeable = powers.flags.writeable = False
+    return matrix, powers
+
+
+def _follow_linear(desired, smoothing, max_step, state):
+    """:func:`follow` in closed form (:func:`_smoothing_filter`) when each row's share is the same over
+    the block; None when it is not, or when a step of that path exceeds the speed limit (then the
+    limit shapes the path and it is stepped frame by frame). Equal to the stepped path up to rounding."""
+    shares = smoothing[:, 0]
+    if not (smoothing == shares[:, None]).all():
+        return None
+    matrix, powers = _smoothing_filter(tuple(shares.tolist()), desired.shape[1])
+    path = matrix @ desired + powers[..., None] * state[:, None]
+    steps = np.diff(path, axis=1, prepend=state[:, None])
+    if (np.sqrt(np.sum(steps * steps, axis=-1)) > max_step).any():
+        return None
+    return path[:, -1].copy(), path
 
 
 def _step_frames(desired, smoothing, max_step, state):
