@@ -335,7 +335,8 @@ class Locomotion(Controller):
         stance = b["ankle_means"][np.argmax(b["idle"])] if b["idle"].any() else None
         pole = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
         bent = (stride < 1.0 - 1e-6).astype(float)
-        for k, (hip, knee, ankle, ball) in enumerate(legs):
+        goals = []
+        for k in range(2):
             mean = w @ b["ankle_means"][:, k]
             if stance is not None:
                 mean = mean + settle[:, None] * (stance[k] - mean)
@@ -344,7 +345,10 @@ class Locomotion(Controller):
             goal = hips + centre + stride[:, None] * (rel - centre)
             low = w @ b["ankle_low"][:, k]
             goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - down[:, k])
-            solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=bent, pole=pole, keep_end=False)
+            goals.append(goal)
+        # The legs are apart: both in one solve.
+        solve_limb(sk, rot, root, jt, [leg[:3] for leg in legs], np.stack(goals, axis=1), weight=bent, pole=pole,
+                   keep_end=False)
         # The feet keep their animated orientation, not the one the calmer pelvis would give them (a
         # planted foot would turn about its pinned ankle). The legs are apart: one FK for both.
         parents, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[leg[2]]) for leg in legs])
@@ -363,6 +367,7 @@ class Locomotion(Controller):
         # Both feet before either is pinned (each leg's IK leaves the other leg as it is).
         _, both = chain_fk(sk, rot, root, jt, [j for leg in legs for j in ((leg[2],) if leg[3] is None else leg[2:])])
         starts = np.cumsum([0] + [1 if leg[3] is None else 2 for leg in legs])
+        solving = []  # (leg, ankle goals, weights) of the legs to correct, solved together at the end
         for k, (hip, knee, ankle, ball) in enumerate(legs):
             heel_w, ball_w = contact[:, k, 0], contact[:, k, 1]
             planted = np.maximum(heel_w, ball_w) > 0.5
@@ -417,9 +422,15 @@ class Locomotion(Controller):
             if np.any(rise != 0.0):
                 _turn_foot(sk, rot, ankle, ball, rise)
             if weight.any():
-                solve_limb(sk, rot, root, jt, (hip, knee, ankle), goal, weight=weight, pole=forward)
+                solving.append(((hip, knee, ankle), goal, weight))
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
             st["last"][k] = pos[-1, [0, -1]]
+        if len(solving) == 1:
+            solve_limb(sk, rot, root, jt, *solving[0], pole=forward)
+        elif solving:  # the legs are apart: both in one solve
+            limbs, goals, weights = zip(*solving)
+            solve_limb(sk, rot, root, jt, list(limbs), np.stack(goals, axis=1), weight=np.stack(weights, axis=1),
+                       pole=forward)
 
 
 def _prepare(space, clips, sk, legs) -> dict:

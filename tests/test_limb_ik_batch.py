@@ -1,0 +1,62 @@
+"""Several limbs in one limb-IK solve: each limb as solving it alone gives, whatever the limbs' shapes."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from infuse import quaternions as quat
+from infuse.kinematics import forward_kinematics
+from infuse.runtime.limb_ik import solve_limb
+from infuse.skeleton import Skeleton
+
+rng = np.random.default_rng(7)
+
+
+def two_legs(twist: bool) -> tuple[Skeleton, list[tuple[int, int, int]]]:
+    """A pelvis with two legs (hip, knee, ankle), the left one with a twist joint below its knee when ``twist``."""
+    names = ["pelvis", "l_hip", "l_knee"] + (["l_twist"] if twist else []) + ["l_ankle", "r_hip", "r_knee", "r_ankle"]
+    offsets = [[0, 1.0, 0], [0.1, 0, 0], [0, -0.45, 0]] + ([[0, -0.2, 0]] if twist else []) + \
+        [[0, -0.2 if twist else -0.4, 0], [-0.1, 0, 0], [0, -0.45, 0], [0, -0.4, 0]]
+    parents = list(range(-1, len(names) - 4)) + [0, len(names) - 3, len(names) - 2]
+    sk = Skeleton(names, np.array(parents), np.array(offsets, dtype=float), quat.identity((len(names),)))
+    index = {n: i for i, n in enumerate(names)}
+    return sk, [tuple(index[f"{s}_{j}"] for j in ("hip", "knee", "ankle")) for s in "lr"]
+
+
+@pytest.mark.parametrize("twist", [False, True])
+@pytest.mark.parametrize("frames", [1, 40, 300])
+@pytest.mark.parametrize("shared", [False, True])
+def test_both_legs_at_once_match_each_leg_alone(twist, frames, shared):
+    sk, legs = two_legs(twist)
+    local = quat.normalize(rng.normal(size=(frames, sk.num_joints, 4)))
+    root = rng.normal(size=(frames, 3))
+    _, pos = forward_kinematics(sk, local, root)
+    goals = pos[:, [leg[2] for leg in legs]] + 0.1 * rng.normal(size=(frames, 2, 3))
+    weight = rng.uniform(size=frames) if shared else rng.uniform(size=(frames, 2))
+    pole = np.array([0.0, 0.0, 1.0]) if shared else rng.normal(size=(frames, 2, 3))
+    for keep_end in (True, False):
+        alone, together = local.copy(), local.copy()
+        left = np.stack([solve_limb(sk, alone, root, None, leg, goals[:, k], weight=weight if shared else weight[:, k],
+                                    pole=pole if shared else pole[:, k], keep_end=keep_end)
+                         for k, leg in enumerate(legs)], axis=1)
+        both = solve_limb(sk, together, root, None, legs, goals, weight=weight, pole=pole, keep_end=keep_end)
+        assert both.shape == (frames, 2)
+        # The quaternion helpers pick their formulas by batch size: the same maths to rounding.
+        assert np.allclose(together, alone, rtol=0.0, atol=1e-12)
+        assert np.allclose(both, left, rtol=0.0, atol=1e-12)
+        assert not np.allclose(together, local)  # the legs did move
+
+
+def test_straight_legs_bend_toward_the_pole_and_reach():
+    sk, legs = two_legs(False)
+    frames = 20
+    local = quat.identity((frames, sk.num_joints))
+    root = np.zeros((frames, 3))
+    _, pos = forward_kinematics(sk, local, root)
+    goals = pos[:, [leg[2] for leg in legs]] + np.array([0.0, 0.15, 0.0])  # up toward the hips: the knees bend
+    solved = local.copy()
+    left = solve_limb(sk, solved, root, None, legs, goals, pole=np.array([0.0, 0.0, 1.0]))
+    _, after = forward_kinematics(sk, solved, root)
+    assert np.all(left < 1e-9)
+    assert np.allclose(after[:, [leg[2] for leg in legs]], goals, atol=1e-9)
+    assert np.all(after[:, [leg[1] for leg in legs], 2] > 0.05)  # both knees forward, toward the pole
