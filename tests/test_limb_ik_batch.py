@@ -60,3 +60,16 @@ def test_straight_legs_bend_toward_the_pole_and_reach():
     assert np.all(left < 1e-9)
     assert np.allclose(after[:, [leg[2] for leg in legs]], goals, atol=1e-9)
     assert np.all(after[:, [leg[1] for leg in legs], 2] > 0.05)  # both knees forward, toward the pole
+
+
+def test_both_feet_phases_at_once_match_each_foot_alone():
+    from infuse_locomotion.phase_keys import foot_phase
+
+    mine = np.sort(rng.uniform(size=(2, 4)), axis=1)
+    theirs = np.sort(rng.uniform(size=(60, 2, 4)), axis=2)
+    phase = rng.uniform(size=60)
+    both = foot_phase(mine, theirs, phase)
+    assert both.shape == (60, 2)
+    for k in (0, 1):
+        assert np.array_equal(both[:, k], foot_phase(mine[k], theirs[:, k], phase))
+    assert np.all((both >= 0.0) & (both < 1.0))

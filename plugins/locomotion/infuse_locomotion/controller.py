@@ -275,7 +275,7 @@ class Locomotion(Controller):
             clip, motion = b["clips"][i], b["motions"][i]
             times_of = [warp(clip.keys, phase)]
             if b["events"][i] is not None:
-                times_of += [warp(clip.keys, foot_phase(b["events"][i][k], events[:, k], phase)) for k in (0, 1)]
+                times_of += list(warp(clip.keys, foot_phase(b["events"][i], events, phase)).T)  # both feet at once
             span = max(motion.duration, 1e-9)
             r, p, j, _ = sample_motion(motion, times_of[0] % span, loop=True)  # fresh arrays
             for t, joints in zip(times_of[1:], b["leg_joints"]):  # each leg from its own foot's time

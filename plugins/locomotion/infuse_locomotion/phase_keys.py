@@ -49,15 +49,21 @@ def foot_events(clip) -> np.ndarray | None:
 
 def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.ndarray:
     """Clip phases (F,) in [0, 1) of blend ``phase`` (F,) for one foot: piecewise linear from the
-    blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it."""
-    x = np.concatenate((theirs, theirs[:, :1] + 1.0), axis=1)  # (F, 5)
-    y = np.concatenate((mine, mine[:1] + 1.0))
-    p = x[:, 0] + np.mod(phase - x[:, 0], 1.0)
-    seg = np.clip((p[:, None] >= x[:, 1:]).sum(axis=1), 0, 3)
-    rows = np.arange(len(p))
-    x0, x1 = x[rows, seg], x[rows, seg + 1]
+    blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it.
+    Both feet at once with ``mine`` (2, 4) and ``theirs`` (F, 2, 4): phases (F, 2)."""
+    x = np.concatenate((theirs, theirs[..., :1] + 1.0), axis=-1)  # (F, [2,] 5)
+    y = np.concatenate((mine, mine[..., :1] + 1.0), axis=-1)  # ([2,] 5)
+    start = x[..., 0]
+    p = start + np.mod(phase.reshape((-1,) + (1,) * (start.ndim - 1)) - start, 1.0)
+    seg = np.clip((p[..., None] >= x[..., 1:]).sum(axis=-1), 0, 3)
+    # Each row's segment ends picked from the rows flattened (fancy indexing beats take_along_axis here).
+    rows = np.arange(p.size).reshape(p.shape)
+    flat_x, flat_y = x.reshape(-1, 5), y.reshape(-1, 5)
+    feet = rows % len(flat_y)
+    x0, x1 = flat_x[rows, seg], flat_x[rows, seg + 1]
+    y0, y1 = flat_y[feet, seg], flat_y[feet, seg + 1]
     frac = np.clip((p - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
-    return np.mod(y[seg] + frac * (y[seg + 1] - y[seg]), 1.0)
+    return np.mod(y0 + frac * (y1 - y0), 1.0)
 
 
 def contact_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0) -> np.ndarray:
