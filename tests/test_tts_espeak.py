@@ -74,21 +74,27 @@ def test_later_syntheses_are_timed_in_a_fresh_process(engine, spoken, tmp_path):
 
 
 def _damage_first_wav(monkeypatch, damage):
-    """Let pyttsx3 write its WAV, then ``damage(samples)`` the first one, as its driver sometimes does."""
+    """Let pyttsx3 write its WAV, then replace the first one by ``damage(timed samples)``, as its driver
+    sometimes writes: the damage is applied to the timed synthesis, so the first WAV is the same damaged
+    audio however the real driver behaved (on a busy machine it may already differ on its own)."""
     from infuse_tts_espeak import pyttsx3_writer
-    from infuse_tts_espeak.engine import read_wav_samples, write_wav
+    from infuse_tts_espeak.engine import EspeakEngine, write_wav
 
-    real_finish, calls = pyttsx3_writer.finish, []
+    real_finish, real_check, calls, timed = pyttsx3_writer.finish, EspeakEngine._check_pyttsx3_wav, [], []
+
+    def check(self, writer, tmp, samples, rate, *args):
+        timed.append((samples, rate))
+        return real_check(self, writer, tmp, samples, rate, *args)
 
     def finish(proc, timeout_s):
         code, err = real_finish(proc, timeout_s)
         if not calls:
-            path = proc.args[proc.args.index("-m") + 2]
-            samples, rate = read_wav_samples(path)
-            write_wav(path, damage(samples), rate)
+            samples, rate = timed[-1]
+            write_wav(proc.args[proc.args.index("-m") + 2], damage(samples), rate)
         calls.append(code)
         return code, err
 
+    monkeypatch.setattr(EspeakEngine, "_check_pyttsx3_wav", check)
     monkeypatch.setattr(pyttsx3_writer, "finish", finish)
     return calls
 
