@@ -6,6 +6,8 @@ import struct
 import zlib
 from pathlib import Path
 
+import numpy as np
+
 from . import registry
 from .asset import Asset
 from .atomic import atomic_path
@@ -63,3 +65,21 @@ def save(asset: Asset, path: str | Path, format: str | None = None, **options) -
     with atomic_path(path) as tmp:
         writer.write(asset, tmp, **options)
     return path
+
+
+def json_ready(value, digits: int | None = None):
+    """``value`` with numpy arrays and scalars made plain lists and numbers, dict keys made strings and
+    anything else JSON cannot hold written as its ``str``; Python floats rounded to ``digits`` when given."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v, digits) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v, digits) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_ready(value.tolist(), digits)
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, float) and digits is not None:
+        return round(value, digits)
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    return str(value)

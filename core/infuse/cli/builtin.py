@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import sys
 
-import numpy as np
 
 from .. import fileio, registry
 from ..hookspecs import hookimpl
@@ -49,22 +48,8 @@ def asset_summary(asset) -> dict:
         "up_axis": asset.source_up_axis,
         "height_m": round(sk.height(), 6),
         "morph_targets": list(asset.morph_targets),
-        "meta": _jsonable(asset.meta),
+        "meta": fileio.json_ready(asset.meta),
     }
-
-
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
-    if isinstance(value, (str, int, float, bool)) or value is None:
-        return value
-    return str(value)
 
 
 def _info_args(p):

@@ -25,22 +25,6 @@ from .tessellation import Tessellation
 LOOP_TOLERANCE_DEG = 12.0
 
 
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, (np.floating,)):
-        return float(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, float):
-        return round(value, 6)
-    return value
-
-
 def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, base: int) -> list[str]:
     """Problems worth a person's attention, one sentence each (empty when all is well)."""
     from .. import quaternions as quat
@@ -93,13 +77,13 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
             t = Tessellation.build(coords, [c["name"] for c in members], [[c["parameters"][k] for k in coords] for c in members])
             tessellations[group] = t.to_dict()
     report = validate(manifest.kind, clips, motions, tessellations, index["base"])
-    doc = _jsonable({
+    doc = fileio.json_ready({
         "format": FORMAT_VERSION, "pack": manifest.name, "version": manifest.version, "kind": manifest.kind,
         "built_with": __version__, "fingerprint": digest, "files": records,
         "mapping": {"joints": mapping.mapped(), "confidence": {k: mapping.confidence[k] for k in mapping.mapped()},
                     "mapper": mapping.mapper},
         "coordinates": list(coords), "clips": clips, "tessellations": tessellations, "report": report,
-    })
+    }, digits=6)
     names = list(motions)
     bounds = np.cumsum([0] + [motions[n].num_frames for n in names])
     arrays = dict(names=np.array(skeleton.names), parents=skeleton.parents, rest_translations=skeleton.rest_translations,
