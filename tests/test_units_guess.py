@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from infuse.conventions import (HUMAN_HEIGHT_RANGE_M, UNIT_SCALES, figure_height, guess_unit, standing_heights,
-                                unit_miss, upright)
+from infuse.conventions import (HUMAN_HEIGHT_RANGE_M, UNIT_SCALES, body_height, body_joints, figure_height,
+                                guess_unit, standing_heights, unit_miss, upright)
 
 ALL_UNITS = tuple(UNIT_SCALES)
 
@@ -79,3 +79,18 @@ def test_a_rest_pose_that_does_not_stand_is_measured_on_the_frames():
     assert figure_height(lying, 0, frames) == pytest.approx(1.775)  # median of the two standing frames
     assert figure_height(lying, 0) == pytest.approx(np.ptp(lying, axis=0).max())  # nothing stands
     assert figure_height(standing[:1], 0) == 0.0
+
+
+def test_a_skeleton_is_measured_on_its_body_without_leading_joints():
+    # world root on the ground far away -> reference -> pelvis, which branches into legs, spine and arms
+    figure = _figure(head_top=False)
+    parents = [-1, 0, 1, 2, 3, 4, 5, 2, 7, 8, 9, 2, 11, 11, 13, 11, 15]
+    far = np.array([[40.0, -3.0, 0.0], [40.0, 0.0, 0.0]])
+    positions = np.concatenate((far, figure))
+    assert list(body_joints(np.array(parents))) == list(range(2, 17))
+    assert body_height(positions, parents) == pytest.approx(1.75)  # legs read, head top missing
+    head_top = np.array([[0.0, 1.75, 0.0]])
+    assert body_height(positions, parents, head_top, np.array([12])) == pytest.approx(1.75)
+    assert body_height(positions, parents, far[:1], np.array([0])) == pytest.approx(1.75)  # a site off the body is left out
+    chain = np.array([-1, 0, 1])
+    assert list(body_joints(chain)) == [0, 1, 2]

@@ -99,6 +99,46 @@ def standing_heights(points: np.ndarray, pelvis: int) -> np.ndarray:
     return np.where(trusted, np.maximum(extent, hip / HIP_HEIGHT_SHARE), extent)
 
 
+def body_joints(parents: np.ndarray) -> np.ndarray:
+    """Indices of the figure itself: the subtree of the first joint below root 0 that branches.
+
+    Leading single-child joints (a ground-projected ``joint_Root``, a ``reference`` node) may sit
+    metres away from the body; they would distort any size or orientation measured on positions.
+    A skeleton that never branches (a plain chain) is all body. ``parents`` (J,), parents first.
+    """
+    parents = np.asarray(parents, dtype=np.int64)
+    joints = len(parents)
+    if joints == 0:
+        return np.arange(0)
+    children = np.bincount(parents[parents >= 0], minlength=joints)
+    j = 0
+    while children[j] == 1:
+        j = int(np.flatnonzero(parents == j)[0])
+    if children[j] == 0:
+        return np.arange(joints)
+    inside = np.zeros(joints, dtype=bool)
+    inside[j] = True
+    for i in range(j + 1, joints):  # parents precede children
+        p = parents[i]
+        inside[i] = p >= 0 and inside[p]
+    return np.flatnonzero(inside)
+
+
+def body_height(positions: np.ndarray, parents: np.ndarray, sites: np.ndarray | None = None,
+                site_parents: np.ndarray | None = None) -> float:
+    """A skeleton's standing height in file units, the size :func:`guess_unit` expects.
+
+    :func:`figure_height` of its rest pose's body (:func:`body_joints`, the joint it branches from
+    taken as the pelvis) and the end sites hanging from it. ``positions`` (J, 3) are the rest joint
+    positions, +Y up; ``sites`` (E, 3) end-site positions with their parent joints ``site_parents`` (E,).
+    """
+    body = body_joints(parents)
+    points = np.asarray(positions, dtype=np.float64)[body]
+    if sites is not None and len(sites):
+        points = np.concatenate((points, np.asarray(sites, dtype=np.float64)[np.isin(site_parents, body)]))
+    return figure_height(points, 0)
+
+
 def upright(points: np.ndarray) -> np.ndarray:
     """Whether each pose ``points`` (..., N, 3), +Y up, stands: see :data:`UPRIGHT_RATIO`."""
     extent = np.ptp(np.asarray(points, dtype=np.float64), axis=-2)

@@ -83,13 +83,15 @@ def _length_unit(asf: AsfFile, override: str | None) -> tuple[str, float, str, s
         return "cmu", _INCH / 0.45, "file", "units length 0.45: CMU units, 1/0.45 inch"
     name = "inch" if length == 1.0 else f"inch/{length:g}"
     scale = _INCH / length
-    extent = _skeleton(asf, 1.0).height()
-    if 0.5 < extent * scale < 3.0:
+    skeleton = _skeleton(asf, 1.0)
+    height = conventions.body_height(skeleton.rest_global_positions, skeleton.parents,
+                                     skeleton.rest_end_site_positions, skeleton.end_site_parents)
+    if 0.5 < height * scale < 3.0:
         return name, scale, "file", f"units length {length:g}: 1/{length:g} inch"
-    guess = conventions.guess_unit(extent, ("m", "cm", "mm", "inch"))
+    guess = conventions.guess_unit(height, ("m", "cm", "mm", "inch"))
     return guess, conventions.unit_scale(guess), "guess", (
-        f"units length {length:g} read as 1/{length:g} inch gives a {extent * scale:.3g} m figure; "
-        f"rest pose extent {extent:.4g} fits a human in {guess}")
+        f"units length {length:g} read as 1/{length:g} inch gives a {height * scale:.3g} m figure; "
+        f"standing height {height:.4g} fits a human in {guess}")
 
 
 def _up_axis(skeleton: Skeleton, override: str | None) -> tuple[str, np.ndarray, str]:

@@ -24,7 +24,7 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.asset import Asset
-from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, figure_height, guess_unit, guess_up_axis
+from infuse.conventions import UNIT_SCALES, UP_AXIS_ROTATIONS, body_joints, figure_height, guess_unit, guess_up_axis
 from infuse.errors import InputError
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
@@ -109,28 +109,6 @@ def local_translations(doc: BvhDocument, position_columns) -> np.ndarray:
     js, axes, cols = position_columns
     out[:, js, axes] = doc.values[:, cols]
     return out
-
-
-def body_joints(parents: np.ndarray) -> np.ndarray:
-    """Indices of the figure itself: the subtree of the first joint below root 0 that branches.
-
-    Leading single-child joints (a ground-projected ``joint_Root``, a ``reference`` node) may sit
-    metres away from the body; they would distort any size or orientation measured on positions.
-    A skeleton that never branches (a plain chain) is all body.
-    """
-    joints = len(parents)
-    children = np.bincount(parents[parents >= 0], minlength=joints)
-    j = 0
-    while children[j] == 1:
-        j = int(np.flatnonzero(parents == j)[0])
-    if children[j] == 0:
-        return np.arange(joints)
-    inside = np.zeros(joints, dtype=bool)
-    inside[j] = True
-    for i in range(j + 1, joints):  # parents precede children
-        p = parents[i]
-        inside[i] = p >= 0 and inside[p]
-    return np.flatnonzero(inside)
 
 
 def sampled_positions(parents: np.ndarray, rotations: np.ndarray, translations: np.ndarray) -> np.ndarray:

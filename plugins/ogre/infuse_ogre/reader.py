@@ -19,7 +19,7 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.asset import Asset
-from infuse.conventions import HUMAN_HEIGHT_M, UNIT_SCALES, UP_AXIS_ROTATIONS, guess_unit, guess_up_axis
+from infuse.conventions import HUMAN_HEIGHT_M, UNIT_SCALES, UP_AXIS_ROTATIONS, body_height, guess_unit, guess_up_axis
 from infuse.errors import UnusableInputError, UsageError
 from infuse.transforms import (compose, frame_change, global_matrices, require_finite, sampled_motion,
                                skeleton_from_globals)
@@ -50,7 +50,7 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     rest_global = global_matrices(bones.parents, rest_local[None])[0]
     require_finite(bones.names, rest_global, "binding pose")
     up, up_by = _up_axis(rest_global[:, :3, 3], up_axis)
-    scale, unit_name, units_by, how = _units(path, rest_global[:, :3, 3], up, units)
+    scale, unit_name, units_by, how = _units(path, rest_global[:, :3, 3], bones.parents, up, units)
     change = frame_change(scale, up)
     skeleton = skeleton_from_globals(bones.names, bones.parents, change @ rest_global)
     motions = {}
@@ -77,13 +77,14 @@ def _up_axis(positions: np.ndarray, override: str | None) -> tuple[str, str]:
     return guess_up_axis(positions), "guess"
 
 
-def _units(path: Path, positions: np.ndarray, up: str, override: str | None) -> tuple[float, str, str, str]:
-    """(metres per unit, unit name, how detected, how guessed)."""
+def _units(path: Path, positions: np.ndarray, parents: np.ndarray, up: str,
+           override: str | None) -> tuple[float, str, str, str]:
+    """(metres per unit, unit name, how detected, how guessed) for bones at binding ``positions`` (J, 3)."""
     if override is not None:
         if override not in UNIT_SCALES:
             raise UsageError(f"unknown unit {override!r}; known: {', '.join(UNIT_SCALES)}")
         return UNIT_SCALES[override], override, "override", "given by the caller"
-    height = float(np.ptp(quat.rotate(UP_AXIS_ROTATIONS[up], positions)[:, 1]))
+    height = body_height(quat.rotate(UP_AXIS_ROTATIONS[up], positions), parents)
     if not height > 1e-9:
         raise UnusableInputError(path, "the binding pose has no height: cannot guess its unit")
     unit = guess_unit(height, UNIT_CANDIDATES)

@@ -60,9 +60,11 @@ def sk_units(sk: SkFile, override: str | None = None) -> tuple[str, str, str]:
     if sk.units:
         return sk.units, "file", f"header comment on line {sk.units_line}"
     rest_t, rest_r = Rig.from_sk(sk, 1.0).rest()
-    extent = _skeleton(sk.path, sk.names, sk.parents, rest_t, rest_r).height()
-    unit = conventions.guess_unit(extent)
-    return unit, "guess", f"no Units header; rest pose extent {extent:.4g} file units fits a human in {unit}"
+    skeleton = _skeleton(sk.path, sk.names, sk.parents, rest_t, rest_r)
+    height = conventions.body_height(skeleton.rest_global_positions, skeleton.parents,
+                                     skeleton.rest_end_site_positions, skeleton.end_site_parents)
+    unit = conventions.guess_unit(height)
+    return unit, "guess", f"no Units header; standing height {height:.4g} file units fits a human in {unit}"
 
 
 def _channel_meta(sk: SkFile) -> dict:
