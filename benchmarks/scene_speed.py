@@ -10,7 +10,11 @@ Times are CPU seconds of this process, best of 3 (the machine may be shared). Sp
 in this process) happens while scheduling; it is reported on its own line and left out of the realize
 time the target is measured on: at least 100 times faster than real time.
 
-    python benchmarks/scene_speed.py [--seconds 30] [--fps 30] [--repeat 3]
+The reference is the same scene realized the simple way, one frame at a time (``block_frames=1``, as a
+per-frame engine loop would), run once in the same process; the ratio is what evaluating frames in
+blocks gains, whatever the machine's speed at the moment.
+
+    python benchmarks/scene_speed.py [--seconds 30] [--fps 30] [--repeat 3] [--no-reference]
 
 The corpus is read from INFUSE_CORPUS (default ../shared/corpus from the repository root).
 """
@@ -53,8 +57,8 @@ def cast():
     return out
 
 
-def build(characters, seconds: float, fps: float) -> Scene:
-    scene = Scene(fps=fps, quiet=True)
+def build(characters, seconds: float, fps: float, block_frames: int = 150) -> Scene:
+    scene = Scene(fps=fps, quiet=True, block_frames=block_frames)
     for name, (character, packs, position) in characters.items():
         other = next(n for n in characters if n != name)
         scene.add_character(character, name, position=position, facing=characters[other][2], packs=packs)
@@ -84,10 +88,10 @@ def script(scene: Scene, seconds: float) -> None:
     scene.walk_to("bob", (-1.0, -0.5), at=seconds - 5.0)
 
 
-def measure(characters, seconds: float, fps: float) -> dict:
+def measure(characters, seconds: float, fps: float, block_frames: int = 150) -> dict:
     cpu = time.process_time
     t0 = cpu()
-    scene = build(characters, seconds, fps)
+    scene = build(characters, seconds, fps, block_frames)
     t1 = cpu()
     script(scene, seconds)
     t2 = cpu()
@@ -108,6 +112,8 @@ def main(argv=None) -> int:
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--fps", type=float, default=30.0)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--no-reference", dest="reference", action="store_false",
+                        help="skip the frame-at-a-time reference run (about 25 times slower than the scene)")
     args = parser.parse_args(argv)
     if not (CORPUS / CAST["bob"][0]).exists():
         raise SystemExit(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)")
@@ -126,6 +132,11 @@ def main(argv=None) -> int:
     spread = [args.seconds / r["realize"] for r in runs if r["realize"] > 0]
     if len(spread) > 1:
         print(f"all runs: {min(spread):.0f}x to {max(spread):.0f}x; load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
+    if args.reference:
+        reference = measure(characters, args.seconds, args.fps, block_frames=1)
+        print(f"reference, one frame at a time: {reference['realize']:.3f} s = "
+              f"{args.seconds / reference['realize']:.0f}x real time; blocks are "
+              f"{reference['realize'] / best['realize']:.1f}x faster")
     if best["warnings"]:
         print(f"{len(best['warnings'])} warnings, e.g. {best['warnings'][0].id}: {best['warnings'][0].description}")
     sys.stdout.flush()
