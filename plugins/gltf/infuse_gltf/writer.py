@@ -22,10 +22,13 @@ target binds are driven, scaled by their weights) or a VRMA expression (its node
 Targets of a driven mesh that no track names keep the mesh's default weights. A name nothing in the
 file matches raises :class:`~infuse.errors.UsageError`.
 
-Any other asset (from BVH, SmartBody...) is written as a new glTF: one node per joint (rest
-translation and rotation, metres, +Y up, +Z forward), end sites as leaf nodes marked
-``extras.infuse_end_site``, a skin listing the joints with their inverse bind matrices (so readers
-know the skeleton; no mesh), and one animation per Motion.
+Any other asset (from BVH, SmartBody, COLLADA, FBX...) is written as a new glTF: one node per joint
+(rest translation and rotation, metres, +Y up, +Z forward), end sites as leaf nodes marked
+``extras.infuse_end_site``, a skin listing every joint with its inverse bind matrix (so readers
+know the whole skeleton), the asset's skinned meshes (``asset.meshes``, each with its own skin,
+material and named morph targets, see :mod:`infuse_gltf.mesh_writer`), and one animation per
+Motion. Morph-weight tracks drive those meshes' targets by name; an asset without morph targets
+cannot carry them (:class:`~infuse.errors.UsageError`).
 
 A ``.vrma`` (VRM Animation) is written the same way from any asset with a humanoid map in
 ``asset.meta["vrm_humanoid"]`` (a VRM character has one): the skeleton, the clips, the
@@ -54,6 +57,7 @@ from infuse.motion import Motion
 
 from .container import CHUNK_BIN, CHUNK_JSON, GLB_MAGIC, read_uri
 from .graph import invert, trs_matrices
+from .mesh_writer import add_meshes
 from .morph import mesh_target_names
 from .reader import END_SITE_MARK, STILL_M, GltfPayload
 from .vrm import VRM_PRESET_EXPRESSIONS, Expression, VrmInfo
@@ -71,8 +75,9 @@ class _Binary:
         self.parts = [bytes(existing)]
         self.length = len(existing)
 
-    def view(self, data: np.ndarray) -> int:
-        """A new bufferView holding ``data`` (4-byte aligned); returns its index."""
+    def view(self, data: np.ndarray, target: int | None = None) -> int:
+        """A new bufferView holding ``data`` (4-byte aligned), for GPU buffer ``target`` when given
+        (vertex attributes, indices); returns its index."""
         raw = np.ascontiguousarray(data).tobytes()
         pad = (-self.length) % 4
         if pad:
@@ -80,12 +85,15 @@ class _Binary:
             self.length += pad
         views = self.doc.setdefault("bufferViews", [])
         views.append({"buffer": self.buffer_index, "byteOffset": self.length, "byteLength": len(raw)})
+        if target is not None:
+            views[-1]["target"] = target
         self.parts.append(raw)
         self.length += len(raw)
         return len(views) - 1
 
-    def accessor(self, view: int, offset: int, count: int, kind: str, minmax: np.ndarray | None = None) -> int:
-        acc = {"bufferView": view, "byteOffset": offset, "componentType": FLOAT, "count": count, "type": kind}
+    def accessor(self, view: int, offset: int, count: int, kind: str, minmax: np.ndarray | None = None,
+                 component: int = FLOAT) -> int:
+        acc = {"bufferView": view, "byteOffset": offset, "componentType": component, "count": count, "type": kind}
         if minmax is not None:
             acc["min"] = [float(v) for v in np.atleast_1d(minmax.min(axis=0))]
             acc["max"] = [float(v) for v in np.atleast_1d(minmax.max(axis=0))]
@@ -163,10 +171,12 @@ def write(asset: infuse.Asset, path: str | Path) -> None:
         _write_animations(doc, bin_writer, asset, tracks, payload, payload.vrm)
         _finish(doc, bin_writer, other, path, binary)
         return
-    # A new document: the skeleton as nodes (for .vrma, also the humanoid map and expression nodes).
-    if tracks and suffix != ".vrma":
-        raise UsageError("morph-weight tracks need a character with meshes (this asset has no glTF meshes)")
-    doc, bin_writer, other, vrm = _skeleton_document(asset, suffix == ".vrma", tracks)
+    # A new document: the skeleton as nodes, its meshes (for .vrma, the humanoid map and expression nodes).
+    vrma = suffix == ".vrma"
+    meshes = () if vrma else asset.meshes
+    if tracks and not vrma and not any(m.morph_names for m in meshes):
+        raise UsageError("morph-weight tracks need a character with morph targets (this asset's meshes have none)")
+    doc, bin_writer, other, vrm = _skeleton_document(asset, vrma, tracks, meshes)
     _write_animations(doc, bin_writer, asset, tracks, None, vrm)
     _finish(doc, bin_writer, other, path, binary)
 
@@ -195,9 +205,10 @@ def _copy_document(payload: GltfPayload, binary: bool):
     return doc, _Binary(doc, 0, data[0]), data
 
 
-def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict):
-    """A new document with the skeleton as nodes and a skin (no mesh); for a VRMA, also the humanoid map
-    and one expression node per morph-weight track name."""
+def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict, meshes):
+    """A new document with the skeleton as nodes, a skin of every joint and ``meshes`` (core surfaces,
+    see :mod:`infuse_gltf.mesh_writer`); for a VRMA, also the humanoid map and one expression node per
+    morph-weight track name."""
     sk = asset.skeleton
     doc: dict = {"asset": {"version": "2.0", "generator": f"infuse {infuse.__version__}"}, "buffers": [{"byteLength": 0}]}
     nodes = [{"name": n, "translation": [float(v) for v in t], "rotation": [float(v) for v in q]}
@@ -225,6 +236,7 @@ def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict):
     world = np.linalg.inv(_rest_world(sk))
     ibm = bin_writer.blocks([np.swapaxes(world, 1, 2).reshape(len(world), 16)], "MAT4")[0]
     doc["skins"] = [{"joints": list(range(sk.num_joints)), "inverseBindMatrices": ibm}]
+    roots += add_meshes(doc, bin_writer, meshes, range(sk.num_joints))
     vrm = None
     if vrma:
         humanoid = asset.meta.get("vrm_humanoid")
