@@ -5,7 +5,8 @@ folded into the roots. The rest pose is the models' static ``Lcl`` transforms. U
 ``GlobalSettings/UnitScaleFactor`` (centimetres per unit, default 1) and the up axis from
 ``UpAxis``/``UpAxisSign``; ``units=`` / ``up_axis=`` override them. Each animation stack becomes a
 Motion sampled at the file's frame rate (``TimeMode``) over the stack's local time span. Names of
-blend-shape channels become ``morph_targets``.
+blend-shape channels become ``morph_targets``. ``meshes`` (decoded on first use): the skinned
+surfaces, see :mod:`infuse_fbx.mesh`; geometry left out is explained in ``meta["warnings"]``.
 """
 from __future__ import annotations
 
@@ -20,6 +21,7 @@ from infuse.transforms import frame_change, nearest_joint_parents, sampled_motio
 
 from . import animation, ascii_format, binary, models
 from .document import Document, build, number
+from .mesh import MeshLoader
 
 #: Largest take read, in frames x joints (bounds memory on absurd time spans).
 MAX_JOINT_FRAMES = 10_000_000
@@ -54,7 +56,8 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
     change = frame_change(scale, up)
     rest_parts = [np.stack(part, axis=1) for part in
                   zip(*[models.local_parts(m, m.translation[None], m.rotation[None], m.scaling[None]) for m in ms])]
-    rest = change @ models.world_matrices(ms, *rest_parts)[0, joints]
+    world = models.world_matrices(ms, *rest_parts)[0]
+    rest = change @ world[joints]
     parents, folded = nearest_joint_parents([m.parent for m in ms], joints, return_folded=True)
     skeleton = skeleton_from_globals(models.unique_names(ms, joints), parents, rest)
 
@@ -81,9 +84,11 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
         takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
     meta = {"fbx_version": version, "unit_scale_factor_cm": number(doc, settings, "UnitScaleFactor", 1.0),
             "axes": _axis_meta(doc, settings), "takes": takes_meta,
-            "folded_models": [ms[i].obj.name for i in folded]}
+            "folded_models": [ms[i].obj.name for i in folded], "warnings": []}
+    has_mesh = any(o.kind == "Geometry" and o.subclass == "Mesh" for o in doc.objects.values())
+    meshes = MeshLoader(doc, ms, world, joints, change, skeleton, meta["warnings"]) if has_mesh else None
     return Asset(path, "fbx", skeleton, motions, _morph_targets(doc), source_units=unit_name, source_up_axis=up,
-                 units_detected_by=units_by, meta=meta)
+                 units_detected_by=units_by, meta=meta, mesh_loader=meshes)
 
 
 def _channel(track, static: np.ndarray, t: np.ndarray) -> np.ndarray:
