@@ -64,6 +64,18 @@ class Document:
             raise self.error(element, "value is not finite (NaN or infinity)")
         return values
 
+    def ints(self, element, expected: int | None = None) -> np.ndarray:
+        """The integers in ``element``'s text (int64), optionally exactly ``expected`` of them."""
+        tokens = (element.text or "").split()
+        try:
+            values = np.array(tokens, dtype=np.int64)
+        except (ValueError, OverflowError):
+            bad = next(t for t in tokens if not _is_int(t))
+            raise self.error(element, f"not an integer: {bad[:40]!r}") from None
+        if expected is not None and values.size != expected:
+            raise self.error(element, f"expected {expected} integers, found {values.size}")
+        return values
+
     def source(self, url: str | None, referrer, numeric: bool = True) -> np.ndarray:
         """A ``<source>``'s data as a (count, stride) array (floats, or strings when not ``numeric``)."""
         src = self.resolve(url, referrer)
@@ -115,3 +127,11 @@ def _is_float(token: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _is_int(token: str) -> bool:
+    try:
+        value = int(token)
+    except ValueError:
+        return False
+    return abs(value) < 2**63

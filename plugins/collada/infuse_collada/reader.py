@@ -19,6 +19,7 @@ from infuse.transforms import frame_change, global_matrices, nearest_joint_paren
 
 from . import animation
 from .document import Document
+from .mesh import MeshLoader
 from .scene import flatten, joint_indices, local_matrices, unique_names, visual_scene
 
 _UP_AXES = {"X_UP": "X", "Y_UP": "Y", "Z_UP": "Z"}
@@ -45,7 +46,8 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
         raise UnusableInputError(path, "no joints: the scene has no JOINT nodes and no skin controllers")
     node_parents = np.array([n.parent for n in nodes], dtype=np.int64)
     change = frame_change(scale, up)
-    rest = change @ global_matrices(node_parents, local_matrices(nodes))[0, joints]
+    world = global_matrices(node_parents, local_matrices(nodes))[0]
+    rest = change @ world[joints]
     parents, folded = nearest_joint_parents(node_parents, joints, return_folded=True)
     skeleton = skeleton_from_globals(unique_names(nodes, joints), parents, rest)
 
@@ -73,8 +75,12 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
             motions[name] = sampled_motion(skeleton, fps, frames, globals_between, name=name)
         meta["animation"] = {"fps": fps, "channels": len(chs), "skipped_channels": skipped,
                              "clip_start_s": {name: start for name, start, _, _ in clips}}
+    warnings: list[str] = []
+    meta["warnings"] = warnings
+    has_mesh = any(child.tag in ("instance_controller", "instance_geometry") for el in elements for child in el)
+    meshes = MeshLoader(doc, nodes, elements, joints, world, change, skeleton, warnings) if has_mesh else None
     return Asset(path, "collada", skeleton, motions, _morph_targets(doc), source_units=unit_name,
-                 source_up_axis=up, units_detected_by=detected_by, meta=meta)
+                 source_up_axis=up, units_detected_by=detected_by, meta=meta, mesh_loader=meshes)
 
 
 def _units(doc: Document, override: str | None) -> tuple[float, str, str]:

@@ -156,14 +156,14 @@ def joint_indices(doc: Document, nodes: list[SceneNode], elements: list) -> list
         names = doc.source(joints_input.get("source"), joints_input, numeric=False).ravel()
         roots = [doc.resolve(s.text and s.text.strip(), s) for s in inst.findall("skeleton")]
         for name in names:
-            found = _find_joint(nodes, elements, index_of, roots, str(name))
+            found = find_joint(nodes, elements, index_of, roots, str(name))
             if found is None:
                 raise doc.error(controller, f"skin names joint {str(name)[:60]!r}, which is not a node of the scene")
             chosen.add(found)
     return sorted(chosen)
 
 
-def _find_joint(nodes, elements, index_of, roots, name: str) -> int | None:
+def find_joint(nodes, elements, index_of, roots, name: str) -> int | None:
     """A skin's joint reference: a sid under the ``<skeleton>`` roots, else a sid, id or name anywhere."""
     for root in roots:
         if root.get("sid") == name and id(root) in index_of:
