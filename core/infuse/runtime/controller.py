@@ -124,6 +124,12 @@ class Controller:
         afresh."""
         return {}
 
+    def at_rest(self, state: dict) -> bool:
+        """Whether an activity with this ``state`` has come to rest: nothing it set going still moves (a
+        walk's stop steps are over and its idle fully shown). A scene hands a walk that has arrived over to
+        the pack's idle clip only then. Default True: the controller keeps no motion of its own going."""
+        return True
+
     def describe(self) -> str:
         """A short human description (for reports and feedback)."""
         return self.kind

@@ -6,7 +6,8 @@ phase, planted feet) at the frame it starts, as the controller's ``handover`` gi
 walk plays on under the new one until the new one has blended in.
 
 A walk that has arrived would go on evaluating the pack's idle on the spot, frame by frame. Instead,
-once the character stands still past the walk's scheduled end, the pack's idle clip takes over, turned
+once the character stands still past the walk's scheduled end and the controller says the walk is at
+rest (:meth:`~infuse.runtime.Controller.at_rest`), the pack's idle clip takes over, turned
 and moved to where the character stands. It is placed from the output pose, not from the controller's
 internals, and crossfaded over :data:`SETTLE_BLEND_S`.
 """
@@ -112,6 +113,8 @@ class Walks:
         rotations, root = runtime.last_frames(name, still)  # in the character's own frame
         if np.linalg.norm(np.ptp(root[:, [0, 2]], axis=0)) > STILL_M:
             return  # still on its way
+        if not walk.activity.controller.at_rest(walk.activity.state):
+            return  # standing, but its last steps or the fade into its idle still run
         heading_now = _heading(rig, rotations[-1, 0])
         turn = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), heading_now - _heading(rig, idle.local_rotations[0, 0]))
         rotations = np.array(idle.local_rotations)
