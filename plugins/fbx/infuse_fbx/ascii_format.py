@@ -1,7 +1,8 @@
 """The ASCII FBX container, read into the same node tree as :mod:`.binary`.
 
 Records are ``Name: value, value, ... { children }``; values are numbers, ``"strings"`` or bare
-words; arrays are ``*N { a: v,v,... }``; ``;`` starts a comment. Integers stay ``int`` (object ids,
+words; arrays are ``*N { a: v,v,... }``; ``;`` starts a comment. A comma may stand before a
+record's first value (embedded media: ``Content: , "base64..."``). Integers stay ``int`` (object ids,
 times in ticks), other numbers become ``float``; arrays become int64 or float64 numpy arrays.
 """
 from __future__ import annotations
@@ -97,6 +98,8 @@ def _records(path: Path, tokens, i: int, depth: int) -> tuple[list[Node], int]:
             raise _error(path, tokens[i], f"expected a record name, found {str(name)[:30]!r}")
         node = Node(name, offset=line, line=True)
         i += 1
+        if i + 1 < len(tokens) and tokens[i][0] == "," and tokens[i + 1][0] in ("value", "array"):
+            i += 1  # embedded media is written "Content: , "base64...""
         expect_value = True
         while i < len(tokens) and tokens[i][0] in ("value", "array", ","):
             if (tokens[i][0] == ",") == expect_value:
