@@ -30,6 +30,7 @@ from typing import Sequence
 
 import numpy as np
 
+from infuse.errors import UsageError
 from infuse.mesh import SkinnedMesh
 
 FLOAT, UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT = 5126, 5121, 5123, 5125
@@ -47,6 +48,9 @@ def add_meshes(doc: dict, bin_writer, meshes: Sequence[SkinnedMesh], joint_nodes
     for mesh in meshes:
         if mesh.num_triangles == 0:
             continue
+        if mesh.bind_joints.size and mesh.bind_joints.max() >= len(joint_nodes):
+            raise UsageError(f"mesh {mesh.name!r} is bound to joints the skeleton does not have "
+                             f"(joint {int(mesh.bind_joints.max())} of {len(joint_nodes)}): it belongs to another skeleton")
         key = (mesh.bind_joints.tobytes(), mesh.inverse_bind.tobytes())
         if key not in skins:
             skins[key] = _skin(doc, bin_writer, mesh, joint_nodes)
