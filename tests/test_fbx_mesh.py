@@ -407,3 +407,10 @@ def test_unskinned_mesh_follows_its_joint_and_one_outside_is_left_out(tmp_path):
     assert np.allclose(posed[0], stick.positions, atol=1e-6)
     assert "Scenery" not in {m.name for m in asset.meshes}
     assert any("'Scenery' is not drawn" in w and "outside the skeleton" in w for w in asset.meta["warnings"])
+
+
+def test_undecodable_texture_falls_back_to_the_colour(tmp_path):
+    asset = infuse.load(_write(tmp_path, fbx_bytes, cube_scene(video=[("Content", [base64.b64encode(b"not an image").decode()], [])])))
+    textured = next(m for m in asset.meshes if m.name.endswith("Textured"))
+    assert textured.colors is None and np.allclose(textured.base_color, [0.0, 0.0, 1.0, 1.0])
+    assert any("cannot be decoded" in w for w in asset.meta["warnings"]), asset.meta["warnings"]

@@ -95,10 +95,11 @@ class Textures:
                 self.warnings.append(f"texture {tex.name!r} ({PureWindowsPath(shown).name or 'no file name'}) "
                                      "is neither embedded nor beside the file: its material's colour is used")
                 return None
-            data = path.read_bytes()
+        from PIL import Image  # only files with textures pay for importing Pillow
+
         try:
-            pixels = _decode(data)
-        except (OSError, ValueError, SyntaxError) as exc:  # what Pillow raises for images it cannot read
+            pixels = _decode(data if data is not None else path.read_bytes())
+        except (OSError, ValueError, SyntaxError, Image.DecompressionBombError) as exc:  # what Pillow raises for images it cannot read
             self.warnings.append(f"texture {tex.name!r} is not used: its image cannot be decoded ({exc})")
             return None
         wrap_u, wrap_v = tex.props.get("WrapModeU", [0]), tex.props.get("WrapModeV", [0])

@@ -62,7 +62,7 @@ class MeshLoader:
                     label = self.models[i].obj.name or geom.name
                     try:
                         out.extend(self._surfaces(geom, i, label))
-                    except (GeometryError, InfuseError, ValueError, np.linalg.LinAlgError) as exc:
+                    except (InfuseError, ValueError, IndexError, OSError, np.linalg.LinAlgError) as exc:
                         self.warnings.append(f"mesh {label!r} is not drawn: {getattr(exc, 'problem', exc)}")
         return out
 

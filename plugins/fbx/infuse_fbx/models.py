@@ -9,7 +9,7 @@ model's ``RotationOrder`` (``XYZ`` means X applied first), pre/post rotations in
 the rotation/scaling offsets and pivots. As in Blender's importer, pre/post rotations and the
 rotation order apply only when ``RotationActive`` is set. Parents combine according to each
 model's ``InheritType`` (see :func:`world_matrices`). Geometric transforms affect meshes only
-and are ignored.
+(see :mod:`.mesh`).
 """
 from __future__ import annotations
 

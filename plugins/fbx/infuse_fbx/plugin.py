@@ -9,4 +9,4 @@ from .reader import read
 
 @hookimpl
 def infuse_readers():
-    return [Reader("fbx", (".fbx",), read, "FBX 7.x, binary or ASCII: skeleton, rest pose, animation stacks, blend shapes")]
+    return [Reader("fbx", (".fbx",), read, "FBX 7.x, binary or ASCII: skeleton, rest pose, animation stacks, skinned meshes, blend shapes")]
