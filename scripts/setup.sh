@@ -58,11 +58,15 @@ if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "$stamp" > "$VENV/.setup-stamp"
 fi
 
-# Khronos glTF validator (npm), used by the tests of the glTF writer; three.js for the browser viewer.
+# Khronos glTF validator (npm), used by the tests of the glTF writer; three.js for the browser viewer;
+# glTF Transform's CLI, which makes the Draco-compressed characters the glTF reader's tests decode.
 THREE_VERSION=0.187.0
+GLTF_TRANSFORM_VERSION=4.5.1
 if command -v npm >/dev/null 2>&1 && { [ ! -f "$VENV/tools/node_modules/gltf-validator/package.json" ] ||
-    ! grep -qs "\"version\": \"$THREE_VERSION\"" "$VENV/tools/node_modules/three/package.json"; }; then
-  echo "setup: installing gltf-validator and three (npm)"
-  npm install --silent --no-audit --no-fund --prefix "$VENV/tools" gltf-validator "three@$THREE_VERSION" >/dev/null
+    ! grep -qs "\"version\": \"$THREE_VERSION\"" "$VENV/tools/node_modules/three/package.json" ||
+    ! grep -qs "\"version\": \"$GLTF_TRANSFORM_VERSION\"" "$VENV/tools/node_modules/@gltf-transform/cli/package.json"; }; then
+  echo "setup: installing gltf-validator, three and @gltf-transform/cli (npm)"
+  npm install --silent --no-audit --no-fund --prefix "$VENV/tools" gltf-validator "three@$THREE_VERSION" \
+    "@gltf-transform/cli@$GLTF_TRANSFORM_VERSION" >/dev/null
 fi
 echo "setup: ready ($VENV/bin/infuse)"

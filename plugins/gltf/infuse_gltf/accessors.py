@@ -4,7 +4,8 @@
 column-major as stored) viewed straight onto the buffer with ``np.ndarray(buffer=...)`` when possible.
 Normalized integers become float64 per the glTF rules (``max(c / 127, -1)`` etc.). Out-of-range indices,
 views running past their buffer and compressed views that cannot be decoded raise errors that name the
-accessor (``"accessors[3]"``).
+accessor (``"accessors[3]"``). Accessors whose data another decoder produced (Draco primitives, see
+:mod:`infuse_gltf.draco`) are handed over with :meth:`AccessorReader.adopt` and read like the others.
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ TYPE_SHAPES: dict[str, tuple[int, int]] = {
 }
 #: Extensions that compress buffer views; only meshopt compresses non-mesh data (animations, skins).
 VIEW_COMPRESSION = ("EXT_meshopt_compression", "KHR_meshopt_compression")
+#: Extensions that compress a mesh primitive's data (decoded by :mod:`infuse_gltf.draco`).
 MESH_COMPRESSION = ("KHR_draco_mesh_compression",)
 
 
@@ -66,13 +68,14 @@ class AccessorReader:
         self._cache: dict[int, np.ndarray] = {}
         self._finite: set[int] = set()
         self._decoded: dict[int, memoryview] = {}
+        self._adopted: dict[int, str] = {}  # accessor index -> where its adopted data came from
 
     def _compression(self, view_index: int) -> str | None:
         view = self.views[view_index]
         ext = view.get("extensions") if isinstance(view, dict) else None
         return next((name for name in VIEW_COMPRESSION if name in ext), None) if isinstance(ext, dict) else None
 
-    def _view_bytes(self, view_index, place: str) -> tuple[memoryview, int | None]:
+    def view_bytes(self, view_index, place: str) -> tuple[memoryview, int | None]:
         """The bytes of a buffer view and its byteStride."""
         view_index = check_index(self.file, place, view_index, len(self.views), "bufferView")
         vplace = f"bufferViews[{view_index}]"
@@ -137,8 +140,20 @@ class AccessorReader:
             self._finite.add(index)
         return out
 
-    def _decode(self, index: int) -> np.ndarray:
-        place = f"accessors[{index}]"
+    def adopt(self, index: int, values: np.ndarray, source: str) -> None:
+        """Take ``values`` (shaped and typed as :meth:`read` returns them) as accessor ``index``'s data,
+        decoded from ``source`` (a place such as ``"bufferViews[4]"``). One accessor decoded from two
+        different sources raises :class:`InputError`."""
+        earlier = self._adopted.get(index)
+        if earlier is not None and earlier != source:
+            raise InputError(self.file, f"accessors[{index}]", f"is decoded from both {earlier} and {source}")
+        values.setflags(write=False)
+        self._adopted[index] = source
+        self._cache[index] = values
+        self._finite.discard(index)
+
+    def layout(self, index: int, place: str) -> tuple[int, int, int, int]:
+        """``(componentType, columns, rows, count)`` of accessor ``index``, checked."""
         acc = self.accessors[index]
         if not isinstance(acc, dict):
             raise InputError(self.file, place, "is not an object")
@@ -147,9 +162,16 @@ class AccessorReader:
             raise InputError(self.file, place, f"componentType {ctype!r} is not a glTF component type")
         if not isinstance(acc.get("type"), str) or acc["type"] not in TYPE_SHAPES:
             raise InputError(self.file, place, f"type {acc.get('type')!r} is not a glTF accessor type")
-        dtype = COMPONENT_DTYPES[ctype]
+        if acc.get("normalized") and ctype == 5126:
+            raise InputError(self.file, place, "normalized is set on a float accessor")
         cols, rows = TYPE_SHAPES[acc["type"]]
-        count = _int_field(self.file, place, acc, "count", None, 1)
+        return ctype, cols, rows, _int_field(self.file, place, acc, "count", None, 1)
+
+    def _decode(self, index: int) -> np.ndarray:
+        place = f"accessors[{index}]"
+        ctype, cols, rows, count = self.layout(index, place)
+        acc = self.accessors[index]
+        dtype = COMPONENT_DTYPES[ctype]
         offset = _int_field(self.file, place, acc, "byteOffset", 0)
         if offset % dtype.itemsize:
             raise InputError(self.file, place, f"byteOffset {offset} is not a multiple of the component size {dtype.itemsize}")
@@ -157,7 +179,7 @@ class AccessorReader:
         col_stride = -(-rows * dtype.itemsize // 4) * 4 if cols > 1 else rows * dtype.itemsize
         element = col_stride * cols
         if "bufferView" in acc:
-            raw, stride = self._view_bytes(acc["bufferView"], place)
+            raw, stride = self.view_bytes(acc["bufferView"], place)
             stride = stride or element
             if offset + stride * (count - 1) + element > len(raw):
                 raise InputError(self.file, place, f"{count} elements at byteOffset {offset} run past the end of bufferViews[{acc['bufferView']}]")
@@ -167,9 +189,7 @@ class AccessorReader:
         if "sparse" in acc:
             arr = self._apply_sparse(np.array(arr), acc["sparse"], count, dtype, (cols, rows), place)
         if acc.get("normalized"):
-            if ctype == 5126:
-                raise InputError(self.file, place, "normalized is set on a float accessor")
-            arr = np.maximum(arr.astype(np.float64) / NORMALIZED_DIVISORS[ctype], -1.0)
+            arr = normalized_to_float(arr, ctype)
         return arr.reshape(count, rows) if cols == 1 else arr
 
     def _apply_sparse(self, arr: np.ndarray, sparse: dict, count: int, dtype, shape, place: str) -> np.ndarray:
@@ -194,12 +214,17 @@ class AccessorReader:
         return arr
 
     def _packed(self, spec: dict, dtype, shape, place: str) -> np.ndarray:
-        raw, _ = self._view_bytes(spec.get("bufferView"), place)
+        raw, _ = self.view_bytes(spec.get("bufferView"), place)
         offset = _int_field(self.file, place, spec, "byteOffset", 0)
         size = int(np.prod(shape)) * dtype.itemsize
         if offset + size > len(raw):
             raise InputError(self.file, place, "runs past the end of its bufferView")
         return np.frombuffer(raw, dtype, int(np.prod(shape)), offset).reshape(shape)
+
+
+def normalized_to_float(values: np.ndarray, component_type: int) -> np.ndarray:
+    """Normalized integers of ``component_type`` as float64 (``max(c / 127, -1)`` etc.)."""
+    return np.maximum(values.astype(np.float64) / NORMALIZED_DIVISORS[component_type], -1.0)
 
 
 def compression_extensions(doc_json: dict) -> list[str]:

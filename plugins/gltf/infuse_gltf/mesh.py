@@ -15,9 +15,9 @@ Colour: the material's base colour factor, times the base colour texture sampled
 (bilinear, on the texture reduced to at most :data:`TEXTURE_SIZE` pixels, sRGB converted to linear),
 times ``COLOR_0``. Triangles whose three vertices fall under the alpha cutoff (``MASK``) or are
 mostly transparent (``BLEND``) are dropped. Morph targets keep their position offsets; default mesh
-weights are not applied. meshopt-compressed mesh data is decoded (indices, octahedral normals);
-primitives the reader cannot decode (Draco) are skipped with a warning in ``meta["warnings"]``;
-points and lines are not surfaces and are left out.
+weights are not applied. Compressed mesh data is decoded: meshopt views (indices, octahedral normals)
+and Draco primitives (:mod:`infuse_gltf.draco`, which needs the ``DracoPy`` package: without it they are
+skipped with a warning in ``meta["warnings"]``); points and lines are not surfaces and are left out.
 """
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ import numpy as np
 from infuse.errors import InputError, MissingFeatureError
 from infuse.mesh import SkinnedMesh, rigid_matrices
 
+from . import draco
 from .accessors import AccessorReader
 from .container import read_uri
 from .morph import mesh_target_names
@@ -147,17 +148,24 @@ class MeshLoader:
     def _primitive(self, prim, place: str, label: str, bones, target_names: list[str]) -> SkinnedMesh | None:
         if not isinstance(prim, dict):
             raise InputError(self.file, place, "is not an object")
-        if "KHR_draco_mesh_compression" in (prim.get("extensions") or {}):
-            raise MissingFeatureError(self.file, "it is Draco-compressed (KHR_draco_mesh_compression), which infuse does not decode")
         attributes = prim.get("attributes")
         if not isinstance(attributes, dict) or "POSITION" not in attributes:
             raise InputError(self.file, f"{place}.attributes", "has no POSITION")
         mode = prim.get("mode", 4)
         if mode not in (4, 5, 6):
             return None  # points and lines are not surfaces
+        extensions = prim.get("extensions")
+        compressed = isinstance(extensions, dict) and draco.EXTENSION in extensions
+        # A Draco primitive's attribute accessors are filled by the decoder before they are read.
+        draco_triangles = draco.load_primitive(self.accessors, prim, place) if compressed else None
         raw = self._read(attributes["POSITION"], f"{place}.attributes.POSITION").astype(np.float64)
         v = len(raw)
-        triangles = self._triangles(prim, place, mode, v)
+        if draco_triangles is None:
+            triangles = self._triangles(prim, place, mode, v)
+        elif draco_triangles.size and draco_triangles.max() >= v:
+            raise InputError(self.file, f"{place}.attributes.POSITION", f"has {v} vertices, fewer than the Draco faces name")
+        else:
+            triangles = draco_triangles
         bind_joints, file_bind, rest = bones
         joints, weights = self._influences(attributes, place, v, len(bind_joints))
         frame = file_bind[int(np.argmin(self.skeleton.depths[bind_joints]))]  # the bind frame of the skin's root bone
@@ -186,7 +194,10 @@ class MeshLoader:
             deltas = np.zeros((len(targets), v, 3))
             for k, target in enumerate(targets):
                 if isinstance(target, dict) and "POSITION" in target:
-                    deltas[k] = self._read(target["POSITION"], f"{place}.targets[{k}].POSITION")
+                    delta = self._read(target["POSITION"], f"{place}.targets[{k}].POSITION")
+                    if delta.shape != (v, 3):
+                        raise InputError(self.file, f"{place}.targets[{k}].POSITION", f"holds {delta.shape} offsets for {v} vertices")
+                    deltas[k] = delta
             morph_names, morph_positions = tuple(target_names), deltas @ linear.T
         pbr = material.get("pbrMetallicRoughness") or {}
         base = np.array(pbr.get("baseColorFactor", (1.0, 1.0, 1.0, 1.0)), dtype=np.float64)
