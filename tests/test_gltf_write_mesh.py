@@ -1,7 +1,7 @@
-"""The glTF writer on assets that are not glTF copies but carry skinned meshes (FBX characters, and glTF
-characters handed over as plain assets): the meshes are written (positions, triangles, normals, skin
-weights, bones, inverse binds, colours, morph targets), pass the Khronos validator and read back the
-same, posed or at rest, and morph-weight tracks drive them."""
+"""The glTF writer on assets that are not glTF copies but carry skinned meshes (COLLADA and FBX
+characters, and glTF characters handed over as plain assets): the meshes are written (positions,
+triangles, normals, skin weights, bones, inverse binds, colours, morph targets), pass the Khronos
+validator and read back the same, posed or at rest, and morph-weight tracks drive them."""
 from __future__ import annotations
 
 import numpy as np
@@ -21,7 +21,8 @@ from infuse_gltf.mesh_writer import color_factors, influence_sets
 from corpus_data import corpus_file
 
 SOURCES = {"xbot": "runxaway-models/Xbot.glb", "brunette": "talkinghead/avatars/brunette-t.glb",
-           "rocketbox": "ubiq-rocketbox/Ubiq_Robot_Rocketbox.fbx", "mannequin": "ue4-mannequin/SK_Mannequin.FBX"}
+           "rocketbox": "ubiq-rocketbox/Ubiq_Robot_Rocketbox.fbx", "mannequin": "ue4-mannequin/SK_Mannequin.FBX",
+           "doctor": "smartbody/mesh/doctor/Doctor.dae"}
 SUFFIXES = (".glb", ".gltf")
 POSE_CLIP = "pose"
 
