@@ -5,8 +5,8 @@ A primitive names a material symbol; the instance's ``<instance_material>`` bind
 holds a ``profile_COMMON`` technique. Its ``<diffuse>`` (``<emission>`` for ``<constant>``) is a
 colour, or a texture: a ``<sampler2D>`` → ``<surface>`` → ``<image>`` chain (COLLADA 1.4) or an
 ``<instance_image>`` (1.5). A texture is used when its image file is found beside the document
-(by its relative path, else by its file name) and Pillow can read it; otherwise the surface gets
-:data:`DEFAULT_COLOR`. Colours are taken as linear RGBA; ``<transparent>``/``<transparency>``
+(by its relative path, else by its file name) and Pillow can read it: its texels are the colour;
+otherwise the surface gets :data:`DEFAULT_COLOR`. Colours are taken as linear RGBA; ``<transparent>``/``<transparency>``
 give the alpha (``A_ONE`` or ``RGB_ZERO`` modes).
 """
 from __future__ import annotations

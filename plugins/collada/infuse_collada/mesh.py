@@ -202,14 +202,15 @@ class MeshLoader:
             normals = np.where((length < 1e-12)[:, None], smooth_normals(all_positions, position_tris)[pos_index], normals)
             length = np.linalg.norm(normals, axis=1)
         normals = normals / np.maximum(length, 1e-12)[:, None]
-        colors = None
+        colors, base_color = None, look.color
         if uv_values is not None:
             pixels = self._pixels(look.image)
-            if pixels is not None:
-                colors = np.clip(material.sample(pixels, uv_values[uv_input.indices.reshape(-1)[first]]) * look.color, 0.0, 1.0)
+            if pixels is not None:  # the texture is the diffuse colour: white times the texels
+                base_color = np.append(np.ones(3), look.color[3])
+                colors = np.clip(material.sample(pixels, uv_values[uv_input.indices.reshape(-1)[first]]) * base_color, 0.0, 1.0)
         morph_positions = None if offsets is None else (offsets @ linear.T)[:, pos_index]
         return SkinnedMesh(label, positions, normals, triangles, joints[pos_index], weights[pos_index], bind_joints,
-                           inverse_bind, base_color=look.color, colors=colors, double_sided=double_sided,
+                           inverse_bind, base_color=base_color, colors=colors, double_sided=double_sided,
                            morph_names=morph_names, morph_positions=morph_positions)
 
     def _texcoord_input(self, prim: Primitive, look: material.Look) -> Input | None:
