@@ -419,11 +419,13 @@ def test_a_skinned_morph_keeps_its_targets(tmp_path):
     (dict(body_p="0 1 2 3 3 2 7"), "a vertex index is out of range (there are 7 positions)"),
     (dict(vcount="1 2 5 2 1 1"), "count=7 but <vcount> lists 6 vertices"),
     (dict(skin_source="#nowhere"), "the geometry its skin names is not in the file"),
-], ids=["float", "index", "vcount", "source"])
+    (dict(body_positions=_matrix(BODY)[:-3] + " 1e308"), "mesh 'body.m2': positions holds NaN or infinity"),
+], ids=["float", "index", "vcount", "source", "overflow"])
 def test_unusable_geometry_is_left_out_with_a_warning(tmp_path, case, problem):
     asset = infuse.load(write_case(tmp_path, "body", scene(loose=False, **case), ".dae"))
     assert [m.name for m in asset.meshes] == ["box"]  # the rigid prop is still drawn
-    [warning] = asset.meta["warnings"]
+    warning, *textures = asset.meta["warnings"]
+    assert all(t.startswith("texture images not found") for t in textures)
     assert re.fullmatch(r"line \d+ <\w+.*>: not drawn: .*", warning) and warning.endswith(problem), warning
 
 

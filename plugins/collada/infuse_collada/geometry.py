@@ -37,7 +37,6 @@ class Primitive:
     primitive's own ``NORMAL`` input, if any; ``texcoords`` its ``TEXCOORD`` inputs in file order.
     """
 
-    element: object
     material: str | None
     positions: np.ndarray
     normals: Input | None
@@ -49,7 +48,6 @@ class Geometry:
     """A ``<geometry>``'s ``<mesh>``: positions (P, 3) in file units, per-position normals when the
     ``<vertices>`` element has them (P, 3), and the surface primitives."""
 
-    element: object
     name: str
     positions: np.ndarray
     normals: np.ndarray | None
@@ -76,7 +74,7 @@ def read_geometry(doc: Document, element) -> Geometry | None:
             raise doc.error(semantic["NORMAL"], f"{len(normals)} normals for {len(positions)} positions")
     primitives = [_primitive(doc, el, vertices.get("id"), len(positions)) for el in mesh if el.tag in SURFACES]
     name = element.get("name") or element.get("id") or "geometry"
-    return Geometry(element, name, positions, normals, [p for p in primitives if p is not None])
+    return Geometry(name, positions, normals, [p for p in primitives if p is not None])
 
 
 def _vectors(doc: Document, input_element, width: int) -> np.ndarray:
@@ -118,7 +116,7 @@ def _primitive(doc: Document, el, vertices_id: str | None, num_positions: int) -
     positions = found["VERTEX"].indices
     if positions.size and (positions.min() < 0 or positions.max() >= num_positions):
         raise doc.error(el, f"a vertex index is out of range (there are {num_positions} positions)")
-    return Primitive(el, el.get("material"), positions, found.get("NORMAL"), texcoords)
+    return Primitive(el.get("material"), positions, found.get("NORMAL"), texcoords)
 
 
 def _corners(doc: Document, el, stride: int) -> tuple[np.ndarray, np.ndarray]:

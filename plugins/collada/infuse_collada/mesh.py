@@ -58,6 +58,10 @@ class MeshLoader:
         self._skipped: dict[str, list[str]] = {}  # why -> where
 
     def __call__(self) -> list[SkinnedMesh]:
+        with np.errstate(all="ignore"):  # huge values overflow to infinity, which the surfaces' checks name
+            return self._surfaces()
+
+    def _surfaces(self) -> list[SkinnedMesh]:
         rest = rigid_matrices(self.skeleton.rest_global_rotations, self.skeleton.rest_global_positions)
         out: list[SkinnedMesh] = []
         errors: list[InputError] = []
@@ -70,6 +74,9 @@ class MeshLoader:
                 except InputError as exc:
                     errors.append(exc)
                     self._skip(exc.place or place(inst), exc.problem)
+                except ValueError as exc:  # the surface's own checks: values that overflowed to infinity
+                    errors.append(self.doc.error(inst, str(exc)))
+                    self._skip(place(inst), str(exc))
         if errors and not out:
             raise errors[0]
         for why, places in self._skipped.items():

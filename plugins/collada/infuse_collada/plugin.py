@@ -9,4 +9,4 @@ from .reader import read
 
 @hookimpl
 def infuse_readers():
-    return [Reader("collada", (".dae",), read, "COLLADA 1.4/1.5: joints, rest pose, morph target names, animations")]
+    return [Reader("collada", (".dae",), read, "COLLADA 1.4/1.5: joints, rest pose, skinned meshes, morph targets, animations")]

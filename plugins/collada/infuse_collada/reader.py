@@ -4,7 +4,9 @@ The rest pose is the visual scene as stored. Non-joint nodes above or between jo
 into the joints below them. ``<asset><unit meter>`` and ``<up_axis>`` are honoured (COLLADA's
 defaults: metre, Y up) unless ``units=`` / ``up_axis=`` override them. Animations become one
 Motion per ``<animation_clip>``, or one for the whole timeline, sampled on the frame grid the key
-times lie on (30 fps when they fit none).
+times lie on (30 fps when they fit none). The skinned meshes (``Asset.meshes``) are decoded on
+first use, in the skeleton's frame (:mod:`infuse_collada.mesh`); what cannot be drawn is said in
+``meta["warnings"]``.
 """
 from __future__ import annotations
 
