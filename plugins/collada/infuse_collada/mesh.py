@@ -33,10 +33,6 @@ from .geometry import Geometry, Input, Primitive, read_geometry
 from .scene import SceneNode, find_joint
 from .skin import read_skin
 
-#: Controllers followed from a skin to its geometry (a morph of a morph...), against cycles.
-MAX_CONTROLLER_DEPTH = 8
-
-
 class MeshLoader:
     """Builds the surfaces of one document on demand (see the module doc); called by ``Asset.meshes``.
 
@@ -143,17 +139,14 @@ class MeshLoader:
         return out
 
     def _base(self, element, inst):
-        """``(geometry element, morph element or None)`` a controller chain ends in; ``(None, None)``
-        (with a warning) when it ends in something else."""
+        """``(geometry element, morph element or None)`` a skin's source or an instance's target leads
+        to; ``(None, None)`` (with a warning) when it leads elsewhere (a morph of a morph, a spline)."""
         morph = None
-        for _ in range(MAX_CONTROLLER_DEPTH):
-            if element.tag == "geometry":
-                return element, morph
-            if element.tag == "controller" and element.find("morph") is not None and morph is None:
-                morph = element.find("morph")
-                element = self.doc.resolve(morph.get("source"), morph)
-                continue
-            break
+        if element.tag == "controller" and element.find("morph") is not None:
+            morph = element.find("morph")
+            element = self.doc.resolve(morph.get("source"), morph)
+        if element.tag == "geometry":
+            return element, morph
         self._skip(place(inst), f"it does not lead to a geometry (a skin or morph of <{element.tag}>)")
         return None, None
 
