@@ -82,20 +82,23 @@ class Tessellation:
             out[:, self.simplices[0, 0]] = 1.0
             return out, np.ones(q, dtype=bool)
         corners, base, inv = self._frames()
+        rows = np.arange(q)
         rel = y[:, None, :] - base[None]                               # (Q, S, d)
         lam = np.einsum("sij,qsj->qsi", inv, rel)                      # (Q, S, d)
         bary = np.concatenate((1.0 - lam.sum(axis=-1, keepdims=True), lam), axis=-1)  # (Q, S, d+1)
         inside_s = np.all(bary >= -1e-9, axis=-1)
-        # Outside every simplex: the clamped barycentric point nearest to the query.
-        clamped = np.clip(bary, 0.0, None)
-        clamped /= np.maximum(clamped.sum(axis=-1, keepdims=True), 1e-12)
-        recon = np.einsum("qsk,skd->qsd", clamped, corners)
-        dist = np.linalg.norm(recon - y[:, None, :], axis=-1)
-        dist = np.where(inside_s, -1.0, dist)
-        best = np.argmin(dist, axis=1)
-        inside = inside_s[np.arange(q), best]
-        chosen = np.where(inside[:, None], bary[np.arange(q), best], clamped[np.arange(q), best])
-        np.add.at(out, (np.repeat(np.arange(q), chosen.shape[1]), self.simplices[best].ravel()), chosen.ravel())
+        inside = inside_s.any(axis=1)
+        best = np.argmax(inside_s, axis=1)  # the first simplex holding the query
+        chosen = bary[rows, best]
+        outside = np.nonzero(~inside)[0]
+        if outside.size:  # the clamped barycentric point nearest to the query, over every simplex
+            clamped = np.clip(bary[outside], 0.0, None)
+            clamped /= np.maximum(clamped.sum(axis=-1, keepdims=True), 1e-12)
+            recon = np.einsum("qsk,skd->qsd", clamped, corners)
+            nearest = np.argmin(np.linalg.norm(recon - y[outside, None, :], axis=-1), axis=1)
+            best[outside] = nearest
+            chosen[outside] = clamped[np.arange(outside.size), nearest]
+        out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
         return out, inside
 
     def _frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
