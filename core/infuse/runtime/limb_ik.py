@@ -15,12 +15,15 @@ from .. import quaternions as quat
 from .pose import chain_fk
 
 
-# Small vector helpers over (F, 3) arrays: numpy's generic cross and norm cost more than the arithmetic.
+# Small vector helpers over (..., 3) arrays: numpy's generic cross and norm, and einsum's broadcasting
+# iterator, cost more than the arithmetic; sums over the last axis run as one matrix-vector product.
 _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+_ONES = np.ones(3)
 
 
 def _dot(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.einsum("...i,...i->...", u, v)
+    product = u * v
+    return (product.reshape(-1, 3) @ _ONES).reshape(product.shape[:-1])
 
 
 def _norm(v: np.ndarray) -> np.ndarray:
@@ -41,16 +44,20 @@ def _arccos(cosine: np.ndarray) -> np.ndarray:
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
                joints, goal: np.ndarray, weight=None, pole: np.ndarray | None = None,
-               keep_end: bool = True) -> np.ndarray:
+               keep_end: bool = True, end_rotation: np.ndarray | None = None, chains=None) -> np.ndarray:
     """Rotate joints a and b of ``joints`` so that c reaches ``goal`` (F, 3); writes ``local_rotations``
     (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within reach).
 
     ``weight`` (F,) in [0, 1] blends from the current pose to the solved one; ``pole`` (F, 3) or (3,)
-    is the bend direction used when the limb is straight.
+    is the bend direction used when the limb is straight. The end joint c keeps its global rotation
+    when ``keep_end``, or takes the global rotation ``end_rotation`` (F, 4) when given.
 
     Several limbs that do not hang from one another (left and right legs) are solved in one call
     with ``joints`` a sequence of K (a, b, c) triples: ``goal`` (F, K, 3), ``weight`` (F,) or (F, K),
-    ``pole`` (3,), (F, 3) or (F, K, 3); the distances are then (F, K).
+    ``pole`` (3,), (F, 3) or (F, K, 3), ``end_rotation`` (F, K, 4); the distances are then (F, K).
+
+    ``chains``: the global rotations (F, [K,] R, 4) and positions (F, [K,] R, 3) of a, b, c and, when
+    a has a parent, that parent (R = 4), when the caller has them already (else one FK finds them).
     """
     several = np.ndim(joints) == 2
     limbs = np.array(joints if several else [joints], dtype=np.int64).reshape(-1, 3)  # (K, 3)
@@ -59,29 +66,36 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     hung = parents >= 0
     if hung.any() and not hung.all():  # a's parent rotation only where it has one: solved apart
         return np.stack([solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb),
-                                    T[:, k], _column(weight, k, 2), _column(pole, k, 3), keep_end)
+                                    T[:, k], _column(weight, k, 2), _column(pole, k, 3), keep_end,
+                                    _column(end_rotation, k, 3), None if chains is None else tuple(c[:, k] for c in chains))
                          for k, limb in enumerate(limbs)], axis=1)
-    # Each limb's own chain FK (a few joints each): a solve of several gives each limb exactly what
-    # solving it alone would. Arrays keep a limb axis only when there are several.
-    chains = [chain_fk(skeleton, local_rotations, root_translations, joint_translations,
-                       list(limb) + ([int(parent)] if hung.all() else [])) for limb, parent in zip(limbs, parents)]
-    g_rot, g_pos = (np.stack(r, axis=1) for r in zip(*chains)) if several else chains[0]
+    if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
+        rows = np.column_stack((limbs, parents)) if hung.all() else limbs  # (K, R)
+        g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
+        shape = (len(g_rot),) + (rows.shape if several else rows.shape[1:])
+        g_rot, g_pos = g_rot.reshape(shape + (4,)), g_pos.reshape(shape + (3,))
+    else:
+        g_rot, g_pos = chains
     parent_rot = g_rot[..., 3, :] if hung.all() else None
-    g_rot, g_pos = g_rot[..., :3, :], g_pos[..., :3, :]
     A, B, C = g_pos[..., 0, :], g_pos[..., 1, :], g_pos[..., 2, :]
-    ab, cb, ca, ta = B - A, C - B, C - A, T - A
-    lab, lcb, lca, lta = _norm(ab), _norm(cb), _norm(ca), _norm(ta)
+    # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3), their lengths and directions.
+    sides = np.stack((B - A, C - B, C - A, T - A))
+    lengths = _norm(sides)
+    lab, lcb, lca, lta = lengths
     lat = np.clip(lta, np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
-    u_ab, u_cb, u_ca, u_ta = (v / np.maximum(n, 1e-12)[..., None] for v, n in ((ab, lab), (cb, lcb), (ca, lca), (ta, lta)))
-    ac_ab_0 = _arccos(_dot(u_ca, u_ab))
-    ba_bc_0 = _arccos(-_dot(u_ab, u_cb))  # the angle at b, between b->a and b->c
-    ac_at_0 = _arccos(_dot(u_ca, u_ta))
-    ac_ab_1 = _arccos((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat))
-    ba_bc_1 = _arccos((lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb))
-    axis1 = _cross(ca, ta)
-    small = _norm(axis1) < 1e-12
-    axis0 = _cross(ca, ab)
-    flat = _norm(axis0) < 1e-6 * np.maximum(lab * lcb, 1e-12)
+    units = sides / np.maximum(lengths, 1e-12)[..., None]
+    # The angles at a (to b) and at b (between b->a and b->c) now and once solved, and the goal's
+    # angle off a->c at a: one arccos.
+    now = _dot(units[[2, 0, 2]], units[[0, 1, 3]])
+    now[1] = -now[1]  # b's angle lies between b->a and b->c
+    solved = np.stack(((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat),
+                       (lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb)))
+    ac_ab_0, ba_bc_0, ac_at_0, ac_ab_1, ba_bc_1 = _arccos(np.concatenate((now, solved)))
+    ca, ta, ab = sides[2], sides[3], sides[0]
+    axis1, axis0 = _cross(ca, sides[[3, 0]])  # toward the goal; the bend's normal
+    axis_norms = _norm(np.stack((axis1, axis0)))
+    small = axis_norms[0] < 1e-12
+    flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
     if flat.any():  # a straight limb bends toward the pole, else toward the goal
         if pole is not None:
             pole = np.asarray(pole, dtype=np.float64)
@@ -92,23 +106,20 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         axis0 = np.where(flat[..., None], fallback, axis0)
     axis0 = _unit(axis0)
     axis1 = _unit(np.where(small[..., None], axis0, axis1))
-    ga_inv = quat.conjugate(g_rot[..., 0, :])
-    gb_inv = quat.conjugate(g_rot[..., 1, :])
-    r0 = quat.from_axis_angle(quat.rotate(ga_inv, axis0), ac_ab_1 - ac_ab_0)
-    r1 = quat.from_axis_angle(quat.rotate(gb_inv, axis0), ba_bc_1 - ba_bc_0)
-    r2 = quat.from_axis_angle(quat.rotate(ga_inv, axis1), ac_at_0)
+    # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
+    inverse = np.moveaxis(quat.conjugate(g_rot[..., :2, :]), -2, 0)  # a's and b's: (2, F, [K,] 4)
+    r0, r1, r2 = quat.from_axis_angle(quat.rotate(inverse[[0, 1, 0]], np.stack((axis0, axis0, axis1))),
+                                      np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0)))
     columns = limbs if several else limbs[0]
     old = local_rotations[:, columns[..., :2]]  # (F, [K,] 2, 4), a copy
-    new_a = quat.multiply(old[..., 0, :], quat.multiply(r0, r2))
-    new_b = quat.multiply(old[..., 1, :], r1)
+    new = quat.multiply(old, np.stack((quat.multiply(r0, r2), r1), axis=-2))
     if weight is not None:  # both joints in one interpolation
         w = np.clip(np.asarray(weight, dtype=np.float64), 0.0, 1.0)
         w = w[:, None] if several and w.ndim == 1 else w
-        new_a, new_b = np.moveaxis(quat.slerp(old, np.stack((new_a, new_b), axis=-2), w[..., None]), -2, 0)
-    local_rotations[:, columns[..., 0]] = new_a
-    local_rotations[:, columns[..., 1]] = new_b
+        new = quat.slerp(old, new, w[..., None])
+    local_rotations[:, columns[..., :2]] = new
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
-    rotation = new_a if parent_rot is None else quat.multiply(parent_rot, new_a)
+    rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
     paths = [_path_below(skeleton, a, c) for a, _, c in limbs]
     if not several:
         position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], A, rotation)
@@ -119,8 +130,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                 for i, p in enumerate(paths)]
         position = np.stack([e[0] for e in ends], axis=1)
         rotation = np.stack([e[1] for e in ends], axis=1)
-    if keep_end:
-        local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), g_rot[..., 2, :])
+    if keep_end or end_rotation is not None:
+        target = g_rot[..., 2, :] if end_rotation is None else end_rotation
+        local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
     return _norm(position - T)
 
 
