@@ -36,7 +36,8 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
-from infuse.runtime import Controller, Layer, Mode, sample_motion
+from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.clip import LoopTable
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
@@ -82,8 +83,12 @@ def infusion_for(rig, pack: str, cache=None):
 
 
 def yaw(angle) -> np.ndarray:
-    angle = np.asarray(angle, dtype=np.float64)
-    return quat.from_axis_angle(np.broadcast_to(np.array([0.0, 1.0, 0.0]), angle.shape + (3,)), angle)
+    """Quaternions (..., 4) of turns by ``angle`` (...) radians about +Y."""
+    half = 0.5 * np.asarray(angle, dtype=np.float64)
+    out = np.zeros(half.shape + (4,))
+    out[..., 1] = np.sin(half)
+    out[..., 3] = np.cos(half)
+    return out
 
 
 def clip_path(params: dict, t: np.ndarray) -> np.ndarray:
@@ -204,7 +209,7 @@ class Locomotion(Controller):
         req = self.steering.run(st, times, dt)
         speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
         w = _weights(b["space"], speed, direction, turn)
-        vf, vl, vt = w @ b["forward"], w @ b["lateral"], w @ b["turn"]
+        vf, vl, vt = (w @ b["velocities"]).T
         # Root motion: integrate the blend's own velocities from where the last block ended; the heading
         # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
         # turning examples) spun at the root.
@@ -230,6 +235,7 @@ class Locomotion(Controller):
         rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
+        forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
         ground = np.stack((px, np.zeros_like(px), pz), axis=-1)
         mover = b["movers"][int(np.argmax(w.sum(axis=0)))]
@@ -238,23 +244,28 @@ class Locomotion(Controller):
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, heading, settle, support)
+            self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
         if self.pin_feet and len(b["legs"]) == 2:
-            self._pin(job, st, rot, root, jt, contact, heading, dt)
+            self._pin(b, st, rot, root, jt, contact, forward, dt)
+        self._write(job, active, rot, root, jt)
+
+    @staticmethod
+    def _write(job, active, rot, root, jt) -> None:
+        """Write the walk's rotations (A, J, 4), root (A, 3) and joint translations (A, J, 3) or None
+        on its ``active`` (A,) frames of the block into the job's pose."""
         pose = job.pose
-        full = np.repeat(pose.local_rotations[:1], len(job.weight), axis=0)
-        full[active] = rot
-        weight = np.zeros(len(job.weight))
-        weight[active] = job.weight[active]
-        pose.set_rotations(np.arange(rot.shape[1]), full, weight, job.mode)
-        roots = np.array(pose.root_translations)
-        roots[active] = root
-        pose.set_root(roots, weight, job.mode)
+        weight = job.weight
+        if active.size < len(weight):  # the walk starts inside the block: the frames before keep the pose
+            weight = np.where(job.local_times >= -1e-9, weight, 0.0)
+            rot = _scatter(pose.local_rotations[:1], active, rot, len(weight))
+            root = _scatter(pose.root_translations, active, root, len(weight))
+            if jt is not None:
+                jt = _scatter(pose.joint_translations if pose.joint_translations is not None
+                              else job.rig.skeleton.rest_translations[None], active, jt, len(weight))
+        pose.set_rotations(np.arange(rot.shape[1]), rot, weight, job.mode)
+        pose.set_root(root, weight, job.mode)
         if jt is not None:
-            moved = np.array(pose.joint_translations) if pose.joint_translations is not None else np.repeat(
-                job.rig.skeleton.rest_translations[None], len(job.weight), axis=0)
-            moved[active] = jt
-            pose.set_translations(np.arange(1, jt.shape[1]), moved[:, 1:], weight, job.mode)
+            pose.set_translations(np.arange(1, jt.shape[1]), jt[:, 1:], weight, job.mode)
 
     def _blend(self, b, w, phase, standing, times):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
@@ -263,139 +274,127 @@ class Locomotion(Controller):
         faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
-        stepping = [i for i in used if b["events"][i] is not None]
-        if stepping:
+        stepping = used[b["stepping"][used]]
+        if stepping.size:
             ws = w[:, stepping]
-            events = np.einsum("fi,ikn->fkn", ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9),
-                               np.stack([b["events"][i] for i in stepping]))
+            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b["events"][stepping].reshape(-1, 8)).reshape(-1, 2, 4)
+        # Each clip's times (U, 3, F): the body's at the blend phase, each leg's at its foot's phase.
+        clock = np.repeat(warp(b["keys"][order, None], phase)[:, None], 3, axis=1)
+        feet = b["stepping"][order]
+        if feet.any():
+            clock[feet, 1:] = np.swapaxes(warp(b["keys"][order[feet], None, None], foot_phase(b["events"][order[feet]], events, phase)), 1, 2)
+        fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
+        if fade.size:  # the idle clips, played at the activity's times
+            clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
+        rot, root, jt = b["table"].sample(np.concatenate((order, fade)), clock, b["limbs"])
         acc = None
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
-        for i in order:
-            clip, motion = b["clips"][i], b["motions"][i]
-            times_of = [warp(clip.keys, phase)]
-            if b["events"][i] is not None:
-                times_of += list(warp(clip.keys, foot_phase(b["events"][i], events, phase)).T)  # both feet at once
-            span = max(motion.duration, 1e-9)
-            r, p, j, _ = sample_motion(motion, times_of[0] % span, loop=True)  # fresh arrays
-            for t, joints in zip(times_of[1:], b["leg_joints"]):  # each leg from its own foot's time
-                if joints.size:
-                    r[:, joints], _, jl, _ = sample_motion(motion, t % span, loop=True, joints=joints)
-                    if j is not None:
-                        j[:, joints] = jl
-            acc = _accumulate(acc, r, p, j, w[:, i])
-            if b["events"][i] is None:
-                frame = np.minimum(np.rint((times_of[0] % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64), len(clip.phases) - 1)
-                contact += clip.phases[frame] * w[:, i][:, None, None]
-                support += clip.phases[frame].max(axis=2) * w[:, i][:, None]
-        if stepping:
+        for u, i in enumerate(order):
+            acc = _accumulate(acc, rot[u], root[u], None if jt is None else jt[u], w[:, i])
+        for u in np.nonzero(~feet)[0]:  # a clip without foot events: its own contact flags
+            contact_w = w[:, order[u]]
+            flags = self._phases(b, order[u], clock[u, 0])
+            contact += flags * contact_w[:, None, None]
+            support += flags.max(axis=2) * contact_w[:, None]
+        if stepping.size:
             contact += contact_of(events, phase, HANDOVER) * ws.sum(axis=1)[:, None, None]
             support += support_of(events, phase) * ws.sum(axis=1)[:, None]
-        fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else []
-        if len(fade):
-            share = standing / len(fade)
+        if fade.size:
+            share = standing / fade.size
             acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 1)) for a in acc)
             contact *= (1.0 - standing)[:, None, None]
             support *= (1.0 - standing)[:, None]
-            for i in fade:
-                clip, motion = b["clips"][i], b["motions"][i]
-                t = times % max(motion.duration, 1e-9)
-                r, p, j, _ = sample_motion(motion, t, loop=True)
-                acc = _accumulate(acc, r, p, j, share)
-                frame = np.minimum(np.rint(t * motion.fps).astype(np.int64), len(clip.phases) - 1)
-                contact += clip.phases[frame] * share[:, None, None]
-                support += clip.phases[frame].max(axis=2) * share[:, None]
+            for u, i in enumerate(fade, start=order.size):
+                acc = _accumulate(acc, rot[u], root[u], None if jt is None else jt[u], share)
+                flags = self._phases(b, i, times)
+                contact += flags * share[:, None, None]
+                support += flags.max(axis=2) * share[:, None]
         rot, root, jt = acc
         return quat.normalize(rot), root, jt, contact, support
 
-    def _shorten(self, b, w, stride, rot, root, jt, heading, settle, support) -> None:
+    @staticmethod
+    def _phases(b, i, t) -> np.ndarray:
+        """(F, 2, 2) heel and ball contact flags of clip ``i`` at its times ``t`` (seconds, looping)."""
+        clip = b["clips"][i]
+        motion = clip.motion
+        frame = np.rint((t % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64)
+        return clip.phases[np.minimum(frame, len(clip.phases) - 1)]
+
+    def _shorten(self, b, w, stride, rot, root, jt, turn_q, forward, settle, support) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
         stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
         land where the feet stand) and lays the feet down: each foot turns toward lying as in the
         idle, its ankle toward its lowest height, fully in the middle of a stance and 60% in the
-        swing (a low step), by its stance share ``support`` (F, 2), so nothing jumps at strike or toe off."""
-        sk = b["skeleton"]
-        legs = b["legs"]
-        toes = [leg[3] for leg in legs] if b["stance_feet"] is not None else []
-        feet_rot, pos = chain_fk(sk, rot, root, jt, [legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + toes)
-        turn_q = yaw(heading)
+        swing (a low step), by its stance share ``support`` (F, 2), so nothing jumps at strike or toe off.
+        ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
+        stance_feet = b["stance_feet"]
+        feet_rot, pos = chain_fk(b["skeleton"], rot, root, jt, b["shorten_joints"])  # hips, ankles[, balls]
         down = settle[:, None] * (0.6 + 0.4 * support)  # (F, 2)
-        feet = np.stack((feet_rot[:, 2:4], feet_rot[:, 2:4]), axis=2)  # (F, 2, 2, 4) ankle and ball rotations
-        if b["stance_feet"] is not None:
-            flat = quat.multiply(turn_q[:, None, None], np.broadcast_to(b["stance_feet"], (len(heading),) + b["stance_feet"].shape))
-            animated = np.stack((feet_rot[:, 2:4], feet_rot[:, 4:6]), axis=2)
-            feet = quat.slerp(animated, flat, np.broadcast_to(down[:, :, None], animated.shape[:3]))
+        feet = feet_rot[:, 2:4, None]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
+        if stance_feet is not None:
+            flat = quat.multiply(turn_q[:, None, None], stance_feet)
+            feet = quat.slerp(feet_rot[:, 2:].reshape(-1, 2, 2, 4).swapaxes(1, 2), flat, down[:, :, None])
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
-        body = np.nonzero(b["limbs"] == 0)[0]
-        mean = quat.normalize(np.einsum("fi,ijc->fjc", w, np.stack([m[0][body] for m in b["means"]]) * np.stack(b["signs"])[:, body]))
+        body = b["body"]
+        mean = quat.normalize((w @ b["body_means"]).reshape(len(w), -1, 4))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
-        rot[:, body] = quat.slerp(mean, rot[:, body], np.broadcast_to(stride[:, None], (len(stride), len(body))))
-        stance = b["ankle_means"][np.argmax(b["idle"])] if b["idle"].any() else None
-        pole = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
-        bent = (stride < 1.0 - 1e-6).astype(float)
-        goals = []
-        for k in range(2):
-            mean = w @ b["ankle_means"][:, k]
-            if stance is not None:
-                mean = mean + settle[:, None] * (stance[k] - mean)
-            centre = quat.rotate(turn_q, mean)
-            rel = pos[:, 2 + k] - hips
-            goal = hips + centre + stride[:, None] * (rel - centre)
-            low = w @ b["ankle_low"][:, k]
-            goal[:, 1] = low + (pos[:, 2 + k, 1] - low) * (1.0 - down[:, k])
-            goals.append(goal)
-        # The legs are apart: both in one solve.
-        solve_limb(sk, rot, root, jt, [leg[:3] for leg in legs], np.stack(goals, axis=1), weight=bent, pole=pole,
-                   keep_end=False)
-        # The feet keep their animated orientation, not the one the calmer pelvis would give them (a
-        # planted foot would turn about its pinned ankle). The legs are apart: one FK for both.
-        parents, _ = chain_fk(sk, rot, root, jt, [int(sk.parents[leg[2]]) for leg in legs])
-        for k, (hip, knee, ankle, ball) in enumerate(legs):
-            rot[:, ankle] = quat.multiply(quat.conjugate(parents[:, k]), feet[:, k, 0])
-            if b["stance_feet"] is not None and int(sk.parents[ball]) == ankle:
-                rot[:, ball] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
+        rot[:, body] = quat.slerp(mean, rot[:, body], stride[:, None])
+        # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
+        centre = (w @ b["ankle_means"].reshape(len(b["ankle_means"]), 6)).reshape(-1, 2, 3)
+        if b["idle"].any():
+            centre = centre + settle[:, None, None] * (b["ankle_means"][np.argmax(b["idle"])] - centre)
+        centre = quat.rotate(turn_q[:, None], centre)
+        goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, 2:4] - hips[:, None] - centre)
+        low = w @ b["ankle_low"]
+        goal[..., 1] = low + (pos[:, 2:4, 1] - low) * (1.0 - down)
+        # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
+        # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
+        solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goal, weight=(stride < 1.0 - 1e-6).astype(float),
+                   pole=forward, end_rotation=feet[:, :, 0])
+        if stance_feet is not None and b["balls_on_ankles"].size:
+            k = b["balls_on_ankles"]
+            rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
-    def _pin(self, job, st, rot, root, jt, contact, heading, dt) -> None:
+    def _pin(self, b, st, rot, root, jt, contact, forward, dt) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
         (the foot pivoting about it, its heel rising further when the leg would not reach); fade the
-        correction out after toe off. ``contact`` (F, 2, 2)."""
-        sk = job.rig.skeleton
-        forward = np.stack((np.sin(heading), 0 * heading, np.cos(heading)), axis=-1)
-        legs = job.binding["legs"]
-        # Both feet before either is pinned (each leg's IK leaves the other leg as it is).
-        _, both = chain_fk(sk, rot, root, jt, [j for leg in legs for j in ((leg[2],) if leg[3] is None else leg[2:])])
-        starts = np.cumsum([0] + [1 if leg[3] is None else 2 for leg in legs])
-        solving = []  # (leg, ankle goals, weights) of the legs to correct, solved together at the end
-        for k, (hip, knee, ankle, ball) in enumerate(legs):
-            heel_w, ball_w = contact[:, k, 0], contact[:, k, 1]
-            planted = np.maximum(heel_w, ball_w) > 0.5
-            anchor = np.where(planted, np.where((ball_w > heel_w) & (ball is not None), BALL, ANKLE), FREE)
-            pos = both[:, starts[k]:starts[k + 1]]
-            ankle_pos = pos[:, 0]
-            point = np.where((anchor == BALL)[:, None], pos[:, -1], ankle_pos)  # the animated anchor
-            # The same anchor one frame earlier (from the last block at the first frame).
-            before = np.concatenate((st["last"][k][None], pos[:-1, [0, -1]]))
-            point_before = np.where((anchor == BALL)[:, None], before[:, 1], before[:, 0])
-            goal = ankle_pos.copy()
-            weight = np.zeros(len(anchor))
-            rise = np.zeros((len(anchor), 3))  # extra heel rise about the ball, rotation vector in the foot's frame
+        correction out after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction."""
+        # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
+        # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
+        g_rot, g_pos = chain_fk(b["skeleton"], rot, root, jt, b["pin_joints"])
+        frames = len(rot)
+        g_rot, g_pos = g_rot.reshape(frames, 2, 5, 4), g_pos.reshape(frames, 2, 5, 3)
+        feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
+        ankle_pos = g_pos[:, :, 2]
+        heel_w, ball_w = contact[..., 0], contact[..., 1]
+        anchors = np.where(np.maximum(heel_w, ball_w) > 0.5, np.where((ball_w > heel_w) & b["has_ball"], BALL, ANKLE), FREE)
+        on_ball = (anchors == BALL)[..., None]
+        points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
+        # The same anchors one frame earlier (from the last block at the first frame).
+        before = np.concatenate((st["last"][None], feet_pos[:-1]))
+        points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
+        goals = ankle_pos.copy()
+        weights = np.zeros(anchors.shape)
+        rises = np.zeros(ankle_pos.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
+        changes = np.diff(np.concatenate((st["anchor"][None], anchors)), axis=0) != 0
+        for k in range(2):
+            goal, weight, rise, point, ankle = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k]
             prev = int(st["anchor"][k])
             offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
-            change = np.nonzero(np.diff(np.concatenate(([prev], anchor))) != 0)[0]
-            bounds = np.concatenate((change, [len(anchor)]))
-            if not change.size or change[0] != 0:
-                bounds = np.concatenate(([0], bounds))
+            bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
-                kind = int(anchor[s])
+                kind = int(anchors[s, k])
                 if kind == FREE:
                     if prev != FREE:
                         released = 0.0
                     age = released + dt * np.arange(1, e - s + 1)
                     fade = 1.0 - _ease(age / RELEASE_S)
-                    goal[s:e] = ankle_pos[s:e] + offset * fade[:, None]
-                    rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
+                    goal[s:e] = ankle[s:e] + offset * fade[:, None]
+                    if lifted.any():
+                        rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:
@@ -409,28 +408,28 @@ class Locomotion(Controller):
                         # The anchor passes from the ankle to the ball (or back): the new one stays
                         # where the corrected foot had it a frame ago, so the foot does not move on
                         # with the blend's drift at the switch.
-                        pin = point_before[s] + offset
+                        pin = points_before[s, k] + offset
                         pin[1] = 0.0
-                    goal[s:e] = pin + ankle_pos[s:e] - point[s:e]
-                    goal[s:e, 1] = ankle_pos[s:e, 1]
+                    goal[s:e] = pin + ankle[s:e] - point[s:e]
+                    goal[s:e, 1] = ankle[s:e, 1]
                     weight[s:e] = 1.0
                     if kind == BALL:
-                        goal[s:e], rise[s:e] = _heel_rise(sk, rot[s:e], root[s:e], None if jt is None else jt[s:e],
-                                                          (hip, knee, ankle, ball), goal[s:e], goal[s:e] + pos[s:e, 1] - ankle_pos[s:e])
-                    offset, lifted = goal[e - 1] - ankle_pos[e - 1], rise[e - 1]
+                        goal[s:e], rise[s:e] = _heel_rise(g_rot[s:e, k, 2], g_pos[s:e, k, :3], goal[s:e],
+                                                          goal[s:e] + feet_pos[s:e, k, 1] - ankle[s:e])
+                    offset, lifted = goal[e - 1] - ankle[e - 1], rise[e - 1]
                 prev = kind
-            if np.any(rise != 0.0):
-                _turn_foot(sk, rot, ankle, ball, rise)
-            if weight.any():
-                solving.append(((hip, knee, ankle), goal, weight))
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
-            st["last"][k] = pos[-1, [0, -1]]
+        st["last"] = feet_pos[-1].copy()
+        if rises.any():
+            g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
+        solving = [k for k in range(2) if weights[:, k].any()]
         if len(solving) == 1:
-            solve_limb(sk, rot, root, jt, *solving[0], pole=forward)
+            k = solving[0]
+            solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"][k], goals[:, k], weight=weights[:, k], pole=forward,
+                       chains=(g_rot[:, k, :4], g_pos[:, k, :4]))
         elif solving:  # the legs are apart: both in one solve
-            limbs, goals, weights = zip(*solving)
-            solve_limb(sk, rot, root, jt, list(limbs), np.stack(goals, axis=1), weight=np.stack(weights, axis=1),
-                       pole=forward)
+            solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goals, weight=weights, pole=forward,
+                       chains=(g_rot[:, :, :4], g_pos[:, :, :4]))
 
 
 def _prepare(space, clips, sk, legs) -> dict:
@@ -476,12 +475,25 @@ def _prepare(space, clips, sk, legs) -> dict:
                             None if m.joint_translations is None else m.joint_translations[:1],
                             [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
         stance_feet = g_rot[0].reshape(2, 2, 4)
-    return {"space": space, "clips": clips, "motions": motions, "movers": [mv for _, mv in prepared],
-            "forward": p("forward_speed"), "lateral": p("lateral_speed"), "turn": p("turn_rate"),
-            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "legs": legs,
-            "events": events, "idle": idle, "slowest": slowest, "limbs": limbs,
-            "leg_joints": [np.nonzero(limbs == k)[0] for k in (1, 2)],
-            "means": means, "signs": signs, "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "skeleton": sk}
+    body = np.nonzero(limbs == 0)[0]
+    out = {"space": space, "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+           "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
+           "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
+           "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
+           "stepping": np.array([e is not None for e in events]), "table": LoopTable(motions), "idle": idle,
+           "slowest": slowest, "limbs": limbs, "body": body,
+           # The clips' sign-aligned mean rotations of the joints outside the legs (N, B * 4).
+           "body_means": (np.stack([m[0][body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
+           "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet}
+    if len(legs) == 2:  # the joints the stride and the pinning work on, both legs at once
+        balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
+        out.update(leg_limbs=[leg[:3] for leg in legs], balls=balls, has_ball=np.array([leg[3] is not None for leg in legs]),
+                   balls_on_ankles=np.array([k for k, leg in enumerate(legs)
+                                             if leg[3] is not None and int(sk.parents[leg[3]]) == leg[2]], dtype=np.int64),
+                   shorten_joints=[legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + (list(balls) if stance_feet is not None else []),
+                   pin_joints=[j for leg, ball in zip(legs, balls)
+                               for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
+    return out
 
 
 #: A leg pinned by its ball reaches at most this share of its length; beyond it the heel rises further.
@@ -490,34 +502,36 @@ REACH = 0.99
 _RISES = np.radians(np.arange(0.0, 61.0, 1.0))
 
 
-def _heel_rise(sk, rot, root, jt, leg, goal, ball_goal):
+def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
     """Ankle goals (F, 3) for a foot pinned at ``ball_goal`` (F, 3) with its ankle at ``goal``: where
     the hip cannot reach the ankle, the smallest further heel rise about the ball (1 degree steps)
     that brings it within :data:`REACH` of the leg's length; and that rise as rotation vectors (F, 3)
-    in the foot's frame."""
-    hip, knee, ankle, ball = leg
-    g_rot, g_pos = chain_fk(sk, rot, root, jt, [hip, knee, ankle])
-    length = np.linalg.norm(g_pos[:, 1] - g_pos[:, 0], axis=-1) + np.linalg.norm(g_pos[:, 2] - g_pos[:, 1], axis=-1)
+    in the foot's frame. ``ankle_rot`` (F, 4) is the ankle's global rotation, ``leg_pos`` (F, 3, 3)
+    the hip, knee and ankle positions."""
+    length = np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1)
     v = goal - ball_goal
     axis = np.cross(v, np.array([0.0, 1.0, 0.0]))
     axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
     up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
     c, s = np.cos(_RISES), np.sin(_RISES)
     cand = ball_goal[:, None] + v[:, None] * c[None, :, None] + up[:, None] * s[None, :, None]  # (F, K, 3)
-    ok = np.linalg.norm(cand - g_pos[:, None, 0], axis=-1) <= REACH * length[:, None]
+    ok = np.linalg.norm(cand - leg_pos[:, None, 0], axis=-1) <= REACH * length[:, None]
     pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
     rows = np.arange(len(goal))
-    local = quat.rotate(quat.conjugate(g_rot[:, 2]), axis * _RISES[pick][:, None])
+    local = quat.rotate(quat.conjugate(ankle_rot), axis * _RISES[pick][:, None])
     return cand[rows, pick], local
 
 
-def _turn_foot(sk, rot, ankle, ball, rise) -> None:
-    """Turn the foot by ``rise`` (F, 3) rotation vectors in its own frame, in place, the toes keeping
-    their orientation when the ball joint hangs from the ankle."""
+def _turn_feet(b, rot, rise) -> np.ndarray:
+    """Turn both feet by ``rise`` (F, 2, 3) rotation vectors in their own frames, in place, the toes
+    keeping their orientation where the ball joint hangs from the ankle; returns the turns (F, 2, 4)."""
     delta = quat.from_rotvec(rise)
-    rot[:, ankle] = quat.multiply(rot[:, ankle], delta)
-    if ball is not None and int(sk.parents[ball]) == ankle:
-        rot[:, ball] = quat.multiply(quat.conjugate(delta), rot[:, ball])
+    ankles = [leg[2] for leg in b["legs"]]
+    rot[:, ankles] = quat.multiply(rot[:, ankles], delta)
+    k = b["balls_on_ankles"]
+    if k.size:
+        rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(delta[:, k]), rot[:, b["balls"][k]])
+    return delta
 
 
 def _weights(space, speed, direction, turn) -> np.ndarray:
@@ -636,6 +650,13 @@ def _accumulate(acc, rot, root, jt, weight):
     if jt is not None and j0 is not None:
         j0 = j0 + jt * wi[:, :, None]
     return r0, p0, j0
+
+
+def _scatter(before: np.ndarray, active: np.ndarray, values: np.ndarray, frames: int) -> np.ndarray:
+    """(F, ...) arrays: ``values`` on the ``active`` frames, ``before`` (F or 1, ...) on the others."""
+    out = np.array(np.broadcast_to(before, (frames,) + values.shape[1:]))
+    out[active] = values
+    return out
 
 
 def _ease(x) -> np.ndarray:

@@ -19,9 +19,10 @@ EVENTS = ("strike", "flat", "heel_off", "off")
 
 def warp(keys: np.ndarray, phase: np.ndarray) -> np.ndarray:
     """Clip times (seconds) of ``phase`` in [0, 1) through the clip's keys (left strike, right strike,
-    next left strike; seconds) at phases 0, 0.5, 1."""
-    first = phase < 0.5
-    return np.where(first, keys[0] + (keys[1] - keys[0]) * phase * 2.0, keys[1] + (keys[2] - keys[1]) * (phase - 0.5) * 2.0)
+    next left strike; seconds) at phases 0, 0.5, 1. ``keys`` (..., 3): several clips' keys, their
+    leading axes broadcast against ``phase``."""
+    k0, k1, k2 = keys[..., 0], keys[..., 1], keys[..., 2]
+    return np.where(phase < 0.5, k0 + (k1 - k0) * phase * 2.0, k1 + (k2 - k1) * (phase - 0.5) * 2.0)
 
 
 def unwarp(keys: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -50,18 +51,20 @@ def foot_events(clip) -> np.ndarray | None:
 def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.ndarray:
     """Clip phases (F,) in [0, 1) of blend ``phase`` (F,) for one foot: piecewise linear from the
     blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it.
-    Both feet at once with ``mine`` (2, 4) and ``theirs`` (F, 2, 4): phases (F, 2)."""
+    Both feet at once with ``mine`` (2, 4) and ``theirs`` (F, 2, 4): phases (F, 2); and U clips' both
+    feet with ``mine`` (U, 2, 4): phases (U, F, 2)."""
     x = np.concatenate((theirs, theirs[..., :1] + 1.0), axis=-1)  # (F, [2,] 5)
-    y = np.concatenate((mine, mine[..., :1] + 1.0), axis=-1)  # ([2,] 5)
+    y = np.concatenate((mine, mine[..., :1] + 1.0), axis=-1)  # ([U,] [2,] 5)
     start = x[..., 0]
     p = start + np.mod(phase.reshape((-1,) + (1,) * (start.ndim - 1)) - start, 1.0)
     seg = np.clip((p[..., None] >= x[..., 1:]).sum(axis=-1), 0, 3)
     # Each row's segment ends picked from the rows flattened (fancy indexing beats take_along_axis here).
     rows = np.arange(p.size).reshape(p.shape)
-    flat_x, flat_y = x.reshape(-1, 5), y.reshape(-1, 5)
-    feet = rows % len(flat_y)
+    flat_x = x.reshape(-1, 5)
     x0, x1 = flat_x[rows, seg], flat_x[rows, seg + 1]
-    y0, y1 = flat_y[feet, seg], flat_y[feet, seg + 1]
+    y = y.reshape(y.shape[:y.ndim - theirs.ndim + 1] + (-1, 5))  # ([U,] feet, 5), one foot's row when alone
+    foot = rows % y.shape[-2]
+    y0, y1 = y[..., foot, seg], y[..., foot, seg + 1]
     frac = np.clip((p - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
     return np.mod(y0 + frac * (y1 - y0), 1.0)
 
