@@ -39,7 +39,7 @@ Other facts
     ``meshes`` (decoded on first use): the skinned surfaces, see :mod:`infuse_gltf.mesh`.
 
 Compressed data: Draco and most meshopt views hold mesh data, which the skeleton and clips never
-touch (the mesh surfaces decode meshopt and skip Draco primitives, with a warning). meshopt views
+touch (the mesh surfaces decode both, Draco with DracoPy: :mod:`infuse_gltf.draco`). meshopt views
 the skeleton or clips need (inverse bind matrices, keyframes; ``ATTRIBUTES`` mode with the
 ``NONE``, ``EXPONENTIAL`` or ``QUATERNION`` filter) are decoded (:mod:`infuse_gltf.meshopt`);
 anything else raises :class:`~infuse.errors.MissingFeatureError` naming the extension. Malformed
