@@ -7,7 +7,6 @@ Angles are radians unless a name ends in ``_deg``.
 """
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -16,10 +15,12 @@ IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 # The product and the rotation are quadratic: each output entry is a signed sum of products of one
 # input component by another. On a few quaternions (a block of frames of one joint) numpy's cost per
-# call outweighs the arithmetic, so they run as one outer product (..., 16) times a constant table;
-# on many, the written-out component formulas stream through memory faster. Both agree to rounding.
-#: Largest batch (quaternions in the broadcast result) computed as one outer product and one table product.
-SMALL_BATCH = 256
+# call outweighs the arithmetic, so they run as a few matrix products: ``a * b`` as ``L(a) b`` with
+# ``L(a)`` gathered from ``a`` by a constant table, ``rotate`` as the outer product ``q q`` times a
+# constant table (the rotation matrix) times ``v``. On many, the written-out component formulas stream
+# through memory faster. Both agree to rounding.
+#: Largest batch (quaternions in the larger operand) computed as small matrix products.
+SMALL_BATCH = 512
 _X, _Y, _Z, _W = range(4)
 # Entry -> (sign, i, j) terms, meaning sign * a_i * b_j: the Hamilton product a * b ...
 _PRODUCT_TERMS = {
@@ -45,16 +46,20 @@ def _table(terms: dict, shape: tuple[int, ...]) -> np.ndarray:
     return table.reshape((16,) + shape)
 
 
-_PRODUCT = _table(_PRODUCT_TERMS, (4,))  # (16, 4)
+def _left_table(terms: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(4, 4) index and sign of the matrix ``L(a)`` with ``a * b = L(a) b``: ``L(a)[r, j] = sign a_i``
+    for the term ``sign a_i b_j`` of entry ``r`` (each entry has one term per ``j``)."""
+    index = np.zeros((4, 4), dtype=np.intp)
+    signs = np.zeros((4, 4))
+    for (r,), products in terms.items():
+        for sign, i, j in products:
+            index[r, j], signs[r, j] = i, sign
+    return index, signs
+
+
+_LEFT_INDEX, _LEFT_SIGN = _left_table(_PRODUCT_TERMS)
 _ROTATION = _table(_ROTATION_TERMS, (3, 3))  # (16, 3, 3)
-
-
-_OUTER_I, _OUTER_J = np.repeat(np.arange(4), 4), np.tile(np.arange(4), 4)
-
-
-def _outer(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(..., 16) products ``a_i b_j`` at ``4 i + j`` of quaternions (..., 4), broadcast."""
-    return a[..., _OUTER_I] * b[..., _OUTER_J]
+_ROTATION_FLAT = _ROTATION.reshape(16, 9)
 
 
 def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
@@ -68,12 +73,11 @@ def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a * b`` (x,y,z,w), broadcast over leading axes."""
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    shape = a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape)
-    if math.prod(shape) <= 4 * SMALL_BATCH:
-        return _outer(a, b) @ _PRODUCT
+    if max(a.size, b.size) <= 4 * SMALL_BATCH:
+        return (a[..., _LEFT_INDEX] * _LEFT_SIGN @ b[..., None])[..., 0]
     ax, ay, az, aw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bx, by, bz, bw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
-    out = np.empty(shape)
+    out = np.empty(a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = aw * bx + ax * bw + ay * bz - az * by
     out[..., 1] = aw * by - ax * bz + ay * bw + az * bx
     out[..., 2] = aw * bz + ax * by - ay * bx + az * bw
@@ -95,12 +99,13 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Rotate vectors ``v`` (...,3) by unit quaternions ``q`` (...,4, x,y,z,w)."""
     q = np.asarray(q, dtype=np.float64)
     v = np.asarray(v, dtype=np.float64)
-    lead = q.shape[:-1] if q.shape[:-1] == v.shape[:-1] else np.broadcast_shapes(q.shape[:-1], v.shape[:-1])
-    if math.prod(lead) <= SMALL_BATCH:
+    if max(q.size // 4, v.size // 3) <= SMALL_BATCH:
+        outer = (q[..., :, None] * q[..., None, :]).reshape(-1, 16)  # q_i q_j at 4 i + j, one row per quaternion
         if v.ndim == 1:  # one vector for every quaternion: the table times the vector first
-            return v + _outer(q, q) @ (_ROTATION @ v)
-        matrices = (_outer(q, q) @ _ROTATION.reshape(16, 9)).reshape(q.shape[:-1] + (3, 3))
+            return v + (outer @ (_ROTATION @ v)).reshape(q.shape[:-1] + (3,))
+        matrices = (outer @ _ROTATION_FLAT).reshape(q.shape[:-1] + (3, 3))
         return v + (matrices @ v[..., None])[..., 0]
+    lead = q.shape[:-1] if q.shape[:-1] == v.shape[:-1] else np.broadcast_shapes(q.shape[:-1], v.shape[:-1])
     x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     vx, vy, vz = v[..., 0], v[..., 1], v[..., 2]
     # v + w t + u x t with t = 2 (u x v), written out: np.cross is slow on small arrays.
