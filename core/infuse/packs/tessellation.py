@@ -83,8 +83,8 @@ class Tessellation:
             return out, np.ones(q, dtype=bool)
         corners, base, inv = self._frames()
         rows = np.arange(q)
-        rel = y[:, None, :] - base[None]                               # (Q, S, d)
-        lam = np.einsum("sij,qsj->qsi", inv, rel)                      # (Q, S, d)
+        rel = y[None] - base[:, None]                                  # (S, Q, d)
+        lam = np.swapaxes(rel @ np.swapaxes(inv, 1, 2), 0, 1)        # (Q, S, d): one small product per simplex
         bary = np.concatenate((1.0 - lam.sum(axis=-1, keepdims=True), lam), axis=-1)  # (Q, S, d+1)
         inside_s = np.all(bary >= -1e-9, axis=-1)
         inside = inside_s.any(axis=1)
