@@ -17,6 +17,7 @@ from .pose import chain_fk
 
 # Small vector helpers over (..., 3) arrays: numpy's generic cross and norm, and einsum's broadcasting
 # iterator, cost more than the arithmetic; sums over the last axis run as one matrix-vector product.
+# Gathers go through np.take: numpy's fancy indexing costs several times more on small arrays.
 _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
 _ONES = np.ones(3)
 
@@ -31,7 +32,7 @@ def _norm(v: np.ndarray) -> np.ndarray:
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return u[..., _NEXT] * v[..., _AFTER] - u[..., _AFTER] * v[..., _NEXT]
+    return np.take(u, _NEXT, -1) * np.take(v, _AFTER, -1) - np.take(u, _AFTER, -1) * np.take(v, _NEXT, -1)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -86,13 +87,13 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     units = sides / np.maximum(lengths, 1e-12)[..., None]
     # The angles at a (to b) and at b (between b->a and b->c) now and once solved, and the goal's
     # angle off a->c at a: one arccos.
-    now = _dot(units[[2, 0, 2]], units[[0, 1, 3]])
+    now = _dot(np.take(units, [2, 0, 2], 0), np.take(units, [0, 1, 3], 0))
     now[1] = -now[1]  # b's angle lies between b->a and b->c
     solved = np.stack(((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat),
                        (lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb)))
     ac_ab_0, ba_bc_0, ac_at_0, ac_ab_1, ba_bc_1 = _arccos(np.concatenate((now, solved)))
     ca, ta, ab = sides[2], sides[3], sides[0]
-    axis1, axis0 = _cross(ca, sides[[3, 0]])  # toward the goal; the bend's normal
+    axis1, axis0 = _cross(ca, np.take(sides, [3, 0], 0))  # toward the goal; the bend's normal
     axis_norms = _norm(np.stack((axis1, axis0)))
     small = axis_norms[0] < 1e-12
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
@@ -108,15 +109,18 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     axis1 = _unit(np.where(small[..., None], axis0, axis1))
     # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
     inverse = np.moveaxis(quat.conjugate(g_rot[..., :2, :]), -2, 0)  # a's and b's: (2, F, [K,] 4)
-    r0, r1, r2 = quat.from_axis_angle(quat.rotate(inverse[[0, 1, 0]], np.stack((axis0, axis0, axis1))),
+    r0, r1, r2 = quat.from_axis_angle(quat.rotate(np.take(inverse, [0, 1, 0], 0), np.stack((axis0, axis0, axis1))),
                                       np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0)))
     columns = limbs if several else limbs[0]
-    old = local_rotations[:, columns[..., :2]]  # (F, [K,] 2, 4), a copy
+    old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
     new = quat.multiply(old, np.stack((quat.multiply(r0, r2), r1), axis=-2))
     if weight is not None:  # both joints in one interpolation
         w = np.clip(np.asarray(weight, dtype=np.float64), 0.0, 1.0)
-        w = w[:, None] if several and w.ndim == 1 else w
-        new = quat.slerp(old, new, w[..., None])
+        w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
+        if np.all((w == 0.0) | (w == 1.0)):  # solved or left as they are, frame by frame: no interpolation
+            new = np.where(w[..., None] == 1.0, new, old)
+        else:
+            new = quat.slerp(old, new, w)
     local_rotations[:, columns[..., :2]] = new
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
