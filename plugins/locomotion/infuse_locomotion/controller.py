@@ -286,12 +286,13 @@ class Locomotion(Controller):
         fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
         if fade.size:  # the idle clips, played at the activity's times
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
+        # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
         rot, root, jt = b["table"].sample(np.concatenate((order, fade)), clock, b["limbs"])
         acc = None
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
         for u, i in enumerate(order):
-            acc = _accumulate(acc, rot[u], root[u], None if jt is None else jt[u], w[:, i])
+            acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], w[:, i])
         for u in np.nonzero(~feet)[0]:  # a clip without foot events: its own contact flags
             contact_w = w[:, order[u]]
             flags = self._phases(b, order[u], clock[u, 0])
@@ -302,16 +303,18 @@ class Locomotion(Controller):
             support += support_of(events, phase) * ws.sum(axis=1)[:, None]
         if fade.size:
             share = standing / fade.size
-            acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 1)) for a in acc)
+            acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 2)) for a in acc)
             contact *= (1.0 - standing)[:, None, None]
             support *= (1.0 - standing)[:, None]
             for u, i in enumerate(fade, start=order.size):
-                acc = _accumulate(acc, rot[u], root[u], None if jt is None else jt[u], share)
+                acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], share)
                 flags = self._phases(b, i, times)
                 contact += flags * share[:, None, None]
                 support += flags.max(axis=2) * share[:, None]
         rot, root, jt = acc
-        return quat.normalize(rot), root, jt, contact, support
+        out = np.empty(rot.shape[1:] + (4,))
+        np.divide(rot, np.sqrt(np.square(rot).sum(axis=0)), out=np.moveaxis(out, -1, 0))  # normalized, frame-major
+        return out, np.ascontiguousarray(root.T), None if jt is None else np.ascontiguousarray(np.moveaxis(jt, 0, -1)), contact, support
 
     @staticmethod
     def _phases(b, i, t) -> np.ndarray:
@@ -341,7 +344,7 @@ class Locomotion(Controller):
         body = b["body"]
         mean = quat.normalize((w @ b["body_means"]).reshape(len(w), -1, 4))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
-        rot[:, body] = quat.slerp(mean, rot[:, body], stride[:, None])
+        rot[:, body] = quat.slerp(mean, np.take(rot, body, 1), stride[:, None])
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
         centre = (w @ b["ankle_means"].reshape(len(b["ankle_means"]), 6)).reshape(-1, 2, 3)
         if b["idle"].any():
@@ -500,6 +503,7 @@ def _prepare(space, clips, sk, legs) -> dict:
 REACH = 0.99
 #: Extra heel rises tried about the ball, radians.
 _RISES = np.radians(np.arange(0.0, 61.0, 1.0))
+_RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
 
 
 def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
@@ -510,16 +514,16 @@ def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
     the hip, knee and ankle positions."""
     length = np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1)
     v = goal - ball_goal
-    axis = np.cross(v, np.array([0.0, 1.0, 0.0]))
+    axis = np.stack((-v[:, 2], np.zeros(len(v)), v[:, 0]), axis=-1)  # v x +Y: the horizontal axis across v
     axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
     up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
-    c, s = np.cos(_RISES), np.sin(_RISES)
-    cand = ball_goal[:, None] + v[:, None] * c[None, :, None] + up[:, None] * s[None, :, None]  # (F, K, 3)
-    ok = np.linalg.norm(cand - leg_pos[:, None, 0], axis=-1) <= REACH * length[:, None]
+    # Each rise's ankle, coordinate by coordinate (F, K), and its squared distance from the hip.
+    far = sum((ball_goal[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - leg_pos[:, 0, k, None]) ** 2
+              for k in range(3))
+    ok = np.sqrt(far) <= REACH * length[:, None]
     pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
-    rows = np.arange(len(goal))
     local = quat.rotate(quat.conjugate(ankle_rot), axis * _RISES[pick][:, None])
-    return cand[rows, pick], local
+    return ball_goal + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None], local
 
 
 def _turn_feet(b, rot, rise) -> np.ndarray:
@@ -639,16 +643,17 @@ def mean_pose(motion) -> tuple:
 
 
 def _accumulate(acc, rot, root, jt, weight):
-    """Add a weighted, sign-aligned pose to the running sums ``acc`` (None to start)."""
-    wi = weight[:, None]
+    """Add a pose (component-major: rotations (4, F, J), root (3, F), joint translations (3, F, J) or
+    None) weighted by ``weight`` (F,) to the running sums ``acc`` (None to start), each rotation
+    turned to the sum's side."""
+    wj = weight[:, None]
     if acc is None:
-        return rot * wi[:, :, None], root * wi, None if jt is None else jt * wi[:, :, None]
+        return rot * wj, root * weight, None if jt is None else jt * wj
     r0, p0, j0 = acc
-    sign = np.where(np.sum(r0 * rot, axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
-    r0 = r0 + sign * rot * wi[:, :, None]
-    p0 = p0 + root * wi
+    r0 += rot * (np.where((r0 * rot).sum(axis=0) < 0.0, -1.0, 1.0) * wj)
+    p0 = p0 + root * weight
     if jt is not None and j0 is not None:
-        j0 = j0 + jt * wi[:, :, None]
+        j0 = j0 + jt * wj
     return r0, p0, j0
 
 
