@@ -7,7 +7,6 @@ Angles are radians unless a name ends in ``_deg``.
 """
 from __future__ import annotations
 
-
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -60,6 +59,7 @@ def _left_table(terms: dict) -> tuple[np.ndarray, np.ndarray]:
 _LEFT_INDEX, _LEFT_SIGN = _left_table(_PRODUCT_TERMS)
 _ROTATION = _table(_ROTATION_TERMS, (3, 3))  # (16, 3, 3)
 _ROTATION_FLAT = _ROTATION.reshape(16, 9)
+_IDENTITY_FLAT = np.eye(3).ravel()
 
 
 def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
@@ -177,6 +177,17 @@ def to_matrix(q: np.ndarray) -> np.ndarray:
     q = np.asarray(q, dtype=np.float64)
     shape = q.shape[:-1]
     return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(shape + (3, 3))
+
+
+def unit_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (...,3,3) acting on column vectors, of unit quaternions (...,4).
+
+    Unlike :func:`to_matrix` the quaternions are taken as unit length (not normalized): the matrices
+    come from their products in one table product, cheap on a few quaternions as on many.
+    """
+    q = np.asarray(q, dtype=np.float64)
+    outer = (q[..., :, None] * q[..., None, :]).reshape(-1, 16)  # q_i q_j at 4 i + j, one row per quaternion
+    return (outer @ _ROTATION_FLAT + _IDENTITY_FLAT).reshape(q.shape[:-1] + (3, 3))
 
 
 def from_euler(order: str, angles: np.ndarray, degrees: bool = False) -> np.ndarray:

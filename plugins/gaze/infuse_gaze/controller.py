@@ -27,7 +27,9 @@ from .model import (
     DEFAULT_INFLUENCE, EYES, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOT_GROUPS, SLOT_PARENTS, SLOTS,
     group_name, smoothing_factor,
 )
-from .solver import SolverInput, rotation_matrices, solve
+from .solver import SolverInput, solve
+
+_FORWARD = np.array([0.0, 0.0, 1.0])
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
     """(heading, pitch) radians of an offset of ``angle_deg`` toward ``direction``: a BML word
@@ -196,8 +198,8 @@ class Gaze(Controller):
         first_jobs = [rows[name][0] for name in names]
         chain = dict(zip(("frames_world", "positions", "origin"), _chain_frames(first_jobs)))
         positions = chain["positions"]  # each slot's joint in the world
-        # Where the priority joint points: the mean forward (+Z, the third column) axis of the eyes or the head.
-        forward_axes = chain["frames_world"][..., 2]
+        # Where the priority joint points: the mean forward (+Z) axis of the eyes or the head.
+        forward_axes = quat.rotate(chain["frames_world"], _FORWARD)
         chain["forward"] = _weighted_slots(np.array([_lead_weights(span[0][0]) for span in spans]), forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
             for job, these in spans[c][1:]:
@@ -226,13 +228,16 @@ class Gaze(Controller):
                     arrays["weights"][c, these] = 0.0
         inp = SolverInput(present=np.stack([rows[n][0].binding["present"] for n in names]),
                           counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays, **chain)
+        # The smoothing's state, per character (whichever of its gazes leads): each group's and each
+        # eye's offsets, and the groups' offsets in the first pass of characters looking at each other.
         states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
         groups_state = np.stack([st.get("groups", np.zeros((n_groups, 2))) for st in states])
         eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
-        offsets, _ = solve(inp, groups_state, eyes_state)
+        first_state = np.stack([st.get("first", groups_state[c]) for c, st in enumerate(states)])
+        offsets = solve(inp, groups_state, eyes_state, first_state)
         for c, name in enumerate(names):
             job = rows[name][0]
-            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c]}
+            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "first": first_state[c]}
             b = job.binding
             present = b["present"]
             hv = offsets[c][:, present]
@@ -266,7 +271,7 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
 
 def _chain_frames(jobs):
     """For the gazing characters (one job each), from the pose below: each slot's aligned frame
-    (C, F, S, 3, 3, matrices acting on column vectors) and position (C, F, S, 3) in the world, and where
+    (C, F, S, 4, unit quaternions) and position (C, F, S, 3) in the world, and where
     the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all else runs
     on every character at once."""
     frames = len(jobs[0].pose.root_translations)
@@ -286,7 +291,7 @@ def _chain_frames(jobs):
         rot = np.where(world, quat.IDENTITY, rot)
         pos = np.where(world, 0.0, pos)
     aligned = np.stack([job.binding["chain_aligned"] for job in jobs])[:, None]  # (C, 1, S, 4)
-    frames_w = rotation_matrices(quat.multiply(rot, aligned))
+    frames_w = quat.multiply(rot, aligned)
     origin = _weighted_slots(np.array([_origin_weights(job.binding["present"]) for job in jobs]), pos)
     return frames_w, pos, origin
 

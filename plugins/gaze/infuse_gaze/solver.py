@@ -3,10 +3,7 @@
 Everything is expressed in the chain's *slots* (:data:`~infuse_gaze.model.SLOTS`, pelvis to eyes) and
 in their aligned frames (:mod:`infuse.runtime.swing`; a slot the character lacks repeats its parent).
 For each character and frame the caller gives, from the pose below the gaze, each slot's aligned
-frame and position in the world, where the gaze starts and where the priority joint points. The
-solver derives each slot's frame relative to its parent slot and its view of the gaze origin and
-direction when it first reaches the slot: the chain above a slot is rigid until its group is solved,
-so one matrix product per slot and frame gives the whole picture.
+frame and position in the world, where the gaze starts and where the priority joint points.
 
 Per frame, groups are solved bottom-up (Thiebaux et al. 2009): with the groups above still at the
 pose below, the turn left to do is the heading and pitch from where the priority joint points to
@@ -19,6 +16,14 @@ finally aims from its own position. Outputs are (heading, pitch) offsets in radi
 
 A group's wish at a frame depends only on the groups below it at that frame, so the solver runs
 group by group over all frames at once; only the smoothing (:func:`follow`) steps frame by frame.
+Up the chain it carries one vector per frame, the target seen from the current slot: the chain
+above a slot is rigid until its group is solved, so what a slot sees is what its parent sees,
+moved into the slot's frame (a rotation and an offset from the pose below, worked out once per
+block for all slots, :class:`_Block`) and turned back by the slot's own swing. Positions are only
+needed when another character looks at this one's face: a forward kinematics of the solved slots.
+Inside a block, vectors and matrices are component-major ((3, C, F), (3, 3, C, F)): each component
+is one contiguous array over the characters and frames, so a product over a block is a few calls on
+long arrays (numpy's products of stacks of 3 x 3 matrices cost far more per frame).
 """
 from __future__ import annotations
 
@@ -29,21 +34,27 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from infuse.runtime.swing import direction_angles
+from infuse import Skeleton
+from infuse import quaternions as quat
+from infuse.runtime.pose import chain_fk
+from infuse.runtime.swing import swing
 
 from .model import EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
 
 _S = len(SLOTS)
 _EYE_SLOTS = (7, 8)
 _FIRST_SLOT = {g: SLOT_GROUPS.index(g) for g in set(SLOT_GROUPS)}
+_PARENT_SLOTS = np.maximum(SLOT_PARENTS, 0)  # the pelvis slot stands in for its own parent (the world)
+#: The slots as a skeleton (joint i is slot i), for the forward kinematics of a solved chain.
+_SLOT_SKELETON = Skeleton(SLOTS, np.array(SLOT_PARENTS), np.zeros((_S, 3)), quat.identity((_S,)))
 
 
 @dataclass
 class SolverInput:
     """Arrays over C characters, F frames, S slots, G groups (angles in radians, lengths in metres).
 
-    - ``frames_world`` (C, F, S, 3, 3), ``positions`` (C, F, S, 3): each slot's aligned frame (a matrix
-      acting on column vectors) and position in the world, in the pose below the gaze;
+    - ``frames_world`` (C, F, S, 4), ``positions`` (C, F, S, 3): each slot's aligned frame (a unit
+      quaternion, x, y, z, w) and position in the world, in the pose below the gaze;
     - ``origin`` (C, F, 3): where the gaze starts (the eyes, or the head); ``forward`` (C, F, 3): where the
       priority joint points (a unit vector), both in the world and the pose below;
     - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
@@ -73,76 +84,90 @@ class SolverInput:
     refine: tuple = ()
 
 
-def swing_matrices(heading: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) matrices of ``R_Y(heading) R_X(-pitch)``: +Z turned to (heading, pitch)."""
-    ch, sh, cv, sv = np.cos(heading), np.sin(heading), np.cos(pitch), np.sin(pitch)
-    out = np.empty(np.shape(heading) + (3, 3))
-    out[..., 0, 0] = ch
-    out[..., 0, 1] = -sh * sv
-    out[..., 0, 2] = sh * cv
-    out[..., 1, 0] = 0.0
-    out[..., 1, 1] = cv
-    out[..., 1, 2] = sv
-    out[..., 2, 0] = -sh
-    out[..., 2, 1] = -ch * sv
-    out[..., 2, 2] = ch * cv
-    return out
+#: Where the nine entries of ``(R_Y(h) R_X(-p))^T`` come from, row by row, among (ch, sh, cp, sp, ch cp,
+#: ch sp, sh cp, sh sp, 0) (c: cosine, s: sine), and their signs (see :func:`unswing_matrices`).
+_UNSWING_SOURCE = np.array([0, 8, 1, 7, 2, 5, 6, 3, 4])
+_UNSWING_SIGN = np.array([1.0, 1.0, -1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0])[:, None, None]
+_SINE_PHASE = np.array([0.0, 0.5 * np.pi])[None, :, None, None]  # cos(x - pi/2) = sin(x): both in one call
 
 
-def rotation_matrices(q: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) matrices of unit quaternions (..., 4) (x, y, z, w)."""
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    out[..., 0, 1] = 2.0 * (x * y - z * w)
-    out[..., 0, 2] = 2.0 * (x * z + y * w)
-    out[..., 1, 0] = 2.0 * (x * y + z * w)
-    out[..., 1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    out[..., 1, 2] = 2.0 * (y * z - x * w)
-    out[..., 2, 0] = 2.0 * (x * z - y * w)
-    out[..., 2, 1] = 2.0 * (y * z + x * w)
-    out[..., 2, 2] = 1.0 - 2.0 * (x * x + y * y)
-    return out
+def unswing_matrices(hv: np.ndarray) -> np.ndarray:
+    """Component-major matrices (3, 3, C, F) of ``(R_Y(h) R_X(-p))^T``, the inverse of the turn taking +Z
+    to (h, p), for (heading, pitch) pairs ``hv`` (C, F, 2) in radians."""
+    lead = hv.shape[:-1]
+    trig = np.cos(np.moveaxis(hv, -1, 0)[:, None] - _SINE_PHASE)  # (2, 2, C, F): (cos, sin) of h, then of p
+    products = trig[0, :, None] * trig[1, None, :]  # (ch cp, ch sp, sh cp, sh sp)
+    values = np.concatenate((trig.reshape((4,) + lead), products.reshape((4,) + lead), np.zeros((1,) + lead)))
+    return (values[_UNSWING_SOURCE] * _UNSWING_SIGN).reshape((3, 3) + lead)
 
 
-def _angles(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return np.arctan2(v[..., 0], v[..., 2]), np.arctan2(v[..., 1], np.hypot(v[..., 0], v[..., 2]))
+class _Clamp:
+    """Scales (heading, pitch) onto the ellipse of ``limits`` (..., 4) (heading, up, down, roll radians)
+    when outside it; an axis with a zero limit does not turn at all."""
 
+    def __init__(self, limits: np.ndarray):
+        turns = limits[..., :3] > 0
+        with np.errstate(divide="ignore"):
+            self.inverse = np.where(turns, 1.0 / limits[..., :3], 0.0)  # (..., 3): 0 where locked
+        self.locked = not turns.all()
 
-def _clamp(h, v, limits):
-    """(h, v) (...) scaled onto the ellipse of ``limits`` (..., 4) when outside it; an axis with a zero
-    limit does not turn at all."""
-    vertical = np.where(v >= 0.0, limits[..., 1], limits[..., 2])
-    h = np.where(limits[..., 0] > 0, h, 0.0)
-    v = np.where(vertical > 0, v, 0.0)
-    a = h / np.where(limits[..., 0] > 0, limits[..., 0], 1.0)
-    b = v / np.where(vertical > 0, vertical, 1.0)
-    f = 1.0 / np.maximum(np.sqrt(a * a + b * b), 1.0)
-    return h * f, v * f
+    def __call__(self, h: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        vertical = np.where(v >= 0.0, self.inverse[..., 1], self.inverse[..., 2])
+        f = 1.0 / np.maximum(np.hypot(h * self.inverse[..., 0], v * vertical), 1.0)
+        if self.locked:
+            h = np.where(self.inverse[..., 0] > 0, h, 0.0)
+            v = np.where(vertical > 0, v, 0.0)
+        return h * f, v * f
 
 
 def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, state: np.ndarray):
     """Smoothed, speed-limited path (C, F, 2) toward ``desired`` (C, F, 2) from ``state`` (C, 2).
 
     Each frame covers ``smoothing`` (C, F) of the distance left, at most ``max_step`` (C, F) radians.
-    Returns the final state (C, 2) and the path. Without the speed limit at work and with one share
-    per row the path is a linear filter (:func:`_follow_linear`); else it is stepped frame by frame,
-    the only loop over frames in the solver (rows at rest with nothing to follow stay at rest without it).
+    Returns the final state (C, 2) and the path (``desired`` itself when it is followed exactly). See
+    :class:`_Smoothing`, which keeps what depends only on the rates for several calls.
     """
-    if (smoothing >= 1.0).all():  # no smoothing: the path is the target unless a step is too long
-        steps = np.diff(np.concatenate((state[:, None], desired), axis=1), axis=1)
-        if (np.sqrt(np.sum(steps * steps, axis=-1)) <= max_step).all():
-            return desired[:, -1].copy(), desired.copy()
-    linear = _follow_linear(desired, smoothing, max_step, state)
-    if linear is not None:
-        return linear
-    rows = np.flatnonzero((desired != 0.0).any(axis=(1, 2)) | (state != 0.0).any(axis=1))
-    if rows.size == len(state):
-        return _step_frames(desired, smoothing, max_step, state)
-    final, path = state.copy(), np.zeros_like(desired)
-    if rows.size:
-        final[rows], path[rows] = _step_frames(desired[rows], smoothing[rows], max_step[rows], state[rows])
-    return final, path
+    return _Smoothing(smoothing, max_step)(desired, state)
+
+
+class _Smoothing:
+    """:func:`follow` for given ``smoothing`` and ``max_step`` (R, F) rows.
+
+    Without smoothing and with no step above the limit the path is the target. Without the speed
+    limit at work and with one share per row the path is a linear filter (:func:`_smoothing_filter`);
+    else it is stepped frame by frame, the only loop over frames in the solver (rows at rest with
+    nothing to follow stay at rest without it).
+    """
+
+    def __init__(self, smoothing: np.ndarray, max_step: np.ndarray):
+        self.smoothing, self.max_step = smoothing, max_step
+        self.instant = bool((smoothing >= 1.0).all())
+        shares = smoothing[:, 0]
+        self.filter = None
+        if (smoothing == shares[:, None]).all():
+            matrix, powers = _smoothing_filter(tuple(shares.tolist()), smoothing.shape[1])
+            self.filter = matrix, powers[..., None]
+
+    def __call__(self, desired: np.ndarray, state: np.ndarray):
+        if self.instant and self._within_limit(desired, state):
+            return desired[:, -1].copy(), desired
+        if self.filter is not None:  # in closed form, equal to the stepped path up to rounding
+            matrix, powers = self.filter
+            path = matrix @ desired + powers * state[:, None]
+            if self._within_limit(path, state):
+                return path[:, -1].copy(), path
+        rows = np.flatnonzero((desired != 0.0).any(axis=(1, 2)) | (state != 0.0).any(axis=1))
+        if rows.size == len(state):
+            return _step_frames(desired, self.smoothing, self.max_step, state)
+        final, path = state.copy(), np.zeros_like(desired)
+        if rows.size:
+            final[rows], path[rows] = _step_frames(desired[rows], self.smoothing[rows], self.max_step[rows], state[rows])
+        return final, path
+
+    def _within_limit(self, path: np.ndarray, state: np.ndarray) -> bool:
+        """Whether no step of ``path`` (R, F, 2) from ``state`` (R, 2) is longer than the limit."""
+        steps = path - np.concatenate((state[:, None], path[:, :-1]), axis=1)
+        return bool((np.sqrt(np.sum(steps * steps, axis=-1)) <= self.max_step).all())
 
 
 @functools.lru_cache(maxsize=64)
@@ -156,21 +181,6 @@ def _smoothing_filter(shares: tuple[float, ...], frames: int) -> tuple[np.ndarra
     powers = (1.0 - share[:, 0]) ** np.arange(1, frames + 1)
     matrix.flags.writeable = powers.flags.writeable = False
     return matrix, powers
-
-
-def _follow_linear(desired, smoothing, max_step, state):
-    """:func:`follow` in closed form (:func:`_smoothing_filter`) when each row's share is the same over
-    the block; None when it is not, or when a step of that path exceeds the speed limit (then the
-    limit shapes the path and it is stepped frame by frame). Equal to the stepped path up to rounding."""
-    shares = smoothing[:, 0]
-    if not (smoothing == shares[:, None]).all():
-        return None
-    matrix, powers = _smoothing_filter(tuple(shares.tolist()), desired.shape[1])
-    path = matrix @ desired + powers[..., None] * state[:, None]
-    steps = np.diff(path, axis=1, prepend=state[:, None])
-    if (np.sqrt(np.sum(steps * steps, axis=-1)) > max_step).any():
-        return None
-    return path[:, -1].copy(), path
 
 
 def _step_frames(desired, smoothing, max_step, state):
@@ -216,16 +226,6 @@ def _follow_scalar(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndar
     return np.array(finals, dtype=np.float64).reshape(state.shape), np.array(paths, dtype=np.float64).reshape(desired.shape)
 
 
-def apply_matrices(m, v):
-    """Matrices (..., 3, 3) times vectors (..., 3)."""
-    return (m @ v[..., None])[..., 0]
-
-
-def _apply_t(m, v):
-    """Transposed matrices (..., 3, 3) times vectors (..., 3)."""
-    return (v[..., None, :] @ m)[..., 0, :]
-
-
 def _pairs(h, v, gain):
     """(..., 2) heading and pitch (...) times ``gain`` (...)."""
     out = np.empty(h.shape + (2,))
@@ -234,126 +234,170 @@ def _pairs(h, v, gain):
     return out
 
 
-def _direction(frame, vector, forward_h, forward_v, fixed):
-    """Heading and pitch left to turn: from the forward angles to ``vector`` seen in ``frame``, plus the fixed offsets."""
-    ht, vt = _angles(_apply_t(frame, vector))
-    return (ht + fixed[..., 0] - forward_h + np.pi) % (2 * np.pi) - np.pi, vt + fixed[..., 1] - forward_v
+def _angles(local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Heading and pitch (...) of component-major vectors (3, ...) given in an aligned frame."""
+    x, y, z = local
+    return np.arctan2(x, z), np.arctan2(y, np.hypot(x, z))
 
 
-class _PoseBelow:
-    """What the solver reads from the pose below, per slot, computed when first asked (the slots below
-    the first that turns need none of it) and shared by both passes of a block."""
+def _contiguous(a: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
+    """A contiguous copy of ``a`` with its axes in the order ``axes``."""
+    return np.ascontiguousarray(a.transpose(axes))
+
+
+class _Group:
+    """One joint group over a block, for every character: the share of the turn it takes
+    (``fraction`` (C, F)), its limits, its gain (``gain`` (C, F): moves times the blend weight), its
+    smoothing and the joints it has (``counts`` (C, 1, 1))."""
+
+    def __init__(self, inp: SolverInput, gains: np.ndarray, g: int):
+        self.fraction = inp.fractions[:, :, g]
+        self.clamp = _Clamp(inp.limits[:, :, g])
+        self.gain = gains[:, :, g]
+        self.smoothing = _Smoothing(inp.smoothing[:, :, g], inp.max_step[:, :, g])
+        self.counts = np.maximum(inp.counts[:, g], 1)[:, None, None]
+
+    def turn(self, dh: np.ndarray, dv: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """The path (C, F, 2) each of the group's joints turns, given the turn left to do (C, F) from
+        the group's first slot; ``state`` (C, 2) (the group's offsets so far) is updated in place."""
+        dh, dv = self.clamp(dh * self.fraction, dv * self.fraction)
+        state[:], path = self.smoothing(_pairs(dh, dv, self.gain), state)
+        return path / self.counts
+
+
+class _Block:
+    """What both passes of a block share, from the pose below, component-major, for all slots at once
+    (S, then components, then C, F):
+
+    - ``frames`` (S, 3, 3, C, F), ``positions`` (S, 3, C, F): each slot's aligned frame and position in
+      the world;
+    - ``to_slot`` (S, 3, 3, C, F): matrices taking a vector from the parent slot's aligned frame into
+      the slot's, ``offset`` (S, 3, C, F): the slot's position in its parent's aligned frame;
+    - ``origin`` (S, 3, C, F): where the gaze starts, seen from each slot's aligned frame;
+    - ``aim_h``, ``aim_v`` (S, C, F): heading (plus pi, for the wrap) and pitch of the fixed offsets minus
+      those of where the priority joint points, seen from each slot: added to the target's angles, the
+      turn left;
+    - the groups' and eyes' settings, made when first asked.
+    """
 
     def __init__(self, inp: SolverInput):
         self.inp = inp
-        self._relative: dict = {}
-        self._views: dict = {}
+        frames = _contiguous(quat.unit_to_matrix(inp.frames_world), (2, 3, 4, 0, 1))
+        positions = _contiguous(inp.positions, (2, 3, 0, 1))
+        parents = frames[_PARENT_SLOTS]
+        self.frames, self.positions = frames, positions
+        self.to_slot = np.einsum("sjicf,sjkcf->sikcf", frames, parents)
+        self.offset = np.einsum("sjicf,sjcf->sicf", parents, positions - positions[_PARENT_SLOTS])
+        self.origin = np.einsum("sjicf,sjcf->sicf", frames, _contiguous(inp.origin, (2, 0, 1)) - positions)
+        forward_h, forward_v = _angles(np.moveaxis(np.einsum("sjicf,jcf->sicf", frames, _contiguous(inp.forward, (2, 0, 1))), 1, 0))
+        self.aim_h = inp.offsets[..., 0] - forward_h + np.pi
+        self.aim_v = inp.offsets[..., 1] - forward_v
+        self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
+        self.present = inp.present[:, None, :, None]  # (C, 1, S, 1)
+        self.everyone = inp.present.all(axis=0).tolist()  # slots every character has
+        self.absent = (~inp.present.any(axis=0)).tolist()  # slots no character has: they repeat their parent
+        self._groups: dict[int, _Group] = {}
+        self._eyes = None
 
-    def relative(self, slots: list[int]):
-        """Sibling slots' aligned frames (C, F, K, 3, 3) and positions (C, F, K, 3) relative to their
-        parent slot's aligned frame."""
-        key = tuple(slots)
-        if key not in self._relative:
-            frames, positions = self.inp.frames_world, self.inp.positions
-            p = SLOT_PARENTS[slots[0]]
-            inverse = np.swapaxes(frames[:, :, p, None], -1, -2)  # (C, F, 1, 3, 3)
-            self._relative[key] = (inverse @ frames[:, :, slots],
-                                   apply_matrices(inverse, positions[:, :, slots] - positions[:, :, p, None]))
-        return self._relative[key]
+    def group(self, g: int) -> _Group:
+        if g not in self._groups:
+            self._groups[g] = _Group(self.inp, self.gains, g)
+        return self._groups[g]
 
-    def view(self, slot: int):
-        """Where the gaze starts (C, F, 3), and the heading and pitch (C, F) of where the priority joint
-        points, seen from a slot's aligned frame."""
-        if slot not in self._views:
-            inverse = np.swapaxes(self.inp.frames_world[:, :, slot], -1, -2)
-            origin = apply_matrices(inverse, self.inp.origin - self.inp.positions[:, :, slot])
-            self._views[slot] = (origin, direction_angles(apply_matrices(inverse, self.inp.forward)))
-        return self._views[slot]
+    def eyes(self):
+        """The eyes' clamp, gain (2, C, F) and smoothing over 2 C rows (one per eye, eye-major)."""
+        if self._eyes is None:
+            inp = self.inp
+            self._eyes = (_Clamp(inp.limits[:, :, EYES]), self.gains[:, :, EYES] * inp.present[:, _EYE_SLOTS].T[:, :, None],
+                          _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1))))
+        return self._eyes
+
+    def world_positions(self, offsets: np.ndarray) -> np.ndarray:
+        """World positions (C, F, S, 3) of the slots turned by ``offsets`` (C, F, S, 2)."""
+        q = self.inp.frames_world
+        local = quat.multiply(quat.conjugate(q[:, :, _PARENT_SLOTS]), q)  # each slot's frame in its parent's
+        local[:, :, 0] = q[:, :, 0]  # the pelvis slot's parent is the world
+        turns = quat.multiply(local, swing(offsets[..., 0], offsets[..., 1]))
+        return chain_fk(_SLOT_SKELETON, turns, self.inp.positions[:, :, 0], self.offset.transpose(2, 3, 0, 1), range(_S))[1]
 
 
-def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray):
-    """Run the block; returns (offsets (C, F, S, 2), positions (C, F, S, 3) of the solved chain).
+def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, first_state: np.ndarray | None = None):
+    """Run the block; returns the offsets (C, F, S, 2).
 
     ``groups_state`` (C, G, 2) and ``eyes_state`` (C, 2, 2) hold the current offsets and are updated
     in place. Characters looking at another one's eyes or head (``refine``) get a second pass with
-    that character's solved positions.
+    that character's solved positions. The first pass smooths its own way: ``first_state`` (C, G, 2)
+    holds its offsets from block to block (updated in place, and equal to ``groups_state`` after a
+    block without a first pass), so that where blocks begin does not change the result; None starts
+    it from ``groups_state``.
     """
-    below = _PoseBelow(inp)
+    block = _Block(inp)
     if not inp.refine:
-        return _solve_once(inp, below, groups_state, eyes_state)
+        offsets = _solve_once(inp, block, groups_state, eyes_state)
+        if first_state is not None:
+            first_state[:] = groups_state
+        return offsets
     # The first pass only places the chains (no joint's position depends on the eyes' turn).
-    _, positions = _solve_once(inp, below, groups_state.copy(), eyes_state, eyes=False)
+    first = groups_state.copy() if first_state is None else first_state
+    positions = block.world_positions(_solve_once(inp, block, first, eyes_state, eyes=False))
     targets = inp.targets.copy()
     for c, c2, slots in inp.refine:
         targets[c] = positions[c2][:, list(slots)].mean(axis=1)
-    return _solve_once(replace(inp, targets=targets), below, groups_state, eyes_state)
+    return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)
 
 
-def _solve_once(inp: SolverInput, below: _PoseBelow, groups_state: np.ndarray, eyes_state: np.ndarray,
-                eyes: bool = True):
+def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
     groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
     no character turns (and none is on its way back) is skipped: its joints stay as they are. Without
-    ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was)."""
+    ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was). Returns the
+    offsets (C, F, S, 2)."""
     c_count, frames = inp.targets.shape[:2]
     out = np.zeros((c_count, frames, _S, 2))
-    w_rot = np.empty((c_count, frames, _S, 3, 3))
-    w_pos = np.empty((c_count, frames, _S, 3))
-    counts = np.maximum(inp.counts, 1)[:, None, :, None]  # (C, 1, G, 1)
-    present = inp.present[:, None, :, None]  # (C, 1, S, 1)
-    target = inp.targets
-    gains = inp.active * inp.weights[..., None]  # (C, F, G)
-    turning = (np.any(gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
-    absent = (~inp.present.any(axis=0)).tolist()  # slots no character has: they repeat their parent
-    moved = False  # until a slot turns, the chain stands as in the pose below
-    share = None
+    target = _contiguous(inp.targets, (2, 0, 1))  # (3, C, F)
+    turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
+    seen = None  # (3, C, F): the target seen from the last slot's aligned frame; None until a slot turns
+    share = unturn = None
     for s in range(_EYE_SLOTS[0]):
-        p = SLOT_PARENTS[s]
-        if not moved:
-            pre = inp.frames_world[:, :, s]
-            w_pos[:, :, s] = inp.positions[:, :, s]
-        elif absent[s]:
-            pre = w_rot[:, :, p]
-            w_pos[:, :, s] = w_pos[:, :, p]
-        else:
-            rotation, position = below.relative([s])
-            pre = w_rot[:, :, p] @ rotation[:, :, 0]
-            w_pos[:, :, s] = w_pos[:, :, p] + apply_matrices(w_rot[:, :, p], position[:, :, 0])
         g = SLOT_GROUPS[s]
-        if turning[g] and _FIRST_SLOT[g] == s:
-            origin, (forward_h, forward_v) = below.view(s)
-            dh, dv = _direction(pre, target - w_pos[:, :, s] - apply_matrices(pre, origin), forward_h, forward_v,
-                                inp.offsets)
-            fraction = inp.fractions[:, :, g]
-            dh, dv = _clamp(dh * fraction, dv * fraction, inp.limits[:, :, g])
-            groups_state[:, g], path = follow(_pairs(dh, dv, gains[:, :, g]), inp.smoothing[:, :, g],
-                                              inp.max_step[:, :, g], groups_state[:, g])
-            share = path / counts[:, :, g]
-        if not turning[g] or absent[s]:
-            w_rot[:, :, s] = pre
+        first = _FIRST_SLOT[g] == s
+        if seen is None:
+            if not (turning[g] and first):
+                continue  # the chain stands as in the pose below
+            view = np.einsum("jicf,jcf->icf", block.frames[s], target - block.positions[s])
+        elif block.absent[s]:
+            view = seen  # the slot is its parent
+        else:
+            view = np.einsum("ijcf,jcf->icf", block.to_slot[s], seen - block.offset[s])
+        if turning[g] and first:
+            heading, pitch = _angles(view - block.origin[s])
+            share = block.group(g).turn((heading + block.aim_h[s]) % (2 * np.pi) - np.pi, pitch + block.aim_v[s],
+                                        groups_state[:, g])
+            unturn = None
+        if not turning[g] or block.absent[s]:
+            seen = view
             continue
-        hv = np.where(present[:, :, s], share, 0.0)
-        out[:, :, s] = hv
-        w_rot[:, :, s] = pre @ swing_matrices(hv[..., 0], hv[..., 1])
-        moved = True
+        if block.everyone[s]:  # the group's slots share one turn
+            unturn = unswing_matrices(share) if unturn is None else unturn
+            out[:, :, s] = share
+            seen = np.einsum("ijcf,jcf->icf", unturn, view)
+        else:
+            hv = np.where(block.present[:, :, s], share, 0.0)
+            out[:, :, s] = hv
+            seen = np.einsum("ijcf,jcf->icf", unswing_matrices(hv), view)
+    if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
+        return out
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
-    pair, p = list(_EYE_SLOTS), SLOT_PARENTS[_EYE_SLOTS[0]]
-    if moved:
-        parent = w_rot[:, :, p, None]
-        rotation, position = below.relative(pair)
-        w_pos[:, :, pair] = w_pos[:, :, p, None] + apply_matrices(parent, position)
+    pair = slice(_EYE_SLOTS[0], _EYE_SLOTS[1] + 1)
+    if seen is None:
+        view = np.einsum("ejicf,ejcf->eicf", block.frames[pair], target - block.positions[pair])
     else:
-        w_pos[:, :, pair] = inp.positions[:, :, pair]
-    if not (eyes and (inp.present[:, pair].any() or eyes_state.any())):
-        return out, w_pos
-    pre = parent @ rotation if moved else inp.frames_world[:, :, pair]
-    dh, dv = _direction(pre, target[:, :, None] - w_pos[:, :, pair], 0.0, 0.0,
-                        inp.offsets[:, :, None])
-    dh, dv = _clamp(dh, dv, inp.limits[:, :, EYES, None])
-    gain = gains[:, :, EYES, None] * inp.present[:, None, pair]  # (C, F, 2)
-    desired = _pairs(dh, dv, gain).transpose(0, 2, 1, 3)  # (C, 2, F, 2): one row per eye
-    final, path = follow(desired.reshape(2 * c_count, frames, 2), np.repeat(inp.smoothing[:, :, EYES], 2, axis=0),
-                         np.repeat(inp.max_step[:, :, EYES], 2, axis=0), eyes_state.reshape(2 * c_count, 2))
-    eyes_state[:] = final.reshape(c_count, 2, 2)
-    out[:, :, pair] = np.where(present[:, :, pair], path.reshape(c_count, 2, frames, 2).transpose(0, 2, 1, 3), 0.0)
-    return out, w_pos
+        view = np.einsum("eijcf,ejcf->eicf", block.to_slot[pair], seen - block.offset[pair])
+    heading, pitch = _angles(np.moveaxis(view, 1, 0))  # (2, C, F): one row per eye
+    clamp, gain, smoothing = block.eyes()
+    dh, dv = clamp((heading + inp.offsets[..., 0] + np.pi) % (2 * np.pi) - np.pi, pitch + inp.offsets[..., 1])
+    final, path = smoothing(_pairs(dh, dv, gain).reshape(2 * c_count, frames, 2),
+                            np.ascontiguousarray(eyes_state.transpose(1, 0, 2)).reshape(2 * c_count, 2))
+    eyes_state[:] = final.reshape(2, c_count, 2).transpose(1, 0, 2)
+    out[:, :, pair] = np.where(block.present[:, :, pair], path.reshape(2, c_count, frames, 2).transpose(1, 2, 0, 3), 0.0)
+    return out
