@@ -20,7 +20,8 @@ Up the chain it carries one vector per frame, the target seen from the current s
 above a slot is rigid until its group is solved, so what a slot sees is what its parent sees,
 moved into the slot's frame (a rotation and an offset from the pose below, worked out once per
 block for all slots, :class:`_Block`) and turned back by the slot's own swing. Positions are only
-needed when another character looks at this one's face: a forward kinematics of the solved slots.
+needed when another character looks at this one's face: that pass also carries each slot's frame in
+the world.
 Inside a block, vectors and matrices are component-major ((3, C, F), (3, 3, C, F)): each component
 is one contiguous array over the characters and frames, so a product over a block is a few calls on
 long arrays (numpy's products of stacks of 3 x 3 matrices cost far more per frame).
@@ -34,10 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from infuse import Skeleton
 from infuse import quaternions as quat
-from infuse.runtime.pose import chain_fk
-from infuse.runtime.swing import swing
 
 from .model import EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
 
@@ -45,8 +43,10 @@ _S = len(SLOTS)
 _EYE_SLOTS = (7, 8)
 _FIRST_SLOT = {g: SLOT_GROUPS.index(g) for g in set(SLOT_GROUPS)}
 _PARENT_SLOTS = np.maximum(SLOT_PARENTS, 0)  # the pelvis slot stands in for its own parent (the world)
-#: The slots as a skeleton (joint i is slot i), for the forward kinematics of a solved chain.
-_SLOT_SKELETON = Skeleton(SLOTS, np.array(SLOT_PARENTS), np.zeros((_S, 3)), quat.identity((_S,)))
+#: The slots a group's turn is worked out from (each group's first, the eyes' aside), and their rows in
+#: the arrays of what they see.
+_AIMED_SLOTS = sorted(s for g, s in _FIRST_SLOT.items() if g != EYES)
+_AIM_ROW = {s: k for k, s in enumerate(_AIMED_SLOTS)}
 
 
 @dataclass
@@ -273,10 +273,11 @@ class _Block:
       the world;
     - ``to_slot`` (S, 3, 3, C, F): matrices taking a vector from the parent slot's aligned frame into
       the slot's, ``offset`` (S, 3, C, F): the slot's position in its parent's aligned frame;
-    - ``origin`` (S, 3, C, F): where the gaze starts, seen from each slot's aligned frame;
-    - ``aim_h``, ``aim_v`` (S, C, F): heading (plus pi, for the wrap) and pitch of the fixed offsets minus
-      those of where the priority joint points, seen from each slot: added to the target's angles, the
-      turn left;
+    - ``origin`` (A, 3, C, F): where the gaze starts, seen from the aligned frame of each slot a group's
+      turn is worked out from (:data:`_AIMED_SLOTS`, row :data:`_AIM_ROW`);
+    - ``aim_h``, ``aim_v`` (A, C, F): heading (plus pi, for the wrap) and pitch of the fixed offsets minus
+      those of where the priority joint points, seen from those slots: added to the target's angles,
+      the turn left;
     - the groups' and eyes' settings, made when first asked.
     """
 
@@ -288,8 +289,9 @@ class _Block:
         self.frames, self.positions = frames, positions
         self.to_slot = np.einsum("sjicf,sjkcf->sikcf", frames, parents)
         self.offset = np.einsum("sjicf,sjcf->sicf", parents, positions - positions[_PARENT_SLOTS])
-        self.origin = np.einsum("sjicf,sjcf->sicf", frames, _contiguous(inp.origin, (2, 0, 1)) - positions)
-        forward_h, forward_v = _angles(np.moveaxis(np.einsum("sjicf,jcf->sicf", frames, _contiguous(inp.forward, (2, 0, 1))), 1, 0))
+        aimed = frames[_AIMED_SLOTS]
+        self.origin = np.einsum("sjicf,sjcf->sicf", aimed, _contiguous(inp.origin, (2, 0, 1)) - positions[_AIMED_SLOTS])
+        forward_h, forward_v = _angles(np.moveaxis(np.einsum("sjicf,jcf->sicf", aimed, _contiguous(inp.forward, (2, 0, 1))), 1, 0))
         self.aim_h = inp.offsets[..., 0] - forward_h + np.pi
         self.aim_v = inp.offsets[..., 1] - forward_v
         self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
@@ -312,14 +314,6 @@ class _Block:
                           _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1))))
         return self._eyes
 
-    def world_positions(self, offsets: np.ndarray) -> np.ndarray:
-        """World positions (C, F, S, 3) of the slots turned by ``offsets`` (C, F, S, 2)."""
-        q = self.inp.frames_world
-        local = quat.multiply(quat.conjugate(q[:, :, _PARENT_SLOTS]), q)  # each slot's frame in its parent's
-        local[:, :, 0] = q[:, :, 0]  # the pelvis slot's parent is the world
-        turns = quat.multiply(local, swing(offsets[..., 0], offsets[..., 1]))
-        return chain_fk(_SLOT_SKELETON, turns, self.inp.positions[:, :, 0], self.offset.transpose(2, 3, 0, 1), range(_S))[1]
-
 
 def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, first_state: np.ndarray | None = None):
     """Run the block; returns the offsets (C, F, S, 2).
@@ -333,31 +327,34 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
     """
     block = _Block(inp)
     if not inp.refine:
-        offsets = _solve_once(inp, block, groups_state, eyes_state)
+        offsets, _ = _solve_once(inp, block, groups_state, eyes_state)
         if first_state is not None:
             first_state[:] = groups_state
         return offsets
     # The first pass only places the chains (no joint's position depends on the eyes' turn).
     first = groups_state.copy() if first_state is None else first_state
-    positions = block.world_positions(_solve_once(inp, block, first, eyes_state, eyes=False))
+    _, positions = _solve_once(inp, block, first, eyes_state, eyes=False, place=True)
     targets = inp.targets.copy()
     for c, c2, slots in inp.refine:
         targets[c] = positions[c2][:, list(slots)].mean(axis=1)
-    return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)
+    return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)[0]
 
 
-def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True):
+def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True,
+                place: bool = False):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
     groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
     no character turns (and none is on its way back) is skipped: its joints stay as they are. Without
     ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was). Returns the
-    offsets (C, F, S, 2)."""
+    offsets (C, F, S, 2), and with ``place`` the slots' positions (C, F, S, 3) in the world (else None)."""
     c_count, frames = inp.targets.shape[:2]
     out = np.zeros((c_count, frames, _S, 2))
     target = _contiguous(inp.targets, (2, 0, 1))  # (3, C, F)
     turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
     seen = None  # (3, C, F): the target seen from the last slot's aligned frame; None until a slot turns
     share = unturn = None
+    # With ``place``: the last slot's aligned frame (3, 3, C, F) in the world, and every slot's position.
+    world, positions = None, block.positions.copy() if place else None
     for s in range(_EYE_SLOTS[0]):
         g = SLOT_GROUPS[s]
         first = _FIRST_SLOT[g] == s
@@ -365,13 +362,20 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
             if not (turning[g] and first):
                 continue  # the chain stands as in the pose below
             view = np.einsum("jicf,jcf->icf", block.frames[s], target - block.positions[s])
+            world = block.frames[s] if place else None
         elif block.absent[s]:
             view = seen  # the slot is its parent
+            if place:
+                positions[s] = positions[s - 1]
         else:
             view = np.einsum("ijcf,jcf->icf", block.to_slot[s], seen - block.offset[s])
+            if place:
+                positions[s] = positions[s - 1] + np.einsum("ijcf,jcf->icf", world, block.offset[s])
+                world = np.einsum("ijcf,kjcf->ikcf", world, block.to_slot[s])
         if turning[g] and first:
-            heading, pitch = _angles(view - block.origin[s])
-            share = block.group(g).turn((heading + block.aim_h[s]) % (2 * np.pi) - np.pi, pitch + block.aim_v[s],
+            row = _AIM_ROW[s]
+            heading, pitch = _angles(view - block.origin[row])
+            share = block.group(g).turn((heading + block.aim_h[row]) % (2 * np.pi) - np.pi, pitch + block.aim_v[row],
                                         groups_state[:, g])
             unturn = None
         if not turning[g] or block.absent[s]:
@@ -380,15 +384,21 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
         if block.everyone[s]:  # the group's slots share one turn
             unturn = unswing_matrices(share) if unturn is None else unturn
             out[:, :, s] = share
-            seen = np.einsum("ijcf,jcf->icf", unturn, view)
+            turn = unturn
         else:
             hv = np.where(block.present[:, :, s], share, 0.0)
             out[:, :, s] = hv
-            seen = np.einsum("ijcf,jcf->icf", unswing_matrices(hv), view)
-    if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
-        return out
-    # The eyes, side by side: each turns from its own position, all the way (within its limits).
+            turn = unswing_matrices(hv)
+        seen = np.einsum("ijcf,jcf->icf", turn, view)
+        if place:
+            world = np.einsum("ijcf,kjcf->ikcf", world, turn)
     pair = slice(_EYE_SLOTS[0], _EYE_SLOTS[1] + 1)
+    if place and seen is not None:
+        positions[pair] = positions[SLOT_PARENTS[_EYE_SLOTS[0]]] + np.einsum("ijcf,ejcf->eicf", world, block.offset[pair])
+    placed = positions.transpose(2, 3, 0, 1) if place else None
+    if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
+        return out, placed
+    # The eyes, side by side: each turns from its own position, all the way (within its limits).
     if seen is None:
         view = np.einsum("ejicf,ejcf->eicf", block.frames[pair], target - block.positions[pair])
     else:
@@ -400,4 +410,4 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
                             np.ascontiguousarray(eyes_state.transpose(1, 0, 2)).reshape(2 * c_count, 2))
     eyes_state[:] = final.reshape(2, c_count, 2).transpose(1, 0, 2)
     out[:, :, pair] = np.where(block.present[:, :, pair], path.reshape(2, c_count, frames, 2).transpose(1, 2, 0, 3), 0.0)
-    return out
+    return out, placed
