@@ -14,7 +14,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode
-from infuse.runtime.swing import clamp_ellipse, local_offsets, swing, swing_angles
+from infuse.runtime.swing import clamp_ellipse, swing, swing_angles
 
 from .model import MODES, SaccadeSchedule, ease_out, saccade_duration
 
@@ -59,8 +59,14 @@ class Saccades(Controller):
             report("has no eyes: saccades are not shown")
             return None
         aligned, rest = rig.aligned[eyes], rig.skeleton.rest_rotations[eyes]
-        return {"eyes": np.array(eyes), "aligned": aligned, "rest": rest, "schedule": self.schedule(rig.name),
-                "from_rest": quat.conjugate(quat.multiply(rest, aligned))}  # (rest A)⁻¹: a pose into the rest's aligned frame
+        # Both ways between an eye's local rotation L and its turn T from rest in its aligned frame A are
+        # linear in the quaternion's components: T = A⁻¹ rest⁻¹ L A and L = rest A T A⁻¹. Their (2, 4, 4)
+        # matrices, made by applying them to the four unit quaternions, act on (x, y, z, w) columns.
+        basis = np.eye(4)[:, None]  # (4, 1, 4): one unit quaternion per row, for both eyes
+        to_turn = quat.multiply(quat.multiply(quat.conjugate(quat.multiply(rest, aligned)), basis), aligned)
+        from_turn = quat.multiply(quat.multiply(quat.multiply(rest, aligned), basis), quat.conjugate(aligned))
+        return {"eyes": np.array(eyes), "schedule": self.schedule(rig.name),
+                "to_turn": to_turn.transpose(1, 2, 0), "from_turn": from_turn.transpose(1, 2, 0)}
 
     def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
         """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
@@ -94,13 +100,10 @@ class Saccades(Controller):
         pauses = [(s - start, e - start + self.resume_s) for s, e in block.runtime.speech_intervals(job.rig.name)]
         offsets = np.radians(self.offsets(b["schedule"], job.local_times, pauses)) * job.weight[:, None]
         # The eyes' current turn from rest (the gaze's), in their aligned frames, plus the saccade.
-        current = job.pose.local_rotations[:, b["eyes"]]
-        aligned = b["aligned"]
-        turn = quat.multiply(quat.multiply(b["from_rest"], current), aligned)  # A⁻¹ rest⁻¹ L A
+        turn = np.einsum("eij,fej->fei", b["to_turn"], job.pose.local_rotations[:, b["eyes"]])
         heading, pitch, roll = swing_angles(turn)
         heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
-        rotations = quat.multiply(b["rest"], local_offsets(aligned, swing(heading, pitch, roll)))
-        job.pose.set_rotations(b["eyes"], rotations)
+        job.pose.set_rotations(b["eyes"], np.einsum("eij,fej->fei", b["from_turn"], swing(heading, pitch, roll)))
 
 
 def saccade_from_bml(parameters: dict, runtime, character: str, activation=None) -> Saccades | None:
