@@ -154,7 +154,7 @@ class Gaze(Controller):
             source[s] = np.count_nonzero(present[:s]) if present[s] else (source[parent] if parent >= 0 else -1)
         return {"slots": slots, "present": present, "counts": counts, "active": active, "fractions": fractions,
                 "eyes_lead": bool(priority == EYES and has_eyes), "chain_aligned": chain_aligned,
-                "columns": ancestors(rig.skeleton, slots[present]), "slot_source": source}
+                "columns": np.array(ancestors(rig.skeleton, slots[present])), "slot_source": source}
 
     # -- evaluation ----------------------------------------------------------------------------------
     @classmethod
@@ -235,13 +235,14 @@ class Gaze(Controller):
         eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
         first_state = np.stack([st.get("first", groups_state[c]) for c, st in enumerate(states)])
         offsets = solve(inp, groups_state, eyes_state, first_state)
+        # Each slot's turn as a local offset of its joint, for every character at once, then written per character.
+        aligned = np.stack([rows[n][0].binding["chain_aligned"] for n in names])[:, None]  # (C, 1, S, 4)
+        turns = local_offsets(aligned, swing(offsets[..., 0], offsets[..., 1]))
         for c, name in enumerate(names):
             job = rows[name][0]
             job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "first": first_state[c]}
             b = job.binding
-            present = b["present"]
-            hv = offsets[c][:, present]
-            job.pose.add_offsets(b["slots"][present], local_offsets(b["chain_aligned"][present], swing(hv[..., 0], hv[..., 1])))
+            job.pose.add_offsets(b["slots"][b["present"]], turns[c][:, b["present"]])
 
 
 def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
