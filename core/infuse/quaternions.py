@@ -45,18 +45,23 @@ def _table(terms: dict, shape: tuple[int, ...]) -> np.ndarray:
     return table.reshape((16,) + shape)
 
 
-def _left_table(terms: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(4, 4) index and sign of the matrix ``L(a)`` with ``a * b = L(a) b``: ``L(a)[r, j] = sign a_i``
-    for the term ``sign a_i b_j`` of entry ``r`` (each entry has one term per ``j``)."""
+def _product_table(terms: dict, right: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(4, 4) index and sign of the matrix ``L(a)`` with ``a * b = L(a) b`` (``L(a)[r, j] = sign a_i`` for
+    the term ``sign a_i b_j`` of entry ``r``; each entry has one term per ``j``), or with ``right`` of
+    ``R(b)`` with ``a * b = R(b) a`` (``R(b)[r, i] = sign b_j``)."""
     index = np.zeros((4, 4), dtype=np.intp)
     signs = np.zeros((4, 4))
     for (r,), products in terms.items():
         for sign, i, j in products:
-            index[r, j], signs[r, j] = i, sign
+            if right:
+                index[r, i], signs[r, i] = j, sign
+            else:
+                index[r, j], signs[r, j] = i, sign
     return index, signs
 
 
-_LEFT_INDEX, _LEFT_SIGN = _left_table(_PRODUCT_TERMS)
+_LEFT_INDEX, _LEFT_SIGN = _product_table(_PRODUCT_TERMS, right=False)
+_RIGHT_INDEX, _RIGHT_SIGN = _product_table(_PRODUCT_TERMS, right=True)
 _ROTATION = _table(_ROTATION_TERMS, (3, 3))  # (16, 3, 3)
 _ROTATION_FLAT = _ROTATION.reshape(16, 9)
 _IDENTITY_FLAT = np.eye(3).ravel()
@@ -74,7 +79,7 @@ def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     if max(a.size, b.size) <= 4 * SMALL_BATCH:
-        return (a[..., _LEFT_INDEX] * _LEFT_SIGN @ b[..., None])[..., 0]
+        return (left_matrix(a) @ b[..., None])[..., 0]
     ax, ay, az, aw = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
     bx, by, bz, bw = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
     out = np.empty(a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape))
@@ -83,6 +88,17 @@ def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out[..., 2] = aw * bz + ax * by - ay * bx + az * bw
     out[..., 3] = aw * bw - ax * bx - ay * by - az * bz
     return out
+
+
+def left_matrix(a: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) matrices ``L(a)`` of quaternions ``a`` (..., 4): ``multiply(a, b) = L(a) @ b`` for
+    (x, y, z, w) columns ``b``. A product by the same ``a`` over many frames is then one matrix product."""
+    return np.asarray(a, dtype=np.float64)[..., _LEFT_INDEX] * _LEFT_SIGN
+
+
+def right_matrix(b: np.ndarray) -> np.ndarray:
+    """(..., 4, 4) matrices ``R(b)`` of quaternions ``b`` (..., 4): ``multiply(a, b) = R(b) @ a``."""
+    return np.asarray(b, dtype=np.float64)[..., _RIGHT_INDEX] * _RIGHT_SIGN
 
 
 def conjugate(q: np.ndarray) -> np.ndarray:

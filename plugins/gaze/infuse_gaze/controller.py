@@ -20,7 +20,7 @@ from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
 from infuse.runtime.pose import ancestors, chain_fk
-from infuse.runtime.swing import local_offsets, swing
+from infuse.runtime.swing import swing
 from infuse.runtime.targets import JointTarget
 
 from .model import (
@@ -235,9 +235,11 @@ class Gaze(Controller):
         eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
         first_state = np.stack([st.get("first", groups_state[c]) for c, st in enumerate(states)])
         offsets = solve(inp, groups_state, eyes_state, first_state)
-        # Each slot's turn as a local offset of its joint, for every character at once, then written per character.
-        aligned = np.stack([rows[n][0].binding["chain_aligned"] for n in names])[:, None]  # (C, 1, S, 4)
-        turns = local_offsets(aligned, swing(offsets[..., 0], offsets[..., 1]))
+        # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
+        # character at once, then written per character.
+        aligned = np.stack([rows[n][0].binding["chain_aligned"] for n in names])  # (C, S, 4)
+        to_local = quat.left_matrix(aligned) @ quat.right_matrix(quat.conjugate(aligned))  # (C, S, 4, 4)
+        turns = _apply_per_slot(to_local, swing(offsets[..., 0], offsets[..., 1]))
         for c, name in enumerate(names):
             job = rows[name][0]
             job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "first": first_state[c]}
@@ -283,18 +285,26 @@ def _chain_frames(jobs):
         same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding["slots"])), []).append(c)
     for members in same_chain.values():
         rot[members], pos[members] = _slot_poses([jobs[c] for c in members])
-    # Into the world, where each character stands; the world itself (no pelvis) stays put.
-    placement = np.stack([job.rig.rotation for job in jobs])[:, None, None]
-    rot = quat.multiply(placement, rot)
-    pos = quat.rotate(placement, pos) + np.stack([job.rig.position for job in jobs])[:, None, None]
+    # Into the world, where each character stands, and into the aligned frames: one constant product
+    # on either side per character and slot, as one matrix product over the frames (F, 4) x (4, 4).
+    placement = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
+    aligned = np.stack([job.binding["chain_aligned"] for job in jobs])  # (C, S, 4)
+    to_world = quat.left_matrix(placement)[:, None] @ quat.right_matrix(aligned)  # (C, S, 4, 4)
+    frames_w = _apply_per_slot(to_world, rot)
+    turn = quat.unit_to_matrix(placement)  # (C, 3, 3)
+    pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(turn, -1, -2)).reshape(pos.shape)
+    pos += np.stack([job.rig.position for job in jobs])[:, None, None]
     world = np.stack([job.binding["slot_source"] < 0 for job in jobs])[:, None, :, None]  # (C, 1, S, 1)
-    if world.any():
-        rot = np.where(world, quat.IDENTITY, rot)
+    if world.any():  # the world itself (no pelvis) stays put
+        frames_w = np.where(world, aligned[:, None], frames_w)
         pos = np.where(world, 0.0, pos)
-    aligned = np.stack([job.binding["chain_aligned"] for job in jobs])[:, None]  # (C, 1, S, 4)
-    frames_w = quat.multiply(rot, aligned)
     origin = _weighted_slots(np.array([_origin_weights(job.binding["present"]) for job in jobs]), pos)
     return frames_w, pos, origin
+
+
+def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Matrices (C, S, 4, 4), one per character and slot, times quaternions (C, F, S, 4) (columns)."""
+    return np.swapaxes(np.swapaxes(q, 1, 2) @ np.swapaxes(matrices, -1, -2), 1, 2)
 
 
 def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:

@@ -60,13 +60,12 @@ class Saccades(Controller):
             return None
         aligned, rest = rig.aligned[eyes], rig.skeleton.rest_rotations[eyes]
         # Both ways between an eye's local rotation L and its turn T from rest in its aligned frame A are
-        # linear in the quaternion's components: T = A⁻¹ rest⁻¹ L A and L = rest A T A⁻¹. Their (2, 4, 4)
-        # matrices, made by applying them to the four unit quaternions, act on (x, y, z, w) columns.
-        basis = np.eye(4)[:, None]  # (4, 1, 4): one unit quaternion per row, for both eyes
-        to_turn = quat.multiply(quat.multiply(quat.conjugate(quat.multiply(rest, aligned)), basis), aligned)
-        from_turn = quat.multiply(quat.multiply(quat.multiply(rest, aligned), basis), quat.conjugate(aligned))
+        # linear in the quaternion's components: T = A⁻¹ rest⁻¹ L A and L = rest A T A⁻¹, (2, 4, 4)
+        # matrices acting on (x, y, z, w) columns.
+        placed = quat.multiply(rest, aligned)  # rest A
         return {"eyes": np.array(eyes), "schedule": self.schedule(rig.name),
-                "to_turn": to_turn.transpose(1, 2, 0), "from_turn": from_turn.transpose(1, 2, 0)}
+                "to_turn": quat.left_matrix(quat.conjugate(placed)) @ quat.right_matrix(aligned),
+                "from_turn": quat.left_matrix(placed) @ quat.right_matrix(quat.conjugate(aligned))}
 
     def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
         """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
@@ -100,10 +99,15 @@ class Saccades(Controller):
         pauses = [(s - start, e - start + self.resume_s) for s, e in block.runtime.speech_intervals(job.rig.name)]
         offsets = np.radians(self.offsets(b["schedule"], job.local_times, pauses)) * job.weight[:, None]
         # The eyes' current turn from rest (the gaze's), in their aligned frames, plus the saccade.
-        turn = np.einsum("eij,fej->fei", b["to_turn"], job.pose.local_rotations[:, b["eyes"]])
+        turn = _apply_per_eye(b["to_turn"], job.pose.local_rotations[:, b["eyes"]])
         heading, pitch, roll = swing_angles(turn)
         heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
-        job.pose.set_rotations(b["eyes"], np.einsum("eij,fej->fei", b["from_turn"], swing(heading, pitch, roll)))
+        job.pose.set_rotations(b["eyes"], _apply_per_eye(b["from_turn"], swing(heading, pitch, roll)))
+
+
+def _apply_per_eye(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Matrices (2, 4, 4), one per eye, times quaternions (F, 2, 4) (columns): one product per eye."""
+    return np.swapaxes(np.swapaxes(q, 0, 1) @ np.swapaxes(matrices, -1, -2), 0, 1)
 
 
 def saccade_from_bml(parameters: dict, runtime, character: str, activation=None) -> Saccades | None:
