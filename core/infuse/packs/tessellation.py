@@ -81,25 +81,37 @@ class Tessellation:
         if self.dimension == 0:
             out[:, self.simplices[0, 0]] = 1.0
             return out, np.ones(q, dtype=bool)
-        corners, base, inv = self._frames()
+        bary, inside_s = self._barycentric(y)
         rows = np.arange(q)
-        rel = y[None] - base[:, None]                                  # (S, Q, d)
-        lam = np.swapaxes(rel @ np.swapaxes(inv, 1, 2), 0, 1)        # (Q, S, d): one small product per simplex
-        bary = np.concatenate((1.0 - lam.sum(axis=-1, keepdims=True), lam), axis=-1)  # (Q, S, d+1)
-        inside_s = np.all(bary >= -1e-9, axis=-1)
-        inside = inside_s.any(axis=1)
-        best = np.argmax(inside_s, axis=1)  # the first simplex holding the query
-        chosen = bary[rows, best]
+        inside = inside_s.any(axis=0)
+        best = np.argmax(inside_s, axis=0)  # the first simplex holding the query
+        chosen = bary[best, :, rows]  # (Q, d+1)
         outside = np.nonzero(~inside)[0]
         if outside.size:  # the clamped barycentric point nearest to the query, over every simplex
-            clamped = np.clip(bary[outside], 0.0, None)
-            clamped /= np.maximum(clamped.sum(axis=-1, keepdims=True), 1e-12)
-            recon = np.einsum("qsk,skd->qsd", clamped, corners)
-            nearest = np.argmin(np.linalg.norm(recon - y[outside, None, :], axis=-1), axis=1)
+            clamped = np.clip(bary[:, :, outside], 0.0, None)
+            clamped /= np.maximum(clamped.sum(axis=1, keepdims=True), 1e-12)
+            gap = np.swapaxes(self._frames()[0], 1, 2) @ clamped - y[outside].T  # (S, d, O) from the query
+            nearest = np.argmin(np.sqrt((gap * gap).sum(axis=1)), axis=0)
             best[outside] = nearest
-            chosen[outside] = clamped[np.arange(outside.size), nearest]
+            chosen[outside] = clamped[nearest, :, np.arange(outside.size)]
         out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
         return out, inside
+
+    def contains(self, query) -> np.ndarray:
+        """(Q,) flags of (Q, D) query points inside the hull (as :meth:`weights` reports them), without the weights."""
+        y = self.reduced(query)
+        if self.dimension == 0:
+            return np.ones(len(y), dtype=bool)
+        return self._barycentric(y)[1].any(axis=0)
+
+    def _barycentric(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Barycentric coordinates (S, d+1, Q) of reduced points ``y`` (Q, d) in every simplex, and (S, Q)
+        flags of the simplices holding them (coordinates >= -1e-9). Simplex-major with the points last:
+        each simplex is one small matrix product, and the sums and tests run over whole rows."""
+        _, base, inv = self._frames()
+        lam = inv @ (y.T[None] - base[:, :, None])  # (S, d, Q)
+        bary = np.concatenate((1.0 - lam.sum(axis=1, keepdims=True), lam), axis=1)
+        return bary, np.all(bary >= -1e-9, axis=1)
 
     def _frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Each simplex's corners (S, d+1, d), first corner (S, d) and inverted edge matrix (S, d, d) in
