@@ -93,6 +93,10 @@ class BlendSpace:
         """Blend weights (Q, N) over :meth:`group` ``group``'s clips for (Q, D) parameter points."""
         return self.tessellations[group].weights(query)
 
+    def contains(self, group: str, query) -> np.ndarray:
+        """(Q,) flags of (Q, D) parameter points inside ``group``'s tessellation."""
+        return self.tessellations[group].contains(query)
+
     def range(self, coordinate: str, group: str | None = None) -> tuple[float, float]:
         """Smallest and largest value of a coordinate over a group's examples."""
         t = self.tessellations[group or next(iter(self.tessellations))]
