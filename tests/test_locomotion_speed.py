@@ -141,3 +141,4 @@ def test_tessellation_weights_inside_and_outside_the_hull():
         assert inside[q] == bool(held)
         assert np.allclose(w[q], expected, rtol=0.0, atol=1e-9), q
     assert inside[300:].all() and not inside[:300].all()
+    assert np.array_equal(t.contains(queries), inside)

@@ -63,6 +63,8 @@ CADENCE_RAMP = 3.0
 SETTLE_PHASE = 0.05
 #: Turning on the spot faster than this (rad/s) beyond what the blend shows, the feet step.
 SPIN_STEP = 0.15
+#: Shares of a turn rate tried, largest first, where the full request lies outside the tessellation.
+_TURN_SHARES = np.linspace(1.0, 0.0, 9)
 #: Seconds over which a stopped character fades into the pack's idle.
 SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
@@ -545,13 +547,12 @@ def _weights(space, speed, direction, turn) -> np.ndarray:
     w, inside = space.weights("locomotion", query)
     out = np.nonzero(~inside)[0]
     if out.size:
-        shares = np.linspace(1.0, 0.0, 9)
-        tried = np.repeat(query[out, None], len(shares), axis=1)
-        tried[..., 2] *= shares
-        wt, ok = space.weights("locomotion", tried.reshape(-1, 3))
-        ok = ok.reshape(len(out), len(shares))
-        pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), 0)
-        w[out] = wt.reshape(len(out), len(shares), -1)[np.arange(len(out)), pick]
+        tried = np.repeat(query[out, None], len(_TURN_SHARES), axis=1)
+        tried[..., 2] *= _TURN_SHARES
+        ok = space.contains("locomotion", tried.reshape(-1, 3)).reshape(tried.shape[:2])
+        cut = np.nonzero(ok.any(axis=1))[0]  # the others keep the weights of the full request's nearest point
+        if cut.size:
+            w[out[cut]] = space.weights("locomotion", tried[cut, np.argmax(ok[cut], axis=1)])[0]
     return w
 
 
