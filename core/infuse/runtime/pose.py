@@ -222,7 +222,8 @@ def chain_fk(skeleton, local_rotations: np.ndarray, root_translations: np.ndarra
     Rotations compose depth by depth (all joints of one depth at once); the offsets are then rotated
     by their parents' rotations in one step and summed along each joint's path.
     """
-    plan = chain_plan(skeleton, tuple(int(j) for j in joints), None if columns is None else tuple(int(c) for c in columns))
+    plan = chain_plan(skeleton, tuple(np.asarray(joints, dtype=np.int64).tolist()),
+                      None if columns is None else tuple(np.asarray(columns, dtype=np.int64).tolist()))
     rot = np.asarray(local_rotations, dtype=np.float64)[..., plan.source, :]  # a gathered copy, composed in place below
     for members, parents in plan.levels:
         rot[..., members, :] = quat.multiply(rot[..., parents, :], rot[..., members, :])
@@ -232,7 +233,8 @@ def chain_fk(skeleton, local_rotations: np.ndarray, root_translations: np.ndarra
         offsets = joint_translations[..., plan.source, :]
     steps = np.empty(rot.shape[:-1] + (3,))
     steps[..., plan.inner, :] = quat.rotate(rot[..., plan.inner_parents, :], offsets[..., plan.inner, :])
-    steps[..., plan.roots, :] = offsets[..., plan.roots, :]
+    if plan.roots.size:
+        steps[..., plan.roots, :] = offsets[..., plan.roots, :]
     if plan.root is not None:
         steps[..., plan.root, :] = root_translations
     pos = plan.paths @ steps

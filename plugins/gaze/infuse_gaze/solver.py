@@ -167,7 +167,7 @@ class _Smoothing:
     def _within_limit(self, path: np.ndarray, state: np.ndarray) -> bool:
         """Whether no step of ``path`` (R, F, 2) from ``state`` (R, 2) is longer than the limit."""
         steps = path - np.concatenate((state[:, None], path[:, :-1]), axis=1)
-        return bool((np.sqrt(np.sum(steps * steps, axis=-1)) <= self.max_step).all())
+        return bool((np.hypot(steps[..., 0], steps[..., 1]) <= self.max_step).all())
 
 
 @functools.lru_cache(maxsize=64)
