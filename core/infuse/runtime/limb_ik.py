@@ -40,7 +40,7 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 
 def _arccos(cosine: np.ndarray) -> np.ndarray:
-    return np.arccos(np.clip(cosine, -1.0, 1.0))
+    return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
 
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
@@ -60,8 +60,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     ``chains``: the global rotations (F, [K,] R, 4) and positions (F, [K,] R, 3) of a, b, c and, when
     a has a parent, that parent (R = 4), when the caller has them already (else one FK finds them).
     """
-    several = np.ndim(joints) == 2
-    limbs = np.array(joints if several else [joints], dtype=np.int64).reshape(-1, 3)  # (K, 3)
+    limbs = np.asarray(joints, dtype=np.int64)
+    several = limbs.ndim == 2
+    limbs = limbs.reshape(-1, 3)  # (K, 3)
     T = np.asarray(goal, dtype=np.float64)
     parents = skeleton.parents[limbs[:, 0]]
     hung = parents >= 0
@@ -80,42 +81,51 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     parent_rot = g_rot[..., 3, :] if hung.all() else None
     A, B, C = g_pos[..., 0, :], g_pos[..., 1, :], g_pos[..., 2, :]
     # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3), their lengths and directions.
-    sides = np.stack((B - A, C - B, C - A, T - A))
+    sides = np.empty((4,) + A.shape)
+    for k, (end, start) in enumerate(((B, A), (C, B), (C, A), (T, A))):
+        np.subtract(end, start, out=sides[k])
     lengths = _norm(sides)
     lab, lcb, lca, lta = lengths
-    lat = np.clip(lta, np.abs(lab - lcb) + 1e-6, (lab + lcb) * (1.0 - 1e-6))
+    lat = np.minimum(np.maximum(lta, np.abs(lab - lcb) + 1e-6), (lab + lcb) * (1.0 - 1e-6))
     units = sides / np.maximum(lengths, 1e-12)[..., None]
-    # The angles at a (to b) and at b (between b->a and b->c) now and once solved, and the goal's
-    # angle off a->c at a: one arccos.
-    now = _dot(np.take(units, [2, 0, 2], 0), np.take(units, [0, 1, 3], 0))
-    now[1] = -now[1]  # b's angle lies between b->a and b->c
-    solved = np.stack(((lcb ** 2 - lab ** 2 - lat ** 2) / (-2.0 * lab * lat),
-                       (lat ** 2 - lab ** 2 - lcb ** 2) / (-2.0 * lab * lcb)))
-    ac_ab_0, ba_bc_0, ac_at_0, ac_ab_1, ba_bc_1 = _arccos(np.concatenate((now, solved)))
-    ca, ta, ab = sides[2], sides[3], sides[0]
-    axis1, axis0 = _cross(ca, np.take(sides, [3, 0], 0))  # toward the goal; the bend's normal
-    axis_norms = _norm(np.stack((axis1, axis0)))
+    # The cosines of the angles at a (to b) and at b (between b->a and b->c) now, of the goal's angle
+    # off a->c at a, and of the angles at a and b once solved (law of cosines): one arccos.
+    cosines = np.empty((5,) + lab.shape)
+    cosines[:3] = _dot(np.take(units, [2, 0, 2], 0), np.take(units, [0, 1, 3], 0))
+    cosines[1] *= -1.0
+    lab2, lcb2, lat2 = lab * lab, lcb * lcb, lat * lat
+    np.divide(lcb2 - lab2 - lat2, -2.0 * lab * lat, out=cosines[3])
+    np.divide(lat2 - lab2 - lcb2, -2.0 * lab * lcb, out=cosines[4])
+    ac_ab_0, ba_bc_0, ac_at_0, ac_ab_1, ba_bc_1 = _arccos(cosines)
+    ca = sides[2]
+    axes = _cross(ca, np.take(sides, [3, 0], 0))  # toward the goal; the bend's normal
+    axis_norms = _norm(axes)
     small = axis_norms[0] < 1e-12
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
-    if flat.any():  # a straight limb bends toward the pole, else toward the goal
-        if pole is not None:
-            pole = np.asarray(pole, dtype=np.float64)
-            fallback = _cross(ca, np.broadcast_to(pole[:, None] if several and pole.ndim == 2 else pole, A.shape))
-        else:
-            other = _cross(ca, np.array([0.0, 1.0, 0.0]))
-            fallback = np.where(small[..., None], other, axis1)
-        axis0 = np.where(flat[..., None], fallback, axis0)
-    axis0 = _unit(axis0)
-    axis1 = _unit(np.where(small[..., None], axis0, axis1))
+    if flat.any() or small.any():
+        axis1, axis0 = axes
+        if flat.any():  # a straight limb bends toward the pole, else toward the goal
+            if pole is not None:
+                pole = np.asarray(pole, dtype=np.float64)
+                fallback = _cross(ca, np.broadcast_to(pole[:, None] if several and pole.ndim == 2 else pole, A.shape))
+            else:
+                other = _cross(ca, np.array([0.0, 1.0, 0.0]))
+                fallback = np.where(small[..., None], other, axis1)
+            axis0 = np.where(flat[..., None], fallback, axis0)
+        axis0 = _unit(axis0)
+        axis1 = _unit(np.where(small[..., None], axis0, axis1))  # the goal on the line a->c: no turn toward it
+    else:
+        axis1, axis0 = axes / np.maximum(axis_norms, 1e-12)[..., None]
     # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
-    inverse = np.moveaxis(quat.conjugate(g_rot[..., :2, :]), -2, 0)  # a's and b's: (2, F, [K,] 4)
-    r0, r1, r2 = quat.from_axis_angle(quat.rotate(np.take(inverse, [0, 1, 0], 0), np.stack((axis0, axis0, axis1))),
-                                      np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0)))
+    inverse = quat.conjugate(np.take(g_rot, [0, 1, 0], -2))  # a's, b's, a's: (F, [K,] 3, 4)
+    turns = quat.from_axis_angle(quat.rotate(inverse, np.stack((axis0, axis0, axis1), axis=-2)),
+                                 np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0), axis=-1))
+    r0, r1, r2 = turns[..., 0, :], turns[..., 1, :], turns[..., 2, :]
     columns = limbs if several else limbs[0]
     old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
     new = quat.multiply(old, np.stack((quat.multiply(r0, r2), r1), axis=-2))
     if weight is not None:  # both joints in one interpolation
-        w = np.clip(np.asarray(weight, dtype=np.float64), 0.0, 1.0)
+        w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
         if np.all((w == 0.0) | (w == 1.0)):  # solved or left as they are, frame by frame: no interpolation
             new = np.where(w[..., None] == 1.0, new, old)
