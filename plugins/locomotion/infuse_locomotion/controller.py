@@ -514,18 +514,24 @@ def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
     that brings it within :data:`REACH` of the leg's length; and that rise as rotation vectors (F, 3)
     in the foot's frame. ``ankle_rot`` (F, 4) is the ankle's global rotation, ``leg_pos`` (F, 3, 3)
     the hip, knee and ankle positions."""
-    length = np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1)
+    reach = REACH * (np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1))
     v = goal - ball_goal
+    out, rise = ball_goal + v, np.zeros_like(goal)  # no further rise where the hip reaches the ankle
+    short = np.nonzero(np.linalg.norm(out - leg_pos[:, 0], axis=-1) > reach)[0]
+    if not short.size:
+        return out, rise
+    v, ball, hip = v[short], ball_goal[short], leg_pos[short, 0]
     axis = np.stack((-v[:, 2], np.zeros(len(v)), v[:, 0]), axis=-1)  # v x +Y: the horizontal axis across v
     axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
     up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
     # Each rise's ankle, coordinate by coordinate (F, K), and its squared distance from the hip.
-    far = sum((ball_goal[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - leg_pos[:, 0, k, None]) ** 2
+    far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
-    ok = np.sqrt(far) <= REACH * length[:, None]
+    ok = np.sqrt(far) <= reach[short, None]
     pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
-    local = quat.rotate(quat.conjugate(ankle_rot), axis * _RISES[pick][:, None])
-    return ball_goal + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None], local
+    out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
+    rise[short] = quat.rotate(quat.conjugate(ankle_rot[short]), axis * _RISES[pick][:, None])
+    return out, rise
 
 
 def _turn_feet(b, rot, rise) -> np.ndarray:
@@ -604,7 +610,7 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
                 if ready.any():
                     goal = np.floor(2.0 * ph[int(np.argmax(ready))]) / 2.0 + SETTLE_PHASE
                 st["landings"] = int(count[-1])
-            stride[a:e] = slow[a:e] / r
+            stride[a:e] = slow[a:e] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
             if goal is not None:
                 over = ph >= goal
                 if over.any():
