@@ -1,26 +1,48 @@
 """Default-pose alignment: the rotation that turns each mapped bone of a pose onto the canonical T-pose.
 
-For a pose (global joint positions, usually the rest), :func:`align` gives every mapped canonical
-joint ``c`` a world rotation ``A(c)`` such that the bone from ``c`` to its mapped children, turned
-by ``A(c)``, points like the same bone of the canonical T-pose (:mod:`infuse.canonical`). As in the
-paper it works recursively from the base: the base is matched as a whole frame (left from hip to
-hip, up along the spine), then each joint starts from its mapped parent's rotation and adds the
-shortest swing that lines its bone up, using the mean of its children's directions at branching
-joints. Starting from the parent keeps bone roll anatomical (a bent knee straightens about its
-hinge, a lowered arm rises about the body's forward axis); at a branching joint whose children
-spread (fingers, neck and clavicles) the spread sets the roll exactly. Zero-length bones keep the
-parent's rotation.
+For a default pose (global joint positions), :func:`align` gives every mapped canonical joint ``c``
+a world rotation ``A(c)``, the paper's turn of the default pose onto the canonical one. It works
+recursively from the base, which is matched as a whole frame (left from hip to hip, up along the
+spine). A joint's bones in a default pose carry two things: pose (where a T-pose puts the arms and
+an A-pose lowers them) and build (where the rig puts its joints). Only pose is turned away:
 
-Some files keep an arbitrary rest (Bandai's lies along X with the real pose in the clip); a pose
-whose legs and spine are far from upright after the base is matched is not a usable default pose,
-and :func:`reference_frame` picks the most upright frame of a clip instead.
+- **Limbs** (:data:`SWUNG`: shoulder to fingertips, hip to ankle) point where the pose puts them.
+  Each joint starts from its mapped parent's rotation and adds the shortest swing that lines its
+  bone up with the canonical bone, using the mean of its children's directions at a branching
+  joint. Starting from the parent keeps bone roll anatomical (a bent knee straightens about its
+  hinge, a lowered arm rises about the body's forward axis); where the children spread (a hand's
+  fingers) the spread sets the roll exactly. A wrist goes by its four fingers' knuckles, not by the
+  thumb, whose base sits wherever the build puts it.
+- **Trunk, neck, head and shoulder girdle** (:data:`HELD`) are at rest in every default pose
+  (upright, looking ahead, shoulders relaxed); their bones point where the build puts the joints:
+  how the spine curves, how far the neck leans, where the two clavicle joints sit. Across the
+  labelled rigs standing in T- and A-poses alike, the girdle's slope (its first joint to the
+  shoulder) spreads over 17° (standard deviation) and does not follow the arms' (correlation 0.1).
+  These joints keep their parent's rotation: a motion moves them from the target's own build.
+  Lining their short bones up one by one turns them from rest by as much as two builds differ:
+  SmartBody's Brad, whose clavicle joints dip 36° and then rise 27° where Utah's rise 20° and then
+  run flat, had his acromioclavicular turned by 71° and his shoulders raised 4 cm by a Utah walk.
+- **Feet** (:data:`FEET`) stand flat; how steeply the ankle looks down at the ball is the build's
+  ankle height (from level to 63° below among the labelled rigs). A flat foot is only turned about
+  the vertical, to head the canonical way, and its toes follow it.
+- **Base**: in a standing rest the world's up is the pose's, so the base is only turned about the
+  vertical (:func:`_level`); how far its pelvis-to-chest line leans is build too.
+
+That holds for a default pose that is the rig's standing rest (:func:`standing`). Some files keep
+an arbitrary rest (Bandai's lies along X with the real pose in the clip): a pose whose legs and
+spine are far from upright once the base is matched is not a usable default pose, and
+:func:`reference_frame` picks the most upright frame of a clip instead, which :mod:`.prepare` sets
+at rest (the held joints at their mean over the clip, the feet laid flat as they are while planted).
+Its base keeps the whole body frame: a clip frame may lean. A rest that does not stand, with no clip
+to replace it, has every bone lined up, as in the paper. Zero-length bones have no direction: a
+joint whose bones all have zero length keeps its parent's rotation.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.canonical import canonical_joint
+from infuse.canonical import ALL_NAMES, canonical_joint
 
 from .rig import canonical_children, canonical_parent
 
@@ -32,6 +54,17 @@ UPRIGHT_BONES = (("l_hip", "l_knee"), ("l_knee", "l_ankle"), ("r_hip", "r_knee")
 UPRIGHT_LIMIT_DEG = 50.0
 #: Least spread (difference of unit directions) between two children of a joint that fixes its roll.
 SPREAD = 0.2
+#: Canonical joints whose bones a default pose sets, lined up bone by bone: the limbs.
+SWUNG = frozenset(n for n in ALL_NAMES if canonical_joint(n).group in ("hand", "leg")
+                  or n.endswith(("_shoulder", "_elbow", "_forearm", "_wrist")))
+#: Canonical joints every default pose holds at rest, placed by the rig's build: the trunk above the
+#: base, the neck, head and eyes, and the shoulder girdle.
+HELD = frozenset(n for n in ALL_NAMES if n != "base" and n not in SWUNG and canonical_joint(n).group != "foot")
+#: Ankles: a foot standing flat in a default pose has only its heading matched (its toes follow).
+FEET = ("l_ankle", "r_ankle")
+#: Largest tilt (degrees) of a pose's body frame from the world's up for the pose to count as
+#: standing (a rest read with the wrong up axis stands on its side).
+STANDING_TILT_DEG = 30.0
 
 
 def canonical_position(name: str) -> np.ndarray:
@@ -73,12 +106,26 @@ def base_alignment(index: dict[str, int], positions: np.ndarray) -> np.ndarray:
     return quat.from_matrix(canon @ np.swapaxes(pose, -1, -2))
 
 
-def align(index: dict[str, int], positions: np.ndarray) -> dict[str, np.ndarray]:
+def standing(index: dict[str, int], positions: np.ndarray) -> bool:
+    """Whether ``positions`` (J, 3) stand: legs near their canonical directions once the body frame
+    is matched, and that frame's up within :data:`STANDING_TILT_DEG` of the world's."""
+    up = quat.rotate(base_alignment(index, positions), np.array([0.0, 1.0, 0.0]))
+    return bool(upright_error(index, positions) <= UPRIGHT_LIMIT_DEG and up[1] >= np.cos(np.radians(STANDING_TILT_DEG)))
+
+
+def align(index: dict[str, int], positions: np.ndarray, *, at_rest: bool = False, level: bool = False,
+          flat_feet=()) -> dict[str, np.ndarray]:
     """Canonical name -> (4,) world rotation aligning that bone of the pose ``positions`` (J, 3).
 
-    ``index`` maps canonical names (table order, ``base`` included) to joint indices.
+    ``index`` maps canonical names (table order, ``base`` included) to joint indices. ``at_rest``:
+    the pose holds the trunk, neck, head and girdle at rest; ``level``: its up is the world's (a
+    standing rest, :func:`standing`); ``flat_feet``: the ankles (``l_ankle``, ``r_ankle``) whose
+    feet stand flat in it. Without them every bone is lined up, as in the paper (see the module
+    docstring).
     """
-    out = {"base": base_alignment(index, positions)}
+    body = base_alignment(index, positions)
+    out = {"base": _level(body) if level else body}
+    flat = set(flat_feet)
     kids = canonical_children(index)
     scale = max(float(np.ptp(positions[list(index.values())], axis=0).max()), 1e-9)
     for name in index:
@@ -86,15 +133,49 @@ def align(index: dict[str, int], positions: np.ndarray) -> dict[str, np.ndarray]
             continue
         parent = canonical_parent(name, index)
         carried = out[parent if parent is not None else "base"]
+        toes_of_flat_foot = canonical_joint(name).group == "foot" and f"{name[0]}_ankle" in flat
+        if (at_rest and name in HELD) or toes_of_flat_foot:
+            out[name] = carried
+            continue
         here = positions[index[name]]
         pose_dirs, canon_dirs = [], []
-        for child in kids[name]:
+        for child in _aims(kids[name]):
             v = positions[index[child]] - here
             if np.linalg.norm(v) > 1e-4 * scale:  # a zero-length bone has no direction
                 pose_dirs.append(_unit(v))
                 canon_dirs.append(_unit(canonical_position(child) - canonical_position(name)))
-        out[name] = _bone_alignment(carried, np.array(pose_dirs).reshape(-1, 3), np.array(canon_dirs).reshape(-1, 3))
+        pose_dirs, canon_dirs = np.array(pose_dirs).reshape(-1, 3), np.array(canon_dirs).reshape(-1, 3)
+        if name in flat:
+            out[name] = _heading(_level(body), pose_dirs, canon_dirs)
+        else:
+            out[name] = _bone_alignment(carried, pose_dirs, canon_dirs)
     return out
+
+
+def _aims(children: list[str]) -> list[str]:
+    """The children whose directions align a joint: at a wrist the four fingers' knuckle line and
+    mean when any is mapped, not the thumb, whose base sits where the build puts it."""
+    fingers = [c for c in children if "thumb" not in c]
+    return fingers if fingers and len(fingers) < len(children) and canonical_joint(children[0]).group == "hand" else children
+
+
+def _level(body: np.ndarray) -> np.ndarray:
+    """The body frame's turn ``body`` without its tilt: the world's up stays up. In a standing rest
+    the world's up is the pose's; how far the pelvis-to-chest line leans is build (X Bot's and the
+    Rocketbox robot's lean 5° to 6° back, Utah's stands straight)."""
+    up = quat.rotate(body, np.array([0.0, 1.0, 0.0]))
+    return quat.normalize(quat.multiply(quat.between(up, np.array([0.0, 1.0, 0.0])), body))
+
+
+def _heading(level: np.ndarray, pose_dirs: np.ndarray, canon_dirs: np.ndarray) -> np.ndarray:
+    """A flat foot's alignment: the body's level turn ``level`` turned about the vertical so the
+    foot's children, seen from above, head like the canonical foot's; the foot keeps its pitch and
+    roll, flat on the ground."""
+    u = quat.rotate(level, pose_dirs.sum(axis=0)) * (1.0, 0.0, 1.0)
+    t = canon_dirs.sum(axis=0) * (1.0, 0.0, 1.0)
+    if np.linalg.norm(u) < 1e-6 or np.linalg.norm(t) < 1e-6:
+        return level
+    return quat.normalize(quat.multiply(quat.between(u, t), level))
 
 
 def _bone_alignment(carried: np.ndarray, pose_dirs: np.ndarray, canon_dirs: np.ndarray) -> np.ndarray:

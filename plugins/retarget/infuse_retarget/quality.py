@@ -5,7 +5,10 @@ one clip and measures each against the source, with the source's contact flags:
 
 - foot skate, cm per metre walked (source, plain, paper, final), over the source's contacts of the
   points both feet have (a target foot without a ball has nothing to hold the source's ball contacts);
-- bone-direction agreement on the body joints, degrees (plain, final);
+- bone-direction agreement on the body's limbs, degrees (plain, final): the bones a default pose
+  sets (upper arm, forearm, thigh, shin) and the hip-to-hip and shoulder-to-shoulder lines, which
+  stand for the pelvis and chest orientation. The trunk's, shoulder girdle's and feet's bones keep
+  each rig's build (see :mod:`.alignment`), so their directions differ between rigs by design;
 - foot penetration and float relative to the ground, cm (source, plain, final);
 - root speed relative to the source's speed times the leg scale;
 - the largest distance left to a reachable IK goal, mm, and the share of goals out of reach
@@ -18,12 +21,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from infuse import metrics
+from infuse.canonical import BODY_NAMES
 from infuse.contacts import FootContacts, lowest_points
 from infuse.kinematics import motion_fk
 from infuse.motion import Motion
 
+from .alignment import SWUNG
 from .retarget import RetargetResult, retarget_clip
 from .transfer import RetargetPlan
+
+#: Body joints whose bones' directions are compared: the limbs, which the alignment lines up.
+POSE_NAMES = tuple(n for n in BODY_NAMES if n in SWUNG)
 
 
 @dataclass(frozen=True)
@@ -75,7 +83,7 @@ def _measure(plan: RetargetPlan, result: RetargetResult, motion: Motion):
     g, p = motion_fk(motion)
     matched, points = _matched_contacts(plan, result)
     skate = metrics.foot_skate(p, matched, plan.target.index["base"], points).per_metre
-    bones = metrics.bone_directions(result.source_positions, plan.source_joints, p, plan.target.index)
+    bones = metrics.bone_directions(result.source_positions, plan.source_joints, p, plan.target.index, POSE_NAMES)
     lowest = lowest_points(plan.target.skeleton, plan.target.feet, g, p)
     ground = metrics.ground_contact(lowest, result.contacts.foot_flags(), result.ground)
     speed = metrics.mean_speed(p[:, plan.target.index["base"]], motion.fps)

@@ -3,13 +3,15 @@
 ``ik`` selects the constraint stage (paper, section 4.2 and beyond):
 
 - ``"none"``: the plain transfer (rotations and scaled root).
-- ``"paper"``: each foot point follows the paper's warped trajectory
-  ``p(0) + s·(p_s(t) − p_s(0))`` through the whole clip, enforced by damped pseudo-inverse IK on
-  hip–knee–ankle plus the ball of the foot.
+- ``"paper"``: each ankle follows the paper's warped trajectory ``p(0) + s·(p_s(t) − p_s(0))``
+  through the whole clip, enforced by damped pseudo-inverse IK on hip–knee–ankle, and the ball of
+  the foot rides on it as the transferred foot carries it (a warped path of its own would drag a
+  foot built unlike the source's along the source foot's geometry).
 - ``"contacts"`` (default): the same IK, but foot contacts are detected on the source (speed and
   height normalized by leg length) and planted points are pinned exactly, at the height they rest
   at in the plain transfer, with the correction gliding between contacts; the ball of the foot
-  rides on the ankle along the source foot's direction.
+  rides on the ankle, heading where the transferred foot heads and lifting off as the source's
+  ball does.
 
 ``limb_scaling`` adds per-limb scaling by extension for the arms: a straightening source arm
 brings the target's wrist to the source's reach scaled by the arm-length ratio.
@@ -139,7 +141,8 @@ class _Solver:
         ankle_t = pos[tgt_foot.ankle]
         if mode == "paper":
             ankle_goal = goals.warp(ankle_t[:, 0], ankle_s, plan.scale)
-            ball_goal = goals.warp(pos[ball_t][:, 0], ball_s, plan.scale) if ball_t is not None else None
+            # The ball rides on the warped ankle as the transferred foot carries it.
+            ball_goal = ankle_goal + (pos[ball_t] - ankle_t) if ball_t is not None else None
         else:
             ankle_goal, ball_goal = self._pinned_goals(k, pos, ankle_s, ball_s, ball_t)
         foot = [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
@@ -150,7 +153,7 @@ class _Solver:
         turn, ball_end = ik.aim(solution.end_position, ball_now, ball_goal, solution.middle)
         self.turn(foot, turn)
         name = self.names[ball_t]
-        length = float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
+        length = self._foot_length(pos, ankle_t, ball_t)
         self.result.goals[name] = ball_goal.T
         self.result.residual[name] = cq.norm(ball_end - ball_goal)
         self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < ik.REACH_MARGIN
@@ -172,13 +175,36 @@ class _Solver:
         ankle_w[1] = ankle_h + s * (ankle_s[1] - goals.planted(ankle_s[1], ankle_flags))
         if ball_t is None:
             return goals.pinned(ankle_w, ankle_flags, ankle_h)[0], None
-        # The ball rides on the ankle along the source foot's direction, so the foot keeps pointing
-        # the source's way whatever its length.
-        length = float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
-        direction = ball_s - ankle_s
-        ball_w = ankle_w + length * direction / np.maximum(cq.norm(direction), 1e-12)
-        ball_h = goals.planted(np.broadcast_to(pos[ball_t], ankle_s.shape)[1], ball_flags)
+        length = self._foot_length(pos, ankle_t, ball_t)
+        ball_t_path = np.broadcast_to(pos[ball_t], ankle_s.shape)
+        ball_h = goals.planted(ball_t_path[1], ball_flags)
+        height = ball_h + s * (ball_s[1] - goals.planted(ball_s[1], ball_flags))
+        ball_w = self._ball_on_foot(ankle_w, height, ball_t_path - ankle_t, ball_s - ankle_s, length)
         return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
+
+    @staticmethod
+    def _foot_length(pos: dict, ankle_t: np.ndarray, ball_t: int) -> float:
+        return float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
+
+    @staticmethod
+    def _ball_on_foot(ankle: np.ndarray, height: np.ndarray, foot: np.ndarray, source_foot: np.ndarray, length: float) -> np.ndarray:
+        """(3, F) goal for the ball of a foot ``length`` long whose ankle goes to ``ankle`` (3, F): at
+        ``height`` (F,) as far as the foot reaches, heading where the transferred foot ``foot``
+        (3, F, ankle to ball) heads (where that stands upright, where the source's ``source_foot``
+        heads).
+
+        The ball lifts off the ground as the source's does, as the ankle; how steeply the foot
+        then points follows from the target's own foot, so a foot longer than the source's, or
+        with a lower ankle, does not dig into the ground as it rolls over.
+        """
+        rise = np.clip(height - ankle[1], -length, length)
+        heading = np.broadcast_to(foot, ankle.shape)[[0, 2]]
+        heading = np.where(np.linalg.norm(heading, axis=0) > 1e-6 * length, heading, source_foot[[0, 2]])
+        heading = heading / np.maximum(np.linalg.norm(heading, axis=0), 1e-12)
+        ball = np.empty_like(ankle)
+        ball[1] = ankle[1] + rise
+        ball[[0, 2]] = ankle[[0, 2]] + np.sqrt(length * length - rise * rise) * heading
+        return ball
 
     def arms(self) -> None:
         plan, state = self.plan, self.state

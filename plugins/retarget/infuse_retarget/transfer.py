@@ -10,9 +10,9 @@ between, which is what makes any-to-any work:
 - a joint only one side has (a 5-joint spine against a 2-joint one, twist joints, a missing
   clavicle) follows the nearest joint both sides map; on a limb or spine chain it also takes its
   share of the twist between that joint and the next shared one, so twist joints share the
-  rotation;
-- a bone that spans joints the other side lacks is turned onto the source's actual direction, so
-  bones point the same way whatever lies between their ends;
+  rotation (the shoulder girdle is a chain of its own: a clavicle joint does not twist with the arm);
+- a bone that spans joints the other side lacks turns as the source's span does when those joints
+  bend it, so a 2-joint spine bends like a 5-joint one;
 - a single clavicle faces a SmartBody pair (``l_sternoclavicular`` and ``l_acromioclavicular``; the
   first is found even when the mapping names only the second): it plays ``l_sternoclavicular``,
   the joint that turns the clavicle, so SmartBody reaches that shrug move it;
@@ -45,6 +45,13 @@ REQUIRED = ("base", "l_hip", "l_knee", "l_ankle", "r_hip", "r_knee", "r_ankle")
 #: Body groups whose joints form one chain for twist sharing.
 FAMILY = {"torso": "axial", "neck": "axial", "head": "axial", "arm": "arm", "hand": "hand", "leg": "leg",
           "foot": "foot", "eye": "eye"}
+#: Clavicle joints: the shoulder girdle, a chain of its own (it does not twist with the arm).
+GIRDLE = ("l_sternoclavicular", "l_acromioclavicular", "r_sternoclavicular", "r_acromioclavicular")
+
+
+def chain_family(name: str) -> str:
+    """The chain a canonical joint shares twist along: axial, girdle, arm, hand, leg, foot or eye."""
+    return "girdle" if name in GIRDLE else FAMILY[canonical_joint(name).group]
 
 
 def infer_sternoclavicular(skeleton: Skeleton, index: dict[str, int]) -> dict[str, int]:
@@ -162,7 +169,14 @@ class RetargetPlan:
         self._driven_offset = quat.multiply(quat.conjugate(src.frame[self._driven_source]), tgt.frame[self._driven])[:, :, None]
 
     def _direction_fixes(self) -> None:
-        """Bones with one shared child: the target bone is turned onto the source bone's direction."""
+        """Bones with one shared child: the target bone turns with the source's span to that child.
+
+        Where the source has joints the target lacks between the two, the span bends with them
+        while the target's single bone would only follow the span's start: the target bone takes
+        the swing from the span's direction carried rigidly by its start (its aligned shape) to
+        its actual direction. Between joints mapped on both sides with nothing in between the
+        swing is nil; the target keeps its own build either way.
+        """
         src, tgt = self.source, self.target
         kids = canonical_children(self.common)
         fix = []
@@ -170,11 +184,13 @@ class RetargetPlan:
             if name == "base" or len(kids[name]) != 1:
                 continue
             child = kids[name][0]
-            u = tgt.aligned[tgt.index[child]] - tgt.aligned[tgt.index[name]]
-            if np.linalg.norm(u) < 1e-6:
-                continue
             s_joint, s_child = src.index[self.pairs[name]], src.index[self.pairs[child]]
-            b = quat.rotate(quat.conjugate(src.frame[s_joint]), u)  # the target bone, in the source joint's frame
+            span = src.aligned[s_child] - src.aligned[s_joint]
+            if np.linalg.norm(span) < 1e-6 or np.linalg.norm(tgt.aligned[tgt.index[child]] - tgt.aligned[tgt.index[name]]) < 1e-6:
+                continue
+            if s_joint == src.rig.position_parent[s_child]:
+                continue  # nothing in between: the span is rigid
+            b = quat.rotate(quat.conjugate(src.frame[s_joint]), span)  # the aligned span, in the source joint's frame
             fix.append((s_joint, s_child, tgt.index[name], b))
         self._fix_src = np.array([f[0] for f in fix], dtype=np.int64)
         self._fix_child = np.array([f[1] for f in fix], dtype=np.int64)
@@ -201,7 +217,7 @@ class RetargetPlan:
             a = tgt.index[self.driver[j]]
             if len(next_driven[j]) == 1:
                 d = next(iter(next_driven[j]))
-                same_chain = FAMILY[canonical_joint(self.driver[j]).group] == FAMILY[canonical_joint(tgt.rig.canonical_of[d]).group]
+                same_chain = chain_family(self.driver[j]) == chain_family(tgt.rig.canonical_of[d])
                 total = _path_length(parents, seg, a, d)
                 axis = tgt.aligned[d] - tgt.aligned[a]
                 if same_chain and total > 1e-9 and np.linalg.norm(axis) > 1e-9:
