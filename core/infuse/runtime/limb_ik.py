@@ -45,9 +45,11 @@ def _arccos(cosine: np.ndarray) -> np.ndarray:
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
                joints, goal: np.ndarray, weight=None, pole: np.ndarray | None = None,
-               keep_end: bool = True, end_rotation: np.ndarray | None = None, chains=None) -> np.ndarray:
+               keep_end: bool = True, end_rotation: np.ndarray | None = None, chains=None,
+               distance: bool = True) -> np.ndarray | None:
     """Rotate joints a and b of ``joints`` so that c reaches ``goal`` (F, 3); writes ``local_rotations``
-    (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within reach).
+    (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within reach), or None
+    with ``distance=False`` (c's new position is then not computed).
 
     ``weight`` (F,) in [0, 1] blends from the current pose to the solved one; ``pole`` (F, 3) or (3,)
     is the bend direction used when the limb is straight. The end joint c keeps its global rotation
@@ -67,10 +69,11 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     parents = skeleton.parents[limbs[:, 0]]
     hung = parents >= 0
     if hung.any() and not hung.all():  # a's parent rotation only where it has one: solved apart
-        return np.stack([solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb),
-                                    T[:, k], _column(weight, k, 2), _column(pole, k, 3), keep_end,
-                                    _column(end_rotation, k, 3), None if chains is None else tuple(c[:, k] for c in chains))
-                         for k, limb in enumerate(limbs)], axis=1)
+        left = [solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb), T[:, k],
+                           _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
+                           None if chains is None else tuple(c[:, k] for c in chains), distance)
+                for k, limb in enumerate(limbs)]
+        return np.stack(left, axis=1) if distance else None
     if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
         rows = np.column_stack((limbs, parents)) if hung.all() else limbs  # (K, R)
         g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
@@ -135,27 +138,30 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
     paths = [_path_below(skeleton, a, c) for a, _, c in limbs]
+    position = A if distance else None
     if not several:
-        position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], A, rotation)
+        position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], position, rotation)
     elif len({len(p) for p in paths}) == 1:  # all limbs step down together
-        position, rotation = _down(skeleton, local_rotations, joint_translations, np.array(paths).T, A, rotation)
+        position, rotation = _down(skeleton, local_rotations, joint_translations, np.array(paths).T, position, rotation)
     else:
-        ends = [_down(skeleton, local_rotations, joint_translations, p, A[:, i], rotation[:, i])
-                for i, p in enumerate(paths)]
-        position = np.stack([e[0] for e in ends], axis=1)
+        ends = [_down(skeleton, local_rotations, joint_translations, p, None if position is None else position[:, i],
+                      rotation[:, i]) for i, p in enumerate(paths)]
+        position = np.stack([e[0] for e in ends], axis=1) if distance else None
         rotation = np.stack([e[1] for e in ends], axis=1)
     if keep_end or end_rotation is not None:
         target = g_rot[..., 2, :] if end_rotation is None else end_rotation
         local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
-    return _norm(position - T)
+    return _norm(position - T) if distance else None
 
 
 def _down(skeleton, local_rotations, joint_translations, steps, position, rotation):
     """Positions (F, [K,] 3) of the limbs' ends and their parents' global rotations (F, [K,] 4),
-    stepping down ``steps`` (S, [K]) joints from the positions and global rotations above them."""
+    stepping down ``steps`` (S, [K]) joints from the positions (None: not followed) and global
+    rotations above them."""
     for i, js in enumerate(steps):
-        offset = skeleton.rest_translations[js] if joint_translations is None else joint_translations[:, js]
-        position = position + quat.rotate(rotation, offset)
+        if position is not None:
+            offset = skeleton.rest_translations[js] if joint_translations is None else joint_translations[:, js]
+            position = position + quat.rotate(rotation, offset)
         if i < len(steps) - 1:
             rotation = quat.multiply(rotation, local_rotations[:, js])
     return position, rotation
