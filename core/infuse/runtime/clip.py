@@ -110,8 +110,8 @@ class LoopTable:
         frac = position - start
         row = self.offsets[which][lead] + start  # (U, S, F)
         # Gathers by np.take on flat tables: numpy's fancy indexing costs several times more here.
-        cells = np.swapaxes(row[:, sets], 1, 2) * self.joints + np.arange(self.joints)  # (U, F, J)
-        joint_frac = np.swapaxes(frac[:, sets], 1, 2)
+        cells = np.swapaxes(row.take(sets, 1), 1, 2) * self.joints + np.arange(self.joints)  # (U, F, J)
+        joint_frac = np.swapaxes(frac.take(sets, 1), 1, 2)
         rot = np.take(self.rotation_steps, cells, axis=1)  # a gathered copy: the interpolation runs in place on it
         rot *= joint_frac
         rot += np.take(self.rotations, cells, axis=1)
