@@ -112,6 +112,10 @@ def test_limb_ik_given_the_limbs_frames_or_an_end_rotation():
     assert np.allclose(np.abs(np.sum(turned * after, axis=-1)), 1.0, rtol=0.0, atol=1e-12)
     g_rot, _ = chain_fk(sk, turned, root, None, [3, 7])
     assert np.allclose(np.abs(np.sum(g_rot * feet, axis=-1)), 1.0, rtol=0.0, atol=1e-12)
+    # Without the distance left: the same pose.
+    quiet = local.copy()
+    assert solve_limb(sk, quiet, root, None, limbs, goals, weight=weight, end_rotation=feet, distance=False) is None
+    assert np.array_equal(quiet, turned)
     # Weights of 0 and 1 only: the solved pose on the frames of weight 1, the pose as it was elsewhere.
     untouched = weight == 0.0
     assert np.array_equal(plain[:, [1, 2]][untouched[:, 0]], local[:, [1, 2]][untouched[:, 0]])

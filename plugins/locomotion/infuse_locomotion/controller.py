@@ -41,7 +41,7 @@ from infuse.runtime.clip import LoopTable
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from .phase_keys import contact_of, foot_events, foot_phase, support_of, warp
+from .phase_keys import foot_events, foot_phase, stance_of, warp
 from .steering import Steering
 
 _INFUSIONS: dict = {}
@@ -217,8 +217,9 @@ class Locomotion(Controller):
         # turning examples) spun at the root.
         heading = h0 + np.concatenate(([0.0], np.cumsum(turn[:-1] * dt)))
         ahead = heading + turn * dt  # each frame's step along the heading it turns to, as the steering integrates
-        step_x = (vf * np.sin(ahead) + vl * np.cos(ahead)) * dt
-        step_z = (vf * np.cos(ahead) - vl * np.sin(ahead)) * dt
+        sin_ahead, cos_ahead = np.sin(ahead), np.cos(ahead)
+        step_x = (vf * sin_ahead + vl * cos_ahead) * dt
+        step_z = (vf * cos_ahead - vl * sin_ahead) * dt
         px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
         st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + turn[-1] * dt))
@@ -271,7 +272,7 @@ class Locomotion(Controller):
 
     def _blend(self, b, w, phase, standing, times):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
-        (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.support_of`) of the moving clips
+        (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.stance_of`) of the moving clips
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
         faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
@@ -280,11 +281,14 @@ class Locomotion(Controller):
         if stepping.size:
             ws = w[:, stepping]
             events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b["events"][stepping].reshape(-1, 8)).reshape(-1, 2, 4)
-        # Each clip's times (U, 3, F): the body's at the blend phase, each leg's at its foot's phase.
-        clock = np.repeat(warp(b["keys"][order, None], phase)[:, None], 3, axis=1)
+        # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
+        # then their times in the clips.
+        phases = np.empty((order.size, 3, len(phase)))
+        phases[:] = phase
         feet = b["stepping"][order]
         if feet.any():
-            clock[feet, 1:] = np.swapaxes(warp(b["keys"][order[feet], None, None], foot_phase(b["events"][order[feet]], events, phase)), 1, 2)
+            phases[feet, 1:] = np.swapaxes(foot_phase(b["events"][order[feet]], events, phase), 1, 2)
+        clock = warp(b["keys"][order, None, None], phases)
         fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
         if fade.size:  # the idle clips, played at the activity's times
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
@@ -301,8 +305,9 @@ class Locomotion(Controller):
             contact += flags * contact_w[:, None, None]
             support += flags.max(axis=2) * contact_w[:, None]
         if stepping.size:
-            contact += contact_of(events, phase, HANDOVER) * ws.sum(axis=1)[:, None, None]
-            support += support_of(events, phase) * ws.sum(axis=1)[:, None]
+            flags, share = stance_of(events, phase, HANDOVER)
+            contact += flags * ws.sum(axis=1)[:, None, None]
+            support += share * ws.sum(axis=1)[:, None]
         if fade.size:
             share = standing / fade.size
             acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 2)) for a in acc)
@@ -358,7 +363,7 @@ class Locomotion(Controller):
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
         solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goal, weight=(stride < 1.0 - 1e-6).astype(float),
-                   pole=forward, end_rotation=feet[:, :, 0])
+                   pole=forward, end_rotation=feet[:, :, 0], distance=False)
         if stance_feet is not None and b["balls_on_ankles"].size:
             k = b["balls_on_ankles"]
             rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
@@ -431,10 +436,10 @@ class Locomotion(Controller):
         if len(solving) == 1:
             k = solving[0]
             solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"][k], goals[:, k], weight=weights[:, k], pole=forward,
-                       chains=(g_rot[:, k, :4], g_pos[:, k, :4]))
+                       chains=(g_rot[:, k, :4], g_pos[:, k, :4]), distance=False)
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goals, weight=weights, pole=forward,
-                       chains=(g_rot[:, :, :4], g_pos[:, :, :4]))
+                       chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
 
 
 def _prepare(space, clips, sk, legs) -> dict:

@@ -69,23 +69,21 @@ def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.nd
     return np.mod(y0 + frac * (y1 - y0), 1.0)
 
 
-def contact_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0) -> np.ndarray:
-    """(F, 2, 2) flags of each foot's heel and ball being down at ``phase`` (F,) from the blend's
-    ``events`` (F, 2, 4): the heel from strike to heel off, the ball from foot flat to toe off.
+def stance_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0, ramp: float = 0.05) -> tuple[np.ndarray, np.ndarray]:
+    """Each foot's contacts and stance share at ``phase`` (F,) from the blend's ``events`` (F, 2, 4).
 
-    ``handover`` < 1 ends the heel's flag that share of the way from foot flat to heel off instead,
-    for a controller that pins the ball from there on: in the middle of foot flat the foot rests
-    still, so the anchor changes while nothing moves (at foot flat the foot is still rolling down
-    about its heel, at heel off it has started to roll about its ball)."""
-    p = events[:, :, 0] + np.mod(phase[:, None] - events[:, :, 0], 1.0)  # (F, 2) from each foot's strike
-    heel = p < events[:, :, 1] + handover * (events[:, :, 2] - events[:, :, 1])
-    ball = (p >= events[:, :, 1]) & (p < events[:, :, 3])
-    return np.stack((heel, ball), axis=-1)
-
-
-def support_of(events: np.ndarray, phase: np.ndarray, ramp: float = 0.05) -> np.ndarray:
-    """(F, 2) how much each foot is in its stance at ``phase`` (F,), from the blend's ``events``
-    (F, 2, 4): 1 from ``ramp`` after heel strike to ``ramp`` before toe off, 0 in the swing, linear
-    in between (continuous in the phase, for adjustments that must not jump at strike or toe off)."""
-    p = events[:, :, 0] + np.mod(phase[:, None] - events[:, :, 0], 1.0)
-    return np.clip((p - events[:, :, 0]) / ramp, 0.0, 1.0) * np.clip((events[:, :, 3] - p) / ramp, 0.0, 1.0)
+    - (F, 2, 2) flags of the heel and the ball being down: the heel from strike to heel off, the
+      ball from foot flat to toe off. ``handover`` < 1 ends the heel's flag that share of the way
+      from foot flat to heel off instead, for a controller that pins the ball from there on: in the
+      middle of foot flat the foot rests still, so the anchor changes while nothing moves (at foot
+      flat the foot is still rolling down about its heel, at heel off it has started to roll about
+      its ball).
+    - (F, 2) how much each foot is in its stance: 1 from ``ramp`` after heel strike to ``ramp``
+      before toe off, 0 in the swing, linear in between (continuous in the phase, for adjustments
+      that must not jump at strike or toe off)."""
+    strike, flat, heel_off, off = (events[:, :, k] for k in range(4))
+    p = strike + np.mod(phase[:, None] - strike, 1.0)  # (F, 2) from each foot's strike
+    heel = p < flat + handover * (heel_off - flat)
+    ball = (p >= flat) & (p < off)
+    support = np.clip((p - strike) / ramp, 0.0, 1.0) * np.clip((off - p) / ramp, 0.0, 1.0)
+    return np.stack((heel, ball), axis=-1), support
