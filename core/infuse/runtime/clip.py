@@ -78,15 +78,17 @@ class LoopTable:
         self.durations = np.array([max(m.duration, 1e-9) for m in motions])
         self.joints = motions[0].skeleton.num_joints
 
+        ends = self.offsets + counts - 1  # each motion's last row: no step to the next motion's first
+
         def tables(values):
             """Values (R, [J,] C) and each frame's step to the next (zero on a motion's last frame), as
             component-major (C, R * J) or (C, R) tables."""
             steps = np.zeros_like(values)
-            for start, count in zip(self.offsets, counts):
-                steps[start:start + count - 1] = np.diff(values[start:start + count], axis=0)
+            steps[:-1] = values[1:] - values[:-1]
+            steps[ends] = 0.0
             return tuple(np.ascontiguousarray(v.reshape(-1, v.shape[-1]).T) for v in (values, steps))
 
-        self.rotations, self.rotation_steps = tables(np.concatenate([_interpolation_table(m)[0] for m in motions]))
+        self.rotations, self.rotation_steps = tables(np.concatenate([continuous_rotations(m) for m in motions]))
         self.roots, self.root_steps = tables(np.concatenate([m.root_translations for m in motions]))
         self.translations = self.translation_steps = None
         if any(m.joint_translations is not None for m in motions):
@@ -125,6 +127,11 @@ class LoopTable:
 
 
 _TABLES: dict[int, tuple] = {}
+
+
+def continuous_rotations(motion: Motion) -> np.ndarray:
+    """The clip's local rotations (F, J, 4) made sign-continuous over frames (cached per clip)."""
+    return _interpolation_table(motion)[0]
 
 
 def _interpolation_table(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
