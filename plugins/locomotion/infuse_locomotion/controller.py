@@ -37,7 +37,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
-from infuse.runtime.clip import LoopTable
+from infuse.runtime.clip import LoopTable, continuous_rotations
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
@@ -465,18 +465,23 @@ def _prepare(space, clips, sk, legs) -> dict:
     for j in range(sk.num_joints):
         if limbs[j] == 0 and sk.parents[j] >= 0:
             limbs[j] = limbs[sk.parents[j]]
-    means = [mean_pose(m) for m in motions]
-    signs = [np.where(np.sum(m[0] * means[0][0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
+    means = [mean_rotations(m) for m in motions]
+    signs = [np.where(np.sum(m * means[0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
     ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
     ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
-    if len(legs) == 2:
-        for i, m in enumerate(motions):
-            _, pos = chain_fk(sk, m.local_rotations[:-1], m.root_translations[:-1],
-                              None if m.joint_translations is None else m.joint_translations[:-1],
-                              [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
-            hips = 0.5 * (pos[:, 0] + pos[:, 1])
-            ankle_means[i] = (pos[:, 2:] - hips[:, None]).mean(axis=0)
-            ankle_low[i] = pos[:, 2:, 1].min(axis=0)
+    if len(legs) == 2:  # one FK over every clip's cycle (its closing frame left out)
+        cycles = [slice(0, max(m.num_frames - 1, 1)) for m in motions]
+        moved = any(m.joint_translations is not None for m in motions)
+        _, pos = chain_fk(sk, np.concatenate([m.local_rotations[c] for m, c in zip(motions, cycles)]),
+                          np.concatenate([m.root_translations[c] for m, c in zip(motions, cycles)]),
+                          np.concatenate([m.local_translations()[c] for m, c in zip(motions, cycles)]) if moved else None,
+                          [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+        ankles = pos[:, 2:] - 0.5 * (pos[:, 0] + pos[:, 1])[:, None]
+        start = 0
+        for i, c in enumerate(cycles):
+            ankle_means[i] = ankles[start:start + c.stop].mean(axis=0)
+            ankle_low[i] = pos[start:start + c.stop, 2:, 1].min(axis=0)
+            start += c.stop
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down.
     stance_feet = None
     if len(legs) == 2 and idle.any() and all(leg[3] is not None for leg in legs):
@@ -493,7 +498,7 @@ def _prepare(space, clips, sk, legs) -> dict:
            "stepping": np.array([e is not None for e in events]), "table": LoopTable(motions), "idle": idle,
            "slowest": slowest, "limbs": limbs, "body": body,
            # The clips' sign-aligned mean rotations of the joints outside the legs (N, B * 4).
-           "body_means": (np.stack([m[0][body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
+           "body_means": (np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
            "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet}
     if len(legs) == 2:  # the joints the stride and the pinning work on, both legs at once
         balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
@@ -644,14 +649,11 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
     return phase % 1.0, np.minimum(stride, 1.0), standing
 
 
-def mean_pose(motion) -> tuple:
-    """A cycle's mean local rotations (J, 4), root offset (3,) and joint translations (J, 3) or None."""
-    rot = quat.make_continuous(np.array(motion.local_rotations[:-1] if motion.num_frames > 1 else motion.local_rotations))
+def mean_rotations(motion) -> np.ndarray:
+    """A cycle's mean local rotations (J, 4) (its closing frame left out), each joint's frames turned to its first's side."""
+    rot = continuous_rotations(motion)[:max(motion.num_frames - 1, 1)]
     sign = np.where(np.sum(rot * rot[:1], axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
-    jt = motion.joint_translations
-    frames = slice(0, max(motion.num_frames - 1, 1))
-    return (quat.normalize((rot * sign).mean(axis=0)), motion.root_translations[frames].mean(axis=0),
-            None if jt is None else jt[frames].mean(axis=0))
+    return quat.normalize((rot * sign).mean(axis=0))
 
 
 def _accumulate(acc, rot, root, jt, weight):
