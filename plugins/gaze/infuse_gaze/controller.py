@@ -29,7 +29,8 @@ from .model import (
 )
 from .solver import SolverInput, solve
 
-_FORWARD = np.array([0.0, 0.0, 1.0])
+_FORWARD = np.array([0.0, 0.0, 1.0])  # an aligned frame's forward axis
+
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
     """(heading, pitch) radians of an offset of ``angle_deg`` toward ``direction``: a BML word
