@@ -144,9 +144,8 @@ def test_last_frames_span_blocks_in_the_characters_own_frame():
 
 
 def test_blocks_of_any_size_give_the_same_frames():
-    """Clips, gazes at points and objects and saccades carry their state across blocks. (Two characters
-    looking at each other are not block-independent: each one's target is the other's eyes as a
-    first pass of the block places them, a pass whose smoothing restarts at every block.)"""
+    """Clips, gazes at points and objects and saccades carry their state across blocks (two characters
+    looking at each other: tests/test_gaze_blocks.py)."""
     from infuse_gaze import Gaze
     from infuse_saccade.controller import Saccades
 
