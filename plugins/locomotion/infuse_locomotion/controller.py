@@ -71,6 +71,7 @@ SETTLE_S = 0.5
 HANDOVER = 0.5
 #: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
 FREE, ANKLE, BALL = 0, 1, 2
+_ONES4 = np.ones(4)
 
 
 def infusion_for(rig, pack: str, cache=None):
@@ -652,8 +653,8 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
 def mean_rotations(motion) -> np.ndarray:
     """A cycle's mean local rotations (J, 4) (its closing frame left out), each joint's frames turned to its first's side."""
     rot = continuous_rotations(motion)[:max(motion.num_frames - 1, 1)]
-    sign = np.where(np.sum(rot * rot[:1], axis=-1, keepdims=True) < 0.0, -1.0, 1.0)
-    return quat.normalize((rot * sign).mean(axis=0))
+    sides = ((rot * rot[:1]).reshape(-1, 4) @ _ONES4).reshape(rot.shape[:2])  # (F, J) dot products with the first frame
+    return quat.normalize(np.where((sides < 0.0)[..., None], -rot, rot).mean(axis=0))
 
 
 def _accumulate(acc, rot, root, jt, weight):
