@@ -109,22 +109,24 @@ def _rebuilt(sk: infuse.Skeleton, moves: dict[str, np.ndarray]) -> infuse.Skelet
     return from_globals(names, parents, rots, pos)
 
 
-def test_a_rig_built_otherwise_keeps_its_girdle_trunk_and_feet_at_rest():
+def test_a_rig_built_otherwise_moves_from_its_own_rest():
     """A target whose clavicle joints zigzag (the acromioclavicular 4 cm down), whose lower spine
-    bends back and whose ankles sit 3 cm higher up the shin gets the source's motion on those joints
-    exactly: where the source's clavicles, spine and feet hold their rest, the target's hold theirs."""
+    bends back, whose ankles sit 3 cm higher up the shin and whose thumbs start 2 cm lower gets the
+    source's motion on those joints exactly: where the source's clavicles, spine, feet and wrists
+    hold their rest, the target's hold theirs."""
     sk = canonical_skeleton(extras=True)
     rest = sk.rest_global_positions
     down, back = np.array([0.0, -0.04, 0.0]), np.array([0.0, 0.0, -0.03])
     shin = {s: rest[sk.index[f"{s}_knee"]] - rest[sk.index[f"{s}_ankle"]] for s in "lr"}
     target = _rebuilt(sk, {"l_acromioclavicular": down, "r_acromioclavicular": down, "spine2": back,
+                           "l_thumb1": 0.5 * down, "r_thumb1": 0.5 * down,
                            **{f"{s}_ankle": 0.03 * v / np.linalg.norm(v) for s, v in shin.items()}})
     clip = smooth_clip(sk, joints=("base", "spine3", "l_shoulder", "l_elbow", "r_shoulder", "r_hip", "r_knee"))
     out = retarget(clip, identity_map(sk), target, identity_map(target), ik="none")
     g, _ = motion_fk(out)
     ref = target.rest_global_rotations
     for name in ("l_sternoclavicular", "l_acromioclavicular", "r_acromioclavicular", "spine1", "spine2",
-                 "l_ankle", "l_forefoot", "r_toe"):
+                 "l_ankle", "l_forefoot", "r_toe", "l_wrist", "r_wrist"):
         j = target.index[name]
         parent = target.parents[j]
         local = quat.multiply(quat.conjugate(g[:, parent]), g[:, j])

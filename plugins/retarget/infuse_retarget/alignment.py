@@ -153,10 +153,10 @@ def align(index: dict[str, int], positions: np.ndarray, *, at_rest: bool = False
 
 
 def _aims(children: list[str]) -> list[str]:
-    """The children whose directions align a joint: at a wrist the four fingers' knuckle line and
-    mean when any is mapped, not the thumb, whose base sits where the build puts it."""
-    fingers = [c for c in children if "thumb" not in c]
-    return fingers if fingers and len(fingers) < len(children) and canonical_joint(children[0]).group == "hand" else children
+    """The children whose directions align a joint: at a wrist the fingers' knuckles when any is
+    mapped, not the thumb, whose base sits where the build puts it."""
+    fingers = [c for c in children if canonical_joint(c).group == "hand" and "thumb" not in c]
+    return fingers or children
 
 
 def _level(body: np.ndarray) -> np.ndarray:
