@@ -22,14 +22,19 @@ import numpy as np
 
 #: Off the facing by this much or more (radians), the character turns on the spot before it walks.
 TURN_IN_PLACE = math.radians(75.0)
+_COS_TURN_IN_PLACE = math.cos(TURN_IN_PLACE)
 #: Turn rate asked per radian off the facing (1/s), before the turn-rate limit.
 TURN_GAIN = 3.0
 #: A character standing within this many metres of a path's last point stays there.
 STAY = 0.15
 
 
-def _value(v, t: float) -> float:
-    return float(v(t)) if callable(v) else float(v)
+def _of_time(v):
+    """A request as a function of time (seconds): ``v`` itself, or a constant."""
+    if callable(v):
+        return lambda t: float(v(t))
+    value = float(v)
+    return lambda t: value
 
 
 @dataclass
@@ -72,11 +77,12 @@ class Steering:
         last_k = -1 if path is None else len(path) - 1
         accel, decel = self.max_accel * dt, self.max_decel * dt
         turn_accel = self.max_turn_accel * dt
+        speed_at, turn_rate_at, direction_at = _of_time(self.speed), _of_time(self.turn_rate), _of_time(self.direction)
         for t in times.tolist():
-            direction = _value(self.direction, t)
+            direction = direction_at(t)
             stopping = 0.0
             if self.path is None:
-                v_goal, w_goal = _value(self.speed, t), _value(self.turn_rate, t)
+                v_goal, w_goal = speed_at(t), turn_rate_at(t)
             else:
                 # Advance along the path while the next point is within the look-ahead distance.
                 while k < last_k and math.hypot(path[k][0] - x, path[k][1] - z) < max(self.lookahead, 0.5 * v):
@@ -93,8 +99,8 @@ class Steering:
                     want = math.atan2(px - x, pz - z) - direction
                     err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
                     w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, TURN_GAIN * err))
-                    ahead = (math.cos(err) - math.cos(TURN_IN_PLACE)) / (1.0 - math.cos(TURN_IN_PLACE))
-                    v_goal = _value(self.speed, t) * min(max(ahead, 0.0), 1.0)
+                    ahead = (math.cos(err) - _COS_TURN_IN_PLACE) / (1.0 - _COS_TURN_IN_PLACE)
+                    v_goal = speed_at(t) * min(max(ahead, 0.0), 1.0)
                     if abs(math.sin(err)) > 1e-6:  # stay on a circle that meets the point
                         v_goal = min(v_goal, self.max_turn_rate * dist / (2.0 * abs(math.sin(err))))
                     if last:
