@@ -170,6 +170,11 @@ class Locomotion(Controller):
         planted feet); only its path starts afresh, at its first point."""
         return dict(copy.deepcopy(state), waypoint=0)
 
+    def at_rest(self, state: dict) -> bool:
+        """At rest once the stop steps are over (both feet landed under the body) and the idle has fully
+        faded in; a walk not evaluated yet (empty ``state``) counts as at rest."""
+        return bool(state.get("settled", True)) and float(state.get("stand", 1.0)) >= 1.0 - 1e-9
+
     def bind(self, rig, report):
         from infuse.packs import BlendSpace
 
