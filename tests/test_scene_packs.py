@@ -128,3 +128,29 @@ def test_an_arrived_walk_hands_over_to_the_idle_where_it_stands():
     for joint, most in (("base", 0.01), ("skullbase", 0.02), ("l_ankle", 0.05), ("r_ankle", 0.05)):
         steps = np.linalg.norm(np.diff(pos[around, rig.joint(joint)], axis=0), axis=1)
         assert steps.max() < most, joint
+
+
+def test_a_walk_settles_into_the_idle_only_once_its_stop_is_over(monkeypatch):
+    """Standing still for half a second is not enough: the stop steps and the fade into the pack's idle
+    must be over (the locomotion controller's ``at_rest``) when the idle clip takes over."""
+    from infuse.scene import walks
+
+    checks = []  # (locomotion state when the scene looked, whether the idle took over)
+    settle = walks.Walks._settle
+
+    def looked(self, name, walk, after):
+        state = dict(walk.activity.state)
+        settle(self, name, walk, after)
+        checks.append((state, walk.settled is not None))
+
+    monkeypatch.setattr(walks.Walks, "_settle", looked)
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(corpus_character("xbot"), "bob", packs=["locomotion-male"])
+    scene.walk_to("bob", (-2.0, -1.0), at=0.5)
+    scene.run(8.0)
+    (walk,) = scene.walks.walks["bob"]
+    controller = walk.activity.controller
+    assert walk.settled is not None and checks[-1][1]
+    assert controller.at_rest(checks[-1][0])  # at rest when the idle clip took over
+    standing_not_at_rest = [s for s, _ in checks[:-1] if s["settled"] and not controller.at_rest(s)]
+    assert standing_not_at_rest  # feet down, idle fading in: the scene waited
