@@ -134,6 +134,17 @@ class SkinnedMesh:
         return positions, normals
 
 
+def area_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(P, 3) unnormalized normals of ``positions`` (P, 3): the sum of the faces around each point, each
+    weighted by its area (``triangles`` (T, 3) index ``positions``, counter-clockwise from the front)."""
+    positions = np.asarray(positions, dtype=np.float64)
+    p = positions[triangles]
+    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    corners = np.asarray(triangles).reshape(-1)
+    repeated = np.repeat(face, 3, axis=0)
+    return np.stack([np.bincount(corners, repeated[:, c], minlength=len(positions)) for c in range(3)], axis=1)
+
+
 def rigid_matrices(global_rotations: np.ndarray, global_positions: np.ndarray) -> np.ndarray:
     """(..., 4, 4) matrices of rigid transforms from rotations (..., 4) and positions (..., 3)."""
     rot = np.asarray(global_rotations, dtype=np.float64)

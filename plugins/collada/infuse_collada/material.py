@@ -17,12 +17,12 @@ from urllib.parse import unquote, urlparse
 
 import numpy as np
 
+from infuse.texture import TEXTURE_SIZE, bilinear, decode_image
+
 from .document import Document
 
 #: Linear RGBA of a surface whose colour is a texture that is not found, or that has no material.
 DEFAULT_COLOR = (0.8, 0.8, 0.8, 1.0)
-#: Largest side (pixels) a texture is reduced to before sampling at the vertices.
-TEXTURE_SIZE = 256
 _SHADERS = ("lambert", "phong", "blinn", "constant")
 
 
@@ -148,34 +148,15 @@ def _texcoord_set(binding, texcoord: str | None) -> int | None:
             raw = b.get("input_set")
             return int(raw) if raw and raw.isdigit() else None
     return None
-
-
 def read_image(path: Path) -> np.ndarray:
     """Linear RGBA pixels (H, W, 4) of an image file, reduced to at most :data:`TEXTURE_SIZE` a side.
 
     Raises ``ImportError`` without Pillow, ``OSError``/``ValueError`` when the file is unreadable.
     """
-    from PIL import Image
-
-    with Image.open(path) as img:
-        img.draft("RGB", (TEXTURE_SIZE, TEXTURE_SIZE))
-        img = img.convert("RGBA")
-        img.thumbnail((TEXTURE_SIZE, TEXTURE_SIZE))
-        rgba = np.asarray(img, dtype=np.float64) / 255.0
-    rgba[..., :3] = np.where(rgba[..., :3] <= 0.04045, rgba[..., :3] / 12.92, ((rgba[..., :3] + 0.055) / 1.055) ** 2.4)
-    return rgba
+    return decode_image(path, TEXTURE_SIZE)
 
 
 def sample(pixels: np.ndarray, uv: np.ndarray) -> np.ndarray:
     """(N, 4) bilinear samples of ``pixels`` (H, W, 4) at COLLADA texture coordinates ``uv`` (N, 2):
     origin at the image's bottom left, repeated outside 0..1."""
-    h, w = pixels.shape[:2]
-    x = np.mod(uv[:, 0], 1.0) * w - 0.5
-    y = (1.0 - np.mod(uv[:, 1], 1.0)) * h - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
-    x0, y0 = x0.astype(np.int64) % w, y0.astype(np.int64) % h
-    x1, y1 = (x0 + 1) % w, (y0 + 1) % h
-    top = pixels[y0, x0] * (1 - fx) + pixels[y0, x1] * fx
-    bottom = pixels[y1, x0] * (1 - fx) + pixels[y1, x1] * fx
-    return top * (1 - fy) + bottom * fy
+    return bilinear(pixels, np.mod(uv[:, 0], 1.0), 1.0 - np.mod(uv[:, 1], 1.0), wrap_edges=True)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from infuse.errors import InputError
-from infuse.mesh import SkinnedMesh, rigid_matrices
+from infuse.mesh import SkinnedMesh, area_normals, rigid_matrices
 
 from . import material
 from .document import Document, place
@@ -199,7 +199,7 @@ class MeshLoader:
         normals = normals @ np.linalg.inv(linear)  # normals transform by the inverse transpose
         length = np.linalg.norm(normals, axis=1)
         if np.any(length < 1e-12):
-            normals = np.where((length < 1e-12)[:, None], smooth_normals(all_positions, position_tris)[pos_index], normals)
+            normals = np.where((length < 1e-12)[:, None], area_normals(all_positions, position_tris)[pos_index], normals)
             length = np.linalg.norm(normals, axis=1)
         normals = normals / np.maximum(length, 1e-12)[:, None]
         colors, base_color = None, look.color
@@ -267,11 +267,3 @@ class MeshLoader:
             offsets.append(geometry.positions if relative else geometry.positions - base.positions)
         return tuple(names), (np.array(offsets) if offsets else None)
 
-
-def smooth_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """(P, 3) area-weighted normals (unnormalized) of the faces around each of ``positions`` (P, 3)."""
-    p = positions[triangles]
-    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    corners = triangles.reshape(-1)
-    repeated = np.repeat(face, 3, axis=0)
-    return np.stack([np.bincount(corners, repeated[:, c], minlength=len(positions)) for c in range(3)], axis=1)

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from infuse.mesh import area_normals
+
 from .binary import Node
 
 
@@ -144,10 +146,6 @@ def polygon_materials(node: Node, polys: Polygons) -> np.ndarray:
 
 def smooth_normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(V, 3) unit area-weighted normals of the faces around each point (``triangles`` index ``points``)."""
-    p = points[triangles]
-    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    out = np.zeros_like(points)
-    for k in range(3):  # three scatters, not a loop over vertices
-        np.add.at(out, triangles[:, k], face)
+    out = area_normals(points, triangles)
     length = np.linalg.norm(out, axis=1, keepdims=True)
     return np.where(length > 1e-30, out / np.maximum(length, 1e-30), [0.0, 1.0, 0.0])

@@ -13,16 +13,15 @@ from __future__ import annotations
 
 import base64
 import binascii
-import io
 from dataclasses import dataclass
 from pathlib import Path, PureWindowsPath
 
 import numpy as np
 
+from infuse.texture import TEXTURE_SIZE, bilinear, decode_image
+
 from .document import Document, FbxObject
 
-#: Largest side (pixels) a diffuse texture is reduced to before it is sampled at the vertices.
-TEXTURE_SIZE = 256
 #: Largest image file read beside the .fbx (bytes).
 MAX_IMAGE_BYTES = 64 << 20
 
@@ -56,11 +55,6 @@ def base_color(material: FbxObject | None) -> np.ndarray:
     transparency = _numbers(material, "TransparencyFactor")
     alpha = opacity[0] if opacity else 1.0 - (transparency[0] if transparency else 0.0)
     return np.clip(np.append(out, alpha), 0.0, 1.0)
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """sRGB-encoded values in 0..1 -> linear (the exact piecewise curve)."""
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 class Textures:
@@ -98,7 +92,7 @@ class Textures:
         from PIL import Image  # only files with textures pay for importing Pillow
 
         try:
-            pixels = _decode(data if data is not None else path.read_bytes())
+            pixels = decode_image(data if data is not None else path.read_bytes(), TEXTURE_SIZE)
         except (OSError, ValueError, SyntaxError, Image.DecompressionBombError) as exc:  # what Pillow raises for images it cannot read
             self.warnings.append(f"texture {tex.name!r} is not used: its image cannot be decoded ({exc})")
             return None
@@ -147,30 +141,8 @@ def _content(video: FbxObject) -> bytes | None:
         return None
 
 
-def _decode(data: bytes) -> np.ndarray:
-    from PIL import Image
-
-    with Image.open(io.BytesIO(data)) as img:
-        img.draft("RGB", (TEXTURE_SIZE, TEXTURE_SIZE))  # JPEG decodes straight at a reduced scale
-        img = img.convert("RGBA")
-        img.thumbnail((TEXTURE_SIZE, TEXTURE_SIZE))
-        rgba = np.asarray(img, dtype=np.float64) / 255.0
-    rgba[..., :3] = srgb_to_linear(rgba[..., :3])
-    return rgba
-
-
 def sample(texture: Texture, uv: np.ndarray) -> np.ndarray:
     """(N, 4) bilinear samples of ``texture`` at FBX texture coordinates ``uv`` (N, 2), origin bottom left."""
-    pixels = texture.pixels
-    h, w = pixels.shape[:2]
     u = np.clip(uv[:, 0], 0.0, 1.0) if texture.clamp_u else np.mod(uv[:, 0], 1.0)
     v = np.clip(uv[:, 1], 0.0, 1.0) if texture.clamp_v else np.mod(uv[:, 1], 1.0)
-    x, y = u * w - 0.5, (1.0 - v) * h - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
-    x0 = np.clip(x0.astype(np.int64), 0, w - 1)
-    y0 = np.clip(y0.astype(np.int64), 0, h - 1)
-    x1, y1 = np.minimum(x0 + 1, w - 1), np.minimum(y0 + 1, h - 1)
-    top = pixels[y0, x0] * (1 - fx) + pixels[y0, x1] * fx
-    bottom = pixels[y1, x0] * (1 - fx) + pixels[y1, x1] * fx
-    return top * (1 - fy) + bottom * fy
+    return bilinear(texture.pixels, u, 1.0 - v)

@@ -12,7 +12,7 @@ without a skin that hangs under a joint follows that joint rigidly; one outside 
 not drawn (a warning says so).
 
 Colour: the material's base colour factor, times the base colour texture sampled at each vertex
-(bilinear, on the texture reduced to at most :data:`TEXTURE_SIZE` pixels, sRGB converted to linear),
+(bilinear, on the texture reduced to at most :data:`infuse.texture.TEXTURE_SIZE` pixels, sRGB converted to linear),
 times ``COLOR_0``. Triangles whose three vertices fall under the alpha cutoff (``MASK``) or are
 mostly transparent (``BLEND``) are dropped. Morph targets keep their position offsets; default mesh
 weights are not applied. Compressed mesh data is decoded: meshopt views (indices, octahedral normals)
@@ -21,20 +21,17 @@ skipped with a warning in ``meta["warnings"]``); points and lines are not surfac
 """
 from __future__ import annotations
 
-import io
-
 import numpy as np
 
 from infuse.errors import InputError, MissingFeatureError
-from infuse.mesh import SkinnedMesh, rigid_matrices
+from infuse.mesh import SkinnedMesh, area_normals, rigid_matrices
+from infuse.texture import TEXTURE_SIZE, bilinear, decode_image
 
 from . import draco
 from .accessors import AccessorReader
 from .container import read_uri
 from .morph import mesh_target_names
 
-#: Largest side (pixels) a base colour texture is reduced to before sampling at the vertices.
-TEXTURE_SIZE = 256
 #: Alpha under which a ``BLEND`` material's vertex counts as transparent.
 BLEND_CUTOFF = 0.5
 WRAP_CLAMP, WRAP_MIRROR = 33071, 33648
@@ -43,11 +40,6 @@ WRAP_CLAMP, WRAP_MIRROR = 33071, 33648
 def similarity_matrix(t, q, s) -> np.ndarray:
     """4x4 matrix of the similarity ``x -> t + s · rotate(q, x)``."""
     return rigid_matrices(np.asarray(q, dtype=np.float64), np.asarray(t, dtype=np.float64)) @ np.diag([s, s, s, 1.0])
-
-
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """sRGB-encoded values in 0..1 -> linear (the exact piecewise curve)."""
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 class MeshLoader:
@@ -180,7 +172,7 @@ class MeshLoader:
         if "NORMAL" in attributes:
             normals = self._read(attributes["NORMAL"], f"{place}.attributes.NORMAL").astype(np.float64) @ np.linalg.inv(linear)
         else:
-            normals = vertex_normals(positions, triangles)
+            normals = area_normals(positions, triangles)
         normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
         material = self._material(prim.get("material"))
         colors = self._colors(attributes, place, material, v)
@@ -296,8 +288,6 @@ class MeshLoader:
         return self._textures[index]
 
     def _image_pixels(self, image: dict, place: str) -> np.ndarray:
-        from PIL import Image
-
         if isinstance(image.get("bufferView"), int):
             views = self.doc.json.get("bufferViews") or []
             view = views[image["bufferView"]] if image["bufferView"] < len(views) else None
@@ -309,13 +299,7 @@ class MeshLoader:
             data = bytes(buffers[view["buffer"]][start:start + int(view.get("byteLength", 0))])
         else:
             data = read_uri(image.get("uri"), self.file, place)
-        with Image.open(io.BytesIO(data)) as img:
-            img.draft("RGB", (TEXTURE_SIZE, TEXTURE_SIZE))  # JPEG decodes straight at a reduced scale
-            img = img.convert("RGBA")
-            img.thumbnail((TEXTURE_SIZE, TEXTURE_SIZE))
-            rgba = np.asarray(img, dtype=np.float64) / 255.0
-        rgba[..., :3] = srgb_to_linear(rgba[..., :3])
-        return rgba
+        return decode_image(data, TEXTURE_SIZE)
 
 
 def _wrap(c: np.ndarray, mode) -> np.ndarray:
@@ -329,24 +313,4 @@ def _wrap(c: np.ndarray, mode) -> np.ndarray:
 def sample_texture(pixels: np.ndarray, wrap_s, wrap_t, uv: np.ndarray) -> np.ndarray:
     """(N, 4) bilinear samples of ``pixels`` (H, W, 4) at glTF texture coordinates ``uv`` (N, 2)
     (origin at the image's top left corner)."""
-    h, w = pixels.shape[:2]
-    x = _wrap(uv[:, 0], wrap_s) * w - 0.5
-    y = _wrap(uv[:, 1], wrap_t) * h - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
-    x0 = np.clip(x0.astype(np.int64), 0, w - 1)
-    y0 = np.clip(y0.astype(np.int64), 0, h - 1)
-    x1, y1 = np.minimum(x0 + 1, w - 1), np.minimum(y0 + 1, h - 1)
-    top = pixels[y0, x0] * (1 - fx) + pixels[y0, x1] * fx
-    bottom = pixels[y1, x0] * (1 - fx) + pixels[y1, x1] * fx
-    return top * (1 - fy) + bottom * fy
-
-
-def vertex_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """(V, 3) area-weighted normals of the faces around each vertex (unnormalized)."""
-    p = positions[triangles]
-    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    out = np.zeros_like(positions)
-    for k in range(3):
-        np.add.at(out, triangles[:, k], face)
-    return out
+    return bilinear(pixels, _wrap(uv[:, 0], wrap_s), _wrap(uv[:, 1], wrap_t))
