@@ -11,6 +11,7 @@ from infuse.cli.builtin import asset_summary
 from infuse.kinematics import motion_fk
 
 from cli_errors import assert_cli_exits_2, assert_info_exits_2, write_case
+from affine import rotation as _R, translation as _T
 from corpus_data import corpus_file, labels
 
 FBX_LABELS = [lab for lab in labels() if lab["file"].lower().endswith(".fbx")]
@@ -192,20 +193,6 @@ CONNECTIONS = [
     C("OO", 42, 41), C("OP", 42, 11, "Lcl Translation"), C("OP", 43, 42, "d|Z"),
     C("OO", 44, 41), C("OP", 44, 12, "Lcl Rotation"), C("OP", 45, 44, "d|X"),
 ]
-
-
-def _R(axis, deg):
-    c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
-    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
-    m = np.eye(4)
-    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
-    return m
-
-
-def _T(v):
-    m = np.eye(4)
-    m[:3, 3] = v
-    return m
 
 
 def _S(v):

@@ -14,6 +14,7 @@ from infuse.transforms import frame_change
 from infuse_fbx import binary
 from infuse_fbx.document import build
 
+from affine import rotation as _R, translation as _T
 from corpus_data import corpus_file
 from test_fbx import C, P, fbx_bytes, fbx_text, model
 
@@ -125,19 +126,6 @@ def test_corpus_faces_point_outward(characters, rel):
 
 
 # -- a synthetic skinned cube -----------------------------------------------------------------------
-
-def _R(axis, deg):
-    c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
-    i, j = {"x": (1, 2), "y": (2, 0), "z": (0, 1)}[axis]
-    m = np.eye(4)
-    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
-    return m
-
-
-def _T(v):
-    m = np.eye(4)
-    m[:3, 3] = v
-    return m
 
 
 ARMATURE = _R("z", 30) @ np.diag([2.0, 2.0, 2.0, 1.0])
