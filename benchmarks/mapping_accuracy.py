@@ -1,13 +1,17 @@
-"""Mapping accuracy on the labelled corpus, and on generated variants of every labelled skeleton.
+"""Mapping accuracy per rig family on the labelled corpus, on the rigs of unseen families (wild) and on
+generated variants of their skeletons; the calibration of confidences and the time per skeleton.
 
-    python benchmarks/mapping_accuracy.py [--mapper heuristic] [--no-variants] [--markdown] [FILTER...]
+    python benchmarks/mapping_accuracy.py [--mapper heuristic] [--sets corpus,wild,variants] [--files]
+                                          [--markdown] [-v] [FILTER...]
 
 A prediction is right when it equals the label or one of its alternatives (``null`` counts as a
 label). Body joints are base, spine1, spine3, spine4, skullbase, clavicle to wrist and hip to the
-ball of the foot. Non-humanoid files must be refused (NotHumanoidError). Times are the mapper call
-alone (the file is read before the clock starts), median over files, as CPU time of this process
-(steady on a busy machine) and as wall-clock time. The corpus is read from
-``INFUSE_CORPUS`` (default ``../shared/corpus`` beside the repository).
+ball of the foot. Non-humanoid files must be refused (NotHumanoidError). A family is the label's
+``convention`` up to its first parenthesis. Calibration: of the entries given a confidence of at
+least 0.9, the share that is right. Times are the mapper call alone (the file is read before the
+clock starts), as CPU time of this process (steady on a busy machine). Data are read in place from
+``INFUSE_CORPUS`` (default ``../shared/corpus``) and ``INFUSE_WILD`` (default ``../shared/wild``),
+both beside the repository.
 """
 from __future__ import annotations
 
@@ -17,6 +21,7 @@ import os
 import statistics
 import sys
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -28,7 +33,11 @@ from infuse.mapping import map_skeleton, sample_poses  # noqa: E402
 
 import skeleton_variants  # noqa: E402
 
-CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")).resolve()
+ROOTS = {
+    "corpus": Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")).resolve(),
+    "wild": Path(os.environ.get("INFUSE_WILD", REPO.parent / "shared" / "wild")).resolve(),
+}
+CONFIDENT = 0.9
 
 
 def score(mapping: dict, expected: dict, alternatives: dict, names=CANONICAL_NAMES) -> tuple[int, int, list]:
@@ -43,127 +52,193 @@ def score(mapping: dict, expected: dict, alternatives: dict, names=CANONICAL_NAM
     return right, len(names), wrong
 
 
-def load_labels(filters: list[str]) -> list[dict]:
-    docs = [json.loads(p.read_text()) for p in sorted((CORPUS / "labels").glob("*.json"))]
+def family(label: dict) -> str:
+    return label.get("convention", "?").split(" (")[0].strip() or "?"
+
+
+def load_labels(root: Path, filters: list[str]) -> list[dict]:
+    docs = [json.loads(p.read_text()) for p in sorted((root / "labels").glob("*.json"))]
     return [d for d in docs if not filters or any(f in d["file"] for f in filters)]
 
 
-def run(mapper: str, filters: list[str], variants: bool, markdown: bool, verbose: bool) -> dict:
-    rows, times, walls = [], [], []
-    total_right = total = 0
-    body_perfect = humanoid_files = 0
-    refused_ok = non_humanoid = 0
-    variant_stats: dict[str, list[int]] = {}
-    variant_times = []
-    failures = []
-    for label in load_labels(filters):
-        path = CORPUS / label["file"]
+@dataclass
+class FileResult:
+    """One labelled file: its mapping (or the refusal) against the label."""
+
+    label: dict
+    joints: int
+    seconds: float
+    right: int = 0
+    body_right: int = 0
+    refused: str | None = None
+    wrong: list = field(default_factory=list)
+    confident: tuple[int, int] = (0, 0)  # (right, entries) with confidence >= CONFIDENT
+
+
+@dataclass
+class Tally:
+    """Sums over a group of files: labelled joints, body joints, files and verdicts."""
+
+    files: int = 0
+    right: int = 0
+    total: int = 0
+    body_files: int = 0
+    humanoids: int = 0
+    accepted: int = 0
+    others: int = 0
+    refused: int = 0
+
+    def add(self, r: FileResult) -> None:
+        self.files += 1
+        if r.label["humanoid"]:
+            self.humanoids += 1
+            self.accepted += r.refused is None
+            self.right += r.right
+            self.total += len(CANONICAL_NAMES)
+            self.body_files += r.body_right == len(BODY_NAMES)
+        else:
+            self.others += 1
+            self.refused += r.refused is not None
+
+
+def map_file(root: Path, label: dict, mapper: str):
+    """(asset, FileResult) of one labelled file, or (None, reason) when it cannot be read."""
+    try:
+        asset = infuse.load(root / label["file"])
+    except infuse.InfuseError as exc:
+        return None, f"{label['file']}: cannot be read: {exc}"
+    t0 = time.process_time()
+    try:
+        mapping, refused = map_skeleton(asset, mapper=mapper), None
+    except infuse.NotHumanoidError as exc:
+        mapping, refused = None, exc.reason
+    r = FileResult(label, asset.skeleton.num_joints, time.process_time() - t0, refused=refused)
+    if label["humanoid"] and mapping is not None:
+        alts = label.get("alternatives") or {}
+        r.right, _, r.wrong = score(mapping.joints, label["mapping"], alts)
+        r.body_right, _, _ = score(mapping.joints, label["mapping"], alts, BODY_NAMES)
+        sure = [k for k in CANONICAL_NAMES if mapping.confidence.get(k, 0.0) >= CONFIDENT]
+        wrong = {k for k, *_ in r.wrong}
+        r.confident = (sum(k not in wrong for k in sure), len(sure))
+    return asset, r
+
+
+def variant_results(asset, label: dict, mapper: str) -> list[tuple[str, int, float]]:
+    """(variant name, right joints, cpu seconds) of every generated variant of one skeleton."""
+    out = []
+    poses = sample_poses(asset)
+    animated = asset.meta.get("channel_joints")
+    for v in skeleton_variants.all_variants(asset.skeleton, poses, label):
+        meta = {"channel_joints": v.translate(animated)} if animated else {}
+        t0 = time.process_time()
         try:
-            asset = infuse.load(path)
-        except infuse.InfuseError as exc:
-            failures.append(f"{label['file']}: cannot be read: {exc}")
-            continue
-        t0, w0 = time.process_time(), time.perf_counter()
-        try:
-            mapping = map_skeleton(asset, mapper=mapper)
-            refused = None
-        except infuse.NotHumanoidError as exc:
-            mapping, refused = None, exc.reason
-        times.append(time.process_time() - t0)
-        walls.append(time.perf_counter() - w0)
-        if not label["humanoid"]:
-            non_humanoid += 1
-            refused_ok += refused is not None
-            rows.append((label["file"], asset.skeleton.num_joints, "refused" if refused else "NOT REFUSED", "", times[-1]))
-            continue
-        humanoid_files += 1
-        joints = mapping.joints if mapping is not None else {}
-        right, n, wrong = score(joints, label["mapping"], label.get("alternatives"))
-        b_right, b_n, b_wrong = score(joints, label["mapping"], label.get("alternatives"), BODY_NAMES)
-        total_right += right
-        total += n
-        body_perfect += b_right == b_n
-        rows.append((label["file"], asset.skeleton.num_joints, f"{right / n:.3f}", f"{b_right}/{b_n}", times[-1]))
-        if verbose and wrong:
-            print(f"  {label['file']}: {wrong}", file=sys.stderr)
-        if refused:
-            failures.append(f"{label['file']}: refused: {refused}")
-        if variants:
-            pose = sample_poses(asset)
-            meta = {"channel_joints": asset.meta.get("channel_joints")} if asset.meta.get("channel_joints") else {}
-            for v in skeleton_variants.all_variants(asset.skeleton, pose, label):
-                meta_v = _variant_meta(asset.skeleton, v, meta) if meta else {}
-                t0 = time.process_time()
-                try:
-                    vm = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses, meta=meta_v).joints
-                except infuse.NotHumanoidError:
-                    vm = {}
-                variant_times.append(time.process_time() - t0)
-                r, n, w = score(vm, v.mapping, v.alternatives)
-                acc = variant_stats.setdefault(v.name, [0, 0])
-                acc[0] += r
-                acc[1] += n
-                if verbose and w:
-                    print(f"  variant {v.name} {label['file']}: {w[:8]}", file=sys.stderr)
-    summary = {
-        "overall": total_right / max(total, 1),
-        "body_perfect_files": body_perfect,
-        "humanoid_files": humanoid_files,
-        "non_humanoid_refused": refused_ok,
-        "non_humanoid": non_humanoid,
-        "median_ms": 1000 * statistics.median(times) if times else float("nan"),
-        "median_wall_ms": 1000 * statistics.median(walls) if walls else float("nan"),
-        "median_ms_40_120_joints": 1000 * statistics.median(
-            [t for t, (_, j, *_) in zip(times, rows) if 40 <= j <= 120] or [float("nan")]),
-        "variants": {k: v[0] / max(v[1], 1) for k, v in variant_stats.items()},
-        "variants_overall": (sum(v[0] for v in variant_stats.values()) / max(sum(v[1] for v in variant_stats.values()), 1))
-        if variant_stats else None,
-        "variant_median_ms": 1000 * statistics.median(variant_times) if variant_times else None,
-    }
-    _print(rows, summary, failures, markdown)
-    return summary
+            joints = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses, meta=meta).joints
+        except infuse.NotHumanoidError:
+            joints = {}
+        seconds = time.process_time() - t0
+        right, _, _ = score(joints, v.mapping, v.alternatives)
+        out.append((v.name, right, seconds))
+    return out
 
 
-def _variant_meta(original, variant, meta):
-    """The animated-joint list of a motion file, in the variant's joint names."""
-    return {"channel_joints": variant.translate(meta["channel_joints"])}
+def _pct(a: int, b: int) -> str:
+    return f"{100.0 * a / b:.1f}% ({a}/{b})" if b else "-"
 
 
-def _print(rows, summary, failures, markdown):
-    if markdown:
-        print("| file | joints | accuracy | body joints | ms |")
-        print("|---|---:|---:|---:|---:|")
-        for f, j, acc, body, t in rows:
-            print(f"| {f} | {j} | {acc} | {body} | {1000 * t:.1f} |")
-    else:
-        for f, j, acc, body, t in rows:
-            print(f"{acc:>11} {body:>6} {1000 * t:7.1f} ms  {j:4d}  {f}")
-    print()
-    print(f"overall accuracy: {summary['overall']:.4f}")
-    print(f"files with every body joint right: {summary['body_perfect_files']}/{summary['humanoid_files']}")
-    print(f"non-humanoids refused: {summary['non_humanoid_refused']}/{summary['non_humanoid']}")
-    print(f"median time per skeleton: {summary['median_ms']:.2f} ms CPU ({summary['median_wall_ms']:.2f} ms wall); "
-          f"skeletons of 40-120 joints: {summary['median_ms_40_120_joints']:.2f} ms CPU")
-    if summary["variants"]:
-        for k, v in summary["variants"].items():
-            print(f"variant {k:<22} {v:.4f}")
-        print(f"variants overall: {summary['variants_overall']:.4f} (median {summary['variant_median_ms']:.2f} ms CPU)")
-    for f in failures:
-        print(f"FAILED {f}")
+def print_families(title: str, results: list[FileResult]) -> Tally:
+    groups: dict[str, Tally] = {}
+    overall = Tally()
+    for r in results:
+        groups.setdefault(family(r.label), Tally()).add(r)
+        overall.add(r)
+    print(f"\n### {title}: {overall.files} files\n")
+    print("| family | files | labelled joints right | body joints right on | humanoids accepted | non-humanoids refused |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for name, t in sorted(groups.items()) + [("**all**", overall)]:
+        body = f"{t.body_files}/{t.humanoids}" if t.humanoids else "-"
+        acc = f"{t.accepted}/{t.humanoids}" if t.humanoids else "-"
+        ref = f"{t.refused}/{t.others}" if t.others else "-"
+        print(f"| {name} | {t.files} | {_pct(t.right, t.total)} | {body} | {acc} | {ref} |")
+    return overall
+
+
+def print_files(results: list[FileResult]) -> None:
+    print("\n| file | joints | labelled joints | body joints | verdict | ms |")
+    print("|---|---:|---:|---:|---|---:|")
+    for r in results:
+        n = len(CANONICAL_NAMES)
+        if r.label["humanoid"]:
+            cells = (f"{r.right / n:.3f}", f"{r.body_right}/{len(BODY_NAMES)}", "refused" if r.refused else "mapped")
+        else:
+            cells = ("", "", "refused" if r.refused else "NOT REFUSED")
+        print(f"| {r.label['file']} | {r.joints} | {' | '.join(cells)} | {1000 * r.seconds:.1f} |")
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("filters", nargs="*", help="only label files whose path contains one of these")
     parser.add_argument("--mapper", default="heuristic")
-    parser.add_argument("--no-variants", action="store_true")
-    parser.add_argument("--markdown", action="store_true", help="print the per-file table as markdown")
-    parser.add_argument("-v", "--verbose", action="store_true", help="list wrong predictions on stderr")
+    parser.add_argument("--sets", default="corpus,wild,variants", help="comma-separated: corpus, wild, variants")
+    parser.add_argument("--files", action="store_true", help="also print the per-file tables")
+    parser.add_argument("-v", "--verbose", action="store_true", help="list wrong predictions and refusals on stderr")
     args = parser.parse_args(argv)
-    if not (CORPUS / "labels").is_dir():
-        print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
-        return 2
-    run(args.mapper, args.filters, not args.no_variants, args.markdown, args.verbose)
+    sets = [s.strip() for s in args.sets.split(",") if s.strip()]
+    unknown = set(sets) - {"corpus", "wild", "variants"}
+    if unknown:
+        parser.error(f"unknown set(s): {', '.join(sorted(unknown))}")
+    data_sets = [s for s in ("corpus", "wild") if s in sets] or ["corpus", "wild"]
+    for name in data_sets:
+        if not (ROOTS[name] / "labels").is_dir():
+            print(f"{name} not found at {ROOTS[name]} (set INFUSE_{name.upper()})", file=sys.stderr)
+            return 2
+    failures: list[str] = []
+    all_results: list[FileResult] = []
+    variants: dict[str, list[int]] = {}
+    variant_seconds: list[float] = []
+    seen: set = set()
+    for name in data_sets:
+        results = []
+        for label in load_labels(ROOTS[name], args.filters):
+            asset, r = map_file(ROOTS[name], label, args.mapper)
+            if asset is None:
+                failures.append(r)
+                continue
+            results.append(r)
+            if args.verbose and (r.wrong or (r.refused and label["humanoid"])):
+                print(f"  {label['file']}: {r.refused or r.wrong}", file=sys.stderr)
+            key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
+            if "variants" in sets and label["humanoid"] and key not in seen:
+                seen.add(key)
+                for kind, right, seconds in variant_results(asset, label, args.mapper):
+                    acc = variants.setdefault(kind, [0, 0])
+                    acc[0] += right
+                    acc[1] += len(CANONICAL_NAMES)
+                    variant_seconds.append(seconds)
+        if name in sets:
+            print_families(name, results)
+            if args.files:
+                print_files(results)
+        all_results += results
+    if variants:
+        print(f"\n### generated variants of {len(seen)} distinct humanoid skeletons\n")
+        print("| variant | labelled joints right |")
+        print("|---|---:|")
+        for kind, (a, b) in variants.items():
+            print(f"| {kind} | {_pct(a, b)} |")
+        a, b = sum(v[0] for v in variants.values()), sum(v[1] for v in variants.values())
+        print(f"| **all** | {_pct(a, b)} |")
+    sure_right = sum(r.confident[0] for r in all_results)
+    sure = sum(r.confident[1] for r in all_results)
+    print(f"\ncalibration: of the entries given confidence >= {CONFIDENT}, {_pct(sure_right, sure)} are right")
+    times = [r.seconds for r in all_results]
+    near_70 = [r.seconds for r in all_results if 60 <= r.joints <= 80]
+    if times:
+        print(f"median time per skeleton: {1000 * statistics.median(times):.2f} ms CPU over {len(times)} files; "
+              f"60-80 joints: {1000 * statistics.median(near_70 or [float('nan')]):.2f} ms over {len(near_70)}")
+    if variant_seconds:
+        print(f"median time per variant: {1000 * statistics.median(variant_seconds):.2f} ms CPU")
+    for f in failures:
+        print(f"FAILED {f}")
     return 0
 
 
