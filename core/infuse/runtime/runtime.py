@@ -353,6 +353,34 @@ class Runtime:
             return np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3))
         return np.concatenate(rotations[::-1]), np.concatenate(roots[::-1])
 
+    def last_pose(self, character) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The last frame evaluated, placed in the world as :meth:`motion` places it: local rotations (J, 4)
+        (the root joint's with the placement), root translation (3,) metres and morph weights (M,)."""
+        track = self._track(character)
+        if not track.rotations:
+            raise UsageError("no frame has been evaluated yet")
+        rotations = track.rotations[-1][-1].copy()
+        root = track.roots[-1][-1]
+        if track.rig.placed:
+            rotations[0], root = track.rig.place(rotations[0], root)
+        return rotations, np.array(root), track.morphs[-1][-1].copy()
+
+    def forget(self, keep_s: float) -> None:
+        """Drop the evaluated frames older than ``keep_s`` seconds (whole blocks; :meth:`motion` then starts
+        later than frame 0) and the activities that ended before then, so that a runtime that runs for
+        hours keeps bounded memory. Frames still needed by :meth:`last_frames` up to ``keep_s`` stay."""
+        keep = max(int(round(float(keep_s) * self.fps)), 1)
+        for track in self._tracks.values():
+            lengths = [len(r) for r in track.rotations]
+            held, cut = sum(lengths), 0
+            while cut < len(lengths) - 1 and held - lengths[cut] >= keep:
+                held -= lengths[cut]
+                cut += 1
+            for parts in (track.rotations, track.roots, track.translations, track.morphs):
+                del parts[:cut]
+        before = self.time - float(keep_s)
+        self.activities = [a for a in self.activities if a.end_s is None or a.end_s + a.controller.settle_s >= before]
+
     def morph_weights(self, character) -> np.ndarray:
         """(F, M) morph weights of every frame evaluated so far (columns: the character's morph targets)."""
         track = self._track(character)
