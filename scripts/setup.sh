@@ -50,6 +50,30 @@ done
 stamp=$(cat scripts/setup.sh $(for d in $packages; do echo "$d/pyproject.toml"; done) | sha1sum | cut -d' ' -f1)
 if [ "$(cat "$VENV/.setup-stamp" 2>/dev/null)" != "$stamp" ]; then
   echo "setup: installing infuse and its plugins into $VENV"
+  # A distribution installed from this checkout under a name no pyproject here has any more (a renamed
+  # or removed package) would register its entry points a second time: uninstall it.
+  stale=$("$VENV/bin/python" - $packages <<'EOF'
+import json, sys, tomllib
+from importlib.metadata import distributions
+from pathlib import Path
+from urllib.parse import unquote, urlparse
+
+def canonical(name):
+    return name.lower().replace("_", "-").replace(".", "-")
+
+here = Path.cwd().resolve()
+names = {canonical(tomllib.loads((Path(d) / "pyproject.toml").read_text())["project"]["name"]) for d in sys.argv[1:]}
+for dist in distributions():
+    url = json.loads(dist.read_text("direct_url.json") or "{}").get("url", "")
+    if url.startswith("file:") and Path(unquote(urlparse(url).path)).resolve().is_relative_to(here) \
+            and canonical(dist.metadata["Name"]) not in names:
+        print(dist.metadata["Name"])
+EOF
+)
+  if [ -n "$stale" ]; then
+    echo "setup: uninstalling distributions no longer in this checkout:" $stale
+    "$VENV/bin/python" -m pip uninstall -q -y $stale
+  fi
   args=""
   for d in $packages; do args="$args -e $d"; done
   pip_install --no-build-isolation $args -e ".[test,docs]"

@@ -210,7 +210,7 @@ def test_cli_progress_and_summary(tmp_path, capsys):
 def test_cluster_without_dask_says_what_to_install(tmp_path, monkeypatch):
     require_corpus()
     monkeypatch.setitem(sys.modules, "distributed", None)
-    with pytest.raises(MissingFeatureError, match=r"infuse-batch\[dask\]"):
+    with pytest.raises(MissingFeatureError, match=r"infuse-anim-batch\[dask\]"):
         run_batch(character_files(), motions=motion_files()[:1], out=tmp_path, cluster="tcp://127.0.0.1:8786")
 
 

@@ -3,7 +3,7 @@
 output trees are byte for byte the same."""
 from __future__ import annotations
 
-import distributed  # the [dask] extra of infuse-batch
+import distributed  # the [dask] extra of infuse-anim-batch
 import pytest
 
 from infuse.cli import main

@@ -34,7 +34,7 @@ def _schedule(body: str):
 def test_listed_by_infuse_plugins_and_installed_as_a_handler(capsys):
     assert cli_main(["plugins"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
-    assert ["shrug", "bml-behaviour", "infuse-example-bml", "0.1.0", "ok"] in rows
+    assert ["shrug", "bml-behaviour", "infuse-anim-example-bml", "0.1.0", "ok"] in rows
     assert installed_handlers()[ELEMENT].attributes == {"amount", "duration"}
 
 

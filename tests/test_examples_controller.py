@@ -20,7 +20,7 @@ FPS = 30
 def test_listed_by_infuse_plugins(capsys):
     assert cli_main(["plugins"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
-    assert ["shrug", "controller", "infuse-example-controller", "0.1.0", "ok"] in rows
+    assert ["shrug", "controller", "infuse-anim-example-controller", "0.1.0", "ok"] in rows
     assert controller_components()["shrug"].info["from_bml"] is not None
 
 

@@ -41,7 +41,7 @@ def infusion(xbot, tmp_path_factory):
 def test_listed_by_infuse_plugins_and_infuse_packs(capsys):
     assert cli_main(["plugins"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
-    assert ["example-wave", "behaviour-pack", "infuse-example-pack", "0.1.0", "ok"] in rows
+    assert ["example-wave", "behaviour-pack", "infuse-anim-example-pack", "0.1.0", "ok"] in rows
     assert cli_main(["packs", "--json"]) == 0
     (entry,) = [p for p in json.loads(capsys.readouterr().out) if p["name"] == "example-wave"]
     assert entry["kind"] == "reach" and entry["clips"] == 5 and entry["built"] is True

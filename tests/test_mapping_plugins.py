@@ -94,18 +94,18 @@ def test_mappers_are_plugins():
     table = registry.mappers()
     assert {"heuristic", "names"} <= set(table)
     records = {(r.name, r.kind): r for r in registry.plugins().records}
-    assert records[("heuristic", "mapper")].distribution == "infuse-heuristic-mapper"
-    assert records[("names", "mapper")].distribution == "infuse-names-mapper"
+    assert records[("heuristic", "mapper")].distribution == "infuse-anim-heuristic-mapper"
+    assert records[("names", "mapper")].distribution == "infuse-anim-names-mapper"
 
 
 def test_third_party_mapper_is_picked_up(capsys, tmp_path):
     """examples/third_party_mapper registers 'studio-prefix' through its own entry point."""
     records = {(r.name, r.kind): r for r in registry.plugins().records}
     assert ("studio-prefix", "mapper") in records, "install examples/third_party_mapper (make setup)"
-    assert records[("studio-prefix", "mapper")].distribution == "infuse-example-mapper"
+    assert records[("studio-prefix", "mapper")].distribution == "infuse-anim-example-mapper"
     assert cli_main(["plugins"]) == 0
     listing = capsys.readouterr().out
-    assert any("studio-prefix" in line and "mapper" in line and "infuse-example-mapper" in line
+    assert any("studio-prefix" in line and "mapper" in line and "infuse-anim-example-mapper" in line
                for line in listing.splitlines())
     # a skeleton using the studio's names for a few joints: those win, the rest comes from the default mapper
     sk = canonical_skeleton(extras=False)

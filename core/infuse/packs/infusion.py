@@ -145,7 +145,7 @@ def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, re
     """
     table = registry.retargeters()
     if not table:
-        raise MissingFeatureError(None, "no retargeter installed: install infuse-retarget")
+        raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
     chosen = table.get(retargeter or "default") or next(iter(table.values()))
     groups: dict[str, list[Pack]] = {}
     for p in packs:

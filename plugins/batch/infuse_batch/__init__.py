@@ -1,4 +1,4 @@
-"""infuse-batch: many characters × many motion clips or behaviour packs, on local processes or Dask.
+"""infuse-anim-batch: many characters × many motion clips or behaviour packs, on local processes or Dask.
 
 ::
 

@@ -94,7 +94,7 @@ class Dask:
         try:
             import distributed
         except ImportError:
-            raise MissingFeatureError(None, "--cluster needs dask.distributed: pip install 'infuse-batch[dask]'") from None
+            raise MissingFeatureError(None, "--cluster needs dask.distributed: pip install 'infuse-anim-batch[dask]'") from None
         self._own = client is None
         if client is None:
             try:

@@ -18,7 +18,7 @@ def add_arguments(p) -> None:
     p.add_argument("--packs", metavar="a,b", help="behaviour packs to infuse every character with (one cache per character)")
     p.add_argument("-o", "--output", required=True, metavar="OUTDIR", help="output tree: OUTDIR/CHARACTER/MOTION.glb|bvh")
     p.add_argument("--workers", type=int, metavar="N", help="local worker processes (default: the cores; 0: this process)")
-    p.add_argument("--cluster", metavar="tcp://HOST:PORT", help="run on this Dask scheduler instead (needs infuse-batch[dask])")
+    p.add_argument("--cluster", metavar="tcp://HOST:PORT", help="run on this Dask scheduler instead (needs infuse-anim-batch[dask])")
     p.add_argument("--format", choices=FORMATS, dest="out_format",
                    help="output format (default: glb for glTF characters, keeping the mesh; bvh for the others)")
     p.add_argument("--mapper", help="joint mapper plugin (default heuristic)")

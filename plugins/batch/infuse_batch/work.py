@@ -137,7 +137,7 @@ def _source_mapping(asset: Asset, mapper: str | None) -> Mapping:
 def _retargeter(name: str | None):
     table = registry.retargeters()
     if not table:
-        raise MissingFeatureError(None, "no retargeter installed: install infuse-retarget")
+        raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
     if (name or "default") not in table:
         raise UsageError(f"no retargeter named {name!r}; installed: {', '.join(sorted(table))}")
     return table[name or "default"]

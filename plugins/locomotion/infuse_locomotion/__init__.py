@@ -1,4 +1,4 @@
-"""infuse-locomotion: parameterized, phase-synchronized locomotion from behaviour packs.
+"""infuse-anim-locomotion: parameterized, phase-synchronized locomotion from behaviour packs.
 
 ::
 

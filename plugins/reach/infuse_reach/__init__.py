@@ -1,4 +1,4 @@
-"""infuse-reach: reaching for points and scene objects with a reaching pack, exact by arm IK."""
+"""infuse-anim-reach: reaching for points and scene objects with a reaching pack, exact by arm IK."""
 from __future__ import annotations
 
 from .controller import HeldTarget, Reach

@@ -1,4 +1,4 @@
-"""infuse-retarget: motion retargeting between any two humanoid skeletons through their canonical mappings.
+"""infuse-anim-retarget: motion retargeting between any two humanoid skeletons through their canonical mappings.
 
 The paper's two steps, default-pose alignment with local-frame re-orientation, then constraint
 enforcement with Jacobian pseudo-inverse IK on the legs, plus contact-pinned feet and per-limb
