@@ -60,3 +60,9 @@ class NotHumanoidError(UnusableInputError):
     def __init__(self, file: str | Path | None, reason: str):
         self.reason = reason
         super().__init__(file, f"not a humanoid: {reason}")
+
+
+class BusyError(InfuseError):
+    """A live service has too much waiting (its command queue is full); the request may be sent again later."""
+
+    exit_code = 2
