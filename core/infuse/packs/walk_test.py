@@ -1,0 +1,213 @@
+"""Testing a locomotion pack on a character: what the walks it drives realize, measured on the output.
+
+Every figure comes from forward kinematics of the runtime's output motion (never from the controller's
+internals). Walks run side by side as characters of one runtime at 30 fps:
+
+- **speed**: a straight walk asked for each of :data:`SPEEDS` speeds spanning the pack's forward range
+  (its slowest to its fastest straight forward example), reached at once; realized speed = the
+  pelvis's net horizontal travel from :data:`SETTLE_S` on over the time it took. Foot skate on the same
+  walk: :func:`infuse.metrics.foot_skate` (default contact detector), cm per metre walked.
+- **drift**: a straight walk of :data:`DRIFT_S` seconds at the pack's walking speed; heading drift =
+  change of the facing (from the hips, averaged over :data:`WINDOW_S` windows, which hold whole gait
+  cycles) from the first window after :data:`SETTLE_S` to the last, degrees.
+- **targets**: walks to points :data:`DISTANCES` metres away at :data:`ANGLES` degrees off the facing
+  (+ left); miss = distance of the pelvis (its ground point, averaged over the last half second)
+  from the target; path ratio = length of the pelvis's ground path (smoothed over one second, which
+  takes out the sway of the gait) over the straight line; turned = the facing's whole change, degrees;
+  a loop is turning more than the angle plus 90 degrees; arrival = first time the pelvis stays
+  within 5 cm.
+
+Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..contacts import foot_contacts
+from ..kinematics import motion_fk
+from ..metrics import foot_skate
+from .analysis import headings
+
+FPS = 30.0
+SPEEDS = 5
+SETTLE_S = 1.5
+DRIFT_S = 8.0
+WINDOW_S = 2.0
+DISTANCES = (2.0, 4.0, 6.0)
+ANGLES = (0.0, 45.0, 90.0, 135.0, 180.0, -90.0)
+#: Walking speed asked of target walks and the drift walk (m/s), within the pack's forward range.
+WALK_SPEED = 1.3
+#: Within this many metres of its target a walk has arrived.
+ARRIVED_M = 0.05
+
+
+@dataclass
+class SpeedTrial:
+    asked: float
+    realized: float
+    skate_cm_m: float
+
+    @property
+    def error(self) -> float:
+        """Relative error of the realized speed (realized / asked - 1)."""
+        return self.realized / self.asked - 1.0
+
+
+@dataclass
+class TargetTrial:
+    distance: float
+    angle_deg: float
+    miss_m: float
+    path_ratio: float
+    turned_deg: float
+    arrival_s: float | None
+
+    @property
+    def loops(self) -> bool:
+        return abs(self.turned_deg) > abs(self.angle_deg) + 90.0
+
+
+@dataclass
+class PackTrial:
+    """What a pack realizes on a character: speed trials, heading drift (degrees over :data:`DRIFT_S`),
+    target trials, and the ground paths (x, z) of the target walks for drawing."""
+
+    pack: str
+    character: str
+    speeds: list[SpeedTrial] = field(default_factory=list)
+    drift_deg: float = float("nan")
+    drift_speed: float = float("nan")
+    targets: list[TargetTrial] = field(default_factory=list)
+    paths: list[np.ndarray] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def worst(self) -> dict:
+        """The worst figure of each measure (speed error as a share, degrees, metres, ratio, cm/m)."""
+        return {"speed_error": max((abs(s.error) for s in self.speeds), default=float("nan")),
+                "drift_deg": abs(self.drift_deg),
+                "miss_m": max((t.miss_m for t in self.targets), default=float("nan")),
+                "path_ratio": max((t.path_ratio for t in self.targets), default=float("nan")),
+                "loops": sum(t.loops for t in self.targets),
+                "skate_cm_m": max((s.skate_cm_m for s in self.speeds), default=float("nan"))}
+
+
+def forward_speeds(space) -> np.ndarray:
+    """(:data:`SPEEDS`,) speeds spanning the forward range of a locomotion blend space: from its slowest
+    to its fastest straight forward example (travel within 30 degrees of the facing, turning less than
+    30 degrees per second), at least 0.3 m/s."""
+    t = space.tessellations["locomotion"]
+    pts = t.points
+    vf, vl, w = pts[:, 0], pts[:, 1], pts[:, 2]
+    ahead = (vf > 0.05) & (np.abs(vl) < 0.58 * vf) & (np.abs(w) < math.radians(30.0))
+    if not ahead.any():
+        return np.zeros(0)
+    lo, hi = max(float(vf[ahead].min()), 0.3), float(vf[ahead].max())
+    return np.linspace(lo, max(hi, lo), SPEEDS)
+
+
+def _runtime_walks(character, mapping, space, settings: list[dict], seconds: float):
+    """Run one walk per entry of ``settings`` (Locomotion keyword arguments), side by side; returns for
+    each its output motion and FK (global rotations, positions), and the runtime's notes."""
+    from ..runtime import Runtime, controller
+
+    notes = []
+    rt = Runtime(fps=FPS, report=lambda who, message: notes.append(message))
+    names = []
+    for k, s in enumerate(settings):
+        name = rt.add_character(character, name=f"walk{k}", mapping=mapping)
+        rt.activate(name, controller("locomotion", pack=space, **s), 0.0)
+        names.append(name)
+    rt.run(seconds)
+    out = []
+    for name in names:
+        m = rt.motion(name)
+        out.append((m, motion_fk(m)))
+    return out, notes
+
+
+def _window_mean(x: np.ndarray, frames: int) -> np.ndarray:
+    """Means of (F, ...) ``x`` over a centred sliding window of ``frames``, the ends held (F, ...)."""
+    half = frames // 2
+    padded = np.concatenate((np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], frames - 1 - half, axis=0)))
+    c = np.cumsum(np.concatenate((np.zeros((1,) + x.shape[1:]), padded)), axis=0)
+    return (c[frames:] - c[:-frames]) / frames
+
+
+def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, angles=ANGLES) -> PackTrial:
+    """Measure ``pack`` (a name, folder, manifest or :class:`~infuse.packs.BlendSpace`) on ``character``
+    (a :class:`~infuse.Character`, asset or file): see the module doc."""
+    from .infusion import BlendSpace, as_character, infuse_character
+
+    character = as_character(character)
+    if isinstance(pack, BlendSpace):
+        space, mapping = pack, mapping or character.mapping
+    else:
+        infusion = infuse_character(character, [pack], mapping=mapping)
+        space, mapping = next(iter(infusion.spaces.values())), infusion.mapping
+    if mapping is None:
+        from ..mapping import map_skeleton
+
+        mapping = map_skeleton(character.asset)
+    character.mapping = mapping
+    index = mapping.indices(character.skeleton)
+    base = index["base"]
+    trial = PackTrial(space.pack, character.name)
+    asked = forward_speeds(space) if speeds is None else np.asarray(speeds, dtype=np.float64)
+    settle = int(SETTLE_S * FPS)
+    if asked.size:
+        walks, notes = _runtime_walks(character, mapping, space, [dict(speed=float(v), max_accel=50.0) for v in asked], 5.0)
+        trial.notes += notes
+        for v, (m, (g_rot, g_pos)) in zip(asked, walks):
+            p = g_pos[settle:, base]
+            realized = float(np.hypot(*(p[-1] - p[0])[[0, 2]]) / ((len(p) - 1) / FPS))
+            found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
+            found = replace(found, flags=found.flags[settle:], lowest=found.lowest[settle:])
+            skate = foot_skate(g_pos[settle:], found, base).per_metre
+            trial.speeds.append(SpeedTrial(float(v), realized, float(skate)))
+    walk_speed = float(np.clip(WALK_SPEED, asked.min(), asked.max())) if asked.size else WALK_SPEED
+    trial.drift_speed = walk_speed
+    window = int(WINDOW_S * FPS)
+    targets = [(d, a) for d in distances for a in angles]
+    settings = [dict(speed=walk_speed, max_accel=50.0)]
+    settings += [dict(speed=walk_speed, target=(d * math.sin(math.radians(a)), d * math.cos(math.radians(a))))
+                 for d, a in targets]
+    longest = max([DRIFT_S + SETTLE_S] + [d / walk_speed + 8.0 for d in distances])
+    walks, notes = _runtime_walks(character, mapping, space, settings, longest)
+    trial.notes += [n for n in notes if n not in trial.notes]
+    _, (_, g_pos) = walks[0]
+    facing = _window_mean(np.unwrap(headings(g_pos[:int((DRIFT_S + SETTLE_S) * FPS)], index)), window)
+    trial.drift_deg = float(np.degrees(facing[-1 - window // 2] - facing[settle + window // 2]))
+    for (d, a), (m, (_, g_pos)) in zip(targets, walks[1:]):
+        ground = g_pos[:, base][:, [0, 2]]
+        goal = np.array([d * math.sin(math.radians(a)), d * math.cos(math.radians(a))])
+        end = ground[-int(FPS / 2):].mean(axis=0)
+        smooth = _window_mean(ground, int(FPS))
+        path = float(np.linalg.norm(np.diff(smooth, axis=0), axis=-1).sum())
+        gap = np.linalg.norm(ground - goal, axis=-1)
+        away = np.nonzero(gap > ARRIVED_M)[0]
+        arrival = None if gap[-1] > ARRIVED_M else float((away[-1] + 1) / FPS if away.size else 0.0)
+        h = _window_mean(np.unwrap(headings(g_pos, index)), int(FPS))
+        turned = float(np.degrees(np.abs(np.diff(h)).sum()))
+        trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival))
+        trial.paths.append(smooth)
+    return trial
+
+
+def report(trial: PackTrial) -> str:
+    """A printable report of a :class:`PackTrial`."""
+    lines = [f"{trial.pack} on {trial.character}"]
+    lines.append("  speed asked -> realized (m/s), error, foot skate (cm/m):")
+    for s in trial.speeds:
+        lines.append(f"    {s.asked:5.2f} -> {s.realized:5.2f}  {100 * s.error:+6.1f}%  skate {s.skate_cm_m:5.2f}")
+    lines.append(f"  heading drift over {DRIFT_S:g} s straight at {trial.drift_speed:.2f} m/s: {trial.drift_deg:+.1f} deg")
+    lines.append("  walk to a target: distance (m), angle (deg) -> miss (m), path / straight line, turned (deg), arrival (s):")
+    for t in trial.targets:
+        arrival = f"{t.arrival_s:5.1f}" if t.arrival_s is not None else "never"
+        flag = "  LOOP" if t.loops else ""
+        lines.append(f"    {t.distance:3.0f} {t.angle_deg:+5.0f} -> {t.miss_m:6.3f}  {t.path_ratio:5.2f}  {t.turned_deg:6.0f}  {arrival}{flag}")
+    for note in trial.notes:
+        lines.append(f"  note: {note}")
+    return "\n".join(lines)
