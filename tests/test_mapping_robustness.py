@@ -265,7 +265,10 @@ LEGS = tuple(f"{s}_{j}" for s in "lr" for j in ("hip", "knee", "ankle", "forefoo
 
 @pytest.mark.parametrize("drop", [ARMS, LEGS], ids=["no_arms", "no_legs"])
 @pytest.mark.parametrize("renamed", [False, True], ids=["named", "meaningless"])
-def test_partial_bodies_are_mapped_not_refused(drop, renamed):
-    """An upper body without legs, or a body without arms: what is there is mapped."""
+def test_bodies_without_legs_or_arms_are_refused(drop, renamed):
+    """An upper body without legs, or a body without arms, is not a humanoid: refused with the reason."""
     names = {n: f"j{i}" for i, n in enumerate(CANONICAL_NAMES)} if renamed else None
-    _check_variant(_canonical_variant(names=names, drop=drop), CANONICAL_NAMES)
+    variant = _canonical_variant(names=names, drop=drop)
+    with pytest.raises(infuse.NotHumanoidError) as err:
+        map_skeleton(variant.skeleton)
+    assert "two legs and two arms" in err.value.reason

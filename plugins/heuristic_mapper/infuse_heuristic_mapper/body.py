@@ -90,13 +90,24 @@ def _role_votes(view: SkeletonView, pair: LimbPair) -> tuple[float, float, float
     return leg / total, arm / total, bad / 4.0
 
 
+def legs_top(view: SkeletonView, legs: LimbPair) -> np.ndarray:
+    """(3,) where the legs start: the joint they hang from, or the middle of their first joints when
+    they hang from far away (thighs parented to a ground root)."""
+    stem = 0.5 * (view.bone[legs.a] + view.bone[legs.b])
+    if stem > 0.5 * legs.length:
+        return 0.5 * (view.P[legs.a] + view.P[legs.b])
+    return view.P[legs.branch]
+
+
 def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
-    """Cosine between the legs' direction (branch to far ends) and the body's up (legs branch to
-    ``up_from``); about -1 for a standing body, about 0 for a four-legged one."""
+    """Cosine between the legs' direction (from their top, :func:`legs_top`, to their far ends) and
+    the body's up (from there to ``up_from``); about -1 for a standing body, about 0 for a
+    four-legged one."""
     if up_from is None:
         return -1.0
     P = view.P
-    return _cos(P[up_from] - P[legs.branch], 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]]) - P[legs.branch])
+    sockets = legs_top(view, legs)
+    return _cos(P[up_from] - sockets, 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]]) - sockets)
 
 
 def _cos(u: np.ndarray, v: np.ndarray) -> float:
@@ -122,7 +133,20 @@ def upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> i
     return best
 
 
-def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 5) -> BodyPlan | None:
+def off_middle(view: SkeletonView, legs: LimbPair, arms: LimbPair) -> float:
+    """How far the arms' pair sits from the legs' middle plane, 0 (on it) .. 1 (a leg length away
+    or more, measured along the line between the hips). Both pairs of a body are mirror images
+    about one plane; the digits of one hand, or two limbs of one side, are not."""
+    P = view.P
+    across = P[legs.a] - P[legs.b]
+    width = float(np.sqrt(across @ across))
+    if width < 1e-6 * view.scale:
+        return 0.0
+    offset = abs(float((0.5 * (P[arms.a] + P[arms.b] - P[legs.a] - P[legs.b])) @ across)) / width
+    return min(1.0, offset / max(0.5 * legs.length, 1e-9))
+
+
+def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> BodyPlan | None:
     """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all.
 
     Each pair is first scored alone as legs and as arms (symmetry, length, names); the best few of
@@ -160,12 +184,14 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 5) -> Bod
                 elif view.is_descendant(legs.branch, arms.branch):
                     score -= 2.0  # legs hanging from below the arms' joint: upside down
                 else:
-                    up = P[arms.branch] - P[legs.branch]
+                    sockets = legs_top(view, legs)
+                    up = P[arms.branch] - sockets
                     if float(np.sqrt(up @ up)) < 0.08 * legs.length:
                         score -= 1.0
-                    score += 0.75 * -_cos(up, ends[legs] - P[legs.branch])
+                    score += 0.75 * -_cos(up, ends[legs] - sockets)
                     if float((ends[arms] - ends[legs]) @ up) < 0:
                         score -= 0.5  # hands hang above the feet in every rest a person stands in
+                score -= 3.0 * off_middle(view, legs, arms)
             score += as_legs[legs] if legs is not None else -2.5
             score += as_arms[arms] if arms is not None else -2.5
             if legs is None:
@@ -175,3 +201,22 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 5) -> Bod
             if best is None or score > best.score:
                 best = BodyPlan(legs, arms, score, ", ".join(why))
     return best
+
+
+def extra_limbs(view: SkeletonView, plan: BodyPlan, pairs: list[LimbPair]) -> list[LimbPair]:
+    """Further mirror-image pairs of limbs that hang from the legs' or the arms' joint beside them,
+    as long as the legs and jointed like them (three joints or more): the legs of an insect or a
+    spider. Pairs whose names say they are not body parts (wings, tails, hair, props) do not count."""
+    legs, arms = plan.legs, plan.arms
+    taken = {legs.a, legs.b, arms.a, arms.b}
+    out = []
+    for p in pairs:
+        if p.branch not in (legs.branch, arms.branch) or {p.a, p.b} & taken or p.length < 0.6 * legs.length:
+            continue
+        if any(view.info[j].flagged(*NON_BODY_FLAGS) for j in (p.a, p.b)):
+            continue
+        chains = [view.main_chain(j, 4) for j in (p.a, p.b)]
+        if all(sum(view.bone[c] > 0.05 * p.length for c in chain[1:]) >= 2 for chain in chains):
+            out.append(p)
+    return out
+

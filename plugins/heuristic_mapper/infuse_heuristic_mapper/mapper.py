@@ -21,7 +21,7 @@ from infuse.canonical import ALL_NAMES, CANONICAL_NAMES, canonical_joint, is_can
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
-from .body import BodyPlan, LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
+from .body import LimbPair, choose_plan, extra_limbs, legs_down, legs_top, limb_pairs, upper_anchor
 from .hands import assign_fingers
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
 from .view import SkeletonView, length, lengths
@@ -77,8 +77,9 @@ class _Frames:
 
 
 def _plan_for(view: SkeletonView):
+    """(the body plan or None, every mirror-image pair of limbs)."""
     pairs = limb_pairs(view)
-    return choose_plan(view, pairs)
+    return choose_plan(view, pairs), pairs
 
 
 def _standing(view: SkeletonView, plan) -> float:
@@ -98,48 +99,60 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
     """
     view = SkeletonView(skeleton, skeleton.rest_global_positions)
     frames = _Frames(pose, view.n)
-    plan = _plan_for(view)
+    plan, pairs = _plan_for(view)
     cos = _standing(view, plan)
     used_pose = "rest pose"
     if (plan is None or cos > STANDING_COS) and frames.get() is not None:
         view_pose = SkeletonView(skeleton, frames.get()[0])
-        plan_pose = _plan_for(view_pose)
+        plan_pose, pairs_pose = _plan_for(view_pose)
         cos_pose = _standing(view_pose, plan_pose)
         if plan_pose is not None and (plan is None or cos_pose < cos):
-            view, plan, cos, used_pose = view_pose, plan_pose, cos_pose, "first frame (the rest pose is not a standing body)"
+            view, plan, pairs, cos = view_pose, plan_pose, pairs_pose, cos_pose
+            used_pose = "first frame (the rest pose is not a standing body)"
     result = _Result(view)
     if plan is None:
         if _map_face_only(view, result):
             return _finish(skeleton, result, 0.3)
         raise NotHumanoidError(file, f"no pair of mirror-image limbs among its {view.n} joints"
                                + (" (a single chain)" if all(len(c) <= 1 for c in view.children) else ""))
-    if plan.legs is not None and plan.arms is None and cos > STANDING_COS:
-        plan = BodyPlan(None, plan.legs, plan.score, "one pair of limbs that does not point down: arms")
-    if plan.legs is not None and cos > STANDING_COS:
+    if plan.legs is None or plan.arms is None:
+        one = "arms" if plan.legs is None else "legs"
+        raise NotHumanoidError(file, f"only one pair of mirror-image limbs (taken as {one}) among its {view.n} "
+                               "joints: a humanoid has two legs and two arms on a trunk")
+    if cos > STANDING_COS:
         angle = np.degrees(np.arccos(np.clip(cos, -1, 1)))
         raise NotHumanoidError(file, f"its legs do not point away from its head (they are {angle:.0f} degrees "
                                "from the spine's direction instead of about 180): a four-legged or lying body")
-    if plan.legs is not None and plan.arms is not None and _hands_on_ground(view, plan):
+    if _hands_on_ground(view, plan):
         raise NotHumanoidError(file, "its front limbs reach the ground like its legs: a four-legged body")
-    if plan.legs is None and plan.arms is None:
-        raise NotHumanoidError(file, "neither legs nor arms found")
+    extra = extra_limbs(view, plan, pairs)
+    if extra:
+        limbs = len({j for p in extra for j in (p.a, p.b)})
+        raise NotHumanoidError(file, f"{limbs} more limbs as long as its legs hang beside its legs or arms: "
+                               "a many-legged body (a humanoid has two legs and two arms)")
     _map_body(view, plan, result, frames, used_pose)
     overall = np.mean([result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
     return _finish(skeleton, result, float(overall))
 
 
 def _hands_on_ground(view: SkeletonView, plan) -> bool:
-    """True when the arms' far ends are as low as the feet (a quadruped's front legs)."""
+    """True when the arms' far ends are as low as the ground the legs stand on (a quadruped's front
+    legs). The ground is the lowest joint outside the arms: an IK-driven foot may hang elsewhere."""
     legs, arms = plan.legs, plan.arms
-    up = view.P[arms.branch] - view.P[legs.branch]
+    sockets = legs_top(view, legs)
+    up = view.P[arms.branch] - sockets
     norm = length(up)
     if norm < 1e-9:
         return False
     up /= norm
-    feet = view.P[[view.far[legs.a], view.far[legs.b]]] @ up
-    hands = view.P[[view.far[arms.a], view.far[arms.b]]] @ up
-    leg_height = float(view.P[legs.branch] @ up - feet.mean())
-    return leg_height > 0 and float(hands.mean() - feet.mean()) < 0.2 * leg_height
+    height = view.P @ up
+    outside = np.ones(view.n, dtype=bool)
+    outside[view.subtree(arms.a)] = False
+    outside[view.subtree(arms.b)] = False
+    ground = float(height[outside].min())
+    hands = height[[view.far[arms.a], view.far[arms.b]]]
+    leg_height = float(sockets @ up) - ground
+    return leg_height > 0 and float(hands.mean()) - ground < 0.2 * leg_height
 
 
 def _finish(skeleton, result: _Result, overall: float) -> Mapping:
@@ -208,7 +221,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         while view.parents[junction] >= 0 and not view.info[int(view.parents[junction])].flagged("root", "control"):
             junction = int(view.parents[junction])
     up = _up_axis(view, junction, legs, arms, leg_res, arm_res)
-    base, base_why = _choose_base(view, junction, legs, [r.slots["hip"] for r in leg_res.values()], up)
+    base, base_why = _choose_base(view, junction, legs, arms, [r.slots["hip"] for r in leg_res.values()], up)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
     torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
 
@@ -261,9 +274,25 @@ def _only_body_child(view: SkeletonView, parent: int, child: int) -> bool:
     return True
 
 
-def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, hips: list[int], up) -> tuple[int, str]:
+def _above_ground(view: SkeletonView, junction: int, top: int, hips: list[int], up: np.ndarray) -> int:
+    """The first joint from ``junction`` towards ``top`` that is not far below the hip sockets: rigs
+    that hang the thighs from a ground root have their pelvis above it on the way to the chest."""
+    sockets = float(view.P[hips].mean(axis=0) @ up)
+    thigh = max(float(np.mean([view.bone[c] for j in hips for c in view.children[j]] or [0.0])), 1e-9)
+    if float(view.P[junction] @ up) > sockets - thigh:
+        return junction
+    for j in view.path_down(junction, top):
+        if float(view.P[j] @ up) > sockets - 0.5 * thigh:
+            return j
+    return junction
+
+
+def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, arms: LimbPair | None, hips: list[int],
+                 up) -> tuple[int, str]:
     """The pelvis: the joint where legs and torso meet, or its parent when the legs hang from a spine
     joint well above the hip sockets (3ds Max Biped: Pelvis -> Spine -> thighs)."""
+    if hips and up is not None and arms is not None and view.is_descendant(arms.branch, junction):
+        junction = _above_ground(view, junction, arms.branch, hips, up)
     info = view.info[junction]
     p = int(view.parents[junction])
     if p < 0 or not _only_body_child(view, p, junction):

@@ -58,6 +58,7 @@ FLAG_WORDS: dict[str, str] = {
     "handle": "prop", "sheath": "prop", "helmet": "prop", "attach": "prop", "socket": "prop", "grip": "prop",
     "hair": "secondary", "skirt": "secondary", "bust": "secondary", "breast": "secondary", "sec": "secondary",
     "cloth": "secondary", "cape": "secondary", "coat": "secondary", "tail": "secondary", "ribbon": "secondary",
+    "wing": "secondary", "wings": "secondary", "hind": "secondary",
     "hood": "secondary", "sleeve": "secondary", "tie": "secondary", "physics": "secondary", "dyn": "secondary",
     "jaw": "face", "chin": "face", "lip": "face", "lips": "face", "cheek": "face", "brow": "face", "eyebrow": "face",
     "lid": "face", "eyelid": "face", "tongue": "face", "nose": "face", "ear": "face", "teeth": "face",
