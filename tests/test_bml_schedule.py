@@ -223,8 +223,7 @@ def wave_plugin():
     plugins = registry.plugins()
     plugins.register(module)
     yield
-    plugins.manager.unregister(module)
-    plugins.collect.cache_clear()
+    plugins.unregister(module)
 
 
 def test_third_party_behaviour_plugin(wave_plugin):

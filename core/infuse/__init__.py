@@ -2,23 +2,45 @@
 
 Conventions, stated once for the whole package: metres and seconds; right-handed axes with +Y up
 and +Z the character's forward (+X its left); quaternions (x, y, z, w), scalar last.
+
+The names below are imported on first use, so ``import infuse`` (and ``infuse --version``) does not
+load numpy, scipy or any plugin; submodules (``infuse.registry``, ``infuse.runtime``...) load the
+same way. :mod:`infuse.api` lists what plugins may import.
 """
 from __future__ import annotations
 
+import importlib
+
 __version__ = "0.1.0"
 
-from .asset import Asset, Character  # noqa: E402
-from .errors import (  # noqa: E402
-    InfuseError, InputError, MissingFeatureError, NotHumanoidError, UnsupportedFormatError, UnusableInputError, UsageError,
-)
-from .fileio import load, save  # noqa: E402
-from .hookspecs import hookimpl  # noqa: E402
-from .kinematics import batch_fk, forward_kinematics, motion_fk  # noqa: E402
-from .motion import Motion  # noqa: E402
-from .skeleton import Skeleton  # noqa: E402
+#: Public name -> the submodule that defines it.
+_EXPORTS: dict[str, str] = {
+    "Asset": "asset", "Character": "asset",
+    "InfuseError": "errors", "InputError": "errors", "MissingFeatureError": "errors", "NotHumanoidError": "errors",
+    "UnsupportedFormatError": "errors", "UnusableInputError": "errors", "UsageError": "errors",
+    "load": "fileio", "save": "fileio",
+    "hookimpl": "hookspecs",
+    "batch_fk": "kinematics", "forward_kinematics": "kinematics", "motion_fk": "kinematics",
+    "Motion": "motion",
+    "Skeleton": "skeleton",
+}
 
-__all__ = [
-    "Asset", "Character", "InfuseError", "InputError", "MissingFeatureError", "NotHumanoidError",
-    "UnsupportedFormatError", "UnusableInputError", "UsageError", "load", "save", "hookimpl",
-    "batch_fk", "forward_kinematics", "motion_fk", "Motion", "Skeleton", "__version__",
-]
+__all__ = [*_EXPORTS, "__version__"]
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is not None:
+        value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+        globals()[name] = value
+        return value
+    try:
+        return importlib.import_module(f"{__name__}.{name}")
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__name__}.{name}":
+            raise
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -1,9 +1,10 @@
 """The contract between infuse and its plugins: every hook a plugin may implement.
 
 A plugin is a module with functions marked ``@infuse.hookimpl`` whose names match the specs
-below. It is found through an entry point in one of the groups of
-:data:`infuse.registry.ENTRY_POINT_GROUPS`; the built-in features register the same way.
-Every hook returns a list of descriptors (see :mod:`infuse.plugin_types`).
+below. It is found through an entry point in the group of its kind (:data:`infuse.registry.KINDS`);
+the built-in features register the same way. Every hook returns a list of descriptors (see
+:mod:`infuse.plugin_types`). A marked function whose name is not below is reported as a misspelled
+hook and the plugin is skipped.
 """
 from __future__ import annotations
 

@@ -28,7 +28,8 @@ from .canonical import ALL_NAMES, CANONICAL_NAMES, EXTRA_NAMES, is_canonical
 from .errors import InputError, UsageError
 from .skeleton import Skeleton
 
-DEFAULT_MAPPER = "heuristic"
+#: The built-in default mapper; a user may choose another (:func:`infuse.registry.default_name`).
+DEFAULT_MAPPER = registry.KINDS["mapper"].default
 
 
 @dataclass
@@ -193,12 +194,10 @@ def _as_saved(saved_map: Any) -> SavedMap:
     return read_map(saved_map)
 
 
-def get_mapper(name: str):
-    """The installed mapper plugin called ``name``; :class:`UsageError` listing the installed ones otherwise."""
-    table = registry.mappers()
-    if name not in table:
-        raise UsageError(f"no mapper named {name!r}; installed: {', '.join(sorted(table)) or 'none'}")
-    return table[name]
+def get_mapper(name: str | None = None):
+    """The installed mapper plugin called ``name`` (the default mapper when ``None``); :class:`UsageError`
+    listing the installed ones otherwise."""
+    return registry.get("mapper", name)
 
 
 def sample_poses(asset, count: int = 12) -> np.ndarray | None:
@@ -245,11 +244,12 @@ def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
     return Mapping.build(skeleton, joints, confidence, reasons, mapper=mapper)
 
 
-def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = None, *, pose: np.ndarray | None = None,
+def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, pose: np.ndarray | None = None,
                  meta: dict | None = None, **options) -> Mapping:
     """Map a skeleton (or the skeleton of an :class:`~infuse.asset.Asset`) to the canonical names.
 
-    - ``mapper``: the name of an installed mapper plugin (see ``infuse plugins``).
+    - ``mapper``: the name of an installed mapper plugin (see ``infuse plugins``); ``None`` is the
+      default mapper (:func:`infuse.registry.default_name`).
     - ``saved_map``: a mapping file path, a parsed dict or a :class:`Mapping`; its entries win and
       the mapper fills in the names it leaves out (a complete file is used as is).
     - ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
@@ -275,7 +275,7 @@ def map_skeleton(source, mapper: str | None = DEFAULT_MAPPER, saved_map: Any = N
         check_map(saved, skeleton)
         if saved.is_complete():
             return Mapping.build(skeleton, saved.joints, saved.confidence, saved.reasons, mapper=saved.mapper or "saved")
-    plugin = get_mapper(mapper or DEFAULT_MAPPER)
+    plugin = get_mapper(mapper)
     fixed = dict(saved.joints) if saved is not None else None
     result = plugin.map(skeleton, pose=pose, meta=meta or {}, fixed=fixed, file=file, **options)
     if not isinstance(result, Mapping):  # a plain {canonical: joint} dict from a simple plugin

@@ -4,11 +4,13 @@ Convention, used everywhere in infuse: quaternions are stored scalar-last ``(x, 
 like glTF and ``scipy.spatial.transform.Rotation``; they are unit quaternions acting on
 column vectors (``rotate(q, v) = q v q*``), and ``multiply(a, b)`` applies ``b`` first, then ``a``.
 Angles are radians unless a name ends in ``_deg``.
+
+The conversions from and to rotation vectors, matrices and Euler angles go through scipy's
+``Rotation``, imported on first use: importing scipy takes longer than most commands.
 """
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -167,32 +169,36 @@ def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.concatenate((axis * np.sin(half), np.cos(half)), axis=-1)
 
 
+def _rotation():
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
+
+
 def from_rotvec(rotvec: np.ndarray) -> np.ndarray:
     """Quaternions from rotation vectors (axis * angle, radians), shape (...,3)."""
     rotvec = np.asarray(rotvec, dtype=np.float64)
     shape = rotvec.shape[:-1]
-    return Rotation.from_rotvec(rotvec.reshape(-1, 3)).as_quat().reshape(shape + (4,))
+    return _rotation().from_rotvec(rotvec.reshape(-1, 3)).as_quat().reshape(shape + (4,))
 
 
 def to_rotvec(q: np.ndarray) -> np.ndarray:
     """Rotation vectors (axis * angle, radians, angle in [0, pi]) from quaternions (...,4)."""
     q = np.asarray(q, dtype=np.float64)
     shape = q.shape[:-1]
-    return Rotation.from_quat(q.reshape(-1, 4)).as_rotvec().reshape(shape + (3,))
+    return _rotation().from_quat(q.reshape(-1, 4)).as_rotvec().reshape(shape + (3,))
 
 
 def from_matrix(m: np.ndarray) -> np.ndarray:
     """Quaternions from rotation matrices (...,3,3) acting on column vectors."""
     m = np.asarray(m, dtype=np.float64)
     shape = m.shape[:-2]
-    return Rotation.from_matrix(m.reshape(-1, 3, 3)).as_quat().reshape(shape + (4,))
+    return _rotation().from_matrix(m.reshape(-1, 3, 3)).as_quat().reshape(shape + (4,))
 
 
 def to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (...,3,3) from quaternions (...,4)."""
-    q = np.asarray(q, dtype=np.float64)
-    shape = q.shape[:-1]
-    return Rotation.from_quat(q.reshape(-1, 4)).as_matrix().reshape(shape + (3, 3))
+    """Rotation matrices (...,3,3) from quaternions (...,4), normalized first (a zero one is the identity)."""
+    return unit_to_matrix(normalize(q))
 
 
 def unit_to_matrix(q: np.ndarray) -> np.ndarray:
@@ -214,7 +220,7 @@ def from_euler(order: str, angles: np.ndarray, degrees: bool = False) -> np.ndar
     """
     angles = np.asarray(angles, dtype=np.float64)
     shape = angles.shape[:-1]
-    rot = Rotation.from_euler(order.upper(), angles.reshape(-1, 3), degrees=degrees)
+    rot = _rotation().from_euler(order.upper(), angles.reshape(-1, 3), degrees=degrees)
     return rot.as_quat().reshape(shape + (4,))
 
 
@@ -222,7 +228,7 @@ def to_euler(order: str, q: np.ndarray, degrees: bool = False) -> np.ndarray:
     """Intrinsic Euler angles (...,3) in ``order`` (see :func:`from_euler`) from quaternions."""
     q = np.asarray(q, dtype=np.float64)
     shape = q.shape[:-1]
-    rot = Rotation.from_quat(q.reshape(-1, 4))
+    rot = _rotation().from_quat(q.reshape(-1, 4))
     return rot.as_euler(order.upper(), degrees=degrees).reshape(shape + (3,))
 
 

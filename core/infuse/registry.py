@@ -1,32 +1,67 @@
-"""Finds plugins through entry points, loads them into one pluggy manager, and collects what they offer.
+"""Finds plugins through entry points and asks them, through one pluggy manager, what they offer.
 
-A plugin that fails to import, or whose hook raises, is reported once on stderr and skipped; the
-rest keeps working.
+Each kind of plugin has an entry-point group, a hook of :mod:`infuse.hookspecs` and a descriptor type
+of :mod:`infuse.plugin_types` (:data:`KINDS`). A kind's plugins are imported the first time that kind
+is asked for, so reading a BVH file loads the readers and nothing else.
+
+- :func:`table` (kind) is every descriptor of a kind by name; :func:`get` (kind, name=None) is one,
+  the kind's default when no name is given (:func:`default_name`).
+- Two plugins offering the same name is a clash: a warning names both, and the winner is the plugin
+  registered by the program (:meth:`PluginSet.register`), else the distribution the configuration
+  file prefers (``[prefer.KIND]``, :mod:`infuse.config`), else the first by distribution name and
+  entry-point name, the same in every environment.
+- A plugin that fails to import, implements a hook infuse does not declare (a misspelled name), marks
+  nothing it defines, raises in its hook or returns something other than its kind's descriptors is
+  reported once on stderr and skipped; the rest keeps working.
 """
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 import pluggy
 
 from . import hookspecs
+from .config import current_config
+from .errors import UsageError
+from .plugin_types import Command, Component, Mapper, Reader, Retargeter, Writer
 
-#: Plugin kind -> entry-point group.
-ENTRY_POINT_GROUPS: dict[str, str] = {
-    "reader": "infuse.readers",
-    "writer": "infuse.writers",
-    "mapper": "infuse.mappers",
-    "retargeter": "infuse.retargeters",
-    "controller": "infuse.controllers",
-    "behaviour-pack": "infuse.behaviour_packs",
-    "tts": "infuse.tts",
-    "bml-behaviour": "infuse.bml_behaviours",
-    "command": "infuse.commands",
-}
+
+@dataclass(frozen=True)
+class Kind:
+    """One kind of plugin: its entry-point group, its hook, its descriptor type and its built-in default name."""
+
+    name: str
+    group: str
+    hook: str
+    descriptor: type
+    default: str | None = None
+
+    @property
+    def environment_variable(self) -> str:
+        """The variable that sets this kind's default, e.g. ``INFUSE_DEFAULT_MAPPER``."""
+        return "INFUSE_DEFAULT_" + self.name.upper().replace("-", "_")
+
+
+#: Plugin kind -> its description.
+KINDS: dict[str, Kind] = {k.name: k for k in (
+    Kind("reader", "infuse.readers", "infuse_readers", Reader),
+    Kind("writer", "infuse.writers", "infuse_writers", Writer),
+    Kind("mapper", "infuse.mappers", "infuse_mappers", Mapper, "heuristic"),
+    Kind("retargeter", "infuse.retargeters", "infuse_retargeters", Retargeter, "default"),
+    Kind("controller", "infuse.controllers", "infuse_controllers", Component),
+    Kind("behaviour-pack", "infuse.behaviour_packs", "infuse_behaviour_packs", Component),
+    Kind("tts", "infuse.tts", "infuse_tts_engines", Component, "espeak"),
+    Kind("bml-behaviour", "infuse.bml_behaviours", "infuse_bml_behaviours", Component),
+    Kind("command", "infuse.commands", "infuse_commands", Command),
+)}
+
+#: The distribution name given to plugins registered by the program rather than installed.
+PROGRAM = "(program)"
 
 
 @dataclass
@@ -41,86 +76,241 @@ class PluginRecord:
     error: str | None = None
 
 
+def entry_point_record(ep: EntryPoint, kind: str) -> PluginRecord:
+    dist = ep.dist.name if ep.dist else "?"
+    version = ep.dist.version if ep.dist else "?"
+    return PluginRecord(ep.name, kind, dist, version, ep.value)
+
+
+def kind_of(kind: str) -> Kind:
+    try:
+        return KINDS[kind]
+    except KeyError:
+        raise UsageError(f"no plugin kind {kind!r}; the kinds are {', '.join(KINDS)}") from None
+
+
 class PluginSet:
-    """The loaded plugins and their pluggy manager."""
+    """The loaded plugins, their pluggy manager, and the descriptors they offer."""
 
     def __init__(self) -> None:
         self.manager = pluggy.PluginManager("infuse")
         self.manager.add_hookspecs(hookspecs)
-        self.records: list[PluginRecord] = []
+        self._records: list[PluginRecord] = []
+        self._records_by_key: dict[tuple, PluginRecord] = {}
+        self._loaded: set[str] = set()
+        self._order: dict[str, tuple] = {}  # pluggy plugin name -> its rank among providers of a name
         self._reported: set[str] = set()
+        self._tables: dict[str, tuple[tuple, dict[str, Any]]] = {}
 
-    def load_entry_points(self) -> None:
-        for kind, group in ENTRY_POINT_GROUPS.items():
-            for ep in entry_points(group=group):
-                dist = ep.dist.name if ep.dist else "?"
-                version = ep.dist.version if ep.dist else "?"
-                record = PluginRecord(ep.name, kind, dist, version, ep.value)
-                self.records.append(record)
-                try:
-                    module = ep.load()
-                    if self.manager.is_registered(module):
-                        continue
-                    self.manager.register(module, name=f"{dist}:{ep.value}")
-                except Exception as exc:  # a broken third-party plugin must not stop infuse
-                    record.error = f"{type(exc).__name__}: {exc}"
-                    self.report(f"plugin {ep.name!r} ({dist}, group {group}) failed to load and is skipped: {record.error}")
+    @property
+    def records(self) -> list[PluginRecord]:
+        """Every entry point of every kind (all are loaded), in kind order."""
+        for kind in KINDS:
+            self.load_kind(kind)
+        return sorted(self._records, key=lambda r: list(KINDS).index(r.kind))
+
+    def load_kind(self, kind: str) -> None:
+        """Import and register the plugins of the entry-point group of ``kind`` (once)."""
+        if kind in self._loaded:
+            return
+        self._loaded.add(kind)
+        eps = sorted(entry_points(group=kind_of(kind).group), key=lambda e: (e.dist.name if e.dist else "", e.name))
+        for ep in eps:
+            self.load_entry_point(ep, kind)
+
+    def load_entry_point(self, ep: EntryPoint, kind: str) -> Any | None:
+        """Import one entry point's module and register it; ``None`` (and a warning) when it is broken."""
+        record = entry_point_record(ep, kind)
+        known = self._records_by_key.setdefault((kind, record.distribution, ep.name, ep.value), record)
+        if known is record:
+            self._records.append(record)
+        elif known.error is not None:
+            return None
+        record = known
+        try:
+            module = ep.load()
+        except Exception as exc:  # a broken third-party plugin must not stop infuse
+            record.error = f"{type(exc).__name__}: {exc}"
+            self.report(f"plugin {ep.name!r} ({record.distribution}, group {ep.group}) failed to load and is skipped: "
+                        f"{record.error}")
+            return None
+        if self.manager.is_registered(module):
+            return module
+        name = f"{record.distribution}:{ep.value}"
+        try:
+            self._register(module, name)
+        except pluggy.PluginValidationError as exc:
+            record.error = f"invalid plugin: {exc}"
+            self.report(f"plugin {ep.name!r} ({record.distribution}, group {ep.group}) is invalid and is skipped: {exc}")
+            return None
+        self._order[name] = (1, record.distribution, ep.name)
+        return module
 
     def register(self, module: Any, name: str | None = None) -> None:
-        """Register a plugin module directly (for tests and embedding applications)."""
-        self.manager.register(module, name=name)
-        self.collect.cache_clear()
+        """Register a plugin module directly (for tests and embedding applications).
+
+        It wins every name it shares with an installed plugin. Raises ``pluggy.PluginValidationError``
+        when it implements a hook infuse does not declare.
+        """
+        name = name or getattr(module, "__name__", None) or repr(module)
+        self._register(module, name)
+        self._order[name] = (0, PROGRAM, name)
+
+    def unregister(self, module: Any) -> None:
+        """Remove a plugin registered with :meth:`register`."""
+        name = self.manager.get_name(module)
+        self.manager.unregister(module)
+        self._order.pop(name, None)
+
+    def _register(self, module: Any, name: str) -> None:
+        try:
+            self.manager.register(module, name=name)
+            self.manager.check_pending()
+        except pluggy.PluginValidationError:
+            if self.manager.is_registered(module):
+                self.manager.unregister(module)
+            raise
+        marked = {caller.name for caller in self.manager.get_hookcallers(module) or ()}
+        for attr in vars(hookspecs):
+            if attr.startswith("infuse_") and attr not in marked and callable(getattr(module, attr, None)):
+                self.report(f"plugin {name!r} defines {attr}() without @infuse.hookimpl: infuse does not call it")
 
     def report(self, message: str) -> None:
+        """Print a warning on stderr, once per process."""
         if message not in self._reported:
             self._reported.add(message)
             print(f"infuse: warning: {message}", file=sys.stderr)
 
-    @lru_cache(maxsize=None)
-    def collect(self, hook_name: str) -> tuple:
-        """Call hook ``hook_name`` on each plugin separately and concatenate the lists they return."""
-        caller = getattr(self.manager.hook, hook_name)
-        items: list = []
-        for impl in caller.get_hookimpls():
-            try:
-                result = impl.function()
-            except Exception as exc:
-                self.report(f"plugin {impl.plugin_name!r} failed in {hook_name} and is skipped: {type(exc).__name__}: {exc}")
-                continue
-            items.extend(result or [])
-        return tuple(items)
-
-    def by_name(self, hook_name: str) -> dict[str, Any]:
-        """``collect(hook_name)`` as a dict by descriptor name (first registration wins)."""
-        out: dict[str, Any] = {}
-        for item in self.collect(hook_name):
-            out.setdefault(item.name, item)
+    def offers(self, kind: str) -> list[tuple[str, list]]:
+        """(pluggy plugin name, descriptors) of each plugin implementing the hook of ``kind``, in precedence order."""
+        self.load_kind(kind)
+        caller = getattr(self.manager.hook, kind_of(kind).hook)
+        out = [(impl.plugin_name, self.offered_by(impl.plugin, kind)) for impl in caller.get_hookimpls()]
+        out.sort(key=lambda entry: self._rank(entry[0]))
         return out
+
+    def offered_by(self, plugin: Any, kind: str) -> list:
+        """The descriptors of ``kind`` one registered plugin offers; [] (and a warning) when its hook raises.
+
+        The hook is called through the manager on this plugin alone, so one that raises is skipped alone.
+        """
+        spec = kind_of(kind)
+        plugin_name = self.manager.get_name(plugin)
+        others = [p for p in self.manager.get_plugins() if p is not plugin]
+        try:
+            results = self.manager.subset_hook_caller(spec.hook, others)()
+        except Exception as exc:
+            self.report(f"plugin {plugin_name!r} failed in {spec.hook} and is skipped: {type(exc).__name__}: {exc}")
+            return []
+        items = []
+        for result in results:
+            for item in result or ():
+                if isinstance(item, spec.descriptor) and isinstance(getattr(item, "name", None), str) and item.name:
+                    items.append(item)
+                else:
+                    self.report(f"plugin {plugin_name!r} returned {type(item).__name__} from {spec.hook}, "
+                                f"not a named {spec.descriptor.__name__}; it is skipped")
+        return items
+
+    def table(self, kind: str) -> dict[str, Any]:
+        """Every descriptor of ``kind`` by name; a name offered twice is a clash (see the module docstring)."""
+        self.load_kind(kind)
+        caller = getattr(self.manager.hook, kind_of(kind).hook)
+        config = current_config(frozenset(KINDS))
+        key = (id(config), *(id(impl.plugin) for impl in caller.get_hookimpls()))
+        cached = self._tables.get(kind)
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        offered: dict[str, list[tuple[str, Any]]] = {}
+        for plugin_name, items in self.offers(kind):
+            for item in items:
+                offered.setdefault(item.name, []).append((plugin_name, item))
+        prefer = config.prefer.get(kind, {})
+        table = {}
+        for name, candidates in offered.items():
+            table[name] = self._winner(kind, name, candidates, prefer.get(name))
+        self._tables[kind] = (key, table)
+        return table
+
+    def _rank(self, plugin_name: str) -> tuple:
+        return self._order.get(plugin_name, (2, plugin_name, ""))
+
+    def _winner(self, kind: str, name: str, candidates: list[tuple[str, Any]], preferred: str | None) -> Any:
+        if len(candidates) == 1 or self._rank(candidates[0][0])[0] == 0:  # the program's own plugin is deliberate
+            return candidates[0][1]
+        owners = [(self._rank(plugin_name)[1], plugin_name.split(":", 1)[-1]) for plugin_name, _ in candidates]
+        return candidates[choose(kind, name, owners, preferred, self.report)][1]
+
+
+def choose(kind: str, name: str, owners: list[tuple[str, str]], preferred: str | None, report) -> int:
+    """Which of several plugins offering ``name`` wins: the index into ``owners`` ((distribution, module) in
+    precedence order): the configuration's preference, else the first, with a warning through ``report``."""
+    distributions = [dist for dist, _ in owners]
+    if preferred in distributions:
+        return distributions.index(preferred)
+    listed = " and ".join(f"{dist} ({module})" for dist, module in owners)
+    report(f"{len(owners)} {kind} plugins are named {name!r}: {listed}; using {distributions[0]}'s "
+           f"(choose with [prefer.{kind}] {name} = \"DISTRIBUTION\" in {current_config(frozenset(KINDS)).path})")
+    return 0
 
 
 @lru_cache(maxsize=1)
 def plugins() -> PluginSet:
-    """The process-wide plugin set, loaded from entry points on first use."""
-    ps = PluginSet()
-    ps.load_entry_points()
-    return ps
+    """The process-wide plugin set; each kind is loaded from its entry points on first use."""
+    return PluginSet()
 
 
-def readers() -> dict[str, Any]:
-    return plugins().by_name("infuse_readers")
+def default_name(kind: str) -> tuple[str | None, str]:
+    """The default plugin name of ``kind`` and what set it.
+
+    Precedence: the environment variable ``INFUSE_DEFAULT_<KIND>`` (``INFUSE_DEFAULT_MAPPER``), then
+    ``[defaults]`` in the configuration file, then the kind's built-in default (:data:`KINDS`).
+    """
+    spec = kind_of(kind)
+    from_env = os.environ.get(spec.environment_variable)
+    if from_env:
+        return from_env, spec.environment_variable
+    config = current_config(frozenset(KINDS))
+    if kind in config.defaults:
+        return config.defaults[kind], f"[defaults] {kind} in {config.path}"
+    return spec.default, "built-in default"
 
 
-def writers() -> dict[str, Any]:
-    return plugins().by_name("infuse_writers")
+def table(kind: str) -> dict[str, Any]:
+    """Every installed descriptor of ``kind`` (``"reader"``, ``"mapper"``...) by name."""
+    return plugins().table(kind)
 
 
-def mappers() -> dict[str, Any]:
-    return plugins().by_name("infuse_mappers")
+def get(kind: str, name: str | None = None) -> Any:
+    """The descriptor of ``kind`` called ``name``, or the kind's default (:func:`default_name`).
+
+    Raises :class:`~infuse.errors.UsageError` naming the installed ones when there is no such plugin.
+    """
+    chosen, source = (name, None) if name else default_name(kind)
+    found = table(kind)
+    if chosen is None:
+        raise UsageError(f"name a {kind}: there is no default {kind}; installed: {', '.join(sorted(found)) or 'none'}")
+    if chosen not in found:
+        why = f" (the default, from {source})" if source else ""
+        raise UsageError(f"no {kind} named {chosen!r}{why}; installed: {', '.join(sorted(found)) or 'none'}")
+    return found[chosen]
 
 
-def retargeters() -> dict[str, Any]:
-    return plugins().by_name("infuse_retargeters")
+def readers() -> dict[str, Reader]:
+    return table("reader")
 
 
-def commands() -> dict[str, Any]:
-    return plugins().by_name("infuse_commands")
+def writers() -> dict[str, Writer]:
+    return table("writer")
+
+
+def mappers() -> dict[str, Mapper]:
+    return table("mapper")
+
+
+def retargeters() -> dict[str, Retargeter]:
+    return table("retargeter")
+
+
+def commands() -> dict[str, Command]:
+    return table("command")

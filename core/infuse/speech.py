@@ -22,7 +22,6 @@ import numpy as np
 
 from .errors import InputError, UsageError
 
-DEFAULT_TTS_ENGINE = "espeak"
 SILENCE = "sil"
 ALPHABETS = ("espeak", "ipa", "arpabet")
 
@@ -254,17 +253,16 @@ def tts_engines() -> dict[str, Any]:
     """Installed TTS engines: name -> :class:`~infuse.plugin_types.Component`."""
     from . import registry
 
-    return registry.plugins().by_name("infuse_tts_engines")
+    return registry.table("tts")
 
 
 def tts_engine(name: str | None = None, **settings) -> Any:
-    """Build the TTS engine ``name`` (default ``"espeak"``) with ``settings``.
+    """Build the TTS engine ``name`` (default: the ``tts`` default of :func:`infuse.registry.default_name`,
+    ``"espeak"`` unless configured) with ``settings``.
 
     An engine has ``synthesize(text, wav_path=None) -> Utterance``. Raises :class:`UsageError`
     when no engine of that name is installed.
     """
-    table = tts_engines()
-    name = name or DEFAULT_TTS_ENGINE
-    if name not in table:
-        raise UsageError(f"no TTS engine named {name!r}; installed: {', '.join(sorted(table)) or 'none'}")
-    return table[name].factory(**settings)
+    from . import registry
+
+    return registry.get("tts", name).factory(**settings)

@@ -95,4 +95,4 @@ def handlers_from(components) -> dict[str, Handler]:
 
 def installed_handlers() -> dict[str, Handler]:
     """The handlers of every installed BML behaviour plugin."""
-    return handlers_from(registry.plugins().collect("infuse_bml_behaviours"))
+    return handlers_from(registry.table("bml-behaviour").values())

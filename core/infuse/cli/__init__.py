@@ -1,5 +1,8 @@
 """The ``infuse`` command line. Sub-commands come from plugins through the ``infuse_commands`` hook.
 
+The list of commands and their help lines come from :mod:`infuse.cli.index` without importing any
+plugin; only the plugin of the command that runs is imported.
+
 Exit codes: 0 ok; 2 bad input or usage; 3 the input cannot be used for that; 1 a bug.
 No traceback reaches the user unless ``INFUSE_DEBUG=1`` is set.
 """
@@ -9,8 +12,9 @@ import argparse
 import os
 import sys
 import traceback
+from collections.abc import Iterable
 
-from .. import __version__, registry
+from .. import __version__
 from ..errors import InfuseError
 
 
@@ -21,11 +25,35 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(complete: Iterable[str] | None = None) -> argparse.ArgumentParser:
+    """The ``infuse`` parser: every installed command with its help line, and the arguments of the
+    commands named in ``complete`` (of every command when it is ``None``, importing every command plugin)."""
+    from .index import command_index, load_command
+
     parser = _Parser(prog="infuse", description="Turn any humanoid 3D model into an animated character.")
     parser.add_argument("--version", action="version", version=f"infuse {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name, command in sorted(registry.commands().items()):
+    if complete is None:
+        from .. import registry
+
+        commands = registry.commands()
+        offers = {name: None for name in commands}
+    else:
+        offers = command_index()
+        commands = {}
+        for name in set(complete):
+            command = load_command(name, offers[name]) if name in offers else None
+            if command is None and name in offers:  # the index was out of date and has been rebuilt
+                offers = command_index()
+                command = load_command(name, offers[name]) if name in offers else None
+            if command is not None:
+                commands[name] = command
+    for name in sorted(offers):
+        command = commands.get(name)
+        if command is None:
+            help_line = offers[name][0].help
+            sub.add_parser(name, help=help_line, description=help_line)
+            continue
         p = sub.add_parser(name, help=command.help, description=command.help)
         command.add_arguments(p)
         p.set_defaults(_run=command.run)
@@ -33,7 +61,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    wanted = next((a for a in argv if not a.startswith("-")), None)  # the options before a command take no value
+    try:
+        parser = build_parser([wanted] if wanted else [])
+    except InfuseError as exc:  # a malformed configuration file
+        print(f"infuse: error: {exc}", file=sys.stderr)
+        return exc.exit_code
     args = parser.parse_args(argv)
     if not getattr(args, "_run", None):
         parser.print_help()

@@ -17,15 +17,14 @@ from .builtin import add_read_options, load_from_args
 
 def add_mapping_options(parser) -> None:
     """Add ``--mapper`` and ``--map`` to a sub-command's parser."""
-    parser.add_argument("--mapper", default=DEFAULT_MAPPER,
-                        help=f"mapper plugin that names the joints (default {DEFAULT_MAPPER}; see 'infuse plugins')")
+    parser.add_argument("--mapper", help=f"mapper plugin that names the joints (default {DEFAULT_MAPPER}; see 'infuse plugins')")
     parser.add_argument("--map", dest="map_file", metavar="MAP.json",
                         help="saved joint map; names it leaves out are filled in by the mapper")
 
 
 def mapping_from_args(args, source):
     """The :class:`~infuse.mapping.Mapping` of ``source`` (an Asset or a Skeleton) as the options ask."""
-    return map_skeleton(source, mapper=getattr(args, "mapper", None) or DEFAULT_MAPPER,
+    return map_skeleton(source, mapper=getattr(args, "mapper", None),
                         saved_map=getattr(args, "map_file", None))
 
 

@@ -180,4 +180,4 @@ def load_pack(source) -> Pack:
 
 def installed_packs() -> dict:
     """Installed behaviour packs: name -> :class:`~infuse.plugin_types.Component` (``info["manifest"]``)."""
-    return registry.plugins().by_name("infuse_behaviour_packs")
+    return registry.table("behaviour-pack")

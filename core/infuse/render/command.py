@@ -69,8 +69,8 @@ def _mapping(asset, args):
     Without a mapping, left and right come from geometry (see :func:`~infuse.render.scene.default_sides`).
     """
     if args.canonical or args.mapper or args.map_file:
-        return map_skeleton(asset, mapper=args.mapper or DEFAULT_MAPPER, saved_map=args.map_file)
-    if DEFAULT_MAPPER not in registry.mappers():
+        return map_skeleton(asset, mapper=args.mapper, saved_map=args.map_file)
+    if registry.default_name("mapper")[0] not in registry.mappers():
         return None
     try:
         return map_skeleton(asset)

@@ -22,7 +22,7 @@ def controller_components() -> dict:
     """Installed controllers: kind -> :class:`~infuse.plugin_types.Component`."""
     from .. import registry
 
-    return registry.plugins().by_name("infuse_controllers")
+    return registry.table("controller")
 
 
 def controller(kind: str, **settings) -> Controller:

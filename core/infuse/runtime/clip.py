@@ -228,7 +228,7 @@ class Clip(Controller):
         if self.source_mapping is None or not table:
             raise UsageError(f"clip {self.motion.name!r} is on another skeleton: retarget it to {rig.name!r} first "
                              "(or give source_mapping= with a retargeter installed)")
-        retargeter = next(iter(table.values()))
+        retargeter = registry.get("retargeter")
         return retargeter.retarget(self.motion, self.source_mapping, rig.skeleton, rig.mapping)
 
     def evaluate_one(self, job: Job, block: Block) -> None:

@@ -20,7 +20,6 @@ import warnings
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from infuse import quaternions as quat
 from infuse.asset import Asset
@@ -62,7 +61,7 @@ def _euler(rotations: np.ndarray, order: str) -> np.ndarray:
     missing = "".join(a for a in "XYZ" if a not in order)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # gimbal lock: scipy picks a valid solution
-        angles = Rotation.from_quat(rotations).as_euler(order + missing, degrees=True)
+        angles = quat.to_euler(order + missing, rotations, degrees=True)
     if missing and np.any(np.abs(angles[:, len(order):]) > ANGLE_TOLERANCE_DEG):
         raise ValueError(order)
     return angles[:, : len(order)]

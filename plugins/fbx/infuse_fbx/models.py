@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .document import Document, FbxObject, number, vector
 
@@ -83,6 +82,8 @@ def models(doc: Document) -> list[Model]:
 
 
 def _model(doc: Document, o: FbxObject, parent: int) -> Model:
+    from scipy.spatial.transform import Rotation  # imported when an FBX file is read, not with the plugin
+
     active = number(doc, o.props, "RotationActive", 0.0, o.node) != 0.0
     order_code = int(number(doc, o.props, "RotationOrder", 0.0, o.node)) if active else 0
     if order_code not in ROTATION_ORDERS:
@@ -107,6 +108,8 @@ def _model(doc: Document, o: FbxObject, parent: int) -> Model:
 
 def euler_matrices(order: str, degrees: np.ndarray) -> np.ndarray:
     """Rotation matrices (F, 3, 3) from FBX Euler angles (F, 3) given as (x, y, z) in degrees."""
+    from scipy.spatial.transform import Rotation
+
     axes = ["xyz".index(a) for a in order]
     return Rotation.from_euler(order, np.asarray(degrees, dtype=np.float64)[:, axes], degrees=True).as_matrix()
 

@@ -1,0 +1,88 @@
+"""The user's configuration file: default plugins per kind and which plugin wins a shared name.
+
+The file is TOML, found at ``$INFUSE_CONFIG``, else ``$XDG_CONFIG_HOME/infuse/config.toml``, else
+``~/.config/infuse/config.toml``; a missing file is an empty configuration::
+
+    [defaults]              # the plugin used when a command or a call names none
+    mapper = "names"
+    retargeter = "paper"
+
+    [prefer.controller]     # two installed distributions offer a controller "gaze": this one wins
+    gaze = "infuse-fancy-gaze"
+
+Keys of ``[defaults]`` and ``[prefer]`` are plugin kinds (:data:`infuse.registry.KINDS`).
+"""
+from __future__ import annotations
+
+import os
+import tomllib
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class Config:
+    """What the configuration file says. ``defaults``: kind -> plugin name; ``prefer``: kind -> {name: distribution}."""
+
+    path: Path
+    defaults: dict[str, str] = field(default_factory=dict)
+    prefer: dict[str, dict[str, str]] = field(default_factory=dict)
+
+
+def config_path() -> Path:
+    """Where the configuration file is looked for (it need not exist)."""
+    explicit = os.environ.get("INFUSE_CONFIG")
+    if explicit:
+        return Path(explicit).expanduser()
+    base = os.environ.get("XDG_CONFIG_HOME") or os.path.join(os.path.expanduser("~"), ".config")
+    return Path(base) / "infuse" / "config.toml"
+
+
+def read_config(path: Path, kinds: frozenset[str]) -> Config:
+    """Parse the configuration file at ``path``; :class:`InputError` names the place of any problem."""
+    try:
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return Config(path)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path, None, f"cannot read the configuration file: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(path, None, f"not valid TOML: {exc}") from None
+    unknown = sorted(set(doc) - {"defaults", "prefer"})
+    if unknown:
+        raise InputError(path, f"[{unknown[0]}]", "unknown section; the sections are [defaults] and [prefer.KIND]")
+    defaults = _table(path, doc.get("defaults", {}), "defaults", kinds)
+    prefer = {}
+    for kind, names in _table(path, doc.get("prefer", {}), "prefer", kinds, values=dict).items():
+        prefer[kind] = _table(path, names, f"prefer.{kind}", None)
+    return Config(path, defaults, prefer)
+
+
+def _table(path: Path, table, place: str, kinds: frozenset[str] | None, values: type = str) -> dict:
+    if not isinstance(table, dict):
+        raise InputError(path, f"[{place}]", "must be a table")
+    for key, value in table.items():
+        if kinds is not None and key not in kinds:
+            raise InputError(path, f"[{place}] {key}", f"unknown plugin kind; the kinds are {', '.join(sorted(kinds))}")
+        if not isinstance(value, values):
+            what = "a table of names" if values is dict else "a string"
+            raise InputError(path, f"[{place}] {key}", f"must be {what}, not {type(value).__name__}")
+    return dict(table)
+
+
+@lru_cache(maxsize=8)
+def _cached(path: Path, mtime_ns: int, kinds: frozenset[str]) -> Config:
+    return read_config(path, kinds)
+
+
+def current_config(kinds: frozenset[str]) -> Config:
+    """The configuration in effect now (re-read when the file changes)."""
+    path = config_path()
+    try:
+        stamp = path.stat().st_mtime_ns
+    except OSError:
+        return Config(path)
+    return _cached(path, stamp, kinds)
