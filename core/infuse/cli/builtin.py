@@ -15,6 +15,8 @@ def add_read_options(parser) -> None:
     parser.add_argument("--units", help="override the file's length unit (m, cm, mm, dm, inch, ft, cmu)")
     parser.add_argument("--up-axis", choices=["Y", "Z"], help="override the file's up axis")
     parser.add_argument("--format", dest="read_format", help="reader name, when the extension is ambiguous")
+    parser.add_argument("--allow-external", action="store_true",
+                        help="let the file's references (buffers, images, media) lead outside its folder")
 
 
 def read_options(args) -> dict:
@@ -23,6 +25,8 @@ def read_options(args) -> dict:
         opts["units"] = args.units
     if getattr(args, "up_axis", None):
         opts["up_axis"] = args.up_axis
+    if getattr(args, "allow_external", False):
+        opts["allow_external"] = True
     return opts
 
 
