@@ -25,14 +25,17 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser(complete: Iterable[str] | None = None) -> argparse.ArgumentParser:
+def build_parser(complete: Iterable[str] | None = None, listed: bool = True) -> argparse.ArgumentParser:
     """The ``infuse`` parser: every installed command with its help line, and the arguments of the
-    commands named in ``complete`` (of every command when it is ``None``, importing every command plugin)."""
-    from .index import command_index, load_command
-
+    commands named in ``complete`` (of every command when it is ``None``, importing every command plugin).
+    ``listed=False`` leaves the commands out (for ``--version``)."""
     parser = _Parser(prog="infuse", description="Turn any humanoid 3D model into an animated character.")
     parser.add_argument("--version", action="version", version=f"infuse {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    if not listed:
+        return parser
+    from .index import command_index, load_command
+
     if complete is None:
         from .. import registry
 
@@ -63,8 +66,9 @@ def build_parser(complete: Iterable[str] | None = None) -> argparse.ArgumentPars
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     wanted = next((a for a in argv if not a.startswith("-")), None)  # the options before a command take no value
+    listed = wanted is not None or "--version" not in argv
     try:
-        parser = build_parser([wanted] if wanted else [])
+        parser = build_parser([wanted] if wanted else [], listed)
     except InfuseError as exc:  # a malformed configuration file
         print(f"infuse: error: {exc}", file=sys.stderr)
         return exc.exit_code
