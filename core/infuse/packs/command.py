@@ -1,4 +1,4 @@
-"""CLI: ``infuse packs``, ``infuse pack build|show|import``, ``infuse infuse CHARACTER --packs ...``."""
+"""CLI: ``infuse packs``, ``infuse pack build|show|import|new``, ``infuse infuse CHARACTER --packs ...``."""
 from __future__ import annotations
 
 import json
@@ -11,9 +11,10 @@ from ..errors import UsageError
 from ..hookspecs import hookimpl
 from ..plugin_types import Command
 from .build import build_pack, summary
-from .importers import import_bvh_folder, import_smartbody
+from .importers import FIRST_VERSION, import_bvh_folder, import_smartbody
 from .infusion import infuse_character
 from .pack import installed_packs, load_pack
+from .publish import add_build_parser, add_new_parser, run_build, run_new
 
 DEFAULT_CACHE = Path("~/.cache/infuse/infusions")
 
@@ -44,33 +45,32 @@ def _packs(args) -> int:
 
 def _pack_args(p) -> None:
     sub = p.add_subparsers(dest="pack_action", required=True)
-    b = sub.add_parser("build", help="analyse a pack's clips and store the results in the pack")
-    b.add_argument("folder", help="pack folder or manifest.toml")
-    b.add_argument("--mapper", help="mapper for the pack skeleton (default heuristic)")
+    add_build_parser(sub)
+    add_new_parser(sub)
     s = sub.add_parser("show", help="print a built pack's clips, parameters, tessellation and checks")
     s.add_argument("pack", help="pack folder, manifest or installed pack name")
-    i = sub.add_parser("import", help="write a pack manifest reading a SmartBody behaviour set or BVH folder in place")
+    i = sub.add_parser("import", help="copy a SmartBody behaviour set or BVH clips into a pack folder with its manifest")
     i.add_argument("source_kind", choices=["smartbody", "bvh"])
     i.add_argument("source", help="SmartBody behaviour-set folder, or a folder of BVH files")
     i.add_argument("-o", "--output", required=True, help="pack folder to create (outside the source)")
     i.add_argument("--name", help="pack name")
     i.add_argument("--glob", default="*.bvh", help="BVH files to take (e.g. '*_feminine_*.bvh')")
+    i.add_argument("--version", dest="pack_version", default=FIRST_VERSION, help=f"pack version (default {FIRST_VERSION})")
     i.add_argument("--no-build", action="store_true", help="only write the manifest")
 
 
 def _pack(args) -> int:
     if args.pack_action == "build":
-        pack = build_pack(args.folder, mapper=args.mapper)
-        print(summary(pack))
-        print(f"wrote {pack.manifest.analysis}")
-        return 0
+        return run_build(args)
+    if args.pack_action == "new":
+        return run_new(args)
     if args.pack_action == "show":
         print(summary(load_pack(args.pack)))
         return 0
     if args.source_kind == "smartbody":
-        manifest = import_smartbody(args.source, args.output, name=args.name)
+        manifest = import_smartbody(args.source, args.output, name=args.name, version=args.pack_version)
     else:
-        manifest = import_bvh_folder(args.source, args.output, name=args.name, pattern=args.glob)
+        manifest = import_bvh_folder(args.source, args.output, name=args.name, pattern=args.glob, version=args.pack_version)
     print(f"wrote {manifest}")
     if not args.no_build:
         pack = build_pack(manifest)
@@ -120,6 +120,6 @@ def _infuse(args) -> int:
 def infuse_commands():
     return [
         Command("packs", "list installed behaviour packs", _packs_args, _packs),
-        Command("pack", "build, show or import a behaviour pack", _pack_args, _pack),
+        Command("pack", "build, show, import or start a behaviour pack (pack new, pack build --wheel)", _pack_args, _pack),
         Command("infuse", "map a character, retarget behaviour packs onto it and cache its blend spaces", _infuse_args, _infuse),
     ]

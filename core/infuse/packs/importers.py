@@ -1,9 +1,10 @@
-"""Importers: turn a SmartBody behaviour set or a folder of BVH clips into a pack that reads them in place.
+"""Importers: turn a SmartBody behaviour set or a folder of BVH clips into a self-contained pack folder.
 
-The importer writes only a manifest into the destination folder; the clips stay where they are (their
-absolute paths are in the manifest) and ``infuse pack build`` then analyses them. Roles come from
-the file names (idle, cycle, reach, grasp; transitions such as starts, stops and turns in place are
-kept as ``other``); everything numeric is measured by the builder.
+The importer copies the skeleton and the clips into the destination folder and writes a manifest
+naming them by relative paths (:mod:`infuse.packs.folder`); the source is only read, and ``infuse
+pack build`` then analyses the copy. Roles come from the file names (idle, cycle, reach, grasp;
+transitions such as starts, stops and turns in place are kept as ``other``); everything numeric is
+measured by the builder.
 """
 from __future__ import annotations
 
@@ -12,7 +13,10 @@ import re
 from pathlib import Path
 
 from ..errors import InputError
-from .manifest import write_manifest
+from .folder import write_pack_folder
+
+#: The version of a newly imported pack.
+FIRST_VERSION = "0.1.0"
 
 #: SmartBody clip names that are transitions or one-offs, not blendable loops.
 _TRANSITION = re.compile(r"(To(Walk|Idle)|Turn\d|Step|Lift|Jump|StopTo|Shuffle01_)", re.IGNORECASE)
@@ -38,9 +42,10 @@ def smartbody_role(stem: str) -> tuple[str, str]:
     return "other", "locomotion"
 
 
-def import_smartbody(source: str | Path, dest: str | Path, name: str | None = None, version: str = "0.0.0") -> Path:
-    """Write a manifest in ``dest`` for the SmartBody behaviour set at ``source`` (``skeletons/*.sk`` and
-    ``motions/*.skm``); returns the manifest path. Transitions are listed with role ``other``."""
+def import_smartbody(source: str | Path, dest: str | Path, name: str | None = None, version: str = FIRST_VERSION,
+                     description: str | None = None) -> Path:
+    """Copy the SmartBody behaviour set at ``source`` (``skeletons/*.sk`` and ``motions/*.skm``) into a pack
+    folder ``dest``; returns the manifest path. Transitions are listed with role ``other``."""
     source = Path(source).resolve()
     skeletons = sorted((source / "skeletons").glob("*.sk"))
     motions = sorted((source / "motions").glob("*.skm"))
@@ -55,20 +60,22 @@ def import_smartbody(source: str | Path, dest: str | Path, name: str | None = No
     kind = "reach" if kinds.count("reach") > kinds.count("locomotion") else "locomotion"
     pack = {"name": name or f"smartbody-{source.name.lower()}", "version": version, "kind": kind,
             "skeleton": str(skeletons[0]), "analysis": "analysis.json",
-            "description": f"SmartBody behaviour set {source.name}, read in place"}
-    return write_manifest(Path(dest) / "manifest.toml", pack, clips)
+            "description": description or f"SmartBody behaviour set {source.name}"}
+    return write_pack_folder(dest, pack, clips)
 
 
 def import_bvh_folder(source: str | Path, dest: str | Path, name: str | None = None, pattern: str = "*.bvh",
-                      kind: str = "locomotion", version: str = "0.0.0") -> Path:
-    """Write a manifest in ``dest`` for the BVH files of ``source`` matching ``pattern`` (clips that are
+                      kind: str = "locomotion", version: str = FIRST_VERSION, description: str | None = None) -> Path:
+    """Copy the BVH files of ``source`` matching ``pattern`` into a pack folder ``dest`` (clips that are
     recorded takes, not loops: the builder finds a cycle in each); returns the manifest path."""
     source = Path(source).resolve()
+    if not source.is_dir():
+        raise InputError(source, None, "not a folder of BVH files")
     files = sorted(p for p in source.iterdir() if p.suffix.lower() == ".bvh" and fnmatch.fnmatch(p.name, pattern))
     if not files:
         raise InputError(source, None, f"no BVH files matching {pattern!r}")
     clips = [{"name": f.stem, "file": str(f), "role": "cycle" if kind == "locomotion" else "reach", "tags": _tags(f.stem),
               "loop": False} for f in files]
     pack = {"name": name or f"bvh-{source.name.lower()}", "version": version, "kind": kind, "skeleton": str(files[0]),
-            "analysis": "analysis.json", "description": f"BVH clips from {source.name} ({pattern}), read in place"}
-    return write_manifest(Path(dest) / "manifest.toml", pack, clips)
+            "analysis": "analysis.json", "description": description or f"BVH clips from {source.name} ({pattern})"}
+    return write_pack_folder(dest, pack, clips)

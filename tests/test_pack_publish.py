@@ -1,0 +1,170 @@
+"""Publishing packs: ``infuse pack new`` makes a complete project, ``pack import`` a self-contained pack folder,
+``pack build --wheel`` a wheel that a new environment installs and lists (the test marked ``venv``)."""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+from packaging.requirements import Requirement
+
+import infuse
+from infuse.cli import main as cli_main
+from infuse.packs import load_pack, read_manifest
+from infuse.packs.project import FIGURES_END, FIGURES_START
+from infuse.scaffold.distribution import CORE_DISTRIBUTION, LICENSE_PLACEHOLDER
+
+from cli_errors import answer_lines
+from corpus_data import corpus_file
+from fresh_venv import make_venv, pip_install
+
+BANDAI = "bandai/Bandai-Namco-Research-Motiondataset-1/data"
+FEMININE = "*_feminine_*.bvh"
+EXAMPLE_PACK = Path(__file__).resolve().parents[1] / "examples" / "example_pack" / "infuse_example_pack" / "pack"
+INFUSE = Path(sys.executable).with_name("infuse")
+
+
+def _listing(folder: Path) -> dict:
+    return {p.relative_to(folder).as_posix(): p.stat().st_mtime_ns for p in folder.rglob("*")}
+
+
+def _error(capsys, code: int, *needles: str) -> str:
+    out = capsys.readouterr()
+    (line,) = answer_lines(out.err)
+    assert code == 2 and line.startswith("infuse: error:") and "Traceback" not in out.err, out.err
+    for needle in needles:
+        assert needle in line, line
+    return line
+
+
+@pytest.fixture(scope="module")
+def bandai_project(tmp_path_factory):
+    """``infuse pack new bandai-fem --import bvh BANDAI --glob FEMININE`` in a new folder; the source's listing before."""
+    source = corpus_file(BANDAI)
+    before = _listing(source.parent)
+    root = tmp_path_factory.mktemp("projects")
+    assert cli_main(["pack", "new", "bandai-fem", "--import", "bvh", str(source), "--glob", FEMININE,
+                     "-o", str(root / "bandai-fem")]) == 0
+    return root / "bandai-fem", source, before
+
+
+def test_pack_new_writes_a_complete_project(bandai_project):
+    project, source, before = bandai_project
+    assert _listing(source.parent) == before  # the source is only read
+    package = project / "infuse_pack_bandai_fem"
+    manifest = read_manifest(package / "pack")
+    takes = sorted(source.glob(FEMININE))
+    assert [c.file.name for c in manifest.clips] == [t.name for t in takes]
+    for path in [manifest.skeleton, *(c.file for c in manifest.clips)]:
+        assert path.is_relative_to(package / "pack") and path.read_bytes() == (source / path.name).read_bytes()
+    raw = tomllib.loads((package / "pack" / "manifest.toml").read_text())
+    assert not any(Path(c["file"]).is_absolute() or ".." in c["file"] for c in raw["clips"])
+    assert manifest.version == "0.1.0" and manifest.name == "bandai-fem"
+
+    meta = tomllib.loads((project / "pyproject.toml").read_text())["project"]
+    assert meta["name"] == "infuse-anim-pack-bandai-fem" and meta["version"] == manifest.version
+    assert meta["entry-points"]["infuse.behaviour_packs"] == {"bandai-fem": "infuse_pack_bandai_fem.plugin"}
+    (core,) = [Requirement(r) for r in meta["dependencies"] if Requirement(r).name == CORE_DISTRIBUTION]
+    assert infuse.__version__ in core.specifier and "0.0.1" not in core.specifier
+    assert meta["license"] == LICENSE_PLACEHOLDER and meta["license-files"] == ["LICENSE"]
+    assert (project / "LICENSE").read_bytes() == (source.parent / "LICENSE").read_bytes()  # the dataset's licence
+
+    pack = load_pack(package / "pack")
+    assert pack.built and len(pack.analysis["clips"]) == len(takes) == 7
+    readme = (project / "README.md").read_text()
+    figures = readme[readme.index(FIGURES_START):readme.index(FIGURES_END)]
+    for clip in pack.analysis["clips"]:  # the figures the builder measured, as it prints them
+        assert clip["name"] in figures and f"speed {clip['parameters']['speed']:5.2f} m/s" in figures
+    assert "blend space locomotion: 3D" in figures and "pip install infuse-anim-pack-bandai-fem" in readme
+
+
+def test_pack_import_writes_a_self_contained_folder(tmp_path, capsys):
+    source = corpus_file(BANDAI)
+    assert cli_main(["pack", "import", "bvh", str(source), "--glob", "*_dash_*.bvh", "-o", str(tmp_path / "dash")]) == 0
+    text = (tmp_path / "dash" / "manifest.toml").read_text()
+    assert str(source) not in text and 'version = "0.1.0"' in text
+    moved = tmp_path / "elsewhere"
+    shutil.move(tmp_path / "dash", moved)  # a folder that names no file outside itself moves and stays built
+    pack = load_pack(moved)
+    assert pack.built and all(c.file.is_relative_to(moved) for c in pack.manifest.clips)
+    capsys.readouterr()
+    code = cli_main(["pack", "import", "bvh", str(source), "--glob", "*_dash_*.bvh", "-o", str(source)])
+    _error(capsys, code, str(source), "must not be the folder its clips come from")
+    assert not (source / "manifest.toml").exists()
+
+
+def test_pack_new_from_a_smartbody_set_and_from_a_pack_folder(tmp_path):
+    behaviour_set = corpus_file("smartbody/behaviorsets/reaching")
+    assert cli_main(["pack", "new", "sb-reach", "--import", "smartbody", str(behaviour_set), "--license", "LicenseRef-SmartBody",
+                     "-o", str(tmp_path / "sb-reach")]) == 0
+    manifest = read_manifest(tmp_path / "sb-reach" / "infuse_pack_sb_reach" / "pack")
+    assert manifest.kind == "reach" and manifest.skeleton.name == "skeleton.sk"
+    assert len(manifest.clips) == len(list((behaviour_set / "motions").glob("*.skm")))
+    assert tomllib.loads((tmp_path / "sb-reach" / "pyproject.toml").read_text())["project"]["license"] == "LicenseRef-SmartBody"
+    assert (tmp_path / "sb-reach" / "LICENSE").is_file()
+
+    assert cli_main(["pack", "new", "waves", "--from", str(EXAMPLE_PACK), "-o", str(tmp_path / "waves")]) == 0
+    copy = load_pack(tmp_path / "waves" / "infuse_pack_waves" / "pack")
+    original = load_pack(EXAMPLE_PACK)
+    assert copy.built and copy.name == "waves" and copy.version == original.version
+    assert [c["parameters"] for c in copy.analysis["clips"]] == [c["parameters"] for c in original.analysis["clips"]]
+    assert not (tmp_path / "waves" / "LICENSE").exists()  # none lies beside the example
+
+
+def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
+    source = str(corpus_file(BANDAI))
+    _error(capsys, cli_main(["pack", "new", "Bandai Fem", "--import", "bvh", source, "-o", str(tmp_path / "x")]), "'Bandai Fem'")
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "taken" / "notes.txt").write_text("mine")
+    _error(capsys, cli_main(["pack", "new", "fem", "--import", "bvh", source, "-o", str(tmp_path / "taken")]), "already exists")
+    assert (tmp_path / "taken" / "notes.txt").read_text() == "mine"
+    _error(capsys, cli_main(["pack", "new", "fem", "--import", "bvh", source, "--glob", "*.nothing", "-o", str(tmp_path / "y")]),
+           "no BVH files matching")
+    assert not (tmp_path / "y").exists()  # nothing half-made is left
+
+    assert cli_main(["pack", "new", "fem", "--import", "bvh", source, "--glob", "*_dash_feminine_*.bvh",
+                     "-o", str(tmp_path / "fem")]) == 0
+    capsys.readouterr()
+    pyproject = tmp_path / "fem" / "pyproject.toml"
+    pyproject.write_text(pyproject.read_text().replace('version = "0.1.0"', 'version = "0.2.0"'))
+    code = cli_main(["pack", "build", str(tmp_path / "fem"), "--wheel"])
+    _error(capsys, code, "manifest.toml:pack.version", "'0.2.0'")
+    assert not (tmp_path / "fem" / "dist").exists()
+
+
+@pytest.mark.venv
+def test_three_commands_publish_a_pack_into_a_new_environment(tmp_path):
+    """pack new (import the Bandai feminine takes), pack build --wheel, pip install of the wheel into a new
+    environment holding infuse from this checkout: infuse packs lists the pack and infuse infuse uses it."""
+    source = corpus_file(BANDAI)
+    xbot = corpus_file("runxaway-models/Xbot.glb")
+
+    def run(command, cwd):
+        proc = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout
+
+    run([str(INFUSE), "pack", "new", "bandai-fem", "--import", "bvh", str(source), "--glob", FEMININE], tmp_path)
+    project = tmp_path / "bandai-fem"
+    out = run([str(INFUSE), "pack", "build", "--wheel"], project)
+    (wheel,) = (project / "dist").glob("*.whl")
+    assert wheel.name == "infuse_anim_pack_bandai_fem-0.1.0-py3-none-any.whl" and f"wrote {wheel}" in out
+
+    bin_dir = make_venv(tmp_path / "venv")
+    pip_install(tmp_path / "venv", ["--no-index", str(wheel)])
+    elsewhere = tmp_path / "elsewhere"  # not the project folder, whose package would shadow the installed one
+    elsewhere.mkdir()
+    (listed,) = json.loads(run([str(bin_dir / "infuse"), "packs", "--json"], elsewhere))
+    assert listed["name"] == "bandai-fem" and listed["built"] and listed["clips"] == 7
+    assert Path(listed["manifest"]).is_relative_to(tmp_path / "venv")  # the installed copy, not the project
+    assert listed["blend_spaces"] == {"locomotion": 3}
+    out = run([str(bin_dir / "infuse"), "infuse", str(xbot), "--packs", "bandai-fem", "-o", str(tmp_path / "cache")], elsewhere)
+    assert "bandai-fem 0.1.0 (locomotion): 7 clips" in out and "locomotion: 3D" in out
+    where = run([str(bin_dir / "python"), "-c", "import infuse; print(infuse.__file__)"], elsewhere)
+    assert Path(where.strip()).is_relative_to(tmp_path / "venv")  # infuse itself is the new environment's
+    # The project's own tests pass against the installed pack.
+    assert "2 passed" in run([str(bin_dir / "python"), "-m", "pytest", "-q", "-p", "no:cacheprovider", str(project / "tests")], elsewhere)
