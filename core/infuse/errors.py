@@ -7,7 +7,15 @@ cannot be used for what was asked (:class:`UnusableInputError` and subclasses su
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
+
+_LINE_BREAKS = re.compile(r"\s*[\r\n]+\s*")
+
+
+def one_line(text: str) -> str:
+    """``text`` with its line breaks (e.g. a parser's message quoting the file) made single spaces."""
+    return _LINE_BREAKS.sub(" ", text).strip()
 
 
 class InfuseError(Exception):
@@ -23,10 +31,10 @@ class InputError(InfuseError):
 
     def __init__(self, file: str | Path | None, place: str | None, problem: str):
         self.file = str(file) if file is not None else None
-        self.place = place
-        self.problem = problem
-        where = ":".join(p for p in (self.file, place) if p)
-        super().__init__(f"{where}: {problem}" if where else problem)
+        self.place = one_line(place) if place else place
+        self.problem = one_line(problem)
+        where = ":".join(p for p in (self.file, self.place) if p)
+        super().__init__(f"{where}: {self.problem}" if where else self.problem)
 
 
 class UsageError(InfuseError):
@@ -42,8 +50,8 @@ class UnusableInputError(InfuseError):
 
     def __init__(self, file: str | Path | None, problem: str):
         self.file = str(file) if file is not None else None
-        self.problem = problem
-        super().__init__(f"{self.file}: {problem}" if self.file else problem)
+        self.problem = one_line(problem)
+        super().__init__(f"{self.file}: {self.problem}" if self.file else self.problem)
 
 
 class UnsupportedFormatError(UnusableInputError):
@@ -66,3 +74,21 @@ class BusyError(InfuseError):
     """A live service has too much waiting (its command queue is full); the request may be sent again later."""
 
     exit_code = 2
+
+
+def _amount(value) -> str:
+    return f"{value:,}" if isinstance(value, int) else f"{value:.6g}"
+
+
+class LimitError(InputError):
+    """A file asks for more than infuse allows (a count, size, nesting depth or duration); checked before
+    anything is allocated or run. ``limit`` names the bound in :mod:`infuse.limits`."""
+
+    def __init__(self, file: str | Path | None, place: str | None, what: str, asked, limit: str, bound):
+        self.limit = limit
+        super().__init__(file, place, f"{what} {_amount(asked)} is over the limit of {_amount(bound)} (infuse.limits.{limit})")
+
+
+class ExternalReferenceError(InputError):
+    """A file refers to another file outside its own folder (an absolute path, a ``..`` escape, a link
+    out of the folder) or to something that is not a regular file; see :mod:`infuse.references`."""

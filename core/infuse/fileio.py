@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
+import math
 import struct
 import zlib
 from pathlib import Path
 
 import numpy as np
 
-from . import registry
+from . import references, registry
 from .asset import Asset
 from .atomic import atomic_path
 from .errors import InfuseError, InputError, UnsupportedFormatError
@@ -36,8 +37,13 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
     """Read ``path`` with the reader for its extension (or the reader named ``format``).
 
     ``options`` go to the reader: ``units`` and ``up_axis`` override detection. Malformed files
-    raise :class:`InputError` naming the file, the place and the problem.
+    raise :class:`InputError` naming the file, the place and the problem. ``allow_external=True`` lets
+    the file's references to other files lead outside its folder (see :mod:`infuse.references`).
     """
+    allowed = options.pop("allow_external", None)
+    if allowed is not None:
+        with references.allow_external(bool(allowed)):
+            return load(path, format, **options)
     path = Path(path)
     if not path.exists():
         raise InputError(path, None, "file not found")
@@ -69,7 +75,8 @@ def save(asset: Asset, path: str | Path, format: str | None = None, **options) -
 
 def json_ready(value, digits: int | None = None):
     """``value`` with numpy arrays and scalars made plain lists and numbers, dict keys made strings and
-    anything else JSON cannot hold written as its ``str``; Python floats rounded to ``digits`` when given."""
+    anything else JSON cannot hold written as its ``str``; Python floats rounded to ``digits`` when given.
+    Infinities and NaN, which JSON cannot hold, become ``None`` (an unbounded limit reads as null)."""
     if isinstance(value, dict):
         return {str(k): json_ready(v, digits) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -77,7 +84,9 @@ def json_ready(value, digits: int | None = None):
     if isinstance(value, np.ndarray):
         return json_ready(value.tolist(), digits)
     if isinstance(value, (np.floating, np.integer)):
-        return value.item()
+        return json_ready(value.item(), digits)
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
     if isinstance(value, float) and digits is not None:
         return round(value, digits)
     if isinstance(value, (str, int, float, bool)) or value is None:

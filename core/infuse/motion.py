@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import limits
 from .errors import InputError
 from .skeleton import Skeleton
 
@@ -65,6 +66,11 @@ class Motion:
             if arr is not None and not np.all(np.isfinite(arr)):
                 frame = int(np.argmax(~np.isfinite(arr.reshape(f, -1)).all(axis=1)))
                 raise InputError(file, f"{where} frame {frame}", f"{label} is not finite (NaN or infinity)")
+        limits.check(file, where, "frame rate (fps)", self.fps, "MAX_FPS")
+        for label, arr in (("root translation", self.root_translations), ("joint translation", self.joint_translations)):
+            if arr is not None and arr.size and np.max(np.abs(arr)) > limits.MAX_COORDINATE_M:
+                frame = int(np.argmax(np.abs(arr.reshape(f, -1)).max(axis=1)))
+                limits.check_coordinates(file, f"{where} frame {frame}", arr[frame], label)
 
     @property
     def num_frames(self) -> int:

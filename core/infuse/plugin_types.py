@@ -87,9 +87,10 @@ class Component:
 
 
 def normalized_extension(path: str | Path) -> str:
-    """The lower-case suffix of ``path`` (``".glb"``), with ``".skeleton.xml"`` style double suffixes kept."""
+    """The lower-case suffix of ``path`` (``".glb"``), with ``".skeleton.xml"`` style double suffixes kept;
+    a name that is only a suffix (``".bvh"``) has that suffix."""
     name = Path(path).name.lower()
     for double in (".skeleton.xml",):
         if name.endswith(double):
             return double
-    return Path(name).suffix
+    return Path(name).suffix or (name if name.count(".") == 1 and name.startswith(".") and len(name) > 1 else "")

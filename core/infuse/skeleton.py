@@ -12,7 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import quaternions as quat
+from . import limits, quaternions as quat
 from .errors import InputError
 
 
@@ -57,6 +57,7 @@ class Skeleton:
         j = len(self.names)
         if j == 0:
             raise InputError(file, "skeleton", "no joints")
+        limits.check(file, "skeleton", "joints", j, "MAX_JOINTS")
         if len(set(self.names)) != j:
             dup = sorted({n for n in self.names if self.names.count(n) > 1})
             raise InputError(file, "skeleton", f"duplicate joint names: {', '.join(dup[:5])}")
@@ -73,6 +74,15 @@ class Skeleton:
                 row = int(np.nonzero(~np.all(np.isfinite(arr), axis=-1))[0][0])
                 where = f"joint {self.names[row]!r}" if arr is not self.end_site_offsets else f"end site {row}"
                 raise InputError(file, where, f"{label} is not finite")
+        for label, arr in (("rest translation", self.rest_translations), ("end site offset", self.end_site_offsets)):
+            if arr.size and np.max(np.abs(arr)) > limits.MAX_COORDINATE_M:
+                row = int(np.argmax(np.max(np.abs(arr), axis=-1)))
+                where = f"joint {self.names[row]!r}" if arr is self.rest_translations else f"end site {row}"
+                limits.check_coordinates(file, where, arr[row], label)
+        depth = int(self.depths.max())
+        if depth > limits.MAX_DEPTH:
+            deepest = self.names[int(np.argmax(self.depths))]
+            limits.check(file, f"joint {deepest!r}", "hierarchy depth", depth, "MAX_DEPTH")
         norms = np.linalg.norm(self.rest_rotations, axis=-1)
         if np.any(np.abs(norms - 1.0) > 1e-3):
             row = int(np.argmax(np.abs(norms - 1.0)))
@@ -171,14 +181,11 @@ class Skeleton:
     def describe_tree(self, max_lines: int | None = None) -> str:
         """An indented text tree of joint names."""
         lines: list[str] = []
-
-        def walk(i: int, depth: int) -> None:
+        stack = [(int(r), 0) for r in reversed(self.roots)]
+        while stack:  # depth first, children in order, without recursion (hierarchies may be deep)
+            i, depth = stack.pop()
             lines.append("  " * depth + self.names[i])
-            for c in self.children[i]:
-                walk(c, depth + 1)
-
-        for r in self.roots:
-            walk(int(r), 0)
+            stack.extend((c, depth + 1) for c in reversed(self.children[i]))
         if max_lines is not None and len(lines) > max_lines:
             lines = lines[:max_lines] + [f"... ({len(lines) - max_lines} more)"]
         return "\n".join(lines)

@@ -165,6 +165,8 @@ def _read_bone(lines: _Lines, start: int) -> Bone:
                 bone.limits = [(float(a), float(b)) for a, b in pairs]
             except ValueError:
                 raise lines.error(line, f"limits {rest!r} are not numbers") from None
+            if any(math.isnan(a) or math.isnan(b) or a > b for a, b in bone.limits):  # +-inf: no limit that way
+                raise lines.error(line, f"limits {rest!r} are not ordered pairs of numbers")
         elif key in ("bodymass", "cofmass"):
             bone.extra[key] = float(_numbers(lines, line, words, 1, key)[0])
         else:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from infuse import limits
 from infuse.errors import InputError
 
 from .numbers import parse_floats, token_bounds, whitespace
@@ -314,6 +315,8 @@ def parse(path: str | Path, data: bytes | None = None) -> BvhDocument:
         raise InputError(file, f"line {line_of[0]}", f"Frames must be a whole number, got {frames_text[:40]!r}") from None
     if frames < 0:
         raise InputError(file, f"line {line_of[0]}", f"Frames must not be negative, got {frames}")
+    limits.check(file, f"line {line_of[0]}", "Frames", frames, "MAX_FRAMES")
+    limits.check(file, f"line {line_of[0]}", "frames x joints", frames * len(names), "MAX_FRAME_JOINTS")
     try:
         frame_time = float(time_text)
     except ValueError:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import unquote
 
+from infuse import references
 from infuse.errors import InputError
 
 GLB_MAGIC = b"glTF"
@@ -59,9 +60,12 @@ def parse_bytes(data: bytes, path: str | Path | None = None) -> GltfDocument:
     if data[:4] == GLB_MAGIC:
         doc, bin_chunk = _split_glb(data, path)
         container = "glb"
-    else:
+    elif data.lstrip(b"\xef\xbb\xbf \t\r\n")[:1] == b"{":
         doc, bin_chunk = _decode_json(data, path, "JSON"), None
         container = "gltf"
+    else:
+        raise InputError(path, None, f"not a glTF or GLB file: it starts with {bytes(data[:8])!r}, "
+                         "neither the GLB header 'glTF' nor a JSON object")
     if not isinstance(doc, dict):
         raise InputError(path, "JSON", "the document is not a JSON object")
     version = str((doc.get("asset") or {}).get("version", "")) if isinstance(doc.get("asset"), dict) else ""
@@ -125,21 +129,18 @@ def decode_data_uri(uri: str, path: Path | None, place: str) -> bytes:
         raise InputError(path, place, f"bad base64 in data URI: {exc}") from None
 
 
-def read_uri(uri: str, path: Path | None, place: str) -> bytes:
-    """The bytes behind a buffer or image URI (``data:`` or a path relative to the glTF file)."""
+def read_uri(uri: str, path: Path | None, place: str, max_bytes: int | None = None) -> bytes:
+    """The bytes behind a buffer or image URI (``data:`` or a path relative to the glTF file, confined to
+    its folder: see :mod:`infuse.references`), at most ``max_bytes`` of a file."""
     if not isinstance(uri, str):
         raise InputError(path, place, "uri is not a string")
     if uri.startswith("data:"):
         return decode_data_uri(uri, path, place)
-    if "://" in uri:
-        raise InputError(path, place, f"external URL {uri!r} is not read (only files beside the glTF)")
+    if "://" in uri or uri.lower().startswith("file:"):
+        raise InputError(path, place, f"external URL {uri[:80]!r} is not read (only files beside the glTF)")
     if path is None:
-        raise InputError(path, place, f"external file {uri!r} cannot be resolved without a file path")
-    target = path.parent / unquote(uri)
-    try:
-        return target.read_bytes()
-    except OSError:
-        raise InputError(path, place, f"missing buffer file {uri!r}") from None
+        raise InputError(path, place, f"external file {uri[:80]!r} cannot be resolved without a file path")
+    return references.read(path, unquote(uri), place, "buffer or image file", max_bytes)
 
 
 def _load_buffers(doc: dict, bin_chunk: memoryview | None, path: Path | None) -> list:
@@ -164,7 +165,7 @@ def _load_buffers(doc: dict, bin_chunk: memoryview | None, path: Path | None) ->
             else:
                 raise InputError(path, place, "missing buffer: no uri and no GLB BIN chunk")
         else:
-            data = memoryview(read_uri(uri, path, place))
+            data = memoryview(read_uri(uri, path, place, max_bytes=length))
         if len(data) < length:
             raise InputError(path, place, f"truncated: byteLength {length} but only {len(data)} bytes present")
         out.append(data[:length].toreadonly())
