@@ -1,0 +1,445 @@
+"""Live characters: a :class:`~infuse.scene.Scene` run against the wall clock, frame by frame.
+
+::
+
+    from infuse.live import LiveScene
+    from infuse.scene import Scene
+
+    scene = Scene(fps=60)
+    scene.add_character("avatar.glb", name="ann", packs=["locomotion-female"])
+    with LiveScene(scene) as live:                  # a thread evaluates one frame every 1/60 s
+        live.on_frame(lambda frame: ...)             # each frame as it is evaluated (do not block)
+        live.on("blockProgress", print)              # BML feedback, as in a Scene
+        live.say("ann", "Hello!")                    # the builder calls start on the next frame
+        live.move_target("ball", (0.5, 1.2, 1.0))    # a named target; gaze follows it from the next frame
+        live.bml("ann", '<bml ... composition="REPLACE">...</bml>')
+
+Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch + k / fps``. Commands
+(BML, builder calls, target moves) are applied on the loop thread between frames, so what a command
+starts "now" shows on the next frame evaluated; the loop spends at most :attr:`LiveScene.command_budget_s`
+per frame on them and the rest wait for the next frame. Commands wait in a bounded queue: a full queue
+raises :class:`~infuse.errors.BusyError` at once. A loop that falls behind the clock evaluates the late
+frames as one block and shows the last: those frames count as missed (:attr:`LiveStats.missed`).
+
+Speech is synthesized on the caller's thread before its block reaches the loop, so synthesis never
+stalls a frame. Old frames are forgotten (:meth:`~infuse.runtime.Runtime.forget`): memory stays bounded.
+"""
+from __future__ import annotations
+
+import math
+import queue
+import threading
+import time
+from collections import deque
+from concurrent.futures import Future
+from dataclasses import dataclass, replace
+from typing import Callable, Iterable
+
+import numpy as np
+
+from .bml import BmlDocument, Scheduler, parse_bml
+from .errors import BusyError, UsageError
+from .runtime.targets import Target
+from .scene import Scene, builder
+
+#: Seconds of evaluated frames kept (walks look back 0.5 s to see a character standing).
+KEEP_S = 2.0
+
+
+@dataclass(frozen=True)
+class CharacterFrame:
+    """One character's pose at one frame: ``rotations`` (J, 4) local joint rotations, scalar-last, the
+    root joint's with the character's placement; ``root`` (3,) root translation, metres; ``morphs`` (M,)
+    morph weights in the order of the character's morph targets."""
+
+    rotations: np.ndarray
+    root: np.ndarray
+    morphs: np.ndarray
+
+
+@dataclass(frozen=True)
+class LiveFrame:
+    """A frame as it is shown: its index, scene time (seconds), wall-clock time it was ready
+    (:func:`time.perf_counter` seconds) and each character's pose."""
+
+    index: int
+    time_s: float
+    wall_s: float
+    characters: dict[str, CharacterFrame]
+
+
+class LiveStats:
+    """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), and the
+    evaluation time of the last frames (milliseconds)."""
+
+    def __init__(self, window: int = 3600):
+        self.shown = 0
+        self.missed = 0
+        self.commands = 0
+        self.evaluate_ms: deque[float] = deque(maxlen=window)
+
+    def summary(self) -> dict:
+        """Counts and evaluation-time percentiles (ms) over the window."""
+        ms = np.asarray(self.evaluate_ms, dtype=np.float64)
+        figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands}
+        if len(ms):
+            figures.update(mean_ms=float(ms.mean()), p50_ms=float(np.percentile(ms, 50)),
+                           p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()))
+        return figures
+
+
+class _PreparedSpeech:
+    """The scheduler's speech timer in a live scene: timings synthesized ahead on the callers' threads
+    (:meth:`LiveScene.prepare`), looked up on the loop thread. A timing not prepared is synthesized where it
+    is asked for, under the same lock as the scene's speech cache."""
+
+    def __init__(self, cache, voice_of: Callable[[str | None], str | None]):
+        self.cache = cache
+        self.voice_of = voice_of
+        self.timings: dict[tuple, object] = {}
+        self.lock = threading.Lock()
+        self.local = threading.local()
+
+    def time_speech(self, text, marks, voice=None, language=None):
+        voice = voice or self.voice_of(getattr(self.local, "character", None))
+        key = (text, tuple(marks), voice, language)
+        timing = self.timings.get(key)
+        if timing is None:
+            with self.lock:
+                timing = self.cache.time_speech(text, marks, voice, language)
+            self.timings[key] = timing
+        return timing
+
+
+class LiveScene:
+    """A scene evaluated against the wall clock on its own thread (see the module doc).
+
+    ``scene``: the :class:`~infuse.scene.Scene` (characters added, blocks maybe scheduled; nothing
+    evaluated yet, or its time is taken as now). ``queue_size``: most commands waiting.
+    ``command_budget_s``: most seconds per frame spent on commands (default a quarter of a frame).
+    """
+
+    def __init__(self, scene: Scene, *, queue_size: int = 256, command_budget_s: float | None = None,
+                 keep_s: float = KEEP_S):
+        if not isinstance(scene, Scene):
+            raise UsageError(f"LiveScene takes an infuse.scene.Scene, not {type(scene).__name__}")
+        self.scene = scene
+        self.fps = scene.fps
+        self.period_s = 1.0 / scene.fps
+        self.command_budget_s = 0.25 * self.period_s if command_budget_s is None else float(command_budget_s)
+        self.keep_s = float(keep_s)
+        self.stats = LiveStats()
+        self.epoch: float | None = None
+        self.error: BaseException | None = None
+        self._commands: queue.Queue = queue.Queue(maxsize=max(1, int(queue_size)))
+        self._frame_callbacks: list[Callable[[LiveFrame], None]] = []
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._speech = _PreparedSpeech(scene.speech, self._voice_of)
+        scene.scheduler.speech_timer = self._speech
+        self._last: LiveFrame | None = None
+        self._movable: dict[str, MovableTarget] = {}
+        self._warm = False
+
+    # -- the loop -------------------------------------------------------------------------------------
+    def warm_up(self, seconds: float = 0.5) -> None:
+        """Prepare what each character's first walk and reach would prepare (pack bindings, clip tables)
+        by playing them for ``seconds`` on a scratch runtime, so that the first one does not stall a frame."""
+        from .runtime import Runtime, controller, controller_components
+
+        installed = controller_components()
+        trials = (("locomotion", {"path": [(0.0, 1.0)]}), ("reach", {"target": (0.25, 1.2, 0.35), "hand": "auto"}))
+        for name, entry in self.scene.characters.items():
+            scratch = Runtime(self.fps, report=lambda character, message: None)
+            scratch.add_character(entry.character, name, self.scene.runtime.rig(name).mapping)
+            for kind, options in trials:
+                space = self.scene.pack_space(name, kind)
+                if space is not None and kind in installed:
+                    scratch.activate(name, controller(kind, pack=space, **options), 0.0)
+            if scratch.activities:
+                scratch.run(seconds)
+
+    def start(self) -> "LiveScene":
+        """Start the loop thread (after :meth:`warm_up`): the scene's current time is now on the wall clock."""
+        if self._thread is not None:
+            raise UsageError("this live scene has already been started")
+        if not self._warm:
+            self.warm_up()
+            self._warm = True
+        self.epoch = time.perf_counter() - self.scene.time
+        self._thread = threading.Thread(target=self._run, name="infuse-live", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Stop the loop (after the frame it is evaluating); commands still queued get :class:`UsageError`."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout_s)
+        while True:
+            try:
+                future = self._commands.get_nowait()[0]
+            except queue.Empty:
+                break
+            future.set_exception(UsageError("the live scene has stopped"))
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def __enter__(self) -> "LiveScene":
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    def due_s(self, frame: int) -> float:
+        """Wall-clock (:func:`time.perf_counter`) seconds when frame ``frame`` is due."""
+        return self.epoch + frame * self.period_s
+
+    def _run(self) -> None:
+        scene = self.scene
+        try:
+            while not self._stop.is_set():
+                frame = scene.runtime.frame
+                self._apply_commands(self.due_s(frame))
+                if self._stop.is_set():
+                    break
+                late = int(math.floor((time.perf_counter() - self.due_s(frame)) / self.period_s))
+                count = min(max(late, 0) + 1, scene.runtime.block_frames)
+                started = time.perf_counter()
+                scene.step(count)
+                self.stats.evaluate_ms.append((time.perf_counter() - started) * 1e3)
+                self.stats.missed += count - 1
+                self.stats.shown += 1
+                self._publish()
+                if frame // int(self.fps) != scene.runtime.frame // int(self.fps):
+                    self._forget()
+        except BaseException as exc:  # reported to callers, which get errors from then on
+            self.error = exc
+            self._stop.set()
+            raise
+
+    def _apply_commands(self, until: float) -> None:
+        """Apply commands until the wall clock reaches ``until`` (waiting for them meanwhile); at most
+        :attr:`command_budget_s` of work once ``until`` has passed."""
+        spent = 0.0
+        while not self._stop.is_set():
+            wait = until - time.perf_counter()
+            if wait <= 0 and (spent >= self.command_budget_s or self._commands.empty()):
+                return
+            try:
+                future, function, args = self._commands.get(timeout=min(max(wait, 0.0), 0.05)) if wait > 0 \
+                    else self._commands.get_nowait()
+            except queue.Empty:
+                continue
+            started = time.perf_counter()
+            if future.set_running_or_notify_cancel():
+                try:
+                    future.set_result(function(*args))
+                except Exception as exc:  # noqa: BLE001 - the caller gets it; the loop goes on
+                    future.set_exception(exc)
+            self.stats.commands += 1
+            if time.perf_counter() >= until:
+                spent += time.perf_counter() - started
+
+    def _publish(self) -> None:
+        runtime = self.scene.runtime
+        poses = {}
+        for name in self.scene.characters:
+            rotations, root, morphs = runtime.last_pose(name)
+            poses[name] = CharacterFrame(rotations, root, morphs)
+        frame = LiveFrame(runtime.frame - 1, (runtime.frame - 1) / self.fps, time.perf_counter(), poses)
+        self._last = frame
+        for callback in list(self._frame_callbacks):
+            callback(frame)
+
+    def _forget(self) -> None:
+        """Keep memory bounded: old frames, ended activities, delivered feedback."""
+        scene = self.scene
+        scene.runtime.forget(self.keep_s)
+        before = scene.time - self.keep_s
+        for key, activity in list(scene.activities.items()):
+            if activity.end_s is not None and activity.end_s < before:
+                del scene.activities[key]
+        del scene.feedback.log[:-1000]
+
+    # -- commands -------------------------------------------------------------------------------------
+    def submit(self, function: Callable, *args) -> Future:
+        """Run ``function(*args)`` on the loop thread before the next frame; returns its future.
+        :class:`BusyError` when the queue is full, :class:`UsageError` when the loop is not running."""
+        if self.error is not None or self._stop.is_set():
+            raise UsageError(f"the live scene has stopped{f': {self.error}' if self.error else ''}")
+        future: Future = Future()
+        try:
+            self._commands.put_nowait((future, function, args))
+        except queue.Full:
+            raise BusyError(f"{self._commands.maxsize} commands are waiting; try again later") from None
+        return future
+
+    def call(self, function: Callable, *args, timeout_s: float = 10.0):
+        """:meth:`submit` and wait for the result (the exception it raised is raised here)."""
+        if self._thread is None:
+            return function(*args)  # not started: nothing runs concurrently
+        return self.submit(function, *args).result(timeout_s)
+
+    def on_frame(self, callback: Callable[[LiveFrame], None]) -> Callable[[], None]:
+        """Call ``callback(frame)`` on the loop thread after each frame (it must return at once);
+        returns a function that unsubscribes."""
+        self._frame_callbacks.append(callback)
+        return lambda: self._frame_callbacks.remove(callback) if callback in self._frame_callbacks else None
+
+    def on(self, kinds: str | Iterable[str] | None, callback: Callable) -> Callable[[], None]:
+        """Call ``callback(event)`` on the loop thread for BML feedback of ``kinds`` (see :meth:`Scene.on`)."""
+        return self.scene.on(kinds, callback)
+
+    @property
+    def last_frame(self) -> LiveFrame | None:
+        """The frame shown last (None before the first)."""
+        return self._last
+
+    # -- BML ------------------------------------------------------------------------------------------
+    def parse(self, character: str | None, bml) -> list:
+        """Parse ``bml`` (text, bytes or a document) into its blocks, each with its character (``character``
+        or the one it names), and synthesize its speech; runs on the caller's thread.
+        :class:`~infuse.errors.InputError` for malformed XML, :class:`UsageError` for unknown characters."""
+        document = bml if isinstance(bml, BmlDocument) else parse_bml(bml)
+        blocks = []
+        for block in document.blocks:
+            name = character if character is not None else block.character_id
+            if name is None:
+                raise UsageError(f"block {block.id!r} names no character; give the character")
+            resolved = self.scene.resolve_name(name)
+            if resolved not in self.scene.characters:
+                raise UsageError(f"no character {name!r}; characters: {', '.join(self.scene.characters) or 'none'}")
+            blocks.append(replace(block, character_id=resolved))
+        self.prepare(blocks)
+        return blocks
+
+    def prepare(self, blocks) -> None:
+        """Synthesize the speech of ``blocks`` (parsed, with their characters) ahead, on this thread."""
+        if not any(b.element == "speech" for block in blocks for b in block.behaviours):
+            return
+        planner = Scheduler(speech_timer=self._speech)
+        for block in blocks:
+            self._speech.local.character = block.character_id
+            try:
+                planner.schedule_block(block, 0.0, block.character_id)
+            finally:
+                self._speech.local.character = None
+
+    def bml(self, character: str | None, bml) -> list[str]:
+        """Schedule BML from the next frame on; returns the block ids. Runs on the caller's thread up to
+        the scheduling itself (parse, speech synthesis)."""
+        return self.call(self.schedule, self.parse(character, bml))
+
+    def schedule(self, blocks) -> list[str]:
+        """Schedule blocks returned by :meth:`parse` now (on the loop thread: inside :meth:`submit`);
+        their ids."""
+        ids = []
+        for block in blocks:
+            self._speech.local.character = block.character_id
+            try:
+                ids.append(self.scene.bml(block.character_id, BmlDocument((block,))))
+            finally:
+                self._speech.local.character = None
+        return ids
+
+    def _voice_of(self, character: str | None) -> str | None:
+        entry = self.scene.characters.get(character) if character else None
+        return entry.voice if entry is not None else None
+
+    # -- the builder, live ----------------------------------------------------------------------------
+    #: Scene builder methods a live scene offers, each starting on the next frame.
+    BUILDER = ("say", "gaze", "head", "nod", "shake", "expression", "walk_to", "reach")
+
+    def prepare_call(self, method: str, character: str, arguments: dict) -> None:
+        """Check a builder call and synthesize its speech ahead (``say``), on the caller's thread."""
+        if method not in self.BUILDER:
+            raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
+        if self.scene.resolve_name(character) not in self.scene.characters:
+            raise UsageError(f"no character {character!r}; characters: {', '.join(self.scene.characters) or 'none'}")
+        if method == "say":
+            text = arguments.get("text")
+            if not isinstance(text, str):
+                raise UsageError("say needs the text to speak")
+            content = builder.element("text", {}, builder.speech_text(text))
+            speech = builder.element("speech", {"id": "s1", "voice": arguments.get("voice")}, content)
+            self.prepare(parse_bml(builder.block("say", self.scene.resolve_name(character), speech)).blocks)
+
+    def builder_call(self, method: str, character: str, arguments: dict) -> str:
+        """Run a builder method of the scene now (on the loop thread: inside :meth:`submit`); the block id."""
+        if method not in self.BUILDER:
+            raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
+        self._speech.local.character = self.scene.resolve_name(character)
+        try:
+            return getattr(self.scene, method)(character, **arguments)
+        finally:
+            self._speech.local.character = None
+
+    def _build(self, method: str, character: str, **arguments) -> str:
+        arguments = {k: v for k, v in arguments.items() if v is not None}
+        self.prepare_call(method, character, arguments)
+        return self.call(self.builder_call, method, character, arguments)
+
+    def say(self, character: str, text: str, voice: str | None = None) -> str:
+        """Speak ``text`` from the next frame (BML ``<sync id="..."/>`` marks allowed); returns the block id."""
+        return self._build("say", character, text=text, voice=voice)
+
+    def gaze(self, character: str, target, duration: float | None = None, influence: str = "HEAD") -> str:
+        """Look at ``target`` (a name or a point) from the next frame (see :meth:`Scene.gaze`)."""
+        return self._build("gaze", character, target=target, duration=duration, influence=influence)
+
+    def head(self, character: str, lexeme: str = "NOD", repeats: float = 1.0, amount: float = 0.5) -> str:
+        """NOD, SHAKE, TOSS, TILT, WIGGLE or WAGGLE from the next frame."""
+        return self._build("head", character, lexeme=lexeme, repeats=repeats, amount=amount)
+
+    def nod(self, character: str, repeats: float = 1.0, amount: float = 0.5) -> str:
+        return self._build("nod", character, repeats=repeats, amount=amount)
+
+    def shake(self, character: str, repeats: float = 2.0, amount: float = 0.5) -> str:
+        return self._build("shake", character, repeats=repeats, amount=amount)
+
+    def expression(self, character: str, lexeme: str, amount: float = 0.7, duration: float | None = None) -> str:
+        """A facial expression (``smile``, ``RAISE_BROWS``...) from the next frame."""
+        return self._build("expression", character, lexeme=lexeme, amount=amount, duration=duration)
+
+    def walk_to(self, character: str, target, manner: str = "walk", speed: float | None = None) -> str:
+        """Walk to a point (x, z) / (x, y, z) or a named object or character from the next frame."""
+        return self._build("walk_to", character, target=target, manner=manner, speed=speed)
+
+    def reach(self, character: str, target, action: str = "touch", hand: str | None = None) -> str:
+        """Reach for an object from the next frame."""
+        return self._build("reach", character, target=target, action=action, hand=hand)
+
+    # -- targets --------------------------------------------------------------------------------------
+    def move_target(self, name: str, position) -> float:
+        """Put the named target ``name`` at ``position`` (x, y, z) metres from the next frame on (it is
+        added when new); returns the scene time (seconds) from which it stands there."""
+        point = np.asarray(position, dtype=np.float64).reshape(-1)
+        if point.shape != (3,) or not np.all(np.isfinite(point)):
+            raise UsageError(f"target {name!r}: a position is three finite numbers (x, y, z) metres, got {position!r}")
+        return self.call(self.place_target, str(name), point)
+
+    def place_target(self, name: str, point) -> float:
+        """Put target ``name`` at ``point`` (3,) metres now (on the loop thread: inside :meth:`submit`);
+        the scene time from which it stands there."""
+        point = np.asarray(point, dtype=np.float64)
+        target = self._movable.get(name)
+        if target is None:
+            target = self._movable[name] = MovableTarget(point)
+            self.scene.add_target(name, target)
+        target.point = point
+        return self.scene.time
+
+
+class MovableTarget(Target):
+    """A named target a client moves: it stands at :attr:`point` (3,) metres for every frame evaluated
+    after the move (frames are evaluated as time goes, so the latest move holds)."""
+
+    def __init__(self, point):
+        self.point = np.asarray(point, dtype=np.float64)
+
+    def positions(self, times, block=None) -> np.ndarray:
+        """(F, 3) metres: the point at every time of ``times`` (F,)."""
+        return np.broadcast_to(self.point, (len(times), 3)).copy()

@@ -1,0 +1,1 @@
+"""``infuse serve``: live characters over WebSocket, HTTP and VMC (see docs/live.md)."""

@@ -1,0 +1,249 @@
+"""The clients of a live scene: their messages in, replies, feedback, frames and speech audio out.
+
+Runs on an asyncio event loop; the live scene's loop thread hands it frames and feedback with
+``call_soon_threadsafe``. Every client has its own writer: a bounded queue of replies and feedback (a
+client that lets :data:`MAX_PENDING` pile up is dropped) and one slot for the latest frame (a client that
+reads slower than the frame rate skips frames). Nothing a client does blocks the loop thread or another
+client.
+"""
+from __future__ import annotations
+
+import asyncio
+import base64
+import io
+import itertools
+import wave
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+from infuse.errors import InfuseError, UsageError
+from infuse.live import LiveFrame, LiveScene
+from infuse.scene.speech import utterance_samples
+
+from .protocol import Message, dumps, error_message, feedback_message, parse_message
+
+#: Replies and feedback waiting for one client before it is dropped as stalled.
+MAX_PENDING = 2000
+#: Decimals sent for rotations (quaternion components) and positions (metres) in the pose stream.
+ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS = 6, 6, 4
+
+
+class Client:
+    """One connected client: what it subscribed to and what waits to be sent to it."""
+
+    def __init__(self, number: int, send):
+        self.number = number
+        self.send = send  # async (text) -> None
+        self.frames = False
+        self.feedback = "own"
+        self.pending: deque[str] = deque()
+        self.frame: str | None = None
+        self.skipped = 0
+        self.closed = False
+        self.wake = asyncio.Event()
+        self.overflowed = False
+
+    def put(self, doc: dict | str) -> None:
+        if self.closed:
+            return
+        if len(self.pending) >= MAX_PENDING:
+            self.overflowed = True
+            self.closed = True
+        else:
+            self.pending.append(doc if isinstance(doc, str) else dumps(doc))
+        self.wake.set()
+
+    def put_frame(self, text: str) -> None:
+        if self.frame is not None:
+            self.skipped += 1
+        self.frame = text
+        self.wake.set()
+
+    async def write(self) -> None:
+        """Send what waits, until the client is closed (runs as the client's own task)."""
+        while not self.closed:
+            await self.wake.wait()
+            self.wake.clear()
+            while self.pending and not self.closed:
+                await self.send(self.pending.popleft())
+            if self.frame is not None and not self.closed:
+                text, self.frame = self.frame, None
+                await self.send(text)
+
+
+class Hub:
+    """Connects clients to a :class:`~infuse.live.LiveScene` (see the module doc). ``model_url(name)``
+    gives the URL of a character's model for the ``hello`` message."""
+
+    def __init__(self, live: LiveScene, loop: asyncio.AbstractEventLoop, model_url=lambda name: None):
+        self.live = live
+        self.loop = loop
+        self.clients: set[Client] = set()
+        self.owners: dict[str, Client] = {}
+        self.speaking: dict[str, tuple[str, float]] = {}  # block -> (character, start) of audio sent
+        self._numbers = itertools.count(1)
+        self._submitter: Client | None = None
+        self._prepare = ThreadPoolExecutor(2, thread_name_prefix="infuse-live-prepare")
+        self._model_url = model_url
+        self._unsubscribe = [live.on_frame(self._frame_from_loop), live.on(None, self._feedback_from_loop)]
+
+    def close(self) -> None:
+        for unsubscribe in self._unsubscribe:
+            unsubscribe()
+        self._prepare.shutdown(wait=False, cancel_futures=True)
+
+    # -- clients --------------------------------------------------------------------------------------
+    def connect(self, send) -> Client:
+        client = Client(next(self._numbers), send)
+        self.clients.add(client)
+        client.put(self.hello())
+        return client
+
+    def disconnect(self, client: Client) -> None:
+        client.closed = True
+        client.wake.set()
+        self.clients.discard(client)
+        for block in [b for b, c in self.owners.items() if c is client]:
+            del self.owners[block]
+
+    def hello(self) -> dict:
+        scene = self.live.scene
+        characters = {}
+        for name, entry in scene.characters.items():
+            rig = scene.runtime.rig(name)
+            sk = rig.skeleton
+            characters[name] = {"joints": list(sk.names), "parents": [int(p) for p in sk.parents],
+                                "morphs": list(rig.morph_targets), "model": self._model_url(name)}
+        return {"type": "hello", "fps": self.live.fps, "frame": scene.runtime.frame, "time": scene.time,
+                "characters": characters, "targets": sorted(scene.targets), "objects": sorted(scene.objects)}
+
+    # -- messages in ----------------------------------------------------------------------------------
+    async def handle(self, client: Client | None, text: str | bytes, where: str = "message") -> list[dict]:
+        """Act on one client message; returns the replies (also queued to ``client``, when given).
+        Every mistake becomes an ``error`` reply; nothing else changes."""
+        request = None
+        try:
+            message = parse_message(text, where)
+            request = message.request
+            reply = await self._act(client, message)
+        except (InfuseError, ValueError, TypeError) as exc:
+            reply = error_message(exc, request)
+        except Exception as exc:  # noqa: BLE001 - one bad request must not end the service
+            reply = error_message(exc, request)
+        if client is not None:
+            client.put(reply)
+        return [reply]
+
+    async def _act(self, client: Client | None, message: Message) -> dict:
+        fields, request = message.fields, message.request
+        if message.type == "subscribe":
+            if client is None:
+                raise UsageError("subscribe needs a WebSocket connection")
+            client.frames = fields.get("frames", client.frames)
+            client.feedback = fields.get("feedback", client.feedback)
+            return {"type": "subscribed", "request": request, "frames": client.frames, "feedback": client.feedback}
+        if message.type == "status":
+            return {"type": "status", "request": request, "frame": self.live.scene.runtime.frame,
+                    "time": self.live.scene.time, **self.live.stats.summary(), "clients": len(self.clients)}
+        if message.type == "target":
+            at = await asyncio.wrap_future(self.live.submit(self._move, fields["name"], fields["position"]))
+            return {"type": "accepted", "request": request, "target": fields["name"], "time": at,
+                    "frame": round(at * self.live.fps)}
+        if message.type == "bml":
+            blocks = await self.loop.run_in_executor(self._prepare, self.live.parse, fields.get("character"), fields["bml"])
+            function = self.live.schedule, blocks
+        else:
+            method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
+            await self.loop.run_in_executor(self._prepare, self.live.prepare_call, method, character, arguments)
+            function = self.live.builder_call, method, character, arguments
+        ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function))
+        ids = ids if isinstance(ids, list) else [ids]
+        return {"type": "accepted", "request": request, "blocks": [i for b in ids for i in (b if isinstance(b, list) else [b])],
+                "time": at, "frame": round(at * self.live.fps)}
+
+    def _move(self, name: str, position) -> float:
+        return self.live.place_target(name, position)
+
+    def _on_behalf(self, client: Client | None, function, *args):
+        """Run ``function`` on the loop thread with the feedback it gives routed to ``client``."""
+        self._submitter = client
+        try:
+            return function(*args), self.live.scene.time
+        finally:
+            self._submitter = None
+
+    # -- out, from the loop thread --------------------------------------------------------------------
+    def _feedback_from_loop(self, event) -> None:
+        owner = self._submitter
+        block = getattr(event, "block", None) or str(getattr(event, "id", "")).split(":")[0]
+        if owner is not None and block:
+            self.owners[block] = owner
+        self.loop.call_soon_threadsafe(self._deliver, event, owner if owner is not None else self.owners.get(block), block)
+
+    def _deliver(self, event, owner: Client | None, block: str) -> None:
+        message = feedback_message(event)
+        text = dumps(message)
+        for client in list(self.clients):
+            if client.feedback == "all" or (client.feedback == "own" and client is owner):
+                client.put(text)
+        audio = self._audio(event)
+        if audio is not None:
+            for client in list(self.clients):
+                if client.frames:
+                    client.put(audio)
+        if event.kind == "blockProgress" and event.sync == "end":
+            self.owners.pop(block, None)
+
+    def _audio(self, event) -> dict | None:
+        """An ``audio`` message when a speech behaviour starts (its WAV), or a ``stop`` when its block ends
+        before the speech does."""
+        if event.kind == "syncPointProgress" and event.sync == "start":
+            record = self.live.scene.scheduler.blocks.get(event.block)
+            activation = record.activation(event.behaviour) if record is not None else None
+            if activation is None or activation.controller != "speech":
+                return None
+            utterance = self.live.scene.speech.utterance(activation.parameters)
+            if utterance is None:
+                return None
+            samples, rate = utterance_samples(utterance)
+            self.speaking[event.block] = (event.character, event.global_time)
+            return {"type": "audio", "character": event.character, "block": event.block, "behaviour": event.behaviour,
+                    "start": event.global_time, "wav": base64.b64encode(_wav(samples, rate)).decode("ascii")}
+        if event.kind == "blockProgress" and event.sync == "end" and event.block in self.speaking:
+            character, _ = self.speaking.pop(event.block)
+            return {"type": "audio", "character": character, "block": event.block, "stop": event.global_time}
+        return None
+
+    def _frame_from_loop(self, frame: LiveFrame) -> None:
+        self.loop.call_soon_threadsafe(self._send_frame, frame)
+
+    def _send_frame(self, frame: LiveFrame) -> None:
+        watching = [c for c in self.clients if c.frames and not c.closed]
+        if not watching:
+            return
+        text = dumps(frame_message(frame))
+        for client in watching:
+            client.put_frame(text)
+
+
+def frame_message(frame: LiveFrame) -> dict:
+    """A ``frame`` message: per character ``rotations`` (J*4, scalar-last, flat), ``root`` (3,) metres and
+    ``morphs`` (M,), rounded (:data:`ROTATION_DECIMALS`...)."""
+    return {"type": "frame", "frame": frame.index, "time": frame.time_s,
+            "characters": {name: {"rotations": np.round(c.rotations, ROTATION_DECIMALS).ravel().tolist(),
+                                  "root": np.round(c.root, POSITION_DECIMALS).tolist(),
+                                  "morphs": np.round(c.morphs, MORPH_DECIMALS).tolist()}
+                           for name, c in frame.characters.items()}}
+
+
+def _wav(samples: np.ndarray, rate: int) -> bytes:
+    """Mono int16 ``samples`` at ``rate`` Hz as WAV file bytes."""
+    buffer = io.BytesIO()
+    with wave.open(buffer, "wb") as out:
+        out.setnchannels(1)
+        out.setsampwidth(2)
+        out.setframerate(int(rate))
+        out.writeframes(np.asarray(samples, dtype="<i2").tobytes())
+    return buffer.getvalue()

@@ -1,0 +1,165 @@
+"""The VMC protocol out: one character's pose and expressions as OSC over UDP, every frame.
+
+What VMC receivers (VSeeFace, VMagicMirror, EVMC4U in Unity, VMC4B in Blender, three-vrm apps) read,
+one OSC bundle per frame:
+
+- ``/VMC/Ext/OK 1``; ``/VMC/Ext/T time``: the sender is alive, its time in seconds;
+- ``/VMC/Ext/Root/Pos "root" px py pz qx qy qz qw``: the avatar's origin (here the world origin);
+- ``/VMC/Ext/Bone/Pos NAME px py pz qx qy qz qw`` per humanoid bone (Unity ``HumanBodyBones`` names:
+  ``Hips``, ``Spine``, ``LeftUpperArm``...), local to the nearest sent ancestor: the rotation relative to
+  the bone's rest pose, in a frame whose axes are the world's at rest (VRM's normalized bones), and the
+  position of the bone's origin from its parent's;
+- ``/VMC/Ext/Blend/Val NAME value`` for each morph target of the character (zeros included), then
+  ``/VMC/Ext/Blend/Apply``.
+
+Coordinates are Unity's (left-handed, +Y up, the character facing +Z): x is negated, and a quaternion
+(x, y, z, w) becomes (x, -y, -z, w). Positions are metres. Frames are sent from a thread of their own;
+a receiver that is gone costs nothing but the UDP sends.
+"""
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
+from pythonosc.osc_message_builder import OscMessageBuilder
+from pythonosc.udp_client import SimpleUDPClient
+
+from infuse import quaternions as quat
+from infuse.kinematics import forward_kinematics
+from infuse.live import LiveFrame, LiveScene
+
+#: Unity HumanBodyBones name -> canonical joint, parents before children.
+VRM_BONES = {
+    "Hips": "base", "Spine": "spine1", "Chest": "spine2", "UpperChest": "spine3", "Neck": "spine4", "Head": "skullbase",
+    "LeftEye": "eyeball_left", "RightEye": "eyeball_right",
+    **{f"{Side}{bone}": f"{s}_{canonical}" for Side, s in (("Left", "l"), ("Right", "r"))
+       for bone, canonical in (("Shoulder", "acromioclavicular"), ("UpperArm", "shoulder"), ("LowerArm", "elbow"),
+                               ("Hand", "wrist"), ("UpperLeg", "hip"), ("LowerLeg", "knee"), ("Foot", "ankle"),
+                               ("Toes", "forefoot"))},
+    **{f"{Side}{finger}{segment}": f"{s}_{canonical}{k}" for Side, s in (("Left", "l"), ("Right", "r"))
+       for finger, canonical in (("Thumb", "thumb"), ("Index", "index"), ("Middle", "middle"), ("Ring", "ring"),
+                                 ("Little", "pinky"))
+       for k, segment in ((1, "Proximal"), (2, "Intermediate"), (3, "Distal"))},
+}
+#: core frame (right-handed, +X the character's left) -> Unity (left-handed, +X its right)
+_FLIP_POSITION = np.array([-1.0, 1.0, 1.0])
+_FLIP_ROTATION = np.array([1.0, -1.0, -1.0, 1.0])
+
+
+class VmcBones:
+    """The humanoid bones of one character as VMC sends them: which joints, their parents among the sent
+    bones, and their rest global rotations."""
+
+    def __init__(self, rig):
+        self.skeleton = rig.skeleton
+        found = [(name, rig.joint(canonical)) for name, canonical in VRM_BONES.items()]
+        found = [(name, j) for name, j in found if j is not None]
+        self.names = [name for name, _ in found]
+        self.joints = np.array([j for _, j in found], dtype=np.int64)
+        sent = {int(j): k for k, j in enumerate(self.joints)}
+        parents = []
+        for j in self.joints:
+            p = int(self.skeleton.parents[j])
+            while p >= 0 and p not in sent:
+                p = int(self.skeleton.parents[p])
+            parents.append(sent[p] if p >= 0 else -1)
+        self.parents = np.array(parents, dtype=np.int64)
+        rest_rotations, _ = forward_kinematics(self.skeleton, self.skeleton.rest_rotations[None],
+                                               self.skeleton.rest_translations[:1])
+        self.rest_inverse = quat.conjugate(rest_rotations[0, self.joints])
+
+    def local(self, rotations: np.ndarray, root: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Local positions (B, 3) and rotations (B, 4) of the sent bones, core frame, for one pose:
+        ``rotations`` (J, 4) local joint rotations and ``root`` (3,) root translation, metres."""
+        global_rotations, global_positions = forward_kinematics(self.skeleton, rotations[None], root[None])
+        normalized = quat.multiply(global_rotations[0, self.joints], self.rest_inverse)  # (B, 4), rest -> now
+        positions = global_positions[0, self.joints]
+        has_parent = self.parents >= 0
+        parent = np.where(has_parent, self.parents, 0)
+        inverse_parent = np.where(has_parent[:, None], quat.conjugate(normalized[parent]), quat.IDENTITY)
+        offsets = positions - np.where(has_parent[:, None], positions[parent], 0.0)
+        return quat.rotate(inverse_parent, offsets), quat.multiply(inverse_parent, normalized)
+
+
+def to_unity(positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Core-frame positions (..., 3) and rotations (..., 4) in Unity's left-handed frame."""
+    return positions * _FLIP_POSITION, rotations * _FLIP_ROTATION
+
+
+def from_unity(positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The inverse of :func:`to_unity` (it is its own inverse)."""
+    return positions * _FLIP_POSITION, rotations * _FLIP_ROTATION
+
+
+def _message(address: str, *values) -> object:
+    builder = OscMessageBuilder(address)
+    for value in values:
+        builder.add_arg(value, "s" if isinstance(value, str) else "i" if isinstance(value, int) else "f")
+    return builder.build()
+
+
+class VmcSender:
+    """Sends ``character`` of a live scene to a VMC receiver at ``host``:``port`` (see the module doc)."""
+
+    def __init__(self, live: LiveScene, character: str, host: str, port: int):
+        self.live, self.character, self.host, self.port = live, character, host, int(port)
+        rig = live.scene.runtime.rig(character)
+        self.bones = VmcBones(rig)
+        self.morphs = list(rig.morph_targets)
+        self.client = SimpleUDPClient(host, self.port)
+        self.sent = 0
+        self._frame: LiveFrame | None = None
+        self._ready = threading.Condition()
+        self._closed = False
+        self._thread = threading.Thread(target=self._run, name="infuse-live-vmc", daemon=True)
+        self._unsubscribe = None
+
+    def start(self) -> "VmcSender":
+        self._unsubscribe = self.live.on_frame(self._offer)
+        self._thread.start()
+        return self
+
+    def close(self) -> None:
+        if self._unsubscribe is not None:
+            self._unsubscribe()
+        with self._ready:
+            self._closed = True
+            self._ready.notify()
+        if self._thread.is_alive():
+            self._thread.join(2.0)
+
+    def _offer(self, frame: LiveFrame) -> None:  # on the loop thread: hand over the latest frame only
+        with self._ready:
+            self._frame = frame
+            self._ready.notify()
+
+    def _run(self) -> None:
+        while True:
+            with self._ready:
+                while self._frame is None and not self._closed:
+                    self._ready.wait()
+                if self._closed:
+                    return
+                frame, self._frame = self._frame, None
+            try:
+                self.client.send(self.bundle(frame))
+                self.sent += 1
+            except OSError:  # no receiver yet, or a network hiccup: the next frame tries again
+                time.sleep(0.001)
+
+    def bundle(self, frame: LiveFrame):
+        """The OSC bundle of one frame."""
+        pose = frame.characters[self.character]
+        positions, rotations = to_unity(*self.bones.local(pose.rotations, pose.root))
+        builder = OscBundleBuilder(IMMEDIATELY)
+        builder.add_content(_message("/VMC/Ext/OK", 1))
+        builder.add_content(_message("/VMC/Ext/T", float(frame.time_s)))
+        builder.add_content(_message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0))
+        for name, p, q in zip(self.bones.names, positions.tolist(), rotations.tolist()):
+            builder.add_content(_message("/VMC/Ext/Bone/Pos", name, *p, *q))
+        for name, value in zip(self.morphs, pose.morphs.tolist()):  # zeros too: receivers keep the last value
+            builder.add_content(_message("/VMC/Ext/Blend/Val", name, float(value)))
+        builder.add_content(_message("/VMC/Ext/Blend/Apply"))
+        return builder.build()

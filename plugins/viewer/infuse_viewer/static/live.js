@@ -1,0 +1,136 @@
+// infuse serve's live page: the scene's characters, played from the server's pose stream, with speech.
+// The server's WebSocket messages are described in infuse_live/protocol.py; scene units are metres, +Y up.
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const $ = (id) => document.getElementById(id);
+// Test and scripting hooks: frames applied, the last frame's number, and where a joint is (world metres).
+const api = window.infuseLive = { ready: false, error: null, frames: 0, frame: -1, socket: null,
+  jointPosition: (character, joint) => {
+    const c = characters.get(character);
+    const bone = c && c.bones[c.joints.indexOf(joint)];
+    if (!bone) return null;
+    bone.updateWorldMatrix(true, false);
+    return bone.getWorldPosition(new THREE.Vector3()).toArray();
+  } };
+
+const canvas = $('view');
+const renderer = new THREE.WebGLRenderer({ canvas, antialias: true });
+renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x1d2129);
+const camera = new THREE.PerspectiveCamera(35, 1, 0.01, 200);
+camera.position.set(0, 1.6, 6);
+const controls = new OrbitControls(camera, canvas);
+controls.target.set(0, 1.0, 0);
+scene.add(new THREE.HemisphereLight(0xe8efff, 0x4a4036, 1.8));
+const sun = new THREE.DirectionalLight(0xffffff, 2.2);
+sun.position.set(2, 5, 4);
+scene.add(sun, new THREE.GridHelper(12, 24, 0x3a4150, 0x2a2f3a));
+
+const characters = new Map(); // name -> {joints, bones: [Object3D|null], meshes, morphs}
+let latest = null;            // the newest frame message not yet shown
+const audio = { context: null, playing: new Map(), streamTime: 0 };
+
+function resize() {
+  const w = canvas.clientWidth, h = canvas.clientHeight;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+
+async function loadCharacter(name, info) {
+  const gltf = await new GLTFLoader().loadAsync(info.model);
+  const root = gltf.scene;
+  const byName = new Map();
+  root.traverse((o) => { if (!byName.has(o.name)) byName.set(o.name, o); });
+  const bones = info.joints.map((j) => byName.get(THREE.PropertyBinding.sanitizeNodeName(j)) || byName.get(j) || null);
+  const meshes = [];
+  root.traverse((o) => { if (o.isMesh && o.morphTargetDictionary) meshes.push(o); });
+  root.traverse((o) => { if (o.isMesh) o.frustumCulled = false; });
+  scene.add(root);
+  characters.set(name, { joints: info.joints, morphs: info.morphs, bones, meshes, root });
+}
+
+function applyFrame(message) {
+  for (const [name, pose] of Object.entries(message.characters)) {
+    const c = characters.get(name);
+    if (!c) continue;
+    const r = pose.rotations;
+    c.bones.forEach((bone, j) => { if (bone) bone.quaternion.set(r[4 * j], r[4 * j + 1], r[4 * j + 2], r[4 * j + 3]); });
+    if (c.bones[0]) c.bones[0].position.set(pose.root[0], pose.root[1], pose.root[2]);
+    for (const mesh of c.meshes) {
+      pose.morphs.forEach((w, k) => {
+        const index = mesh.morphTargetDictionary[c.morphs[k]];
+        if (index !== undefined) mesh.morphTargetInfluences[index] = w;
+      });
+    }
+  }
+  audio.streamTime = message.time;
+  api.frame = message.frame;
+  api.frames += 1;
+}
+
+// Speech: each utterance's WAV arrives when it starts; it plays from where the stream is in it.
+async function playAudio(message) {
+  if (!audio.context) audio.context = new AudioContext();
+  const key = `${message.character}/${message.block}`;
+  if (message.stop !== undefined) {
+    const playing = audio.playing.get(key);
+    if (playing) {
+      playing.gain.gain.setTargetAtTime(0, audio.context.currentTime, 0.02); // a short fade, as in the WAV
+      playing.source.stop(audio.context.currentTime + 0.1);
+      audio.playing.delete(key);
+    }
+    return;
+  }
+  const bytes = Uint8Array.from(atob(message.wav), (ch) => ch.charCodeAt(0));
+  const buffer = await audio.context.decodeAudioData(bytes.buffer);
+  const source = audio.context.createBufferSource();
+  const gain = audio.context.createGain();
+  source.buffer = buffer;
+  source.connect(gain).connect(audio.context.destination);
+  source.start(0, Math.max(0, audio.streamTime - message.start));
+  audio.playing.set(key, { source, gain });
+  source.onended = () => { if (audio.playing.get(key)?.source === source) audio.playing.delete(key); };
+  if (audio.context.state === 'suspended') $('audio').hidden = false;
+}
+$('audio').addEventListener('click', () => { audio.context?.resume(); $('audio').hidden = true; });
+
+async function connect() {
+  const config = await (await fetch('/live.json' + location.search)).json();
+  const token = new URLSearchParams(location.search).get('token');
+  const url = `ws://${location.hostname}:${config.websocket_port}/` + (token ? `?token=${encodeURIComponent(token)}` : '');
+  const socket = api.socket = new WebSocket(url);
+  let loading = Promise.resolve();
+  socket.onmessage = (event) => {
+    const message = JSON.parse(event.data);
+    if (message.type === 'hello') {
+      loading = Promise.all(Object.entries(message.characters).map(([name, info]) =>
+        loadCharacter(name, { ...info, model: info.model + location.search }))).then(() => {
+        socket.send(JSON.stringify({ type: 'subscribe', frames: true, feedback: 'none' }));
+        $('status').textContent = `${characters.size} characters at ${message.fps} fps`;
+        api.ready = true;
+      }).catch((error) => { api.error = String(error); $('status').textContent = `Error: ${error}`; });
+    } else if (message.type === 'frame') {
+      latest = message;
+    } else if (message.type === 'audio') {
+      loading.then(() => playAudio(message)).catch((error) => { api.error = String(error); });
+    } else if (message.type === 'error') {
+      $('status').textContent = `Error: ${message.message}`;
+    }
+  };
+  socket.onclose = () => { $('status').textContent = 'Disconnected'; };
+}
+
+function tick() {
+  requestAnimationFrame(tick);
+  if (latest) { applyFrame(latest); latest = null; }
+  controls.update();
+  renderer.render(scene, camera);
+}
+resize();
+tick();
+connect().catch((error) => { api.error = String(error); $('status').textContent = `Error: ${error}`; });
