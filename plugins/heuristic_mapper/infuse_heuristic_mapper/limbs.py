@@ -29,16 +29,18 @@ from .view import SkeletonView, length, lengths
 UPPER_OVER_FORE = 1.0    # upper arm / forearm length between joints (rigs range 0.6 .. 1.6)
 THIGH_OVER_SHIN = 1.05   # thigh / shin length
 VIRTUAL_COST = 2.2       # picking a predicted (missing) hand or foot instead of a chain joint
+EARLY_END_COST = 0.6     # ... while chain joints follow (digits or claws on the forearm itself)
 
 
 @lru_cache(maxsize=64)
 def _combos(m: int, k: int, lead: int = 3) -> np.ndarray:
     """(N, k) increasing index tuples into a chain of m points; the last slot may also take the
-    virtual index m, but only right after the last chain joint (the limb ends early). The second
-    slot sits within the first ``lead + 1`` chain joints (a limb starts with at most a few helpers)."""
+    virtual index m (the limb ends early: no hand or foot joint, or only digits or claws past the
+    slot before it, see :data:`EARLY_END_COST`). The second slot sits within the first ``lead + 1``
+    chain joints (a limb starts with at most a few helpers)."""
     rows = list(combinations(range(m), k))
     if m >= k - 1:
-        rows += [c + (m,) for c in combinations(range(m), k - 1) if c[-1] == m - 1]
+        rows += [c + (m,) for c in combinations(range(m), k - 1)]
     rows = [r for r in rows if k < 2 or r[1] <= lead]
     return np.array(rows, dtype=np.int64).reshape(-1, k)
 
@@ -177,6 +179,47 @@ def _strongest_bend(P: np.ndarray) -> np.ndarray:
     return np.where(strong, i + 1, -1)
 
 
+def _slot_paths(view: SkeletonView, chain: list[int], combos: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+    """(N, k) path length from the limb's branch to each slot's joint along the chain (NaN: slot
+    empty); a predicted end lies its predicted distance past the slot before it. Path lengths do not
+    depend on the pose."""
+    m = len(chain)
+    path = np.cumsum(view.bone[chain])
+    idx = np.clip(combos, 0, m - 1)
+    out = np.where(combos >= 0, path[idx], np.nan)
+    virtual = combos[:, -1] == m
+    if np.any(virtual) and combos.shape[1] >= 2:
+        prev = np.clip(combos[:, -2], 0, m - 1)
+        extra = lengths(predicted - view.P[np.array(chain)[prev]])
+        out[:, -1] = np.where(virtual, path[prev] + extra, out[:, -1])
+    return out
+
+
+def _agree(view: SkeletonView, chains: list[list[int]], found: list, weight: float = 3.0) -> None:
+    """Two mirror limbs whose chains differ in length (a prop or a claw on one hand) are scored
+    separately; make them one decision: the pair of placements with the least summed cost, where
+    each slot's path length from the branch differing between the two sides costs ``weight`` per
+    limb length, and a slot filled on one side only costs ``weight / 3``. Adds that cost to each
+    side's costs (in place), against the other side's chosen placement."""
+    (ga, ca, Ca, Pa), (gb, cb, Cb, Pb) = found
+    pa = _slot_paths(view, chains[ga[0]], ca, Pa[0])
+    pb = _slot_paths(view, chains[gb[0]], cb, Pb[0])
+    scale = max(float(np.nanmax(pa)), float(np.nanmax(pb)), 1e-9)
+    keep = 40
+    ia = np.argsort(Ca[0])[:keep]
+    ib = np.argsort(Cb[0])[:keep]
+
+    def mismatch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        both = ~np.isnan(x) & ~np.isnan(y)
+        diff = np.where(both, np.abs(np.nan_to_num(x) - np.nan_to_num(y)), 0.0).sum(axis=-1) / scale
+        return diff + (np.isnan(x) != np.isnan(y)).sum(axis=-1) / 3.0
+
+    total = Ca[0][ia][:, None] + Cb[0][ib][None, :] + weight * mismatch(pa[ia][:, None, :], pb[ib][None, :, :])
+    i, j = np.unravel_index(int(np.argmin(total)), total.shape)
+    Ca[0] += weight * mismatch(pa, pb[ib[j]][None, :])
+    Cb[0] += weight * mismatch(pb, pa[ia[i]][None, :])
+
+
 def _results(chains, group, combos, cost, predicted, slot_names, end_slot) -> list[LimbResult]:
     total = cost.sum(axis=0)
     best = int(np.argmin(total))
@@ -199,6 +242,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
     scale = view.scale
     chains = [view.main_chain(r, 9) for r in roots]
     out: dict[int, LimbResult] = {}
+    found = []
     for group in _batches(chains):
         cs = [chains[i] for i in group]
         m = len(cs[0])
@@ -233,7 +277,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         strongest = _strongest_bend(P)[:, None]
         inside = (h < strongest) & (np.minimum(a, m) > strongest) & (strongest > 0)
         cost += 1.0 * (inside & (k != strongest))
-        cost += VIRTUAL_COST * virtual
+        cost += VIRTUAL_COST * virtual + EARLY_END_COST * (virtual & (k < m - 1))
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"thigh": 0.8, "shin": -0.8, "foot": -1.0, "toe": -1.0},
                                                       {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, h]
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"shin": 0.8, "legpart": 0.4, "thigh": -0.8,
@@ -241,6 +285,10 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
                                                       {"twist": 1.0, "end": 0.8, "control": 0.6, "helper": 0.6}))[:, k]
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"foot": 0.8, "thigh": -1.0, "shin": -0.8},
                                                       {"twist": 0.8, "end": 0.6, "control": 0.3, "heel": 0.6}))[:, a]
+        found.append((group, combos, cost, Pa))
+    if len(found) == 2:
+        _agree(view, chains, found)
+    for group, combos, cost, Pa in found:
         for i, r in zip(group, _results(chains, group, combos, cost, Pa, ("hip", "knee", "ankle"), "ankle")):
             out[roots[i]] = r
     return out
@@ -253,6 +301,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
     chains = [view.main_chain(r, 10) for r in roots]
     all_offsets = _mirror_offsets(view, chains, anchor)
     out: dict[int, LimbResult] = {}
+    found = []
     for group in _batches(chains):
         cs = [chains[i] for i in group]
         m = len(cs[0])
@@ -295,14 +344,14 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         cost -= 0.6 * (~virtual & many[:, np.minimum(w, m)])
         # the hand is where the fingers branch: a wrist past a branching joint is a finger
         fb = first_branch[:, None]
-        cost += 1.5 * ((e < fb) & (w > fb) & (w < m))
+        cost += 1.5 * ((e <= fb) & (w > fb) & (w < m))
         reach = view.reach[np.array(cs)]
         rem = np.where(virtual, 0.0, reach[:, np.minimum(w, m - 1)])
         cost += 0.6 * (rem > 1.6 * fore)
         strongest = _strongest_bend(P)[:, None]
         inside = (s < strongest) & (np.minimum(w, m) > strongest) & (strongest > 0)
         cost += 1.0 * (inside & (e != strongest))
-        cost += VIRTUAL_COST * virtual
+        cost += VIRTUAL_COST * virtual + EARLY_END_COST * (virtual & (e < m - 1))
         cost += np.where(has_c, _stack(view, cs, lambda ch: _role_cost(
             view, ch, {"clavicle": 0.8, "shoulder": 0.4, "upperarm": -0.8, "forearm": -1.0, "hand": -1.0},
             {"twist": 1.0, "end": 1.0, "control": 0.6}))[:, c0], 0.0)
@@ -318,6 +367,10 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
                                                                   "forearm": -0.5},
                                                        {"twist": 0.8, "end": 0.6, "control": 0.3, "prop": 1.0,
                                                         "metacarpal": 0.8}))[:, w]
+        found.append((group, combos, cost, Pw))
+    if len(found) == 2:
+        _agree(view, chains, found)
+    for group, combos, cost, Pw in found:
         for i, r in zip(group, _results(chains, group, combos, cost, Pw, ("clavicle", "shoulder", "elbow", "wrist"),
                                         "wrist")):
             out[roots[i]] = r
@@ -338,7 +391,7 @@ def _hand_structure(view: SkeletonView, chains: list[list[int]]) -> tuple[np.nda
 def settle_coincident(view: SkeletonView, result: LimbResult) -> None:
     """Several joints at one place along a chain (a twist joint at the elbow, a helper above a
     joint): the slot goes to the one that branches (parents the next segments), else the last one,
-    whose bone is the segment that follows."""
+    whose bone is the segment that follows; joints named twist, roll or helper only when all are."""
     chain = result.chain
     tol = 1e-3 * view.scale
     taken = {j for j in result.slots.values() if j >= 0}
@@ -355,6 +408,8 @@ def settle_coincident(view: SkeletonView, result: LimbResult) -> None:
         if lo == hi:
             continue
         run = [c for c in chain[lo:hi + 1] if c == j or c not in taken]
+        # a joint named twist, roll or helper never carries a limb slot over a plain one at its place
+        run = [c for c in run if not view.info[c].flagged("twist", "helper")] or run
         best = max(run, key=lambda c: (len(view.children[c]), chain.index(c)))
         if best != j and not view.info[j].roles - view.info[best].roles:
             taken.discard(j)

@@ -221,7 +221,10 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         while view.parents[junction] >= 0 and not view.info[int(view.parents[junction])].flagged("root", "control"):
             junction = int(view.parents[junction])
     up = _up_axis(view, junction, legs, arms, leg_res, arm_res)
-    base, base_why = _choose_base(view, junction, legs, arms, [r.slots["hip"] for r in leg_res.values()], up)
+    hips = [r.slots["hip"] for r in leg_res.values()]
+    thigh = max(float(np.mean([length(view.P[r.slots["knee"]] - view.P[r.slots["hip"]]) for r in leg_res.values()]
+                              or [0.0])), 1e-9)
+    base, base_why = _choose_base(view, junction, legs, arms, hips, thigh, up)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
     torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
 
@@ -258,7 +261,10 @@ def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body
     mid = view.P[r.slots[middle]]
     target = view.P[j] if j >= 0 else r.predicted[end]
     seg = length(target - mid)
-    new = relocate(view, target, body_chain, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
+    # neither the limb's own trunk nor what hangs from its last joint (digits, claws) is the hand
+    # or foot found elsewhere
+    exclude = body_chain | set(view.ancestors(r.chain[0])) | set(view.subtree(r.slots[middle]).tolist())
+    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
     if new >= 0:
         r.slots[end] = new
         r.notes[end] = "IK-driven: found where the limb ends, outside its chain"
@@ -274,11 +280,10 @@ def _only_body_child(view: SkeletonView, parent: int, child: int) -> bool:
     return True
 
 
-def _above_ground(view: SkeletonView, junction: int, top: int, hips: list[int], up: np.ndarray) -> int:
+def _above_ground(view: SkeletonView, junction: int, top: int, hips: list[int], thigh: float, up: np.ndarray) -> int:
     """The first joint from ``junction`` towards ``top`` that is not far below the hip sockets: rigs
     that hang the thighs from a ground root have their pelvis above it on the way to the chest."""
     sockets = float(view.P[hips].mean(axis=0) @ up)
-    thigh = max(float(np.mean([view.bone[c] for j in hips for c in view.children[j]] or [0.0])), 1e-9)
     if float(view.P[junction] @ up) > sockets - thigh:
         return junction
     for j in view.path_down(junction, top):
@@ -288,11 +293,11 @@ def _above_ground(view: SkeletonView, junction: int, top: int, hips: list[int], 
 
 
 def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, arms: LimbPair | None, hips: list[int],
-                 up) -> tuple[int, str]:
+                 thigh: float, up) -> tuple[int, str]:
     """The pelvis: the joint where legs and torso meet, or its parent when the legs hang from a spine
     joint well above the hip sockets (3ds Max Biped: Pelvis -> Spine -> thighs)."""
     if hips and up is not None and arms is not None and view.is_descendant(arms.branch, junction):
-        junction = _above_ground(view, junction, arms.branch, hips, up)
+        junction = _above_ground(view, junction, arms.branch, hips, thigh, up)
     info = view.info[junction]
     p = int(view.parents[junction])
     if p < 0 or not _only_body_child(view, p, junction):
@@ -302,7 +307,6 @@ def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, arms:
         return p, "pelvis above the spine joint that carries the legs"
     if hips and up is not None and not info.has("hips") and not parent_info.flagged("root"):
         sockets = view.P[hips].mean(axis=0)
-        thigh = max(float(np.mean([view.bone[c] for j in hips for c in view.children[j]] or [0.0])), 1e-9)
         h_junction = float((view.P[junction] - sockets) @ up) / thigh
         h_parent = float((view.P[p] - sockets) @ up) / thigh
         if h_junction > 0.4 and -0.2 < h_parent < h_junction - 0.1:
