@@ -13,6 +13,8 @@ from .errors import InputError, LimitError
 MAX_JOINTS = 10_000
 #: Ancestors of a joint or node (real rigs: under 100).
 MAX_DEPTH = 1_000
+#: Nesting of a JSON document's arrays and objects (glTF nests about 8 deep).
+MAX_NESTING = 100
 #: Frames in one clip: 100 hours at 30 fps.
 MAX_FRAMES = 10_800_000
 #: Frame rate of a clip, frames per second (a frame time under 0.1 ms is a corrupted number; glTF's
@@ -54,3 +56,17 @@ def check_coordinates(file, place: str | None, values, what: str = "coordinate")
     largest = float(np.max(np.abs(values)))
     if largest > MAX_COORDINATE_M:
         raise LimitError(file, place, f"{what} (metres)", largest, "MAX_COORDINATE_M", MAX_COORDINATE_M)
+
+
+def json_depth(document) -> int:
+    """Nesting depth of a parsed JSON document (0 for a number or string), walked without recursion."""
+    deepest, stack = 0, [(document, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, dict):
+            node = node.values()
+        elif not isinstance(node, list):
+            continue
+        deepest = max(deepest, depth + 1)
+        stack.extend((child, depth + 1) for child in node if isinstance(child, (dict, list)))
+    return deepest

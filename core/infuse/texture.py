@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import limits
+
 #: Largest side (pixels) a texture is reduced to before sampling at the vertices.
 TEXTURE_SIZE = 256
 
@@ -26,11 +28,20 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
 def decode_image(source: bytes | str | Path, size: int = TEXTURE_SIZE) -> np.ndarray:
     """Linear RGBA pixels (H, W, 4) of an encoded image (bytes) or image file, at most ``size`` a side.
 
-    Raises ``ImportError`` without Pillow, ``OSError``/``ValueError`` when the image is unreadable.
+    Raises ``ImportError`` without Pillow, ``OSError``/``ValueError`` when the image is unreadable or
+    declares more than :data:`infuse.limits.MAX_IMAGE_PIXELS` pixels (checked before decoding).
     """
     from PIL import Image
 
-    with Image.open(io.BytesIO(source) if isinstance(source, (bytes, bytearray)) else source) as img:
+    try:
+        opened = Image.open(io.BytesIO(source) if isinstance(source, (bytes, bytearray)) else source)
+    except Image.DecompressionBombError as exc:
+        raise ValueError(str(exc)) from None
+    with opened as img:
+        width, height = img.size
+        if width * height > limits.MAX_IMAGE_PIXELS:
+            raise ValueError(f"an image of {width} x {height} pixels is over the limit of {limits.MAX_IMAGE_PIXELS:,} "
+                             "(infuse.limits.MAX_IMAGE_PIXELS)")
         img.draft("RGB", (size, size))  # JPEG decodes straight at a reduced scale
         img = img.convert("RGBA")
         img.thumbnail((size, size))

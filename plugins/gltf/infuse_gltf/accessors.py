@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from infuse import limits
 from infuse.errors import InputError, MissingFeatureError
 
 from . import meshopt
@@ -165,7 +166,9 @@ class AccessorReader:
         if acc.get("normalized") and ctype == 5126:
             raise InputError(self.file, place, "normalized is set on a float accessor")
         cols, rows = TYPE_SHAPES[acc["type"]]
-        return ctype, cols, rows, _int_field(self.file, place, acc, "count", None, 1)
+        count = _int_field(self.file, place, acc, "count", None, 1)
+        limits.check(self.file, place, "count x components", count * cols * rows, "MAX_ELEMENTS")
+        return ctype, cols, rows, count
 
     def _decode(self, index: int) -> np.ndarray:
         place = f"accessors[{index}]"

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import unquote
 
-from infuse import references
+from infuse import limits, references
 from infuse.errors import InputError
 
 GLB_MAGIC = b"glTF"
@@ -111,11 +111,14 @@ def _decode_json(raw, path: Path | None, place: str):
     except UnicodeDecodeError as exc:
         raise InputError(path, place, f"not UTF-8 text (byte {exc.start})") from None
     try:
-        return json.loads(text)
+        document = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(path, f"{place} line {exc.lineno} column {exc.colno}", f"bad JSON: {exc.msg}") from None
     except RecursionError:
-        raise InputError(path, place, "bad JSON: nesting too deep") from None
+        raise InputError(path, place, f"bad JSON: nested deeper than the parser can follow (infuse.limits.MAX_NESTING "
+                         f"is {limits.MAX_NESTING})") from None
+    limits.check(path, place, "JSON nesting", limits.json_depth(document), "MAX_NESTING")
+    return document
 
 
 def decode_data_uri(uri: str, path: Path | None, place: str) -> bytes:

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from infuse import quaternions as quat
+from infuse import limits, quaternions as quat
 from infuse.errors import InputError
 
 from .accessors import check_index
@@ -68,6 +68,13 @@ def node_graph(nodes: list, file) -> NodeGraph:
     if not seen.all():
         bad = int(np.nonzero(~seen)[0][0])
         raise InputError(file, f"nodes[{bad}]", "is part of a cycle in the node graph")
+    depth = np.zeros(n, dtype=np.int64)
+    for i in order:
+        if parent[i] >= 0:
+            depth[i] = depth[parent[i]] + 1
+    if n and depth.max() > limits.MAX_DEPTH:
+        deepest = int(np.argmax(depth))
+        limits.check(file, f"nodes[{deepest}]", "node depth", int(depth[deepest]), "MAX_DEPTH")
     return NodeGraph(parent, tuple(children), tuple(order))
 
 

@@ -274,6 +274,11 @@ def decode_view(ext: dict, source: bytes, mesh: bool = False) -> bytes:
     count, stride = ext.get("count"), ext.get("byteStride")
     if not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (count, stride)):
         raise MeshoptError("count and byteStride must be positive integers")
+    # Checked before decoding: the most a codec packs into one compressed byte is 64 bytes (a vertex
+    # stream of zeros: two header bits per group of 16 bytes) or 3 indices (a triangle code byte).
+    most = 3 * stride * len(source) if mode in ("TRIANGLES", "INDICES") else 64 * len(source)
+    if count * stride > most:
+        raise MeshoptError(f"count {count} x byteStride {stride} is more than {len(source)} compressed bytes can hold")
     if not mesh and (mode != "ATTRIBUTES" or flt == "OCTAHEDRAL"):
         what = f"mode {mode!r}" if mode != "ATTRIBUTES" else f"filter {flt!r}"
         raise MeshoptUnsupported(f"{what} holds mesh data (indices or normals), not skeleton or clip data")

@@ -321,9 +321,10 @@ def _order_joints(chosen: set[int], graph, nodes: list) -> tuple[list[int], np.n
                 break
             between.append(k)
             k = int(graph.parent[k])
+    occupied = _occupied(graph, nodes)
     for n in graph.order:  # parents first, so an empty chain below a joint is taken whole
         p = int(graph.parent[n])
-        if n not in joints and p in joints and not _is_end_site(nodes[n]) and _empty_subtree(n, graph, nodes):
+        if n not in joints and p in joints and not _is_end_site(nodes[n]) and not occupied[n]:
             joints.add(n)
     roots = [j for j in joints if graph.parent[j] < 0 or int(graph.parent[j]) not in joints]
 
@@ -368,14 +369,14 @@ def _facing_from_humanoid(vrm: VrmInfo | None, world: np.ndarray, q_up: np.ndarr
     return None
 
 
-def _empty_subtree(n: int, graph, nodes: list) -> bool:
-    stack = [n]
-    while stack:
-        k = stack.pop()
-        if any(key in nodes[k] for key in ("mesh", "camera", "skin")):
-            return False
-        stack.extend(graph.children[k])
-    return True
+def _occupied(graph, nodes: list) -> np.ndarray:
+    """(N,) bool: the node's subtree holds a mesh, camera or skin (one pass, children before parents)."""
+    occupied = np.array([any(key in node for key in ("mesh", "camera", "skin")) for node in nodes], dtype=bool)
+    for n in reversed(graph.order):
+        p = int(graph.parent[n])
+        if p >= 0 and occupied[n]:
+            occupied[p] = True
+    return occupied
 
 
 def _end_sites(nodes: list, graph, joint_nodes: list[int]) -> tuple:
