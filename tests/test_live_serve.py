@@ -1,0 +1,135 @@
+"""``infuse serve`` driven over a real WebSocket with real BML (speech, gaze at a moving target, nod, walk,
+reach, an interruption): feedback arrives in order, and the pose stream's frames are those of the same
+scene realized offline from the same blocks at the times the server started them."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from infuse.kinematics import forward_kinematics
+from infuse.scene.command import build_scene
+from infuse.scene.scenefile import read_scene_file
+
+from live_support import BML_NS, SBM_NS, Recorder, scene_file, serving
+
+SPEECH = f'''<bml xmlns="{BML_NS}" id="talk">
+  <speech id="s1"><text>Hello Bob, it is <sync id="m"/>nice to see you here again today.</text></speech>
+  <head id="h1" lexeme="NOD" start="s1:m"/>
+</bml>'''
+REACH = f'<bml xmlns="{BML_NS}" xmlns:sbm="{SBM_NS}" id="grab"><sbm:reach id="r1" target="cup" sbm:action="touch"/></bml>'
+GAZE = f'<bml xmlns="{BML_NS}" id="look"><gazeShift id="g1" target="ball" influence="HEAD"/></bml>'
+CUT = f'''<bml xmlns="{BML_NS}" id="cut" composition="REPLACE">
+  <speech id="s2"><text>Oh wait.</text></speech>
+</bml>'''
+
+
+def _progress_in_order(feedback: list[dict], block: str) -> None:
+    """A block's feedback: its prediction first, then progress by time, its start first and its end last."""
+    events = [m for m in feedback if (m.get("block") or m.get("id", "").split(":")[0]) == block]
+    kinds = [m["kind"] for m in events]
+    assert kinds[0] == "blockPrediction", kinds
+    progress = [m for m in events if m["kind"] in ("blockProgress", "syncPointProgress")]
+    assert progress[0]["kind"] == "blockProgress" and progress[0]["sync"] == "start", progress[:2]
+    assert progress[-1]["kind"] == "blockProgress" and progress[-1]["sync"] == "end", progress[-2:]
+    times = [m["global_time"] for m in progress]
+    assert times == sorted(times), times
+
+
+def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
+    scene_path = scene_file(tmp_path)
+    applied = []  # what the server started, in order: (kind, arguments, scene time)
+    with serving(scene_path) as (process, port, _):
+        client = Recorder(port)
+        hello = client.wait_for(lambda m: m["type"] == "hello")
+        assert set(hello["characters"]) == {"bob", "ann"}
+        assert client.request({"type": "subscribe", "frames": True})["frames"] is True
+
+        def target(position):
+            reply = client.request({"type": "target", "name": "ball", "position": position})
+            assert reply["type"] == "accepted", reply
+            applied.append(("target", position, reply["time"]))
+
+        def bml(character, text):
+            reply = client.request({"type": "bml", "character": character, "bml": text})
+            assert reply["type"] == "accepted", reply
+            applied.append(("bml", (character, text), reply["time"]))
+            return reply
+
+        def call(method, character, **args):
+            reply = client.request({"type": "call", "method": method, "character": character, "args": args})
+            assert reply["type"] == "accepted", reply
+            applied.append(("call", (method, character, args), reply["time"]))
+            return reply
+
+        target([0.6, 1.5, 1.0])
+        bml("bob", GAZE)
+        time.sleep(0.3)
+        target([-0.4, 1.3, 0.6])  # the gaze follows the moved target
+        talk = bml("ann", SPEECH)
+        call("walk_to", "bob", target=[0.0, 0.6])
+        bml("ann", REACH)
+        time.sleep(0.8)
+        target([0.2, 1.7, 0.4])
+        cut = bml("ann", CUT)  # interrupts the speech and the reach
+        client.wait_for(lambda m: m.get("kind") == "blockProgress" and m["block"] == "cut" and m["sync"] == "end", 20)
+        time.sleep(0.3)
+        status = client.request({"type": "status"})
+        client.close()
+
+    feedback = [m for m in client.messages if m["type"] == "feedback"]
+    for block in ("look", "talk", "grab", "cut"):
+        assert any(m.get("block") == block for m in feedback), block
+    for block in ("talk", "grab", "cut"):
+        _progress_in_order(feedback, block)
+    # the interrupted speech ends where the cut starts, and its audio is told to stop there
+    talk_end = next(m for m in feedback if m["kind"] == "blockProgress" and m["block"] == "talk" and m["sync"] == "end")
+    assert abs(talk_end["global_time"] - cut["time"]) < 1e-9
+    audio = [m for m in client.messages if m["type"] == "audio"]
+    assert any(m["block"] == "talk" and "wav" in m for m in audio)
+    assert any(m["block"] == "talk" and m.get("stop") == cut["time"] for m in audio)
+    assert status["missed"] <= status["shown"] // 20, status  # a loaded 2-core machine may miss a few
+
+    # The same scene offline: the same commands at the same times, in the same order.
+    spec = read_scene_file(scene_path)
+    offline = build_scene(spec, quiet=True)
+    moves = [(t, np.asarray(p, dtype=float)) for kind, p, t in applied if kind == "target"]
+    offline.add_target("ball", _steps(moves))
+    for kind, what, at in applied:
+        if kind == "bml":
+            offline.bml(what[0], what[1], at=at)
+        elif kind == "call":
+            method, character, args = what
+            getattr(offline, method)(character, at=at, **args)
+    last = max(client.frames)
+    offline.run((last + 1) / offline.fps)
+    compared = 0
+    for name in ("bob", "ann"):
+        motion = offline.motion(name)
+        rig = offline.runtime.rig(name)
+        frames = sorted(f for f in client.frames if f < motion.num_frames)
+        live_rot = np.array([client.frames[f]["characters"][name]["rotations"] for f in frames]).reshape(len(frames), -1, 4)
+        live_root = np.array([client.frames[f]["characters"][name]["root"] for f in frames])
+        _, live_pos = forward_kinematics(rig.skeleton, live_rot, live_root)
+        _, offline_pos = forward_kinematics(rig.skeleton, motion.local_rotations[frames], motion.root_translations[frames])
+        error_m = np.abs(live_pos - offline_pos).max()
+        assert error_m < 1e-4, (name, error_m)
+        live_morphs = np.array([client.frames[f]["characters"][name]["morphs"] for f in frames])
+        if live_morphs.size:
+            assert np.abs(live_morphs - offline.runtime.morph_weights(name)[frames]).max() < 1e-3
+        compared += len(frames)
+    assert compared > 100
+    # the walk moved Bob, the speech moved Ann's mouth: the comparison is over a moving scene
+    bob_root = np.array([client.frames[f]["characters"]["bob"]["root"] for f in sorted(client.frames)])
+    assert np.ptp(bob_root[:, [0, 2]], axis=0).max() > 0.3
+
+
+def _steps(moves):
+    """The moved target offline: each position from the time the server applied its move."""
+    times = np.array([t for t, _ in moves])
+    points = np.array([p for _, p in moves])
+
+    def where(t):
+        index = np.searchsorted(times, np.atleast_1d(np.asarray(t, dtype=float)) + 1e-9, side="right") - 1
+        return points[np.clip(index, 0, None)]
+    return where
