@@ -36,6 +36,7 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
+from infuse.packs.coverage import SpeedLimit
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations
 from infuse.runtime.limb_ik import solve_limb
@@ -63,8 +64,6 @@ CADENCE_RAMP = 3.0
 SETTLE_PHASE = 0.05
 #: Turning on the spot faster than this (rad/s) beyond what the blend shows, the feet step.
 SPIN_STEP = 0.15
-#: Shares of a turn rate tried, largest first, where the full request lies outside the tessellation.
-_TURN_SHARES = np.linspace(1.0, 0.0, 9)
 #: Seconds over which a stopped character fades into the pack's idle.
 SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
@@ -214,10 +213,18 @@ class Locomotion(Controller):
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
-        req = self.steering.run(st, times, dt)
+        req = self.steering.run(st, times, dt, top=b["limit"])
+        if st.get("capped") and not st.get("warned"):
+            asked, done, towards = st["capped"]
+            job.report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b['space'].pack!r} realizes at most {done:.2f} m/s "
+                       f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
+            st["warned"] = True
         speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
-        w = _weights(b["space"], speed, direction, turn)
-        vf, vl, vt = (w @ b["velocities"]).T
+        w, slow = _weights(b, speed, direction, turn)
+        # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
+        # the blend shows it; the clips' own turn shows what it can of the heading's.
+        vf, vl = speed * np.cos(direction), speed * np.sin(direction)
+        vt = (w @ b["velocities"][:, 2]) * (1.0 if b["idle"].any() else slow)
         # Root motion: integrate the blend's own velocities from where the last block ended; the heading
         # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
         # turning examples) spun at the root.
@@ -233,9 +240,8 @@ class Locomotion(Controller):
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
-        slow = np.clip(1.0 - w[:, b["idle"]].sum(axis=1), 0.0, 1.0)
         wm = np.where(b["idle"][None], 0.0, w)
-        wm = (wm + SLOW_EPS * b["slowest"][None]) / (slow + SLOW_EPS)[:, None]  # the slowest walk when standing
+        wm = (wm + SLOW_EPS * b["slowest"][None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
         phase, stride, standing = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
@@ -497,7 +503,7 @@ def _prepare(space, clips, sk, legs) -> dict:
                             [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
         stance_feet = g_rot[0].reshape(2, 2, 4)
     body = np.nonzero(limbs == 0)[0]
-    out = {"space": space, "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+    out = {"space": space, "limit": SpeedLimit(space.tessellations["locomotion"]), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
@@ -562,20 +568,37 @@ def _turn_feet(b, rot, rise) -> np.ndarray:
     return delta
 
 
-def _weights(space, speed, direction, turn) -> np.ndarray:
-    """Blend weights (F, N) for the requests: the turn rate cut down (in eighths) to what the
-    tessellation holds at that speed and direction, where the full request lies outside it."""
+def _towards(direction: float) -> str:
+    """A travel direction (radians off the facing, + left) in words."""
+    deg = math.degrees(direction)
+    return "forward" if abs(deg) < 1.0 else f"{abs(deg):.0f} deg to the {'left' if deg > 0 else 'right'} of the facing"
+
+
+def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+    """Blend weights (F, N) for the requests and the moving share (F,) of the slowest walk's speed:
+    where the full request lies outside the tessellation, its turn rate is the nearest one the
+    tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
+    minus its weight; without, a request slower than the slowest example in its direction is blended
+    at that example's speed and the share is the ratio of the speeds."""
+    space = b["space"]
+    slow = np.ones(len(speed))
+    if not b["idle"].any():
+        lowest = np.array([b["limit"].lowest(d) for d in np.unique(direction)])
+        floor = lowest[np.searchsorted(np.unique(direction), direction)]
+        slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
+        speed = np.maximum(speed, floor)
     query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
     w, inside = space.weights("locomotion", query)
     out = np.nonzero(~inside)[0]
-    if out.size:
-        tried = np.repeat(query[out, None], len(_TURN_SHARES), axis=1)
-        tried[..., 2] *= _TURN_SHARES
-        ok = space.contains("locomotion", tried.reshape(-1, 3)).reshape(tried.shape[:2])
-        cut = np.nonzero(ok.any(axis=1))[0]  # the others keep the weights of the full request's nearest point
+    if out.size:  # the turn rate nearest the request's that the tessellation holds at that velocity
+        turns, ok = b["limit"].hull.nearest_turns(query[out, :2], query[out, 2])
+        cut = np.nonzero(ok)[0]  # the others keep the weights of the full request's nearest point
         if cut.size:
-            w[out[cut]] = space.weights("locomotion", tried[cut, np.argmax(ok[cut], axis=1)])[0]
-    return w
+            query[out[cut], 2] = turns[cut]
+            w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
+    if b["idle"].any():
+        slow = np.clip(1.0 - w[:, b["idle"]].sum(axis=1), 0.0, 1.0)
+    return w, slow
 
 
 def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

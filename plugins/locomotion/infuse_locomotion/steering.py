@@ -63,11 +63,13 @@ class Steering:
                 raise ValueError("a path is (K, 2) ground points (x, z) or (K, 3) points, metres")
             self.path = p
 
-    def run(self, state: dict, times: np.ndarray, dt: float) -> np.ndarray:
+    def run(self, state: dict, times: np.ndarray, dt: float, top=None) -> np.ndarray:
         """(F, 4) requests (speed, turn rate, direction, stopping) for ``times``; updates ``state``
         (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
         requests themselves. ``stopping`` is 1 on the way into a path's last point: braking for it,
-        or there."""
+        or there. ``top(direction)``: the fastest speed (m/s) realizable in a travel direction
+        (radians); a faster speed asked is kept to it and ``state["capped"]`` is set to (asked m/s,
+        realized m/s, direction) the first time."""
         # Plain floats in the loop: it runs once per frame, and numpy scalars cost more than the maths.
         rows = []
         x, z, h = float(state["x"]), float(state["z"]), float(state["heading"])
@@ -81,8 +83,14 @@ class Steering:
         for t in times.tolist():
             direction = direction_at(t)
             stopping = 0.0
+            asked = speed_at(t)
+            if top is not None:
+                limit = top(direction)
+                if asked > limit + 1e-3 and "capped" not in state:
+                    state["capped"] = (asked, limit, direction)
+                asked = min(asked, limit)
             if self.path is None:
-                v_goal, w_goal = speed_at(t), turn_rate_at(t)
+                v_goal, w_goal = asked, turn_rate_at(t)
             else:
                 # Advance along the path while the next point is within the look-ahead distance.
                 while k < last_k and math.hypot(path[k][0] - x, path[k][1] - z) < max(self.lookahead, 0.5 * v):
@@ -100,7 +108,7 @@ class Steering:
                     err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
                     w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, TURN_GAIN * err))
                     ahead = (math.cos(err) - _COS_TURN_IN_PLACE) / (1.0 - _COS_TURN_IN_PLACE)
-                    v_goal = speed_at(t) * min(max(ahead, 0.0), 1.0)
+                    v_goal = asked * min(max(ahead, 0.0), 1.0)
                     if abs(math.sin(err)) > 1e-6:  # stay on a circle that meets the point
                         v_goal = min(v_goal, self.max_turn_rate * dist / (2.0 * abs(math.sin(err))))
                     if last:

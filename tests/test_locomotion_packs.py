@@ -1,0 +1,65 @@
+"""Locomotion from packs beyond the built-in ones: the hull of what a pack realizes, requests outside it,
+packs imported from real motion sets (SmartBody, Bandai), and scenes whose walks end when they arrive.
+Measured on the output with FK."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse.packs.coverage import Hull, SpeedLimit, coverage, describe_coverage, speed_limits
+from infuse.packs.tessellation import Tessellation
+from infuse.runtime import Runtime
+
+from corpus_data import corpus_file, require_corpus
+
+infuse_locomotion = pytest.importorskip("infuse_locomotion")
+Locomotion = infuse_locomotion.Locomotion
+
+
+@pytest.fixture(scope="module")
+def xbot():
+    require_corpus()
+    return infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+
+
+def square_space():
+    """A 3D tessellation over forward speeds 0.5-2 m/s, lateral -0.5-0.5 m/s, turn rates -1-1 rad/s."""
+    corners = [(f, l, w) for f in (0.5, 2.0) for l in (-0.5, 0.5) for w in (-1.0, 1.0)]
+    return Tessellation.build(("forward_speed", "lateral_speed", "turn_rate"), [str(c) for c in corners], corners)
+
+
+def test_hull_intervals_are_exact():
+    t = square_space()
+    lo, hi = Hull(t).interval(np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 2.0]]), np.array([1.0, 0.0, 0.0]))
+    assert lo[0] == pytest.approx(0.5, abs=1e-6) and hi[0] == pytest.approx(2.0, abs=1e-6)
+    assert lo[1] > hi[1]  # turning at 2 rad/s is outside at every speed
+    top, low = speed_limits(t, [0.0, math.pi / 2, math.pi])
+    assert top[0] == pytest.approx(2.0, abs=1e-6) and low[0] == pytest.approx(0.5, abs=1e-6)
+    assert top[1] == 0.0 and top[2] == 0.0  # nothing sideways (0.5 m/s across needs 0.5 along) or back
+    turns, ok = Hull(t).nearest_turns(np.array([[1.0, 0.0], [3.0, 0.0]]), np.array([1.7, 0.3]))
+    assert ok.tolist() == [True, False] and turns[0] == pytest.approx(1.0, abs=1e-5) and turns[1] == 0.3
+    limit = SpeedLimit(t)
+    assert limit(0.0) == pytest.approx(2.0, abs=1e-6) and limit.lowest(0.0) == pytest.approx(0.5, abs=1e-6)
+    table = coverage(t)
+    assert table["top"][0] == pytest.approx(2.0, abs=1e-6)
+    assert any("deg/s" in line for line in describe_coverage(table))
+
+
+def test_a_speed_beyond_the_pack_is_reported_once_and_walked_at_the_top_speed(xbot):
+    notes = []
+    rt = Runtime(fps=30, report=lambda who, message: notes.append(message))
+    c = rt.add_character(infuse.Character("x", xbot))
+    rt.activate(c, Locomotion("locomotion-female", speed=6.0, max_accel=50.0), 0.0)
+    rt.run(4.0)
+    top = rt.activities[0].binding["limit"](0.0)
+    assert 3.0 < top < 3.5
+    (note,) = notes
+    assert "asked 6.00 m/s forward" in note and f"at most {top:.2f} m/s" in note and f"walking at {top:.2f} m/s" in note
+    m = rt.motion(c)
+    _, g = infuse.motion_fk(m)
+    base = g[:, rt.rig(c).joint("base")]
+    realized = np.hypot(*(base[-1] - base[45])[[0, 2]]) / ((len(base) - 1 - 45) / 30.0)
+    assert realized == pytest.approx(top, rel=0.02)
