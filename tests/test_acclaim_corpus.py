@@ -75,7 +75,7 @@ def euler_xyz(angles: np.ndarray) -> np.ndarray:
 def raw_asf(text: str):
     bones = {}
     for block in re.findall(r"begin(.*?)end", text.split(":bonedata")[1].split(":hierarchy")[0], re.S):
-        fields = {l.split()[0]: l.split()[1:] for l in block.strip().splitlines() if l.strip()}
+        fields = {line.split()[0]: line.split()[1:] for line in block.strip().splitlines() if line.strip()}
         bones[fields["name"][0]] = dict(direction=np.array(fields["direction"], float), length=float(fields["length"][0]),
                                         axis=np.array(fields["axis"][:3], float), dof=fields.get("dof", []))
     parent = {}

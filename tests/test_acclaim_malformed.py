@@ -46,7 +46,7 @@ def asf_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
 
 def amc_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
     lines = text.split("\n")
-    frame_rows = [i for i, l in enumerate(lines) if l.strip().isdigit()]
+    frame_rows = [i for i, line in enumerate(lines) if line.strip().isdigit()]
 
     def cut_inside_frame() -> str:
         k = rng.randrange(len(frame_rows) - 1)

@@ -45,7 +45,7 @@ def rodrigues(rotvec: np.ndarray) -> np.ndarray:
 
 def raw_sk(text: str) -> list[dict]:
     """Joints of an .sk: name, parent, offset, prerot rotvec, free position dofs, Quat channel, Euler."""
-    tokens = " ".join(l for l in text.splitlines() if not l.lstrip().startswith("#")).split()
+    tokens = " ".join(line for line in text.splitlines() if not line.lstrip().startswith("#")).split()
     joints, stack, i = [], [], 0
     while i < len(tokens):
         t = tokens[i]
@@ -95,10 +95,10 @@ def raw_sk(text: str) -> list[dict]:
 
 def raw_skm(text: str) -> tuple[list[tuple[str, str]], np.ndarray]:
     lines = text.splitlines()
-    start = next(i for i, l in enumerate(lines) if l.startswith("channels"))
+    start = next(i for i, line in enumerate(lines) if line.startswith("channels"))
     count = int(lines[start].split()[1])
-    channels = [tuple(l.split()) for l in lines[start + 1:start + 1 + count]]
-    values = np.array([l.split()[3:] for l in lines if l.startswith("kt ")], float)
+    channels = [tuple(line.split()) for line in lines[start + 1:start + 1 + count]]
+    values = np.array([line.split()[3:] for line in lines if line.startswith("kt ")], float)
     return channels, values
 
 

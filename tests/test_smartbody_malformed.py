@@ -48,7 +48,7 @@ def sk_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
 
 
 def skm_cases(text: str, rng: random.Random) -> dict[str, str | bytes]:
-    frame_lines = [i for i, l in enumerate(text.split("\n")) if l.startswith("kt ")]
+    frame_lines = [i for i, line in enumerate(text.split("\n")) if line.startswith("kt ")]
     block_end = text.index("\n", text.index(text.split("\n")[frame_lines[-1]]))
     lines = text.split("\n")
 

@@ -16,8 +16,8 @@ COMMON = "smartbody/behaviorsets/reaching/skeletons/common.sk"
 
 def _channel_joints(text: str) -> list[str]:
     lines = text.splitlines()
-    start = next(i for i, l in enumerate(lines) if l.startswith("channels"))
-    names = [l.split()[0] for l in lines[start + 1:start + 1 + int(lines[start].split()[1])]]
+    start = next(i for i, line in enumerate(lines) if line.startswith("channels"))
+    names = [line.split()[0] for line in lines[start + 1:start + 1 + int(lines[start].split()[1])]]
     return list(dict.fromkeys(names))
 
 
@@ -72,7 +72,7 @@ def test_up_axis_override_turns_the_whole_motion():
     np.testing.assert_allclose(p_z, quat.rotate(turn, p_y), atol=1e-9)
 
 
-def _pose_file(tmp_path, times, rows, extra="") -> "Path":
+def _pose_file(tmp_path, times, rows, extra=""):
     body = "\n".join(f"kt {t} fr " + " ".join(map(str, r)) for t, r in zip(times, rows))
     path = tmp_path / "pose.skm"
     path.write_text(f"SkMotion\nname \"pose\"\nchannels 2\nj XPos\nj Quat\n{extra}frames {len(times)}\n{body}\n"

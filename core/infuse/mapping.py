@@ -25,7 +25,7 @@ import numpy as np
 from . import registry
 from .atomic import atomic_path
 from .canonical import ALL_NAMES, CANONICAL_NAMES, EXTRA_NAMES, is_canonical
-from .errors import InputError, UsageError
+from .errors import InputError
 from .skeleton import Skeleton
 
 #: The built-in default mapper; a user may choose another (:func:`infuse.registry.default_name`).

@@ -90,7 +90,7 @@ def _relations(line: str):
 def expectations_from_comments(comments) -> list[Expectation]:
     """Expectations in the first comment that has a timing or outcome section."""
     for comment in comments:
-        lines = [l.strip() for l in comment.splitlines()]
+        lines = [line.strip() for line in comment.splitlines()]
         found, section = [], None
         for line in lines:
             lower = line.lower()

@@ -20,7 +20,7 @@ SYNC_ATTRIBUTES = frozenset(STANDARD_SYNC_POINTS) | frozenset(SYNC_ALIASES) | {"
 
 _NUMBER = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
 _ABSOLUTE = re.compile(rf"\s*({_NUMBER})\s*")
-_LAST_PART = re.compile(rf"(?P<name>.*?)\s*(?P<offset>[+-]\s*(?:\d+(?:\.\d*)?|\.\d+))?\s*")
+_LAST_PART = re.compile(r"(?P<name>.*?)\s*(?P<offset>[+-]\s*(?:\d+(?:\.\d*)?|\.\d+))?\s*")
 
 
 class SyncRefError(ValueError):

@@ -87,8 +87,8 @@ class _Lines:
 
     def __init__(self, text: str, file: Path):
         self.file = file
-        self.items = [(i + 1, l.split("#", 1)[0].strip()) for i, l in enumerate(text.splitlines())]
-        self.items = [(n, l) for n, l in self.items if l]
+        self.items = [(i + 1, line.split("#", 1)[0].strip()) for i, line in enumerate(text.splitlines())]
+        self.items = [(n, line) for n, line in self.items if line]
         self.pos = 0
 
     def error(self, line: int, problem: str) -> InputError:

@@ -102,7 +102,7 @@ def _up_axis(skeleton: Skeleton, override: str | None) -> tuple[str, np.ndarray,
 
 
 def _bone_meta(asf: AsfFile) -> dict:
-    return {b.name: {"dof": b.dof, "limits": [list(l) for l in b.limits], "axis": b.axis.tolist(),
+    return {b.name: {"dof": b.dof, "limits": [list(limit) for limit in b.limits], "axis": b.axis.tolist(),
                      "axis_order": b.axis_order, "length": b.length, **b.extra} for b in asf.bones.values()}
 
 
