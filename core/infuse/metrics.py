@@ -1,4 +1,4 @@
-"""Motion quality figures: foot skate, bone-direction agreement, ground contact and root speed.
+"""Motion quality figures: foot skate, bone-direction agreement, popping, ground contact and root speed.
 
 Every function takes global joint positions (F, J, 3) in metres (core frame, +Y up) and, where it
 compares two clips, the canonical mappings that say which joints correspond. Frames correspond one
@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import quaternions as quat
 from .canonical import BODY_NAMES, canonical_joint
 from .contacts import FootContacts
 
@@ -160,3 +161,63 @@ def mean_speed(points: np.ndarray, fps: float) -> float:
     """Mean horizontal speed, metres per second, along (F, 3) ``points`` (path length over duration)."""
     n = len(points)
     return horizontal_path(points) * fps / (n - 1) if n > 1 else 0.0
+
+
+def largest_turns(global_rotations: np.ndarray) -> np.ndarray:
+    """(J,) the largest turn of each joint's global orientation between consecutive frames, degrees,
+    from (F, J, 4) global rotations (x, y, z, w); zeros for a clip of one frame."""
+    g = np.asarray(global_rotations, dtype=np.float64)
+    if len(g) < 2:
+        return np.zeros(g.shape[1])
+    return np.degrees(quat.angle_between(g[:-1], g[1:]).max(axis=0))
+
+
+#: The popping bound: a joint may turn in one frame at most ``POP_FACTOR`` x the source's largest
+#: turn of that joint, plus ``POP_MARGIN_DEG`` degrees.
+POP_FACTOR = 1.5
+POP_MARGIN_DEG = 10.0
+
+
+def pop_limit(source_deg):
+    """The largest per-frame turn (degrees) allowed for a joint whose source turns at most ``source_deg``."""
+    return POP_FACTOR * np.asarray(source_deg) + POP_MARGIN_DEG
+
+
+@dataclass(frozen=True)
+class Popping:
+    """Largest per-frame turns of corresponding joints, degrees: ``per_joint`` {canonical name:
+    (source, output)}; ``worst`` the joint whose output turn exceeds its :func:`pop_limit` by the
+    most (or comes closest to it), ``excess`` by how many degrees (negative: within the bound)."""
+
+    per_joint: dict[str, tuple[float, float]]
+    worst: str
+    excess: float
+
+    @property
+    def ok(self) -> bool:
+        """Every joint within :func:`pop_limit`."""
+        return self.excess <= 0.0
+
+    def turns(self, name: str | None = None) -> tuple[float, float]:
+        """(source, output) largest turn of joint ``name`` (default: the worst joint)."""
+        return self.per_joint[self.worst if name is None else name]
+
+
+def popping(source_rotations: np.ndarray, source_index: dict[str, int], output_rotations: np.ndarray,
+            output_index: dict[str, int], names=None) -> Popping:
+    """Popping of a clip against its source: each joint's largest change of global orientation
+    between frames (:func:`largest_turns`), output against source, over the canonical ``names``
+    (default: every name both ``*_index`` map, canonical name -> joint index).
+
+    ``*_rotations``: (F, J, 4) global rotations of each clip; the frame rates should agree (a joint
+    turning at a given speed turns by the same angle per frame).
+    """
+    names = [n for n in (source_index if names is None else names) if n in source_index and n in output_index]
+    if not names:
+        return Popping({}, "", float("-inf"))
+    src = largest_turns(np.asarray(source_rotations)[:, [source_index[n] for n in names]])
+    out = largest_turns(np.asarray(output_rotations)[:, [output_index[n] for n in names]])
+    excess = out - pop_limit(src)
+    k = int(np.argmax(excess))
+    per_joint = {n: (float(a), float(b)) for n, a, b in zip(names, src, out)}
+    return Popping(per_joint, names[k], float(excess[k]))

@@ -9,6 +9,9 @@ one clip and measures each against the source, with the source's contact flags:
   sets (upper arm, forearm, thigh, shin) and the hip-to-hip and shoulder-to-shoulder lines, which
   stand for the pelvis and chest orientation. The trunk's, shoulder girdle's and feet's bones keep
   each rig's build (see :mod:`.alignment`), so their directions differ between rigs by design;
+- popping, degrees: every mapped joint's largest change of global orientation between frames
+  (:func:`infuse.metrics.popping`), final output against source, and the joint that comes closest
+  to (or goes furthest past) the bound, 1.5 x the source's largest turn + 10 degrees;
 - foot penetration and float relative to the ground, cm (source, plain, final);
 - root speed relative to the source's speed times the leg scale;
 - the largest distance left to a reachable IK goal, mm, and the share of goals out of reach
@@ -56,6 +59,8 @@ class Quality:
     speed_ratio: float
     residual_mm: float
     unreachable: float
+    popping_plain: metrics.Popping
+    popping_final: metrics.Popping
 
     def skate_limit(self) -> float:
         """The foot-skate target for this pair: source x 1.1 + 0.5 cm/m."""
@@ -87,7 +92,7 @@ def _measure(plan: RetargetPlan, result: RetargetResult, motion: Motion):
     lowest = lowest_points(plan.target.skeleton, plan.target.feet, g, p)
     ground = metrics.ground_contact(lowest, result.contacts.foot_flags(), result.ground)
     speed = metrics.mean_speed(p[:, plan.target.index["base"]], motion.fps)
-    return skate, bones, ground, speed
+    return skate, bones, ground, speed, g
 
 
 def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
@@ -100,9 +105,11 @@ def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
     skate_src = metrics.foot_skate(ps, _matched_contacts(plan, final)[0], src_base).per_metre
     ground_src = metrics.ground_contact(c.lowest, c.foot_flags(), c.ground)
     speed_src = metrics.mean_speed(ps[:, src_base], motion.fps)
-    skate_plain, bones_plain, ground_plain, _ = _measure(plan, final, final.plain)
+    skate_plain, bones_plain, ground_plain, _, g_plain = _measure(plan, final, final.plain)
     skate_paper = _measure(plan, paper, paper.motion)[0]
-    skate_final, bones_final, ground_final, speed = _measure(plan, final, final.motion)
+    skate_final, bones_final, ground_final, speed, g_final = _measure(plan, final, final.motion)
+    g_source = motion_fk(motion)[0]
+    mapped = plan.common
     reached = [r[final.reachable[k] & final.hard[k]] for k, r in final.residual.items()]
     residual = max((float(r.max()) for r in reached if r.size), default=0.0)
     total = sum(int(h.sum()) for h in final.hard.values())
@@ -116,6 +123,8 @@ def evaluate(plan: RetargetPlan, motion: Motion) -> Quality:
         float_source=ground_src.float, float_plain=ground_plain.float, float_final=ground_final.float,
         speed_ratio=speed / (speed_src * plan.scale) if speed_src > 1e-9 else float("nan"),
         residual_mm=1000.0 * residual, unreachable=unreachable,
+        popping_plain=metrics.popping(g_source, plan.source_joints, g_plain, plan.target.index, mapped),
+        popping_final=metrics.popping(g_source, plan.source_joints, g_final, plan.target.index, mapped),
     )
 
 
