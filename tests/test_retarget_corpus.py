@@ -2,7 +2,8 @@
 
 Mappings come from the corpus labels, so these checks measure the retargeter alone (the CLI tests
 go through the mapper). Targets: foot skate <= source x 1.1 + 0.5 cm/m, bone-direction error
-<= 5 degrees on body joints, reachable IK goals met within 1 mm.
+<= 5 degrees on body joints, reachable IK goals met within 1 mm, and no popping: every mapped
+joint's largest turn between frames at most 1.5 x the source's + 10 degrees.
 """
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ PAIRS = [
     (BANDAI.format("run_masculinity"), CMU),
     (BANDAI.format("walk_masculinity"), ROBOT),
     (BANDAI.format("dash_feminine"), XBOT),
+    (BANDAI.format("dash_normal"), CMU),
     (UTAH + "motions/ChrUtah_Walk001.skm", BANDAI.format("walk_normal")),
     (UTAH + "motions/ChrUtah_Run001.skm", XBOT),
 ]
@@ -75,6 +77,7 @@ def test_quality_targets(qualities, src, tgt):
     assert abs(q.speed_ratio - 1.0) < 0.02, q  # the root travels at source speed x leg scale
     assert q.penetration_final < 1.0 and q.float_final < 2.5, q
     assert q.unreachable < 0.25, q
+    assert q.popping_final.ok, q.popping_final
 
 
 def test_contacts_beat_the_paper_and_the_plain_transfer(qualities):
@@ -164,3 +167,4 @@ def test_walk_onto_every_kind_of_rig(loaded, rel):
     q = evaluate(*plan_for(loaded, BANDAI.format("walk_normal"), rel))
     assert q.skate_final <= q.skate_limit() and q.bones_final <= 5.0 and q.residual_mm <= 1.0, q
     assert abs(q.speed_ratio - 1.0) < 0.02, q
+    assert q.popping_final.ok, q.popping_final

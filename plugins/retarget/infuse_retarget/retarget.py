@@ -34,6 +34,12 @@ from .transfer import RetargetPlan, Transferred
 IK_MODES = ("none", "paper", "contacts")
 #: Canonical hinge axes in the T-pose frame: knees bend about +X, elbows about -Y (left) / +Y (right).
 HINGES = {"l_knee": (1.0, 0.0, 0.0), "r_knee": (1.0, 0.0, 0.0), "l_elbow": (0.0, -1.0, 0.0), "r_elbow": (0.0, 1.0, 0.0)}
+#: The canonical side-to-side axis of a foot (the knee's hinge): the ball heads square to it.
+LATERAL = np.array([1.0, 0.0, 0.0])
+#: Heights (source leg lengths above its planted height) of the source's ball of the foot between
+#: which the target ball's goal hands over from its height above the ground to the transferred
+#: foot: from the contact detector's height threshold (``infuse.contacts``) to a third of the leg.
+GROUND_LIFT = (0.06, 0.3)
 #: Seconds over which a ball contact's hold on the ankle goal fades in and out.
 BLEND_SECONDS = 0.12
 #: The hinge of a limb never straightens past this (radians): no hyperextended knees.
@@ -150,10 +156,12 @@ class _Solver:
         if ball_t is None:
             return
         ball_now = solution.end_position + cq.rotate(solution.middle, pos[ball_t] - ankle_t)
+        length = self._foot_length(pos, ankle_t, ball_t)
+        if mode != "paper":
+            ball_goal = self._near_ground(ball_goal, ball_now, solution.end_position, length, k)
         turn, ball_end = ik.aim(solution.end_position, ball_now, ball_goal, solution.middle)
         self.turn(foot, turn)
         name = self.names[ball_t]
-        length = self._foot_length(pos, ankle_t, ball_t)
         self.result.goals[name] = ball_goal.T
         self.result.residual[name] = cq.norm(ball_end - ball_goal)
         self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < ik.REACH_MARGIN
@@ -179,27 +187,52 @@ class _Solver:
         ball_t_path = np.broadcast_to(pos[ball_t], ankle_s.shape)
         ball_h = goals.planted(ball_t_path[1], ball_flags)
         height = ball_h + s * (ball_s[1] - goals.planted(ball_s[1], ball_flags))
-        ball_w = self._ball_on_foot(ankle_w, height, ball_t_path - ankle_t, ball_s - ankle_s, length)
+        ball_w = self._ball_on_foot(ankle_w, height, self._lateral(k), length)
         return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
+
+    def _lateral(self, k: int) -> np.ndarray:
+        """(3, F) the side-to-side axis of foot ``k`` as transferred (the canonical +X the ankle carries)."""
+        delta = self.plan.canonical_delta(self.state.rotations, f"{'lr'[k]}_ankle")
+        return cq.rotate(delta, LATERAL[:, None])
+
+    def _near_ground(self, ball_goal: np.ndarray, ball_now: np.ndarray, ankle: np.ndarray, length: float, k: int) -> np.ndarray:
+        """(3, F) the ball goal ``ball_goal`` near the ground, the ball as the transferred foot carries
+        it (``ball_now``) once the source's ball is high: the weight of the goal falls from 1 to 0
+        as the source ball rises from :data:`GROUND_LIFT` [0] to [1] leg lengths above where it is
+        planted. Kept ``length`` from the ``ankle`` (3, F).
+
+        The goal's height follows the source's ball, and off the ground that says nothing of how
+        the foot is turned: a running foot kicked up behind the knee points down and back, and a
+        goal ahead of the ankle there turned it about by up to 170 degrees in a frame or two.
+        """
+        found = self.result.contacts
+        src_foot = self.plan.source.feet[k]
+        flags = found.flags[:, list(found.points).index(src_foot.ball)]
+        height = self.state.source_positions[src_foot.ball][1]
+        lift = (height - goals.planted(height, flags)) / max(found.leg_length, 1e-9)
+        w = 1.0 - goals.smoothstep((lift - GROUND_LIFT[0]) / (GROUND_LIFT[1] - GROUND_LIFT[0]))
+        toward = ball_now + w * (ball_goal - ball_now) - ankle
+        return ankle + length * toward / np.maximum(cq.norm(toward), 1e-12)
 
     @staticmethod
     def _foot_length(pos: dict, ankle_t: np.ndarray, ball_t: int) -> float:
         return float(cq.norm(pos[ball_t][:, :1] - ankle_t[:, :1])[0])
 
     @staticmethod
-    def _ball_on_foot(ankle: np.ndarray, height: np.ndarray, foot: np.ndarray, source_foot: np.ndarray, length: float) -> np.ndarray:
+    def _ball_on_foot(ankle: np.ndarray, height: np.ndarray, lateral: np.ndarray, length: float) -> np.ndarray:
         """(3, F) goal for the ball of a foot ``length`` long whose ankle goes to ``ankle`` (3, F): at
-        ``height`` (F,) as far as the foot reaches, heading where the transferred foot ``foot``
-        (3, F, ankle to ball) heads (where that stands upright, where the source's ``source_foot``
-        heads).
+        ``height`` (F,) as far as the foot reaches, heading square to the transferred foot's
+        ``lateral`` axis (3, F, the canonical +X the foot carries).
 
         The ball lifts off the ground as the source's does, as the ankle; how steeply the foot
         then points follows from the target's own foot, so a foot longer than the source's, or
-        with a lower ankle, does not dig into the ground as it rolls over.
+        with a lower ankle, does not dig into the ground as it rolls over. The heading comes from
+        the foot's side-to-side axis, not from where its ball lies: a foot built with a high ankle
+        points its ball straight down, and past, when it rolls over its toes, and the ball's
+        horizontal direction then turns about from one frame to the next.
         """
         rise = np.clip(height - ankle[1], -length, length)
-        heading = np.broadcast_to(foot, ankle.shape)[[0, 2]]
-        heading = np.where(np.linalg.norm(heading, axis=0) > 1e-6 * length, heading, source_foot[[0, 2]])
+        heading = np.stack((-lateral[2], lateral[0]))  # lateral x up, on the ground plane
         heading = heading / np.maximum(np.linalg.norm(heading, axis=0), 1e-12)
         ball = np.empty_like(ankle)
         ball[1] = ankle[1] + rise
