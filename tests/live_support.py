@@ -104,8 +104,13 @@ class Recorder:
         self._closed = threading.Event()
         self._opened = threading.Event()
         threading.Thread(target=self._loop.run_forever, daemon=True).start()
-        asyncio.run_coroutine_threadsafe(self._run(), self._loop)
-        assert self._opened.wait(10), "could not connect"
+        task = asyncio.run_coroutine_threadsafe(self._run(), self._loop)
+        deadline = time.monotonic() + 10
+        while not self._opened.wait(0.01):
+            if task.done():
+                self._loop.call_soon_threadsafe(self._loop.stop)
+                task.result()  # raises why the connection failed
+            assert time.monotonic() < deadline, "could not connect"
 
     async def _run(self):
         async with connect(self.url, max_size=None) as socket:

@@ -33,9 +33,10 @@ ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS = 6, 6, 4
 class Client:
     """One connected client: what it subscribed to and what waits to be sent to it."""
 
-    def __init__(self, number: int, send):
+    def __init__(self, number: int, send, drop=lambda: None):
         self.number = number
         self.send = send  # async (text) -> None
+        self.drop = drop  # ends the connection at once, unsent data discarded
         self.frames = False
         self.feedback = "own"
         self.pending: deque[str] = deque()
@@ -43,14 +44,13 @@ class Client:
         self.skipped = 0
         self.closed = False
         self.wake = asyncio.Event()
-        self.overflowed = False
 
     def put(self, doc: dict | str) -> None:
         if self.closed:
             return
         if len(self.pending) >= MAX_PENDING:
-            self.overflowed = True
             self.closed = True
+            self.drop()
         else:
             self.pending.append(doc if isinstance(doc, str) else dumps(doc))
         self.wake.set()
@@ -95,8 +95,9 @@ class Hub:
         self._prepare.shutdown(wait=False, cancel_futures=True)
 
     # -- clients --------------------------------------------------------------------------------------
-    def connect(self, send) -> Client:
-        client = Client(next(self._numbers), send)
+    def connect(self, send, drop=lambda: None) -> Client:
+        """A new client: ``send(text)`` (async) writes to it, ``drop()`` ends its connection at once."""
+        client = Client(next(self._numbers), send, drop)
         self.clients.add(client)
         client.put(self.hello())
         return client

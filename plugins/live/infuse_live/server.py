@@ -101,7 +101,7 @@ class LiveServer:
 
     async def _connection(self, websocket) -> None:
         hub = self.hub
-        client = hub.connect(websocket.send)
+        client = hub.connect(websocket.send, websocket.transport.abort)
         writer = asyncio.create_task(self._write(client, websocket))
         try:
             async for text in websocket:
@@ -120,9 +120,6 @@ class LiveServer:
             await client.write()
         except ConnectionClosed:
             pass
-        finally:
-            if client.overflowed:  # it stopped reading: let it go rather than keep its backlog
-                await websocket.close(1008, "too many messages waiting: the client does not read")
 
     # -- HTTP -----------------------------------------------------------------------------------------
     def post(self, body: bytes, query: dict, timeout_s: float = 10.0) -> dict:
