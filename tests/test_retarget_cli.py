@@ -64,7 +64,9 @@ def test_bvh_output_has_the_characters_names_and_rest(tmp_path, capsys, expected
     assert np.abs(motion_fk(motion)[1] - motion_fk(result.motion)[1]).max() < 1e-5
 
 
-def test_glb_output_keeps_the_mesh_and_adds_the_clip(tmp_path, capsys, expected):
+def test_glb_output_keeps_the_mesh_and_plays_the_new_clip_first(tmp_path, capsys, expected):
+    """The new clip is the glb's first animation (Blender's active action, three.js's animations[0]);
+    the character's own clips follow with --keep-clips only."""
     xbot, result = expected
     out = tmp_path / "walk_xbot.glb"
     code, _, err = run(capsys, corpus_file(WALK), "--to", corpus_file(XBOT), "-o", out, "--name", "walk")
@@ -72,9 +74,14 @@ def test_glb_output_keeps_the_mesh_and_adds_the_clip(tmp_path, capsys, expected)
     before, after = parse_file(corpus_file(XBOT)).json, parse_file(out).json
     for key in ("meshes", "skins", "materials"):
         assert json.dumps(after.get(key), sort_keys=True) == json.dumps(before.get(key), sort_keys=True), key
+    assert [a["name"] for a in after["animations"]] == ["walk"]
     back = infuse.load(out)
-    assert set(back.motions) == set(xbot.motions) | {"walk"}
+    assert list(back.motions) == ["walk"]
     assert np.abs(motion_fk(back.motions["walk"])[1] - motion_fk(result.motion)[1]).max() < 1e-4
+    kept = tmp_path / "walk_xbot_kept.glb"
+    code, _, err = run(capsys, corpus_file(WALK), "--to", corpus_file(XBOT), "-o", kept, "--name", "walk", "--keep-clips")
+    assert code == 0, err
+    assert [a["name"] for a in parse_file(kept).json["animations"]] == ["walk", *xbot.motions]
     if not validator.available():
         pytest.fail("the Khronos glTF validator is missing: run `make setup`")
     assert validator.validate(out)["issues"]["numErrors"] == 0

@@ -9,7 +9,10 @@ were, and its animations become ``asset.motions``:
 - any other Motion becomes a new animation: a rotation track on every joint node, a translation track
   on the first joint and on joints whose offsets move (LINEAR, at the clip's frame times), converted
   back to the file's node frames (parents, scale and axes the reader folded are undone);
-- clips the reader found but that are no longer in ``asset.motions`` are dropped.
+- clips the reader found but that are no longer in ``asset.motions`` are dropped;
+- the animations follow the order of ``asset.motions`` (then morph-track-only clips, then
+  animations the reader did not turn into clips): the first is the one Blender makes active and
+  three.js code playing ``animations[0]`` plays.
 
 Morph-weight tracks come from ``asset.meta["morph_weight_tracks"]``::
 
@@ -281,7 +284,9 @@ def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, track
         target = _Target(sk.names, range(sk.num_joints), sk.parents, {int(r): ident for r in sk.roots},
                          np.ones(sk.num_joints), sk.rest_translations)
         source, from_clips, kept = [], set(), {}
-    animations = [copy.deepcopy(a) for i, a in enumerate(source) if i not in from_clips]  # untouched extras
+    # The asset's clips come first, in their order (a viewer plays the first animation), then any
+    # animation the reader did not turn into a clip, untouched.
+    animations = []
     names = list(asset.motions) + [n for n in tracks if n not in asset.motions]
     for name in names:
         if name in kept:
@@ -295,6 +300,7 @@ def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, track
             _weight_channels(anim, bin_writer, doc, vrm, name, tracks[name])
         if anim["channels"]:
             animations.append(anim)
+    animations += [copy.deepcopy(a) for i, a in enumerate(source) if i not in from_clips]
     if animations:
         doc["animations"] = animations
     else:

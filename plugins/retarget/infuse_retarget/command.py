@@ -3,7 +3,8 @@
 Both skeletons are mapped to the canonical names (``--mapper``, or saved maps ``--map`` for the
 motion and ``--target-map`` for the character; a partial map is completed by the mapper). BVH
 output carries the character's joint names and rest offsets; glTF/GLB output is a copy of the
-character, mesh and all, with the clip added. Nothing is written unless everything succeeds.
+character, mesh and all, with the new clip as its first (and, unless ``--keep-clips``, only)
+animation. Nothing is written unless everything succeeds.
 """
 from __future__ import annotations
 
@@ -24,7 +25,7 @@ from .transfer import RetargetPlan
 def add_arguments(p) -> None:
     p.add_argument("motion", metavar="MOTION", help="the clip to retarget (BVH, SmartBody .skm, glTF, ...)")
     p.add_argument("--to", dest="character", required=True, metavar="CHARACTER", help="the character that receives it")
-    p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file: .bvh, or .glb/.gltf (the character with the clip added)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="output file: .bvh, or .glb/.gltf (the character with the new clip)")
     add_mapping_options(p)
     p.add_argument("--target-map", metavar="MAP.json", help="saved joint map for the character (completed by the mapper)")
     p.add_argument("--clip", help="which clip of MOTION (default: its first)")
@@ -33,6 +34,8 @@ def add_arguments(p) -> None:
                    help="foot constraints: contacts (pinned planted feet, default), paper (warped trajectories), none")
     p.add_argument("--no-ik", dest="ik", action="store_const", const="none", help="the plain transfer (same as --ik none)")
     p.add_argument("--limb-scaling", action="store_true", help="scale reaching hands by arm length as the arm extends")
+    p.add_argument("--keep-clips", action="store_true",
+                   help="glTF output: keep the character's own clips after the new one (default: the new clip only)")
     add_read_options(p)
 
 
@@ -77,14 +80,14 @@ def run(args) -> int:
     result = retarget_clip(plan, clip, ik=args.ik, limb_scaling=args.limb_scaling)
     name = args.name or clip.name or motion_path.stem
     motion = result.motion.replace(name=name)
-    if ext == ".bvh":
-        motions = {name: motion}
-    else:
-        motions = dict(character.motions)
-        while name in motions:
-            name += "_retargeted"
-        motions[name] = motion.replace(name=name)
-    fileio.save(dataclasses.replace(character, motions=motions), out)
+    kept = dict(character.motions) if args.keep_clips and ext != ".bvh" else {}
+    while name in kept:
+        name += "_retargeted"
+    # The new clip first: Blender makes the first animation the active action and three.js code
+    # plays animations[0]; the character's own clips follow only when asked for.
+    motions = {name: motion.replace(name=name), **kept}
+    meta = character.meta if kept else {k: v for k, v in character.meta.items() if k != "morph_weight_tracks"}
+    fileio.save(dataclasses.replace(character, motions=motions, meta=meta), out)
     unmet = [k for k, r in result.residual.items() if (r[result.reachable[k]] > 1e-3).any()]
     print(f"wrote {out}: clip {name!r}, {motion.num_frames} frames at {motion.fps:g} fps, "
           f"leg scale {result.scale:.3f}, feet: {args.ik}"
