@@ -1,7 +1,7 @@
 """The VMC protocol out: one character's pose and expressions as OSC over UDP, every frame.
 
 What VMC receivers (VSeeFace, VMagicMirror, EVMC4U in Unity, VMC4B in Blender, three-vrm apps) read,
-one OSC bundle per frame:
+every frame:
 
 - ``/VMC/Ext/OK 1``; ``/VMC/Ext/T time``: the sender is alive, its time in seconds;
 - ``/VMC/Ext/Root/Pos "root" px py pz qx qy qz qw``: the avatar's origin (here the world origin);
@@ -11,6 +11,8 @@ one OSC bundle per frame:
   position of the bone's origin from its parent's;
 - ``/VMC/Ext/Blend/Val NAME value`` for each morph target of the character (zeros included), then
   ``/VMC/Ext/Blend/Apply``.
+
+A frame that does not fit in one datagram of :data:`MAX_PACKET_BYTES` goes as several bundles, in that order.
 
 Coordinates are Unity's (left-handed, +Y up, the character facing +Z): x is negated, and a quaternion
 (x, y, z, w) becomes (x, -y, -z, w). Positions are metres. Frames are sent from a thread of their own;
@@ -46,6 +48,8 @@ VRM_BONES = {
 #: core frame (right-handed, +X the character's left) -> Unity (left-handed, +X its right)
 _FLIP_POSITION = np.array([-1.0, 1.0, 1.0])
 _FLIP_ROTATION = np.array([1.0, -1.0, -1.0, 1.0])
+#: Largest OSC bundle sent, bytes: what common receivers read in one datagram (python-osc reads 8 KB).
+MAX_PACKET_BYTES = 8000
 
 
 class VmcBones:
@@ -144,22 +148,29 @@ class VmcSender:
                     return
                 frame, self._frame = self._frame, None
             try:
-                self.client.send(self.bundle(frame))
+                for packet in self.packets(frame):
+                    self.client.send(packet)
                 self.sent += 1
             except OSError:  # no receiver yet, or a network hiccup: the next frame tries again
                 time.sleep(0.001)
 
-    def bundle(self, frame: LiveFrame):
-        """The OSC bundle of one frame."""
+    def packets(self, frame: LiveFrame) -> list:
+        """The OSC bundles of one frame, each at most :data:`MAX_PACKET_BYTES`, ``Blend/Apply`` in the last."""
         pose = frame.characters[self.character]
         positions, rotations = to_unity(*self.bones.local(pose.rotations, pose.root))
-        builder = OscBundleBuilder(IMMEDIATELY)
-        builder.add_content(_message("/VMC/Ext/OK", 1))
-        builder.add_content(_message("/VMC/Ext/T", float(frame.time_s)))
-        builder.add_content(_message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0))
-        for name, p, q in zip(self.bones.names, positions.tolist(), rotations.tolist()):
-            builder.add_content(_message("/VMC/Ext/Bone/Pos", name, *p, *q))
-        for name, value in zip(self.morphs, pose.morphs.tolist()):  # zeros too: receivers keep the last value
-            builder.add_content(_message("/VMC/Ext/Blend/Val", name, float(value)))
-        builder.add_content(_message("/VMC/Ext/Blend/Apply"))
-        return builder.build()
+        messages = [_message("/VMC/Ext/OK", 1), _message("/VMC/Ext/T", float(frame.time_s)),
+                    _message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)]
+        messages += [_message("/VMC/Ext/Bone/Pos", name, *p, *q)
+                     for name, p, q in zip(self.bones.names, positions.tolist(), rotations.tolist())]
+        # zeros too: receivers keep the last value they were sent
+        messages += [_message("/VMC/Ext/Blend/Val", name, float(v)) for name, v in zip(self.morphs, pose.morphs.tolist())]
+        messages.append(_message("/VMC/Ext/Blend/Apply"))
+        bundles, builder, size = [], OscBundleBuilder(IMMEDIATELY), 16
+        for message in messages:
+            if size + 4 + message.size > MAX_PACKET_BYTES:
+                bundles.append(builder.build())
+                builder, size = OscBundleBuilder(IMMEDIATELY), 16
+            builder.add_content(message)
+            size += 4 + message.size
+        bundles.append(builder.build())
+        return bundles
