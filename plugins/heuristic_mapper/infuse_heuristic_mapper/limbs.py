@@ -29,7 +29,7 @@ from .view import SkeletonView, length, lengths
 UPPER_OVER_FORE = 1.0    # upper arm / forearm length between joints (rigs range 0.6 .. 1.6)
 THIGH_OVER_SHIN = 1.05   # thigh / shin length
 VIRTUAL_COST = 2.2       # picking a predicted (missing) hand or foot instead of a chain joint
-EARLY_END_COST = 0.6     # ... while chain joints follow (digits or claws on the forearm itself)
+EARLY_END_COST = 0.6     # ... while digits or claws follow on the forearm itself
 
 
 @lru_cache(maxsize=64)
@@ -43,6 +43,26 @@ def _combos(m: int, k: int, lead: int = 3) -> np.ndarray:
         rows += [c + (m,) for c in combinations(range(m), k - 1)]
     rows = [r for r in rows if k < 2 or r[1] <= lead]
     return np.array(rows, dtype=np.int64).reshape(-1, k)
+
+
+def _proportion_cost(x: np.ndarray) -> np.ndarray:
+    """Cost of a length ratio ``x`` standard deviations from a person's: quadratic near it, linear
+    past one deviation, so that cartoon proportions stay possible when the rest of the evidence
+    agrees."""
+    a = np.abs(x)
+    return np.where(a < 1.0, a * a, 2.0 * a - 1.0)
+
+
+def _early_end_cost(view: SkeletonView, chains: list[list[int]], last: np.ndarray, virtual: np.ndarray) -> np.ndarray:
+    """(B, N) cost of a predicted end while chain joints follow the slot before it (index ``last``):
+    cheap when digits or claws branch from that joint (a hand without a wrist joint), otherwise
+    the chain goes on and the end should be on it."""
+    kids, _ = view.digit_counts()
+    idx = np.array(chains)
+    m = idx.shape[1]
+    branching = kids[idx[:, np.clip(last, 0, m - 1)]] >= 2
+    early = virtual & (last < m - 1)
+    return np.where(early, np.where(branching, EARLY_END_COST, 3.0 * VIRTUAL_COST), 0.0)
 
 
 def _role_cost(view: SkeletonView, chain: list[int], good: dict[str, float], bad_flags: dict[str, float]) -> np.ndarray:
@@ -257,7 +277,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         shin = np.sqrt(np.einsum("bnk,bnk->bn", shin_v, shin_v))
         ok = (thigh > 1e-6) & (shin > 1e-6)
         ratio = np.where(ok, thigh / np.where(ok, shin, 1.0), 1.0)
-        cost = np.where(ok, ((np.log(ratio) - np.log(THIGH_OVER_SHIN)) / 0.35) ** 2, 1e6)
+        cost = np.where(ok, _proportion_cost((np.log(ratio) - np.log(THIGH_OVER_SHIN)) / 0.4), 1e6)
         if up is not None:  # thigh and shin point away from the head
             for seg, seg_len in ((thigh_v, thigh), (shin_v, shin)):
                 down = -(seg @ up) / np.maximum(seg_len, 1e-9)
@@ -277,7 +297,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         strongest = _strongest_bend(P)[:, None]
         inside = (h < strongest) & (np.minimum(a, m) > strongest) & (strongest > 0)
         cost += 1.0 * (inside & (k != strongest))
-        cost += VIRTUAL_COST * virtual + EARLY_END_COST * (virtual & (k < m - 1))
+        cost += VIRTUAL_COST * virtual + _early_end_cost(view, cs, k, virtual)
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"thigh": 0.8, "shin": -0.8, "foot": -1.0, "toe": -1.0},
                                                       {"twist": 1.0, "end": 1.0, "control": 0.6, "helper": 0.8}))[:, h]
         cost += _stack(view, cs, lambda c: _role_cost(view, c, {"shin": 0.8, "legpart": 0.4, "thigh": -0.8,
@@ -323,7 +343,7 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         fore = norm(Pw - Pe)
         ok = (upper > 1e-6) & (fore > 1e-6)
         ratio = np.where(ok, upper / np.where(ok, fore, 1.0), 1.0)
-        cost = np.where(ok, ((np.log(ratio) - np.log(UPPER_OVER_FORE)) / 0.4) ** 2, 1e6)
+        cost = np.where(ok, _proportion_cost((np.log(ratio) - np.log(UPPER_OVER_FORE)) / 0.45), 1e6)
         clav = norm(Ps - P[:, c0])
         log_c = np.log(np.maximum(np.where(has_c, clav / np.maximum(upper, 1e-9), 0.5), 1e-3))
         cost += np.where(has_c, (np.maximum(0.0, np.log(0.15) - log_c) / 0.5) ** 2
@@ -344,14 +364,15 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         cost -= 0.6 * (~virtual & many[:, np.minimum(w, m)])
         # the hand is where the fingers branch: a wrist past a branching joint is a finger
         fb = first_branch[:, None]
-        cost += 1.5 * ((e <= fb) & (w > fb) & (w < m))
+        palm_less = _starts_together(view, cs)[:, np.minimum(w, m - 1)] & (w == fb + 1)
+        cost += 1.5 * ((e <= fb) & (w > fb) & (w < m) & ~palm_less)
         reach = view.reach[np.array(cs)]
         rem = np.where(virtual, 0.0, reach[:, np.minimum(w, m - 1)])
         cost += 0.6 * (rem > 1.6 * fore)
         strongest = _strongest_bend(P)[:, None]
         inside = (s < strongest) & (np.minimum(w, m) > strongest) & (strongest > 0)
         cost += 1.0 * (inside & (e != strongest))
-        cost += VIRTUAL_COST * virtual + EARLY_END_COST * (virtual & (e < m - 1))
+        cost += VIRTUAL_COST * virtual + _early_end_cost(view, cs, e, virtual)
         cost += np.where(has_c, _stack(view, cs, lambda ch: _role_cost(
             view, ch, {"clavicle": 0.8, "shoulder": 0.4, "upperarm": -0.8, "forearm": -1.0, "hand": -1.0},
             {"twist": 1.0, "end": 1.0, "control": 0.6}))[:, c0], 0.0)
@@ -374,6 +395,22 @@ def assign_arms(view: SkeletonView, branch: int, roots: list[int]) -> dict[int, 
         for i, r in zip(group, _results(chains, group, combos, cost, Pw, ("clavicle", "shoulder", "elbow", "wrist"),
                                         "wrist")):
             out[roots[i]] = r
+    return out
+
+
+def _starts_together(view: SkeletonView, chains: list[list[int]]) -> np.ndarray:
+    """(B, m) the chain joint has a sibling at its own place that leads somewhere: digits that all
+    start at the end of the forearm (a hand without a hand joint)."""
+    idx = np.array(chains)
+    out = np.zeros(idx.shape, dtype=bool)
+    for b, chain in enumerate(chains):
+        for i, j in enumerate(chain):
+            p = int(view.parents[j])
+            if p < 0 or len(view.children[p]) < 2:
+                continue
+            tol = 0.05 * max(view.bone[j], 1e-9)
+            out[b, i] = any(c != j and view.size[c] >= 2 and length(view.P[c] - view.P[j]) < tol
+                            for c in view.children[p])
     return out
 
 
@@ -438,7 +475,7 @@ def forearm_twist(view: SkeletonView, result: LimbResult) -> int:
                 continue
             t = float(np.dot(view.P[c] - E, axis)) / length2
             off = length(view.P[c] - E - t * axis) / np.sqrt(length2)
-            if 0.05 < t < 0.98 and off < 0.2 and not view.info[c].flagged("control", "prop", "end"):
+            if 0.05 < t < 0.98 and off < 0.2 and not view.info[c].flagged("control", "prop", "end", "helper"):
                 return c
     return -1
 
@@ -450,13 +487,14 @@ def relocate(view: SkeletonView, target: np.ndarray, exclude: set[int], toleranc
     best, best_score = -1, np.inf
     for j in np.nonzero(d < tolerance)[0]:
         j = int(j)
-        if j in exclude:
-            continue
         info = view.info[j]
+        odd = info.flagged("control", "prop", "secondary", "face")
+        if j in exclude or (odd and not view.children[j]):
+            continue  # a bare IK target or pole, prop or cloth bone is never a hand or foot
         score = d[j] / tolerance
         score -= 0.5 * (len(view.children[j]) > 0)
         score -= 0.6 * bool(info.roles & {"hand", "foot"})
-        score += 0.8 * info.flagged("secondary", "prop", "face", "control") + 0.3 * info.flagged("end")
+        score += 0.8 * odd + 0.3 * info.flagged("end")
         score += 0.8 * bool(info.roles & {"thumb", "index", "middle", "ring", "pinky", "finger", "toe"})
         if score < best_score:
             best, best_score = j, score

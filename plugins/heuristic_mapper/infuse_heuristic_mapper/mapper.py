@@ -486,6 +486,9 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
         a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
         if names and (names > 0) == a_left:
             conf = min(0.99, conf + 0.05)
+        elif names:
+            why += "; the side names say the opposite (mirrored names): the geometry decides"
+            conf = min(conf, 0.85)
     elif names:
         a_left, why, conf = names > 0, "left/right from the names (the feet do not show the front)", 0.7
     elif abs(geo) > 0.05:
@@ -579,13 +582,16 @@ def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> N
         result.put(f"{s}_forefoot", None, 0.5, "no foot joint")
         result.put(f"{s}_toe", None, 0.5, "no foot joint")
         return
-    toes = [c for c in view.children[ankle] if not view.info[c].flagged("control", "prop", "heel", "secondary")]
+    toes = [c for c in view.children[ankle]
+            if not view.info[c].flagged("control", "prop", "heel", "secondary", "helper")]
     forefoot = -1
     if toes:
         if len(toes) >= 3:  # one chain per toe: the big toe is the one nearest the body's middle plane
             forefoot = _big_toe(view, toes, base, up)
-        else:
-            forefoot = max(toes, key=lambda c: view.limb_length(ankle, c))
+        else:  # the longer; of two alike, the one named a toe rather than a digit of another name
+            step = 0.01 * view.scale
+            forefoot = max(toes, key=lambda c: (round(view.limb_length(ankle, c) / step), view.info[c].has("toe"),
+                                                not view.info[c].roles & {"pinky", "ring", "middle", "index"}))
     if forefoot >= 0 and view.info[forefoot].flagged("end") and not view.children[forefoot]:
         result.put(f"{s}_forefoot", None, 0.6, "the only joint past the ankle is the toe tip")
         result.put(f"{s}_toe", forefoot, 0.6, "toe end: the tip of the foot")

@@ -52,8 +52,13 @@ FLAG_WORDS: dict[str, str] = {
     "ik": "control", "fk": "control", "ctrl": "control", "control": "control", "controller": "control",
     "pole": "control", "target": "control", "mch": "control", "org": "control", "snap": "control",
     "track": "control", "cursor": "control", "master": "control", "locator": "control", "goal": "control",
+    "orient": "control", "tracker": "control", "effector": "control", "eff": "control", "aim": "control",
     "helper": "helper", "dummy": "helper", "null": "helper", "aux": "helper", "free": "helper",
     "hipjoint": "helper", "buttock": "helper", "fingerbase": "helper", "adjust": "helper", "correct": "helper",
+    # anatomical landmarks and sensors (markers, not joints)
+    "landmark": "helper", "marker": "helper", "imu": "helper", "sensor": "helper", "acromion": "helper",
+    "styloid": "helper", "epicondyle": "helper", "malleolus": "helper", "metatarsal": "helper",
+    "occiput": "helper", "sellion": "helper", "vertex": "helper", "sitbone": "helper", "trochanter": "helper",
     "slot": "prop", "weapon": "prop", "sword": "prop", "shield": "prop", "gun": "prop", "prop": "prop",
     "handle": "prop", "sheath": "prop", "helmet": "prop", "attach": "prop", "socket": "prop", "grip": "prop",
     "hair": "secondary", "skirt": "secondary", "bust": "secondary", "breast": "secondary", "sec": "secondary",
@@ -194,6 +199,18 @@ def bits(words) -> int:
     return out
 
 
+def _split_glued(token: str) -> tuple[str, ...]:
+    """A token of two known words written together without a case change or separator
+    (``ARMCONTROL``, ``legorient``) -> the two words; any other token as it is."""
+    if len(token) < 6 or token in ROLE_WORDS or token in FLAG_WORDS:
+        return (token,)
+    for cut in range(3, len(token) - 2):
+        head, tail = token[:cut], token[cut:]
+        if (head in ROLE_WORDS or head in FLAG_WORDS) and (tail in ROLE_WORDS or tail in FLAG_WORDS):
+            return head, tail
+    return (token,)
+
+
 @lru_cache(maxsize=8192)
 def analyse(name: str, prefix: str = "") -> NameInfo:
     """The :class:`NameInfo` of one joint name, with ``prefix`` (shared by the skeleton's names) removed."""
@@ -238,6 +255,7 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
         else:
             joined.append(tokens[i])
             i += 1
+    joined = [part for t in joined for part in _split_glued(t)]
     roles = {ROLE_WORDS[t] for t in joined if t in ROLE_WORDS}
     flags = {FLAG_WORDS[t] for t in joined if t in FLAG_WORDS}
     # "hip" names the thigh when a side is given (LeftHip, lhip) and the pelvis otherwise (Hip, hip)
@@ -248,6 +266,9 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
     if "leg" in roles:
         roles.discard("leg")
         roles.add("legpart")
+    if roles & {"hips"} and len(roles) > 1 and {"com", "cog"} & set(joined):
+        roles.discard("hips")  # the centre of mass of a segment (COM_LeftForeArm): a marker
+        helper = True
     if helper:
         flags.add("helper")
     if "end" in flags and "toe" in roles:
