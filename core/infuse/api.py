@@ -35,6 +35,7 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.transforms": "affine transforms",
     "infuse.kinematics": "forward kinematics over frames",
     "infuse.contacts": "foot contacts",
+    "infuse.grounding": "the height of a character's feet at rest, clips lifted onto the ground",
     "infuse.mapping": "Mapping and map_skeleton: canonical joint names of a skeleton",
     "infuse.metrics": "motion quality measures",
     "infuse.speech": "utterances, phonemes and visemes for TTS engines and lip sync",
