@@ -2,6 +2,7 @@
 one line, nothing written)."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -12,6 +13,9 @@ import pytest
 
 import infuse
 from infuse.cli import main
+from infuse.contacts import feet as contact_feet
+from infuse.contacts import lowest_points
+from infuse.grounding import foot_height, grounded
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse_gltf import validate as validator
@@ -25,6 +29,7 @@ WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_
 XBOT = "runxaway-models/Xbot.glb"
 UTAH = "smartbody/behaviorsets/MaleLocomotion/skeletons/test_utah.sk"
 FOX = "projectlookingglass-glb/Fox.glb"
+BRAD = "smartbody/mesh/brad/Brad.dae"
 INFUSE = Path(sys.executable).with_name("infuse")
 
 
@@ -40,14 +45,38 @@ def run(capsys, *argv) -> tuple[int, str, str]:
 
 @pytest.fixture(scope="module")
 def expected():
-    """The retargeted walk computed through the API with the mappings the command uses."""
+    """The retargeted walk computed through the API with the mappings the command uses, stood on
+    the ground as the command writes it."""
     require_corpus()
     walk = infuse.load(corpus_file(WALK))
     xbot = infuse.load(corpus_file(XBOT))
     clip = next(iter(walk.motions.values()))
-    plan = RetargetPlan(clip.skeleton, source_mapping(walk, "heuristic", None), xbot.skeleton, map_skeleton(xbot),
+    xbot_map = map_skeleton(xbot)
+    plan = RetargetPlan(clip.skeleton, source_mapping(walk, "heuristic", None), xbot.skeleton, xbot_map,
                         source_motion=clip, target_motion=next(iter(xbot.motions.values())))
-    return xbot, retarget_clip(plan, clip)
+    result = retarget_clip(plan, clip)
+    on_ground = {k: grounded(m, foot_height(xbot, xbot_map, m)) for k, m in (("motion", result.motion), ("plain", result.plain))}
+    return xbot, dataclasses.replace(result, **on_ground)
+
+
+def test_characters_stand_on_the_ground_unless_asked_not_to(tmp_path, capsys):
+    """SmartBody's Brad puts his hips at the origin, his feet a metre down: written, every clip
+    stands on y = 0 (its lowest sole point; his own rest clip lifted by a metre), or keeps its
+    height with --no-ground."""
+    brad = corpus_file(BRAD)
+    out, kept = tmp_path / "brad.glb", tmp_path / "brad_kept.glb"
+    assert run(capsys, corpus_file(WALK), "--to", brad, "-o", out, "--keep-clips")[0] == 0
+    assert run(capsys, corpus_file(WALK), "--to", brad, "-o", kept, "--keep-clips", "--no-ground")[0] == 0
+    written, unchanged = infuse.load(out), infuse.load(kept)
+    mapping = map_skeleton(written)
+    assert list(written.motions) == ["dataset-1_walk_normal_001", "Brad"]
+    assert foot_height(written, mapping) < -0.9  # the file's rest pose is Brad's own
+    for name in written.motions:
+        assert abs(foot_height(written, mapping, written.motions[name])) < 1e-5, name
+    assert foot_height(unchanged, mapping, unchanged.motions["Brad"]) < -0.9
+    pair = contact_feet(written.skeleton, mapping)
+    walk = lowest_points(written.skeleton, pair, *motion_fk(written.motions["dataset-1_walk_normal_001"]))
+    assert 0.0 < np.median(walk) < 0.02  # the toe joints a little above the soles while planted
 
 
 def test_bvh_output_has_the_characters_names_and_rest(tmp_path, capsys, expected):

@@ -4,7 +4,8 @@ Both skeletons are mapped to the canonical names (``--mapper``, or saved maps ``
 motion and ``--target-map`` for the character; a partial map is completed by the mapper). BVH
 output carries the character's joint names and rest offsets; glTF/GLB output is a copy of the
 character, mesh and all, with the new clip as its first (and, unless ``--keep-clips``, only)
-animation. Nothing is written unless everything succeeds.
+animation. Each written clip stands on the ground, its feet's lowest point (soles included) at
+y = 0, unless ``--no-ground``. Nothing is written unless everything succeeds.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from infuse import fileio, registry
 from infuse.cli.builtin import add_read_options, read_options
 from infuse.cli.map_command import add_mapping_options
 from infuse.errors import InputError, UnusableInputError, UsageError
+from infuse.grounding import foot_height, grounded
 from infuse.mapping import DEFAULT_MAPPER, map_skeleton, sample_poses
 from infuse.plugin_types import normalized_extension
 
@@ -36,6 +38,8 @@ def add_arguments(p) -> None:
     p.add_argument("--limb-scaling", action="store_true", help="scale reaching hands by arm length as the arm extends")
     p.add_argument("--keep-clips", action="store_true",
                    help="glTF output: keep the character's own clips after the new one (default: the new clip only)")
+    p.add_argument("--no-ground", dest="ground", action="store_false",
+                   help="keep the clips' heights (default: each lifted or lowered so its lowest foot touches y = 0)")
     add_read_options(p)
 
 
@@ -86,6 +90,8 @@ def run(args) -> int:
     # The new clip first: Blender makes the first animation the active action and three.js code
     # plays animations[0]; the character's own clips follow only when asked for.
     motions = {name: motion.replace(name=name), **kept}
+    if args.ground:
+        motions = {k: grounded(m, foot_height(character, tgt_map, m)) for k, m in motions.items()}
     meta = character.meta if kept else {k: v for k, v in character.meta.items() if k != "morph_weight_tracks"}
     fileio.save(dataclasses.replace(character, motions=motions, meta=meta), out)
     unmet = [k for k, r in result.residual.items() if (r[result.reachable[k]] > 1e-3).any()]
