@@ -63,3 +63,41 @@ def test_a_speed_beyond_the_pack_is_reported_once_and_walked_at_the_top_speed(xb
     base = g[:, rt.rig(c).joint("base")]
     realized = np.hypot(*(base[-1] - base[45])[[0, 2]]) / ((len(base) - 1 - 45) / 30.0)
     assert realized == pytest.approx(top, rel=0.02)
+
+
+@pytest.fixture(scope="module")
+def sb_female(tmp_path_factory):
+    """SmartBody's FemaleLocomotion set imported and built as a pack (copied to a temporary folder)."""
+    from infuse.packs import build_pack, import_smartbody
+
+    source = corpus_file("smartbody/behaviorsets/FemaleLocomotion")
+    return build_pack(import_smartbody(source, tmp_path_factory.mktemp("packs") / "female", name="sb-female")).manifest.path.parent
+
+
+def test_a_scene_lasts_until_its_walks_have_arrived(xbot, sb_female):
+    from infuse.scene import Scene
+
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(infuse.Character("x", xbot), "ann", packs=[str(sb_female)])
+    block = scene.walk_to("ann", (1.5, 4.0), at=0.0)
+    nominal = scene.scheduler.blocks[block].end_s
+    scene.run()
+    assert scene.end_time > nominal  # the pack walks slower than the nominal 1.2 m/s
+    rig = scene.runtime.rig("ann")
+    _, pos = infuse.motion_fk(scene.motion("ann"))
+    end = pos[-15:, rig.joint("base")][:, [0, 2]].mean(axis=0)
+    assert np.linalg.norm(end - (1.5, 4.0)) < 0.05
+    assert not [e for e in scene.feedback.log if e.kind == "warningFeedback" and "short" in e.description]
+
+
+def test_a_run_faster_than_the_pack_is_reported(xbot):
+    from infuse.scene import Scene
+
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(infuse.Character("x", xbot), "bob", packs=["locomotion-male"])
+    scene.walk_to("bob", (0.0, 12.0), at=0.0, manner="run", speed=6.0)
+    (warning,) = [e for e in scene.feedback.log if e.kind == "warningFeedback" and "m/s" in e.description]
+    top = scene.pack_space("bob", "locomotion").speed_limit()(0.0)
+    assert "asked 6.00 m/s (run)" in warning.description and f"walking at {top:.2f} m/s" in warning.description
+    scene.run()
+    assert [e for e in scene.feedback.log if e.kind == "warningFeedback" and "m/s" in e.description] == [warning]

@@ -97,6 +97,16 @@ class BlendSpace:
         """(Q,) flags of (Q, D) parameter points inside ``group``'s tessellation."""
         return self.tessellations[group].contains(query)
 
+    def speed_limit(self):
+        """The locomotion group's :class:`~infuse.packs.coverage.SpeedLimit` (top speed by travel
+        direction), made once."""
+        from .coverage import SpeedLimit
+
+        cached = self.__dict__.get("_speed_limit")
+        if cached is None or cached[0] is not self.tessellations["locomotion"]:
+            cached = self.__dict__["_speed_limit"] = (self.tessellations["locomotion"], SpeedLimit(self.tessellations["locomotion"]))
+        return cached[1]
+
     def range(self, coordinate: str, group: str | None = None) -> tuple[float, float]:
         """Smallest and largest value of a coordinate over a group's examples."""
         t = self.tessellations[group or next(iter(self.tessellations))]

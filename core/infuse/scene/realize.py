@@ -201,10 +201,24 @@ def _locomotion(scene, activation: Activation):
     if p.get("facing_deg") is not None:
         scene.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: the facing at the end is not realized; "
                                                     "the character faces its last direction of travel")
-    walk = controller("locomotion", pack=scene.pack_space(name, "locomotion"), speed=float(p.get("speed_m_s") or 1.2),
-                      path=own, max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
+    space = scene.pack_space(name, "locomotion")
+    speed = float(p.get("speed_m_s") or 1.2)
+    top = space.speed_limit()(0.0)
+    if speed > top + 1e-3:
+        scene.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: asked {speed:.2f} m/s ({p.get('manner') or 'walk'}); "
+                                                  f"pack {space.pack!r} realizes at most {top:.2f} m/s forward: "
+                                                  f"walking at {top:.2f} m/s")
+        speed = top
+    walk = controller("locomotion", pack=space, speed=speed, path=own,
+                      max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
+    # The walk lasts until the character stands at its last point, as the steering will take it there.
+    arrival, final = walk.plan(scene.fps, scene.walks.expected_state(name))
+    end = activation.end if arrival is None else max(activation.end, activation.start + arrival)
+    if arrival is None:
+        scene.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: the walk cannot reach its target "
+                                                  f"({points[-1][0]:.2f}, {points[-1][1]:.2f})")
     activity = scene.activate(activation, walk, activation.stop_s, blend_in_s=0.3, priority=scene.walks.priority(name))
-    scene.walks.start(name, activity, activation.end)
+    scene.walks.start(name, activity, end, final)
     scene.character(name).destination = (float(points[-1][0]), float(points[-1][1]))
     return activity
 

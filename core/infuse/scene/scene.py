@@ -561,9 +561,9 @@ class Scene:
     # -- evaluation -----------------------------------------------------------------------------------
     @property
     def end_time(self) -> float:
-        """When everything scheduled has ended (seconds; 0 for an empty scene)."""
-        return max([0.0] + [r.end_s if r.interrupted_at is None else r.interrupted_at
-                            for r in self.scheduler.blocks.values() if not r.failed])
+        """When everything scheduled has ended, every walk standing at its target (seconds; 0 for an empty scene)."""
+        return max([0.0, self.walks.end_s()] + [r.end_s if r.interrupted_at is None else r.interrupted_at
+                                                for r in self.scheduler.blocks.values() if not r.failed])
 
     def run(self, seconds: float | None = None, progress=None) -> None:
         """Evaluate the next ``seconds`` (default: up to the first frame at or after :attr:`end_time`) and

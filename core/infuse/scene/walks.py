@@ -20,6 +20,7 @@ import numpy as np
 
 from .. import quaternions as quat
 from ..runtime import Clip
+from .realize import BEHAVIOR_DEGRADED
 
 #: Crossfade from a walk that has arrived to the idle clip, seconds.
 SETTLE_BLEND_S = 0.5
@@ -28,15 +29,21 @@ SETTLE_BLEND_S = 0.5
 STILL_M, STILL_S = 0.015, 0.5
 
 
+#: A walk handed over farther than this (metres) from its last point is reported as not arrived.
+SHORT_M = 0.15
+
+
 @dataclass
 class Walk:
-    """One walk of a character: the activity, its scheduled end (seconds), the frame at which to see
-    whether it stands still, and the idle that took over."""
+    """One walk of a character: the activity, when it stands at its last point (seconds, as planned),
+    the frame at which to see whether it stands still, the idle that took over, and the steering's
+    state planned for its end (``x``, ``z``, ``heading`` in the character's own frame)."""
 
     activity: object
     end_s: float
     check_frame: int
     settled: object = None
+    final: dict | None = None
 
 
 class Walks:
@@ -55,8 +62,21 @@ class Walks:
         """The base-layer priority of the character's next walk."""
         return 2 * len(self.walks.get(name, ())) + 2
 
-    def start(self, name: str, activity, end_s: float) -> None:
-        """``activity`` (a locomotion, at :meth:`priority`) becomes the character's walk from its start."""
+    def expected_state(self, name: str) -> dict | None:
+        """Where the character's last walk is planned to leave it (its steering state), or None."""
+        walks = self.walks.get(name)
+        return walks[-1].final if walks else None
+
+    def end_s(self) -> float:
+        """When the last walk of any character stands at its target (seconds; 0 without walks); a walk
+        stopped earlier counts until it stopped."""
+        ends = [w.end_s if w.activity.end_s is None else min(w.end_s, w.activity.end_s)
+                for walks in self.walks.values() for w in walks]
+        return max(ends, default=0.0)
+
+    def start(self, name: str, activity, end_s: float, final: dict | None = None) -> None:
+        """``activity`` (a locomotion, at :meth:`priority`) becomes the character's walk from its start;
+        it is planned to stand at its last point at ``end_s``, its steering then in state ``final``."""
         runtime = self.scene.runtime
         walks = self.walks.setdefault(name, [])
         previous = walks[-1] if walks else None
@@ -66,7 +86,7 @@ class Walks:
             if previous.settled is not None:
                 runtime.stop(previous.settled, until, blend_out_s=0.0)
         fps = self.scene.fps
-        walks.append(Walk(activity, float(end_s), math.ceil((end_s + STILL_S) * fps - 1e-9)))
+        walks.append(Walk(activity, float(end_s), math.ceil(end_s * fps - 1e-9), final=final))
         frame = max(math.ceil(activity.start_s * fps - 1e-9), 0)
         self._handovers.append((frame, activity, previous.activity if previous is not None else None))
 
@@ -93,11 +113,22 @@ class Walks:
         self._handovers = [h for h in self._handovers if h[0] > frame]
         for _, activity, previous in due:
             if previous is not None and previous.state and not activity.state:
+                self._report_short(previous)
                 activity.state.update(activity.controller.handover(previous.state))
         for name, walk, after in list(self._waiting()):
             started = walk.activity.start_s <= self.scene.time
             if started and frame >= walk.check_frame and (after is None or after.activity.start_s > self.scene.time + SETTLE_BLEND_S):
                 self._settle(name, walk, after)
+
+    def _report_short(self, activity) -> None:
+        """warningFeedback for a walk handed over before it reached its last point."""
+        path = getattr(getattr(activity.controller, "steering", None), "path", None)
+        if path is None or activity.source is None:
+            return
+        short = math.hypot(activity.state["x"] - path[-1][0], activity.state["z"] - path[-1][1])
+        if short > SHORT_M:
+            self.scene.warn(activity.source, BEHAVIOR_DEGRADED, f"<{activity.source.element}>: {short:.2f} m short of its "
+                                                                f"target when the next walk took over at {self.scene.time:.2f} s")
 
     def _settle(self, name: str, walk: Walk, after: Walk | None) -> None:
         scene, runtime = self.scene, self.scene.runtime

@@ -36,14 +36,13 @@ import numpy as np
 
 from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
-from infuse.packs.coverage import SpeedLimit
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
 from .phase_keys import foot_events, foot_phase, stance_of, warp
-from .steering import Steering
+from .steering import STAY as STAY_M, Steering
 
 _INFUSIONS: dict = {}
 #: What :meth:`Locomotion.bind` prepared, by (blend space, skeleton, legs): walks of a character reuse it.
@@ -163,6 +162,36 @@ class Locomotion(Controller):
 
     def describe(self) -> str:
         return f"locomotion ({getattr(self.pack, 'pack', self.pack)})"
+
+    def plan(self, fps: float, state: dict | None = None, most_s: float = 600.0) -> tuple[float | None, dict]:
+        """When a walk along a path (``path=`` or ``target=``) with a :class:`~infuse.packs.BlendSpace`
+        pack stands at its last point, seconds from its start at ``fps``, from the steering at the
+        speeds the pack realizes (faster ones kept to its top speed), with the stop's last steps and
+        the fade into the idle (one cycle of the slowest forward walk at the stop's cadence, and
+        :data:`SETTLE_S`); None if it does not stand there within ``most_s``. Also the steering's
+        state then (``x``, ``z``, ``heading``...). ``state``: where it starts (default: the origin,
+        standing, facing +Z)."""
+        st = dict(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0)
+        st.update({k: v for k, v in (state or {}).items() if k in st})
+        st["waypoint"] = 0
+        space = self.pack
+        top = space.speed_limit() if hasattr(space, "speed_limit") else None
+        path = self.steering.path
+        if path is None:
+            return None, st
+        dt = 1.0 / float(fps)
+        last, frames = path[-1], 0
+        while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
+            self.steering.run(st, np.array([frames * dt]), dt, top=top)
+            frames += 1
+            if st["waypoint"] == len(path) - 1 and st["speed"] < 1e-6 and \
+                    math.hypot(st["x"] - last[0], st["z"] - last[1]) < STAY_M:
+                break
+        else:
+            return None, st
+        walks = [c for c in space.group("locomotion") if c.role != "idle" and c.parameters["forward_speed"] > 0.0] if top else []
+        slowest = min(walks, key=lambda c: c.parameters["forward_speed"]).keys if walks else (0.0, 0.0, 1.0)
+        return frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S, st
 
     def handover(self, state: dict) -> dict:
         """A walk following another goes on from its state (where it is, heading, speed, gait phase,
@@ -503,7 +532,7 @@ def _prepare(space, clips, sk, legs) -> dict:
                             [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
         stance_feet = g_rot[0].reshape(2, 2, 4)
     body = np.nonzero(limbs == 0)[0]
-    out = {"space": space, "limit": SpeedLimit(space.tessellations["locomotion"]), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+    out = {"space": space, "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
