@@ -14,6 +14,8 @@ import pytest
 import infuse
 from infuse.cli import main
 from infuse.errors import MissingFeatureError, UsageError
+from infuse.grounding import foot_height
+from infuse.mapping import map_skeleton
 from infuse_batch import backends, jobs, run_batch
 from infuse_batch.manifest import FILENAME
 
@@ -59,6 +61,7 @@ def test_glb_output_is_the_character_with_the_clip(local):
     doc, original = got.payload.document.json, xbot.payload.document.json
     assert len(doc["meshes"]) == len(original["meshes"]) > 0
     assert len(doc["animations"]) == 1
+    assert abs(foot_height(got, map_skeleton(got), clip)) < 1e-5  # its soles touch y = 0
 
 
 def test_first_clip_of_a_chunk_equals_infuse_retarget(local, tmp_path, capsys):

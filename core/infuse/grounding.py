@@ -33,9 +33,10 @@ def sole_depth(asset: Asset, pair: tuple[Foot, Foot]) -> float:
     return lowest - sole
 
 
-def foot_height(asset: Asset, mapping, motion: Motion | None = None) -> float:
+def foot_height(asset: Asset, mapping, motion: Motion | None = None, sole: float | None = None) -> float:
     """Height (m) of the lowest point of the character's feet: in its rest pose, or (``motion``) the
-    lowest over the clip's frames, soles included (:func:`sole_depth`).
+    lowest over the clip's frames, soles included (``sole``: the :func:`sole_depth`, measured here
+    unless given, for many clips of one character).
 
     ``mapping``: the character's canonical mapping (:class:`~infuse.mapping.Mapping` or a dict).
     Raises :class:`~infuse.errors.UnusableInputError` when a leg is not mapped.
@@ -46,7 +47,7 @@ def foot_height(asset: Asset, mapping, motion: Motion | None = None) -> float:
         g, p = forward_kinematics(sk, sk.rest_rotations[None], sk.rest_translations[None, 0])
     else:
         g, p = motion_fk(motion)
-    return float(lowest_points(sk, pair, g, p).min()) - sole_depth(asset, pair)
+    return float(lowest_points(sk, pair, g, p).min()) - (sole_depth(asset, pair) if sole is None else sole)
 
 
 def grounded(motion: Motion, height: float) -> Motion:

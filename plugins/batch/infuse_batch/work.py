@@ -26,7 +26,9 @@ import numpy as np
 
 from infuse import fileio, registry
 from infuse.asset import Asset, Character
+from infuse.contacts import feet
 from infuse.errors import InfuseError, InputError, MissingFeatureError, UnusableInputError, UsageError
+from infuse.grounding import foot_height, grounded, sole_depth
 from infuse.mapping import Mapping, map_skeleton, sample_poses
 from infuse.plugin_types import normalized_extension
 
@@ -74,6 +76,7 @@ class _Loaded:
     asset: Asset
     mapping: Mapping
     signature: dict
+    sole: float  # how far its soles reach below its feet's joints (infuse.grounding.sole_depth)
 
 
 _characters: OrderedDict = OrderedDict()
@@ -105,7 +108,7 @@ def _character(source: Source, settings: Settings) -> _Loaded:
     sig = signature(source.path)
     asset = fileio.load(source.path)
     mapping = map_skeleton(asset, mapper=settings.mapper)
-    loaded = _Loaded(asset, mapping, sig)
+    loaded = _Loaded(asset, mapping, sig, sole_depth(asset, feet(asset.skeleton, mapping, file=asset.path)))
     _characters[key] = loaded
     while len(_characters) > CHARACTER_BLOCK:
         _characters.popitem(last=False)
@@ -157,8 +160,10 @@ def _file_name(name: str) -> str:
 
 
 def _writable(loaded: _Loaded, name: str, motion) -> Asset:
-    """The character with only this clip (its own clips and their morph tracks left out)."""
+    """The character with only this clip (its own clips and their morph tracks left out), the clip
+    standing on the ground (its feet's lowest point at y = 0)."""
     meta = {k: v for k, v in loaded.asset.meta.items() if k != "morph_weight_tracks"}
+    motion = grounded(motion, foot_height(loaded.asset, loaded.mapping, motion, loaded.sole))
     return dataclasses.replace(loaded.asset, motions={name: motion}, meta=meta)
 
 
