@@ -264,7 +264,7 @@ def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body
     # neither the limb's own trunk nor what hangs from its last joint (digits, claws) is the hand
     # or foot found elsewhere
     exclude = body_chain | set(view.ancestors(r.chain[0])) | set(view.subtree(r.slots[middle]).tolist())
-    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.0) * seg, 1e-6))
+    new = relocate(view, target, exclude, max((0.25 if j >= 0 else 1.5) * seg, 1e-6))
     if new >= 0:
         r.slots[end] = new
         r.notes[end] = "IK-driven: found where the limb ends, outside its chain"
@@ -336,7 +336,9 @@ def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.nda
             break
         def score(c: int) -> float:
             info = view.info[c]
-            far = view.P[view.far[c]] - view.P[cur]
+            # which way the joint leads: its own bone, or the next ones when it sits at its parent's
+            # place (not its farthest descendant: hair may hang from the head down the back)
+            far = view.P[view.main_chain(c, 3)[-1] if view.bone[c] < 1e-3 * view.scale else c] - view.P[cur]
             norm = length(far)
             upness = float(np.dot(far, up) / norm) if norm > 1e-9 else 0.0
             s = upness + 0.5 * view.limb_length(cur, c) / view.scale
@@ -385,7 +387,9 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
     head = _pick_head(view, chain, base, up, top, neck_from_top)
     if head < 0:
         return torso, chain if neck_from_top else [], -1, chest_why
-    neck = chain[:chain.index(head)]
+    # a zero-length joint at its parent's place is a helper, a look-at target a control: not neck joints
+    neck = [j for j in chain[:chain.index(head)] if (view.bone[j] > 1e-3 * view.scale or view.info[j].has("neck"))
+            and not view.info[j].flagged("control")]
     if arms is None and top == base:  # no arms to mark the chest: split the chain by names, else by height
         torso, neck = _split_without_arms(view, neck, base, head)
         chest_why = "chest: the last torso joint below the neck (no arms: by name or height)"
