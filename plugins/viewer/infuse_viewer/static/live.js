@@ -51,7 +51,29 @@ async function loadCharacter(name, info) {
   root.traverse((o) => { if (o.isMesh && o.morphTargetDictionary) meshes.push(o); });
   root.traverse((o) => { if (o.isMesh) o.frustumCulled = false; });
   scene.add(root);
-  characters.set(name, { joints: info.joints, morphs: info.morphs, bones, meshes, root });
+  // The stream's root joint transform is in the world (metres, the placement included); the model's root
+  // bone may hang under nodes that turn and scale it (an Armature at 0.01): undo them once, keep its scale.
+  root.updateMatrixWorld(true);
+  const top = bones[0];
+  const above = top && top.parent ? top.parent.matrixWorld.clone().invert() : new THREE.Matrix4();
+  const scale = top ? top.getWorldScale(new THREE.Vector3()) : new THREE.Vector3(1, 1, 1);
+  characters.set(name, { joints: info.joints, morphs: info.morphs, bones, meshes, root, above, scale });
+}
+
+const placed = { m: new THREE.Matrix4(), p: new THREE.Vector3(), q: new THREE.Quaternion() };
+
+// The first frame sets the view: across the line between the first two characters, all of them in sight.
+function frameView(message) {
+  const roots = Object.values(message.characters).map((c) => new THREE.Vector3(c.root[0], 0, c.root[2]));
+  if (!roots.length) return;
+  const centre = roots.reduce((a, b) => a.add(b), new THREE.Vector3()).divideScalar(roots.length);
+  const across = roots.length > 1 ? new THREE.Vector3().subVectors(roots[1], roots[0]) : new THREE.Vector3(1, 0, 0);
+  const spread = Math.max(across.length(), ...roots.map((r) => r.distanceTo(centre) * 2), 1.0);
+  const side = new THREE.Vector3(-across.z, 0, across.x).normalize();
+  if (side.lengthSq() === 0) side.set(0, 0, 1);
+  controls.target.set(centre.x, 1.0, centre.z);
+  camera.position.copy(centre).addScaledVector(side, 2.2 * spread + 2.0).setY(1.5);
+  controls.update();
 }
 
 function applyFrame(message) {
@@ -59,8 +81,14 @@ function applyFrame(message) {
     const c = characters.get(name);
     if (!c) continue;
     const r = pose.rotations;
-    c.bones.forEach((bone, j) => { if (bone) bone.quaternion.set(r[4 * j], r[4 * j + 1], r[4 * j + 2], r[4 * j + 3]); });
-    if (c.bones[0]) c.bones[0].position.set(pose.root[0], pose.root[1], pose.root[2]);
+    c.bones.forEach((bone, j) => { if (bone && j > 0) bone.quaternion.set(r[4 * j], r[4 * j + 1], r[4 * j + 2], r[4 * j + 3]); });
+    const top = c.bones[0];
+    if (top) {
+      placed.p.set(pose.root[0], pose.root[1], pose.root[2]);
+      placed.q.set(r[0], r[1], r[2], r[3]);
+      placed.m.compose(placed.p, placed.q, c.scale).premultiply(c.above);
+      placed.m.decompose(top.position, top.quaternion, top.scale);
+    }
     for (const mesh of c.meshes) {
       pose.morphs.forEach((w, k) => {
         const index = mesh.morphTargetDictionary[c.morphs[k]];
@@ -68,6 +96,7 @@ function applyFrame(message) {
       });
     }
   }
+  if (api.frames === 0) frameView(message);
   audio.streamTime = message.time;
   api.frame = message.frame;
   api.frames += 1;
