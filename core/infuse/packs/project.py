@@ -85,8 +85,7 @@ The `$name` behaviour pack for infuse ($kind): $description.
 ## Install
 
 ```sh
-pip install $distribution                  # once published on the package index
-pip install dist/$wheel_prefix-*.whl       # the wheel 'infuse pack build --wheel' wrote
+$install
 ```
 
 It depends on the `infuse-anim` distribution (the `infuse` command and Python package).
@@ -94,15 +93,18 @@ It depends on the `infuse-anim` distribution (the `infuse` command and Python pa
 ## Use
 
 ```sh
-infuse packs                               # lists $name
-infuse pack show $name                     # clips, parameters, blend spaces, checks
-infuse infuse character.glb --packs $name  # the pack retargeted onto a character, cached
+$use
 ```
 
 ```python
-from infuse.runtime import controller
+import infuse
+from infuse.runtime import Runtime, controller
 
-$usage
+rt = Runtime(fps=30)
+bob = rt.add_character(infuse.Character("bob", infuse.load("character.glb")))
+rt.activate(bob, $usage, 0.0)
+rt.run(4.0)
+infuse.save(rt.export(bob, "$name"), "$name.glb")
 ```
 
 ## Source and licence
@@ -124,17 +126,22 @@ Change the clips or `$package/pack/manifest.toml`, raise `version` in the manife
 `pyproject.toml` alike, then:
 
 ```sh
-infuse pack build --wheel                  # analyses the clips again, checks, writes dist/*.whl
-pip install dist/$wheel_prefix-VERSION-py3-none-any.whl && pytest tests
+$release
 ```
 ''')
 
 USAGE = {
-    "locomotion": 'rt.activate(character, controller("locomotion", pack="{name}", speed=1.2), 0.0)',
-    "reach": 'rt.activate(character, controller("reach", target=(-0.3, 1.2, 0.4), hand="right", pack="{name}"), 0.0)',
+    "locomotion": 'controller("locomotion", pack="{name}", speed=1.2)',
+    "reach": 'controller("reach", target=(-0.3, 1.2, 0.4), hand="right", pack="{name}")',
 }
 
 GITIGNORE = "build/\ndist/\n*.egg-info/\n__pycache__/\n"
+
+
+def _commands(rows: list[tuple[str, str]]) -> str:
+    """Shell lines with their comments aligned."""
+    width = max(len(command) for command, _ in rows)
+    return "\n".join(f"{command:<{width}}  # {comment}" if comment else command for command, comment in rows)
 
 
 def find_licence(folder: Path) -> Path | None:
@@ -213,6 +220,7 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         note = (f" `LICENSE` is the licence file found with the source (`{licence.name}`); set `license` to the"
                 " expression it corresponds to.")
     m = pack.manifest
+    wheel = distribution.replace("-", "_")
     (project / package / "__init__.py").write_text(f'"""The {name} behaviour pack for infuse: data in ``pack/``, registered by ``plugin.py``."""\n',
                                                    encoding="utf-8")
     (project / package / "plugin.py").write_text(PLUGIN.substitute(name=name, name_literal=repr(name),
@@ -226,7 +234,13 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
     (project / ".gitignore").write_text(GITIGNORE, encoding="utf-8")
     (project / "README.md").write_text(README.substitute(
         distribution=distribution, name=name, kind=m.kind, description=m.description or f"a {m.kind} pack",
-        wheel_prefix=distribution.replace("-", "_"), package=package, source=where, licence_note=note,
+        install=_commands([(f"pip install {distribution}", "once published on the package index"),
+                           (f"pip install dist/{wheel}-{m.version}-py3-none-any.whl", "the wheel 'infuse pack build --wheel' writes")]),
+        use=_commands([("infuse packs", f"lists {name}"), (f"infuse pack show {name}", "clips, parameters, blend spaces, checks"),
+                       (f"infuse infuse character.glb --packs {name}", "the pack retargeted onto a character, cached")]),
+        release=_commands([("infuse pack build --wheel", "analyses the clips again, checks, writes dist/*.whl"),
+                           (f"pip install dist/{wheel}-VERSION-py3-none-any.whl", ""), ("pytest tests", "")]),
+        package=package, source=where, licence_note=note,
         usage=USAGE[m.kind].format(name=name), figures_start=FIGURES_START, figures=figures_block(pack),
         figures_end=FIGURES_END), encoding="utf-8")
     return project, pack

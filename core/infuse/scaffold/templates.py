@@ -456,8 +456,8 @@ import numpy as np
 import infuse
 from infuse import quaternions as quat
 from infuse.bml import Scheduler
-from infuse.bml.behaviours import installed_handlers
 from infuse.canonical import canonical_skeleton
+from infuse.registry import table
 from infuse.runtime import Runtime
 
 from $package.plugin import ELEMENT, NAMESPACE, TIMING
@@ -475,7 +475,7 @@ def _schedule(attributes: str):
 
 
 def test_installed():
-    assert ELEMENT in installed_handlers()
+    assert ELEMENT in table("bml-behaviour")["$name"].info["elements"]
 
 
 def test_scheduled_at_its_natural_timing():
@@ -530,32 +530,41 @@ def infuse_commands():
 ''')
 
 COMMAND_TEST = Template('''"""The $name command: installed, prints a file's clips, and exits 2 with one line on a missing file."""
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 
 import infuse
 from infuse import quaternions as quat
 from infuse.canonical import canonical_skeleton
-from infuse.cli import main
 from infuse.registry import commands
+
+INFUSE = Path(sys.executable).with_name("infuse")
+
+
+def infuse_command(*args):
+    return subprocess.run([str(INFUSE), *map(str, args)], capture_output=True, text=True, timeout=60)
 
 
 def test_installed():
     assert "$name" in commands()
 
 
-def test_prints_the_clips(tmp_path, capsys):
+def test_prints_the_clips(tmp_path):
     sk = canonical_skeleton()
     motion = infuse.Motion(sk, 30.0, quat.identity((31, len(sk.names))), np.tile(sk.rest_translations[0], (31, 1)), name="still")
     path = tmp_path / "still.bvh"
     infuse.save(infuse.Asset(None, "bvh", sk, {"still": motion}), path)
-    assert main(["$name", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert f"{len(sk.names)} joints, 1 clips" in out and "31 frames at 30 fps (1.00 s)" in out
+    proc = infuse_command("$name", path)
+    assert proc.returncode == 0, proc.stderr
+    assert f"{len(sk.names)} joints, 1 clips" in proc.stdout and "31 frames at 30 fps (1.00 s)" in proc.stdout
 
 
-def test_a_missing_file_exits_2(tmp_path, capsys):
-    assert main(["$name", str(tmp_path / "nothing.bvh")]) == 2
-    assert "nothing.bvh" in capsys.readouterr().err
+def test_a_missing_file_exits_2(tmp_path):
+    proc = infuse_command("$name", tmp_path / "nothing.bvh")
+    assert proc.returncode == 2 and "nothing.bvh" in proc.stderr and "Traceback" not in proc.stderr
 ''')
 
 KINDS: dict[str, KindTemplate] = {
