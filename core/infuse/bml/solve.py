@@ -10,6 +10,7 @@ the block.
 """
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -28,6 +29,26 @@ class _Drop(Exception):
 
 class _RefError(Exception):
     pass
+
+
+class _Resolved(dict):
+    """Group root -> local time, remembering the order roots were added (``added``) and handing each
+    new one out once (:meth:`take_new`)."""
+
+    def __init__(self):
+        super().__init__()
+        self.added: list = []
+        self._handed = 0
+
+    def __setitem__(self, root, time):
+        if root not in self:
+            self.added.append(root)
+        super().__setitem__(root, time)
+
+    def take_new(self) -> list:
+        new = self.added[self._handed:]
+        self._handed = len(self.added)
+        return new
 
 
 class _Groups:
@@ -183,11 +204,6 @@ class BlockSolver:
             root, pot = groups.root_and_potential((b, open_syncs[0]))
             resolved[root] = times[open_syncs[0]] - pot
 
-    def _priority(self, b, groups, resolved):
-        roots = {groups.find((b, s)) for s in self.linked[b]}
-        n = sum(r in resolved for r in roots)
-        return (n < len(roots), self.plans[b].timing.stretchable, -n, self.order[b])
-
     def _node_time(self, node, placed):
         if node == ANCHOR:
             return 0.0
@@ -195,47 +211,76 @@ class BlockSolver:
         return None if times is None else times[node[1]]
 
     def _place_all(self, groups, inequalities):
-        resolved = {groups.find(ANCHOR): -groups.root_and_potential(ANCHOR)[1]}
+        """Place every behaviour: next the one with the best priority (all its linked points known,
+        not stretchable, most points known, document order) among those tied to a known point, else
+        the next free cluster as early as it may go. A heap keeps the priorities, updated as points
+        become known, so each step costs a logarithm rather than a pass over the pending behaviours."""
+        resolved = _Resolved()
+        resolved[groups.find(ANCHOR)] = -groups.root_and_potential(ANCHOR)[1]
         placed: dict = {}
         state = (groups, resolved, placed, self.linked)
-        pending = sorted(self.plans, key=self.order.get)
+        pending = dict.fromkeys(sorted(self.plans, key=self.order.get))
+        roots = {b: {groups.find((b, s)) for s in self.linked[b]} for b in pending}
+        users: dict = {}
+        for b, own in roots.items():
+            for root in own:
+                users.setdefault(root, []).append(b)
+        known = dict.fromkeys(pending, 0)
+        later: dict = {}  # behaviour -> the inequalities whose late point is one of its own
+        for _, early, late in inequalities:
+            if late[0] != ANCHOR:
+                later.setdefault(late[0][0], []).append((early, late))
+        heap: list = []
 
-        def ready():
-            return [b for b in pending if any(groups.find((b, s)) in resolved for s in self.linked[b])]
+        def priority(b):
+            n = known[b]
+            return (n < len(roots[b]), self.plans[b].timing.stretchable, -n, self.order[b])
+
+        def next_ready():
+            for root in resolved.take_new():
+                for b in users.get(root, ()):
+                    if b in pending:
+                        known[b] += 1
+                        heapq.heappush(heap, (priority(b), b))
+            while heap:
+                key, b = heapq.heappop(heap)
+                if b in pending and key == priority(b):
+                    return b
+            return None
 
         while pending:
-            candidates = ready()
-            if candidates:
-                b = min(candidates, key=lambda x: self._priority(x, groups, resolved))
+            b = next_ready()
+            if b is not None:
                 self._place(b, state, tentative=False)
-                pending.remove(b)
+                del pending[b]
                 continue
             # Nothing is tied to a placed point: place the next free cluster as early as it may go.
-            seed = self._seed(pending, inequalities, placed)
-            before_roots, before_placed = set(resolved), set(placed)
+            seed = self._seed(pending, later, placed)
+            first_root = len(resolved.added)
+            members = [seed]
             self._place(seed, state, tentative=True)
-            pending.remove(seed)
-            while candidates := ready():
-                b = min(candidates, key=lambda x: self._priority(x, groups, resolved))
+            del pending[seed]
+            while (b := next_ready()) is not None:
                 self._place(b, state, tentative=True)
-                pending.remove(b)
-            members = set(placed) - before_placed
+                del pending[b]
+                members.append(b)
+            cluster = set(members)
             shift = max(-min(placed[m][self.plans[m].timing.sync_ids[0]] for m in members), 0.0)
-            for _, (early, early_off), (late, late_off) in inequalities:
-                if late != ANCHOR and late[0] in members and (early == ANCHOR or early[0] in before_placed):
-                    needed = self._node_time(early, placed) + early_off - (placed[late[0]][late[1]] + late_off)
-                    shift = max(shift, needed)
+            for m in members:
+                for (early, early_off), (late, late_off) in later.get(m, ()):
+                    if early == ANCHOR or (early[0] in placed and early[0] not in cluster):
+                        needed = self._node_time(early, placed) + early_off - (placed[late[0]][late[1]] + late_off)
+                        shift = max(shift, needed)
             for m in members:
                 placed[m] = {s: t + shift for s, t in placed[m].items()}
-            for root in set(resolved) - before_roots:
+            for root in resolved.added[first_root:]:
                 resolved[root] += shift
         return placed
 
-    def _seed(self, pending, inequalities, placed):
+    def _seed(self, pending, later, placed):
         def blocked(b):
-            return any(late != ANCHOR and late[0] == b and early != ANCHOR and early[0] not in placed and early[0] != b
-                       for _, (early, _eo), (late, _lo) in inequalities)
-        return next((b for b in pending if not blocked(b)), pending[0])
+            return any(early != ANCHOR and early[0] not in placed and early[0] != b for (early, _eo), _late in later.get(b, ()))
+        return next((b for b in pending if not blocked(b)), next(iter(pending)))
 
     # -- driver ---------------------------------------------------------------------------------------------
     def solve(self) -> Solution:
