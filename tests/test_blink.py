@@ -46,15 +46,19 @@ def test_morph_targets_of_the_rpm_avatar_follow_the_curve():
     assert 4 <= len(starts[starts < 20.0]) <= 16 and left.max() > 0.9
 
 
-def test_a_vrm_blink_expression_drives_both_eyes():
+def test_a_vrm_blink_expression_without_morph_targets_is_left_alone(tmp_path):
+    """This VRM's ``blink`` expression binds materials only: the blink drives nothing it cannot show,
+    and the character is written after blinking."""
     asset = infuse.load(corpus_file("vrm-specification/samples/VRMC_vrm_expressions_isBinary_Overrides/vrm/"
                                     "VRMC_vrm_expressions_isBinary_Overrides.vrm"))
+    assert "blink" in asset.meta["vrm_expressions"] and "blink" not in asset.morph_targets
     rt = Runtime(fps=30)
     rt.add_character(Character("vrm", asset, mapping=map_skeleton(asset)))
     rt.activate("vrm", Blink(rate_per_min=30, seed=1), 0.0)
     rt.run(10.0)
-    weights = rt.morph_tracks("vrm")["weights"]
-    assert set(weights) == {"blink"} and weights["blink"].max() > 0.9
+    assert rt.morph_tracks("vrm")["weights"] == {}
+    infuse.save(rt.export("vrm", "blinking"), tmp_path / "vrm.glb")
+    assert list(infuse.load(tmp_path / "vrm.glb").motions) == ["blinking"]
 
 
 def test_eyelid_joints_close_when_there_are_no_morph_targets():

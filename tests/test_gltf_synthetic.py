@@ -223,7 +223,8 @@ def test_vrm0_faces_minus_z_and_is_turned(tmp_path):
     sk = asset.skeleton
     assert sk.rest_global_positions[sk.index["LeftArm"], 0] == pytest.approx(0.2)  # left at +X in the core
     assert asset.meta["vrm_humanoid"] == {"hips": "Hips", "spine": "Spine", "leftUpperArm": "LeftArm", "rightUpperArm": "RightArm"}
-    assert asset.morph_targets == ["mesh0.0", "a", "joy"]
+    assert asset.morph_targets == ["mesh0.0", "a"]  # "joy" binds no morph target: nothing to animate
+    assert asset.meta["vrm_expressions"] == ["a", "joy"]
     kept = infuse.load(path, facing="+Z")
     assert kept.skeleton.rest_global_positions[sk.index["LeftArm"], 0] == pytest.approx(-0.2)
     # A new clip written back lands in the file's -Z frame and reads back the same.

@@ -30,7 +30,8 @@ Animations
     clip's frame times.
 
 Other facts
-    ``morph_targets``: mesh morph target names in file order, then VRM expression names.
+    ``morph_targets``: mesh morph target names in file order, then the names of the VRM expressions
+    that bind morph targets (``meta["vrm_expressions"]`` lists them all).
     ``meta``: ``container``, ``generator``, ``extensions_used``, ``extensions_required``,
     ``compression``, ``skins``, ``folded_nodes``, ``bind_pose``, ``clips`` (per clip: animation index,
     fps and how it was found, interpolations, ignored channels), ``warnings``, and for VRM files
@@ -222,7 +223,10 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
     target_names = mesh_target_names(js)
     morph_targets = unique_in_order([t for t in target_names if t])
     if vrm is not None:
-        morph_targets = unique_in_order([morph_targets, [e.name for e in vrm.expressions]])
+        # Only expressions a weight can show: those binding morph targets (or a VRMA expression
+        # node). One that binds materials only is listed in meta, but nothing animates it.
+        shown = [e.name for e in vrm.expressions if e.binds or e.node is not None]
+        morph_targets = unique_in_order([morph_targets, shown])
         meta["vrm_version"] = vrm.version
         meta["vrm_humanoid"] = {bone: names[joint_nodes.index(n)] for bone, n in vrm.bones.items() if n in joint_nodes}
         meta["vrm_expressions"] = [e.name for e in vrm.expressions]
