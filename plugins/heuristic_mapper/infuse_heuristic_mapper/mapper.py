@@ -387,13 +387,21 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
     head = _pick_head(view, chain, base, up, top, neck_from_top)
     if head < 0:
         return torso, chain if neck_from_top else [], -1, chest_why
-    # a zero-length joint at its parent's place is a helper, a look-at target a control: not neck joints
-    neck = [j for j in chain[:chain.index(head)] if (view.bone[j] > 1e-3 * view.scale or view.info[j].has("neck"))
-            and not view.info[j].flagged("control")]
+    neck = [j for j in chain[:chain.index(head)] if not view.info[j].flagged("control") and not _helper_below_neck(
+        view, j, base, shoulders, up)]
     if arms is None and top == base:  # no arms to mark the chest: split the chain by names, else by height
         torso, neck = _split_without_arms(view, neck, base, head)
         chest_why = "chest: the last torso joint below the neck (no arms: by name or height)"
     return torso, neck, head, chest_why
+
+
+def _helper_below_neck(view: SkeletonView, j: int, base: int, shoulders: list[int], up: np.ndarray) -> bool:
+    """A zero-length joint at its parent's place, well below the shoulders: a helper at the torso's
+    centre, not a neck joint (a zero-length neck joint at the chest's place is one)."""
+    if view.bone[j] > 1e-3 * view.scale or not shoulders or view.info[j].has("neck"):
+        return False
+    top = float(view.P[shoulders].mean(axis=0) @ up)
+    return float(view.P[j] @ up) < top - 0.5 * max(top - float(view.P[base] @ up), 1e-9)
 
 
 def _split_without_arms(view: SkeletonView, joints: list[int], base: int, head: int) -> tuple[list[int], list[int]]:
