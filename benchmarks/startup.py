@@ -105,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         cold_env = dict(env, XDG_CACHE_HOME=str(cold_cache))
 
         def forget_commands() -> None:
-            (cold_cache / "infuse" / "commands.json").unlink(missing_ok=True)
+            (cold_cache / "infuse" / "plugins.json").unlink(missing_ok=True)
 
         rows = [
             ("`python -c pass`", [PYTHON, "-c", "pass"], None, env, None),

@@ -363,5 +363,5 @@ def test_the_command_index_matches_the_full_parser():
     (choices,) = [a.choices for a in full._actions if isinstance(getattr(a, "choices", None), dict)]
     index = command_index()
     assert set(index) == set(choices)
-    assert all(index[name][0].help == choices[name].description for name in index)
+    assert all(index[name][0].description == choices[name].description for name in index)
 

@@ -174,6 +174,7 @@ def test_canonical_names_and_low_confidence_rings(tmp_path, capsys, bvh, monkeyp
 def test_canonical_without_a_mapper_is_a_usage_error(tmp_path, capsys, bvh, monkeypatch):
     from infuse import registry
 
-    monkeypatch.setattr(registry, "mappers", lambda: {})
+    installed = registry.table
+    monkeypatch.setattr(registry, "table", lambda kind: {} if kind == "mapper" else installed(kind))
     code, _, err = run(capsys, bvh, "-o", tmp_path / "c.png", "--canonical")
     assert code == 2 and "mapper" in err and not (tmp_path / "c.png").exists()

@@ -49,7 +49,7 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
         raise InputError(path, None, "file not found")
     if path.is_dir():
         raise InputError(path, None, "is a folder, expected a file")
-    reader = _pick("reader", registry.readers(), path, format)
+    reader = _pick("reader", registry.table_for_file("reader", path, format), path, format)
     try:
         return reader.read(path, **options)
     except InputError as exc:
@@ -67,7 +67,7 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
 def save(asset: Asset, path: str | Path, format: str | None = None, **options) -> Path:
     """Write ``asset`` to ``path`` atomically with the writer for its extension; returns ``path``."""
     path = Path(path)
-    writer = _pick("writer", registry.writers(), path, format)
+    writer = _pick("writer", registry.table_for_file("writer", path, format), path, format)
     with atomic_path(path) as tmp:
         writer.write(asset, tmp, **options)
     return path

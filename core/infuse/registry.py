@@ -21,6 +21,7 @@ import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib.metadata import EntryPoint, entry_points
+from pathlib import Path
 from typing import Any
 
 import pluggy
@@ -182,8 +183,8 @@ class PluginSet:
             print(f"infuse: warning: {message}", file=sys.stderr)
 
     def offers(self, kind: str) -> list[tuple[str, list]]:
-        """(pluggy plugin name, descriptors) of each plugin implementing the hook of ``kind``, in precedence order."""
-        self.load_kind(kind)
+        """(pluggy plugin name, descriptors) of each registered plugin implementing the hook of ``kind``, in
+        precedence order."""
         caller = getattr(self.manager.hook, kind_of(kind).hook)
         out = [(impl.plugin_name, self.offered_by(impl.plugin, kind)) for impl in caller.get_hookimpls()]
         out.sort(key=lambda entry: self._rank(entry[0]))
@@ -212,9 +213,13 @@ class PluginSet:
                                 f"not a named {spec.descriptor.__name__}; it is skipped")
         return items
 
-    def table(self, kind: str) -> dict[str, Any]:
-        """Every descriptor of ``kind`` by name; a name offered twice is a clash (see the module docstring)."""
-        self.load_kind(kind)
+    def table(self, kind: str, complete: bool = True) -> dict[str, Any]:
+        """Every descriptor of ``kind`` by name; a name offered twice is a clash (see the module docstring).
+
+        ``complete=False`` leaves out the plugins of the kind not imported yet.
+        """
+        if complete:
+            self.load_kind(kind)
         caller = getattr(self.manager.hook, kind_of(kind).hook)
         config = current_config(frozenset(KINDS))
         key = (id(config), *(id(impl.plugin) for impl in caller.get_hookimpls()))
@@ -294,6 +299,36 @@ def get(kind: str, name: str | None = None) -> Any:
         why = f" (the default, from {source})" if source else ""
         raise UsageError(f"no {kind} named {chosen!r}{why}; installed: {', '.join(sorted(found)) or 'none'}")
     return found[chosen]
+
+
+def table_for_file(kind: str, path: str | Path, format: str | None = None) -> dict[str, Any]:
+    """Readers (or writers) by name, holding the one for ``path``: the one named ``format``, else those
+    claiming its extension.
+
+    Imports only the plugins the index (:mod:`infuse.plugin_index`) says offer such a name or extension,
+    and every plugin offering the same names, so clashes resolve as in :func:`table`; the whole kind
+    when none does.
+    """
+    from .plugin_index import offers
+    from .plugin_types import normalized_extension
+
+    ps = plugins()
+    if kind in ps._loaded:
+        return ps.table(kind)
+    extension = normalized_extension(path)
+
+    def fits(name: str, extensions) -> bool:
+        return name == format if format else extension in extensions
+
+    everything = offers(kind)
+    names = {o.name for o in everything if fits(o.name, o.extensions)}
+    for offer in everything:
+        if offer.name in names:
+            ps.load_entry_point(offer.entry_point, kind)
+    partial = ps.table(kind, complete=False)
+    if any(fits(name, d.extensions) for name, d in partial.items()):
+        return partial
+    return ps.table(kind)
 
 
 def readers() -> dict[str, Reader]:

@@ -54,7 +54,7 @@ def build_parser(complete: Iterable[str] | None = None, listed: bool = True) -> 
     for name in sorted(offers):
         command = commands.get(name)
         if command is None:
-            help_line = offers[name][0].help
+            help_line = offers[name][0].description
             sub.add_parser(name, help=help_line, description=help_line)
             continue
         p = sub.add_parser(name, help=command.help, description=command.help)
