@@ -29,8 +29,9 @@ MAX_ELEMENTS = 1 << 27
 MAX_COORDINATE_M = 1e6
 #: Latest time a BML block, behaviour or scene may ask for, seconds (one day).
 MAX_TIME_S = 86_400.0
-#: Behaviours (and constraints) in one BML document.
-MAX_BML_BEHAVIOURS = 50_000
+#: Elements (blocks, behaviours, constraints, speech marks) in one BML document: real documents hold
+#: tens; scheduling costs about half a millisecond per behaviour.
+MAX_BML_ELEMENTS = 20_000
 #: Pixels of one texture image (Pillow's own bomb limit is checked with this one).
 MAX_IMAGE_PIXELS = 1 << 28
 

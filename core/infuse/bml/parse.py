@@ -13,6 +13,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from .. import limits
 from ..errors import InputError
 from . import names
 from .model import (
@@ -61,6 +62,8 @@ def parse_bml(source: str | bytes, file: str | None = None, max_bytes: int = DEF
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
         raise InputError(label, "line 1", "DOCTYPE declarations are refused in BML (no DTDs, entities or external references)")
     root = tree.getroot()
+    elements = sum(1 for _ in root.iter(tag=etree.Element))
+    limits.check(label, None, "elements (behaviours, constraints, blocks, marks)", elements, "MAX_BML_ELEMENTS")
     comments = tuple(c.text or "" for c in reversed(list(root.itersiblings(preceding=True)))
                      if isinstance(c, etree._Comment))
     return BmlDocument(_blocks(root, label, declared), file=file, comments=comments)
@@ -305,6 +308,7 @@ def _unique_ids(behaviours: list[Behaviour], block_id: str, issues: list[Issue])
     taken = {b.id for b in behaviours if b.id}
     seen: set[str] = set()
     counters: dict[str, int] = {}
+    renamed: dict[str, int] = {}
     out = []
     for b in behaviours:
         new_id = b.id
@@ -316,10 +320,13 @@ def _unique_ids(behaviours: list[Behaviour], block_id: str, issues: list[Issue])
                 if new_id not in taken:
                     break
         elif b.id in seen:
-            n = 2
-            while f"{b.id}#{n}" in taken or f"{b.id}#{n}" in seen:
+            n = renamed.get(b.id, 1)  # the last suffix given to this id: each rename tries on from there
+            while True:
                 n += 1
-            new_id = f"{b.id}#{n}"
+                new_id = f"{b.id}#{n}"
+                if new_id not in taken and new_id not in seen:
+                    break
+            renamed[b.id] = n
             issues.append(Issue(f"{block_id}:{b.id}", PARSING_FAILURE,
                                 f"behaviour id {b.id!r} is used twice; this one is renamed {new_id!r}", b.line))
         seen.add(new_id)

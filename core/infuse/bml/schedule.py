@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .. import limits
 from .behaviours import BehaviourContext, BehaviourError, installed_handlers
 from .feedback import BlockPrediction, BlockProgress, FeedbackBus, SyncPointProgress, WarningFeedback
 from .model import (
@@ -171,7 +172,14 @@ class Scheduler:
                            sync_aliases=dict(plans[b.id].timing.aliases))
                 for b in block.behaviours if b.id in solution.times)
             end = max([start] + [a.end for a in activations])
-            record = BlockSchedule(block, character, start, end, activations, tuple(issues))
+            latest = max([abs(start), abs(end)] + [abs(t) for a in activations for t in a.sync_times.values()])
+            if not latest <= limits.MAX_TIME_S:
+                failed = (f"block not executed: it reaches {latest:g} s, past the limit of {limits.MAX_TIME_S:g} s "
+                          "(infuse.limits.MAX_TIME_S)")
+                issues.append(Issue(block.id, IMPOSSIBLE_TO_SCHEDULE, failed, block.line))
+                record = BlockSchedule(block, character, start, start, (), tuple(issues), failed=failed)
+            else:
+                record = BlockSchedule(block, character, start, end, activations, tuple(issues))
         self.blocks[block.id] = record
         for issue in record.issues:
             self.feedback.emit(WarningFeedback(issue.id, issue.type, issue.description, character, issue.line))

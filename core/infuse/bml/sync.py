@@ -11,6 +11,8 @@ import math
 import re
 from dataclasses import dataclass, field
 
+from .. import limits
+
 #: The BML 1.0 sync points, in temporal order.
 STANDARD_SYNC_POINTS = ("start", "ready", "strokeStart", "stroke", "strokeEnd", "relax", "end")
 #: Other spellings found in documents -> the BML 1.0 name.
@@ -62,6 +64,12 @@ def canonical_sync(name: str) -> str:
     return SYNC_ALIASES.get(name, name)
 
 
+def _check_time(raw: str, seconds: float) -> None:
+    if not abs(seconds) <= limits.MAX_TIME_S:
+        raise SyncRefError(f"sync reference {raw!r}: {seconds:g} s is past the limit of {limits.MAX_TIME_S:g} s "
+                           "(infuse.limits.MAX_TIME_S)")
+
+
 def parse_sync_ref(text: str) -> SyncRef:
     """Parse a sync reference; raises :class:`SyncRefError` naming what is wrong."""
     raw = text
@@ -70,10 +78,12 @@ def parse_sync_ref(text: str) -> SyncRef:
         value = float(m.group(1))
         if not math.isfinite(value):
             raise SyncRefError(f"sync reference {raw!r} is not a finite time")
+        _check_time(raw, value)
         return SyncRef(raw, time=value)
     parts = [p.strip() for p in text.split(":")]
     last = _LAST_PART.fullmatch(parts[-1])
     offset = float(last.group("offset").replace(" ", "")) if last.group("offset") else 0.0
+    _check_time(raw, offset)
     parts[-1] = last.group("name")
     iteration = None
     if len(parts) >= 3 and parts[-1].isdigit():

@@ -20,6 +20,10 @@ ATTRIBUTES = {"lexeme", "type", "repetition", "repeats", "amount", "velocity", "
               "sbm:amount"}
 
 
+#: Most oscillations one head movement makes (each one is a sync point).
+MAX_REPEATS = 100.0
+
+
 def nod_timing(repeats: float, velocity_hz: float) -> TimingModel:
     """The head movement's sync points for ``repeats`` oscillations at ``velocity_hz`` (see the module doc)."""
     r, v = max(repeats, 0.25), velocity_hz
@@ -45,7 +49,7 @@ def plan(behaviour, context) -> BehaviourPlan:
     if kind not in AMPLITUDE_DEG:
         notes.append(f"head movement {kind!r} is unknown; it is realized as a NOD")
         kind = "NOD"
-    repeats = number(behaviour, ("repetition", "repeats", "sbm:repeats"), 1.0, notes, minimum=0.25)
+    repeats = number(behaviour, ("repetition", "repeats", "sbm:repeats"), 1.0, notes, minimum=0.25, maximum=MAX_REPEATS)
     velocity = number(behaviour, ("velocity", "sbm:velocity"), 1.0, notes, minimum=1e-3)
     amount = number(behaviour, ("amount", "sbm:amount"), 0.5, notes, -1.0, 1.0)
     parameters = {"lexeme": kind, "amount": amount, "repeats": repeats, "velocity_hz": velocity,
