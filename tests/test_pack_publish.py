@@ -74,7 +74,9 @@ def test_pack_new_writes_a_complete_project(bandai_project):
     figures = readme[readme.index(FIGURES_START):readme.index(FIGURES_END)]
     for clip in pack.analysis["clips"]:  # the figures the builder measured, as it prints them
         assert clip["name"] in figures and f"speed {clip['parameters']['speed']:5.2f} m/s" in figures
-    assert "blend space locomotion: 3D" in figures and "pip install infuse-anim-pack-bandai-fem" in readme
+    for group, tessellation in pack.tessellations().items():
+        assert f"blend space {group}: {tessellation.describe()}" in figures
+    assert "pip install infuse-anim-pack-bandai-fem" in readme
 
 
 def test_pack_import_writes_a_self_contained_folder(tmp_path, capsys):
@@ -113,6 +115,7 @@ def test_pack_new_from_a_smartbody_set_and_from_a_pack_folder(tmp_path):
 def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     source = str(corpus_file(BANDAI))
     _error(capsys, cli_main(["pack", "new", "Bandai Fem", "--import", "bvh", source, "-o", str(tmp_path / "x")]), "'Bandai Fem'")
+    _error(capsys, cli_main(["pack", "new", "reaching", "--import", "bvh", source, "-o", str(tmp_path / "x")]), "already installed")
     (tmp_path / "taken").mkdir()
     (tmp_path / "taken" / "notes.txt").write_text("mine")
     _error(capsys, cli_main(["pack", "new", "fem", "--import", "bvh", source, "-o", str(tmp_path / "taken")]), "already exists")

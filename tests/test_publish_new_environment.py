@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from infuse.packs import load_pack
 from infuse.scaffold.templates import KINDS
 
 from corpus_data import corpus_file
@@ -48,13 +49,18 @@ def test_three_commands_publish_a_pack_into_a_new_environment(environment, tmp_p
     (wheel,) = (project / "dist").glob("*.whl")
     assert wheel.name == "infuse_anim_pack_bandai_fem-0.1.0-py3-none-any.whl" and f"wrote {wheel}" in out
 
+    built = load_pack(project / "infuse_pack_bandai_fem" / "pack")
+    spaces = {group: t.dimension for group, t in built.tessellations().items()}
+    assert built.built and len(built.analysis["clips"]) == 7 and spaces
+
     pip_install(venv, ["--no-index", str(wheel)])
     listed = {p["name"]: p for p in json.loads(run([venv / "bin" / "infuse", "packs", "--json"], elsewhere))}
     pack = listed["bandai-fem"]
-    assert pack["built"] and pack["clips"] == 7 and pack["blend_spaces"] == {"locomotion": 3}
+    assert pack["built"] and pack["clips"] == 7 and pack["blend_spaces"] == spaces
     assert Path(pack["manifest"]).is_relative_to(venv)  # the installed copy, not the project
     out = run([venv / "bin" / "infuse", "infuse", xbot, "--packs", "bandai-fem", "-o", tmp_path / "cache"], elsewhere)
-    assert "bandai-fem 0.1.0 (locomotion): 7 clips" in out and "locomotion: 3D" in out
+    assert "bandai-fem 0.1.0 (locomotion): 7 clips" in out
+    assert all(f"    {group}: " in out for group in spaces) and all(c["name"] in out for c in built.analysis["clips"])
     where = run([venv / "bin" / "python", "-c", "import infuse; print(infuse.__file__)"], elsewhere)
     assert Path(where.strip()).is_relative_to(venv)  # infuse itself is the new environment's
     out = run([venv / "bin" / "python", "-m", "pytest", "-q", "-p", "no:cacheprovider", project / "tests"], elsewhere)

@@ -108,8 +108,7 @@ def test_malformed_config_is_one_line_and_exit_code_2(tmp_path):
     config = tmp_path / "config.toml"
     config.write_text('[defaults]\nmapper = ["names"]\n')
     bvh = tmp_path / "one.bvh"
-    bvh.write_text("HIERARCHY\nROOT hips\n{\n OFFSET 0 1 0\n CHANNELS 3 Zrotation Xrotation Yrotation\n"
-                   " End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 1\nFrame Time: 0.04\n0 0 0\n")
+    bvh.write_text(ONE_JOINT_BVH)
     proc = infuse_cli(None, tmp_path, "map", str(bvh), INFUSE_CONFIG=str(config))
     assert proc.returncode == 2
     assert proc.stderr.strip() == f"infuse: error: {config}:[defaults] mapper: must be a string, not list"
@@ -254,6 +253,29 @@ def test_a_kind_is_loaded_when_first_asked_for(tmp_path):
     readers = {r.module.split(".")[0] for r in registry.plugins().records if r.kind == "reader"}
     only_others = {r.module.split(".")[0] for r in registry.plugins().records if r.kind != "reader"} - readers
     assert readers <= loaded and not (only_others & loaded), only_others & loaded
+
+
+ONE_JOINT_BVH = ("HIERARCHY\nROOT hips\n{\n OFFSET 0 1 0\n CHANNELS 3 Zrotation Xrotation Yrotation\n"
+                 " End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 1\nFrame Time: 0.04\n0 0 0\n")
+
+
+def test_a_file_is_read_importing_only_the_readers_of_its_extension(tmp_path):
+    bvh = tmp_path / "one.bvh"
+    bvh.write_text(ONE_JOINT_BVH)
+    readers = {r.module.split(".")[0] for r in registry.plugins().records if r.kind == "reader"}
+    bvh_plugin = {r.module.split(".")[0] for r in registry.plugins().records if (r.kind, r.name) == ("reader", "bvh")}
+    code = (f"import sys, infuse; asset = infuse.load({str(bvh)!r}); "
+            f"print(asset.format, sorted(set({sorted(readers)!r}) & set(sys.modules)))")
+    first = child(None, code, tmp_path)  # learns what every reader offers
+    assert first.returncode == 0, first.stderr
+    second = child(None, code, tmp_path)
+    assert second.returncode == 0, second.stderr
+    assert second.stdout.split(None, 1) == ["bvh", f"{sorted(bvh_plugin)!r}\n"]
+    bvh.rename(bvh.with_suffix(".nope"))
+    unknown = child(None, f"import infuse; infuse.load({str(bvh.with_suffix('.nope'))!r})", tmp_path)
+    last = unknown.stderr.strip().splitlines()[-1]
+    assert "UnsupportedFormatError" in last and "no installed reader handles '.nope'; known: " in last
+    assert all(e in last for e in (".bvh", ".glb", ".dae", ".fbx"))
 
 
 def test_importing_infuse_loads_neither_numpy_nor_scipy(tmp_path):

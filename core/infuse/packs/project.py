@@ -15,6 +15,7 @@ markers and ``infuse pack build`` rewrites them whenever it rebuilds the pack.
 """
 from __future__ import annotations
 
+import importlib.util
 import re
 import shutil
 from pathlib import Path
@@ -26,7 +27,7 @@ from .build import build_pack, summary
 from .folder import copy_pack
 from .importers import FIRST_VERSION, import_bvh_folder, import_smartbody
 from .manifest import read_manifest
-from .pack import Pack
+from .pack import Pack, installed_packs
 
 IMPORT_KINDS = ("bvh", "smartbody")
 PACK_DATA = ("pack/*", "pack/clips/*")
@@ -188,6 +189,10 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         raise UsageError("give either a pack folder to start from or a source to import, not both")
     if import_kind is not None and import_kind not in IMPORT_KINDS:
         raise UsageError(f"cannot import {import_kind!r}; expected one of {', '.join(IMPORT_KINDS)}")
+    if name in installed_packs():
+        raise UsageError(f"a behaviour pack named {name!r} is already installed; choose another name")
+    if importlib.util.find_spec(package) is not None:
+        raise UsageError(f"an import package {package!r} is already installed; choose another name")
     project = Path(dest if dest is not None else name)
     if project.exists() and (not project.is_dir() or any(project.iterdir())):
         raise UsageError(f"{project}: already exists and is not an empty folder")
