@@ -8,12 +8,15 @@ forward, +X the character's left); angles in radians, headings about +Y (+ turns
   foot flat (the ball comes down) and the heel off (the heel rises while the ball stays down).
 - **Contact phases** per foot: the heel (ankle) is down from heel strike to heel off, the ball from
   foot flat to toe off; the controllers pin whichever is down (the ball once the heel rises).
-- **Cycle**: a looping clip is its own cycle; otherwise the stretch from one left heel strike to the next.
+- **Cycle**: the steadiest stride from one left heel strike to the next (:mod:`.cycles`); a looping clip of
+  one stride is its own cycle.
 - **Keys** (correspondence for time-warping): the times of left strike, right strike and the next left
   strike; they map to phases 0, 0.5 and 1 in every clip, so blended clips step together.
 - **Locomotion parameters** over the cycle: ``speed`` = net horizontal displacement of the pelvis
   over the cycle's duration (not path length), ``direction`` of that displacement from the facing at
-  mid cycle, ``turn_rate`` = change of facing over the duration; the facing comes from the hips.
+  mid cycle, ``turn_rate`` = change of facing from the cycle's first frame to its last (the same
+  phase of the gait) over the duration; the facing comes from the hips, its line the mean about
+  that turn.
   The blend coordinates are the velocity along and across the facing (speed along the arc for
   turning clips) and the turn rate.
 - **Reach parameters**: the wrist position at the stroke (when the wrist settles after its fastest
@@ -21,13 +24,19 @@ forward, +X the character's left); angles in radians, headings about +Y (+ turns
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..contacts import foot_contacts
 from ..errors import UnusableInputError
+from .cycles import steadiest_cycle
 
 LOCOMOTION_COORDINATES = ("forward_speed", "lateral_speed", "turn_rate")
 REACH_COORDINATES = ("x", "y", "z")
+#: Smallest spread of each locomotion coordinate that makes it a dimension of the blend space (m/s,
+#: m/s, rad/s): examples that differ less (forward walks 1 cm/s apart across the facing) lie in one.
+LOCOMOTION_RESOLUTION = (0.1, 0.1, math.radians(10.0))
 
 
 def headings(positions: np.ndarray, index: dict[str, int]) -> np.ndarray:
@@ -137,11 +146,21 @@ def steps(foot_flags: np.ndarray, fps: float, loop: bool, phases: np.ndarray | N
     return sorted(out, key=lambda s: s["strike"])
 
 
-def cycle_and_keys(step_list: list[dict], frames: int, fps: float, loop: bool) -> tuple[tuple[int, int], list[float], str]:
-    """Cycle (first, last frame), keys (left strike, right strike, next left strike; seconds) and a note."""
+def cycle_and_keys(step_list: list[dict], frames: int, fps: float, loop: bool,
+                   speed_of=None) -> tuple[tuple[int, int], list[float], str]:
+    """Cycle (first, last frame), keys (left strike, right strike, next left strike; seconds) and a note.
+
+    A clip holding more than one stride (left strike to left strike, a right strike between) gets the
+    steadiest (:func:`~infuse.packs.cycles.steadiest_cycle`, by ``speed_of((first, last))`` m/s);
+    a loop of one stride is its own cycle."""
     duration = (frames - 1) / fps
     lefts = [s["strike"] for s in step_list if s["foot"] == "left"]
     rights = [s["strike"] for s in step_list if s["foot"] == "right"]
+    if speed_of is not None:
+        stride = steadiest_cycle(step_list, speed_of, fps)
+        if stride is not None:
+            a, b = stride
+            return stride, [a / fps, next(r for r in rights if a / fps < r < b / fps), b / fps], ""
     if loop:
         if lefts and rights:
             t0 = lefts[0]
@@ -164,11 +183,12 @@ def locomotion_parameters(root: np.ndarray, heading: np.ndarray, cycle: tuple[in
     d = root[b] - root[a]
     d[1] = 0.0
     speed = float(np.hypot(d[0], d[2]) / duration)
-    # The facing oscillates with the pelvis: fit a line through it over the cycle.
+    # The facing oscillates with the pelvis, the same at both ends of a cycle (a stride from one left
+    # strike to the next): the turn is the change between them, the facing the mean about that turn.
     t = np.arange(b - a + 1) / fps
     h = heading[a:b + 1]
-    turn, start = np.polyfit(t, h, 1) if len(t) > 1 else (0.0, float(h[0]))
-    turn = float(turn)
+    turn = float(h[-1] - h[0]) / duration if len(t) > 1 else 0.0
+    start = float(np.mean((h - turn * t)[:max(len(t) - 1, 1)]))
     mid = float(start + turn * duration / 2.0)
     forward = np.array([np.sin(mid), 0.0, np.cos(mid)])
     left = np.array([np.cos(mid), 0.0, -np.sin(mid)])
@@ -202,8 +222,9 @@ def body_frame_point(point: np.ndarray, root: np.ndarray, heading: float, ground
     return np.array([c * rel[0] - s * rel[2], rel[1], s * rel[0] + c * rel[2]])
 
 
-def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk) -> dict:
-    """The analysis of one clip (a JSON-ready dict); ``fk`` = (global rotations, positions) of ``motion``."""
+def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk, cycle=None) -> dict:
+    """The analysis of one clip (a JSON-ready dict); ``fk`` = (global rotations, positions) of ``motion``;
+    ``cycle``: its locomotion cycle and keys, ((first, last frame), keys), when already chosen."""
     g_rot, g_pos = fk
     fps = motion.fps
     frames = motion.num_frames
@@ -220,7 +241,14 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk) -
            "heel_contacts": phases[:, :, 0].T.astype(int).tolist(), "ball_contacts": phases[:, :, 1].T.astype(int).tolist(),
            "steps": step_list, "notes": []}
     if kind == "locomotion":
-        cycle, keys, note = cycle_and_keys(step_list, frames, fps, loop)
+        def speed_of(stride):
+            d = (root[stride[1]] - root[stride[0]])[[0, 2]]
+            return float(np.hypot(*d)) * fps / max(stride[1] - stride[0], 1)
+
+        if cycle is not None:
+            (cycle, keys), note = cycle, ""
+        else:
+            cycle, keys, note = cycle_and_keys(step_list, frames, fps, loop, speed_of if entry.role == "cycle" else None)
         if entry.role == "idle":
             cycle, keys, note = (0, frames - 1), [0.0, motion.duration / 2.0, motion.duration], ""
         if note:
@@ -243,6 +271,11 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk) -
 
 def coordinates_of(kind: str) -> tuple[str, ...]:
     return LOCOMOTION_COORDINATES if kind == "locomotion" else REACH_COORDINATES
+
+
+def resolution_of(kind: str) -> tuple[float, ...] | None:
+    """The coordinates' resolutions of a pack kind's blend space (see :class:`~.tessellation.Tessellation`)."""
+    return LOCOMOTION_RESOLUTION if kind == "locomotion" else None
 
 
 def blend_groups(kind: str, clips: list[dict]) -> dict[str, list[dict]]:

@@ -16,7 +16,9 @@ from ..atomic import atomic_path
 from ..errors import UnusableInputError
 from ..kinematics import batch_fk
 from ..mapping import map_skeleton
-from .analysis import analyse_clip, blend_groups, coordinates_of
+from .analysis import analyse_clip, blend_groups, coordinates_of, headings, resolution_of
+from .coverage import coverage, describe_coverage
+from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, straighten, transition_kind
 from .manifest import read_manifest
 from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
 from .tessellation import Tessellation
@@ -47,6 +49,44 @@ def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, b
     return problems
 
 
+def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:
+    """Make a locomotion pack's recorded clips usable as blend examples, in place (:mod:`.cycles`):
+    transitions recognized by what they do (``transition``; a clip given as a cycle that is one is
+    not blended), cycles straightened, aligned with their travel and closed, then analysed again on
+    the same stride. Each change is in the clip's ``derived`` record and ``motions`` holds the result."""
+    for i, (entry, info) in enumerate(zip(entries, clips)):
+        if info["role"] not in ("cycle", "other"):
+            continue
+        g_pos = fks[i][1]
+        what = transition_kind(np.asarray(info["contacts"], dtype=bool).T, g_pos[:, index["base"]], headings(g_pos, index),
+                               info["fps"], info["leg_length"], len(info["steps"]))
+        if what is not None:
+            info["transition"] = what
+            if info["role"] == "cycle":
+                info["role"] = "other"
+                info["notes"].append("no foot steps: not locomotion, not blended" if what == "none"
+                                     else f"a {what}, not a steady cycle: not blended")
+            continue
+        if info["role"] != "cycle":
+            continue
+        p, cycle = info["parameters"], tuple(info["cycle"])
+        motion = motions[entry.name]
+        turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
+        align = alignment(p["direction"])
+        derived = {}
+        if turn or align:
+            motion = straighten(motion, p, cycle, turn, align)
+            derived.update(straightened_deg_s=float(np.degrees(turn)), aligned_deg=float(np.degrees(align)))
+        motion, gap = close_loop(motion, cycle, p["turn_rate"] - turn)
+        derived["closed_deg"] = gap
+        motions[entry.name] = motion
+        fks[i] = batch_fk([motion])[0]
+        again = analyse_clip(motion, entry, "locomotion", index, mapping, fks[i], cycle=(cycle, info["keys"]))
+        again["notes"] = info["notes"] + again["notes"]
+        again["derived"] = derived
+        clips[i] = again
+
+
 def build_pack(folder, mapper: str | None = None) -> Pack:
     """Analyse the pack at ``folder`` (or its manifest path) and write its analysis; returns the built :class:`Pack`."""
     manifest = read_manifest(folder)
@@ -70,11 +110,14 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         raise UnusableInputError(manifest.path, f"the pack skeleton lacks {', '.join(missing)} after mapping")
     fks = batch_fk(list(motions.values()))
     clips = [analyse_clip(motions[e.name], e, manifest.kind, index, mapping, fk) for e, fk in zip(manifest.clips, fks)]
+    if manifest.kind == "locomotion":
+        usable_cycles(manifest.clips, motions, clips, fks, index, mapping)
     coords = coordinates_of(manifest.kind)
     tessellations = {}
     for group, members in blend_groups(manifest.kind, clips).items():
         if members:
-            t = Tessellation.build(coords, [c["name"] for c in members], [[c["parameters"][k] for k in coords] for c in members])
+            t = Tessellation.build(coords, [c["name"] for c in members], [[c["parameters"][k] for k in coords] for c in members],
+                                   resolution=resolution_of(manifest.kind))
             tessellations[group] = t.to_dict()
     report = validate(manifest.kind, clips, motions, tessellations, index["base"])
     doc = fileio.json_ready({

@@ -31,7 +31,8 @@ from ..kinematics import forward_kinematics
 from ..mapping import Mapping, map_skeleton
 from ..motion import Motion
 from ..skeleton import Skeleton
-from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters
+from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of
+from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
@@ -222,13 +223,27 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             keys = np.array([0.0, stroke, info["duration"]])
         m = Motion(sk, fps, out.local_rotations[sl], out.root_translations[sl],
                    None if out.joint_translations is None else out.joint_translations[sl], name=info["name"])
+        if pack.kind == "locomotion" and info.get("derived"):  # straight and aligned on this character too
+            m, params = _restraightened(m, params, index)
         clips[info["name"]] = BlendClip(info["name"], info["role"], info.get("hand"), bool(info["loop"]), m, keys, contacts,
                                         params, stroke, phases)
     coords = coordinates_of(pack.kind)
     tess = {}
     for group, t in pack.tessellations().items():
-        tess[group] = Tessellation.build(coords, t.labels, [[clips[n].parameters[c] for c in coords] for n in t.labels])
+        tess[group] = Tessellation.build(coords, t.labels, [[clips[n].parameters[c] for c in coords] for n in t.labels],
+                                         resolution=resolution_of(pack.kind))
     return BlendSpace(pack.name, pack.version, pack.kind, clips, tess)
+
+
+def _restraightened(motion: Motion, params: dict, index: dict[str, int]) -> tuple[Motion, dict]:
+    """A cycle the builder straightened (or aligned with its travel), retargeted: what is left of its turn
+    taken out and its travel aligned again as measured on the character (retargeting moves the hips a
+    little), then measured again. Returns the motion and its parameters."""
+    turn = params["turn_rate"] if abs(np.degrees(params["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
+    cycle = (0, motion.num_frames - 1)
+    motion = straighten(motion, params, cycle, turn, alignment(params["direction"]))
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    return motion, locomotion_parameters(g_pos[:, index["base"]], headings(g_pos, index), cycle, motion.fps)
 
 
 def cache_key(character: Character, mapping: Mapping, packs: list[Pack], retargeter: str | None) -> str:

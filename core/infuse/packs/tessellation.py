@@ -33,15 +33,17 @@ class Tessellation:
     simplices: np.ndarray
 
     @classmethod
-    def build(cls, coordinates, labels, points, tolerance: float = 1e-6) -> "Tessellation":
-        """Tessellate (N, D) ``points``; dimensions with no spread are left out."""
+    def build(cls, coordinates, labels, points, tolerance: float = 1e-6, resolution=None) -> "Tessellation":
+        """Tessellate (N, D) ``points``; coordinates with no spread (less than their ``resolution`` (D,),
+        if given, in their units) are left out."""
         pts = np.asarray(points, dtype=np.float64).reshape(len(labels), len(coordinates))
         if not len(pts):
             raise ValueError("a tessellation needs at least one example")
         origin = pts.mean(axis=0)
         spread = np.ptp(pts, axis=0)
-        scale = np.where(spread > tolerance, spread, 1.0)
-        x = (pts - origin) / scale
+        spans = spread > (tolerance if resolution is None else np.maximum(np.asarray(resolution, dtype=np.float64), tolerance))
+        scale = np.where(spans, spread, 1.0)
+        x = np.where(spans, (pts - origin) / scale, 0.0)
         _, sv, vt = np.linalg.svd(x, full_matrices=False) if len(pts) > 1 else (None, np.zeros(0), np.zeros((0, len(coordinates))))
         rank = int(np.sum(sv > tolerance * max(float(sv.max(initial=0.0)), 1.0))) if len(sv) else 0
         rank = min(rank, 3)

@@ -353,17 +353,28 @@ class Runtime:
             return np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3))
         return np.concatenate(rotations[::-1]), np.concatenate(roots[::-1])
 
-    def last_pose(self, character) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The last frame evaluated, placed in the world as :meth:`motion` places it: local rotations (J, 4)
-        (the root joint's with the placement), root translation (3,) metres and morph weights (M,)."""
+    def last_poses(self, character, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The last ``count`` frames evaluated (n = fewer when fewer were), placed in the world as
+        :meth:`motion` places them: local rotations (n, J, 4) (the root joint's with the placement), root
+        translations (n, 3) metres and morph weights (n, M)."""
         track = self._track(character)
-        if not track.rotations:
-            raise UsageError("no frame has been evaluated yet")
-        rotations = track.rotations[-1][-1].copy()
-        root = track.roots[-1][-1]
-        if track.rig.placed:
-            rotations[0], root = track.rig.place(rotations[0], root)
-        return rotations, np.array(root), track.morphs[-1][-1].copy()
+        rotations, roots, morphs, n = [], [], [], 0
+        for rot, root, morph in zip(reversed(track.rotations), reversed(track.roots), reversed(track.morphs)):
+            if n >= count:
+                break
+            take = min(count - n, len(rot))
+            rotations.append(rot[len(rot) - take:])
+            roots.append(root[len(root) - take:])
+            morphs.append(morph[len(morph) - take:])
+            n += take
+        rig = track.rig
+        if not rotations:
+            return (np.zeros((0, rig.skeleton.num_joints, 4)), np.zeros((0, 3)), np.zeros((0, len(rig.morph_targets))))
+        rotations = np.concatenate(rotations[::-1])
+        roots = np.concatenate(roots[::-1])
+        if rig.placed:
+            rotations[:, 0], roots = rig.place(rotations[:, 0], roots)
+        return rotations, roots, np.concatenate(morphs[::-1])
 
     def forget(self, keep_s: float) -> None:
         """Drop the evaluated frames older than ``keep_s`` seconds (whole blocks; :meth:`motion` then starts

@@ -1,0 +1,200 @@
+"""Making recorded takes usable as locomotion examples: the steadiest cycle, straightened and closed.
+
+Real takes are irregular: they start from standing, curve a little, and a stretch from one left heel
+strike to the next does not end in the pose it began with. The builder, on each locomotion clip:
+
+- picks the **steadiest cycle** of a take (:func:`steadiest_cycle`): of its left-to-left strides,
+  the one whose speed is nearest the take's median stride speed, the starts and stops left out;
+- **straightens** a cycle that turns slower than :data:`STRAIGHTEN_DEG_S` (:func:`straighten`): the
+  root joint is turned back by the turn rate times the time and carried from the circle the take
+  walks onto the straight line of the same length, so straight walking exists at every speed the
+  takes show (the controller turns the root for any turn rate asked); a cycle travelling within
+  :data:`ALIGN_DEG` of its facing (or of straight back) is turned to travel exactly forward (back);
+- **closes the cycle** (:func:`close_loop`): each joint's rotation difference between the cycle's
+  last frame and its first (the root's without its turn) and the root's height difference are taken
+  out progressively over the cycle, so the loop is seamless;
+- recognizes **transitions** by what they do (:func:`transition_kind`): a start (standing, then
+  walking), a stop (walking, then standing), a turn on the spot (turning with little travel), a step
+  (a few steps, standing before and after), or no locomotion at all (no steps); these are not
+  blended.
+
+Core frame: metres, seconds, +Y up, +Z forward; angles radians about +Y, + turns left.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import quaternions as quat
+
+#: Cycles turning slower than this (degrees per second) are straightened.
+STRAIGHTEN_DEG_S = 30.0
+#: A cycle travelling within this many degrees of its facing (or of straight back) walks forward (back):
+#: its body is turned to travel exactly so (the hips of a real take seldom face its travel exactly).
+ALIGN_DEG = 10.0
+#: A clip's pelvis moving slower than this many leg lengths per second over its first (last) quarter
+#: second stands there.
+STILL_LEGS_S = 0.15
+#: Clips of at most this many steps may be transitions (starts, stops, steps).
+SHORT_STEPS = 4
+#: A turn on the spot turns at least this much (degrees) over the clip.
+TURN_DEG = 45.0
+
+
+def _yaw(angle) -> np.ndarray:
+    half = 0.5 * np.asarray(angle, dtype=np.float64)
+    out = np.zeros(half.shape + (4,))
+    out[..., 1] = np.sin(half)
+    out[..., 3] = np.cos(half)
+    return out
+
+
+def steadiest_cycle(step_list: list[dict], speed_of, fps: float) -> tuple[int, int] | None:
+    """(first, last frame) of the left-to-left stride (with a right strike between) whose speed
+    ``speed_of((first, last))`` (m/s) is nearest the median over the take's strides; None without one."""
+    lefts = [s["strike"] for s in step_list if s["foot"] == "left"]
+    rights = [s["strike"] for s in step_list if s["foot"] == "right"]
+    strides = [(int(round(a * fps)), int(round(b * fps))) for a, b in zip(lefts[:-1], lefts[1:])
+               if any(a < r < b for r in rights)]
+    if not strides:
+        return None
+    speeds = np.array([speed_of(s) for s in strides])
+    return strides[int(np.argmin(np.abs(speeds - np.median(speeds))))]
+
+
+def _arc(speed: float, direction: float, turn: float, heading: float, t: np.ndarray) -> np.ndarray:
+    """(T, 3) ground points at times ``t`` (T,) along a circle (or line, ``turn`` 0) from the origin,
+    travelled at ``speed`` m/s in ``direction`` off a facing that starts at ``heading`` and turns at
+    ``turn`` rad/s."""
+    a = heading + direction
+    if abs(turn) < 1e-9:
+        return np.stack((speed * math.sin(a) * t, 0 * t, speed * math.cos(a) * t), axis=-1)
+    r = speed / turn
+    return np.stack((r * (math.cos(a) - np.cos(a + turn * t)), 0 * t, r * (np.sin(a + turn * t) - math.sin(a))), axis=-1)
+
+
+def _travel(motion) -> tuple[int, np.ndarray] | None:
+    """The joint that carries a motion's travel and its positions (F, 3) in the motion's frame: the root
+    joint, else the first child of the root whose own translation moves; None if nothing moves."""
+    root = motion.root_translations
+    if np.ptp(root, axis=0).max() >= 1e-6:
+        return 0, root
+    jt = motion.joint_translations
+    if jt is None:
+        return None
+    moving = np.nonzero((np.ptp(jt, axis=0).max(axis=1) > 1e-6) & (motion.skeleton.parents == 0))[0]
+    if not moving.size:
+        return None
+    j = int(moving[0])
+    return j, root + quat.rotate(motion.local_rotations[:, 0], jt[:, j])
+
+
+def _turned(rotations: np.ndarray, joint: int, turn: np.ndarray) -> np.ndarray:
+    """Local rotations (F, J, 4) with ``joint`` (the root or a child of it) turned by ``turn`` (F, 4)
+    in the motion's frame."""
+    rot = np.array(rotations)
+    if joint == 0:
+        rot[:, 0] = quat.multiply(turn, rot[:, 0])
+    else:
+        r0 = rot[:, 0]
+        rot[:, joint] = quat.multiply(quat.multiply(quat.conjugate(r0), quat.multiply(turn, r0)), rot[:, joint])
+    return rot
+
+
+def _moved(motion, joint: int, turn: np.ndarray, positions: np.ndarray):
+    """``motion`` with its travelling ``joint`` turned by ``turn`` (F, 4) and placed at ``positions``
+    (F, 3), both in the motion's frame."""
+    rot = _turned(motion.local_rotations, joint, turn)
+    if joint == 0:
+        return motion.replace(local_rotations=rot, root_translations=positions)
+    jt = np.array(motion.joint_translations)
+    jt[:, joint] = quat.rotate(quat.conjugate(rot[:, 0]), positions - motion.root_translations)
+    return motion.replace(local_rotations=rot, joint_translations=jt)
+
+
+def straighten(motion, params: dict, cycle: tuple[int, int], turn: float, align: float = 0.0):
+    """``motion`` with ``turn`` rad/s of its cycle's turn rate taken out and its body turned by
+    ``align`` radians off its path: the root joint turned by ``align - turn * t`` (t seconds from the
+    cycle's first frame) and carried from the circle the cycle walks (``params`` of
+    :func:`~infuse.packs.analysis.locomotion_parameters`) onto the circle of the remaining turn rate
+    (a straight line when all of it is taken out), same arc speed, same start and first heading of
+    travel. Returns the new motion; one whose root joint does not move is returned as it is."""
+    travel = _travel(motion)
+    if travel is None:
+        return motion
+    joint, pos = travel
+    t = (np.arange(motion.num_frames) - cycle[0]) / motion.fps
+    w = params["turn_rate"]
+    speed = math.hypot(params["forward_speed"], params["lateral_speed"])  # along the arc
+    direction = math.atan2(params["lateral_speed"], params["forward_speed"])
+    h0 = params["heading_start"]
+    start = pos[cycle[0]] * np.array([1.0, 0.0, 1.0])
+    undo = _yaw(align - turn * t)
+    walked = start + _arc(speed, direction, w, h0, t)
+    kept = start + _arc(speed, direction - align, w - turn, h0 + align, t)
+    return _moved(motion, joint, undo, kept + quat.rotate(undo, pos - walked))
+
+
+def close_loop(motion, cycle: tuple[int, int], turn_rate: float = 0.0):
+    """``motion`` with its cycle (first, last frame) closed: each joint's rotation from the cycle's first
+    frame to its last (the root's after taking out ``turn_rate`` rad/s) and the travelling joint's
+    height change,
+    taken out in proportion to the time into the cycle (fully from the last frame on). Returns the
+    new motion and the largest rotation taken out (degrees)."""
+    a, b = cycle
+    if b - a < 2:
+        return motion, 0.0
+    travel = _travel(motion)
+    joint = 0 if travel is None else travel[0]
+    turn = _yaw(turn_rate * (np.arange(motion.num_frames) - a) / motion.fps)
+    rot = _turned(motion.local_rotations, joint, quat.conjugate(turn))
+    gap = quat.multiply(quat.conjugate(rot[a]), rot[b])  # (J, 4): first -> last, in each joint's frame
+    gap = np.where(gap[:, 3:] < 0.0, -gap, gap)
+    share = np.clip((np.arange(len(rot)) - a) / (b - a), 0.0, 1.0)
+    closed = quat.multiply(rot, quat.from_rotvec(-share[:, None, None] * quat.to_rotvec(gap)[None]))
+    largest = float(np.degrees(quat.angle_between(rot[a], rot[b]).max()))
+    if travel is None:
+        return motion.replace(local_rotations=_turned(closed, joint, turn)), largest
+    pos = np.array(travel[1])
+    pos[:, 1] -= share * (pos[b, 1] - pos[a, 1])
+    return _moved(motion.replace(local_rotations=closed), joint, turn, pos), largest
+
+
+def alignment(direction: float) -> float:
+    """The turn (radians) that makes a cycle travelling ``direction`` radians off its facing travel
+    exactly forward or back, if it is within :data:`ALIGN_DEG` of either; else 0."""
+    limit = math.radians(ALIGN_DEG)
+    if abs(direction) <= limit:
+        return direction
+    if abs(direction) >= math.pi - limit:
+        return direction - math.copysign(math.pi, direction)
+    return 0.0
+
+
+def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarray, fps: float, leg: float,
+                    steps: int) -> str | None:
+    """What a clip does, from its (F, 2) foot contacts, pelvis path (F, 3), facing (F,) radians, leg
+    length (m) and number of steps: ``"none"`` (no steps: not locomotion), ``"turn"`` (turning more
+    than :data:`TURN_DEG` on the spot), and for clips of at most :data:`SHORT_STEPS` steps ``"step"``
+    (standing before and after), ``"start"`` (standing, then walking) or ``"stop"`` (walking, then
+    standing); None for a walk (what the blend can use)."""
+    if steps == 0 or len(root) < 3:
+        return "none"
+    travel = float(np.linalg.norm((root[-1] - root[0])[[0, 2]]))
+    turned = abs(float(heading[-1] - heading[0]))
+    if travel < 0.6 * leg and turned > math.radians(TURN_DEG):
+        return "turn"
+    if steps > SHORT_STEPS:
+        return None
+    speed = np.linalg.norm(np.gradient(root[:, [0, 2]], axis=0), axis=-1) * fps
+    span = max(int(round(0.25 * fps)), 1)
+    still = STILL_LEGS_S * leg
+    begins, ends = speed[:span].mean() < still, speed[-span:].mean() < still
+    if begins and ends:
+        return "step"
+    if begins:
+        return "start"
+    if ends:
+        return "stop"
+    return None
