@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .asset import Asset
-from .contacts import Foot, feet, lowest_points
+from .contacts import SIDES, Foot, feet, joint_index, lowest_points
 from .kinematics import forward_kinematics, motion_fk
 from .motion import Motion
 
@@ -60,3 +60,12 @@ def grounded(motion: Motion, height: float) -> Motion:
         jt = jt.copy()
         jt[:, 0, 1] -= height
     return motion.replace(root_translations=roots, joint_translations=jt)
+
+
+def on_ground(asset: Asset, mapping, motion: Motion, level: float = 0.0) -> Motion:
+    """``motion`` moved up or down so that its feet's lowest point (:func:`foot_height`) is at
+    ``level`` metres; unchanged for a character without both legs mapped (nothing to stand on)."""
+    index = joint_index(asset.skeleton, mapping)
+    if not all(prefix + j in index for _, prefix in SIDES for j in ("hip", "knee", "ankle")):
+        return motion
+    return grounded(motion, foot_height(asset, mapping, motion) - level)

@@ -26,6 +26,7 @@ import numpy as np
 from .. import quaternions as quat
 from ..asset import Asset, Character
 from ..errors import UsageError
+from ..grounding import on_ground
 from ..motion import Motion
 from .controller import Block, Controller, Job
 from .layers import Layer, Mode, blend_weights
@@ -408,14 +409,20 @@ class Runtime:
         return {"times": np.arange(len(weights)) / self.fps,
                 "weights": {targets[i]: weights[:, i].copy() for i in np.nonzero(written)[0]}}
 
-    def export(self, character, clip: str = "runtime") -> Asset:
+    def export(self, character, clip: str = "runtime", ground: bool = True) -> Asset:
         """The character's asset with the evaluated frames as its only clip (and morph-weight tracks),
-        ready for :func:`infuse.save`."""
+        ready for :func:`infuse.save`. With ``ground`` the clip is moved up or down so that the
+        feet's lowest point, soles included, is at the height the character stands at (a rig that
+        puts its hips at the origin would otherwise stand a leg's length below the ground)."""
         track = self._track(character)
-        asset = track.rig.character.asset
+        rig = track.rig
+        asset = rig.character.asset
         meta = dict(asset.meta)
         tracks = self.morph_tracks(character)
         meta.pop("morph_weight_tracks", None)
         if tracks["weights"]:
             meta["morph_weight_tracks"] = {clip: tracks}
-        return replace(asset, motions={clip: self.motion(character, clip)}, meta=meta)
+        motion = self.motion(character, clip)
+        if ground and motion.num_frames:
+            motion = on_ground(asset, rig.mapping, motion, float(rig.position[1]))
+        return replace(asset, motions={clip: motion}, meta=meta)
