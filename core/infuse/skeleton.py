@@ -7,6 +7,7 @@ when no motion is applied. Roots have parent -1 and their rest translation is in
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -14,6 +15,9 @@ import numpy as np
 
 from . import limits, quaternions as quat
 from .errors import InputError
+
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 def _frozen(array, dtype, shape_tail: tuple[int, ...]) -> np.ndarray:
@@ -58,6 +62,9 @@ class Skeleton:
         if j == 0:
             raise InputError(file, "skeleton", "no joints")
         limits.check(file, "skeleton", "joints", j, "MAX_JOINTS")
+        bad_name = next((n for n in self.names if not n or _CONTROL.search(n)), None)
+        if bad_name is not None:  # a writer could not put it in a text format (BVH, glTF JSON keeps it escaped)
+            raise InputError(file, f"joint {bad_name[:40]!r}", "joint name is empty or holds control characters")
         if len(set(self.names)) != j:
             dup = sorted({n for n in self.names if self.names.count(n) > 1})
             raise InputError(file, "skeleton", f"duplicate joint names: {', '.join(dup[:5])}")

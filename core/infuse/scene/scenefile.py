@@ -47,6 +47,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from .. import limits
 from ..errors import InputError
 
 _VARIABLE = re.compile(r"\$(?:\{(\w+)(?::-([^}]*))?\}|(\w+))")
@@ -132,7 +133,10 @@ class _Reader:
             self.fail(f"{place}.{unknown[0]}" if place else unknown[0],
                       f"unknown key; expected one of: {', '.join(sorted(allowed))}")
 
-    def number(self, value, place: str, minimum: float | None = None, positive: bool = False) -> float:
+    def number(self, value, place: str, minimum: float | None = None, positive: bool = False,
+               maximum: float = limits.MAX_COORDINATE_M) -> float:
+        """A finite number within +-``maximum`` (by default the largest coordinate, which bounds every
+        number a scene holds; times are bounded by the day of :data:`~infuse.limits.MAX_TIME_S`)."""
         if isinstance(value, str):
             try:
                 value = float(value)
@@ -144,6 +148,8 @@ class _Reader:
             self.fail(place, f"must be positive, got {value!r}")
         if minimum is not None and value < minimum:
             self.fail(place, f"must be at least {minimum:g}, got {value!r}")
+        if abs(value) > maximum:
+            self.fail(place, f"must be within +-{maximum:g}, got {value!r}")
         return float(value)
 
     def text(self, value, place: str) -> str:
@@ -212,9 +218,9 @@ def _spec(doc: dict, r: _Reader) -> SceneSpec:
     r.keys(doc, _TOP_KEYS, "")
     spec = SceneSpec(r.path)
     if "fps" in doc:
-        spec.fps = r.number(doc["fps"], "fps", positive=True)
+        spec.fps = r.number(doc["fps"], "fps", positive=True, maximum=limits.MAX_FPS)
     if doc.get("duration") is not None:
-        spec.duration = r.number(doc["duration"], "duration", minimum=0.0)
+        spec.duration = r.number(doc["duration"], "duration", minimum=0.0, maximum=limits.MAX_TIME_S)
     if "seed" in doc:
         spec.seed = int(r.number(doc["seed"], "seed"))
     if "idle" in doc:
@@ -263,7 +269,7 @@ def _spec(doc: dict, r: _Reader) -> SceneSpec:
         r.keys(item, _BLOCK_KEYS, place)
         if ("bml" in item) == ("file" in item):
             r.fail(place, "a block holds either bml (inline) or file")
-        spec.blocks.append(BlockSpec(r.number(item.get("at", 0.0), f"{place}.at"),
+        spec.blocks.append(BlockSpec(r.number(item.get("at", 0.0), f"{place}.at", maximum=limits.MAX_TIME_S),
                                      r.text(item["character"], f"{place}.character") if "character" in item else None,
                                      r.text(item["bml"], f"{place}.bml") if "bml" in item else None,
                                      r.file(item["file"], f"{place}.file") if "file" in item else None, place))

@@ -71,8 +71,35 @@ def parse_bytes(data: bytes, path: str | Path | None = None) -> GltfDocument:
     version = str((doc.get("asset") or {}).get("version", "")) if isinstance(doc.get("asset"), dict) else ""
     if not version.startswith("2."):
         raise InputError(path, "asset.version", f"not a glTF 2.0 asset (version {version or 'missing'!r})")
+    _check_top_level(doc, path)
     buffers = _load_buffers(doc, bin_chunk, path)
     return GltfDocument(doc, buffers, path, container)
+
+
+#: The glTF 2.0 top-level arrays: each holds objects (the ``extensions...`` ones hold names).
+OBJECT_ARRAYS = ("accessors", "animations", "buffers", "bufferViews", "cameras", "images", "materials", "meshes",
+                 "nodes", "samplers", "scenes", "skins", "textures")
+
+
+def _check_top_level(doc: dict, path: Path | None) -> None:
+    """The shape the glTF 2.0 schema gives the top level: arrays of objects, arrays of names, objects."""
+    for key in OBJECT_ARRAYS:
+        value = doc.get(key, [])
+        if not isinstance(value, list):
+            raise InputError(path, key, "is not an array")
+        bad = next((i for i, item in enumerate(value) if not isinstance(item, dict)), None)
+        if bad is not None:
+            raise InputError(path, f"{key}[{bad}]", "is not an object")
+    for key in ("extensionsUsed", "extensionsRequired"):
+        value = doc.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(name, str) for name in value):
+            raise InputError(path, key, "is not an array of extension names")
+    for key in ("asset", "extensions"):
+        if key in doc and not isinstance(doc[key], dict):
+            raise InputError(path, key, "is not an object")
+    scene = doc.get("scene", 0)
+    if not isinstance(scene, int) or isinstance(scene, bool):
+        raise InputError(path, "scene", f"{scene!r} is not a scene index")
 
 
 def _split_glb(data: bytes, path: Path | None) -> tuple[dict, memoryview | None]:
