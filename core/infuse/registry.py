@@ -331,6 +331,15 @@ def table_for_file(kind: str, path: str | Path, format: str | None = None) -> di
     return ps.table(kind)
 
 
+def extensions(kind: str) -> set[str]:
+    """The file extensions the installed readers (or writers) claim, from the index of what plugins offer
+    (:mod:`infuse.plugin_index`, no plugin imported), and those of the plugins already registered."""
+    from .plugin_index import offers
+
+    claimed = {e for offer in offers(kind) for e in offer.extensions}
+    return claimed | {e for d in plugins().table(kind, complete=False).values() for e in d.extensions}
+
+
 def readers() -> dict[str, Reader]:
     return table("reader")
 

@@ -86,7 +86,7 @@ class PackUnit:
 
 
 def readable_extensions() -> set[str]:
-    return {e for r in registry.readers().values() for e in r.extensions}
+    return registry.extensions("reader")
 
 
 def _files_under(folder: Path, extensions: set[str], exclude: Path | None) -> list[Path]:
