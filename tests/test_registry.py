@@ -387,3 +387,9 @@ def test_the_command_index_matches_the_full_parser():
     assert set(index) == set(choices)
     assert all(index[name][0].description == choices[name].description for name in index)
 
+
+
+def test_the_index_knows_the_extensions_the_readers_and_writers_claim():
+    for kind in ("reader", "writer"):
+        claimed = {e for d in registry.table(kind).values() for e in d.extensions}
+        assert registry.extensions(kind) == claimed and ".bvh" in claimed
