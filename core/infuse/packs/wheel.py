@@ -1,12 +1,13 @@
 """``infuse pack build --wheel``: the wheel of a pack project, made by pip through the project's own build backend.
 
 The project is copied without its ``build/``, ``dist/`` and egg-info folders and built there, so a
-file deleted from the project never lingers in the wheel from an earlier build. With setuptools
-installed beside infuse the build uses it and needs no network (``--no-build-isolation``);
+file deleted from the project never lingers in the wheel from an earlier build. With setuptools 77
+or later installed beside infuse the build uses it and needs no network (``--no-build-isolation``);
 otherwise pip fetches the backend the project names.
 """
 from __future__ import annotations
 
+import importlib.metadata
 import importlib.util
 import shutil
 import subprocess
@@ -18,8 +19,18 @@ from pathlib import Path
 from ..errors import InputError, MissingFeatureError, UnusableInputError, UsageError
 from .manifest import read_manifest
 
+#: The first setuptools that reads a licence expression (``license = "CC-BY-4.0"``), as new projects write.
+SETUPTOOLS_MAJOR = 77
 #: What a build leaves in a project, never copied into the next build.
 _BUILD_LEFTOVERS = shutil.ignore_patterns("build", "dist", "*.egg-info", "__pycache__", ".git", ".pytest_cache")
+
+
+def _setuptools_major() -> int:
+    """The major version of the setuptools beside infuse, 0 when there is none."""
+    try:
+        return int(importlib.metadata.version("setuptools").split(".")[0])
+    except (importlib.metadata.PackageNotFoundError, ValueError):
+        return 0
 
 
 def find_project(folder: str | Path) -> Path:
@@ -65,7 +76,7 @@ def build_wheel(project: str | Path, dist: str | Path | None = None) -> Path:
         raise MissingFeatureError(project, "building a wheel needs pip in this Python: python -m ensurepip")
     dist = Path(dist).resolve() if dist is not None else project / "dist"
     dist.mkdir(parents=True, exist_ok=True)
-    isolation = [] if importlib.util.find_spec("setuptools") is None else ["--no-build-isolation"]
+    isolation = ["--no-build-isolation"] if _setuptools_major() >= SETUPTOOLS_MAJOR else []
     with tempfile.TemporaryDirectory(prefix="infuse-wheel-") as tmp:
         source = Path(tmp) / project.name
         shutil.copytree(project, source, ignore=_BUILD_LEFTOVERS)

@@ -46,7 +46,8 @@ pip wheel --no-deps -w dist .
 ```
 
 The plugin is `$package/plugin.py`: change it, keep its tests passing. It depends on `infuse-anim`
-(import name `infuse`) and imports nothing of another plugin.
+(import name `infuse`), imports only the modules `infuse.api` lists as public, and nothing of another
+plugin.
 ''')
 
 GITIGNORE = "build/\ndist/\n*.egg-info/\n__pycache__/\n"
