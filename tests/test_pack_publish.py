@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import shutil
+import zipfile
 import tomllib
 from pathlib import Path
 
@@ -133,3 +134,30 @@ def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     _error(capsys, code, "manifest.toml:pack.version", "'0.2.0'")
     assert not (tmp_path / "fem" / "dist").exists()
 
+
+
+def test_the_wheel_holds_the_pack_and_nothing_left_from_an_earlier_build(tmp_path, capsys):
+    source = str(corpus_file(BANDAI))
+    project = tmp_path / "dash"
+    assert cli_main(["pack", "new", "dash", "--import", "bvh", source, "--glob", "*_dash_*.bvh", "-o", str(project)]) == 0
+    stale = project / "build" / "lib" / "infuse_pack_dash" / "stale.py"  # what an earlier setuptools build leaves
+    stale.parent.mkdir(parents=True)
+    stale.write_text("raise SystemExit('left over')\n")
+    readme = project / "README.md"
+    figures = readme.read_text()
+    readme.write_text(figures.replace("check: all clips pass", "check: old figures"))
+    capsys.readouterr()
+    assert cli_main(["pack", "build", str(project / "infuse_pack_dash" / "pack"), "--wheel"]) == 0  # from inside the project
+    out = capsys.readouterr().out
+    assert readme.read_text() == figures and f"license is still {LICENSE_PLACEHOLDER}" in out
+    (wheel,) = (project / "dist").glob("*.whl")
+    with zipfile.ZipFile(wheel) as z:
+        names = set(z.namelist())
+        entry_points = z.read("infuse_anim_pack_dash-0.1.0.dist-info/entry_points.txt").decode()
+    pack = load_pack(project / "infuse_pack_dash" / "pack")
+    shipped = {f"infuse_pack_dash/pack/{p.relative_to(pack.manifest.folder).as_posix()}"
+               for p in [pack.manifest.path, pack.manifest.analysis, pack.npz_path, *(c.file for c in pack.manifest.clips)]}
+    assert shipped <= names and "infuse_pack_dash/plugin.py" in names
+    assert "infuse_anim_pack_dash-0.1.0.dist-info/licenses/LICENSE" in names
+    assert not any("stale" in n or n.startswith("tests/") for n in names)
+    assert "[infuse.behaviour_packs]\ndash = infuse_pack_dash.plugin" in entry_points
