@@ -5,8 +5,6 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import UsageError
 from ..hookspecs import hookimpl
 from ..plugin_types import Command
