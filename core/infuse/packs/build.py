@@ -51,11 +51,13 @@ def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, b
 
 def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:
     """Make a locomotion pack's recorded clips usable as blend examples, in place (:mod:`.cycles`):
-    transitions recognized by what they do (``transition``; a clip given as a cycle that is one is
-    not blended), cycles straightened, aligned with their travel and closed, then analysed again on
+    transitions recognized by what they do (``transition``; a take given as a cycle that is one is
+    not blended; a loop is a cycle as given), cycles straightened, aligned with their travel and closed, then analysed again on
     the same stride. Each change is in the clip's ``derived`` record and ``motions`` holds the result."""
     for i, (entry, info) in enumerate(zip(entries, clips)):
-        if info["role"] not in ("cycle", "other"):
+        if info["role"] not in ("cycle", "other") or (info["loop"] and info["role"] == "cycle"):
+            if info["role"] == "cycle":
+                _derive(entry, info, i, motions, clips, fks, index, mapping)
             continue
         g_pos = fks[i][1]
         what = transition_kind(np.asarray(info["contacts"], dtype=bool).T, g_pos[:, index["base"]], headings(g_pos, index),
@@ -67,24 +69,28 @@ def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: d
                 info["notes"].append("no foot steps: not locomotion, not blended" if what == "none"
                                      else f"a {what}, not a steady cycle: not blended")
             continue
-        if info["role"] != "cycle":
-            continue
-        p, cycle = info["parameters"], tuple(info["cycle"])
-        motion = motions[entry.name]
-        turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
-        align = alignment(p["direction"])
-        derived = {}
-        if turn or align:
-            motion = straighten(motion, p, cycle, turn, align)
-            derived.update(straightened_deg_s=float(np.degrees(turn)), aligned_deg=float(np.degrees(align)))
-        motion, gap = close_loop(motion, cycle, p["turn_rate"] - turn)
-        derived["closed_deg"] = gap
-        motions[entry.name] = motion
-        fks[i] = batch_fk([motion])[0]
-        again = analyse_clip(motion, entry, "locomotion", index, mapping, fks[i], cycle=(cycle, info["keys"]))
-        again["notes"] = info["notes"] + again["notes"]
-        again["derived"] = derived
-        clips[i] = again
+        if info["role"] == "cycle":
+            _derive(entry, info, i, motions, clips, fks, index, mapping)
+
+
+def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:
+    """Straighten, align and close cycle ``i`` (see :func:`usable_cycles`)."""
+    p, cycle = info["parameters"], tuple(info["cycle"])
+    motion = motions[entry.name]
+    turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
+    align = alignment(p["direction"])
+    derived = {}
+    if turn or align:
+        motion = straighten(motion, p, cycle, turn, align)
+        derived.update(straightened_deg_s=float(np.degrees(turn)), aligned_deg=float(np.degrees(align)))
+    motion, gap = close_loop(motion, cycle, p["turn_rate"] - turn)
+    derived["closed_deg"] = gap
+    motions[entry.name] = motion
+    fks[i] = batch_fk([motion])[0]
+    again = analyse_clip(motion, entry, "locomotion", index, mapping, fks[i], cycle=(cycle, info["keys"]))
+    again["notes"] = info["notes"] + again["notes"]
+    again["derived"] = derived
+    clips[i] = again
 
 
 def build_pack(folder, mapper: str | None = None) -> Pack:
@@ -120,12 +126,14 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
                                    resolution=resolution_of(manifest.kind))
             tessellations[group] = t.to_dict()
     report = validate(manifest.kind, clips, motions, tessellations, index["base"])
+    covered = coverage(Tessellation.from_dict(tessellations["locomotion"])) if "locomotion" in tessellations else None
     doc = fileio.json_ready({
         "format": FORMAT_VERSION, "pack": manifest.name, "version": manifest.version, "kind": manifest.kind,
         "built_with": __version__, "fingerprint": digest, "files": records,
         "mapping": {"joints": mapping.mapped(), "confidence": {k: mapping.confidence[k] for k in mapping.mapped()},
                     "mapper": mapping.mapper},
         "coordinates": list(coords), "clips": clips, "tessellations": tessellations, "report": report,
+        **({"coverage": covered} if covered else {}),
     }, digits=6)
     names = list(motions)
     bounds = np.cumsum([0] + [motions[n].num_frames for n in names])
@@ -156,11 +164,20 @@ def summary(pack: Pack) -> str:
             lines.append(f"  {c['name']:<28} {c['role']:<6} speed {p['speed']:5.2f} m/s  dir {np.degrees(p['direction']):7.1f} deg  "
                          f"turn {np.degrees(p['turn_rate']):7.1f} deg/s  cycle {p['duration']:.2f} s  steps {steps}  "
                          f"keys {', '.join(f'{k:.2f}' for k in c['keys'])}")
+            made = c.get("derived") or {}
+            if made:
+                done = [f"made straight (a {made['straightened_deg_s']:+.1f} deg/s turn taken out)"] if made.get("straightened_deg_s") else []
+                done += [f"travel aligned by {made['aligned_deg']:+.1f} deg"] if made.get("aligned_deg") else []
+                lines.append("    " + ", ".join(done + [f"loop closed ({made['closed_deg']:.0f} deg at most)"]))
+            if c.get("transition"):
+                lines.append(f"    does: {c['transition'] if c['transition'] != 'none' else 'no locomotion'}")
         else:
             lines.append(f"  {c['name']:<40} {c['role']:<6} {c['hand'] or '':<5} stroke {c.get('stroke', 0):.2f} s  "
                          f"wrist ({p['x']:+.2f}, {p['y']:+.2f}, {p['z']:+.2f}) m")
     for group, t in pack.tessellations().items():
         lines.append(f"  blend space {group}: {t.describe()}")
+    if doc.get("coverage"):
+        lines += ["  " + line for line in describe_coverage(doc["coverage"])]
     for problem in doc["report"]:
         lines.append(f"  check: {problem}")
     if not doc["report"]:
