@@ -141,14 +141,17 @@ def update_docs(header: str, table: str) -> None:
     text = path.read_text(encoding="utf-8") if path.exists() else "# Performance\n"
     body = (f"{SECTION}\n\nMeasured with `benchmarks/startup.py`: each command is a whole process started from outside "
             f"and timed to its exit, CPU seconds as the operating system charged it. {header}\n\n{table}\n\n"
+            "- *met*: the median wall clock is under the target; *CPU only*: on this busy machine the wall clock "
+            "was not, but the CPU seconds were. These commands run on one core and read files the system has "
+            "cached, so on an idle machine their wall clock comes close to their CPU seconds.\n"
             "- `infuse` imports neither numpy, scipy nor any plugin to list its commands: their names and help lines "
-            "come from the `infuse.commands` entry points and a cached index (see [Writing plugins](plugins.md#how-"
-            "infuse-finds-plugins)); a command imports its own plugin only, and a kind of plugin (the readers, say) "
-            "is imported the first time it is needed.\n"
+            "come from an index of what every entry point offers, kept in the cache folder (see "
+            "[Writing plugins](plugins.md#loaded-when-needed)). A command imports its own plugin only, and a file is "
+            "read importing only the readers that claim its extension.\n"
             "- scipy is imported by the functions that use it (rotation vectors, Euler angles, Delaunay "
-            "tessellation), not by `infuse.quaternions` at import.\n"
-            "- The last row is the first run after a command plugin is installed or edited, which imports every "
-            "command plugin once to rebuild the index.\n")
+            "tessellation, FBX rotations), not by `infuse.quaternions` or a plugin at import.\n"
+            "- The last row is the first run after a command plugin is installed or edited: every command plugin "
+            "is imported once to learn its commands again.\n")
     if SECTION in text:
         start = text.index(SECTION)
         end = text.find("\n## ", start + len(SECTION))
