@@ -36,6 +36,14 @@ class InputError(InfuseError):
         where = ":".join(p for p in (self.file, self.place) if p)
         super().__init__(f"{where}: {self.problem}" if where else self.problem)
 
+    def naming(self, file: str | Path) -> "InputError":
+        """This error, of the same type, naming ``file`` (for errors raised by checks that do not know
+        the file, such as the core model's)."""
+        named = type(self).__new__(type(self))
+        named.__dict__.update(self.__dict__)
+        InputError.__init__(named, file, self.place, self.problem)
+        return named
+
 
 class UsageError(InfuseError):
     """A command or API call was given arguments that do not fit together."""

@@ -54,7 +54,7 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
         return reader.read(path, **options)
     except InputError as exc:
         if exc.file is None:  # raised by the core model's own checks, which do not know the file
-            raise InputError(path, exc.place, exc.problem) from None
+            raise exc.naming(path) from None
         raise
     except InfuseError:
         raise

@@ -120,6 +120,7 @@ class Scene:
         self._realize_notes: list[str] = []
         self._ids = itertools.count(1)
         self._points = itertools.count(1)
+        self._facing_later: dict[str, tuple] = {}  # character -> (name it faces, character, mapping, position)
         if not quiet:
             self.feedback.subscribe(_print_warning, kinds=["warningFeedback"])
 
@@ -163,7 +164,7 @@ class Scene:
         packs = (packs,) if isinstance(packs, str) else tuple(packs)
         infusion = self._infuse(character, packs) if packs else None
         position = _point(position, "position")
-        heading = self._heading(character, mapping, position, facing)
+        heading = self._heading(character, mapping, position, facing, waiting=name)
         self.runtime.add_character(character, name, mapping, position, heading)
         entry = SceneCharacter(name, character, path or asset.path, map_file, packs, voice, infusion)
         self.characters[name] = entry
@@ -171,6 +172,7 @@ class Scene:
         if self.idle if idle is None else idle:
             self._start_idle(entry, len(self.characters) - 1)
         self._record_objects()
+        self._face_waiting()
         return name
 
     def add_object(self, name: str, position, size: float = 0.1) -> str:
@@ -183,6 +185,7 @@ class Scene:
         self.objects[name] = SceneObject(name, tuple(float(v) for v in point), float(size))
         self.runtime.add_target(name, point)
         self._record_objects()
+        self._face_waiting()
         return name
 
     def _record_objects(self) -> None:
@@ -229,12 +232,16 @@ class Scene:
         if name in self.characters or name in self.objects or name in self.targets:
             raise UsageError(f"the scene already has something named {name!r}")
 
-    def _heading(self, character: Character, mapping, position: np.ndarray, facing) -> float:
-        """Degrees to turn the character about +Y so its front looks toward ``facing``."""
+    def _heading(self, character: Character, mapping, position: np.ndarray, facing, waiting: str | None = None) -> float:
+        """Degrees to turn the character about +Y so its front looks toward ``facing``. A name not in the
+        scene yet, before the first frame, makes character ``waiting`` turn when that name is added."""
         if facing is None:
             return 0.0
         if isinstance(facing, str):
             there = self.locate(self.resolve_name(facing))
+            if there is None and waiting is not None and self.runtime.frame == 0:
+                self._facing_later[waiting] = (facing, character, mapping, position)
+                return 0.0
             if there is None:
                 raise UsageError(f"facing {facing!r}: no character or object of that name")
             direction = np.asarray(there) - position
@@ -252,6 +259,20 @@ class Scene:
         forward = quat.rotate(Rig("probe", character, mapping).body, np.array([0.0, 0.0, 1.0]))
         turn = math.atan2(direction[0], direction[2]) - math.atan2(forward[0], forward[2])
         return math.degrees((turn + math.pi) % (2 * math.pi) - math.pi)
+
+    def _face_waiting(self) -> None:
+        """Turn the characters whose facing names something now in the scene."""
+        for name, (facing, character, mapping, position) in list(self._facing_later.items()):
+            if self.locate(self.resolve_name(facing)) is not None:
+                del self._facing_later[name]
+                heading = self._heading(character, mapping, position, facing)
+                self.runtime.rig(name).rotation = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), math.radians(heading))
+
+    def _check_facing(self) -> None:
+        """Before the first frame: every facing names something in the scene."""
+        if self._facing_later:
+            name, (facing, *_) = next(iter(self._facing_later.items()))
+            raise UsageError(f"character {name!r} facing {facing!r}: no character or object of that name")
 
     def _infuse(self, character: Character, packs: tuple[str, ...]):
         """Infuse ``character`` with behaviour packs: their clips join the character's (``clip`` and
@@ -575,6 +596,7 @@ class Scene:
             frames = int(round(float(seconds) * self.fps))
         if frames < 0:
             raise UsageError("run() takes a duration >= 0 seconds")
+        self._check_facing()
         done = 0
         while done < frames:
             self.walks.before_block()
@@ -588,6 +610,7 @@ class Scene:
     def step(self, frames: int = 1) -> None:
         """Evaluate the next ``frames`` frames and deliver their feedback."""
         frames = int(frames)
+        self._check_facing()
         while frames > 0:
             self.walks.before_block()
             n = self.walks.frames_until_handover(frames)

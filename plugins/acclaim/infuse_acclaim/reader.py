@@ -68,7 +68,7 @@ def _skeleton(asf: AsfFile, metres: float) -> Skeleton:
         return Skeleton(names, parents, offsets * metres, quat.identity((len(names),)),
                         np.array([index[b] for b in leaves], dtype=np.int64), ends * metres)
     except InputError as exc:
-        raise InputError(asf.path, exc.place, exc.problem) from None
+        raise exc.naming(asf.path) from None
 
 
 def _length_unit(asf: AsfFile, override: str | None) -> tuple[str, float, str, str]:
@@ -229,6 +229,6 @@ def read_amc(path: Path, units: str | None = None, up_axis: str | None = None, s
     try:
         motion = Motion(skel, float(fps), rotations, root_t, name=name)
     except InputError as exc:
-        raise InputError(path, exc.place, exc.problem) from None
+        raise exc.naming(path) from None
     return Asset(path, "acclaim-amc", skel, {name: motion}, source_units=unit, source_up_axis=axis,
                  units_detected_by=detected_by, meta=meta, payload=(amc, asf))

@@ -229,5 +229,5 @@ def read(path: str | Path, units: str | None = None, up_axis: str | None = None,
         return to_asset(path, parse(path), units=units, up_axis=up_axis)
     except InputError as exc:
         if exc.file is None:  # raised by the core's checks (finite values, options): name the file
-            raise InputError(path, exc.place, exc.problem) from None
+            raise exc.naming(path) from None
         raise

@@ -50,7 +50,7 @@ def _skeleton(path: Path, names, parents, translations, rotations) -> Skeleton:
     try:
         return Skeleton(names, parents, translations, rotations)
     except InputError as exc:
-        raise InputError(path, exc.place, exc.problem) from None
+        raise exc.naming(path) from None
 
 
 def sk_units(sk: SkFile, override: str | None = None) -> tuple[str, str, str]:
@@ -169,6 +169,6 @@ def read_skm(path: Path, units: str | None = None, up_axis: str | None = None, s
     try:
         motion = Motion(skel, fps, rotations, translations[:, 0], joint_translations, name=skm.name, sync_points=sync)
     except InputError as exc:
-        raise InputError(path, exc.place, exc.problem) from None
+        raise exc.naming(path) from None
     return Asset(path, "smartbody-skm", skel, {skm.name: motion}, source_units=unit, source_up_axis=axis,
                  units_detected_by=detected_by, meta=meta, payload=(skm, sk))
