@@ -123,7 +123,7 @@ def map_file(root: Path, label: dict, mapper: str):
     return asset, r
 
 
-def variant_results(asset, label: dict, mapper: str) -> list[tuple[str, int, float]]:
+def variant_results(asset, label: dict, mapper: str, verbose: bool = False) -> list[tuple[str, int, float]]:
     """(variant name, right joints, cpu seconds) of every generated variant of one skeleton."""
     out = []
     poses = sample_poses(asset)
@@ -136,7 +136,9 @@ def variant_results(asset, label: dict, mapper: str) -> list[tuple[str, int, flo
         except infuse.NotHumanoidError:
             joints = {}
         seconds = time.process_time() - t0
-        right, _, _ = score(joints, v.mapping, v.alternatives)
+        right, _, wrong = score(joints, v.mapping, v.alternatives)
+        if verbose and wrong:
+            print(f"  variant {v.name} of {label['file']}: {len(wrong)} wrong {wrong[:6]}", file=sys.stderr)
         out.append((v.name, right, seconds))
     return out
 
@@ -209,7 +211,7 @@ def main(argv=None) -> int:
             key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
             if "variants" in sets and label["humanoid"] and key not in seen:
                 seen.add(key)
-                for kind, right, seconds in variant_results(asset, label, args.mapper):
+                for kind, right, seconds in variant_results(asset, label, args.mapper, args.verbose):
                     acc = variants.setdefault(kind, [0, 0])
                     acc[0] += right
                     acc[1] += len(CANONICAL_NAMES)

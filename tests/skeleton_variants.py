@@ -11,7 +11,18 @@ the alternatives). Variants:
   each elbow, a prop under each hand, an IK target at the root and a ground root above the pelvis,
   all with meaningless names;
 - ``reordered``: children listed in reverse order (joint indices change);
-- ``everything``: all of the above at once.
+- ``convention_*``: the labelled joints renamed into another naming convention (Mixamo with its
+  namespace, Unreal, Blender ``.L``/``.R``), the other joints keep their names;
+- ``prefixed``: every name behind a namespace and a studio prefix (``Char01:rig_``);
+- ``a_pose`` / ``t_pose``: the arms turned 40 degrees down or up about the shoulders in the body's
+  frontal plane (the rest pose changes, the motion does not);
+- ``rest_rotations``: random local rest rotations with the same joint positions;
+- ``named_helpers``: zero-length roll joints after each upper arm, forearm, thigh and shin
+  (MotionBuilder style, named ``<joint>Roll``), a named IK target and pole per hand and foot;
+- ``no_fingers`` / ``no_clavicles`` / ``no_neck``: those joints removed (children re-parented);
+- ``mirrored_names``: every left joint takes the name of its right counterpart and vice versa
+  (geometry must decide the sides);
+- ``everything``: extra joints, reordered, turned, rescaled and renamed at once.
 """
 from __future__ import annotations
 
@@ -196,6 +207,221 @@ def reordered(skeleton: Skeleton, poses, label: dict) -> Variant:
     return Variant("reordered", sk, pose_arr, mapping, alts, _identity(skeleton.names))
 
 
+#: Canonical name -> joint name in other conventions ("{s}"/"{S}"/"{Side}": side letter, capital, word).
+CONVENTIONS: dict[str, dict[str, str]] = {
+    "mixamo": {"base": "mixamorig:Hips", "spine1": "mixamorig:Spine", "spine2": "mixamorig:Spine1",
+               "spine3": "mixamorig:Spine2", "spine4": "mixamorig:Neck", "spine5": "mixamorig:Neck1",
+               "skullbase": "mixamorig:Head", "eyeball": "mixamorig:{Side}Eye",
+               "acromioclavicular": "mixamorig:{Side}Shoulder", "shoulder": "mixamorig:{Side}Arm",
+               "elbow": "mixamorig:{Side}ForeArm", "forearm": "mixamorig:{Side}ForeArmTwist",
+               "wrist": "mixamorig:{Side}Hand", "finger": "mixamorig:{Side}Hand{Finger}{k}",
+               "hip": "mixamorig:{Side}UpLeg", "knee": "mixamorig:{Side}Leg", "ankle": "mixamorig:{Side}Foot",
+               "forefoot": "mixamorig:{Side}ToeBase", "toe": "mixamorig:{Side}Toe_End"},
+    "unreal": {"base": "pelvis", "spine1": "spine_01", "spine2": "spine_02", "spine3": "spine_03",
+               "spine4": "neck_01", "spine5": "neck_02", "skullbase": "head", "eyeball": "eye_{s}",
+               "acromioclavicular": "clavicle_{s}", "shoulder": "upperarm_{s}", "elbow": "lowerarm_{s}",
+               "forearm": "lowerarm_twist_01_{s}", "wrist": "hand_{s}", "finger": "{finger}_0{k}_{s}",
+               "hip": "thigh_{s}", "knee": "calf_{s}", "ankle": "foot_{s}", "forefoot": "ball_{s}",
+               "toe": "toe_end_{s}"},
+    "blender": {"base": "hips", "spine1": "spine", "spine2": "spine.001", "spine3": "chest", "spine4": "neck",
+                "spine5": "neck.001", "skullbase": "head", "eyeball": "eye.{S}", "acromioclavicular": "shoulder.{S}",
+                "shoulder": "upper_arm.{S}", "elbow": "forearm.{S}", "forearm": "forearm_twist.{S}",
+                "wrist": "hand.{S}", "finger": "f_{finger}.0{k}.{S}", "hip": "thigh.{S}", "knee": "shin.{S}",
+                "ankle": "foot.{S}", "forefoot": "toe.{S}", "toe": "toe_end.{S}"},
+}
+FINGERS = ("thumb", "index", "middle", "ring", "pinky")
+
+
+def _convention_name(table: dict, canonical: str) -> str:
+    if canonical in table:
+        return table[canonical]
+    if canonical.startswith("eyeball_"):
+        side = canonical[len("eyeball_"):]
+        return table["eyeball"].format(s=side[0], S=side[0].upper(), Side=side.capitalize())
+    side, rest = canonical.split("_", 1)
+    fields = {"s": side, "S": side.upper(), "Side": "Left" if side == "l" else "Right"}
+    if rest[:-1] in FINGERS:
+        return table["finger"].format(finger=rest[:-1], Finger=rest[:-1].capitalize(), k=rest[-1], **fields)
+    return table[rest].format(**fields)
+
+
+def _renamed(skeleton: Skeleton, poses, label: dict, rename: dict, name: str) -> Variant:
+    sk = Skeleton(tuple(rename[n] for n in skeleton.names), skeleton.parents, skeleton.rest_translations,
+                  skeleton.rest_rotations, skeleton.end_site_parents, skeleton.end_site_offsets)
+    mapping, alts = _translate(label, rename)
+    return Variant(name, sk, poses, mapping, alts, rename)
+
+
+def convention(skeleton: Skeleton, poses, label: dict, table: str) -> Variant:
+    """The labelled joints renamed into another convention; the other joints keep their names
+    (with a suffix when a new name is taken)."""
+    conv = CONVENTIONS[table]
+    rename = {v: _convention_name(conv, k) for k, v in label["mapping"].items() if v is not None}
+    used = set(rename.values())
+    for n in skeleton.names:
+        if n not in rename:
+            rename[n] = n if n not in used else f"{n}_extra"
+    return _renamed(skeleton, poses, label, rename, f"convention_{table}")
+
+
+def prefixed(skeleton: Skeleton, poses, label: dict) -> Variant:
+    rename = {n: f"Char01:rig_{n}" for n in skeleton.names}
+    return _renamed(skeleton, poses, label, rename, "prefixed")
+
+
+def mirrored_names(skeleton: Skeleton, poses, label: dict) -> Variant:
+    """Each labelled left joint takes its right counterpart's name and vice versa; the expected
+    mapping follows the joints, not the names."""
+    m = label["mapping"]
+    rename = {n: n for n in skeleton.names}
+    for k, v in m.items():
+        other = "r_" + k[2:] if k.startswith("l_") else "eyeball_right" if k == "eyeball_left" else None
+        if other and v is not None and m.get(other) is not None and m[other] != v:
+            rename[v], rename[m[other]] = m[other], v
+    return _renamed(skeleton, poses, label, rename, "mirrored_names")
+
+
+def _body_axes(positions: np.ndarray, index: dict, m: dict) -> tuple[np.ndarray, np.ndarray] | None:
+    """(up, left) unit vectors of a labelled body from its rest positions, or None."""
+    need = ("base", "l_shoulder", "r_shoulder")
+    if any(m.get(k) not in index for k in need):
+        return None
+    shoulders = positions[[index[m["l_shoulder"]], index[m["r_shoulder"]]]]
+    left = shoulders[0] - shoulders[1]
+    up = shoulders.mean(axis=0) - positions[index[m["base"]]]
+    up = up - (up @ left) / max(left @ left, 1e-12) * left
+    if np.linalg.norm(up) < 1e-9 or np.linalg.norm(left) < 1e-9:
+        return None
+    return up / np.linalg.norm(up), left / np.linalg.norm(left)
+
+
+def _subtree(skeleton: Skeleton, j: int) -> list[int]:
+    out, stack = [], [j]
+    while stack:
+        k = stack.pop()
+        out.append(k)
+        stack.extend(skeleton.children[k])
+    return out
+
+
+def arms_turned(skeleton: Skeleton, poses, label: dict, degrees: float, name: str) -> Variant:
+    """Each arm turned ``degrees`` (positive: down) about its shoulder in the body's frontal plane."""
+    pos = skeleton.rest_global_positions.copy()
+    ends = skeleton.rest_end_site_positions.copy() if len(skeleton.end_site_parents) else None
+    m, idx = label["mapping"], skeleton.index
+    axes = _body_axes(pos, idx, m)
+    if axes is not None:
+        up, left = axes
+        forward = np.cross(left, up)
+        for side, sign in (("l", 1.0), ("r", -1.0)):
+            shoulder = idx[m[f"{side}_shoulder"]]
+            q = quat.from_axis_angle(forward, sign * np.radians(degrees))
+            moved = _subtree(skeleton, shoulder)
+            pos[moved] = pos[shoulder] + quat.rotate(q, pos[moved] - pos[shoulder])
+            if ends is not None:
+                sel = np.isin(skeleton.end_site_parents, moved)
+                ends[sel] = pos[shoulder] + quat.rotate(q, ends[sel] - pos[shoulder])
+    sk = _from_positions(skeleton.names, skeleton.parents, pos, skeleton.end_site_parents, ends)
+    mapping, alts = _translate(label, _identity(skeleton.names))
+    return Variant(name, sk, poses, mapping, alts, _identity(skeleton.names))
+
+
+def rest_rotations(skeleton: Skeleton, poses, label: dict, seed: int = 0) -> Variant:
+    """Random local rest rotations; local offsets chosen so every joint keeps its rest position."""
+    rng = np.random.default_rng(seed)
+    n = skeleton.num_joints
+    local = quat.normalize(rng.normal(size=(n, 4)))
+    world = local.copy()
+    parents = skeleton.parents
+    for j in range(n):
+        if parents[j] >= 0:
+            world[j] = quat.multiply(world[parents[j]], local[j])
+    pos = skeleton.rest_global_positions
+    has_parent = parents >= 0
+    offsets = pos.copy()
+    offsets[has_parent] = quat.rotate(quat.conjugate(world[parents[has_parent]]),
+                                      pos[has_parent] - pos[parents[has_parent]])
+    end_offsets = skeleton.end_site_offsets
+    if len(skeleton.end_site_parents):
+        ep = skeleton.end_site_parents
+        end_offsets = quat.rotate(quat.conjugate(world[ep]), skeleton.rest_end_site_positions - pos[ep])
+    sk = Skeleton(skeleton.names, parents, offsets, local, skeleton.end_site_parents, end_offsets)
+    mapping, alts = _translate(label, _identity(skeleton.names))
+    return Variant("rest_rotations", sk, poses, mapping, alts, _identity(skeleton.names))
+
+
+def named_helpers(skeleton: Skeleton, poses, label: dict) -> Variant:
+    """Zero-length ``<joint>Roll`` joints right after each upper arm, forearm, thigh and shin, and a
+    named IK target and pole for each hand and foot under the root."""
+    names = list(skeleton.names)
+    parents = [int(p) for p in skeleton.parents]
+    pos = list(skeleton.rest_global_positions)
+    pose_list = None if poses is None else list(np.moveaxis(np.asarray(poses), -2, 0))
+    idx = skeleton.index
+    m = label["mapping"]
+    root = int(skeleton.roots[0])
+    height = skeleton.height()
+    for side in ("l", "r"):
+        for upper, lower in (("shoulder", "elbow"), ("elbow", "wrist"), ("hip", "knee"), ("knee", "ankle")):
+            a, b = m.get(f"{side}_{upper}"), m.get(f"{side}_{lower}")
+            if a in idx and b in idx and parents[idx[b]] == idx[a]:
+                _insert(names, parents, pos, pose_list, idx[b], 0.0, f"{a}Roll")
+        for end in ("wrist", "ankle"):
+            j = m.get(f"{side}_{end}")
+            if j in idx:
+                _leaf(names, parents, pos, pose_list, root, pos[idx[j]] - pos[root], f"{j}_IK_target")
+                _leaf(names, parents, pos, pose_list, root, pos[idx[j]] - pos[root]
+                      + np.array([0.0, 0.1, 0.3]) * height, f"{j}_IK_pole")
+    names, parents, pos_arr, pose_arr = _topological(names, parents, pos, pose_list)
+    sk = _with_end_sites(skeleton, names, parents, pos_arr)
+    mapping, alts = _translate(label, _identity(names))
+    return Variant("named_helpers", sk, pose_arr, mapping, alts, _identity(skeleton.names))
+
+
+def removed(skeleton: Skeleton, poses, label: dict, kind: str) -> Variant:
+    """The fingers (with everything below them), the clavicles or the neck joints removed; the
+    children of a removed joint hang from its parent."""
+    m = label["mapping"]
+    idx = skeleton.index
+    drop: set[int] = set()
+    if kind == "fingers":
+        for k, j in m.items():
+            if k[2:-1] in FINGERS and j in idx:
+                drop.update(_subtree(skeleton, idx[j]))
+    elif kind == "clavicles":
+        drop.update(idx[m[k]] for k in ("l_acromioclavicular", "r_acromioclavicular", "l_sternoclavicular",
+                                        "r_sternoclavicular") if m.get(k) in idx)
+    else:  # every joint between the chest and the head
+        head, chest = idx.get(m.get("skullbase")), idx.get(m.get("spine3") or m.get("base"))
+        path, j = [], int(skeleton.parents[head]) if head is not None else -1
+        while j >= 0 and j != chest:
+            path.append(j)
+            j = int(skeleton.parents[j])
+        if chest is not None and j == chest:
+            drop.update(path)
+    keep = [j for j in range(skeleton.num_joints) if j not in drop]
+    new_index = {old: i for i, old in enumerate(keep)}
+    pos = skeleton.rest_global_positions
+    parents = []
+    for j in keep:
+        p = int(skeleton.parents[j])
+        while p >= 0 and p not in new_index:
+            p = int(skeleton.parents[p])
+        parents.append(new_index[p] if p >= 0 else -1)
+    kept_names = [skeleton.names[j] for j in keep]
+    ends = [(int(e), q) for e, q in zip(skeleton.end_site_parents, skeleton.rest_end_site_positions) if e in new_index]
+    sk = _from_positions(kept_names, parents, pos[keep], [new_index[e] for e, _ in ends],
+                         np.array([q for _, q in ends]) if ends else None)
+    new_poses = None if poses is None else np.asarray(poses)[..., keep, :]
+    gone = {skeleton.names[j] for j in drop}
+    expected = {"mapping": {k: (None if v in gone else v) for k, v in m.items()},
+                "alternatives": {k: [a for a in vals if a not in gone]
+                                 for k, vals in (label.get("alternatives") or {}).items()}}
+    mapping, alts = _translate(expected, _identity(kept_names))
+    rename = {n: n for n in kept_names}
+    return Variant(f"no_{kind}", sk, new_poses, mapping, alts, rename)
+
+
 def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
     """Every variant of one labelled skeleton (see the module docstring)."""
     out = [meaningless(skeleton, poses, label)]
@@ -205,6 +431,16 @@ def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
         out.append(transformed(skeleton, poses, label, unit=unit))
     out.append(extra_joints(skeleton, poses, label))
     out.append(reordered(skeleton, poses, label))
+    for table in CONVENTIONS:
+        out.append(convention(skeleton, poses, label, table))
+    out.append(prefixed(skeleton, poses, label))
+    out.append(arms_turned(skeleton, poses, label, 40.0, "a_pose"))
+    out.append(arms_turned(skeleton, poses, label, -40.0, "t_pose"))
+    out.append(rest_rotations(skeleton, poses, label))
+    out.append(named_helpers(skeleton, poses, label))
+    for kind in ("fingers", "clavicles", "neck"):
+        out.append(removed(skeleton, poses, label, kind))
+    out.append(mirrored_names(skeleton, poses, label))
     combo = extra_joints(skeleton, poses, label)
     combo = reordered(combo.skeleton, combo.poses, {"mapping": combo.mapping, "alternatives": combo.alternatives})
     combo = transformed(combo.skeleton, combo.poses, {"mapping": combo.mapping, "alternatives": combo.alternatives},

@@ -1,8 +1,8 @@
 """The heuristic mapper on every labelled corpus file, and on generated variants of its skeletons.
 
-Targets (issue "automatic skeleton mapping"): at least 98% of labelled joints right overall, every
-body joint right on every humanoid file, at least 95% on generated variants, non-humanoids
-refused, a median of at most 5 ms per skeleton. The corpus is loaded once for the module.
+Targets: at least 98% of labelled joints right overall, every body joint right on every humanoid
+file, at least 97% on generated variants, non-humanoids refused, a median of at most 5 ms per
+skeleton. The corpus is loaded once for the module.
 """
 from __future__ import annotations
 
@@ -102,7 +102,9 @@ def distinct_skeletons(corpus):
 
 
 def test_generated_variants(distinct_skeletons):
-    """Renamed, rotated, rescaled, with extra joints, reordered, and all at once: >= 95% right."""
+    """Renamed (meaningless names, other conventions, prefixes, mirrored side names), rotated,
+    rescaled, re-posed (A-pose, T-pose, random rest rotations), with extra joints (meaningless or
+    named helpers), with fingers, clavicles or neck removed, reordered, and all at once: >= 97%."""
     right = total = 0
     per_kind: dict[str, list[int]] = {}
     for label, asset in distinct_skeletons:
@@ -120,9 +122,9 @@ def test_generated_variants(distinct_skeletons):
             kind = per_kind.setdefault(v.name, [0, 0])
             kind[0] += r
             kind[1] += len(CANONICAL_NAMES)
-    assert right / total >= 0.95, {k: round(a / b, 4) for k, (a, b) in per_kind.items()}
-    # turning, scaling and reordering never change the answer
+    assert right / total >= 0.97, {k: round(a / b, 4) for k, (a, b) in per_kind.items()}
+    # turning, scaling, reordering and local rest rotations never change the answer
     for kind in ("rotated_z_up", "rotated_facing_-z", "rotated_facing_+x", "scaled_cm", "scaled_dm", "scaled_inch",
-                 "reordered"):
+                 "reordered", "rest_rotations"):
         a, b = per_kind[kind]
         assert a / b >= 0.995, (kind, a / b)
