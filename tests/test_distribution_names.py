@@ -33,3 +33,9 @@ def test_every_other_distribution_is_infuse_anim_something_and_depends_on_this_c
         assert [str(r) for r in core] == [core_requirement()], folder
         assert infuse.__version__ in core[0].specifier
         assert not any(Requirement(r).name == "infuse" for r in table["dependencies"]), folder  # an unrelated project
+
+
+def test_every_distribution_declares_the_core_licence():
+    projects = _projects()
+    licence = projects[ROOT]["license"]
+    assert licence == "MIT" and [f for f, t in projects.items() if t.get("license") != licence] == []
