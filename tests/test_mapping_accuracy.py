@@ -89,6 +89,20 @@ def test_confidences_and_reasons(corpus):
         assert set(mapping.unmapped) == set(asset.skeleton.names) - used
 
 
+def test_confident_entries_are_right(corpus):
+    """Calibration: of the entries given a confidence of at least 0.9, at least 99% are right."""
+    right = total = 0
+    for label, asset, mapping, refused, _ in corpus:
+        if mapping is None or not label["humanoid"]:
+            continue
+        _, wrong = score(mapping.joints, label["mapping"], label.get("alternatives"))
+        wrong_names = {k for k, *_ in wrong}
+        sure = [k for k in CANONICAL_NAMES if mapping.confidence[k] >= 0.9]
+        right += sum(k not in wrong_names for k in sure)
+        total += len(sure)
+    assert total >= 1000 and right / total >= 0.99, f"{right}/{total}"
+
+
 @pytest.fixture(scope="module")
 def distinct_skeletons(corpus):
     """One labelled humanoid file per distinct skeleton (motion files share theirs)."""
