@@ -1,8 +1,9 @@
 """``infuse speak CHARACTER "text" -o out.glb``: speech, lip sync and the files that go with them.
 
 Writes ``out.glb`` (the character with one clip, ``speech``: morph-weight tracks on its own face
-channels, or face-joint rotations for joint faces), ``out.wav`` next to it and
-``out.timeline.json`` (phonemes, visemes, words, marks, the channels driven).
+channels, or face-joint rotations for joint faces, over a living idle of the body, see
+:mod:`.body`, unless ``--face-only``; standing on the ground unless ``--no-ground``), ``out.wav``
+next to it and ``out.timeline.json`` (phonemes, visemes, words, marks, the channels driven).
 """
 from __future__ import annotations
 
@@ -14,8 +15,11 @@ from infuse import fileio
 from infuse.atomic import atomic_path
 from infuse.cli.builtin import add_read_options, read_options
 from infuse.errors import InputError, UsageError
+from infuse.grounding import on_ground
+from infuse.mapping import map_skeleton
 from infuse.speech import tts_engine
 
+from .body import IDLE_PACK, idle_body, merged_tracks, with_face
 from .channels import detect_face
 from .expressions import Expression
 from .lipsync import LipSyncSettings, choose_viseme_set, lipsync
@@ -43,6 +47,12 @@ def add_arguments(p) -> None:
                    help="hold a facial expression during the speech: smile, frown, surprise, raised_brows, blink, "
                         "sad, angry, or an action unit such as AU12 (repeatable)")
     p.add_argument("--clip", default="speech", help="clip name (default speech)")
+    p.add_argument("--face-only", action="store_true",
+                   help="move the face only (default: the body idles too: breathing, blinks, saccades, nods)")
+    p.add_argument("--idle-pack", default=IDLE_PACK, metavar="PACK",
+                   help=f"behaviour pack whose idle clip the body stands in (default {IDLE_PACK}, when installed)")
+    p.add_argument("--no-ground", dest="ground", action="store_false",
+                   help="keep the character's own height (default: its feet's lowest point at y = 0)")
     add_read_options(p)
 
 
@@ -85,11 +95,21 @@ def run(args) -> int:
     with atomic_path(wav) as wav_tmp:  # the WAV appears only once the animation is written too
         utterance = engine.synthesize(args.text, wav_tmp)
         result = lipsync(utterance, face, args.viseme_set, LipSyncSettings(fps=args.fps), asset.skeleton, expressions)
-        motion = result.motion(asset.skeleton, args.clip)
+        face_motion = result.motion(asset.skeleton, args.clip)
+        face_track = result.morph_weight_track() if result.morph_weights else None
+        if args.face_only:
+            motion, track, body = face_motion, face_track, "face only"
+            if motion is not None and args.ground:
+                motion = on_ground(asset, map_skeleton(asset, saved_map=args.map), motion)
+        else:
+            idle, body = idle_body(asset, len(result.times), args.fps, utterance.words, args.idle_pack, args.map,
+                                   clip=args.clip, ground=args.ground)
+            motion = with_face(idle.motions[args.clip], face_motion, result.joint_rotations)
+            track = merged_tracks(idle.meta.get("morph_weight_tracks", {}).get(args.clip), face_track)
         asset.motions = {args.clip: motion} if motion is not None else {}
         asset.meta = {k: v for k, v in asset.meta.items() if k != "morph_weight_tracks"}
-        if result.morph_weights:
-            asset.meta["morph_weight_tracks"] = {args.clip: result.morph_weight_track()}
+        if track is not None:
+            asset.meta["morph_weight_tracks"] = {args.clip: track}
         fileio.save(asset, out)
         doc = dict(result.timeline, wav=wav.name, animation=out.name, clip=args.clip,
                    character=str(args.character), joints=sorted(result.joint_rotations))
@@ -99,7 +119,7 @@ def run(args) -> int:
     driven = (f"{len(result.morph_weights)} morph targets" if result.morph_weights
               else f"{len(result.joint_rotations)} face joints")
     print(f"wrote {out}: clip {args.clip!r}, {len(result.times)} frames at {args.fps:g} fps, viseme set "
-          f"{result.viseme_set} ({driven})")
+          f"{result.viseme_set} ({driven}); body: {body}")
     print(f"wrote {wav}: {utterance.duration_s:.2f} s ({utterance.engine})")
     print(f"wrote {timeline_path}: {len(utterance.phonemes)} phonemes, {len(utterance.words)} words, {len(utterance.marks)} marks")
     sys.stdout.flush()

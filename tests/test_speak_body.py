@@ -1,0 +1,80 @@
+"""``infuse speak`` gives the body a living idle: it stands in a pack's idle on both feet, breathes,
+blinks, moves its eyes and nods on the beats, while the mouth speaks; ``--face-only`` moves the face only."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+from corpus_data import UNDER_CI, corpus_file, require_corpus
+from infuse import quaternions as quat
+from infuse.cli import main
+from infuse.contacts import feet, lowest_points
+from infuse.grounding import foot_height
+from infuse.kinematics import motion_fk
+from infuse.mapping import map_skeleton
+from infuse_gltf.container import parse_file
+from infuse_lipsync.body import beats
+
+RPM = "talkinghead/avatars/brunette-t.glb"
+VROID = "talkinghead/avatars/vroid.glb"
+TEXT = "Hello, I am infused. It is good to meet you all here today."
+
+
+@pytest.fixture(scope="module")
+def espeak():
+    try:
+        from infuse_tts_espeak.library import espeak as load
+        load()
+    except Exception as exc:
+        if UNDER_CI:
+            pytest.fail(f"espeak-ng is required under CI: {exc}")
+        pytest.skip(f"espeak-ng not available: {exc}")
+
+
+def _speak(tmp_path, rel: str, *options) -> infuse.Asset:
+    require_corpus()
+    out = tmp_path / "out.glb"
+    assert main(["speak", str(corpus_file(rel)), TEXT, "-o", str(out), *options]) == 0
+    assert [a["name"] for a in parse_file(out).json["animations"]] == ["speech"]  # the first, and only, animation
+    return infuse.load(out)
+
+
+def _turns_deg(asset: infuse.Asset, names) -> dict[str, float]:
+    """Largest turn (degrees) of each joint's global rotation from its first frame."""
+    g, _ = motion_fk(asset.motions["speech"])
+    return {n: float(np.degrees(quat.angle_between(g[:, asset.skeleton.index[n]], g[:1, asset.skeleton.index[n]])).max())
+            for n in names}
+
+
+def test_beats_fall_on_words_at_least_a_gap_apart():
+    words = [(0.1, 0.4, "hello"), (0.5, 0.9, "i"), (1.7, 2.0, "am"), (2.1, 2.5, "here"), (3.3, 3.6, "now")]
+    assert beats(words, gap_s=1.5) == [0.1, 1.7, 3.3]
+    assert beats([]) == []
+
+
+@pytest.mark.parametrize("rel", [RPM, VROID], ids=["ready-player-me", "vroid"])
+def test_the_body_lives_while_the_mouth_speaks(espeak, tmp_path, rel):
+    asset = _speak(tmp_path, rel)
+    motion = asset.motions["speech"]
+    mapping = map_skeleton(asset)
+    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    assert max(np.max(weights[k]) for k in weights if k.startswith("viseme_")) > 0.5  # the mouth speaks
+    assert max(np.max(weights[k]) for k in weights if "blink" in k.lower()) > 0.5  # the eyes blink
+    turns = _turns_deg(asset, [mapping.joints[n] for n in ("spine3", "skullbase", "eyeball_left")])
+    assert all(turns[mapping.joints[n]] > 0.5 for n in ("spine3", "skullbase", "eyeball_left")), turns  # breath, nods, saccades
+    # out of its T-pose: the hands hang below the shoulders; both feet on the ground throughout
+    _, p = motion_fk(motion)
+    j = mapping.indices(asset.skeleton)
+    assert np.all(p[:, j["l_shoulder"], 1] - p[:, j["l_wrist"], 1] > 0.3)
+    low = lowest_points(asset.skeleton, feet(asset.skeleton, mapping), *motion_fk(motion))  # (F, 2) joints
+    assert abs(foot_height(asset, mapping, motion)) < 1e-4  # the soles touch y = 0
+    assert np.all(low - low.min(axis=0) < 0.01)  # neither foot lifts: weight on both
+
+
+def test_face_only_leaves_the_body_at_rest(espeak, tmp_path):
+    asset = _speak(tmp_path, VROID, "--face-only")
+    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    assert all(np.max(weights[k]) == 0.0 for k in weights if "blink" in k.lower())
+    rotations = asset.motions["speech"].local_rotations  # a morph face: every joint holds its rest
+    assert np.all(quat.angle_between(rotations, asset.skeleton.rest_rotations[None]) < 1e-6)
