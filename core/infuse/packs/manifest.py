@@ -6,7 +6,7 @@
     name = "locomotion-female"
     version = "1.0.0"
     kind = "locomotion"            # or "reach"
-    skeleton = "skeleton.bvh"      # relative to the manifest, or absolute (imported packs read in place)
+    skeleton = "skeleton.bvh"      # relative to the manifest (pack import and pack new write only such)
     analysis = "analysis.json"     # written by 'infuse pack build'
     description = "..."
 
