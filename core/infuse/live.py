@@ -15,18 +15,24 @@
         live.bml("ann", '<bml ... composition="REPLACE">...</bml>')
 
 Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch + k / fps``. Commands
-(BML, builder calls, target moves) are applied on the loop thread between frames, so what a command
+(BML, builder calls, target moves) are applied on the loop thread between evaluations, so what a command
 starts "now" shows on the next frame evaluated; the loop spends at most :attr:`LiveScene.command_budget_s`
-per frame on them and the rest wait for the next frame. Commands wait in a bounded queue: a full queue
-raises :class:`~infuse.errors.BusyError` at once. A loop that falls behind the clock evaluates the late
-frames as one block and shows the last: those frames count as missed (:attr:`LiveStats.missed`).
+per frame on them and the rest wait. Commands wait in a bounded queue: a full queue raises
+:class:`~infuse.errors.BusyError` at once.
+
+Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
+much the same for one frame as for eight). So the loop evaluates blocks of
+:attr:`LiveScene.block_frames` frames: one, just in time, while a frame costs under 60% of a frame's
+time; twice as many (up to ``max_block_frames``) when it costs more, evaluated ahead while the frames in
+hand are shown at their due times; half as many after two seconds of frames that cost under 20%.
+With blocks of B frames a command shows within 2B frames. Frames that are ready only after the next
+one is due are skipped and count as missed (:attr:`LiveStats.missed`).
 
 Speech is synthesized on the caller's thread before its block reaches the loop, so synthesis never
 stalls a frame. Old frames are forgotten (:meth:`~infuse.runtime.Runtime.forget`): memory stays bounded.
 """
 from __future__ import annotations
 
-import math
 import queue
 import threading
 import time
@@ -69,19 +75,20 @@ class LiveFrame:
 
 
 class LiveStats:
-    """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), and the
-    evaluation time of the last frames (milliseconds)."""
+    """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), commands
+    applied, the current block size, and the evaluation time per frame of the last blocks (milliseconds)."""
 
     def __init__(self, window: int = 3600):
         self.shown = 0
         self.missed = 0
         self.commands = 0
+        self.block_frames = 1
         self.evaluate_ms: deque[float] = deque(maxlen=window)
 
     def summary(self) -> dict:
         """Counts and evaluation-time percentiles (ms) over the window."""
         ms = np.asarray(self.evaluate_ms, dtype=np.float64)
-        figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands}
+        figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands, "block_frames": self.block_frames}
         if len(ms):
             figures.update(mean_ms=float(ms.mean()), p50_ms=float(np.percentile(ms, 50)),
                            p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()))
@@ -117,10 +124,11 @@ class LiveScene:
     ``scene``: the :class:`~infuse.scene.Scene` (characters added, blocks maybe scheduled; nothing
     evaluated yet, or its time is taken as now). ``queue_size``: most commands waiting.
     ``command_budget_s``: most seconds per frame spent on commands (default a quarter of a frame).
+    ``keep_s``: seconds of evaluated frames kept. ``max_block_frames``: the largest block evaluated at once.
     """
 
     def __init__(self, scene: Scene, *, queue_size: int = 256, command_budget_s: float | None = None,
-                 keep_s: float = KEEP_S):
+                 keep_s: float = KEEP_S, max_block_frames: int = 16):
         if not isinstance(scene, Scene):
             raise UsageError(f"LiveScene takes an infuse.scene.Scene, not {type(scene).__name__}")
         self.scene = scene
@@ -128,6 +136,9 @@ class LiveScene:
         self.period_s = 1.0 / scene.fps
         self.command_budget_s = 0.25 * self.period_s if command_budget_s is None else float(command_budget_s)
         self.keep_s = float(keep_s)
+        self.max_block_frames = max(1, int(max_block_frames))
+        self.block_frames = 1
+        self._cheap = 0
         self.stats = LiveStats()
         self.epoch: float | None = None
         self.error: BaseException | None = None
@@ -199,26 +210,57 @@ class LiveScene:
 
     def _run(self) -> None:
         scene = self.scene
+        pending: deque[tuple[int, dict]] = deque()  # frames evaluated, not shown yet
         try:
             while not self._stop.is_set():
-                frame = scene.runtime.frame
-                self._apply_commands(self.due_s(frame))
-                if self._stop.is_set():
-                    break
-                late = int(math.floor((time.perf_counter() - self.due_s(frame)) / self.period_s))
-                count = min(max(late, 0) + 1, scene.runtime.block_frames)
-                started = time.perf_counter()
-                scene.step(count)
-                self.stats.evaluate_ms.append((time.perf_counter() - started) * 1e3)
-                self.stats.missed += count - 1
-                self.stats.shown += 1
-                self._publish()
-                if frame // int(self.fps) != scene.runtime.frame // int(self.fps):
-                    self._forget()
+                if len(pending) < self.block_frames:
+                    if self.block_frames == 1:  # just in time: what arrives before the frame is due shows on it
+                        self._apply_commands(self.due_s(scene.runtime.frame))
+                    else:  # ahead: the frames in hand are shown while the next block is evaluated
+                        self._apply_commands(time.perf_counter())
+                    if self._stop.is_set():
+                        break
+                    overdue = int((time.perf_counter() - self.due_s(scene.runtime.frame)) / self.period_s)
+                    pending.extend(self._evaluate(self.block_frames + max(overdue - len(pending), 0)))
+                index = pending[0][0]
+                self._apply_commands(self.due_s(index))
+                now = time.perf_counter()
+                while len(pending) > 1 and now >= self.due_s(pending[1][0]):  # too late to show: skipped
+                    pending.popleft()
+                    self.stats.missed += 1
+                self._show(*pending.popleft())
         except BaseException as exc:  # reported to callers, which get errors from then on
             self.error = exc
             self._stop.set()
             raise
+
+    def _evaluate(self, count: int) -> list[tuple[int, dict]]:
+        """Evaluate the next ``count`` frames as one block (at most the runtime's ``block_frames``); their
+        indices and poses. Adapts :attr:`block_frames` to what evaluation costs (see the module doc)."""
+        scene = self.scene
+        count = min(count, scene.runtime.block_frames)
+        first = scene.runtime.frame
+        started = time.perf_counter()
+        scene.step(count)
+        spent = time.perf_counter() - started
+        count = scene.runtime.frame - first
+        self.stats.evaluate_ms.append(spent * 1e3 / count)
+        per_frame = spent / count
+        if per_frame > 0.6 * self.period_s and self.block_frames < self.max_block_frames:
+            self.block_frames, self._cheap = min(2 * self.block_frames, self.max_block_frames), 0
+        elif per_frame < 0.2 * self.period_s and self.block_frames > 1:
+            self._cheap += count
+            if self._cheap >= 2 * self.fps:  # two seconds of cheap frames: try smaller blocks
+                self.block_frames, self._cheap = self.block_frames // 2, 0
+        else:
+            self._cheap = 0
+        self.stats.block_frames = self.block_frames
+        poses = {name: scene.runtime.last_poses(name, count) for name in scene.characters}
+        frames = [(first + k, {name: CharacterFrame(r[k], t[k], m[k]) for name, (r, t, m) in poses.items()})
+                  for k in range(count)]
+        if first // int(self.fps) != scene.runtime.frame // int(self.fps):
+            self._forget()
+        return frames
 
     def _apply_commands(self, until: float) -> None:
         """Apply commands until the wall clock reaches ``until`` (waiting for them meanwhile); at most
@@ -243,14 +285,10 @@ class LiveScene:
             if time.perf_counter() >= until:
                 spent += time.perf_counter() - started
 
-    def _publish(self) -> None:
-        runtime = self.scene.runtime
-        poses = {}
-        for name in self.scene.characters:
-            rotations, root, morphs = runtime.last_pose(name)
-            poses[name] = CharacterFrame(rotations, root, morphs)
-        frame = LiveFrame(runtime.frame - 1, (runtime.frame - 1) / self.fps, time.perf_counter(), poses)
+    def _show(self, index: int, characters: dict) -> None:
+        frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
         self._last = frame
+        self.stats.shown += 1
         for callback in list(self._frame_callbacks):
             callback(frame)
 
