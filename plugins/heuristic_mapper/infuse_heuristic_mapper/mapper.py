@@ -17,7 +17,7 @@ quadruped), raises :class:`~infuse.errors.NotHumanoidError` with the reason.
 from __future__ import annotations
 
 import numpy as np
-from infuse.canonical import ALL_NAMES, CANONICAL_NAMES, canonical_joint, is_canonical
+from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
@@ -191,16 +191,15 @@ def _named_eyes(view: SkeletonView, candidates) -> dict[str, int]:
 
 # -- body ------------------------------------------------------------------------------------------------
 def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> None:
-    legs: LimbPair | None = plan.legs
-    arms: LimbPair | None = plan.arms
+    legs: LimbPair = plan.legs
+    arms: LimbPair = plan.arms
     up_guess = None
-    if legs is not None:
-        anchor = upper_anchor(view, legs, arms)
-        if anchor is not None:
-            up_guess = view.P[anchor] - view.P[legs.branch]
-            up_guess = up_guess / max(length(up_guess), 1e-12)
-    leg_res = assign_legs(view, legs.branch, [legs.a, legs.b], up_guess) if legs is not None else {}
-    arm_res = assign_arms(view, arms.branch, [arms.a, arms.b]) if arms is not None else {}
+    anchor = upper_anchor(view, legs, arms)
+    if anchor is not None:
+        up_guess = view.P[anchor] - view.P[legs.branch]
+        up_guess = up_guess / max(length(up_guess), 1e-12)
+    leg_res = assign_legs(view, legs.branch, [legs.a, legs.b], up_guess)
+    arm_res = assign_arms(view, arms.branch, [arms.a, arms.b])
     body_chain: set[int] = set()
     for r in list(leg_res.values()) + list(arm_res.values()):
         settle_coincident(view, r)
@@ -212,19 +211,12 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         _relocate_end(view, r, "wrist", "elbow", body_chain)
 
     # torso, neck and head
-    if legs is not None and arms is not None:
-        junction = view.lca(legs.branch, arms.branch)
-    elif legs is not None:
-        junction = legs.branch
-    else:  # an upper body: the pelvis is the lowest joint of the chain the arms hang from
-        junction = arms.branch
-        while view.parents[junction] >= 0 and not view.info[int(view.parents[junction])].flagged("root", "control"):
-            junction = int(view.parents[junction])
-    up = _up_axis(view, junction, legs, arms, leg_res, arm_res)
+    junction = view.lca(legs.branch, arms.branch)
+    up = _up_axis(view, junction, legs, arms)
     hips = [r.slots["hip"] for r in leg_res.values()]
     thigh = max(float(np.mean([length(view.P[r.slots["knee"]] - view.P[r.slots["hip"]]) for r in leg_res.values()]
                               or [0.0])), 1e-9)
-    base, base_why = _choose_base(view, junction, legs, arms, hips, thigh, up)
+    base, base_why = _choose_base(view, junction, arms, hips, thigh, up)
     shoulders = [r.slots["shoulder"] for r in arm_res.values()]
     torso, neck, head, chest_why = _torso_neck_head(view, base, arms, up, shoulders)
 
@@ -292,42 +284,43 @@ def _above_ground(view: SkeletonView, junction: int, top: int, hips: list[int], 
     return junction
 
 
-def _choose_base(view: SkeletonView, junction: int, legs: LimbPair | None, arms: LimbPair | None, hips: list[int],
-                 thigh: float, up) -> tuple[int, str]:
+def _choose_base(view: SkeletonView, junction: int, arms: LimbPair, hips: list[int], thigh: float,
+                 up: np.ndarray) -> tuple[int, str]:
     """The pelvis: the joint where legs and torso meet, or its parent when the legs hang from a spine
-    joint well above the hip sockets (3ds Max Biped: Pelvis -> Spine -> thighs)."""
-    if hips and up is not None and arms is not None and view.is_descendant(arms.branch, junction):
+    joint well above the hip sockets (3ds Max Biped: Pelvis -> Spine -> thighs), or the first joint
+    towards the chest when the legs hang from a ground root."""
+    if view.is_descendant(arms.branch, junction):
         junction = _above_ground(view, junction, arms.branch, hips, thigh, up)
     info = view.info[junction]
     p = int(view.parents[junction])
     if p < 0 or not _only_body_child(view, p, junction):
-        return junction, "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
+        return junction, "pelvis: parents the spine and both legs"
     parent_info = view.info[p]
     if not info.has("hips") and info.roles & {"spine", "chest"} and parent_info.has("hips"):
         return p, "pelvis above the spine joint that carries the legs"
-    if hips and up is not None and not info.has("hips") and not parent_info.flagged("root"):
+    if not info.has("hips") and not parent_info.flagged("root"):
         sockets = view.P[hips].mean(axis=0)
         h_junction = float((view.P[junction] - sockets) @ up) / thigh
         h_parent = float((view.P[p] - sockets) @ up) / thigh
         if h_junction > 0.4 and -0.2 < h_parent < h_junction - 0.1:
             return p, "pelvis: the legs hang from a spine joint above it"
-    return junction, "pelvis: parents the spine and both legs" if legs is not None else "lowest joint of the torso"
+    return junction, "pelvis: parents the spine and both legs"
 
 
-def _up_axis(view, base, legs, arms, leg_res, arm_res) -> np.ndarray:
+def _up_axis(view: SkeletonView, base: int, legs: LimbPair, arms: LimbPair) -> np.ndarray:
+    """(3,) the body's up: from the pelvis to the arms' joint, or from the feet to the pelvis when
+    both are one joint."""
     P = view.P
-    if arms is not None and length(P[arms.branch] - P[base]) > 1e-3 * view.scale:
+    if length(P[arms.branch] - P[base]) > 1e-3 * view.scale:
         up = P[arms.branch] - P[base]
-    elif legs is not None:
-        up = P[base] - P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
     else:
-        up = np.array([0.0, 1.0, 0.0])
+        up = P[base] - P[[view.far[legs.a], view.far[legs.b]]].mean(axis=0)
     return up / max(length(up), 1e-12)
 
 
-def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.ndarray) -> list[int]:
+def _head_branch(view: SkeletonView, top: int, arms: LimbPair, up: np.ndarray) -> list[int]:
     """The chain from ``top`` towards the head (excluding the arms), following neck/head joints."""
-    excluded = {arms.a, arms.b} if arms is not None else set()
+    excluded = {arms.a, arms.b}
     chain: list[int] = []
     cur = top
     for _ in range(12):
@@ -356,10 +349,10 @@ def _head_branch(view: SkeletonView, top: int, arms: LimbPair | None, up: np.nda
     return chain
 
 
-def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: np.ndarray, shoulders: list[int]):
+def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair, up: np.ndarray, shoulders: list[int]):
     """(torso joints bottom-up, neck joints bottom-up, head joint or -1, reason for the chest)."""
     P = view.P
-    if arms is not None and view.is_descendant(arms.branch, base):
+    if view.is_descendant(arms.branch, base):
         path = view.path_down(base, arms.branch)[1:]
         top = arms.branch
     else:
@@ -389,9 +382,6 @@ def _torso_neck_head(view: SkeletonView, base: int, arms: LimbPair | None, up: n
         return torso, chain if neck_from_top else [], -1, chest_why
     neck = [j for j in chain[:chain.index(head)] if not view.info[j].flagged("control") and not _helper_below_neck(
         view, j, base, shoulders, up)]
-    if arms is None and top == base:  # no arms to mark the chest: split the chain by names, else by height
-        torso, neck = _split_without_arms(view, neck, base, head)
-        chest_why = "chest: the last torso joint below the neck (no arms: by name or height)"
     return torso, neck, head, chest_why
 
 
@@ -402,25 +392,6 @@ def _helper_below_neck(view: SkeletonView, j: int, base: int, shoulders: list[in
         return False
     top = float(view.P[shoulders].mean(axis=0) @ up)
     return float(view.P[j] @ up) < top - 0.5 * max(top - float(view.P[base] @ up), 1e-9)
-
-
-def _split_without_arms(view: SkeletonView, joints: list[int], base: int, head: int) -> tuple[list[int], list[int]]:
-    """Torso and neck joints of a body without arms: named ones by their names, the others by how
-    close they are to the head (a neck is about a third of the way from the head to the pelvis)."""
-    reach = length(view.P[head] - view.P[base])
-    torso, neck = [], []
-    for j in joints:
-        info = view.info[j]
-        if is_canonical(view.names[j]):  # the target's own names (SmartBody rigs)
-            is_neck = canonical_joint(view.names[j]).group == "neck"
-        elif info.has("neck"):
-            is_neck = True
-        elif info.roles & {"spine", "chest"}:
-            is_neck = False
-        else:
-            is_neck = length(view.P[head] - view.P[j]) < 0.35 * reach
-        (neck if is_neck or neck else torso).append(j)
-    return torso, neck
 
 
 def _pick_head(view: SkeletonView, chain: list[int], base: int, up: np.ndarray, top: int, neck_from_top: bool) -> int:
@@ -473,7 +444,7 @@ def _put_neck(result: _Result, neck: list[int]) -> None:
 def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
     """Root of each limb -> "l"/"r", the reason and the confidence."""
     P = view.P
-    pairs = [p for p in (legs, arms) if p is not None]
+    pairs = [legs, arms]
     lateral = np.zeros(3)
     for p in pairs:
         res = leg_res if p is legs else arm_res
@@ -491,7 +462,7 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
     if np.dot(P[ref_res[ref.a].slots[ref_key]] - P[ref_res[ref.b].slots[ref_key]], lateral) < 0:
         lateral = -lateral
     forward = np.cross(lateral, up)  # the body's front if the "a" members are on its left
-    top = arms.branch if arms is not None else base
+    top = arms.branch
     geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames if top != base else None, base, top)
     names = _name_votes(view, pairs, leg_res, arm_res, legs)
     if abs(geo) >= 0.3:
@@ -525,8 +496,6 @@ def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[f
     """+1 when the feet point (and the knees bend) along ``forward``, -1 against, ~0 when they do not
     tell. ``forward`` is the front if the pair's "a" members are on the left. With frames of motion
     each frame votes in its own body axes."""
-    if legs is None:
-        return 0.0, ""
     ra, rb = leg_res[legs.a], leg_res[legs.b]
     feet = []
     for r in (ra, rb):
