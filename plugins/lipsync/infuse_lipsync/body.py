@@ -57,7 +57,8 @@ def idle_body(asset: Asset, frames: int, fps: float, words=(), pack: str | None 
     for start in beats(words):
         runtime.activate(name, controller("head", lexeme="NOD", amount=BEAT_AMOUNT, velocity_hz=BEAT_HZ), start)
     scene.run(frames / scene.fps)
-    return runtime.export(name, clip, ground=ground), f"{stance}, breathing, blinks, saccades, {len(beats(words))} nods"
+    nods = len(beats(words))
+    return runtime.export(name, clip, ground=ground), f"{stance}, breathing, blinks, saccades, {nods} nod{'s' * (nods != 1)}"
 
 
 def with_face(body: Motion, face: Motion | None, joints) -> Motion:
