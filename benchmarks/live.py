@@ -1,0 +1,210 @@
+"""Live characters against the wall clock: frame time, latency and frames missed at 60 fps, and the
+service under a flood of bad input.
+
+For 1, 10 and 50 characters (Mixamo Xbots and Ready Player Me avatars in a ring, each with its
+locomotion pack): everyone idles, blinks, breathes and looks at a neighbour with saccades; a third of
+them walk across the ring and back, a third speak (lip sync) and nod, round after round. The scene runs
+in a :class:`infuse.live.LiveScene` for ``--seconds`` (default 60), and the benchmark prints:
+
+- frame time: the milliseconds the loop spends evaluating a frame (mean, median, 99th percentile, max
+  over the blocks evaluated, per frame), and the block size the loop settled on (1: frame by frame);
+- latency: from a BML message (a nod) to the wall-clock moment the frame whose time is the block's start
+  is ready, for 20 messages at random points of a frame (target: at most one frame plus 10 ms);
+- frames missed: frames evaluated too late to be shown on time (target: none up to 10 characters).
+
+Then ``infuse serve``'s servers run in process with 10 characters while one client sends 1,000 bad
+messages a second (malformed JSON, unknown characters, malformed BML) and another subscribes to the
+pose stream and never reads: the frames missed meanwhile, and the replies counted.
+
+    python benchmarks/live.py [--seconds 60] [--counts 1,10,50] [--no-flood]
+
+Wall-clock figures on a shared 2-core machine; the load average is printed with them. The corpus is read
+from INFUSE_CORPUS (default ../shared/corpus from the repository root).
+"""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import math
+import os
+import random
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+import infuse
+from infuse.live import LiveScene
+from infuse.mapping import map_skeleton
+from infuse.scene import Scene
+
+REPO = Path(__file__).resolve().parents[1]
+CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")).resolve()
+FPS = 60.0
+CAST = (("runxaway-models/Xbot.glb", "locomotion-male"), ("talkinghead/avatars/brunette-t.glb", "locomotion-female"))
+BML_NS = "http://www.bml-initiative.org/bml/bml-1.0"
+LINES = ("Good morning. Did you sleep well?", "The storm kept me up for a while, though.",
+         "Shall we walk down to the river after breakfast?", "Careful, the coffee is still hot.")
+
+
+def build(count: int) -> Scene:
+    """``count`` characters in a ring of radius 1.5 m + 0.25 m per character, facing the centre."""
+    scene = Scene(fps=FPS, quiet=True)
+    prepared = []
+    for path, pack in CAST:
+        asset = infuse.load(CORPUS / path)
+        prepared.append((infuse.Character(Path(path).stem, asset, map_skeleton(asset)), pack))
+    radius = 1.5 + 0.25 * count
+    for k in range(count):
+        character, pack = prepared[k % 2]
+        angle = 2 * math.pi * k / max(count, 1)
+        scene.add_character(character, f"c{k}", position=(radius * math.sin(angle), 0.0, radius * math.cos(angle)),
+                            facing=(0.0, 0.0, 0.0) if count > 1 else None, packs=[pack])
+    return scene
+
+
+def direct(live: LiveScene, count: int, stop: threading.Event) -> None:
+    """Rounds of behaviour until ``stop``: gazes with saccades once, then walks, speech and nods."""
+    names = list(live.scene.characters)
+    for k, name in enumerate(names):
+        if count > 1:
+            live.bml(name, f'<bml xmlns="{BML_NS}" xmlns:sbm="http://ict.usc.edu" id="look{k}">'
+                           f'<gazeShift id="g" target="{names[(k + 1) % count]}"/><sbm:saccade id="s" mode="listen"/></bml>')
+    round_ = 0
+    while not stop.is_set():
+        for k, name in enumerate(names):
+            role = (k + round_) % 3
+            position = live.scene.runtime.rig(name).position
+            if role == 0:
+                home = (float(position[0]), float(position[2]))
+                there = (0.3 * home[0], 0.3 * home[1]) if round_ % 2 == 0 else home
+                live.walk_to(name, there)
+            elif role == 1:
+                live.say(name, LINES[(k + round_) % len(LINES)])
+                live.nod(name)
+        round_ += 1
+        stop.wait(4.0)
+
+
+def latency(live: LiveScene, samples: int = 20) -> list[float]:
+    """Seconds from a nod's BML to the moment the first frame at or after its start is shown, at random
+    points of a frame."""
+    shown: list[tuple[int, float]] = []
+    ready = threading.Condition()
+
+    def keep(frame):
+        with ready:
+            shown.append((frame.index, frame.wall_s))
+            ready.notify_all()
+    unsubscribe = live.on_frame(keep)
+    name = next(iter(live.scene.characters))
+    out = []
+    for k in range(samples):
+        time.sleep(random.uniform(0.05, 0.2))
+        submitted = time.perf_counter()
+        block = live.bml(name, f'<bml xmlns="{BML_NS}" id="probe{k}"><head id="h" lexeme="NOD"/></bml>')[0]
+        index = round(live.scene.scheduler.blocks[block].start_s * live.fps)
+        with ready:
+            ready.wait_for(lambda: shown and shown[-1][0] >= index, 5.0)
+            out.append(next((wall for i, wall in shown if i >= index), math.inf) - submitted)
+            shown.clear()
+    unsubscribe()
+    return out
+
+
+def run_count(count: int, seconds: float) -> dict:
+    started = time.perf_counter()
+    scene = build(count)
+    live = LiveScene(scene)
+    live.warm_up()
+    load_s = time.perf_counter() - started
+    stop = threading.Event()
+    with live:
+        director = threading.Thread(target=direct, args=(live, count, stop), daemon=True)
+        director.start()
+        time.sleep(max(seconds - 5.0, 1.0))
+        delays = latency(live)
+        stop.set()
+        director.join(10)
+        summary = live.stats.summary()
+    ms = np.asarray(live.stats.evaluate_ms)
+    return {"count": count, "load_s": load_s, "shown": summary["shown"], "missed": summary["missed"],
+            "block": summary["block_frames"],
+            "mean_ms": float(ms.mean()), "p50_ms": float(np.median(ms)), "p99_ms": float(np.percentile(ms, 99)),
+            "max_ms": float(ms.max()), "latency_ms": np.array(delays) * 1e3}
+
+
+def flood(seconds: float) -> dict:
+    """The servers in process with 10 characters; 1,000 bad messages a second and a client that never reads."""
+    from websockets.asyncio.client import connect
+
+    from infuse_live.hub import Hub
+    from infuse_live.server import LiveServer
+
+    live = LiveScene(build(10))
+    server = LiveServer(lambda loop: Hub(live, loop), port=0, http_port=None)
+    thread = threading.Thread(target=lambda: asyncio.run(server.run()), daemon=True)
+    thread.start()
+    server.ready.wait(30)
+    bad = ["{not json", json.dumps({"type": "bml", "character": "nobody", "bml": "<bml/>"}),
+           json.dumps({"type": "bml", "character": "c0", "bml": "<bml id='x'><head></bml>"}), json.dumps({"type": "dance"})]
+
+    async def clients() -> tuple[int, int]:
+        url = f"ws://127.0.0.1:{server.port}/"
+        async with connect(url, max_queue=1) as stalled, connect(url, max_size=None) as sender:
+            await stalled.send(json.dumps({"type": "subscribe", "frames": True, "feedback": "all"}))
+            replies = 0
+
+            async def count():
+                nonlocal replies
+                async for text in sender:
+                    replies += json.loads(text)["type"] == "error"
+            counter = asyncio.create_task(count())
+            sent, start = 0, time.perf_counter()
+            while time.perf_counter() - start < seconds:
+                for _ in range(10):
+                    await sender.send(bad[sent % len(bad)])
+                    sent += 1
+                await asyncio.sleep(max(0.0, start + sent / 1000.0 - time.perf_counter()))
+            await asyncio.sleep(1.0)
+            counter.cancel()
+            return sent, replies
+
+    with live:
+        time.sleep(1.0)
+        before = live.stats.summary()
+        sent, replies = asyncio.run(clients())
+        after = live.stats.summary()
+    server.shutdown()
+    thread.join(10)
+    return {"sent": sent, "replies": replies, "shown": after["shown"] - before["shown"],
+            "missed": after["missed"] - before["missed"], "seconds": seconds}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seconds", type=float, default=60.0, help="seconds each cast runs live (default 60)")
+    parser.add_argument("--counts", default="1,10,50", help="numbers of characters (default 1,10,50)")
+    parser.add_argument("--no-flood", action="store_true", help="skip the bad-input flood")
+    args = parser.parse_args()
+    random.seed(0)
+    print(f"live at {FPS:g} fps for {args.seconds:g} s per cast; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    print("| characters | load + warm-up s | frame ms mean | p50 | p99 | max | block | frames shown | missed | "
+          "latency ms median | max |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for count in (int(c) for c in args.counts.split(",")):
+        r = run_count(count, args.seconds)
+        print(f"| {count} | {r['load_s']:.1f} | {r['mean_ms']:.2f} | {r['p50_ms']:.2f} | {r['p99_ms']:.2f} | "
+              f"{r['max_ms']:.2f} | {r['block']} | {r['shown']} | {r['missed']} | {np.median(r['latency_ms']):.1f} | "
+              f"{r['latency_ms'].max():.1f} |", flush=True)
+    if not args.no_flood:
+        f = flood(min(args.seconds, 10.0))
+        print(f"flood: {f['sent']} bad messages over {f['seconds']:g} s, {f['replies']} error replies; "
+              f"{f['shown']} frames shown meanwhile, {f['missed']} missed (10 characters, one client never reading)")
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
