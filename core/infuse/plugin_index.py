@@ -33,7 +33,12 @@ class Offer:
 
     @property
     def distribution(self) -> str:
-        return self.entry_point.dist.name if self.entry_point.dist else "?"
+        return distribution(self.entry_point)
+
+
+def distribution(ep: EntryPoint) -> str:
+    """The name of the distribution of ``ep`` ("?" when its metadata says none, e.g. while it is reinstalled)."""
+    return (ep.dist.name if ep.dist else None) or "?"
 
 
 def cache_file() -> Path:
@@ -62,7 +67,7 @@ def source_stamp(ep: EntryPoint) -> str | None:
     if path is None:
         return None
     digest = hashlib.blake2b(digest_size=12)
-    digest.update(f"{ep.dist.version if ep.dist else '?'}\0{ep.value}".encode())
+    digest.update(f"{(ep.dist.version if ep.dist else None) or '?'}\0{ep.value}".encode())
     try:
         for entry in sorted(os.scandir(path.parent), key=lambda e: e.name):
             if entry.name.endswith(".py") and entry.is_file():
@@ -108,7 +113,7 @@ def _learn(ep: EntryPoint, kind: str) -> list[list] | None:
 
 def entry_points_of(group: str) -> list[EntryPoint]:
     """The entry points of ``group`` in precedence order: by distribution name, then entry-point name."""
-    return sorted(entry_points(group=group), key=lambda e: (e.dist.name if e.dist else "", e.name))
+    return sorted(entry_points(group=group), key=lambda e: (distribution(e), e.name))
 
 
 def offers(kind: str, refresh: bool = False) -> list[Offer]:
@@ -120,7 +125,7 @@ def offers(kind: str, refresh: bool = False) -> list[Offer]:
     entries = {key: entry for key, entry in cached.items() if not key.startswith(f"{kind}|")}
     out = []
     for ep in entry_points_of(kind_of(kind).group):
-        key = f"{kind}|{ep.dist.name if ep.dist else '?'}|{ep.name}|{ep.value}"
+        key = f"{kind}|{distribution(ep)}|{ep.name}|{ep.value}"
         stamp = source_stamp(ep)
         hit = None if refresh else cached.get(key)
         if stamp is not None and isinstance(hit, dict) and hit.get("stamp") == stamp:

@@ -20,7 +20,7 @@ import os
 import sys
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib.metadata import EntryPoint, entry_points
+from importlib.metadata import EntryPoint
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,8 @@ import pluggy
 from . import hookspecs
 from .config import current_config
 from .errors import UsageError
-from .plugin_types import Command, Component, Mapper, Reader, Retargeter, Writer
+from .plugin_index import distribution, entry_points_of, offers
+from .plugin_types import Command, Component, Mapper, Reader, Retargeter, Writer, normalized_extension
 
 
 @dataclass(frozen=True)
@@ -78,8 +79,8 @@ class PluginRecord:
 
 
 def entry_point_record(ep: EntryPoint, kind: str) -> PluginRecord:
-    dist = ep.dist.name if ep.dist else "?"
-    version = ep.dist.version if ep.dist else "?"
+    dist = distribution(ep)
+    version = (ep.dist.version if ep.dist else None) or "?"
     return PluginRecord(ep.name, kind, dist, version, ep.value)
 
 
@@ -115,8 +116,7 @@ class PluginSet:
         if kind in self._loaded:
             return
         self._loaded.add(kind)
-        eps = sorted(entry_points(group=kind_of(kind).group), key=lambda e: (e.dist.name if e.dist else "", e.name))
-        for ep in eps:
+        for ep in entry_points_of(kind_of(kind).group):
             self.load_entry_point(ep, kind)
 
     def load_entry_point(self, ep: EntryPoint, kind: str) -> Any | None:
@@ -309,9 +309,6 @@ def table_for_file(kind: str, path: str | Path, format: str | None = None) -> di
     and every plugin offering the same names, so clashes resolve as in :func:`table`; the whole kind
     when none does.
     """
-    from .plugin_index import offers
-    from .plugin_types import normalized_extension
-
     ps = plugins()
     if kind in ps._loaded:
         return ps.table(kind)
@@ -334,8 +331,6 @@ def table_for_file(kind: str, path: str | Path, format: str | None = None) -> di
 def extensions(kind: str) -> set[str]:
     """The file extensions the installed readers (or writers) claim, from the index of what plugins offer
     (:mod:`infuse.plugin_index`, no plugin imported), and those of the plugins already registered."""
-    from .plugin_index import offers
-
     claimed = {e for offer in offers(kind) for e in offer.extensions}
     return claimed | {e for d in plugins().table(kind, complete=False).values() for e in d.extensions}
 

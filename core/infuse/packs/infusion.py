@@ -154,10 +154,9 @@ def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, re
 
     Packs sharing a skeleton go through the retargeter as one clip (one plan, one batch).
     """
-    table = registry.retargeters()
-    if not table:
+    if not registry.retargeters():
         raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
-    chosen = table.get(retargeter or "default") or next(iter(table.values()))
+    chosen = registry.get("retargeter", retargeter)
     groups: dict[str, list[Pack]] = {}
     for p in packs:
         groups.setdefault(_signature(p), []).append(p)

@@ -50,8 +50,8 @@ class Settings:
 
     def key(self) -> dict:
         """What an output depends on besides its input files (stored in the manifest)."""
-        return {"format": self.format, "mapper": self.mapper or "heuristic", "retargeter": self.retargeter or "default",
-                "packs": list(self.packs)}
+        return {"format": self.format, "mapper": self.mapper or registry.default_name("mapper")[0],
+                "retargeter": self.retargeter or registry.default_name("retargeter")[0], "packs": list(self.packs)}
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ import numpy as np
 from infuse import fileio, registry
 from infuse.asset import Asset, Character
 from infuse.contacts import feet
-from infuse.errors import InfuseError, InputError, MissingFeatureError, UnusableInputError, UsageError
+from infuse.errors import InfuseError, InputError, MissingFeatureError, UnusableInputError
 from infuse.grounding import foot_height, grounded, sole_depth
 from infuse.mapping import Mapping, map_skeleton, sample_poses
 from infuse.plugin_types import normalized_extension
@@ -138,12 +138,9 @@ def _source_mapping(asset: Asset, mapper: str | None) -> Mapping:
 
 
 def _retargeter(name: str | None):
-    table = registry.retargeters()
-    if not table:
+    if not registry.retargeters():
         raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
-    if (name or "default") not in table:
-        raise UsageError(f"no retargeter named {name!r}; installed: {', '.join(sorted(table))}")
-    return table[name or "default"]
+    return registry.get("retargeter", name)
 
 
 def _planner(retargeter, clip, src_map, loaded: _Loaded, source_file, target_file):

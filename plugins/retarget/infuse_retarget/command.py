@@ -17,7 +17,7 @@ from infuse.cli.builtin import add_read_options, read_options
 from infuse.cli.map_command import add_mapping_options
 from infuse.errors import InputError, UnusableInputError, UsageError
 from infuse.grounding import foot_height, grounded
-from infuse.mapping import DEFAULT_MAPPER, map_skeleton, sample_poses
+from infuse.mapping import map_skeleton, sample_poses
 from infuse.plugin_types import normalized_extension
 
 from .retarget import IK_MODES, retarget_clip
@@ -54,7 +54,7 @@ def _clip(asset, name, path):
     return asset.motions[name]
 
 
-def source_mapping(asset, mapper: str, saved_map):
+def source_mapping(asset, mapper: str | None, saved_map):
     """The motion file's canonical mapping, over its whole skeleton.
 
     A motion file may animate only some joints (``meta["channel_joints"]``), but every joint has a
@@ -74,7 +74,7 @@ def run(args) -> int:
     motion_path = Path(args.motion)
     asset = fileio.load(motion_path, format=getattr(args, "read_format", None), **read_options(args))
     clip = _clip(asset, args.clip, motion_path)
-    mapper = args.mapper or DEFAULT_MAPPER
+    mapper = args.mapper  # None: the default mapper
     src_map = source_mapping(asset, mapper, args.map_file)
     character = fileio.load(args.character)
     tgt_map = map_skeleton(character, mapper=mapper, saved_map=args.target_map)
