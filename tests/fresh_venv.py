@@ -3,11 +3,15 @@
 The core and every plugin of ``plugins/`` are built and installed into it by pip (``--no-deps
 --no-index``, not editable), so it sees none of this checkout's editable installs. The third-party
 packages they need (numpy, scipy, ...) are not installed again: the new environment reaches the
-ones of the running environment through a folder of links named in a ``.pth`` file.
+ones of the running environment through a folder of links named in a ``.pth`` file. One such
+environment serves every test of a run, whichever xdist worker runs it (:func:`shared_venv`).
 """
 from __future__ import annotations
 
+import fcntl
+import os
 import re
+from contextlib import contextmanager
 import subprocess
 import sys
 import tomllib
@@ -89,3 +93,27 @@ def pip_install(root: Path, targets: list[str], timeout_s: float = 120.0) -> Non
                           capture_output=True, text=True, timeout=timeout_s)
     assert proc.returncode == 0, proc.stderr[-3000:]
 
+
+
+@contextmanager
+def locked(path: Path):
+    """Hold an exclusive lock on ``path`` (created) for the ``with`` block: one process at a time."""
+    with open(path, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def shared_venv(tmp_path_factory) -> tuple[Path, Path]:
+    """The run's environment (built by the first test to ask, the others wait) and the lock that
+    guards installing into it; the temporary folder is the one every xdist worker of the run shares."""
+    root = tmp_path_factory.getbasetemp()
+    root = root.parent if os.environ.get("PYTEST_XDIST_WORKER") else root
+    venv, lock = root / "infuse-venv", root / "infuse-venv.lock"
+    with locked(lock):
+        if not (venv / "ready").is_file():
+            make_venv(venv)
+            (venv / "ready").write_text("")
+    return venv, lock

@@ -13,7 +13,7 @@ from infuse.packs import load_pack
 from infuse.scaffold.templates import KINDS
 
 from corpus_data import corpus_file
-from fresh_venv import make_venv, pip_install
+from fresh_venv import locked, pip_install, shared_venv
 
 pytestmark = pytest.mark.venv
 
@@ -29,18 +29,17 @@ def run(command, cwd) -> str:
 
 @pytest.fixture(scope="module")
 def environment(tmp_path_factory):
-    """A new environment's folder and a working folder outside every project (a project's own package
-    folder would shadow the installed one)."""
-    root = tmp_path_factory.mktemp("env")
-    make_venv(root / "venv")
-    (root / "elsewhere").mkdir()
-    return root / "venv", root / "elsewhere"
+    """The new environment, the lock to hold while installing into it, and a working folder outside every
+    project (a project's own package folder would shadow the installed one)."""
+    venv, lock = shared_venv(tmp_path_factory)
+    elsewhere = tmp_path_factory.mktemp("elsewhere")
+    return venv, lock, elsewhere
 
 
 def test_three_commands_publish_a_pack_into_a_new_environment(environment, tmp_path):
     """pack new (the Bandai feminine takes), pack build --wheel, pip install of the wheel: infuse packs lists the
     pack from the new environment and infuse infuse retargets it onto X Bot."""
-    venv, elsewhere = environment
+    venv, lock, elsewhere = environment
     source = corpus_file(BANDAI)
     xbot = corpus_file("runxaway-models/Xbot.glb")
     run([INFUSE, "pack", "new", "bandai-fem", "--import", "bvh", source, "--glob", "*_feminine_*.bvh"], tmp_path)
@@ -53,7 +52,8 @@ def test_three_commands_publish_a_pack_into_a_new_environment(environment, tmp_p
     spaces = {group: t.dimension for group, t in built.tessellations().items()}
     assert built.built and len(built.analysis["clips"]) == 7 and spaces
 
-    pip_install(venv, ["--no-index", str(wheel)])
+    with locked(lock):
+        pip_install(venv, ["--no-index", str(wheel)])
     listed = {p["name"]: p for p in json.loads(run([venv / "bin" / "infuse", "packs", "--json"], elsewhere))}
     pack = listed["bandai-fem"]
     assert pack["built"] and pack["clips"] == 7 and pack["blend_spaces"] == spaces
@@ -68,13 +68,14 @@ def test_three_commands_publish_a_pack_into_a_new_environment(environment, tmp_p
 
 
 def test_a_new_plugin_of_every_kind_installs_lists_and_passes_its_tests(environment, tmp_path):
-    venv, elsewhere = environment
+    venv, lock, elsewhere = environment
     projects = {}
     for kind in KINDS:
         name = f"my-{kind}"
         run([INFUSE, "plugin", "new", kind, name], tmp_path)
         projects[kind] = tmp_path / name
-    pip_install(venv, [str(p) for p in projects.values()])
+    with locked(lock):
+        pip_install(venv, [str(p) for p in projects.values()])
     rows = [line.split() for line in run([venv / "bin" / "infuse", "plugins"], elsewhere).splitlines()]
     for kind in KINDS:
         assert [f"my-{kind}", kind, f"infuse-anim-my-{kind}", "0.1.0", "ok"] in rows
