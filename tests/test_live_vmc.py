@@ -6,17 +6,23 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 
 import numpy as np
 from pythonosc.dispatcher import Dispatcher
 from pythonosc.osc_server import BlockingOSCUDPServer
 
+import infuse
 from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
+from infuse.mapping import map_skeleton
+from infuse.runtime.rig import Rig
 from infuse.scene.command import build_scene
 from infuse.scene.scenefile import read_scene_file
-from infuse_live.vmc import VRM_BONES
+from infuse.canonical import canonical_joint
+from infuse_live.vmc import TPOSE_CHILD, VRM_BONES, VmcBones, to_unity
 
+from corpus_data import corpus_file
 from live_support import BML_NS, SBM_NS, Recorder, scene_file, serving
 
 # Unity's humanoid hierarchy, as a receiver knows it: each bone's parent, nearest first when one is missing.
@@ -73,8 +79,9 @@ class Receiver:
         self.server.server_close()
 
 
-def rebuild(bones: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """World positions (core frame, metres) of the received bones, from their local Unity transforms."""
+def rebuild(bones: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """World rotations and positions (core frame, metres) of the received bones, from their local Unity
+    transforms."""
     world = {}
     for name in ["Hips"] + [n for n in VRM_BONES if n != "Hips"]:
         if name not in bones:
@@ -88,7 +95,7 @@ def rebuild(bones: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
             continue
         parent_rotation, parent_position = world[parent]
         world[name] = (quat.multiply(parent_rotation, rotation), parent_position + quat.rotate(parent_rotation, position))
-    return {name: p for name, (_, p) in world.items()}
+    return world
 
 
 def test_vmc_stream_rebuilds_the_pose_within_a_millimetre(tmp_path):
@@ -109,7 +116,7 @@ def test_vmc_stream_rebuilds_the_pose_within_a_millimetre(tmp_path):
     fps = scene.fps
     joints = {name: rig.joint(canonical) for name, canonical in VRM_BONES.items() if rig.joint(canonical) is not None}
     assert {"Hips", "Spine", "Head", "LeftUpperArm", "RightHand", "LeftFoot", "RightIndexProximal"} <= set(joints)
-    matched, errors, moving = 0, [], []
+    matched, errors, moving, directions = 0, [], [], []
     for t, vmc in receiver.frames.items():
         frame = client.frames.get(int(round(t * fps)))
         if frame is None or not vmc["applied"]:
@@ -119,7 +126,16 @@ def test_vmc_stream_rebuilds_the_pose_within_a_millimetre(tmp_path):
         rotations = np.array(pose["rotations"]).reshape(-1, 4)
         _, positions = forward_kinematics(rig.skeleton, rotations[None], np.array(pose["root"])[None])
         rebuilt = rebuild(vmc["bones"])
-        errors.append(max(np.linalg.norm(rebuilt[name] - positions[0, j]) for name, j in joints.items()))
+        errors.append(max(np.linalg.norm(rebuilt[name][1] - positions[0, j]) for name, j in joints.items()))
+        # a receiver's T-pose bone, turned by the received rotation, points along the character's bone
+        for name, j in joints.items():
+            child = rig.joint(TPOSE_CHILD.get(VRM_BONES[name], ""))
+            if child is not None and rig.skeleton.parents[child] == j:
+                tpose = np.subtract(canonical_joint(TPOSE_CHILD[VRM_BONES[name]]).position, canonical_joint(VRM_BONES[name]).position)
+                pointed = quat.rotate(rebuilt[name][0], tpose)
+                bone = positions[0, child] - positions[0, j]
+                cosine = pointed @ bone / np.linalg.norm(pointed) / np.linalg.norm(bone)
+                directions.append(np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0))))
         morphs = dict(zip(rig.morph_targets, pose["morphs"]))
         assert set(vmc["blend"]) == set(rig.morph_targets)
         assert max(abs(vmc["blend"][k] - morphs[k]) for k in morphs) < 1e-3
@@ -127,5 +143,33 @@ def test_vmc_stream_rebuilds_the_pose_within_a_millimetre(tmp_path):
         matched += 1
     assert matched > 60, matched
     assert max(errors) < 1e-3, max(errors)
+    assert max(directions) < 1.0, max(directions)
     # the frames compared show a moving character (the reach moves the right hand)
     assert np.ptp(np.array(moving), axis=0).max() > 0.05
+
+
+def test_an_a_pose_rest_is_sent_as_a_turn_from_the_receivers_t_pose():
+    """Xbot with its arms lowered 40 degrees at rest: standing at rest, a receiver's T-pose arm turned by
+    the sent rotations points down along the character's arm, not straight out."""
+    asset = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    mapping = map_skeleton(asset)
+    sk = asset.skeleton
+    rest_global = sk.rest_global_rotations
+    rotations = np.array(sk.rest_rotations)
+    for side, sign in (("l", -1.0), ("r", 1.0)):  # +X is the left: the left arm turns down about +Z by -40 degrees
+        j = mapping.indices(sk)[f"{side}_shoulder"]
+        down = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.radians(sign * 40.0))
+        rotations[j] = quat.multiply(rotations[j], quat.multiply(quat.conjugate(rest_global[j]), quat.multiply(down, rest_global[j])))
+    a_pose = replace(asset, skeleton=replace(sk, rest_rotations=rotations), motions={})
+    rig = Rig("a", infuse.Character("a", a_pose, mapping), mapping)
+    bones = VmcBones(rig)
+    positions, local = to_unity(*bones.local(rig.skeleton.rest_rotations, rig.skeleton.rest_translations[0]))
+    world = rebuild({name: np.concatenate([p, q]) for name, p, q in zip(bones.names, positions, local)})
+    _, global_positions = forward_kinematics(rig.skeleton, rig.skeleton.rest_rotations[None], rig.skeleton.rest_translations[:1])
+    for side, name in (("l", "LeftUpperArm"), ("r", "RightUpperArm")):
+        arm = global_positions[0, rig.joint(f"{side}_elbow")] - global_positions[0, rig.joint(f"{side}_shoulder")]
+        tpose = np.subtract(canonical_joint(f"{side}_elbow").position, canonical_joint(f"{side}_shoulder").position)
+        pointed = quat.rotate(world[name][0], tpose)
+        angle = np.degrees(np.arccos(pointed @ arm / np.linalg.norm(pointed) / np.linalg.norm(arm)))
+        assert angle < 0.5, (name, angle)
+        assert arm[1] < -0.5 * np.linalg.norm(arm)  # the arm does point down at rest

@@ -6,9 +6,12 @@ every frame:
 - ``/VMC/Ext/OK 1``; ``/VMC/Ext/T time``: the sender is alive, its time in seconds;
 - ``/VMC/Ext/Root/Pos "root" px py pz qx qy qz qw``: the avatar's origin (here the world origin);
 - ``/VMC/Ext/Bone/Pos NAME px py pz qx qy qz qw`` per humanoid bone (Unity ``HumanBodyBones`` names:
-  ``Hips``, ``Spine``, ``LeftUpperArm``...), local to the nearest sent ancestor: the rotation relative to
-  the bone's rest pose, in a frame whose axes are the world's at rest (VRM's normalized bones), and the
-  position of the bone's origin from its parent's;
+  ``Hips``, ``Spine``, ``LeftUpperArm``...), local to the nearest sent ancestor, as VRM's normalized bones
+  take it: rotations from a T-pose facing +Z whose bone frames are the world's (the receiver's avatar at
+  rest), and the position of the bone's origin from its parent's. The character's own rest (an A-pose,
+  say) is told apart from that T-pose bone by bone: each bone's T-pose direction (from the canonical
+  skeleton) is swung onto the character's in its reference pose, so a receiver's arm points where the
+  character's does;
 - ``/VMC/Ext/Blend/Val NAME value`` for each morph target of the character (zeros included), then
   ``/VMC/Ext/Blend/Apply``.
 
@@ -30,7 +33,9 @@ from pythonosc.udp_client import SimpleUDPClient
 
 from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
+from infuse.canonical import canonical_joint
 from infuse.live import LiveFrame, LiveScene
+from infuse.runtime.rig import reference_pose
 
 #: Unity HumanBodyBones name -> canonical joint, parents before children.
 VRM_BONES = {
@@ -45,6 +50,14 @@ VRM_BONES = {
                                  ("Little", "pinky"))
        for k, segment in ((1, "Proximal"), (2, "Intermediate"), (3, "Distal"))},
 }
+#: The canonical joint each bone points to in a T-pose (bones missing here keep the body's axes).
+TPOSE_CHILD = {
+    "spine1": "spine2", "spine2": "spine3", "spine3": "spine4", "spine4": "skullbase",
+    **{f"{s}_{a}": f"{s}_{b}" for s in "lr" for a, b in (("acromioclavicular", "shoulder"), ("shoulder", "elbow"),
+                                                          ("elbow", "wrist"), ("wrist", "middle1"), ("hip", "knee"),
+                                                          ("knee", "ankle"), ("ankle", "forefoot"), ("forefoot", "toe"))},
+    **{f"{s}_{f}{k}": f"{s}_{f}{k + 1}" for s in "lr" for f in ("thumb", "index", "middle", "ring", "pinky") for k in (1, 2, 3)},
+}
 #: core frame (right-handed, +X the character's left) -> Unity (left-handed, +X its right)
 _FLIP_POSITION = np.array([-1.0, 1.0, 1.0])
 _FLIP_ROTATION = np.array([1.0, -1.0, -1.0, 1.0])
@@ -53,8 +66,9 @@ MAX_PACKET_BYTES = 8000
 
 
 class VmcBones:
-    """The humanoid bones of one character as VMC sends them: which joints, their parents among the sent
-    bones, and their rest global rotations."""
+    """The humanoid bones of one character as VMC sends them: which joints (``names``, ``joints`` (B,)),
+    their parents among the sent bones (``parents`` (B,), -1 for the hips) and the rotations (B, 4) taking
+    each bone of a receiver's T-pose to the character's reference pose (``tpose``)."""
 
     def __init__(self, rig):
         self.skeleton = rig.skeleton
@@ -70,15 +84,28 @@ class VmcBones:
                 p = int(self.skeleton.parents[p])
             parents.append(sent[p] if p >= 0 else -1)
         self.parents = np.array(parents, dtype=np.int64)
-        rest_rotations, _ = forward_kinematics(self.skeleton, self.skeleton.rest_rotations[None],
-                                               self.skeleton.rest_translations[:1])
-        self.rest_inverse = quat.conjugate(rest_rotations[0, self.joints])
+        reference_rotations, reference_positions, _ = reference_pose(rig.character, rig.joints)
+        self.reference_inverse = quat.conjugate(reference_rotations[self.joints])
+        # the T-pose of each bone, turned to the character's body axes, then swung onto its reference pose
+        aligned = []
+        for name in self.names:
+            canonical = VRM_BONES[name]
+            child = rig.joint(TPOSE_CHILD.get(canonical, ""))
+            if child is None:
+                aligned.append(rig.body)
+                continue
+            tpose = quat.rotate(rig.body, np.subtract(canonical_joint(TPOSE_CHILD[canonical]).position,
+                                                      canonical_joint(canonical).position))
+            own = reference_positions[child] - reference_positions[rig.joint(canonical)]
+            aligned.append(quat.multiply(quat.between(tpose, own), rig.body))
+        self.tpose = np.array(aligned)
 
     def local(self, rotations: np.ndarray, root: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Local positions (B, 3) and rotations (B, 4) of the sent bones, core frame, for one pose:
         ``rotations`` (J, 4) local joint rotations and ``root`` (3,) root translation, metres."""
         global_rotations, global_positions = forward_kinematics(self.skeleton, rotations[None], root[None])
-        normalized = quat.multiply(global_rotations[0, self.joints], self.rest_inverse)  # (B, 4), rest -> now
+        # (B, 4): the receiver's T-pose bone -> the character's reference pose -> now
+        normalized = quat.multiply(quat.multiply(global_rotations[0, self.joints], self.reference_inverse), self.tpose)
         positions = global_positions[0, self.joints]
         has_parent = self.parents >= 0
         parent = np.where(has_parent, self.parents, 0)
