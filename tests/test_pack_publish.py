@@ -134,6 +134,14 @@ def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     _error(capsys, code, "manifest.toml:pack.version", "'0.2.0'")
     assert not (tmp_path / "fem" / "dist").exists()
 
+    # A pack folder that is no project's pack gets no wheel, even below some other project.
+    assert cli_main(["pack", "import", "bvh", source, "--glob", "*_dash_feminine_*.bvh", "-o", str(tmp_path / "other" / "loose")]) == 0
+    (tmp_path / "other" / "pyproject.toml").write_text('[project]\nname = "other"\nversion = "0.1.0"\n')
+    capsys.readouterr()
+    _error(capsys, cli_main(["pack", "build", str(tmp_path / "other" / "loose"), "--wheel"]), "not the pack of a pack project",
+           "infuse pack new NAME --from")
+    assert not (tmp_path / "other" / "dist").exists()
+
 
 
 def test_the_wheel_holds_the_pack_and_nothing_left_from_an_earlier_build(tmp_path, capsys):

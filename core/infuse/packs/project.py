@@ -41,7 +41,7 @@ PLUGIN = Template('''"""Registers the $name behaviour pack's manifest under the 
 from pathlib import Path
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import BehaviourPack
 
 MANIFEST = Path(__file__).resolve().parent / "pack" / "manifest.toml"
 
@@ -54,7 +54,7 @@ def load():
 
 @hookimpl
 def infuse_behaviour_packs():
-    return [Component($name_literal, load, $description_literal, {"manifest": str(MANIFEST)})]
+    return [BehaviourPack($name_literal, load, $description_literal, str(MANIFEST))]
 ''')
 
 TEST = Template('''"""The installed $name pack: listed, built from its clips as they are, and infused onto a skeleton."""
@@ -175,7 +175,7 @@ def refresh_figures(readme: Path, pack: Pack) -> bool:
 
 def pack_manifests(project: Path) -> list[Path]:
     """The pack manifests inside a project's import packages (``*/pack/manifest.toml``)."""
-    return sorted(p for p in project.glob("*/pack/manifest.toml") if not p.parts[-3].startswith((".", "build")))
+    return sorted(p.resolve() for p in project.glob("*/pack/manifest.toml") if not p.parts[-3].startswith((".", "build")))
 
 
 def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = None, source=None, pattern: str = "*.bvh",

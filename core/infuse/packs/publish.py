@@ -52,12 +52,15 @@ def run_new(args) -> int:
 def run_build(args) -> int:
     folder = Path(args.folder)
     in_project = (folder / "pyproject.toml").is_file()
-    manifests = pack_manifests(folder) if in_project else [read_manifest(folder).path]
+    manifests = pack_manifests(folder.resolve()) if in_project else [read_manifest(folder).path]
     if not manifests:
         raise UsageError(f"{folder}: a project without a pack (no */pack/manifest.toml)")
     project = folder.resolve() if in_project else (find_project(folder) if args.wheel else None)
     if args.wheel:
-        check_versions(project, pack_manifests(project) or manifests)
+        if not set(manifests) <= set(pack_manifests(project)):
+            raise UsageError(f"{folder}: not the pack of a pack project ({project}/*/pack/manifest.toml); "
+                             f"make one with 'infuse pack new NAME --from {folder}'")
+        check_versions(project, manifests if in_project else pack_manifests(project))
     for manifest in manifests:
         pack = build_pack(manifest, mapper=args.mapper)
         print(summary(pack))
