@@ -117,6 +117,8 @@ def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     source = str(corpus_file(BANDAI))
     _error(capsys, cli_main(["pack", "new", "Bandai Fem", "--import", "bvh", source, "-o", str(tmp_path / "x")]), "'Bandai Fem'")
     _error(capsys, cli_main(["pack", "new", "reaching", "--import", "bvh", source, "-o", str(tmp_path / "x")]), "already installed")
+    _error(capsys, cli_main(["pack", "new", "fem", "--import", "bvh", source, "--version", "v1", "-o", str(tmp_path / "x")]),
+           "'v1'", "PEP 440")
     (tmp_path / "taken").mkdir()
     (tmp_path / "taken" / "notes.txt").write_text("mine")
     _error(capsys, cli_main(["pack", "new", "fem", "--import", "bvh", source, "-o", str(tmp_path / "taken")]), "already exists")

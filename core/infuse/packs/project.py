@@ -22,7 +22,7 @@ from pathlib import Path
 from string import Template
 
 from ..errors import UsageError
-from ..scaffold.distribution import LICENSE_PLACEHOLDER, distribution_name, package_name, pyproject_text
+from ..scaffold.distribution import LICENSE_PLACEHOLDER, check_version, distribution_name, package_name, pyproject_text
 from .build import build_pack, summary
 from .folder import copy_pack
 from .importers import FIRST_VERSION, import_bvh_folder, import_smartbody
@@ -189,6 +189,8 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         raise UsageError("give either a pack folder to start from or a source to import, not both")
     if import_kind is not None and import_kind not in IMPORT_KINDS:
         raise UsageError(f"cannot import {import_kind!r}; expected one of {', '.join(IMPORT_KINDS)}")
+    if version is not None:
+        check_version(version)
     if name in installed_packs():
         raise UsageError(f"a behaviour pack named {name!r} is already installed; choose another name")
     if importlib.util.find_spec(package) is not None:
@@ -212,6 +214,7 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
             manifest = import_smartbody(source, pack_folder, name=name, version=version or FIRST_VERSION,
                                         description=description)
             where = f"Copied from the SmartBody behaviour set `{origin.name}`."
+        check_version(read_manifest(manifest).version)
         pack = build_pack(manifest, mapper=mapper)
     except BaseException:
         shutil.rmtree(project, ignore_errors=True)

@@ -18,6 +18,7 @@ CORE_DISTRIBUTION = "infuse-anim"
 #: A licence expression that builds but says nothing: the author replaces it (see the generated README).
 LICENSE_PLACEHOLDER = "LicenseRef-Unspecified"
 _NAME = re.compile(r"[a-z][a-z0-9]*(-[a-z0-9]+)*")
+_VERSION = re.compile(r"\d+(\.\d+)*((a|b|rc)\d+)?(\.post\d+)?(\.dev\d+)?")
 
 
 def core_requirement(version: str = __version__) -> str:
@@ -32,6 +33,13 @@ def check_name(name: str, what: str = "name") -> str:
         raise UsageError(f"{what} {name!r}: use lower-case letters and digits in words joined by hyphens, "
                          "starting with a letter (e.g. 'bandai-fem')")
     return name
+
+
+def check_version(version: str) -> str:
+    """``version`` if it is a public release number the package index takes (``1.2.0``, ``0.1.0rc1``), else UsageError."""
+    if not _VERSION.fullmatch(version or ""):
+        raise UsageError(f"version {version!r}: expected a release number such as 0.1.0 (PEP 440)")
+    return version
 
 
 def distribution_name(name: str, pack: bool = False) -> str:
