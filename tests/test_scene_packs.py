@@ -116,14 +116,14 @@ def test_an_arrived_walk_hands_over_to_the_idle_where_it_stands():
     scene.run(6.0)
     (walk,) = scene.walks.walks["bob"]
     assert walk.settled is not None and walk.activity.end_s is not None  # the idle clip took over
-    assert walk.settled.start_s >= walk.end_s
+    assert walk.settled.start_s <= walk.end_s + 0.5  # at rest by the end its walk was planned to have
     rig = scene.runtime.rig("bob")
     _, pos = infuse.motion_fk(scene.motion("bob"))
     after = int(round(walk.settled.start_s * 30))
     assert np.linalg.norm(pos[after:, rig.joint("base")][:, [0, 2]] - (0.2, 2.0), axis=1).max() < 0.15
-    base = pos[:, rig.joint("base")][:, [0, 2]]
-    moving = np.nonzero(np.linalg.norm(np.diff(base, axis=0), axis=1) > 1e-3)[0]
-    assert after <= moving[moving < after].max() + 30  # within a second of standing still
+    feet = pos[:, [rig.joint("l_ankle"), rig.joint("r_ankle")]][..., [0, 2]]
+    moving = np.nonzero((np.linalg.norm(np.diff(feet, axis=0), axis=2) > 1e-3).any(axis=1))[0]
+    assert after <= moving[moving < after].max() + 30  # within a second of the last step
     around = slice(after - 5, after + 20)  # through the crossfade: no jump of the body; the feet step into place
     for joint, most in (("base", 0.01), ("skullbase", 0.02), ("l_ankle", 0.05), ("r_ankle", 0.05)):
         steps = np.linalg.norm(np.diff(pos[around, rig.joint(joint)], axis=0), axis=1)

@@ -11,6 +11,7 @@ from ..plugin_types import Command
 from .build import build_pack, summary
 from .importers import FIRST_VERSION, import_bvh_folder, import_smartbody
 from .infusion import infuse_character
+from .manifest import KINDS
 from .pack import installed_packs, load_pack
 from .publish import add_build_parser, add_new_parser, run_build, run_new
 
@@ -54,6 +55,7 @@ def _pack_args(p) -> None:
     i.add_argument("--name", help="pack name")
     i.add_argument("--glob", default="*.bvh", help="BVH files to take (e.g. '*_feminine_*.bvh')")
     i.add_argument("--version", dest="pack_version", default=FIRST_VERSION, help=f"pack version (default {FIRST_VERSION})")
+    i.add_argument("--kind", choices=KINDS, default="locomotion", help="what BVH clips show (default locomotion)")
     i.add_argument("--no-build", action="store_true", help="only write the manifest")
 
 
@@ -68,7 +70,8 @@ def _pack(args) -> int:
     if args.source_kind == "smartbody":
         manifest = import_smartbody(args.source, args.output, name=args.name, version=args.pack_version)
     else:
-        manifest = import_bvh_folder(args.source, args.output, name=args.name, pattern=args.glob, version=args.pack_version)
+        manifest = import_bvh_folder(args.source, args.output, name=args.name, pattern=args.glob, kind=args.kind,
+                                     version=args.pack_version)
     print(f"wrote {manifest}")
     if not args.no_build:
         pack = build_pack(manifest)

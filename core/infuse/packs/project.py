@@ -179,10 +179,10 @@ def pack_manifests(project: Path) -> list[Path]:
 
 
 def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = None, source=None, pattern: str = "*.bvh",
-                     dest=None, version: str | None = None, description: str | None = None,
+                     clip_kind: str = "locomotion", dest=None, version: str | None = None, description: str | None = None,
                      license: str | None = None, mapper: str | None = None) -> tuple[Path, Pack]:
     """Make the project ``dest`` (default ``./NAME``) of pack ``name`` from a pack folder (``from_folder``) or by
-    importing ``source`` (``import_kind`` ``"bvh"`` with ``pattern``, or ``"smartbody"``), build the pack and
+    importing ``source`` (``import_kind`` ``"bvh"`` with ``pattern`` and ``clip_kind``, or ``"smartbody"``), build the pack and
     write the README with its figures. Returns the project folder and the built pack."""
     distribution, package = distribution_name(name, pack=True), package_name(name, pack=True)
     if (from_folder is None) == (import_kind is None):
@@ -207,8 +207,8 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
             manifest = copy_pack(from_folder, pack_folder, name=name, version=version, description=description)
             where = f"Copied from the pack `{read_manifest(from_folder).name}` (folder `{origin.name}`)."
         elif import_kind == "bvh":
-            manifest = import_bvh_folder(source, pack_folder, name=name, pattern=pattern, version=version or FIRST_VERSION,
-                                         description=description)
+            manifest = import_bvh_folder(source, pack_folder, name=name, pattern=pattern, kind=clip_kind,
+                                         version=version or FIRST_VERSION, description=description)
             where = f"Clips copied from the folder `{origin.name}` (`{pattern}`)."
         else:
             manifest = import_smartbody(source, pack_folder, name=name, version=version or FIRST_VERSION,

@@ -11,7 +11,7 @@ from pathlib import Path
 from ..errors import UsageError
 from ..scaffold.distribution import LICENSE_PLACEHOLDER
 from .build import build_pack, summary
-from .manifest import read_manifest
+from .manifest import KINDS, read_manifest
 from .project import IMPORT_KINDS, new_pack_project, pack_manifests, refresh_figures
 from .wheel import build_wheel, check_versions, find_project, project_table
 
@@ -24,6 +24,7 @@ def add_new_parser(sub) -> None:
     source.add_argument("--import", dest="import_source", nargs=2, metavar=("KIND", "SRC"),
                         help=f"import clips: KIND is {' or '.join(IMPORT_KINDS)}, SRC a BVH folder or a SmartBody behaviour set")
     n.add_argument("--glob", default="*.bvh", help="BVH files to take (e.g. '*_feminine_*.bvh')")
+    n.add_argument("--kind", choices=KINDS, default="locomotion", help="what imported BVH clips show (default locomotion)")
     n.add_argument("-o", "--output", help="project folder to create (default ./NAME)")
     n.add_argument("--version", dest="pack_version", help="first version (default 0.1.0, or the copied pack's)")
     n.add_argument("--description", help="one line saying what the pack holds")
@@ -42,7 +43,7 @@ def add_build_parser(sub) -> None:
 def run_new(args) -> int:
     kind, source = args.import_source if args.import_source else (None, None)
     project, pack = new_pack_project(args.name, from_folder=args.from_folder, import_kind=kind, source=source, pattern=args.glob,
-                                     dest=args.output, version=args.pack_version, description=args.description,
+                                     clip_kind=args.kind, dest=args.output, version=args.pack_version, description=args.description,
                                      license=args.license, mapper=args.mapper)
     print(summary(pack))
     print(f"wrote {project}/ (distribution {project_table(project)['name']}); next: cd {project} && infuse pack build --wheel")

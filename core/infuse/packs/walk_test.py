@@ -13,9 +13,9 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
 - **targets**: walks to points :data:`DISTANCES` metres away at :data:`ANGLES` degrees off the facing
   (+ left); miss = distance of the pelvis (its ground point, averaged over the last half second)
   from the target; path ratio = length of the pelvis's ground path (smoothed over one second, which
-  takes out the sway of the gait) over the straight line; turned = the facing's whole change, degrees;
-  a loop is turning more than the angle plus 90 degrees; arrival = first time the pelvis stays
-  within 5 cm.
+  takes out the sway of the gait) over the straight line; turned = how much that path's direction
+  of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
+  more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm.
 
 Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
 """
@@ -42,6 +42,10 @@ ANGLES = (0.0, 45.0, 90.0, 135.0, 180.0, -90.0)
 WALK_SPEED = 1.3
 #: Within this many metres of its target a walk has arrived.
 ARRIVED_M = 0.05
+#: A path whose direction of travel turns more than this (degrees, all turns added, where it moves
+#: faster than :data:`MOVING_M_S`) makes a loop.
+LOOP_DEG = 270.0
+MOVING_M_S = 0.2
 
 
 @dataclass
@@ -67,7 +71,7 @@ class TargetTrial:
 
     @property
     def loops(self) -> bool:
-        return abs(self.turned_deg) > abs(self.angle_deg) + 90.0
+        return self.turned_deg > LOOP_DEG
 
 
 @dataclass
@@ -189,8 +193,10 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         gap = np.linalg.norm(ground - goal, axis=-1)
         away = np.nonzero(gap > ARRIVED_M)[0]
         arrival = None if gap[-1] > ARRIVED_M else float((away[-1] + 1) / FPS if away.size else 0.0)
-        h = _window_mean(np.unwrap(headings(g_pos, index)), int(FPS))
-        turned = float(np.degrees(np.abs(np.diff(h)).sum()))
+        step = np.diff(smooth, axis=0)
+        moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
+        tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
+        turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
         trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival))
         trial.paths.append(smooth)
     return trial
@@ -211,3 +217,38 @@ def report(trial: PackTrial) -> str:
     for note in trial.notes:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
+
+
+def draw_paths(trial: PackTrial, path, size: int = 640) -> None:
+    """A top view (PNG at ``path``) of the target walks: each pelvis ground path (smoothed as measured)
+    from the start (the circle, facing up the image, +Z) to its target (a cross; red when missed by
+    more than :data:`ARRIVED_M`), a 1 m grid, +X (the character's left) to the left."""
+    from PIL import Image, ImageDraw
+
+    goals = [(t.distance * math.sin(math.radians(t.angle_deg)), t.distance * math.cos(math.radians(t.angle_deg)))
+             for t in trial.targets]
+    pts = np.concatenate([np.zeros((1, 2)), np.array(goals).reshape(-1, 2)] + [p for p in trial.paths])
+    lo, hi = pts.min(axis=0) - 0.5, pts.max(axis=0) + 0.5
+    scale = (size - 20) / float(max(hi - lo))
+    centre = 0.5 * (lo + hi)
+
+    def px(x, z):  # +X (left of the character) drawn to the left, +Z up
+        return (size / 2 - (x - centre[0]) * scale, size / 2 - (z - centre[1]) * scale)
+
+    image = Image.new("RGB", (size, size), "white")
+    draw = ImageDraw.Draw(image)
+    for v in range(int(np.floor(lo.min())), int(np.ceil(hi.max())) + 1):
+        draw.line([px(v, lo[1]), px(v, hi[1])], fill=(232, 232, 232))
+        draw.line([px(lo[0], v), px(hi[0], v)], fill=(232, 232, 232))
+    for t, (gx, gz), p in zip(trial.targets, goals, trial.paths):
+        draw.line([px(x, z) for x, z in p], fill=(40, 90, 200) if not t.loops else (200, 120, 0), width=2)
+        cx, cz = px(gx, gz)
+        colour = (0, 150, 0) if t.miss_m <= ARRIVED_M else (210, 0, 0)
+        draw.line([(cx - 6, cz - 6), (cx + 6, cz + 6)], fill=colour, width=2)
+        draw.line([(cx - 6, cz + 6), (cx + 6, cz - 6)], fill=colour, width=2)
+    ox, oz = px(0.0, 0.0)
+    draw.ellipse([ox - 5, oz - 5, ox + 5, oz + 5], outline=(0, 0, 0), width=2)
+    draw.line([(ox, oz), (ox, oz - 14)], fill=(0, 0, 0), width=2)
+    draw.text((8, 8), f"{trial.pack} on {trial.character}: walks to targets, top view (1 m grid)", fill=(0, 0, 0))
+    image.save(path)
+

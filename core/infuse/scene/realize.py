@@ -212,13 +212,16 @@ def _locomotion(scene, activation: Activation):
     walk = controller("locomotion", pack=space, speed=speed, path=own,
                       max_decel=DECELERATION_M_S2 * max(float(p.get("braking") or 1.0), 0.1))
     # The walk lasts until the character stands at its last point, as the steering will take it there.
-    arrival, final = walk.plan(scene.fps, scene.walks.expected_state(name))
-    end = activation.end if arrival is None else max(activation.end, activation.start + arrival)
-    if arrival is None:
+    plan = walk.plan(scene.fps, scene.walks.expected_state(name))
+    if plan is None:
         scene.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: the walk cannot reach its target "
                                                   f"({points[-1][0]:.2f}, {points[-1][1]:.2f})")
     activity = scene.activate(activation, walk, activation.stop_s, blend_in_s=0.3, priority=scene.walks.priority(name))
-    scene.walks.start(name, activity, end, final)
+    if plan is None:
+        scene.walks.start(name, activity, activation.end)
+    else:
+        scene.walks.start(name, activity, max(activation.end, activation.start + plan.rests_s), plan.state,
+                          arrives_s=activation.start + plan.arrives_s)
     scene.character(name).destination = (float(points[-1][0]), float(points[-1][1]))
     return activity
 

@@ -74,9 +74,11 @@ class Walks:
                 for walks in self.walks.values() for w in walks]
         return max(ends, default=0.0)
 
-    def start(self, name: str, activity, end_s: float, final: dict | None = None) -> None:
+    def start(self, name: str, activity, end_s: float, final: dict | None = None, arrives_s: float | None = None) -> None:
         """``activity`` (a locomotion, at :meth:`priority`) becomes the character's walk from its start;
-        it is planned to stand at its last point at ``end_s``, its steering then in state ``final``."""
+        it is planned to arrive at its last point at ``arrives_s`` (default ``end_s``) and to be at rest
+        there by ``end_s``, its steering then in state ``final``; the scene looks whether it stands
+        from its arrival on."""
         runtime = self.scene.runtime
         walks = self.walks.setdefault(name, [])
         previous = walks[-1] if walks else None
@@ -86,7 +88,8 @@ class Walks:
             if previous.settled is not None:
                 runtime.stop(previous.settled, until, blend_out_s=0.0)
         fps = self.scene.fps
-        walks.append(Walk(activity, float(end_s), math.ceil(end_s * fps - 1e-9), final=final))
+        first_look = end_s if arrives_s is None else arrives_s
+        walks.append(Walk(activity, float(end_s), math.ceil(first_look * fps - 1e-9), final=final))
         frame = max(math.ceil(activity.start_s * fps - 1e-9), 0)
         self._handovers.append((frame, activity, previous.activity if previous is not None else None))
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -129,6 +130,18 @@ def canonical_clip(clip):
     return m.replace(local_rotations=rot, joint_translations=jt), mover
 
 
+@dataclass
+class WalkPlan:
+    """How a walk to a point goes (:meth:`Locomotion.plan`): seconds from its start until it stands
+    there (``arrives_s``), until its stop's last steps and the fade into the idle are surely over
+    (``rests_s``: one cycle of the slowest forward walk at the stop's cadence and :data:`SETTLE_S`
+    later), and the steering's state then (``x``, ``z``, ``heading``... in the character's frame)."""
+
+    arrives_s: float
+    rests_s: float
+    state: dict
+
+
 class Locomotion(Controller):
     """Locomotion from a behaviour pack (an installed name, a folder, or a :class:`BlendSpace`).
 
@@ -163,14 +176,11 @@ class Locomotion(Controller):
     def describe(self) -> str:
         return f"locomotion ({getattr(self.pack, 'pack', self.pack)})"
 
-    def plan(self, fps: float, state: dict | None = None, most_s: float = 600.0) -> tuple[float | None, dict]:
-        """When a walk along a path (``path=`` or ``target=``) with a :class:`~infuse.packs.BlendSpace`
-        pack stands at its last point, seconds from its start at ``fps``, from the steering at the
-        speeds the pack realizes (faster ones kept to its top speed), with the stop's last steps and
-        the fade into the idle (one cycle of the slowest forward walk at the stop's cadence, and
-        :data:`SETTLE_S`); None if it does not stand there within ``most_s``. Also the steering's
-        state then (``x``, ``z``, ``heading``...). ``state``: where it starts (default: the origin,
-        standing, facing +Z)."""
+    def plan(self, fps: float, state: dict | None = None, most_s: float = 600.0) -> WalkPlan | None:
+        """How a walk along a path (``path=`` or ``target=``) with a :class:`~infuse.packs.BlendSpace`
+        pack goes at ``fps``, from the steering at the speeds the pack realizes (faster ones kept to
+        its top speed): a :class:`WalkPlan`, or None if it does not stand at its last point within
+        ``most_s``. ``state``: where it starts (default: the origin, standing, facing +Z)."""
         st = dict(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0)
         st.update({k: v for k, v in (state or {}).items() if k in st})
         st["waypoint"] = 0
@@ -178,7 +188,7 @@ class Locomotion(Controller):
         top = space.speed_limit() if hasattr(space, "speed_limit") else None
         path = self.steering.path
         if path is None:
-            return None, st
+            return None
         dt = 1.0 / float(fps)
         last, frames = path[-1], 0
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
@@ -188,10 +198,10 @@ class Locomotion(Controller):
                     math.hypot(st["x"] - last[0], st["z"] - last[1]) < STAY_M:
                 break
         else:
-            return None, st
+            return None
         walks = [c for c in space.group("locomotion") if c.role != "idle" and c.parameters["forward_speed"] > 0.0] if top else []
         slowest = min(walks, key=lambda c: c.parameters["forward_speed"]).keys if walks else (0.0, 0.0, 1.0)
-        return frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S, st
+        return WalkPlan(frames * dt, frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S, st)
 
     def handover(self, state: dict) -> dict:
         """A walk following another goes on from its state (where it is, heading, speed, gait phase,
@@ -283,10 +293,13 @@ class Locomotion(Controller):
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
         ground = np.stack((px, np.zeros_like(px), pz), axis=-1)
         mover = b["movers"][int(np.argmax(w.sum(axis=0)))]
+        # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
+        # ahead, behind or aside of their path as their gait goes).
+        centre = np.array([[1.0, 0.0, 1.0]]) * settle[:, None]
         if mover == 0:
-            root = ground + quat.rotate(turn_q, root)
+            root = ground + quat.rotate(turn_q, root - root * centre)
         else:
-            jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover])
+            jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - jt[:, mover] * centre)
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
         if self.pin_feet and len(b["legs"]) == 2:
@@ -603,6 +616,18 @@ def _towards(direction: float) -> str:
     return "forward" if abs(deg) < 1.0 else f"{abs(deg):.0f} deg to the {'left' if deg > 0 else 'right'} of the facing"
 
 
+def _slowest_towards(b, direction) -> np.ndarray:
+    """(F,) speed (m/s) of the slowest moving example travelling within 45 degrees of each ``direction``
+    (F,) radians (of any moving example where none does): a pack without an idle walks slower than
+    that by slowing it. (A blend of walks forward and back may stand still, but it steps on the spot.)"""
+    v = b["velocities"]
+    moving = ~b["idle"] & (np.hypot(v[:, 0], v[:, 1]) > 1e-3)
+    speeds = np.where(moving, np.hypot(v[:, 0], v[:, 1]), np.inf)
+    off = np.abs((direction[:, None] - np.arctan2(v[:, 1], v[:, 0])[None] + np.pi) % (2.0 * np.pi) - np.pi)
+    near = np.where(off < np.pi / 4, speeds[None], np.inf).min(axis=1)
+    return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
+
+
 def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     """Blend weights (F, N) for the requests and the moving share (F,) of the slowest walk's speed:
     where the full request lies outside the tessellation, its turn rate is the nearest one the
@@ -612,8 +637,7 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     space = b["space"]
     slow = np.ones(len(speed))
     if not b["idle"].any():
-        lowest = np.array([b["limit"].lowest(d) for d in np.unique(direction)])
-        floor = lowest[np.searchsorted(np.unique(direction), direction)]
+        floor = _slowest_towards(b, direction)
         slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
         speed = np.maximum(speed, floor)
     query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
