@@ -110,6 +110,12 @@ async def _serve(server: LiveServer, live: LiveScene, senders, args) -> None:
     print(f"infuse serve: {len(live.scene.characters)} characters at {live.fps:g} fps; "
           f"ws://{args.host}:{server.port}/  http://{args.host}:{server.http_port}/{vmc}  (Ctrl-C stops)", flush=True)
     try:
-        await task
+        while not task.done():  # the loop thread failing stops the service, with its error
+            await asyncio.wait({task}, timeout=0.25)
+            if live.error is not None:
+                raise live.error
+        task.result()
     finally:
         server.shutdown()
+        if not task.done():
+            await task
