@@ -112,6 +112,14 @@ def test_pack_new_from_a_smartbody_set_and_from_a_pack_folder(tmp_path):
     assert [c["parameters"] for c in copy.analysis["clips"]] == [c["parameters"] for c in original.analysis["clips"]]
     assert not (tmp_path / "waves" / "LICENSE").exists()  # none lies beside the example
 
+    # The same clips imported as a folder of BVH reaches: the hand is found from the motion, the figures agree.
+    assert cli_main(["pack", "new", "bvh-waves", "--import", "bvh", str(EXAMPLE_PACK / "clips"), "--kind", "reach",
+                     "-o", str(tmp_path / "bvh-waves")]) == 0
+    imported = load_pack(tmp_path / "bvh-waves" / "infuse_pack_bvh_waves" / "pack")
+    assert imported.kind == "reach" and {c["hand"] for c in imported.analysis["clips"]} == {"right"}
+    by_name = {c["name"]: c["parameters"] for c in original.analysis["clips"]}
+    assert all(c["parameters"] == pytest.approx(by_name[c["name"]], abs=1e-6) for c in imported.analysis["clips"])
+
 
 def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     source = str(corpus_file(BANDAI))
