@@ -1,4 +1,4 @@
-"""CLI: ``infuse packs``, ``infuse pack build|show|import|new``, ``infuse infuse CHARACTER --packs ...``."""
+"""CLI: ``infuse packs``, ``infuse pack build|show|import|new|test``, ``infuse infuse CHARACTER --packs ...``."""
 from __future__ import annotations
 
 import json
@@ -14,6 +14,7 @@ from .infusion import infuse_character
 from .manifest import KINDS
 from .pack import installed_packs, load_pack
 from .publish import add_build_parser, add_new_parser, run_build, run_new
+from .trial_command import add_test_parser, run_test
 
 DEFAULT_CACHE = Path("~/.cache/infuse/infusions")
 
@@ -46,6 +47,7 @@ def _pack_args(p) -> None:
     sub = p.add_subparsers(dest="pack_action", required=True)
     add_build_parser(sub)
     add_new_parser(sub)
+    add_test_parser(sub)
     s = sub.add_parser("show", help="print a built pack's clips, parameters, tessellation and checks")
     s.add_argument("pack", help="pack folder, manifest or installed pack name")
     i = sub.add_parser("import", help="copy a SmartBody behaviour set or BVH clips into a pack folder with its manifest")
@@ -64,6 +66,8 @@ def _pack(args) -> int:
         return run_build(args)
     if args.pack_action == "new":
         return run_new(args)
+    if args.pack_action == "test":
+        return run_test(args)
     if args.pack_action == "show":
         print(summary(load_pack(args.pack)))
         return 0

@@ -5,7 +5,7 @@ so); the other fingers are ordered across the palm starting next to the thumb. M
 palm joints (a first bone that starts at the wrist) are not finger joints. A hand without an
 identifiable thumb and at least two other fingers (a mitten) keeps its fingers unmapped, and so does
 a stylized hand of fewer than five digits whose thumb is not named (which digit is missing cannot
-be told).
+be told); fingers named each as one finger keep their names.
 """
 from __future__ import annotations
 
@@ -112,17 +112,23 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
     others = [r for r in keys if r != thumb]
     if len(others) < 2:
         return {}, "a thumb and a single finger (mitten): digits left unmapped"
-    ordered = _order_fingers(view, thumb, others, wrist_pos, dirs.mean(axis=0))
     out = {"thumb": _drop_helpers(view, chains[thumb])[:4]}
-    for name, r in zip(FINGER_ORDER, ordered):
+    for name, r in _order_fingers(view, thumb, others, wrist_pos, dirs.mean(axis=0)):
         out[name] = _drop_metacarpal(view, chains[r], wrist_pos)[:4]
     return out, why
 
 
 def _few_digits(view: SkeletonView, chains: dict[int, list[int]], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:
     """One or two digit chains: a named thumb is kept; beside it a single-joint "fingers" segment
-    (CMU) is the index; a second chain of several joints makes a mitten, left unmapped."""
+    (CMU) is the index; a second chain of several joints makes a mitten, left unmapped. Without a
+    thumb, fingers each named as one finger keep their names."""
     thumbs = [r for r in chains if view.info[r].has("thumb")]
+    if not thumbs:
+        # a numbered finger name (HandMiddle1), not a word for part of the hand (MiddleHand)
+        named = {r: view.info[r].roles & set(FINGER_ORDER) if view.info[r].numbers else set() for r in chains}
+        if chains and all(len(v) == 1 for v in named.values()) and len({min(v) for v in named.values()}) == len(chains):
+            return ({min(named[r]): _drop_metacarpal(view, chains[r], wrist_pos)[:4] for r in chains},
+                    "fingers named, no thumb")
     if len(thumbs) != 1:
         return {}, f"{len(chains)} digit chain(s) and no named thumb: digits left unmapped"
     thumb = thumbs[0]
@@ -150,15 +156,18 @@ def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
     return keys[int(np.argmin(nums))]
 
 
-def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos: np.ndarray, axis: np.ndarray) -> list[int]:
-    """Non-thumb fingers from the thumb side across the palm (names first when they say it all)."""
+def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos: np.ndarray,
+                   axis: np.ndarray) -> list[tuple[str, int]]:
+    """(finger name, chain start) of the non-thumb fingers: by their names when each is named as a
+    different finger (a hand without a ring finger keeps its pinky), else in order from the thumb
+    side across the palm."""
     by_name = {}
     for r in others:
         roles = view.info[r].roles & set(FINGER_ORDER)
         if len(roles) == 1:
-            by_name[r] = FINGER_ORDER.index(next(iter(roles)))
+            by_name[r] = next(iter(roles))
     if len(by_name) == len(others) and len(set(by_name.values())) == len(others):
-        return sorted(others, key=lambda r: by_name[r])
+        return [(by_name[r], r) for r in others]
     axis = axis / max(length(axis), 1e-9)
     side = view.P[thumb] - wrist_pos
     side = side - np.dot(side, axis) * axis
@@ -170,4 +179,4 @@ def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos:
     def across(r: int) -> float:
         chain = _drop_metacarpal(view, view.main_chain(r, 6), wrist_pos)
         return float(np.dot(view.P[chain[0]] - wrist_pos, side))
-    return sorted(others, key=lambda r: -across(r))
+    return list(zip(FINGER_ORDER, sorted(others, key=lambda r: -across(r))))
