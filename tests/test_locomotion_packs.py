@@ -101,3 +101,34 @@ def test_a_run_faster_than_the_pack_is_reported(xbot):
     assert "asked 6.00 m/s (run)" in warning.description and f"walking at {top:.2f} m/s" in warning.description
     scene.run()
     assert [e for e in scene.feedback.log if e.kind == "warningFeedback" and "m/s" in e.description] == [warning]
+
+
+def test_pack_test_prints_the_trials_and_draws_them(tmp_path, capsys):
+    from infuse.cli import main
+
+    xbot_file = corpus_file("runxaway-models/Xbot.glb")
+    out = tmp_path / "male.png"
+    assert main(["pack", "test", "locomotion-male", "--on", str(xbot_file), "--speeds", "1.0,2.0", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    rows = [line.split() for line in printed.splitlines() if "->" in line and "%" in line]
+    assert [float(r[0]) for r in rows] == [1.0, 2.0]
+    assert all(abs(float(r[2]) / float(r[0]) - 1.0) < 0.05 for r in rows)  # realized within 5%
+    assert "heading drift over 8 s" in printed and "walk to a target" in printed
+    for name in ("male.png", "male-straight.png", "male-target.png"):
+        from PIL import Image
+
+        with Image.open(tmp_path / name) as image:
+            assert image.size[0] >= 400 and len(np.unique(np.asarray(image.convert("L")))) > 10  # drawn, not blank
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["pack", "test", "reaching"], "a reach pack"),
+    (["pack", "test", "locomotion-male", "--speeds", "fast"], "--speeds takes numbers"),
+    (["pack", "test", "locomotion-male", "--speeds", "-1"], "--speeds takes speeds above 0"),
+])
+def test_pack_test_refuses_what_it_cannot_walk(argv, says, capsys):
+    from infuse.cli import main
+
+    assert main(argv + ["--on", str(corpus_file("runxaway-models/Xbot.glb")), "--no-pictures"]) == 2
+    err = capsys.readouterr().err
+    assert says in err and "Traceback" not in err

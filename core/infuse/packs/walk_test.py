@@ -77,7 +77,9 @@ class TargetTrial:
 @dataclass
 class PackTrial:
     """What a pack realizes on a character: speed trials, heading drift (degrees over :data:`DRIFT_S`),
-    target trials, and the ground paths (x, z) of the target walks for drawing."""
+    target trials, the ground paths (x, z) of the target walks for drawing, and output motions to show
+    (``"straight"``: the drift walk; ``"target"``: the walk to the farthest target straight behind, or
+    the last target) with the character's mapping."""
 
     pack: str
     character: str
@@ -87,6 +89,8 @@ class PackTrial:
     targets: list[TargetTrial] = field(default_factory=list)
     paths: list[np.ndarray] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    motions: dict = field(default_factory=dict)
+    mapping: object = None
 
     def worst(self) -> dict:
         """The worst figure of each measure (speed error as a share, degrees, metres, ratio, cm/m)."""
@@ -181,6 +185,10 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
     longest = max([DRIFT_S + SETTLE_S] + [d / walk_speed + 8.0 for d in distances])
     walks, notes = _runtime_walks(character, mapping, space, settings, longest)
     trial.notes += [n for n in notes if n not in trial.notes]
+    trial.mapping = mapping
+    trial.motions["straight"] = walks[0][0]
+    behind = [k for k, (d, a) in enumerate(targets) if abs(a) == 180.0]
+    trial.motions["target"] = walks[1 + (behind[-1] if behind else len(targets) - 1)][0] if targets else None
     _, (_, g_pos) = walks[0]
     facing = _window_mean(np.unwrap(headings(g_pos[:int((DRIFT_S + SETTLE_S) * FPS)], index)), window)
     trial.drift_deg = float(np.degrees(facing[-1 - window // 2] - facing[settle + window // 2]))
