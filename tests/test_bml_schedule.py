@@ -12,7 +12,7 @@ from infuse.bml import (
     BehaviourPlan, EstimatedSpeechTimer, Scheduler, SpeechTiming, TimingModel, installed_handlers,
 )
 from infuse.bml.speech import EngineSpeechTimer
-from infuse.plugin_types import Component
+from infuse.plugin_types import BMLBehaviour
 
 NS = "http://www.bml-initiative.org/bml/bml-1.0"
 
@@ -217,7 +217,7 @@ def wave_plugin():
 
     @infuse.hookimpl
     def infuse_bml_behaviours():
-        return [Component("wave", plan, "wave a hand", {"elements": ["{urn:example}wave"], "attributes": {"cycles"}})]
+        return [BMLBehaviour("wave", plan, "wave a hand", ("{urn:example}wave",), frozenset({"cycles"}))]
 
     module.infuse_bml_behaviours = infuse_bml_behaviours
     plugins = registry.plugins()
@@ -241,7 +241,7 @@ def test_failing_third_party_handler_is_a_warning():
         raise RuntimeError("boom")
     handlers = dict(installed_handlers())
     from infuse.bml.behaviours import handlers_from
-    handlers.update(handlers_from([Component("broken", broken, "", {"elements": ["head"], "priority": 5})]))
+    handlers.update(handlers_from([BMLBehaviour("broken", broken, "", ("head",), priority=5)]))
     s = Scheduler(handlers=handlers)
     (r,) = s.submit(bml('<head id="n"/><gesture id="g" lexeme="BEAT"/>'))
     assert set(r.local_times()) == {"g"}

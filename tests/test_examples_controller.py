@@ -21,7 +21,7 @@ def test_listed_by_infuse_plugins(capsys):
     assert cli_main(["plugins"]) == 0
     rows = [line.split() for line in capsys.readouterr().out.splitlines()]
     assert ["shrug", "controller", "infuse-anim-example-controller", "0.1.0", "ok"] in rows
-    assert controller_components()["shrug"].info["from_bml"] is not None
+    assert controller_components()["shrug"].from_bml is not None
 
 
 def test_shrug_curve_rises_holds_and_falls():

@@ -21,7 +21,7 @@ BANDAI = "bandai/Bandai-Namco-Research-Motiondataset-1/data"
 def test_built_in_packs_are_installed_and_built():
     table = installed_packs()
     for name in BUILT_IN:
-        pack = load_pack(table[name].info["manifest"])
+        pack = load_pack(table[name].manifest)
         assert pack.built, name
         assert pack.analysis["report"] == [], pack.analysis["report"]
     male, female = load_pack("locomotion-male"), load_pack("locomotion-female")

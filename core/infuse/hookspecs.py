@@ -36,22 +36,22 @@ def infuse_retargeters():
 
 @hookspec
 def infuse_controllers():
-    """Return a list of :class:`~infuse.plugin_types.Component` whose factories build runtime controllers."""
+    """Return a list of :class:`~infuse.plugin_types.ControllerFactory` (controller kinds of the runtime)."""
 
 
 @hookspec
 def infuse_behaviour_packs():
-    """Return a list of :class:`~infuse.plugin_types.Component`; ``info["manifest"]`` is the pack's manifest path."""
+    """Return a list of :class:`~infuse.plugin_types.BehaviourPack` (each names its manifest)."""
 
 
 @hookspec
 def infuse_tts_engines():
-    """Return a list of :class:`~infuse.plugin_types.Component` whose factories build text-to-speech engines."""
+    """Return a list of :class:`~infuse.plugin_types.TTSEngine` (text-to-speech engines)."""
 
 
 @hookspec
 def infuse_bml_behaviours():
-    """Return a list of :class:`~infuse.plugin_types.Component`; ``info["elements"]`` names the BML elements handled."""
+    """Return a list of :class:`~infuse.plugin_types.BMLBehaviour` (handlers of BML elements)."""
 
 
 @hookspec

@@ -1,7 +1,7 @@
 """The small descriptor objects plugins hand to infuse through the hooks in :mod:`infuse.hookspecs`."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -73,17 +73,56 @@ class Command:
 
 
 @dataclass(frozen=True)
-class Component:
-    """A named runtime part (controller, behaviour pack, TTS engine, BML behaviour).
+class ControllerFactory:
+    """A controller kind of the runtime: ``factory(**settings) -> Controller`` builds one (usually the
+    :class:`~infuse.runtime.Controller` subclass itself).
 
-    ``factory`` builds it; ``info`` holds kind-specific facts (a pack's manifest path, the BML
-    element names a behaviour handles...).
+    ``from_bml(parameters, runtime, character, activation) -> Controller | None`` (optional) builds it
+    from a scheduled BML activation; without it the activation's parameters go to ``factory``.
     """
 
     name: str
     factory: Callable[..., Any]
     description: str = ""
-    info: dict = field(default_factory=dict)
+    from_bml: Callable[..., Any] | None = None
+
+
+@dataclass(frozen=True)
+class BehaviourPack:
+    """An installed behaviour pack: ``manifest`` is the path of its ``manifest.toml``; ``load() -> Pack``."""
+
+    name: str
+    load: Callable[[], Any]
+    description: str = ""
+    manifest: str = ""
+
+
+@dataclass(frozen=True)
+class TTSEngine:
+    """A text-to-speech engine: ``factory(**settings)`` builds one, with
+    ``synthesize(text, wav_path=None) -> infuse.speech.Utterance``; ``settings`` names what it accepts."""
+
+    name: str
+    factory: Callable[..., Any]
+    description: str = ""
+    settings: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class BMLBehaviour:
+    """Handles the BML ``elements`` (names as :mod:`infuse.bml.names` writes them: ``"head"``,
+    ``"sbm:reach"``, ``"{uri}local"``): ``plan(behaviour, context) -> BehaviourPlan``.
+
+    ``attributes``: the attribute names it understands (others are reported as unsupported; ``None``
+    accepts all). ``priority``: the highest takes an element several plugins handle (default 0).
+    """
+
+    name: str
+    plan: Callable[..., Any]
+    description: str = ""
+    elements: tuple[str, ...] = ()
+    attributes: frozenset[str] | None = None
+    priority: int = 0
 
 
 def normalized_extension(path: str | Path) -> str:

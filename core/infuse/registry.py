@@ -30,7 +30,10 @@ from . import hookspecs
 from .config import current_config
 from .errors import UsageError
 from .plugin_index import distribution, entry_points_of, offers
-from .plugin_types import Command, Component, Mapper, Reader, Retargeter, Writer, normalized_extension
+from .plugin_types import (
+    BehaviourPack, BMLBehaviour, Command, ControllerFactory, Mapper, Reader, Retargeter, TTSEngine, Writer,
+    normalized_extension,
+)
 
 
 @dataclass(frozen=True)
@@ -55,10 +58,10 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("writer", "infuse.writers", "infuse_writers", Writer),
     Kind("mapper", "infuse.mappers", "infuse_mappers", Mapper, "heuristic"),
     Kind("retargeter", "infuse.retargeters", "infuse_retargeters", Retargeter, "default"),
-    Kind("controller", "infuse.controllers", "infuse_controllers", Component),
-    Kind("behaviour-pack", "infuse.behaviour_packs", "infuse_behaviour_packs", Component),
-    Kind("tts", "infuse.tts", "infuse_tts_engines", Component, "espeak"),
-    Kind("bml-behaviour", "infuse.bml_behaviours", "infuse_bml_behaviours", Component),
+    Kind("controller", "infuse.controllers", "infuse_controllers", ControllerFactory),
+    Kind("behaviour-pack", "infuse.behaviour_packs", "infuse_behaviour_packs", BehaviourPack),
+    Kind("tts", "infuse.tts", "infuse_tts_engines", TTSEngine, "espeak"),
+    Kind("bml-behaviour", "infuse.bml_behaviours", "infuse_bml_behaviours", BMLBehaviour),
     Kind("command", "infuse.commands", "infuse_commands", Command),
 )}
 

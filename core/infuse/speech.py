@@ -250,7 +250,7 @@ def check_speech_text(text: str) -> str:
 # -- engines -----------------------------------------------------------------------------------------
 
 def tts_engines() -> dict[str, Any]:
-    """Installed TTS engines: name -> :class:`~infuse.plugin_types.Component`."""
+    """Installed TTS engines: name -> :class:`~infuse.plugin_types.TTSEngine`."""
     from . import registry
 
     return registry.table("tts")

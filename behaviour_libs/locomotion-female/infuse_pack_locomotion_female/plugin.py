@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import infuse
-from infuse.plugin_types import Component
+from infuse.plugin_types import BehaviourPack
 
 MANIFEST = Path(__file__).resolve().parent / "pack" / "manifest.toml"
 
@@ -17,4 +17,5 @@ def _load():
 
 @infuse.hookimpl
 def infuse_behaviour_packs():
-    return [Component("locomotion-female", _load, "female locomotion: idle, walks, jog, run, turns and strafes (procedural, gait-study figures)", {"manifest": str(MANIFEST)})]
+    return [BehaviourPack("locomotion-female", _load, "female locomotion: idle, walks, jog, run, turns and strafes (procedural, gait-study figures)",
+                          str(MANIFEST))]

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import infuse
-from infuse.plugin_types import Component
+from infuse.plugin_types import BehaviourPack
 
 MANIFEST = Path(__file__).resolve().parent / "pack" / "manifest.toml"
 
@@ -17,4 +17,5 @@ def _load():
 
 @infuse.hookimpl
 def infuse_behaviour_packs():
-    return [Component("reaching", _load, "standing reaches over a grid of targets for each hand, and a grasp (procedural)", {"manifest": str(MANIFEST)})]
+    return [BehaviourPack("reaching", _load, "standing reaches over a grid of targets for each hand, and a grasp (procedural)",
+                          str(MANIFEST))]

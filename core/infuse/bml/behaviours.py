@@ -1,11 +1,11 @@
 """The contract between the scheduler and BML behaviour plugins.
 
-A plugin's ``infuse_bml_behaviours`` hook returns :class:`~infuse.plugin_types.Component` objects with
-``info["elements"]`` (element names as :mod:`infuse.bml.names` writes them: ``"head"``, ``"sbm:reach"``,
-``"{uri}name"``), optionally ``info["attributes"]`` (the attribute names it understands; others are
-reported as unsupported) and ``info["priority"]`` (a higher one wins an element; default 0). Its
-``factory(behaviour, context) -> BehaviourPlan`` turns a parsed behaviour into a timing model and an
-activation record, or raises :class:`BehaviourError` when it cannot.
+A plugin's ``infuse_bml_behaviours`` hook returns :class:`~infuse.plugin_types.BMLBehaviour` objects:
+the ``elements`` they handle (names as :mod:`infuse.bml.names` writes them: ``"head"``, ``"sbm:reach"``,
+``"{uri}name"``), the ``attributes`` they understand (others are reported as unsupported) and a
+``priority`` (a higher one wins an element; default 0). Their ``plan(behaviour, context) -> BehaviourPlan``
+turns a parsed behaviour into a timing model and an activation record, or raises :class:`BehaviourError`
+when it cannot.
 """
 from __future__ import annotations
 
@@ -70,26 +70,26 @@ class Handler:
     """One element's handler, resolved from the plugins."""
 
     element: str
-    component: object
+    behaviour: object  # the plugin's BMLBehaviour
 
     @property
     def attributes(self):
-        names = self.component.info.get("attributes")
+        names = self.behaviour.attributes
         return None if names is None else frozenset(names)
 
     def plan(self, behaviour, context: BehaviourContext) -> BehaviourPlan:
-        return self.component.factory(behaviour, context)
+        return self.behaviour.plan(behaviour, context)
 
 
-def handlers_from(components) -> dict[str, Handler]:
-    """Element name -> handler from a list of components; the highest ``priority`` wins, then the first."""
+def handlers_from(behaviours) -> dict[str, Handler]:
+    """Element name -> handler from :class:`~infuse.plugin_types.BMLBehaviour` objects; the highest
+    ``priority`` wins, then the first."""
     table: dict[str, tuple[int, Handler]] = {}
-    for component in components:
-        priority = int(component.info.get("priority", 0))
-        for element in component.info.get("elements", ()):
+    for plugin in behaviours:
+        for element in plugin.elements:
             name = normalize_name(element)
-            if name not in table or priority > table[name][0]:
-                table[name] = (priority, Handler(name, component))
+            if name not in table or plugin.priority > table[name][0]:
+                table[name] = (plugin.priority, Handler(name, plugin))
     return {name: handler for name, (_, handler) in table.items()}
 
 

@@ -5,7 +5,7 @@
 - :mod:`~infuse.packs.importers`: SmartBody behaviour sets and folders of BVH;
 - :mod:`~infuse.packs.infusion`: retargeting a pack onto a character, blend spaces, the cache.
 
-Installed packs register a :class:`~infuse.plugin_types.Component` with ``info["manifest"]`` through
+Installed packs register a :class:`~infuse.plugin_types.BehaviourPack` naming their manifest through
 the ``infuse_behaviour_packs`` hook (entry-point group ``infuse.behaviour_packs``).
 """
 from __future__ import annotations

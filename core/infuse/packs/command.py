@@ -25,8 +25,8 @@ def _packs_args(p) -> None:
 
 def _packs(args) -> int:
     rows = []
-    for name, component in sorted(installed_packs().items()):
-        pack = load_pack(component.info["manifest"])
+    for name, installed in sorted(installed_packs().items()):
+        pack = load_pack(installed.manifest)
         doc = pack.analysis
         rows.append({"name": name, "version": pack.version, "kind": pack.kind, "clips": len(pack.manifest.clips),
                      "built": pack.built, "manifest": str(pack.manifest.path), "description": pack.manifest.description,

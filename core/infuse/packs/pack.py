@@ -163,7 +163,7 @@ def load_pack(source) -> Pack:
         table = installed_packs()
         if str(source) not in table:
             raise UsageError(f"no pack {str(source)!r}: not a path and not installed; installed: {', '.join(sorted(table)) or 'none'}")
-        path = Path(table[str(source)].info["manifest"])
+        path = Path(table[str(source)].manifest)
     manifest = read_manifest(path)
     analysis = None
     if manifest.analysis.is_file() and manifest.analysis.with_suffix(".npz").is_file():
@@ -179,5 +179,5 @@ def load_pack(source) -> Pack:
 
 
 def installed_packs() -> dict:
-    """Installed behaviour packs: name -> :class:`~infuse.plugin_types.Component` (``info["manifest"]``)."""
+    """Installed behaviour packs: name -> :class:`~infuse.plugin_types.BehaviourPack`."""
     return registry.table("behaviour-pack")

@@ -8,7 +8,7 @@
       LICENSE                        the source's licence file, when one lies beside the clips
       infuse_pack_NAME/plugin.py     registers pack/manifest.toml
       infuse_pack_NAME/pack/         manifest.toml, the skeleton, clips/, analysis.json and .npz (built)
-      tests/test_pack.py             the installed pack is listed, built, and infuses onto the canonical skeleton
+      tests/test_pack_NAME.py        the installed pack is listed, built, and infuses onto the canonical skeleton
 
 The pack folder is self-contained (:mod:`infuse.packs.folder`). The README's figures sit between two
 markers and ``infuse pack build`` rewrites them whenever it rebuilds the pack.
@@ -234,7 +234,8 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
     (project / package / "plugin.py").write_text(PLUGIN.substitute(name=name, name_literal=repr(name),
                                                                     description_literal=repr(m.description or name)), encoding="utf-8")
     (project / "tests").mkdir(exist_ok=True)
-    (project / "tests" / "test_pack.py").write_text(TEST.substitute(name=name, name_literal=repr(name)), encoding="utf-8")
+    test_file = project / "tests" / f"test_{package.removeprefix('infuse_')}.py"
+    test_file.write_text(TEST.substitute(name=name, name_literal=repr(name)), encoding="utf-8")
     (project / "pyproject.toml").write_text(pyproject_text(
         distribution, m.version, f"The {name} behaviour pack for infuse: {m.description or m.kind}", package,
         {"infuse.behaviour_packs": {name: f"{package}.plugin"}}, package_data=PACK_DATA,

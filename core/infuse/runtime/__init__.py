@@ -3,7 +3,7 @@
 See :mod:`infuse.runtime.runtime` for the API (``Runtime``, ``activate``, ``run``, ``motion``),
 :mod:`infuse.runtime.controller` for what a controller plugin implements, and
 :mod:`infuse.runtime.swing` for the aligned frames controllers express rotations in.
-Controller plugins register :class:`~infuse.plugin_types.Component` objects through the
+Controller plugins register :class:`~infuse.plugin_types.ControllerFactory` objects through the
 ``infuse_controllers`` hook (entry-point group ``infuse.controllers``); :func:`controller` builds one by name.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ from .tracks import Tracks
 
 
 def controller_components() -> dict:
-    """Installed controllers: kind -> :class:`~infuse.plugin_types.Component`."""
+    """Installed controllers: kind -> :class:`~infuse.plugin_types.ControllerFactory`."""
     from .. import registry
 
     return registry.table("controller")

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..hookspecs import hookimpl
-from ..plugin_types import Component
+from ..plugin_types import ControllerFactory
 from .clip import Clip
 from .tracks import Tracks
 
@@ -10,7 +10,6 @@ from .tracks import Tracks
 @hookimpl
 def infuse_controllers():
     return [
-        Component("clip", Clip, "play a Motion on a character, looping or once (base layer)", {"layer": int(Clip.layer)}),
-        Component("tracks", Tracks, "play keyed joint-rotation and morph-weight curves (face layer by default)",
-                  {"layer": int(Tracks.layer)}),
+        ControllerFactory("clip", Clip, "play a Motion on a character, looping or once (base layer)"),
+        ControllerFactory("tracks", Tracks, "play keyed joint-rotation and morph-weight curves (face layer by default)"),
     ]

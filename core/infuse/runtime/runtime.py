@@ -247,7 +247,8 @@ class Runtime:
     def realize(self, activation, character=None) -> Activity | None:
         """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller of its kind.
 
-        The controller component's ``info["from_bml"](parameters, runtime, character, activation)`` builds
+        The controller's ``from_bml(parameters, runtime, character, activation)`` (its
+        :class:`~infuse.plugin_types.ControllerFactory`) builds
         the controller (else its factory is called with the parameters). It may return None when the
         activation asks for nothing to play, and may stop activities itself (finishing saccades).
         Returns None, and reports why, when no installed controller realizes that kind. The activity
@@ -263,7 +264,7 @@ class Runtime:
         if component is None:
             self.report(rig.name, f"no installed controller realizes <{activation.element}> ({activation.controller!r}); skipped")
             return None
-        build = component.info.get("from_bml")
+        build = component.from_bml
         try:
             controller = build(dict(activation.parameters), self, rig.name, activation) if build \
                 else component.factory(**activation.parameters)

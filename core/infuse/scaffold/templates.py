@@ -335,7 +335,7 @@ import numpy as np
 
 from infuse import hookimpl
 from infuse.errors import MissingFeatureError, UsageError
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.swing import local_offsets, swing
 
@@ -378,7 +378,7 @@ class $ident(Controller):
 
 @hookimpl
 def infuse_controllers():
-    return [Component("$name", $ident, "tip the head forward and back", {"layer": int($ident.layer)})]
+    return [ControllerFactory("$name", $ident, "tip the head forward and back")]
 ''')
 
 CONTROLLER_TEST = Template('''"""The $name controller: installed, and the head turns by the angle asked at the middle of the movement."""
@@ -421,7 +421,7 @@ import math
 
 from infuse import hookimpl
 from infuse.bml import BehaviourError, BehaviourPlan, TimingModel
-from infuse.plugin_types import Component
+from infuse.plugin_types import BMLBehaviour
 
 NAMESPACE = "urn:infuse:$name"
 ELEMENT = "{" + NAMESPACE + "}$name"
@@ -447,7 +447,7 @@ def plan(behaviour, context) -> BehaviourPlan:
 
 @hookimpl
 def infuse_bml_behaviours():
-    return [Component("$name", plan, "nod twice", {"elements": [ELEMENT], "attributes": ATTRIBUTES})]
+    return [BMLBehaviour("$name", plan, "nod twice", (ELEMENT,), ATTRIBUTES)]
 ''')
 
 BML_TEST = Template('''"""The $name BML behaviour: installed, scheduled, refused when wrong, and realized on a character."""
@@ -475,7 +475,7 @@ def _schedule(attributes: str):
 
 
 def test_installed():
-    assert ELEMENT in table("bml-behaviour")["$name"].info["elements"]
+    assert ELEMENT in table("bml-behaviour")["$name"].elements
 
 
 def test_scheduled_at_its_natural_timing():

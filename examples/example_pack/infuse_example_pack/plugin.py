@@ -2,7 +2,7 @@
 from pathlib import Path
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import BehaviourPack
 
 MANIFEST = Path(__file__).resolve().parent / "pack" / "manifest.toml"
 
@@ -15,5 +15,5 @@ def load():
 
 @hookimpl
 def infuse_behaviour_packs():
-    return [Component("example-wave", load, "example: the right hand waves at five places around the body",
-                      {"manifest": str(MANIFEST)})]
+    return [BehaviourPack("example-wave", load, "example: the right hand waves at five places around the body",
+                          str(MANIFEST))]

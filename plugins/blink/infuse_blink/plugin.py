@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .controller import Blink, blink_from_bml
 
 
 @hookimpl
 def infuse_controllers():
-    return [Component("blink", Blink, "blink at human rates through eyelid morph targets or joints",
-                      {"layer": int(Blink.layer), "from_bml": blink_from_bml})]
+    return [ControllerFactory("blink", Blink, "blink at human rates through eyelid morph targets or joints",
+                              from_bml=blink_from_bml)]

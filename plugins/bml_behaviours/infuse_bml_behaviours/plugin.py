@@ -2,13 +2,13 @@
 from __future__ import annotations
 
 import infuse
-from infuse.plugin_types import Component
+from infuse.plugin_types import BMLBehaviour
 
 from . import face, gaze, gesture, head, locomotion, manipulation, misc, posture, speech
 
 
 def _component(name, factory, elements, attributes, description):
-    return Component(name, factory, description, {"elements": tuple(elements), "attributes": frozenset(attributes)})
+    return BMLBehaviour(name, factory, description, tuple(elements), frozenset(attributes))
 
 
 @infuse.hookimpl

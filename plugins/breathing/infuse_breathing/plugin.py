@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .controller import Breathing, breathing_from_bml
 
 
 @hookimpl
 def infuse_controllers():
-    return [Component("breathing", Breathing, "subtle chest and clavicle motion at a breathing rate and depth",
-                      {"layer": int(Breathing.layer), "from_bml": breathing_from_bml})]
+    return [ControllerFactory("breathing", Breathing, "subtle chest and clavicle motion at a breathing rate and depth",
+                              from_bml=breathing_from_bml)]

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .bml import gaze_from_bml
 from .controller import Gaze
@@ -10,8 +10,8 @@ from .controller import Gaze
 
 @hookimpl
 def infuse_controllers():
-    return [Component("gaze", Gaze, "look at a point, a moving object or a character's joint with eyes, head and spine "
-                      "(Thiebaux et al. 2009)", {"layer": int(Gaze.layer), "from_bml": gaze_from_bml})]
+    return [ControllerFactory("gaze", Gaze, "look at a point, a moving object or a character's joint with eyes, head and spine "
+                      "(Thiebaux et al. 2009)", from_bml=gaze_from_bml)]
 
 
 @hookimpl

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .controller import HeadMovement, head_from_bml
 
 
 @hookimpl
 def infuse_controllers():
-    return [Component("head", HeadMovement, "nod, shake, toss or tilt the head, split over the neck joints",
-                      {"layer": int(HeadMovement.layer), "from_bml": head_from_bml})]
+    return [ControllerFactory("head", HeadMovement, "nod, shake, toss or tilt the head, split over the neck joints",
+                              from_bml=head_from_bml)]

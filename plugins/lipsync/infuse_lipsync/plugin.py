@@ -3,7 +3,7 @@ runtime controllers (group ``infuse.controllers``)."""
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Command, Component
+from infuse.plugin_types import Command, ControllerFactory
 
 from . import command
 from .controllers import FaceExpression, Speech, face_from_bml, speech_from_bml
@@ -17,7 +17,7 @@ def infuse_commands():
 
 @hookimpl
 def infuse_controllers():
-    return [Component("speech", Speech, "lip sync of an utterance on the character's mouth (morphs, face poses or jaw)",
-                      {"layer": int(Speech.layer), "from_bml": speech_from_bml}),
-            Component("face", FaceExpression, "a facial lexeme or FACS action unit held on the character's face",
-                      {"layer": int(FaceExpression.layer), "from_bml": face_from_bml})]
+    return [ControllerFactory("speech", Speech, "lip sync of an utterance on the character's mouth (morphs, face poses or jaw)",
+                              from_bml=speech_from_bml),
+            ControllerFactory("face", FaceExpression, "a facial lexeme or FACS action unit held on the character's face",
+                              from_bml=face_from_bml)]

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import infuse
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .controller import Locomotion
 
 
 @infuse.hookimpl
 def infuse_controllers():
-    return [Component("locomotion", Locomotion, "walk, run, turn and strafe by blending a locomotion pack (base layer)",
-                      {"layer": int(Locomotion.layer)})]
+    return [ControllerFactory("locomotion", Locomotion,
+                              "walk, run, turn and strafe by blending a locomotion pack (base layer)")]

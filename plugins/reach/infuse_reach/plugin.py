@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import infuse
-from infuse.plugin_types import Component
+from infuse.plugin_types import ControllerFactory
 
 from .controller import Reach
 
 
 @infuse.hookimpl
 def infuse_controllers():
-    return [Component("reach", Reach, "reach, touch, grab or put down with one hand (posture layer)", {"layer": int(Reach.layer)})]
+    return [ControllerFactory("reach", Reach, "reach, touch, grab or put down with one hand (posture layer)")]

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 from infuse import hookimpl
-from infuse.plugin_types import Component
+from infuse.plugin_types import TTSEngine
 
 from .engine import FileEngine
 
 
 @hookimpl
 def infuse_tts_engines():
-    return [Component("file", FileEngine, "recorded speech: a WAV plus a phoneme timing file (TextGrid, MFA JSON, JSON, TSV)",
-                      {"settings": ["audio", "timing", "alphabet"]})]
+    return [TTSEngine("file", FileEngine, "recorded speech: a WAV plus a phoneme timing file (TextGrid, MFA JSON, JSON, TSV)",
+                      ("audio", "timing", "alphabet"))]
