@@ -2,7 +2,8 @@
 
 Each kind of plugin has an entry-point group, a hook of :mod:`infuse.hookspecs` and a descriptor type
 of :mod:`infuse.plugin_types` (:data:`KINDS`). A kind's plugins are imported the first time that kind
-is asked for, so reading a BVH file loads the readers and nothing else.
+is asked for, and a file is read importing only the readers that claim its extension
+(:func:`table_for_file`, from :mod:`infuse.plugin_index`).
 
 - :func:`table` (kind) is every descriptor of a kind by name; :func:`get` (kind, name=None) is one,
   the kind's default when no name is given (:func:`default_name`).
@@ -10,9 +11,10 @@ is asked for, so reading a BVH file loads the readers and nothing else.
   registered by the program (:meth:`PluginSet.register`), else the distribution the configuration
   file prefers (``[prefer.KIND]``, :mod:`infuse.config`), else the first by distribution name and
   entry-point name, the same in every environment.
-- A plugin that fails to import, implements a hook infuse does not declare (a misspelled name), marks
-  nothing it defines, raises in its hook or returns something other than its kind's descriptors is
-  reported once on stderr and skipped; the rest keeps working.
+- A plugin that fails to import, implements a hook infuse does not declare (a misspelled name, found by
+  pluggy's ``check_pending``), raises in its hook or returns something other than its kind's
+  descriptors is reported once on stderr and skipped, as is a hook function left unmarked; the rest
+  keeps working.
 """
 from __future__ import annotations
 
@@ -113,6 +115,10 @@ class PluginSet:
         for kind in KINDS:
             self.load_kind(kind)
         return sorted(self._records, key=lambda r: list(KINDS).index(r.kind))
+
+    def loaded(self, kind: str) -> bool:
+        """Whether every plugin of ``kind`` has been imported."""
+        return kind in self._loaded
 
     def load_kind(self, kind: str) -> None:
         """Import and register the plugins of the entry-point group of ``kind`` (once)."""
@@ -313,7 +319,7 @@ def table_for_file(kind: str, path: str | Path, format: str | None = None) -> di
     when none does.
     """
     ps = plugins()
-    if kind in ps._loaded:
+    if ps.loaded(kind):
         return ps.table(kind)
     extension = normalized_extension(path)
 
