@@ -14,7 +14,7 @@ from infuse.grounding import foot_height
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse_gltf.container import parse_file
-from infuse_lipsync.body import beats
+from infuse_lipsync.body import beats, idle_body
 
 RPM = "talkinghead/avatars/brunette-t.glb"
 VROID = "talkinghead/avatars/vroid.glb"
@@ -78,3 +78,10 @@ def test_face_only_leaves_the_body_at_rest(espeak, tmp_path):
     assert all(np.max(weights[k]) == 0.0 for k in weights if "blink" in k.lower())
     rotations = asset.motions["speech"].local_rotations  # a morph face: every joint holds its rest
     assert np.all(quat.angle_between(rotations, asset.skeleton.rest_rotations[None]) < 1e-6)
+
+
+def test_a_character_that_is_not_a_humanoid_keeps_only_its_face():
+    require_corpus()
+    fox = infuse.load(corpus_file("projectlookingglass-glb/Fox.glb"))
+    idle, body = idle_body(fox, 30, 30.0)
+    assert idle is None and body.startswith("face only (")

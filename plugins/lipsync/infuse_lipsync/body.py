@@ -37,9 +37,10 @@ def beats(words, gap_s: float = BEAT_GAP_S) -> list[float]:
 
 
 def idle_body(asset: Asset, frames: int, fps: float, words=(), pack: str | None = IDLE_PACK, map_file=None,
-              seed: int = 0, clip: str = "speech", ground: bool = True) -> tuple[Asset, str]:
+              seed: int = 0, clip: str = "speech", ground: bool = True) -> tuple[Asset | None, str]:
     """The character ``asset`` idling for ``frames`` frames at ``fps``, written as the clip ``clip``
-    (standing on the ground unless ``ground`` is false), and a phrase saying what moves it.
+    (standing on the ground unless ``ground`` is false), and a phrase saying what moves it; ``None``
+    for a character that is not a humanoid (nothing to idle but its face).
 
     ``words`` (``(start_s, end_s, word)``) place the nods; ``pack``: the behaviour pack whose idle
     clip the body stands in (``None``: the rest pose); ``map_file``: a saved joint map.
@@ -50,7 +51,10 @@ def idle_body(asset: Asset, frames: int, fps: float, words=(), pack: str | None 
         name = scene.add_character(asset, "speaker", packs=packs, map=map_file)
         stance = f"the {pack} idle" if packs else "its rest pose"
     except UnusableInputError:  # a pack needs legs to stand on: a bust keeps its rest pose
-        name = scene.add_character(asset, "speaker", map=map_file)
+        try:
+            name = scene.add_character(asset, "speaker", map=map_file)
+        except UnusableInputError as exc:  # not a humanoid (a head alone): only its face moves
+            return None, f"face only ({exc.problem})"
         stance = "its rest pose"
     runtime = scene.runtime
     runtime.activate(name, controller("saccade", mode="talk", seed=seed), 0.0)

@@ -14,7 +14,7 @@ from pathlib import Path
 from infuse import fileio
 from infuse.atomic import atomic_path
 from infuse.cli.builtin import add_read_options, read_options
-from infuse.errors import InputError, UsageError
+from infuse.errors import InputError, UnusableInputError, UsageError
 from infuse.grounding import on_ground
 from infuse.mapping import map_skeleton
 from infuse.speech import tts_engine
@@ -76,6 +76,16 @@ def _engine(args):
     return tts_engine(args.tts, **settings)
 
 
+def _on_ground(asset, motion, map_file):
+    """``motion`` standing on the ground (see :mod:`infuse.grounding`); as it is for a character
+    that is not a humanoid (no feet to stand on)."""
+    try:
+        mapping = map_skeleton(asset, saved_map=map_file)
+    except UnusableInputError:
+        return motion
+    return on_ground(asset, mapping, motion)
+
+
 def run(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() in (".wav", ".json"):
@@ -97,13 +107,13 @@ def run(args) -> int:
         result = lipsync(utterance, face, args.viseme_set, LipSyncSettings(fps=args.fps), asset.skeleton, expressions)
         face_motion = result.motion(asset.skeleton, args.clip)
         face_track = result.morph_weight_track() if result.morph_weights else None
-        if args.face_only:
-            motion, track, body = face_motion, face_track, "face only"
+        idle, body = (None, "face only") if args.face_only else idle_body(
+            asset, len(result.times), args.fps, utterance.words, args.idle_pack, args.map, clip=args.clip, ground=args.ground)
+        if idle is None:
+            motion, track = face_motion, face_track
             if motion is not None and args.ground:
-                motion = on_ground(asset, map_skeleton(asset, saved_map=args.map), motion)
+                motion = _on_ground(asset, motion, args.map)
         else:
-            idle, body = idle_body(asset, len(result.times), args.fps, utterance.words, args.idle_pack, args.map,
-                                   clip=args.clip, ground=args.ground)
             motion = with_face(idle.motions[args.clip], face_motion, result.joint_rotations)
             track = merged_tracks(idle.meta.get("morph_weight_tracks", {}).get(args.clip), face_track)
         asset.motions = {args.clip: motion} if motion is not None else {}
