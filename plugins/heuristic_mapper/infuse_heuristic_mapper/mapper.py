@@ -464,6 +464,10 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
     forward = np.cross(lateral, up)  # the body's front if the "a" members are on its left
     top = arms.branch
     geo, geo_why = _front_votes(view, forward, up, legs, leg_res, frames if top != base else None, base, top)
+    if abs(geo) < 0.3:  # the feet do not show the front: the thumbs do (they point forward in any rest)
+        thumbs = _thumb_votes(view, forward, arm_res)
+        if abs(geo + thumbs) > abs(geo):
+            geo, geo_why = float(np.clip(geo + thumbs, -1, 1)), "left = up x forward, forward from the thumbs"
     names = _name_votes(view, pairs, leg_res, arm_res, legs)
     if abs(geo) >= 0.3:
         a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
@@ -490,6 +494,22 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
             db = np.dot(P[res[p.b].slots[key]], left)
             side_of[p.a], side_of[p.b] = ("l", "r") if da >= db else ("r", "l")
     return side_of, why, conf, left
+
+
+def _thumb_votes(view: SkeletonView, forward: np.ndarray, arm_res: dict) -> float:
+    """+1 when the thumbs lie along ``forward`` from the wrists, -1 against, 0 when no thumb is
+    found: palms down (T-pose, A-pose) or facing the thighs, the thumb side of a hand is its front."""
+    votes = []
+    for r in arm_res.values():
+        wrist = r.slots["wrist"]
+        if wrist < 0:
+            continue
+        fingers, _ = assign_fingers(view, list(view.children[wrist]), view.P[wrist])
+        thumb = fingers.get("thumb")
+        if thumb:
+            d = view.P[thumb[-1]] - view.P[wrist]
+            votes.append(float(d @ forward) / max(length(d), 1e-12))
+    return float(np.mean(votes)) if votes else 0.0
 
 
 def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[float, str]:
@@ -673,6 +693,9 @@ def _put_eyes(view, result, head, up, left) -> None:
     small joints in front of and above the head joint."""
     eyes = _named_eyes(view, view.subtree(head))
     why = "named eye below the head"
+    if len(eyes) == 2 and float((view.P[eyes["left"]] - view.P[eyes["right"]]) @ left) < 0:
+        eyes = {"left": eyes["right"], "right": eyes["left"]}
+        why = "named eye below the head; its side name says the opposite: the geometry decides"
     if not eyes:
         eyes = _eye_pair(view, head, up, left)
         why = "mirror-image pair in front of the head (eyes)"
