@@ -30,7 +30,7 @@ from .manifest import read_manifest
 from .pack import Pack, installed_packs
 
 IMPORT_KINDS = ("bvh", "smartbody")
-PACK_DATA = ("pack/*", "pack/clips/*")
+PACK_DATA = ("pack/**/*",)  # every file under pack/, in any subfolder
 FIGURES_START = "<!-- figures: written by infuse pack build -->"
 FIGURES_END = "<!-- end of figures -->"
 _LICENCE_FILE = re.compile(r"(LICEN[CS]E|COPYING)([.-].*)?", re.IGNORECASE)
