@@ -56,7 +56,7 @@ def main(argv=None) -> int:
     if unknown:
         parser.error(f"unknown formats {unknown}; known: {', '.join(FORMATS)}")
     seeds = seeds_by_format(formats, args.max_seed_bytes)
-    print(f"seeds: " + ", ".join(f"{fmt} {len(s)}" for fmt, s in seeds.items()))
+    print("seeds: " + ", ".join(f"{fmt} {len(s)}" for fmt, s in seeds.items()))
 
     counts: dict[str, Counter] = defaultdict(Counter)
     findings: dict[tuple, list] = {}

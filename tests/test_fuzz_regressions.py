@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import io
 import json
-import os
 import struct
 import sys
 import time
@@ -27,7 +26,7 @@ from infuse.texture import decode_image
 
 from cli_errors import assert_info_exits_2
 from fuzz_support import TINY_BML, TINY_BVH, TINY_SCENE_TOML
-from gltf_builder import GltfBuilder, mini_rig
+from gltf_builder import mini_rig
 from runtime_characters import synthetic_character
 
 BML_NS = 'xmlns="http://www.bml-initiative.org/bml/bml-1.0"'

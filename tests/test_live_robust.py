@@ -7,7 +7,6 @@ import base64
 import json
 import os
 import socket
-import struct
 import time
 import urllib.error
 import urllib.request

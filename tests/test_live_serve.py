@@ -69,7 +69,7 @@ def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
         bml("bob", GAZE)
         time.sleep(0.3)
         target([-0.4, 1.3, 0.6])  # the gaze follows the moved target
-        talk = bml("ann", SPEECH)
+        bml("ann", SPEECH)
         call("walk_to", "bob", target=[0.0, 0.6])
         bml("ann", REACH)
         time.sleep(0.8)

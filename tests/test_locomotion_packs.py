@@ -27,7 +27,7 @@ def xbot():
 
 def square_space():
     """A 3D tessellation over forward speeds 0.5-2 m/s, lateral -0.5-0.5 m/s, turn rates -1-1 rad/s."""
-    corners = [(f, l, w) for f in (0.5, 2.0) for l in (-0.5, 0.5) for w in (-1.0, 1.0)]
+    corners = [(f, s, w) for f in (0.5, 2.0) for s in (-0.5, 0.5) for w in (-1.0, 1.0)]
     return Tessellation.build(("forward_speed", "lateral_speed", "turn_rate"), [str(c) for c in corners], corners)
 
 
