@@ -58,10 +58,10 @@ def _imports_of_plugins():
 def test_plugins_import_only_the_public_api():
     problems = [f"{where}: {module} is not public (infuse.api)" for where, module, _, _ in _imports_of_plugins()
                 if module.split(".")[0] == "infuse" and not is_public(module)]
-    assert problems == [], "\n".join(problems)
+    assert problems == [], "\n".join(problems + ["(make the module public in infuse/api.py, or import a public one)"])
 
 
 def test_no_plugin_imports_another():
     problems = [f"{where}: {package} imports {module}" for where, module, package, packages in _imports_of_plugins()
                 if module.split(".")[0] in packages and module.split(".")[0] != package]
-    assert problems == [], "\n".join(problems)
+    assert problems == [], "\n".join(problems + ["(what two plugins share belongs in the core, behind infuse.api)"])
