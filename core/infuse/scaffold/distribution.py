@@ -8,6 +8,7 @@ plugin formats.
 """
 from __future__ import annotations
 
+import json
 import re
 
 from .. import __version__
@@ -53,7 +54,8 @@ def package_name(name: str, pack: bool = False) -> str:
 
 
 def _string(value: str) -> str:
-    return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """A TOML basic string (JSON's escapes are TOML's: quotes, backslashes, control characters)."""
+    return json.dumps(value, ensure_ascii=False)
 
 
 def _strings(values) -> str:
