@@ -57,6 +57,8 @@ def test_bad_requests_exit_2_with_one_line(tmp_path, capsys):
     _error(capsys, ["plugin", "new", "mapper", "heuristic", "-o", str(tmp_path / "b")], "already installed")
     _error(capsys, ["plugin", "new", "reader", "bvh", "-o", str(tmp_path / "c")], "'infuse_bvh'")
     _error(capsys, ["plugin", "new", "controller", "Tip_Top", "-o", str(tmp_path / "d")], "'Tip_Top'")
+    _error(capsys, ["plugin", "new", "controller", "tip-top", "--description", 'says """hi"""', "-o", str(tmp_path / "f")],
+           "one printable line")
     (tmp_path / "e").mkdir()
     (tmp_path / "e" / "mine.txt").write_text("mine")
     _error(capsys, ["plugin", "new", "controller", "tip-top", "-o", str(tmp_path / "e")], "already exists")

@@ -22,7 +22,8 @@ from pathlib import Path
 from string import Template
 
 from ..errors import UsageError
-from ..scaffold.distribution import LICENSE_PLACEHOLDER, check_version, distribution_name, package_name, pyproject_text
+from ..scaffold.distribution import (LICENSE_PLACEHOLDER, check_description, check_version, distribution_name, package_name,
+                                     pyproject_text)
 from .build import build_pack, summary
 from .folder import copy_pack
 from .importers import FIRST_VERSION, import_bvh_folder, import_smartbody
@@ -191,6 +192,7 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         raise UsageError(f"cannot import {import_kind!r}; expected one of {', '.join(IMPORT_KINDS)}")
     if version is not None:
         check_version(version)
+    check_description(description)
     if name in installed_packs():
         raise UsageError(f"a behaviour pack named {name!r} is already installed; choose another name")
     if importlib.util.find_spec(package) is not None:

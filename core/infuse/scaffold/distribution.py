@@ -43,6 +43,14 @@ def check_version(version: str) -> str:
     return version
 
 
+def check_description(text: str | None) -> str | None:
+    """``text`` if it is one printable line without backslashes or double quotes (it goes into TOML, Markdown
+    and Python docstrings), else UsageError; None passes."""
+    if text is not None and (not text.strip() or not text.isprintable() or any(c in text for c in '\\"')):
+        raise UsageError(f"description {text!r}: one printable line without backslashes or double quotes")
+    return text
+
+
 def distribution_name(name: str, pack: bool = False) -> str:
     """``infuse-anim-<name>``, or ``infuse-anim-pack-<name>`` for a behaviour pack."""
     return f"{CORE_DISTRIBUTION}-{'pack-' if pack else ''}{check_name(name)}"

@@ -16,7 +16,7 @@ from string import Template
 
 from .. import registry
 from ..errors import UsageError
-from .distribution import distribution_name, package_name, pyproject_text
+from .distribution import check_description, distribution_name, package_name, pyproject_text
 from .templates import KINDS
 
 README = Template('''# $distribution
@@ -65,6 +65,7 @@ def new_plugin_project(kind: str, name: str, dest=None, description: str | None 
     if kind not in KINDS:
         raise UsageError(f"unknown plugin kind {kind!r}; expected one of {', '.join(KINDS)}")
     distribution, package = distribution_name(name), package_name(name)
+    check_description(description)
     if importlib.util.find_spec(package) is not None:
         raise UsageError(f"an import package {package!r} is already installed; choose another name")
     if name in registry.table(kind):
