@@ -177,7 +177,7 @@ def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarra
     """What a clip does, from its (F, 2) foot contacts, pelvis path (F, 3), facing (F,) radians, leg
     length (m) and number of steps: ``"none"`` (no steps: not locomotion), ``"turn"`` (turning more
     than :data:`TURN_DEG` on the spot), and for clips of at most :data:`SHORT_STEPS` steps ``"step"``
-    (standing before and after), ``"start"`` (standing, then walking) or ``"stop"`` (walking, then
+    (one or two steps travelling less than a leg length, or standing before and after), ``"start"`` (standing, then walking) or ``"stop"`` (walking, then
     standing); None for a walk (what the blend can use)."""
     if steps == 0 or len(root) < 3:
         return "none"
@@ -187,6 +187,8 @@ def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarra
         return "turn"
     if steps > SHORT_STEPS:
         return None
+    if steps <= 2 and travel < leg:
+        return "step"
     speed = np.linalg.norm(np.gradient(root[:, [0, 2]], axis=0), axis=-1) * fps
     span = max(int(round(0.25 * fps)), 1)
     still = STILL_LEGS_S * leg

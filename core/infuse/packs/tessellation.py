@@ -34,8 +34,9 @@ class Tessellation:
 
     @classmethod
     def build(cls, coordinates, labels, points, tolerance: float = 1e-6, resolution=None) -> "Tessellation":
-        """Tessellate (N, D) ``points``; coordinates with no spread (less than their ``resolution`` (D,),
-        if given, in their units) are left out."""
+        """Tessellate (N, D) ``points``; coordinates, and directions of the space, along which the
+        examples do not spread (by less than the coordinates' ``resolution`` (D,), if given, in their
+        units) are left out."""
         pts = np.asarray(points, dtype=np.float64).reshape(len(labels), len(coordinates))
         if not len(pts):
             raise ValueError("a tessellation needs at least one example")
@@ -45,9 +46,15 @@ class Tessellation:
         scale = np.where(spans, spread, 1.0)
         x = np.where(spans, (pts - origin) / scale, 0.0)
         _, sv, vt = np.linalg.svd(x, full_matrices=False) if len(pts) > 1 else (None, np.zeros(0), np.zeros((0, len(coordinates))))
-        rank = int(np.sum(sv > tolerance * max(float(sv.max(initial=0.0)), 1.0))) if len(sv) else 0
-        rank = min(rank, 3)
-        basis = vt[:rank].T if rank else np.zeros((len(coordinates), 0))
+        keep = sv > tolerance * max(float(sv.max(initial=0.0)), 1.0) if len(sv) else np.zeros(0, dtype=bool)
+        if resolution is not None and keep.any():
+            # A direction counts if the examples spread along it by more than the resolution: the
+            # extent of their projections, in resolution units of a unit step along it.
+            unit = np.linalg.norm(vt * scale / np.maximum(np.asarray(resolution, dtype=np.float64), tolerance), axis=1)
+            keep &= np.ptp(x @ vt.T, axis=0) * unit > 1.0
+        chosen = np.nonzero(keep)[0][:3]
+        rank = len(chosen)
+        basis = vt[chosen].T if rank else np.zeros((len(coordinates), 0))
         y = x @ basis
         if rank == 0:
             simplices = np.zeros((1, 1), dtype=np.int64)
