@@ -393,3 +393,13 @@ def test_the_index_knows_the_extensions_the_readers_and_writers_claim():
     for kind in ("reader", "writer"):
         claimed = {e for d in registry.table(kind).values() for e in d.extensions}
         assert registry.extensions(kind) == claimed and ".bvh" in claimed
+
+
+def test_infuse_plugins_says_which_defaults_are_in_effect(no_user_settings, monkeypatch, capsys):
+    from infuse.cli import main
+
+    monkeypatch.setenv("INFUSE_DEFAULT_MAPPER", "names")
+    assert main(["plugins"]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last == ("defaults: mapper names (INFUSE_DEFAULT_MAPPER), retargeter default (built-in default), "
+                    "tts espeak (built-in default)")

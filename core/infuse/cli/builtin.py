@@ -110,6 +110,8 @@ def _plugins(args) -> int:
     widths = [max(len(r[i]) for r in rows) for i in range(4)]
     for r in rows:
         print("  ".join(c.ljust(w) for c, w in zip(r, widths)) + "  " + r[4])
+    defaults = [(kind, *registry.default_name(kind)) for kind in registry.KINDS]
+    print("defaults: " + ", ".join(f"{kind} {name} ({source})" for kind, name, source in defaults if name))
     return 0
 
 
