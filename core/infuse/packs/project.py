@@ -250,6 +250,8 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         use=_commands([("infuse packs", f"lists {name}"), (f"infuse pack show {name}", "clips, parameters, blend spaces, checks"),
                        (f"infuse infuse character.glb --packs {name}", "the pack retargeted onto a character, cached")]),
         release=_commands([("infuse pack build --wheel", "analyses the clips again, checks, writes dist/*.whl"),
+                           *([(f"infuse pack test {package}/pack --on character.glb",
+                               "speeds, drift and foot skate measured on a character")] if m.kind == "locomotion" else []),
                            (f"pip install dist/{wheel}-VERSION-py3-none-any.whl", ""), ("pytest tests", "")]),
         package=package, source=where, licence_note=note,
         usage=USAGE[m.kind].format(name=name), figures_start=FIGURES_START, figures=figures_block(pack),
