@@ -132,3 +132,28 @@ def test_pack_test_refuses_what_it_cannot_walk(argv, says, capsys):
     assert main(argv + ["--on", str(corpus_file("runxaway-models/Xbot.glb")), "--no-pictures"]) == 2
     err = capsys.readouterr().err
     assert says in err and "Traceback" not in err
+
+
+@pytest.fixture(scope="module")
+def bandai_masculinity(tmp_path_factory):
+    """Bandai dataset-1's masculinity style (walks forward, back, left and right, a run and a dash, all
+    recorded takes) imported and built as a pack."""
+    from infuse.packs import build_pack, import_bvh_folder
+
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    folder = tmp_path_factory.mktemp("packs") / "masculinity"
+    return build_pack(import_bvh_folder(source, folder, pattern="dataset-1_*_masculinity_*.bvh")).manifest.path.parent
+
+
+@pytest.mark.parametrize("which", ["sb_female", "bandai_masculinity"])
+def test_imported_packs_steer_exactly(xbot, which, request):
+    """Speeds over the pack's forward range within 5%, heading drift within 3 degrees over 8 s, walks to
+    targets 2 and 5 m away in six directions within 5 cm, paths at most 1.15x the straight line, no loops."""
+    from infuse.packs.walk_test import trial_pack
+
+    trial = trial_pack(infuse.Character("xbot", xbot), request.getfixturevalue(which), distances=(2.0, 5.0))
+    worst = trial.worst()
+    assert len(trial.speeds) == 5 and worst["speed_error"] < 0.05, [(s.asked, s.realized) for s in trial.speeds]
+    assert worst["drift_deg"] < 3.0
+    assert worst["miss_m"] < 0.05 and worst["path_ratio"] < 1.15 and worst["loops"] == 0
+    assert all(t.arrival_s is not None for t in trial.targets)
