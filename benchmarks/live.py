@@ -137,7 +137,7 @@ def run_count(count: int, seconds: float) -> dict:
 
 
 def flood(seconds: float) -> dict:
-    """The servers in process with 10 characters; 1,000 bad messages a second and a client that never reads."""
+    """The servers in process with 10 idle characters; 1,000 bad messages a second and a client that never reads."""
     from websockets.asyncio.client import connect
 
     from infuse_live.hub import Hub
@@ -151,7 +151,7 @@ def flood(seconds: float) -> dict:
     bad = ["{not json", json.dumps({"type": "bml", "character": "nobody", "bml": "<bml/>"}),
            json.dumps({"type": "bml", "character": "c0", "bml": "<bml id='x'><head></bml>"}), json.dumps({"type": "dance"})]
 
-    async def clients() -> tuple[int, int]:
+    async def clients() -> dict:
         url = f"ws://127.0.0.1:{server.port}/"
         async with connect(url, max_queue=1) as stalled, connect(url, max_size=None) as sender:
             await stalled.send(json.dumps({"type": "subscribe", "frames": True, "feedback": "all"}))
@@ -162,25 +162,27 @@ def flood(seconds: float) -> dict:
                 async for text in sender:
                     replies += json.loads(text)["type"] == "error"
             counter = asyncio.create_task(count())
-            sent, start = 0, time.perf_counter()
+            before, start, sent = live.stats.summary(), time.perf_counter(), 0
             while time.perf_counter() - start < seconds:
                 for _ in range(10):
                     await sender.send(bad[sent % len(bad)])
                     sent += 1
                 await asyncio.sleep(max(0.0, start + sent / 1000.0 - time.perf_counter()))
-            await asyncio.sleep(1.0)
+            flooded_s = time.perf_counter() - start
+            after = live.stats.summary()
+            while replies < sent and time.perf_counter() - start < seconds + 60.0:
+                await asyncio.sleep(0.05)
+            all_answered_s = time.perf_counter() - start
             counter.cancel()
-            return sent, replies
+            return {"sent": sent, "replies": replies, "seconds": flooded_s, "answered_s": all_answered_s,
+                    "shown": after["shown"] - before["shown"], "missed": after["missed"] - before["missed"]}
 
     with live:
         time.sleep(1.0)
-        before = live.stats.summary()
-        sent, replies = asyncio.run(clients())
-        after = live.stats.summary()
+        result = asyncio.run(clients())
     server.shutdown()
     thread.join(10)
-    return {"sent": sent, "replies": replies, "shown": after["shown"] - before["shown"],
-            "missed": after["missed"] - before["missed"], "seconds": seconds}
+    return result
 
 
 def main() -> None:
@@ -201,8 +203,9 @@ def main() -> None:
               f"{r['latency_ms'].max():.1f} |", flush=True)
     if not args.no_flood:
         f = flood(min(args.seconds, 10.0))
-        print(f"flood: {f['sent']} bad messages over {f['seconds']:g} s, {f['replies']} error replies; "
-              f"{f['shown']} frames shown meanwhile, {f['missed']} missed (10 characters, one client never reading)")
+        print(f"flood: {f['sent']} bad messages in {f['seconds']:.1f} s, {f['replies']} error replies "
+              f"(all by {f['answered_s']:.1f} s); meanwhile {f['shown']} frames shown, {f['missed']} missed "
+              f"(10 idle characters, one client never reading)")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 

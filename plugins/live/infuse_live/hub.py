@@ -26,6 +26,9 @@ from .protocol import Message, dumps, error_message, feedback_message, parse_mes
 
 #: Replies and feedback waiting for one client before it is dropped as stalled.
 MAX_PENDING = 2000
+#: Blocks whose sender is remembered for their feedback (the oldest forgotten first; a block's entry goes
+#: when it ends, so only blocks that never end, failed ones, pile up to this).
+MAX_OWNED_BLOCKS = 10_000
 #: Decimals sent for rotations (quaternion components) and positions (metres) in the pose stream.
 ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS = 6, 6, 4
 
@@ -177,15 +180,18 @@ class Hub:
 
     # -- out, from the loop thread --------------------------------------------------------------------
     def _feedback_from_loop(self, event) -> None:
-        owner = self._submitter
-        block = getattr(event, "block", None) or str(getattr(event, "id", "")).split(":")[0]
-        if owner is not None and block:
-            self.owners[block] = owner
-        self.loop.call_soon_threadsafe(self._deliver, event, owner if owner is not None else self.owners.get(block), block)
+        # on the loop thread: only hand over; the owners are kept on the event loop's thread
+        self.loop.call_soon_threadsafe(self._deliver, event, self._submitter)
 
-    def _deliver(self, event, owner: Client | None, block: str) -> None:
-        message = feedback_message(event)
-        text = dumps(message)
+    def _deliver(self, event, submitter: Client | None) -> None:
+        block = getattr(event, "block", None) or str(getattr(event, "id", "")).split(":")[0]
+        if submitter is not None and block:
+            self.owners.pop(block, None)
+            self.owners[block] = submitter
+            if len(self.owners) > MAX_OWNED_BLOCKS:
+                del self.owners[next(iter(self.owners))]
+        owner = self.owners.get(block)
+        text = dumps(feedback_message(event))
         for client in list(self.clients):
             if client.feedback == "all" or (client.feedback == "own" and client is owner):
                 client.put(text)
