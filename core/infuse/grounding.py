@@ -51,15 +51,17 @@ def foot_height(asset: Asset, mapping, motion: Motion | None = None, sole: float
 
 
 def grounded(motion: Motion, height: float) -> Motion:
-    """``motion`` with its root (joint 0) lowered by ``height`` metres (a negative height lifts it):
-    a clip whose feet go down to ``height`` then stands on y = 0."""
-    roots = motion.root_translations.copy()
-    roots[:, 1] -= height
+    """``motion`` with its roots lowered by ``height`` metres (a negative height lifts it): a clip
+    whose feet go down to ``height`` then stands on y = 0. Every root moves (a skeleton whose body
+    hangs from another root than joint 0 gets per-frame joint translations for it)."""
+    root = motion.root_translations.copy()
+    root[:, 1] -= height
+    roots = motion.skeleton.roots
     jt = motion.joint_translations
-    if jt is not None:
-        jt = jt.copy()
-        jt[:, 0, 1] -= height
-    return motion.replace(root_translations=roots, joint_translations=jt)
+    if jt is not None or len(roots) > 1:
+        jt = motion.local_translations()
+        jt[:, roots, 1] -= height
+    return motion.replace(root_translations=root, joint_translations=jt)
 
 
 def on_ground(asset: Asset, mapping, motion: Motion, level: float = 0.0) -> Motion:
