@@ -34,33 +34,40 @@ def build_parser(complete: Iterable[str] | None = None, listed: bool = True) -> 
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     if not listed:
         return parser
-    from .index import command_index, load_command
+    from .index import command_index  # reads installed metadata: not for --version
 
     if complete is None:
         from .. import registry
 
         commands = registry.commands()
-        offers = {name: None for name in commands}
+        help_lines = {name: command.help for name, command in commands.items()}
     else:
-        offers = command_index()
-        commands = {}
-        for name in set(complete):
-            command = load_command(name, offers[name]) if name in offers else None
-            if command is None and name in offers:  # the index was out of date and has been rebuilt
-                offers = command_index()
-                command = load_command(name, offers[name]) if name in offers else None
-            if command is not None:
-                commands[name] = command
-    for name in sorted(offers):
+        commands = _load_commands(set(complete))
+        help_lines = {name: offered[0].description for name, offered in command_index().items()}
+    for name in sorted(help_lines | {n: c.help for n, c in commands.items()}):
         command = commands.get(name)
-        if command is None:
-            help_line = offers[name][0].description
-            sub.add_parser(name, help=help_line, description=help_line)
-            continue
-        p = sub.add_parser(name, help=command.help, description=command.help)
-        command.add_arguments(p)
-        p.set_defaults(_run=command.run)
+        help_line = command.help if command is not None else help_lines[name]
+        p = sub.add_parser(name, help=help_line, description=help_line)
+        if command is not None:
+            command.add_arguments(p)
+            p.set_defaults(_run=command.run)
     return parser
+
+
+def _load_commands(names: set[str]) -> dict:
+    """The installed commands among ``names`` (name -> Command), importing only their plugins."""
+    from .index import command_index, load_command
+
+    found = {}
+    for name in names:
+        offered = command_index().get(name)
+        command = load_command(name, offered) if offered else None
+        if command is None and offered:  # the index was out of date and has been rebuilt
+            offered = command_index().get(name)
+            command = load_command(name, offered) if offered else None
+        if command is not None:
+            found[name] = command
+    return found
 
 
 def main(argv: list[str] | None = None) -> int:
