@@ -53,12 +53,12 @@ def _subparsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentP
 
 def _distributions() -> dict[str, str]:
     """Command name -> the distribution that registers it."""
+    plugins = registry.plugins()
+    plugins.load_kind("command")
     out: dict[str, str] = {}
-    caller = registry.plugins().manager.hook.infuse_commands
-    for impl in caller.get_hookimpls():
-        dist = impl.plugin_name.split(":", 1)[0]
-        for command in impl.function() or []:
-            out.setdefault(command.name, dist)
+    for plugin_name, commands in plugins.offers("command"):  # in precedence order, as the registry picks
+        for command in commands:
+            out.setdefault(command.name, plugin_name.split(":", 1)[0])
     return out
 
 
