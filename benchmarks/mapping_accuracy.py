@@ -38,6 +38,7 @@ ROOTS = {
     "wild": Path(os.environ.get("INFUSE_WILD", REPO.parent / "shared" / "wild")).resolve(),
 }
 CONFIDENT = 0.9
+BINS = (0.0, 0.6, 0.8, 0.9, 1.01)  # confidence bins of the calibration table
 
 
 def score(mapping: dict, expected: dict, alternatives: dict, names=CANONICAL_NAMES) -> tuple[int, int, list]:
@@ -73,6 +74,7 @@ class FileResult:
     refused: str | None = None
     wrong: list = field(default_factory=list)
     confident: tuple[int, int] = (0, 0)  # (right, entries) with confidence >= CONFIDENT
+    bins: list = field(default_factory=lambda: [[0, 0] for _ in BINS[:-1]])  # (right, entries) per bin
 
 
 @dataclass
@@ -120,11 +122,21 @@ def map_file(root: Path, label: dict, mapper: str):
         sure = [k for k in CANONICAL_NAMES if mapping.confidence.get(k, 0.0) >= CONFIDENT]
         wrong = {k for k, *_ in r.wrong}
         r.confident = (sum(k not in wrong for k in sure), len(sure))
+        count_bins(mapping.confidence, wrong, r.bins)
     return asset, r
 
 
-def variant_results(asset, label: dict, mapper: str, verbose: bool = False) -> list[tuple[str, int, float]]:
-    """(variant name, right joints, cpu seconds) of every generated variant of one skeleton."""
+def count_bins(confidence: dict, wrong: set, bins: list) -> None:
+    """Add each canonical entry to its confidence bin: [right, entries] per bin of :data:`BINS`."""
+    for k in CANONICAL_NAMES:
+        b = next(i for i in range(len(BINS) - 1) if confidence.get(k, 0.0) < BINS[i + 1])
+        bins[b][0] += k not in wrong
+        bins[b][1] += 1
+
+
+def variant_results(asset, label: dict, mapper: str, bins: list, verbose: bool = False) -> list[tuple[str, int, float]]:
+    """(variant name, right joints, cpu seconds) of every generated variant of one skeleton; the
+    entries of the variants that were mapped are added to the confidence ``bins``."""
     out = []
     poses = sample_poses(asset)
     animated = asset.meta.get("channel_joints")
@@ -132,11 +144,13 @@ def variant_results(asset, label: dict, mapper: str, verbose: bool = False) -> l
         meta = {"channel_joints": v.translate(animated)} if animated else {}
         t0 = time.process_time()
         try:
-            joints = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses, meta=meta).joints
+            mapping = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses, meta=meta)
         except infuse.NotHumanoidError:
-            joints = {}
+            mapping = None
         seconds = time.process_time() - t0
-        right, _, wrong = score(joints, v.mapping, v.alternatives)
+        right, _, wrong = score(mapping.joints if mapping else {}, v.mapping, v.alternatives)
+        if mapping is not None:
+            count_bins(mapping.confidence, {k for k, *_ in wrong}, bins)
         if verbose and wrong:
             print(f"  variant {v.name} of {label['file']}: {len(wrong)} wrong {wrong[:6]}", file=sys.stderr)
         out.append((v.name, right, seconds))
@@ -197,6 +211,7 @@ def main(argv=None) -> int:
     all_results: list[FileResult] = []
     variants: dict[str, list[int]] = {}
     variant_seconds: list[float] = []
+    variant_bins = [[0, 0] for _ in BINS[:-1]]
     seen: set = set()
     for name in data_sets:
         results = []
@@ -211,7 +226,7 @@ def main(argv=None) -> int:
             key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
             if "variants" in sets and label["humanoid"] and key not in seen:
                 seen.add(key)
-                for kind, right, seconds in variant_results(asset, label, args.mapper, args.verbose):
+                for kind, right, seconds in variant_results(asset, label, args.mapper, variant_bins, args.verbose):
                     acc = variants.setdefault(kind, [0, 0])
                     acc[0] += right
                     acc[1] += len(CANONICAL_NAMES)
@@ -231,7 +246,12 @@ def main(argv=None) -> int:
         print(f"| **all** | {_pct(a, b)} |")
     sure_right = sum(r.confident[0] for r in all_results)
     sure = sum(r.confident[1] for r in all_results)
-    print(f"\ncalibration: of the entries given confidence >= {CONFIDENT}, {_pct(sure_right, sure)} are right")
+    print(f"\ncalibration: of the entries given confidence >= {CONFIDENT}, {_pct(sure_right, sure)} are right\n")
+    print("| confidence | labelled files: entries right | generated variants: entries right |")
+    print("|---|---:|---:|")
+    for i in range(len(BINS) - 1):
+        a, b = sum(r.bins[i][0] for r in all_results), sum(r.bins[i][1] for r in all_results)
+        print(f"| {BINS[i]:.1f} - {min(BINS[i + 1], 1.0):.1f} | {_pct(a, b)} | {_pct(*variant_bins[i])} |")
     times = [r.seconds for r in all_results]
     near_70 = [r.seconds for r in all_results if 60 <= r.joints <= 80]
     if times:
