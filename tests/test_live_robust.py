@@ -109,6 +109,8 @@ def test_http_post_and_token(tmp_path):
         assert status == 400 and reply["error"] == "InputError"
         status, reply = post(json.dumps({"type": "call", "method": "nod", "character": "bob"}).encode())
         assert status == 200 and reply["type"] == "accepted"
+        status, reply = post(json.dumps({"type": "add", "file": "elsewhere.glb"}).encode())
+        assert status == 400 and "--allow-add" in reply["message"]
         status, reply = post(NOD.encode(), "?character=ann", token=None)
         assert status == 401
         status, reply = post(NOD.encode(), "?character=ann", token="wrong")

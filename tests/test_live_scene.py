@@ -120,3 +120,19 @@ def test_bad_bml_and_names_are_refused_before_the_loop():
         with pytest.raises(UsageError, match="three finite numbers"):
             live.move_target("ball", (0, float("nan"), 1))
         assert live.stats.commands == 0 and live.running
+
+
+def test_a_character_joins_the_running_scene():
+    with LiveScene(_scene()) as live:
+        frames = Frames(live)
+        time.sleep(0.3)
+        name = live.add_character(corpus_file("runxaway-models/Xbot.glb"), "carl", position=(1.5, 0.0, 1.0), facing="ann")
+        assert name == "carl" and "carl" in live.scene.characters
+        block = live.nod("carl", amount=0.8)
+        start = round(live.scene.scheduler.blocks[block].start_s * FPS)
+        frames.wait(start + 30)
+        head = live.scene.runtime.rig("carl").joint("skullbase")
+        turns = [quat.angle_between(frames.shown[i][1]["carl"][0][head], frames.shown[start][1]["carl"][0][head])
+                 for i in range(start, start + 30)]
+        assert max(turns) > np.radians(3)  # it nods
+        assert live.stats.summary()["missed"] <= 30  # joining costs at most half a second of frames

@@ -10,6 +10,7 @@ from infuse.kinematics import forward_kinematics
 from infuse.scene.command import build_scene
 from infuse.scene.scenefile import read_scene_file
 
+from corpus_data import corpus_file
 from live_support import BML_NS, Recorder, scene_file, serving
 from viewer_support import chromium_context
 
@@ -26,7 +27,7 @@ def test_live_page_moves_as_bml_arrives(tmp_path):
     rig = scene.runtime.rig("bob")
     wrist = rig.joint("r_wrist")
     name = rig.skeleton.names[wrist]
-    with serving(path) as (process, port, http_port), chromium_context() as browser:
+    with serving(path, "--allow-add") as (process, port, http_port), chromium_context() as browser:
         page = browser.new_page()
         problems = []
         page.on("pageerror", lambda error: problems.append(str(error)))
@@ -44,6 +45,13 @@ def test_live_page_moves_as_bml_arrives(tmp_path):
         shown, after = page.evaluate("([c, j]) => [window.infuseLive.frame, window.infuseLive.jointPosition(c, j)]",
                                      ["bob", name])
         after = np.array(after)
+        # a character joins: the page loads it and shows it where the stream puts it
+        added = client.request({"type": "add", "name": "carl", "file": str(corpus_file("runxaway-models/Xbot.glb")),
+                                "position": [1.5, 0.0, 1.0], "facing": "ann"}, timeout_s=120)
+        assert added["type"] == "accepted" and added["character"] == "carl", added
+        page.wait_for_function("window.infuseLive.jointPosition('carl', 'mixamorig:Hips') !== null", timeout=60_000)
+        time.sleep(0.5)
+        carl = np.array(page.evaluate("window.infuseLive.jointPosition('carl', 'mixamorig:Hips')"))
         page.screenshot(path=str(tmp_path / "live.png"))
         client.close()
     assert not problems, problems
@@ -54,3 +62,4 @@ def test_live_page_moves_as_bml_arrives(tmp_path):
     pose = frame["characters"]["bob"]
     _, positions = forward_kinematics(rig.skeleton, np.array(pose["rotations"]).reshape(1, -1, 4), np.array(pose["root"])[None])
     assert np.linalg.norm(positions[0, wrist] - after) < 0.01
+    assert np.linalg.norm(carl[[0, 2]] - [1.5, 1.0]) < 0.2  # Carl stands where he was put

@@ -156,19 +156,22 @@ class LiveScene:
     def warm_up(self, seconds: float = 0.5) -> None:
         """Prepare what each character's first walk and reach would prepare (pack bindings, clip tables)
         by playing them for ``seconds`` on a scratch runtime, so that the first one does not stall a frame."""
+        for name in list(self.scene.characters):
+            self._warm_up(name, seconds)
+
+    def _warm_up(self, name: str, seconds: float = 0.5) -> None:
         from .runtime import Runtime, controller, controller_components
 
         installed = controller_components()
         trials = (("locomotion", {"path": [(0.0, 1.0)]}), ("reach", {"target": (0.25, 1.2, 0.35), "hand": "auto"}))
-        for name, entry in self.scene.characters.items():
-            scratch = Runtime(self.fps, report=lambda character, message: None)
-            scratch.add_character(entry.character, name, self.scene.runtime.rig(name).mapping)
-            for kind, options in trials:
-                space = self.scene.pack_space(name, kind)
-                if space is not None and kind in installed:
-                    scratch.activate(name, controller(kind, pack=space, **options), 0.0)
-            if scratch.activities:
-                scratch.run(seconds)
+        scratch = Runtime(self.fps, report=lambda character, message: None)
+        scratch.add_character(self.scene.characters[name].character, name, self.scene.runtime.rig(name).mapping)
+        for kind, options in trials:
+            space = self.scene.pack_space(name, kind)
+            if space is not None and kind in installed:
+                scratch.activate(name, controller(kind, pack=space, **options), 0.0)
+        if scratch.activities:
+            scratch.run(seconds)
 
     def start(self) -> "LiveScene":
         """Start the loop thread (after :meth:`warm_up`): the scene's current time is now on the wall clock."""
@@ -449,6 +452,33 @@ class LiveScene:
     def reach(self, character: str, target, action: str = "touch", hand: str | None = None) -> str:
         """Reach for an object from the next frame."""
         return self._build("reach", character, target=target, action=action, hand=hand)
+
+    # -- the cast, live -------------------------------------------------------------------------------
+    def add_character(self, source, name: str | None = None, *, position=(0.0, 0.0, 0.0), facing=None,
+                      packs: Iterable[str] = (), voice: str | None = None, idle: bool | None = None) -> str:
+        """Add a character while the scene runs (see :meth:`Scene.add_character`); returns its name.
+
+        Its file is read and mapped on the caller's thread; it joins the scene between two frames, on the
+        loop thread, where its packs are infused (with the scene's ``pack_cache`` they are infused here
+        first, and the loop only reads them back); then its first walk and reach are prepared here."""
+        from .asset import Asset, Character
+        from .fileio import load
+        from .mapping import map_skeleton
+        from .packs import infuse_character
+
+        if isinstance(source, Character):
+            character = source
+        else:
+            asset = source if isinstance(source, Asset) else load(source)
+            stem = asset.path.stem if asset.path is not None else "character"
+            character = Character(name or stem, asset, map_skeleton(asset))
+        packs = (packs,) if isinstance(packs, str) else tuple(packs)
+        if packs and self.scene.pack_cache is not None:
+            infuse_character(character, list(packs), mapping=character.mapping, cache=self.scene.pack_cache)
+        added = self.call(lambda: self.scene.add_character(character, name, position=position, facing=facing, packs=packs,
+                                                            voice=voice, idle=idle), timeout_s=120.0)
+        self._warm_up(added)
+        return added
 
     # -- targets --------------------------------------------------------------------------------------
     def move_target(self, name: str, position) -> float:

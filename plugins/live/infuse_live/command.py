@@ -35,6 +35,8 @@ def add_arguments(p) -> None:
     p.add_argument("--vmc", metavar="HOST:PORT", action="append", default=[],
                    help="send one character over the VMC protocol (OSC/UDP) to a receiver, e.g. 127.0.0.1:39539 (repeatable)")
     p.add_argument("--vmc-character", metavar="NAME", help="the character sent over VMC (default: the first)")
+    p.add_argument("--allow-add", action="store_true",
+                   help="let clients add characters from files this machine can read (an 'add' message)")
     p.add_argument("--quiet", action="store_true", help="do not print warnings (clients still get them as feedback)")
 
 
@@ -76,8 +78,8 @@ def run(args) -> int:
 
     live = LiveScene(scene)
     site = LiveSite(scene, ensure_vendor(), Path(args.scene).name)
-    server = LiveServer(lambda loop: Hub(live, loop, lambda name: f"/characters/{name}.glb"), args.host, args.port,
-                        http_port, args.token, site)
+    server = LiveServer(lambda loop: Hub(live, loop, lambda name: f"/characters/{name}.glb", args.allow_add), args.host,
+                        args.port, http_port, args.token, site)
     senders = [VmcSender(live, vmc_character, host, port) for host, port in receivers]
     previous = {}
     if threading.current_thread() is threading.main_thread():

@@ -80,7 +80,8 @@ class Hub:
     """Connects clients to a :class:`~infuse.live.LiveScene` (see the module doc). ``model_url(name)``
     gives the URL of a character's model for the ``hello`` message."""
 
-    def __init__(self, live: LiveScene, loop: asyncio.AbstractEventLoop, model_url=lambda name: None):
+    def __init__(self, live: LiveScene, loop: asyncio.AbstractEventLoop, model_url=lambda name: None,
+                 allow_add: bool = False):
         self.live = live
         self.loop = loop
         self.clients: set[Client] = set()
@@ -90,6 +91,7 @@ class Hub:
         self._submitter: Client | None = None
         self._prepare = ThreadPoolExecutor(2, thread_name_prefix="infuse-live-prepare")
         self._model_url = model_url
+        self.allow_add = allow_add
         self._unsubscribe = [live.on_frame(self._frame_from_loop), live.on(None, self._feedback_from_loop)]
 
     def close(self) -> None:
@@ -114,14 +116,15 @@ class Hub:
 
     def hello(self) -> dict:
         scene = self.live.scene
-        characters = {}
-        for name, entry in scene.characters.items():
-            rig = scene.runtime.rig(name)
-            sk = rig.skeleton
-            characters[name] = {"joints": list(sk.names), "parents": [int(p) for p in sk.parents],
-                                "morphs": list(rig.morph_targets), "model": self._model_url(name)}
+        characters = {name: self.character_info(name) for name in list(scene.characters)}
         return {"type": "hello", "fps": self.live.fps, "frame": scene.runtime.frame, "time": scene.time,
                 "characters": characters, "targets": sorted(scene.targets), "objects": sorted(scene.objects)}
+
+    def character_info(self, name: str) -> dict:
+        """A character's joints (names), parents, morph targets and model URL."""
+        rig = self.live.scene.runtime.rig(name)
+        return {"joints": list(rig.skeleton.names), "parents": [int(p) for p in rig.skeleton.parents],
+                "morphs": list(rig.morph_targets), "model": self._model_url(name)}
 
     # -- messages in ----------------------------------------------------------------------------------
     async def handle(self, client: Client | None, text: str | bytes, where: str = "message") -> list[dict]:
@@ -155,6 +158,17 @@ class Hub:
             at = await asyncio.wrap_future(self.live.submit(self._move, fields["name"], fields["position"]))
             return {"type": "accepted", "request": request, "target": fields["name"], "time": at,
                     "frame": round(at * self.live.fps)}
+        if message.type == "add":
+            if not self.allow_add:
+                raise UsageError("adding characters is off; start infuse serve with --allow-add")
+            options = {k: fields[k] for k in ("position", "facing", "packs") if k in fields}
+            name = await self.loop.run_in_executor(
+                self._prepare, lambda: self.live.add_character(fields["file"], fields.get("name"), **options))
+            info = {"type": "character", "name": name, **self.character_info(name)}
+            for other in list(self.clients):
+                if other is not client:
+                    other.put(info)
+            return {**info, "type": "accepted", "request": request, "character": name}
         if message.type == "bml":
             blocks = await self.loop.run_in_executor(self._prepare, self.live.parse, fields.get("character"), fields["bml"])
             function = self.live.schedule, blocks

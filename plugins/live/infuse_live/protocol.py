@@ -10,10 +10,13 @@ Client to server (one JSON object per WebSocket text message, or an HTTP POST bo
   there from the next frame on;
 - ``{"type": "subscribe", "frames": true, "feedback": "all"}``: receive the pose stream; feedback of
   every block (default: only of the blocks this client sent);
-- ``{"type": "status"}``: frame counts and timings.
+- ``{"type": "status"}``: frame counts and timings;
+- ``{"type": "add", "name": "carl", "file": "carl.glb", "position": [x, y, z], "facing": ..., "packs": [...]}``:
+  a character joins the running scene (only when the server allows it: ``--allow-add``).
 
 ``request`` is optional and echoed in the reply. Server to client: ``hello`` on connect (characters with
-their joints, parents, morph targets and model URL), ``accepted`` (block ids and the frame they start
+their joints, parents, morph targets and model URL), ``character`` (one that joined, the same facts),
+``accepted`` (block ids and the frame they start
 on), ``feedback`` (``kind``: blockProgress, syncPointProgress, warningFeedback, blockPrediction, the event's
 fields, and ``xml``: the BML feedback element), ``frame`` (pose stream), ``audio`` (an utterance's WAV
 when it starts, ``stop`` when cut), ``status`` and ``error`` (``error``: the exception type, ``message``).
@@ -37,7 +40,7 @@ METHODS = {
     "walk_to": {"target", "manner", "speed"},
     "reach": {"target", "action", "hand"},
 }
-TYPES = ("bml", "call", "target", "subscribe", "status")
+TYPES = ("bml", "call", "target", "subscribe", "status", "add")
 #: Largest message accepted, bytes.
 MAX_MESSAGE_BYTES = 1 << 20
 
@@ -77,7 +80,8 @@ def parse_message(text: str | bytes, where: str = "message") -> Message:
 
 def _check(kind: str, fields: dict, where: str) -> None:
     allowed = {"bml": {"bml", "character"}, "call": {"method", "character", "args"}, "target": {"name", "position"},
-               "subscribe": {"frames", "feedback"}, "status": set()}[kind]
+               "subscribe": {"frames", "feedback"}, "status": set(),
+               "add": {"name", "file", "position", "facing", "packs"}}[kind]
     for key in fields:
         if key not in allowed:
             raise InputError(where, key, f"unknown field for a {kind!r} message (fields: {', '.join(sorted(allowed)) or 'none'})")
@@ -101,15 +105,28 @@ def _check(kind: str, fields: dict, where: str) -> None:
     if kind == "target":
         if not (isinstance(fields.get("name"), str) and fields["name"] and ":" not in fields["name"]):
             raise InputError(where, "name", "a target is named by a non-empty string without ':'")
-        position = fields.get("position")
-        if not (isinstance(position, list) and len(position) == 3 and
-                all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in position)):
+        if not _point(fields.get("position")):
+            raise InputError(where, "position", "expected [x, y, z]: three finite numbers, metres")
+    if kind == "add":
+        if not (isinstance(fields.get("file"), str) and fields["file"]):
+            raise InputError(where, "file", "expected the character's file (a path on the server)")
+        if "name" in fields and not (isinstance(fields["name"], str) and fields["name"]):
+            raise InputError(where, "name", "a character is named by a non-empty string")
+        packs = fields.get("packs", [])
+        if not (isinstance(packs, list) and all(isinstance(p, str) for p in packs)):
+            raise InputError(where, "packs", "expected a list of pack names")
+        if "position" in fields and not _point(fields["position"]):
             raise InputError(where, "position", "expected [x, y, z]: three finite numbers, metres")
     if kind == "subscribe":
         if "frames" in fields and not isinstance(fields["frames"], bool):
             raise InputError(where, "frames", "expected true or false")
         if fields.get("feedback", "own") not in ("own", "all", "none"):
             raise InputError(where, "feedback", "expected 'own', 'all' or 'none'")
+
+
+def _point(value) -> bool:
+    return isinstance(value, list) and len(value) == 3 and \
+        all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
 
 
 def feedback_message(event) -> dict:

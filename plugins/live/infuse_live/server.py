@@ -122,7 +122,7 @@ class LiveServer:
             pass
 
     # -- HTTP -----------------------------------------------------------------------------------------
-    def post(self, body: bytes, query: dict, timeout_s: float = 10.0) -> dict:
+    def post(self, body: bytes, query: dict, timeout_s: float = 150.0) -> dict:
         """Answer one HTTP POST (from an HTTP server thread): a JSON message, or BML XML."""
         text = body.decode("utf-8", errors="replace").lstrip()
         if text.startswith("<"):

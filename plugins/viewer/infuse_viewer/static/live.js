@@ -143,6 +143,10 @@ async function connect() {
         $('status').textContent = `${characters.size} characters at ${message.fps} fps`;
         api.ready = true;
       }).catch((error) => { api.error = String(error); $('status').textContent = `Error: ${error}`; });
+    } else if (message.type === 'character') {  // one that joined the running scene
+      loading = loading.then(() => loadCharacter(message.name, { ...message, model: message.model + location.search }))
+        .then(() => { $('status').textContent = `${characters.size} characters`; })
+        .catch((error) => { api.error = String(error); });
     } else if (message.type === 'frame') {
       latest = message;
     } else if (message.type === 'audio') {
