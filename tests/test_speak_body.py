@@ -14,7 +14,7 @@ from infuse.grounding import foot_height
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse_gltf.container import parse_file
-from infuse_lipsync.body import beats, idle_body
+from infuse_lipsync.body import beats, idle_body, merged_tracks
 
 RPM = "talkinghead/avatars/brunette-t.glb"
 VROID = "talkinghead/avatars/vroid.glb"
@@ -85,3 +85,13 @@ def test_a_character_that_is_not_a_humanoid_keeps_only_its_face():
     fox = infuse.load(corpus_file("projectlookingglass-glb/Fox.glb"))
     idle, body = idle_body(fox, 30, 30.0)
     assert idle is None and body.startswith("face only (")
+
+
+def test_merged_morph_tracks_keep_the_blinks_under_the_speech():
+    times = np.arange(4) / 30.0
+    idle = {"times": times, "weights": {"eyeBlinkLeft": np.array([0.0, 1.0, 0.2, 0.0])}}
+    speech = {"times": times, "weights": {"eyeBlinkLeft": np.zeros(4), "viseme_aa": np.array([0.0, 0.5, 0.9, 0.1])}}
+    merged = merged_tracks(idle, speech)
+    assert merged["weights"]["eyeBlinkLeft"].tolist() == [0.0, 1.0, 0.2, 0.0]
+    assert merged["weights"]["viseme_aa"].tolist() == [0.0, 0.5, 0.9, 0.1]
+    assert merged_tracks(None, speech) is speech and merged_tracks(idle, None) is idle

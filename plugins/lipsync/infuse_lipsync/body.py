@@ -3,8 +3,9 @@
 A scene (:class:`infuse.scene.Scene`) stands the character in the idle clip of a behaviour pack
 (weight on both feet, arms down, however the file's rest pose holds them), with its default
 breathing and blinks, talk-mode saccades and a small nod on the speech's beats. The speech itself
-is laid over the result (:func:`with_face`): its face joints and morph weights win over the idle's,
-so the mouth says exactly what the lip sync made.
+is laid over the result: its face joints replace the idle's (:func:`with_face`) and a morph
+target both drive takes the larger weight (:func:`merged_tracks`), so the mouth says exactly what
+the lip sync made and the eyes still blink.
 """
 from __future__ import annotations
 
@@ -83,12 +84,15 @@ def with_face(body: Motion, face: Motion | None, joints) -> Motion:
 
 def merged_tracks(body: dict | None, face: dict | None) -> dict | None:
     """One morph-weight track (``{"times", "weights"}``) from the idle's and the speech's on the same
-    frames; the speech's weights win for targets both drive."""
+    frames; a target both drive takes the larger weight (the speech writes its neutral channels
+    at 0, which must not hold the eyelids open through a blink)."""
     if not body or not body.get("weights"):
         return face
     if not face or not face.get("weights"):
         return body
     n = min(len(body["times"]), len(face["times"]))
     weights = {k: np.asarray(v)[:n] for k, v in body["weights"].items()}
-    weights.update({k: np.asarray(v)[:n] for k, v in face["weights"].items()})
+    for k, v in face["weights"].items():
+        v = np.asarray(v)[:n]
+        weights[k] = np.maximum(weights[k], v) if k in weights else v
     return {"times": np.asarray(face["times"])[:n], "weights": weights}
