@@ -10,8 +10,9 @@
 - ``"contacts"`` (default): the same IK, but foot contacts are detected on the source (speed and
   height normalized by leg length) and planted points are pinned exactly, at the height they rest
   at in the plain transfer, with the correction gliding between contacts; the ball of the foot
-  rides on the ankle, heading where the transferred foot heads and lifting off as the source's
-  ball does.
+  rides on the ankle, heading square to the foot's side-to-side axis and lifting off as the
+  source's ball does, and is left where the transferred foot carries it once the source's ball is
+  well off the ground.
 
 ``limb_scaling`` adds per-limb scaling by extension for the arms: a straightening source arm
 brings the target's wrist to the source's reach scaled by the arm-length ratio.
