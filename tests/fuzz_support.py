@@ -197,14 +197,26 @@ def built_seeds(fmt: str) -> list[Seed]:
     return []
 
 
+def _first_frames(amc: bytes, frames: int) -> bytes:
+    """An AMC motion cut after its first ``frames`` frames (a frame starts with a line holding its number)."""
+    lines = amc.splitlines(keepends=True)
+    starts = [i for i, line in enumerate(lines) if line.strip().isdigit()]
+    return b"".join(lines[:starts[frames]]) if len(starts) > frames else amc
+
+
 def corpus_seeds(fmt: str, roots: list[Path], max_bytes: int) -> list[Seed]:
-    """Seeds read in place from the corpus and wild folders: files up to ``max_bytes``, with the files a
-    reader needs beside them (the ``.asf`` of an ``.amc``)."""
+    """Seeds read in place from the corpus and wild folders: files up to ``max_bytes`` (longer motions
+    cut to their first frames), with the files a reader needs beside them (the ``.asf`` of an ``.amc``)."""
     seeds = []
     for root in roots:
         for pattern in FORMATS[fmt].corpus:
             for path in sorted(root.glob(pattern)):
-                if not path.is_file() or path.stat().st_size > max_bytes or "labels" in path.parts:
+                if not path.is_file() or "labels" in path.parts:
+                    continue
+                data = path.read_bytes()
+                if fmt == "amc" and len(data) > max_bytes:
+                    data = _first_frames(data, 30)
+                if len(data) > max_bytes:
                     continue
                 beside = ()
                 if fmt == "amc":
@@ -213,7 +225,7 @@ def corpus_seeds(fmt: str, roots: list[Path], max_bytes: int) -> list[Seed]:
                         continue
                     beside = (("case.asf", subject.read_bytes()),)
                 name = "case" + (".skeleton.xml" if fmt == "ogre" else path.suffix.lower())
-                seeds.append(Seed(str(path.relative_to(root)), name, path.read_bytes(), beside))
+                seeds.append(Seed(str(path.relative_to(root)), name, data, beside))
     return seeds
 
 
@@ -306,8 +318,9 @@ def _with_json(data: bytes, edit) -> bytes:
     return b"glTF" + struct.pack("<II", 2, 12 + len(chunks)) + chunks
 
 
-def mutate(data: bytes, ops) -> bytes:
-    """``data`` after the operations ``ops``: a sequence of ``(kind, where, n)`` (see :data:`KINDS`)."""
+def mutate(data: bytes, ops, max_bytes: int = MAX_CASE_BYTES) -> bytes:
+    """``data`` after the operations ``ops``: a sequence of ``(kind, where, n)`` (see :data:`KINDS`), cut
+    to ``max_bytes``."""
     for kind, where, n in ops:
         at = _at(data, where)
         rng = random.Random(n)
@@ -325,7 +338,7 @@ def mutate(data: bytes, ops) -> bytes:
         elif kind == "repeat" and data:
             span = data[at:at + 1 + n % 256] or data[-1:]
             times = rng.choice((2, 10, 1000, 5000, 100000))
-            data = data[:at] + span * min(times, MAX_CASE_BYTES // len(span)) + data[at:]
+            data = data[:at] + span * min(times, max_bytes // len(span)) + data[at:]
         elif kind == "number":
             m = _nth_match(_NUMBER, data, where)
             if m:
@@ -341,8 +354,8 @@ def mutate(data: bytes, ops) -> bytes:
             data = _with_json(data, lambda doc: _json_mutation(doc, where, n))
         elif kind == "nest":
             data = _nest(data, at, rng)
-        if len(data) > MAX_CASE_BYTES:
-            data = data[:MAX_CASE_BYTES]
+        if len(data) > max_bytes:
+            data = data[:max_bytes]
     return data
 
 
@@ -556,11 +569,14 @@ def _serve(conn, memory_bytes: int, paths: list[str]) -> None:
     import sys
 
     sys.path[:0] = [p for p in paths if p not in sys.path]
-    os.environ["INFUSE_QUIET"] = "1"
     import infuse.cli  # noqa: F401  (imported before the limit: the plugins' own start-up is not the case's)
     from infuse import registry
 
     registry.readers(), registry.writers(), registry.commands()
+    with tempfile.TemporaryDirectory(prefix="infuse-fuzz-warm-") as folder:  # lazy imports happen here, not in a case
+        for fmt in ("bvh", "glb", "bml", "scene"):
+            for seed in built_seeds(fmt):
+                run_case(fmt, seed.name, seed.data, seed.beside, Path(folder))
     if memory_bytes:
         limit = _vm_bytes() + memory_bytes
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
@@ -594,7 +610,19 @@ class Worker:
         parent, child = context.Pipe()
         tests = str(Path(__file__).resolve().parent)
         self._process = context.Process(target=_serve, args=(child, self.memory_bytes, [tests] + sys.path), daemon=True)
-        self._process.start()
+        # One thread per library and few malloc arenas in the child: a thread pool started lazily inside
+        # a case would count its stacks and arenas against the case's memory limit.
+        settings = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "MALLOC_ARENA_MAX": "2"}
+        saved = {name: os.environ.get(name) for name in settings}
+        os.environ.update(settings)
+        try:
+            self._process.start()
+        finally:
+            for name, value in saved.items():
+                if value is None:
+                    os.environ.pop(name)
+                else:
+                    os.environ[name] = value
         child.close()
         self._conn = parent
 

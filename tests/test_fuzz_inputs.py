@@ -15,9 +15,10 @@ from fuzz_support import FORMATS, GOOD, KINDS, Worker, built_seeds, corpus_seeds
 
 #: Cases per format; the text formats that parse in milliseconds get more.
 CASES = {"bml": 300, "scene": 300}
-DEFAULT_CASES = 150
-#: Largest corpus file used as a seed here (the long run takes bigger ones).
+DEFAULT_CASES = 100
+#: Largest corpus file used as a seed here, and largest mutated case (the long run takes bigger ones).
 MAX_SEED_BYTES = 64_000
+MAX_CASE_BYTES = 256_000
 OPS = st.lists(st.tuples(st.sampled_from(KINDS), st.floats(0.0, 1.0), st.integers(0, 2 ** 32 - 1)), min_size=1, max_size=4)
 
 
@@ -50,7 +51,7 @@ def test_mutated_input_is_a_typed_error_or_a_clean_load(fmt, worker):
               suppress_health_check=list(HealthCheck), print_blob=False)
     @given(st.integers(0, len(seeds) - 1), OPS)
     def case(index, ops):
-        outcome = worker.run(fmt, seeds[index], mutate(seeds[index].data, ops))
+        outcome = worker.run(fmt, seeds[index], mutate(seeds[index].data, ops, MAX_CASE_BYTES))
         outcomes.append(outcome.kind)
         assert outcome.kind in GOOD, f"{outcome.kind}: {outcome.detail} (seed {seeds[index].label}, ops {ops})"
 

@@ -175,7 +175,11 @@ class _Reader:
         path = Path(expand(self.text(value, place)))
         if not path.is_absolute():
             path = self.path.parent / path
-        if not path.is_file():
+        try:
+            found = path.is_file()
+        except OSError as exc:  # a name too long for the file system, say
+            self.fail(place, f"cannot be a file name: {exc.strerror or exc}")
+        if not found:
             self.fail(place, f"file not found: {path}")
         return path
 
