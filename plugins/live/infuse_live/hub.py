@@ -152,8 +152,9 @@ class Hub:
             client.feedback = fields.get("feedback", client.feedback)
             return {"type": "subscribed", "request": request, "frames": client.frames, "feedback": client.feedback}
         if message.type == "status":
+            mine = {"frames_skipped": client.skipped} if client is not None else {}  # replaced before it read them
             return {"type": "status", "request": request, "frame": self.live.scene.runtime.frame,
-                    "time": self.live.scene.time, **self.live.stats.summary(), "clients": len(self.clients)}
+                    "time": self.live.scene.time, **self.live.stats.summary(), "clients": len(self.clients), **mine}
         if message.type == "target":
             at = await asyncio.wrap_future(self.live.submit(self._move, fields["name"], fields["position"]))
             return {"type": "accepted", "request": request, "target": fields["name"], "time": at,
