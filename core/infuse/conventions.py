@@ -74,6 +74,8 @@ def guess_unit(size: float, candidates: tuple[str, ...] = ("m", "cm", "mm")) -> 
     if not np.isfinite(size) or size <= 0:
         return "m"
     misses = [unit_miss(size, u) for u in candidates]
+    if not all(np.isfinite(misses)):  # a size no unit makes human (1e308 file units): the first candidate
+        return candidates[0]
     best = min(misses)
     return next(u for u, miss in zip(candidates, misses) if miss - best < UNIT_TIE_LOG)
 
