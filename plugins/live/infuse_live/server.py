@@ -175,7 +175,7 @@ class _HttpHandler(BaseHTTPRequestHandler):
         if found is None:
             self._send(HTTPStatus.NOT_FOUND, b"not found\n", "text/plain")
             return
-        self._send(HTTPStatus.OK, *found)
+        self._send(HTTPStatus.OK, *found, shared=True)
 
     def do_POST(self):
         if not self._allowed():
@@ -195,9 +195,12 @@ class _HttpHandler(BaseHTTPRequestHandler):
             HTTPStatus.SERVICE_UNAVAILABLE if reply.get("error") == "BusyError" else HTTPStatus.BAD_REQUEST
         self._send(status, dumps(reply).encode("utf-8"), "application/json")
 
-    def _send(self, status, body: bytes, mime: str) -> None:
+    def _send(self, status, body: bytes, mime: str, shared: bool = False) -> None:
+        """Answer; ``shared``: pages from other origins may read it too (models and scripts for one's own page)."""
         self.send_response(status)
         self.send_header("Content-Type", mime)
+        if shared:
+            self.send_header("Access-Control-Allow-Origin", "*")
         self.send_header("Content-Length", str(len(body)))
         self.send_header("Cache-Control", "no-store")
         self.end_headers()
