@@ -286,7 +286,10 @@ class Locomotion(Controller):
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
-        rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times)
+        advance = np.mod(np.diff(phase, append=phase[-1:]), 1.0)  # each frame's step of the phase (the last: its predecessor's)
+        if len(advance) > 1:
+            advance[-1] = advance[-2]
+        rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times, 0.5 * advance)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
@@ -324,11 +327,12 @@ class Locomotion(Controller):
         if jt is not None:
             pose.set_translations(np.arange(1, jt.shape[1]), jt[:, 1:], weight, job.mode)
 
-    def _blend(self, b, w, phase, standing, times):
+    def _blend(self, b, w, phase, standing, times, half_frame):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
         (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.stance_of`) of the moving clips
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
-        faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``)."""
+        faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``).
+        ``half_frame`` (F,): half a frame's advance of the phase."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
         stepping = used[b["stepping"][used]]
@@ -359,7 +363,11 @@ class Locomotion(Controller):
             contact += flags * contact_w[:, None, None]
             support += flags.max(axis=2) * contact_w[:, None]
         if stepping.size:
-            flags, share = stance_of(events, phase, HANDOVER)
+            # A frame holds the half-frame either side of it (as the events were found): a foot lands
+            # in the frame whose span holds its strike, and is pinned from there.
+            early = events.copy()
+            early[:, :, 0] -= half_frame[:, None]
+            flags, share = stance_of(early, phase, HANDOVER)
             contact += flags * ws.sum(axis=1)[:, None, None]
             support += share * ws.sum(axis=1)[:, None]
         if fade.size:
