@@ -27,7 +27,7 @@ want() { [ -z "$ONLY" ] || [[ "$1" == "$ONLY"* ]]; }
 
 if want quickstart-walk; then  # index.md, quickstart.md
   "$INFUSE" retarget "$WALK" --to "$XBOT" -o "$WORK/xbot_walk.glb"
-  "$INFUSE" render "$WORK/xbot_walk.glb" --clip dataset-1_walk_normal_001 -o "$OUT/quickstart-walk.png" --strip 6
+  "$INFUSE" render "$WORK/xbot_walk.glb" -o "$OUT/quickstart-walk.png" --strip 6
 fi
 
 if want render-mesh; then  # render.md
