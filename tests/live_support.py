@@ -8,6 +8,7 @@ import json
 import os
 import re
 import signal
+import struct
 import subprocess
 import sys
 import threading
@@ -15,6 +16,7 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 from websockets.asyncio.client import connect
 
 from corpus_data import corpus_file
@@ -90,6 +92,22 @@ def serving(scene: Path, *options: str, timeout_s: float = 120.0):
         assert "stopped after" in "".join(lines), "".join(lines) + stderr
 
 
+def decode_binary_frame(data: bytes) -> dict:
+    """A binary frame message as the JSON one reads (lists of floats), decoded independently of the server."""
+    (length,) = struct.unpack_from("<I", data, 0)
+    header = json.loads(data[4:4 + length])
+    values = np.frombuffer(data, dtype="<f4", offset=4 + length)
+    characters, at = {}, 0
+    for name, joints, morphs in header["characters"]:
+        rotations = values[at:at + 4 * joints]
+        root = values[at + 4 * joints:at + 4 * joints + 3]
+        weights = values[at + 4 * joints + 3:at + 4 * joints + 3 + morphs]
+        characters[name] = {"rotations": rotations.tolist(), "root": root.tolist(), "morphs": weights.tolist()}
+        at += 4 * joints + 3 + morphs
+    assert at == len(values)
+    return {"type": "frame", "frame": header["frame"], "time": header["time"], "characters": characters}
+
+
 class Recorder:
     """A WebSocket client on its own event loop thread: :meth:`send` a message, :meth:`wait_for` a reply;
     every message received is kept in :attr:`messages` (frames in :attr:`frames` by frame number)."""
@@ -117,7 +135,7 @@ class Recorder:
             self._socket = socket
             self._opened.set()
             async for text in socket:
-                message = json.loads(text)
+                message = decode_binary_frame(text) if isinstance(text, bytes) else json.loads(text)
                 if message["type"] == "frame":
                     self.frames[message["frame"]] = message
                 else:

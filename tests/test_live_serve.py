@@ -47,6 +47,8 @@ def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
         hello = client.wait_for(lambda m: m["type"] == "hello")
         assert set(hello["characters"]) == {"bob", "ann"}
         assert client.request({"type": "subscribe", "frames": True})["frames"] is True
+        packed = Recorder(port)  # the same stream as binary messages
+        assert packed.request({"type": "subscribe", "frames": True, "format": "binary"})["format"] == "binary"
 
         def target(position):
             reply = client.request({"type": "target", "name": "ball", "position": position})
@@ -79,7 +81,15 @@ def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
         time.sleep(0.3)
         status = client.request({"type": "status"})
         client.close()
+        packed.close()
 
+    both = sorted(set(client.frames) & set(packed.frames))
+    assert len(both) > 50
+    for f in both:
+        for name in ("bob", "ann"):
+            for key in ("rotations", "root", "morphs"):
+                assert np.allclose(packed.frames[f]["characters"][name][key], client.frames[f]["characters"][name][key],
+                                   atol=2e-6 if key != "morphs" else 1e-4)
     feedback = [m for m in client.messages if m["type"] == "feedback"]
     for block in ("look", "talk", "grab", "cut"):
         assert any(m.get("block") == block for m in feedback), block

@@ -12,6 +12,7 @@ import asyncio
 import base64
 import io
 import itertools
+import struct
 import wave
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
@@ -41,9 +42,10 @@ class Client:
         self.send = send  # async (text) -> None
         self.drop = drop  # ends the connection at once, unsent data discarded
         self.frames = False
+        self.format = "json"
         self.feedback = "own"
         self.pending: deque[str] = deque()
-        self.frame: str | None = None
+        self.frame: str | bytes | None = None
         self.skipped = 0
         self.closed = False
         self.wake = asyncio.Event()
@@ -58,10 +60,10 @@ class Client:
             self.pending.append(doc if isinstance(doc, str) else dumps(doc))
         self.wake.set()
 
-    def put_frame(self, text: str) -> None:
+    def put_frame(self, message: str | bytes) -> None:
         if self.frame is not None:
             self.skipped += 1
-        self.frame = text
+        self.frame = message
         self.wake.set()
 
     async def write(self) -> None:
@@ -150,7 +152,9 @@ class Hub:
                 raise UsageError("subscribe needs a WebSocket connection")
             client.frames = fields.get("frames", client.frames)
             client.feedback = fields.get("feedback", client.feedback)
-            return {"type": "subscribed", "request": request, "frames": client.frames, "feedback": client.feedback}
+            client.format = fields.get("format", client.format)
+            return {"type": "subscribed", "request": request, "frames": client.frames, "feedback": client.feedback,
+                    "format": client.format}
         if message.type == "status":
             mine = {"frames_skipped": client.skipped} if client is not None else {}  # replaced before it read them
             return {"type": "status", "request": request, "frame": self.live.scene.runtime.frame,
@@ -242,12 +246,11 @@ class Hub:
         self.loop.call_soon_threadsafe(self._send_frame, frame)
 
     def _send_frame(self, frame: LiveFrame) -> None:
-        watching = [c for c in self.clients if c.frames and not c.closed]
-        if not watching:
-            return
-        text = dumps(frame_message(frame))
-        for client in watching:
-            client.put_frame(text)
+        encoded = {}
+        for client in [c for c in self.clients if c.frames and not c.closed]:
+            if client.format not in encoded:
+                encoded[client.format] = binary_frame(frame) if client.format == "binary" else dumps(frame_message(frame))
+            client.put_frame(encoded[client.format])
 
 
 def frame_message(frame: LiveFrame) -> dict:
@@ -258,6 +261,17 @@ def frame_message(frame: LiveFrame) -> dict:
                                   "root": np.round(c.root, POSITION_DECIMALS).tolist(),
                                   "morphs": np.round(c.morphs, MORPH_DECIMALS).tolist()}
                            for name, c in frame.characters.items()}}
+
+
+def binary_frame(frame: LiveFrame) -> bytes:
+    """A frame as one binary message: a little-endian uint32 N, N bytes of JSON ``{"frame", "time",
+    "characters": [[name, J, M], ...]}``, then for each character in that order float32 (little-endian)
+    ``rotations`` (J*4), ``root`` (3) and ``morphs`` (M), unrounded."""
+    layout = [[name, len(c.rotations), len(c.morphs)] for name, c in frame.characters.items()]
+    header = dumps({"frame": frame.index, "time": frame.time_s, "characters": layout}).encode("utf-8")
+    values = [part for c in frame.characters.values() for part in (c.rotations.ravel(), c.root, c.morphs)]
+    body = np.concatenate(values).astype("<f4").tobytes() if values else b""
+    return struct.pack("<I", len(header)) + header + body
 
 
 def _wav(samples: np.ndarray, rate: int) -> bytes:

@@ -8,8 +8,9 @@ Client to server (one JSON object per WebSocket text message, or an HTTP POST bo
   (:data:`METHODS`: ``say``, ``gaze``, ``head``, ``nod``, ``shake``, ``expression``, ``walk_to``, ``reach``);
 - ``{"type": "target", "name": "ball", "position": [x, y, z]}``: a named target (added when new) stands
   there from the next frame on;
-- ``{"type": "subscribe", "frames": true, "feedback": "all"}``: receive the pose stream; feedback of
-  every block (default: only of the blocks this client sent);
+- ``{"type": "subscribe", "frames": true, "feedback": "all", "format": "binary"}``: receive the pose
+  stream (as JSON ``frame`` messages, or binary messages: :func:`binary_frame`); feedback of every block
+  (default: only of the blocks this client sent);
 - ``{"type": "status"}``: frame counts and timings;
 - ``{"type": "add", "name": "carl", "file": "carl.glb", "position": [x, y, z], "facing": ..., "packs": [...]}``:
   a character joins the running scene (only when the server allows it: ``--allow-add``).
@@ -41,6 +42,7 @@ METHODS = {
     "reach": {"target", "action", "hand"},
 }
 TYPES = ("bml", "call", "target", "subscribe", "status", "add")
+FORMATS = ("json", "binary")
 #: Largest message accepted, bytes.
 MAX_MESSAGE_BYTES = 1 << 20
 
@@ -80,7 +82,7 @@ def parse_message(text: str | bytes, where: str = "message") -> Message:
 
 def _check(kind: str, fields: dict, where: str) -> None:
     allowed = {"bml": {"bml", "character"}, "call": {"method", "character", "args"}, "target": {"name", "position"},
-               "subscribe": {"frames", "feedback"}, "status": set(),
+               "subscribe": {"frames", "feedback", "format"}, "status": set(),
                "add": {"name", "file", "position", "facing", "packs"}}[kind]
     for key in fields:
         if key not in allowed:
@@ -122,6 +124,8 @@ def _check(kind: str, fields: dict, where: str) -> None:
             raise InputError(where, "frames", "expected true or false")
         if fields.get("feedback", "own") not in ("own", "all", "none"):
             raise InputError(where, "feedback", "expected 'own', 'all' or 'none'")
+        if fields.get("format", "json") not in FORMATS:
+            raise InputError(where, "format", f"expected one of {', '.join(FORMATS)}")
 
 
 def _point(value) -> bool:

@@ -128,18 +128,37 @@ async function playAudio(message) {
 }
 $('audio').addEventListener('click', () => { audio.context?.resume(); $('audio').hidden = true; });
 
+// A binary frame: uint32 header length, JSON header {frame, time, characters: [[name, J, M]...]}, then
+// float32 rotations (J*4), root (3) and morphs (M) per character (see infuse_live/hub.py binary_frame).
+function decodeFrame(buffer) {
+  const length = new DataView(buffer).getUint32(0, true);
+  const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, length)));
+  const values = new Float32Array(buffer.slice(4 + length));
+  const characters = {};
+  let at = 0;
+  for (const [name, joints, morphs] of header.characters) {
+    characters[name] = { rotations: values.subarray(at, at + 4 * joints),
+      root: values.subarray(at + 4 * joints, at + 4 * joints + 3),
+      morphs: values.subarray(at + 4 * joints + 3, at + 4 * joints + 3 + morphs) };
+    at += 4 * joints + 3 + morphs;
+  }
+  return { type: 'frame', frame: header.frame, time: header.time, characters };
+}
+
 async function connect() {
   const config = await (await fetch('/live.json' + location.search)).json();
   const token = new URLSearchParams(location.search).get('token');
   const url = `ws://${location.hostname}:${config.websocket_port}/` + (token ? `?token=${encodeURIComponent(token)}` : '');
   const socket = api.socket = new WebSocket(url);
+  socket.binaryType = 'arraybuffer';
   let loading = Promise.resolve();
   socket.onmessage = (event) => {
+    if (event.data instanceof ArrayBuffer) { latest = decodeFrame(event.data); return; }
     const message = JSON.parse(event.data);
     if (message.type === 'hello') {
       loading = Promise.all(Object.entries(message.characters).map(([name, info]) =>
         loadCharacter(name, { ...info, model: info.model + location.search }))).then(() => {
-        socket.send(JSON.stringify({ type: 'subscribe', frames: true, feedback: 'none' }));
+        socket.send(JSON.stringify({ type: 'subscribe', frames: true, feedback: 'none', format: 'binary' }));
         $('status').textContent = `${characters.size} characters at ${message.fps} fps`;
         api.ready = true;
       }).catch((error) => { api.error = String(error); $('status').textContent = `Error: ${error}`; });
