@@ -6,6 +6,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+from .errors import PARSE_ERRORS, InfuseError, InputError
 from .mesh import SkinnedMesh
 from .motion import Motion
 from .skeleton import Skeleton
@@ -48,7 +49,16 @@ class Asset:
         Empty for a file without meshes, or whose meshes the reader cannot decode (it says why in
         ``meta["warnings"]``).
         """
-        return tuple(self.mesh_loader()) if self.mesh_loader is not None else ()
+        if self.mesh_loader is None:
+            return ()
+        try:
+            return tuple(self.mesh_loader())
+        except InfuseError:
+            raise
+        except RecursionError:
+            raise InputError(self.path, "meshes", "cannot be decoded: nesting too deep") from None
+        except PARSE_ERRORS as exc:  # a malformed mesh the reader's own checks missed
+            raise InputError(self.path, "meshes", f"cannot be decoded: {type(exc).__name__}: {exc}") from exc
 
     @property
     def num_frames(self) -> int:

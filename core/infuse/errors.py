@@ -7,8 +7,15 @@ cannot be used for what was asked (:class:`UnusableInputError` and subclasses su
 """
 from __future__ import annotations
 
+import json
 import re
+import struct
+import zlib
 from pathlib import Path
+
+#: Exceptions that, raised while parsing, mean the file is malformed rather than a bug in infuse.
+PARSE_ERRORS = (ValueError, IndexError, KeyError, TypeError, AttributeError, UnicodeDecodeError, struct.error,
+                json.JSONDecodeError, zlib.error, EOFError, OverflowError)
 
 _LINE_BREAKS = re.compile(r"\s*[\r\n]+\s*")
 

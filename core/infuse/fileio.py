@@ -1,10 +1,7 @@
 """Loading and saving files through whichever reader or writer plugin handles their type."""
 from __future__ import annotations
 
-import json
 import math
-import struct
-import zlib
 from pathlib import Path
 
 import numpy as np
@@ -12,12 +9,9 @@ import numpy as np
 from . import references, registry
 from .asset import Asset
 from .atomic import atomic_path
-from .errors import InfuseError, InputError, UnsupportedFormatError
+from .errors import PARSE_ERRORS, InfuseError, InputError, UnsupportedFormatError
 from .plugin_types import normalized_extension
 
-# Exceptions that, raised while parsing, mean the file is malformed rather than a bug in infuse.
-_PARSE_ERRORS = (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, struct.error,
-                 json.JSONDecodeError, zlib.error, EOFError, OverflowError)
 
 
 def _pick(kind: str, table: dict, path: Path, format: str | None):
@@ -60,7 +54,7 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
         raise
     except RecursionError:
         raise InputError(path, None, f"cannot be read as {reader.name}: nesting too deep") from None
-    except _PARSE_ERRORS as exc:
+    except PARSE_ERRORS as exc:
         raise InputError(path, None, f"cannot be read as {reader.name}: {type(exc).__name__}: {exc}") from exc
 
 
