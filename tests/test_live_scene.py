@@ -97,12 +97,20 @@ def test_replace_stops_speech_and_lip_sync_at_its_frame():
 
 
 def test_memory_stays_bounded_and_a_full_queue_says_so():
-    live = LiveScene(_scene(), keep_s=0.5)
+    live = LiveScene(_scene(idle=False), keep_s=0.5)
     with live:
+        frames = Frames(live)
+        live.say("ann", "Hi.")
         time.sleep(3.2)
         kept = len(live.scene.runtime.motion("bob").local_rotations)
         assert kept <= int(1.5 * FPS) + 1, kept  # half a second kept, forgotten once a second
         assert live.scene.runtime.frame >= 2.5 * FPS
+        assert live.scene.speech.utterances == [None]  # said, then let go
+        assert len(live.scene.activities) == 0 and len(live.scene.runtime.activities) <= 2
+        block = live.say("ann", "Hi.")  # said again: synthesized anew, lip-synced
+        start = round(live.scene.scheduler.blocks[block].start_s * FPS)
+        frames.wait(start + 20)
+        assert max(np.abs(frames.shown[i][1]["ann"][1]).max() for i in range(start, start + 20)) > 0.05
     with pytest.raises(UsageError, match="stopped"):
         live.submit(print)
     waiting = LiveScene(_scene(), queue_size=2)  # not started: nothing takes commands

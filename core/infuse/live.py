@@ -114,7 +114,7 @@ class _PreparedSpeech:
         if timing is None:
             with self.lock:
                 timing = self.cache.time_speech(text, marks, voice, language)
-            self.timings[key] = timing
+                self.timings[key] = timing
         return timing
 
 
@@ -151,6 +151,7 @@ class LiveScene:
         self._last: LiveFrame | None = None
         self._movable: dict[str, MovableTarget] = {}
         self._warm = False
+        self._made_before = 0
 
     # -- the loop -------------------------------------------------------------------------------------
     def warm_up(self, seconds: float = 0.5) -> None:
@@ -296,14 +297,25 @@ class LiveScene:
             callback(frame)
 
     def _forget(self) -> None:
-        """Keep memory bounded: old frames, ended activities, delivered feedback."""
+        """Keep memory bounded: old frames, ended activities and utterances, delivered feedback. An
+        utterance goes once no activity plays it and it was made before the last call (one prepared on a
+        caller's thread may not be scheduled yet)."""
         scene = self.scene
-        scene.runtime.forget(self.keep_s)
-        before = scene.time - self.keep_s
-        for key, activity in list(scene.activities.items()):
-            if activity.end_s is not None and activity.end_s < before:
-                del scene.activities[key]
-        del scene.feedback.log[:-1000]
+        scene.forget(self.keep_s)
+        cache = scene.speech
+        playing = {(a.source.parameters.get("tts") or {}).get("utterance") for a in scene.activities.values()
+                   if a.source is not None and a.controller.speaks}
+        if not self._speech.lock.acquire(blocking=False):
+            return  # a synthesis is running on a caller's thread: let utterances go next time
+        try:
+            released = {i for i in range(self._made_before) if cache.utterances[i] is not None and i not in playing}
+            if released:
+                self._speech.timings = {k: t for k, t in self._speech.timings.items()
+                                        if (t.details or {}).get("utterance") not in released}
+                cache.release(released)
+            self._made_before = len(cache.utterances)
+        finally:
+            self._speech.lock.release()
 
     # -- commands -------------------------------------------------------------------------------------
     def submit(self, function: Callable, *args) -> Future:

@@ -622,6 +622,20 @@ class Scene:
         last = (self.runtime.frame - 1) / self.fps
         self.scheduler.advance(last + 1e-9)
 
+    def forget(self, keep_s: float) -> None:
+        """Keep memory bounded in a scene that runs for hours (a live one): drop the frames evaluated more
+        than ``keep_s`` seconds ago (:meth:`motion` and :meth:`audio` then start later), the activities and
+        utterances that ended before then, and all but the last 1,000 feedback events of the log."""
+        before = self.time - float(keep_s)
+        self.runtime.forget(keep_s)
+        for key, activity in list(self.activities.items()):
+            if activity.end_s is not None and activity.end_s < before:
+                del self.activities[key]
+        for name, spoken in self._spoken.items():
+            self._spoken[name] = [s for s in spoken if s.start_s + s.utterance.duration_s >= before
+                                  and (s.stop_s is None or s.stop_s >= before)]
+        del self.feedback.log[:-1000]
+
     # -- results --------------------------------------------------------------------------------------
     def motion(self, character: str, clip: str = "scene"):
         """The character's animation so far, a :class:`~infuse.Motion` on its own skeleton (placed in the scene)."""

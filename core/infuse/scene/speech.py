@@ -100,6 +100,14 @@ class SpeechCache:
         mark_times = {m: float(utterance.marks.get(m, 0.0)) for m, _ in marks}
         return SpeechTiming(float(utterance.duration_s), mark_times, getattr(utterance, "engine", "") or "tts", details)
 
+    def release(self, indices) -> None:
+        """Let the utterances at ``indices`` go (a scene that runs for hours): their entries become None and
+        their texts are synthesized anew if they are spoken again."""
+        released = {int(i) for i in indices if 0 <= int(i) < len(self.utterances)}
+        for i in released:
+            self.utterances[i] = None
+        self._keys = {key: i for key, i in self._keys.items() if i not in released}
+
     def utterance(self, parameters: dict) -> Utterance | None:
         """The utterance a ``<speech>`` activation's ``parameters`` were timed with, or None (estimated)."""
         index = (parameters.get("tts") or {}).get("utterance")
