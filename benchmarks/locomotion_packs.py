@@ -6,7 +6,8 @@ Bandai Namco dataset-1 (feminine, masculinity, normal) and dataset-2 (feminine, 
 folders; with the built-in ``locomotion-male`` and ``locomotion-female``. Each is tried on Xbot and on
 SmartBody's Brad with :func:`infuse.packs.walk_test.trial_pack` (speeds over the pack's forward range,
 heading drift over 8 s straight, walks to targets 2, 4 and 6 m away at 0, 45, 90, 135, 180 and -90
-degrees, foot skate): the table shows the worst figure of each measure; ``--full`` prints every trial.
+degrees, foot skate on the straight walks and on the walks to targets, with their starts, turns on the
+spot and stops): the table shows the worst figure of each measure; ``--full`` prints every trial.
 
 Targets: speed within 5%, drift at most 3 degrees, miss at most 5 cm, path at most 1.15x the straight
 line, no loops, foot skate at most 1.5 cm/m.
@@ -62,8 +63,8 @@ def main() -> int:
         return 2
     characters = {n: infuse.load(CORPUS / f) for n, f in CHARACTERS.items()}
     print(f"{'pack':<18} {'character':<6} {'speed err':>9} {'drift':>6} {'miss':>7} {'path':>5} {'loops':>5} "
-          f"{'skate':>6} {'s':>5}")
-    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6}")
+          f"{'skate':>6} {'to tgt':>6} {'s':>5}")
+    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6} {'cm/m':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         for name, pack in packs(Path(tmp), args.only).items():
             for who, asset in characters.items():
@@ -71,7 +72,8 @@ def main() -> int:
                 trial = trial_pack(infuse.Character(who, asset), pack)
                 w = trial.worst()
                 print(f"{name:<18} {who:<6} {100 * w['speed_error']:9.1f} {w['drift_deg']:6.1f} {w['miss_m']:7.3f} "
-                      f"{w['path_ratio']:5.2f} {w['loops']:5d} {w['skate_cm_m']:6.2f} {time.perf_counter() - start:5.1f}",
+                      f"{w['path_ratio']:5.2f} {w['loops']:5d} {w['skate_cm_m']:6.2f} {w['target_skate_cm']:6.1f} "
+                      f"{time.perf_counter() - start:5.1f}",
                       flush=True)
                 if args.full:
                     print(report(trial))

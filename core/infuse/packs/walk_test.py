@@ -15,7 +15,8 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
   from the target; path ratio = length of the pelvis's ground path (smoothed over one second, which
   takes out the sway of the gait) over the straight line; turned = how much that path's direction
   of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
-  more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm.
+  more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
+  whole walk (its start, turn on the spot and stop), cm in all.
 
 Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
 """
@@ -68,6 +69,7 @@ class TargetTrial:
     path_ratio: float
     turned_deg: float
     arrival_s: float | None
+    skate_cm: float = float("nan")
 
     @property
     def loops(self) -> bool:
@@ -93,13 +95,15 @@ class PackTrial:
     mapping: object = None
 
     def worst(self) -> dict:
-        """The worst figure of each measure (speed error as a share, degrees, metres, ratio, cm/m)."""
+        """The worst figure of each measure (speed error as a share, degrees, metres, ratio, cm/m; cm on
+        a walk to a target)."""
         return {"speed_error": max((abs(s.error) for s in self.speeds), default=float("nan")),
                 "drift_deg": abs(self.drift_deg),
                 "miss_m": max((t.miss_m for t in self.targets), default=float("nan")),
                 "path_ratio": max((t.path_ratio for t in self.targets), default=float("nan")),
                 "loops": sum(t.loops for t in self.targets),
-                "skate_cm_m": max((s.skate_cm_m for s in self.speeds), default=float("nan"))}
+                "skate_cm_m": max((s.skate_cm_m for s in self.speeds), default=float("nan")),
+                "target_skate_cm": max((t.skate_cm for t in self.targets), default=float("nan"))}
 
 
 def forward_speeds(space) -> np.ndarray:
@@ -192,7 +196,7 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
     _, (_, g_pos) = walks[0]
     facing = _window_mean(np.unwrap(headings(g_pos[:int((DRIFT_S + SETTLE_S) * FPS)], index)), window)
     trial.drift_deg = float(np.degrees(facing[-1 - window // 2] - facing[settle + window // 2]))
-    for (d, a), (m, (_, g_pos)) in zip(targets, walks[1:]):
+    for (d, a), (m, (g_rot, g_pos)) in zip(targets, walks[1:]):
         ground = g_pos[:, base][:, [0, 2]]
         goal = np.array([d * math.sin(math.radians(a)), d * math.cos(math.radians(a))])
         end = ground[-int(FPS / 2):].mean(axis=0)
@@ -205,7 +209,8 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
         tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
         turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
-        trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival))
+        skate = foot_skate(g_pos, foot_contacts(m, mapping, fk=(g_rot, g_pos)), base).travel
+        trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival, 100.0 * skate))
         trial.paths.append(smooth)
     return trial
 
@@ -217,11 +222,13 @@ def report(trial: PackTrial) -> str:
     for s in trial.speeds:
         lines.append(f"    {s.asked:5.2f} -> {s.realized:5.2f}  {100 * s.error:+6.1f}%  skate {s.skate_cm_m:5.2f}")
     lines.append(f"  heading drift over {DRIFT_S:g} s straight at {trial.drift_speed:.2f} m/s: {trial.drift_deg:+.1f} deg")
-    lines.append("  walk to a target: distance (m), angle (deg) -> miss (m), path / straight line, turned (deg), arrival (s):")
+    lines.append("  walk to a target: distance (m), angle (deg) -> miss (m), path / straight line, turned (deg), arrival (s), "
+                 "foot skate (cm):")
     for t in trial.targets:
         arrival = f"{t.arrival_s:5.1f}" if t.arrival_s is not None else "never"
         flag = "  LOOP" if t.loops else ""
-        lines.append(f"    {t.distance:3.0f} {t.angle_deg:+5.0f} -> {t.miss_m:6.3f}  {t.path_ratio:5.2f}  {t.turned_deg:6.0f}  {arrival}{flag}")
+        lines.append(f"    {t.distance:3.0f} {t.angle_deg:+5.0f} -> {t.miss_m:6.3f}  {t.path_ratio:5.2f}  {t.turned_deg:6.0f}  {arrival}  "
+                     f"{t.skate_cm:5.1f}{flag}")
     for note in trial.notes:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
