@@ -155,7 +155,47 @@ def _hands_on_ground(view: SkeletonView, plan) -> bool:
     return leg_height > 0 and float(hands.mean()) - ground < 0.2 * leg_height
 
 
+#: The body-part roles a joint's name may carry for each canonical name (by its part after the side).
+SLOT_ROLES: dict[str, frozenset[str]] = {
+    "base": frozenset({"hips"}), "spine1": frozenset({"spine", "chest", "hips"}),
+    "spine2": frozenset({"spine", "chest"}), "spine3": frozenset({"spine", "chest"}), "spine4": frozenset({"neck"}),
+    "spine5": frozenset({"neck"}), "skullbase": frozenset({"head"}), "eyeball": frozenset({"eye"}),
+    "acromioclavicular": frozenset({"clavicle", "shoulder"}), "sternoclavicular": frozenset({"clavicle", "shoulder"}),
+    "shoulder": frozenset({"upperarm", "shoulder"}), "elbow": frozenset({"forearm"}),
+    "forearm": frozenset({"forearm"}), "wrist": frozenset({"hand"}), "hip": frozenset({"thigh"}),
+    "knee": frozenset({"shin", "legpart"}), "ankle": frozenset({"foot"}), "forefoot": frozenset({"toe"}),
+    "toe": frozenset({"toe", "toe_end"}),
+    **{f: frozenset({f, "finger"}) for f in ("thumb", "index", "middle", "ring", "pinky")},
+}
+NAME_SILENT_CAP = 0.75   # confidence at most, when the joint's name names no body part
+NAME_CONTRARY_CAP = 0.6  # ... when it names another one: an entry to check
+
+
+def _expected_roles(name: str) -> frozenset[str] | None:
+    part = name[2:] if name[:2] in ("l_", "r_") else "eyeball" if name.startswith("eyeball") else name
+    return SLOT_ROLES.get(part) or SLOT_ROLES.get(part.rstrip("1234"))  # spine1 / thumb1 -> thumb
+
+
+EXPECTED_ROLES = {n: _expected_roles(n) for n in ALL_NAMES}
+
+
+def _name_agreement(result: _Result) -> None:
+    """Cap each mapped entry's confidence by what its joint's name says: the geometry alone, or
+    against the name, is less sure than both together."""
+    for name, j in result.joint.items():
+        expected = EXPECTED_ROLES.get(name)
+        if expected is None:
+            continue
+        roles = result.view.info[j].roles
+        if not roles:
+            result.conf[name] = min(result.conf[name], NAME_SILENT_CAP)
+        elif not roles & expected:
+            result.conf[name] = min(result.conf[name], NAME_CONTRARY_CAP)
+            result.reason[name] += "; its name suggests another body part (check it)"
+
+
 def _finish(skeleton, result: _Result, overall: float) -> Mapping:
+    _name_agreement(result)
     names = skeleton.names
     joints = {n: names[j] for n, j in result.joint.items()}
     conf = dict(result.conf)
