@@ -248,7 +248,7 @@ class Locomotion(Controller):
         if not st:
             st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
                       anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
-                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
+                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), pin_yaw=np.zeros(2), yaw_offset=np.zeros(2), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
@@ -276,6 +276,9 @@ class Locomotion(Controller):
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
         st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + turn[-1] * dt))
         spinning = np.abs(turn - vt) > SPIN_STEP
+        # The heading's turn the blend does not show, spun at the root (radians, from the walk's start).
+        spun = st.get("spun", 0.0) + np.concatenate(([0.0], np.cumsum((turn - vt)[:-1] * dt)))
+        st["spun"] = float(spun[-1] + (turn[-1] - vt[-1]) * dt)
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
@@ -306,7 +309,7 @@ class Locomotion(Controller):
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
         if self.pin_feet and len(b["legs"]) == 2:
-            self._pin(b, st, rot, root, jt, contact, forward, dt)
+            self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
         self._write(job, active, rot, root, jt)
 
     @staticmethod
@@ -430,10 +433,13 @@ class Locomotion(Controller):
             k = b["balls_on_ankles"]
             rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
-    def _pin(self, b, st, rot, root, jt, contact, forward, dt) -> None:
+    def _pin(self, b, st, rot, root, jt, contact, forward, dt, spun) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
-        (the foot pivoting about it, its heel rising further when the leg would not reach); fade the
-        correction out after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction."""
+        (the foot pivoting about it, its heel rising further when the leg would not reach); a planted
+        foot does not turn with the part of the heading's turn spun at the root (turning on the spot,
+        the body turns over it; the clips' own turning shows in their feet already); fade the
+        corrections out after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's
+        direction; ``spun`` (F,) the turn spun at the root so far (radians)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot, g_pos = chain_fk(b["skeleton"], rot, root, jt, b["pin_joints"])
@@ -451,11 +457,14 @@ class Locomotion(Controller):
         goals = ankle_pos.copy()
         weights = np.zeros(anchors.shape)
         rises = np.zeros(ankle_pos.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
+        yaws = np.zeros(anchors.shape)  # turn about +Y keeping a planted foot as it landed (radians)
         changes = np.diff(np.concatenate((st["anchor"][None], anchors)), axis=0) != 0
         for k in range(2):
             goal, weight, rise, point, ankle = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k]
+            yaw_k = yaws[:, k]
             prev = int(st["anchor"][k])
             offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
+            pin_yaw, yaw_offset = float(st["pin_yaw"][k]), float(st["yaw_offset"][k])
             bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
                 kind = int(anchors[s, k])
@@ -465,43 +474,48 @@ class Locomotion(Controller):
                     age = released + dt * np.arange(1, e - s + 1)
                     fade = 1.0 - _ease(age / RELEASE_S)
                     goal[s:e] = ankle[s:e] + offset * fade[:, None]
+                    yaw_k[s:e] = yaw_offset * fade
                     if lifted.any():
                         rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:
-                        offset, lifted = np.zeros(3), np.zeros(3)
+                        offset, lifted, yaw_offset = np.zeros(3), np.zeros(3), 0.0
                 else:
                     if kind != prev and prev == FREE:
                         # The anchor lands: it stays where the corrected foot puts it now.
                         pin = point[s] + offset * (1.0 - _ease(released / RELEASE_S))
                         pin[1] = 0.0
+                        pin_yaw = spun[s] + yaw_offset * (1.0 - _ease(released / RELEASE_S))
                     elif kind != prev:
                         # The anchor passes from the ankle to the ball (or back): the new one stays
                         # where the corrected foot had it a frame ago, so the foot does not move on
                         # with the blend's drift at the switch.
                         pin = points_before[s, k] + offset
                         pin[1] = 0.0
-                    goal[s:e] = pin + ankle[s:e] - point[s:e]
+                    yaw_k[s:e] = pin_yaw - spun[s:e]
+                    goal[s:e] = pin + quat.rotate(yaw(yaw_k[s:e]), ankle[s:e] - point[s:e])
                     goal[s:e, 1] = ankle[s:e, 1]
                     weight[s:e] = 1.0
                     if kind == BALL:
                         goal[s:e], rise[s:e] = _heel_rise(g_rot[s:e, k, 2], g_pos[s:e, k, :3], goal[s:e],
                                                           goal[s:e] + feet_pos[s:e, k, 1] - ankle[s:e])
-                    offset, lifted = goal[e - 1] - ankle[e - 1], rise[e - 1]
+                    offset, lifted, yaw_offset = goal[e - 1] - ankle[e - 1], rise[e - 1], float(yaw_k[e - 1])
                 prev = kind
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
+            st["pin_yaw"][k], st["yaw_offset"][k] = pin_yaw, yaw_offset
         st["last"] = feet_pos[-1].copy()
         if rises.any():
             g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
+        feet_rot = quat.multiply(yaw(yaws), g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
         solving = [k for k in range(2) if weights[:, k].any()]
         if len(solving) == 1:
             k = solving[0]
             solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"][k], goals[:, k], weight=weights[:, k], pole=forward,
-                       chains=(g_rot[:, k, :4], g_pos[:, k, :4]), distance=False)
+                       end_rotation=feet_rot[:, k], chains=(g_rot[:, k, :4], g_pos[:, k, :4]), distance=False)
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goals, weight=weights, pole=forward,
-                       chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
+                       end_rotation=feet_rot, chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
 
 
 def _prepare(space, clips, sk, legs) -> dict:
