@@ -272,3 +272,44 @@ def test_bodies_without_legs_or_arms_are_refused(drop, renamed):
     with pytest.raises(infuse.NotHumanoidError) as err:
         map_skeleton(variant.skeleton)
     assert "two legs and two arms" in err.value.reason
+
+
+def test_winged_body_is_refused():
+    """Two legs and two wings (a bird): the arms' chains are named wings, so not a humanoid."""
+    arm_parts = ("acromioclavicular", "shoulder", "elbow", "forearm", "wrist")
+    names = {f"{s}_{p}": f"Wing{k}.{s.upper()}" for s in "lr" for k, p in enumerate(arm_parts, start=1)}
+    fingers = tuple(n for n in CANONICAL_NAMES if n[2:-1] in ("thumb", "index", "middle", "ring", "pinky"))
+    variant = _canonical_variant(names=names, drop=fingers)
+    with pytest.raises(infuse.NotHumanoidError) as err:
+        map_skeleton(variant.skeleton)
+    assert "wings" in err.value.reason and "Wing1.L" in err.value.reason
+
+
+def test_thighs_on_a_ground_root():
+    """Legs parented to a ground root at the feet's level, the pelvis carrying only the spine: the
+    body stands and the pelvis is the base."""
+    sk = canonical_skeleton(extras=False)
+    names = list(sk.names) + ["ground"]
+    pos = np.concatenate((sk.rest_global_positions, [[0.0, 0.0, 0.0]]))
+    parents = [int(p) for p in sk.parents] + [-1]
+    ground = len(names) - 1
+    parents[sk.index["base"]] = ground
+    for side in "lr":
+        parents[sk.index[f"{side}_hip"]] = ground
+    skeleton = skeleton_variants._topological(names, parents, list(pos), None)
+    new = skeleton_variants._from_positions(skeleton[0], skeleton[1], skeleton[2])
+    mapping = map_skeleton(new)
+    for name in BODY_NAMES:
+        assert mapping[name] == name, (name, mapping[name], mapping.reasons[name])
+
+
+def test_mirrored_side_names_follow_the_geometry():
+    """Every left joint named as the right one and vice versa: the sides follow the body, and the
+    reasons say that the names disagree."""
+    sk = canonical_skeleton(extras=False)
+    label = {"mapping": {n: n for n in CANONICAL_NAMES}}
+    variant = skeleton_variants.mirrored_names(sk, None, label)
+    mapping = map_skeleton(variant.skeleton)
+    assert mapping["l_hip"] == "r_hip" and mapping["r_wrist"] == "l_wrist"
+    assert "opposite" in mapping.reasons["l_hip"] and "geometry decides" in mapping.reasons["l_hip"]
+    assert mapping.confidence["l_hip"] <= 0.85

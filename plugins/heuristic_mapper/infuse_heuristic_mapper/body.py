@@ -93,8 +93,8 @@ def _role_votes(view: SkeletonView, pair: LimbPair) -> tuple[float, float, float
 def legs_top(view: SkeletonView, legs: LimbPair) -> np.ndarray:
     """(3,) where the legs start: the joint they hang from, or the middle of their first joints when
     they hang from far away (thighs parented to a ground root)."""
-    stem = 0.5 * (view.bone[legs.a] + view.bone[legs.b])
-    if stem > 0.5 * legs.length:
+    stem = 0.5 * (view.bone[legs.a] + view.bone[legs.b])  # LimbPair.length includes it
+    if stem > 0.5 * (legs.length - stem):
         return 0.5 * (view.P[legs.a] + view.P[legs.b])
     return view.P[legs.branch]
 

@@ -119,6 +119,11 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
         one = "arms" if plan.legs is None else "legs"
         raise NotHumanoidError(file, f"only one pair of mirror-image limbs (taken as {one}) among its {view.n} "
                                "joints: a humanoid has two legs and two arms on a trunk")
+    named_otherwise = [view.names[j] for j in (plan.arms.a, plan.arms.b, plan.legs.a, plan.legs.b)
+                       if view.info[j].flagged("secondary")]
+    if named_otherwise:
+        raise NotHumanoidError(file, f"the limbs taken as its arms or legs are named as wings, tails, hair or cloth "
+                               f"({', '.join(named_otherwise)}): not two legs and two arms (a winged creature)")
     if cos > STANDING_COS:
         angle = np.degrees(np.arccos(np.clip(cos, -1, 1)))
         raise NotHumanoidError(file, f"its legs do not point away from its head (they are {angle:.0f} degrees "
