@@ -84,6 +84,11 @@ def test_bad_input_flood_and_a_stalled_client_leave_the_frame_rate_alone(tmp_pat
         # and the scene still takes BML
         nod = watcher.request({"type": "bml", "character": "ann", "bml": NOD})
         assert nod["type"] == "accepted" and nod["blocks"] == ["nod"]
+        # a warning found while the speech is synthesized ahead goes to the client that asked
+        said = flood.request({"type": "call", "method": "say", "character": "ann", "args": {"text": "Hello.", "voice": "no-such-voice"}})
+        assert said["type"] == "accepted", said
+        warning = flood.wait_for(lambda m: m.get("kind") == "warningFeedback" and "no-such-voice" in m["description"])
+        assert "unknown" in warning["description"] and warning["xml"].startswith("<warningFeedback")
         watcher.close()
         flood.close()
         stalled.close()

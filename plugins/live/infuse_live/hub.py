@@ -13,6 +13,7 @@ import base64
 import io
 import itertools
 import struct
+import threading
 import wave
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
@@ -90,7 +91,7 @@ class Hub:
         self.owners: dict[str, Client] = {}
         self.speaking: dict[str, tuple[str, float]] = {}  # block -> (character, start) of audio sent
         self._numbers = itertools.count(1)
-        self._submitter: Client | None = None
+        self._local = threading.local()  # the client a thread acts for (its feedback goes there)
         self._prepare = ThreadPoolExecutor(2, thread_name_prefix="infuse-live-prepare")
         self._model_url = model_url
         self.allow_add = allow_add
@@ -175,11 +176,13 @@ class Hub:
                     other.put(info)
             return {**info, "type": "accepted", "request": request, "character": name}
         if message.type == "bml":
-            blocks = await self.loop.run_in_executor(self._prepare, self.live.parse, fields.get("character"), fields["bml"])
+            blocks, _ = await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.parse,
+                                                        fields.get("character"), fields["bml"])
             function = self.live.schedule, blocks
         else:
             method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
-            await self.loop.run_in_executor(self._prepare, self.live.prepare_call, method, character, arguments)
+            await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.prepare_call, method,
+                                            character, arguments)
             function = self.live.builder_call, method, character, arguments
         ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function))
         ids = ids if isinstance(ids, list) else [ids]
@@ -190,26 +193,30 @@ class Hub:
         return self.live.place_target(name, position)
 
     def _on_behalf(self, client: Client | None, function, *args):
-        """Run ``function`` on the loop thread with the feedback it gives routed to ``client``."""
-        self._submitter = client
+        """Run ``function`` (on the loop thread, or a preparing one) with the feedback it gives routed to
+        ``client``; returns its result and the scene time."""
+        self._local.submitter = client
         try:
             return function(*args), self.live.scene.time
         finally:
-            self._submitter = None
+            self._local.submitter = None
 
     # -- out, from the loop thread --------------------------------------------------------------------
     def _feedback_from_loop(self, event) -> None:
-        # on the loop thread: only hand over; the owners are kept on the event loop's thread
-        self.loop.call_soon_threadsafe(self._deliver, event, self._submitter)
+        # on the thread that emits it (the loop's, or a preparing one's): only hand over; the owners are
+        # kept on the event loop's thread
+        self.loop.call_soon_threadsafe(self._deliver, event, getattr(self._local, "submitter", None))
 
     def _deliver(self, event, submitter: Client | None) -> None:
+        """Feedback to the client whose request gave it (while scheduling or preparing), else to the client
+        that sent its block; and to every client that wants all of it."""
         block = getattr(event, "block", None) or str(getattr(event, "id", "")).split(":")[0]
-        if submitter is not None and block:
+        if submitter is not None and event.kind == "blockPrediction":
             self.owners.pop(block, None)
             self.owners[block] = submitter
             if len(self.owners) > MAX_OWNED_BLOCKS:
                 del self.owners[next(iter(self.owners))]
-        owner = self.owners.get(block)
+        owner = submitter if submitter is not None else self.owners.get(block)
         text = dumps(feedback_message(event))
         for client in list(self.clients):
             if client.feedback == "all" or (client.feedback == "own" and client is owner):
