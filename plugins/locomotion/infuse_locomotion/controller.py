@@ -285,7 +285,7 @@ class Locomotion(Controller):
         wm = np.where(b["idle"][None], 0.0, w)
         wm = (wm + SLOW_EPS * b["slowest"][None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
-        phase, stride, standing = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
+        phase, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -293,6 +293,12 @@ class Locomotion(Controller):
         if len(advance) > 1:
             advance[-1] = advance[-2]
         rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times, 0.5 * advance)
+        if not b["idle"].any() and rest.any():
+            # Come to rest without an idle: both feet stay down where they are, laid flat about their
+            # balls over the rest's fade (the held phase of a walk may have a foot in the air).
+            resting = rest > 0.0
+            contact[resting] = (0.9, 1.0)  # heel and ball: each foot pinned by its ball, its heel coming down
+            support = np.maximum(support, rest[:, None])
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
@@ -558,14 +564,22 @@ def _prepare(space, clips, sk, legs) -> dict:
             ankle_means[i] = ankles[start:start + c.stop].mean(axis=0)
             ankle_low[i] = pos[start:start + c.stop, 2:, 1].min(axis=0)
             start += c.stop
-    # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down.
+    # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
+    # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     stance_feet = None
-    if len(legs) == 2 and idle.any() and all(leg[3] is not None for leg in legs):
-        m = motions[int(np.argmax(idle))]
-        g_rot, _ = chain_fk(sk, m.local_rotations[:1], m.root_translations[:1],
-                            None if m.joint_translations is None else m.joint_translations[:1],
+    walking = [i for i in np.argsort(np.where(idle, np.inf, speeds)) if events[i] is not None and not idle[i]]
+    if len(legs) == 2 and all(leg[3] is not None for leg in legs) and (idle.any() or walking):
+        if idle.any():
+            m, frames = motions[int(np.argmax(idle))], np.zeros(2, dtype=np.int64)
+        else:
+            i = int(walking[0])
+            m = motions[i]
+            flat = np.mod(0.5 * (events[i][:, 1] + events[i][:, 2]), 1.0)
+            frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
+        g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
+                            None if m.joint_translations is None else m.joint_translations[frames],
                             [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
-        stance_feet = g_rot[0].reshape(2, 2, 4)
+        stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
     body = np.nonzero(limbs == 0)[0]
     out = {"space": space, "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
@@ -676,8 +690,9 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     return w, slow
 
 
-def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The blend's phase (F,) in [0, 1), stride factor (F,) and idle share (F,) for moving shares
+def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The blend's phase (F,) in [0, 1), stride factor (F,), idle share (F,) and how far it has come
+    to rest (F,) (the idle share's easing, with an idle or not) for moving shares
     ``slow`` (F,) of the slowest walk, the steering's ``stopping`` (F,) flags, ``spinning`` (F,)
     flags (the root turns on the spot) and cycle durations ``period`` (F,) seconds; updates ``st``.
 
@@ -749,8 +764,8 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
         ramp = st["stand"] + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
         level[a:e] = np.clip(ramp, 0.0, 1.0)
         st["stand"] = float(level[e - 1])
-    standing = _ease(level) if idle else np.zeros(f)
-    return phase % 1.0, np.minimum(stride, 1.0), standing
+    rest = _ease(level)
+    return phase % 1.0, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
 
 
 def mean_rotations(motion) -> np.ndarray:
