@@ -64,7 +64,7 @@ def main() -> int:
     characters = {n: infuse.load(CORPUS / f) for n, f in CHARACTERS.items()}
     print(f"{'pack':<18} {'character':<6} {'speed err':>9} {'drift':>6} {'miss':>7} {'path':>5} {'loops':>5} "
           f"{'skate':>6} {'to tgt':>6} {'s':>5}")
-    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6} {'cm/m':>6}")
+    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6} {'cm':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         for name, pack in packs(Path(tmp), args.only).items():
             for who, asset in characters.items():
