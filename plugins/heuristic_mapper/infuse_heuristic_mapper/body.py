@@ -92,11 +92,14 @@ def _role_votes(view: SkeletonView, pair: LimbPair) -> tuple[float, float, float
 
 def legs_top(view: SkeletonView, legs: LimbPair) -> np.ndarray:
     """(3,) where the legs start: the joint they hang from, or the middle of their first joints when
-    they hang from far away (thighs parented to a ground root)."""
-    stem = 0.5 * (view.bone[legs.a] + view.bone[legs.b])  # LimbPair.length includes it
-    if stem > 0.5 * (legs.length - stem):
-        return 0.5 * (view.P[legs.a] + view.P[legs.b])
-    return view.P[legs.branch]
+    that joint lies down the legs' way, past half their length (thighs parented to a ground root)."""
+    P = view.P
+    sockets = 0.5 * (P[legs.a] + P[legs.b])
+    down = 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]]) - sockets
+    reach = float(down @ down)
+    if reach > 1e-12 and float((P[legs.branch] - sockets) @ down) > 0.5 * reach:
+        return sockets
+    return P[legs.branch]
 
 
 def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
