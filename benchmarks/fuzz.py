@@ -48,7 +48,7 @@ def main(argv=None) -> int:
     parser.add_argument("--formats", default=",".join(FORMATS), help="comma-separated (default: all)")
     parser.add_argument("--timeout", type=float, default=20.0, help="seconds a case may take")
     parser.add_argument("--memory-mb", type=int, default=1024, help="address space a case may add, MiB")
-    parser.add_argument("--max-seed-bytes", type=int, default=1_000_000)
+    parser.add_argument("--max-seed-bytes", type=int, default=300_000)
     args = parser.parse_args(argv)
 
     formats = args.formats.split(",")
@@ -81,6 +81,8 @@ def main(argv=None) -> int:
             seconds[fmt] += time.perf_counter() - started
             if outcome.kind in BAD:
                 signature = (fmt, outcome.kind, outcome.detail.split(":")[0] if outcome.kind == "hang" else outcome.detail[-90:])
+                if signature not in findings:  # shown as found, so a long run can be acted on before it ends
+                    print(f"  found: {outcome.kind} [{fmt}] {outcome.detail[:300]} (case {index})", flush=True)
                 findings.setdefault(signature, []).append((index, seed.label, ops, outcome.detail))
 
     started = time.perf_counter()
