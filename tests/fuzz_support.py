@@ -580,6 +580,7 @@ def _serve(conn, memory_bytes: int, paths: list[str]) -> None:
     if memory_bytes:
         limit = _vm_bytes() + memory_bytes
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    conn.send("ready")
     with tempfile.TemporaryDirectory(prefix="infuse-fuzz-") as folder:
         while True:
             try:
@@ -625,6 +626,10 @@ class Worker:
                     os.environ[name] = value
         child.close()
         self._conn = parent
+        # Start-up (imports, a warm-up case per kind) is not a case's time; a loaded machine may take long.
+        if not parent.poll(600) or parent.recv() != "ready":
+            self.close(kill=True)
+            raise RuntimeError("the fuzz worker did not start")
 
     def run(self, fmt: str, seed: Seed, data: bytes) -> Outcome:
         if self._process is None or not self._process.is_alive():
