@@ -125,11 +125,13 @@ def test_pack_test_prints_the_trials_and_draws_them(tmp_path, capsys):
     (["pack", "test", "reaching"], "a reach pack"),
     (["pack", "test", "locomotion-male", "--speeds", "fast"], "--speeds takes numbers"),
     (["pack", "test", "locomotion-male", "--speeds", "-1"], "--speeds takes speeds above 0"),
+    (["pack", "test", "locomotion-male", "-o", "top.gif"], "the top view is a .png"),
 ])
 def test_pack_test_refuses_what_it_cannot_walk(argv, says, capsys):
     from infuse.cli import main
 
-    assert main(argv + ["--on", str(corpus_file("runxaway-models/Xbot.glb")), "--no-pictures"]) == 2
+    pictures = [] if "-o" in argv else ["--no-pictures"]
+    assert main(argv + ["--on", str(corpus_file("runxaway-models/Xbot.glb"))] + pictures) == 2
     err = capsys.readouterr().err
     assert says in err and "Traceback" not in err
 

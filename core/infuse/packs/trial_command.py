@@ -68,13 +68,13 @@ def run_test(args) -> int:
     if pack.kind != "locomotion":
         raise UsageError(f"{args.pack}: a {pack.kind} pack; 'pack test' walks locomotion packs")
     speeds = _speeds(args.speeds)
+    out = Path(args.output or f"{pack.name}-test.png")
+    if not args.no_pictures and out.suffix.lower() != ".png":
+        raise UsageError(f"{out}: the top view is a .png")
     asset = fileio.load(args.character)
     trial = trial_pack(Character(Path(args.character).stem, asset), pack.manifest.path, speeds=speeds)
     print(report(trial))
     if not args.no_pictures:
-        out = Path(args.output or f"{pack.name}-test.png")
-        if out.suffix.lower() != ".png":
-            raise UsageError(f"{out}: the top view is a .png")
         draw_paths(trial, out)
         for written in [out] + side_strips(trial, out):
             print(f"wrote {written}")
