@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import infuse
+from infuse.errors import UsageError
 from infuse.live import LiveScene
 from infuse.mapping import map_skeleton
 from infuse.scene import Scene
@@ -77,13 +78,17 @@ def direct(live: LiveScene, count: int, stop: threading.Event) -> None:
         for k, name in enumerate(names):
             role = (k + round_) % 3
             position = live.scene.runtime.rig(name).position
-            if role == 0:
-                home = (float(position[0]), float(position[2]))
-                there = (0.3 * home[0], 0.3 * home[1]) if round_ % 2 == 0 else home
-                live.walk_to(name, there)
-            elif role == 1:
-                live.say(name, LINES[(k + round_) % len(LINES)])
-                live.nod(name)
+            try:
+                if role == 0:
+                    home = (float(position[0]), float(position[2]))
+                    live.walk_to(name, (0.3 * home[0], 0.3 * home[1]) if round_ % 2 == 0 else home)
+                elif role == 1:
+                    live.say(name, LINES[(k + round_) % len(LINES)])
+                    live.nod(name)
+            except UsageError:
+                if stop.is_set():  # the scene stopped while this call waited
+                    return
+                raise
         round_ += 1
         stop.wait(4.0)
 
