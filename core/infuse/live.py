@@ -24,7 +24,8 @@ Evaluating frames one by one costs more per frame than in blocks (each controlle
 much the same for one frame as for eight). So the loop evaluates blocks of
 :attr:`LiveScene.block_frames` frames: one, just in time, while a frame costs under 60% of a frame's
 time; twice as many (up to ``max_block_frames``) when it costs more, evaluated ahead while the frames in
-hand are shown at their due times; half as many after two seconds of frames that cost under 20%.
+hand are shown at their due times; half as many after two seconds of frames that cost under 20% (costs
+as a moving average over the last blocks).
 With blocks of B frames a command shows within 2B frames. Frames that are ready only after the next
 one is due are skipped and count as missed (:attr:`LiveStats.missed`).
 
@@ -76,7 +77,8 @@ class LiveFrame:
 
 class LiveStats:
     """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), commands
-    applied, the current block size, and the evaluation time per frame of the last blocks (milliseconds)."""
+    applied, the current block size, and the evaluation time per frame of the last blocks, on the wall
+    clock and in the loop thread's CPU time (milliseconds; they differ when the machine is loaded)."""
 
     def __init__(self, window: int = 3600):
         self.shown = 0
@@ -84,6 +86,7 @@ class LiveStats:
         self.commands = 0
         self.block_frames = 1
         self.evaluate_ms: deque[float] = deque(maxlen=window)
+        self.evaluate_cpu_ms: deque[float] = deque(maxlen=window)
 
     def summary(self) -> dict:
         """Counts and evaluation-time percentiles (ms) over the window."""
@@ -91,7 +94,8 @@ class LiveStats:
         figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands, "block_frames": self.block_frames}
         if len(ms):
             figures.update(mean_ms=float(ms.mean()), p50_ms=float(np.percentile(ms, 50)),
-                           p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()))
+                           p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()),
+                           cpu_mean_ms=float(np.mean(self.evaluate_cpu_ms)))
         return figures
 
 
@@ -139,6 +143,7 @@ class LiveScene:
         self.max_block_frames = max(1, int(max_block_frames))
         self.block_frames = 1
         self._cheap = 0
+        self._cost_s: float | None = None  # moving average of a frame's evaluation time at this block size
         self.stats = LiveStats()
         self.epoch: float | None = None
         self.error: BaseException | None = None
@@ -244,18 +249,20 @@ class LiveScene:
         scene = self.scene
         count = min(count, scene.runtime.block_frames)
         first = scene.runtime.frame
-        started = time.perf_counter()
+        started, started_cpu = time.perf_counter(), time.thread_time()
         scene.step(count)
         spent = time.perf_counter() - started
         count = scene.runtime.frame - first
         self.stats.evaluate_ms.append(spent * 1e3 / count)
-        per_frame = spent / count
+        self.stats.evaluate_cpu_ms.append((time.thread_time() - started_cpu) * 1e3 / count)
+        # a moving average, so that one late block (the machine busy elsewhere) does not resize blocks
+        per_frame = self._cost_s = spent / count if self._cost_s is None else 0.7 * self._cost_s + 0.3 * spent / count
         if per_frame > 0.6 * self.period_s and self.block_frames < self.max_block_frames:
-            self.block_frames, self._cheap = min(2 * self.block_frames, self.max_block_frames), 0
+            self.block_frames, self._cheap, self._cost_s = min(2 * self.block_frames, self.max_block_frames), 0, None
         elif per_frame < 0.2 * self.period_s and self.block_frames > 1:
             self._cheap += count
             if self._cheap >= 2 * self.fps:  # two seconds of cheap frames: try smaller blocks
-                self.block_frames, self._cheap = self.block_frames // 2, 0
+                self.block_frames, self._cheap, self._cost_s = self.block_frames // 2, 0, None
         else:
             self._cheap = 0
         self.stats.block_frames = self.block_frames
