@@ -20,7 +20,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
-from infuse.errors import InfuseError, UsageError
+from infuse.errors import UsageError
 from infuse.live import LiveFrame, LiveScene
 from infuse.scene.speech import utterance_samples
 
@@ -138,9 +138,7 @@ class Hub:
             message = parse_message(text, where)
             request = message.request
             reply = await self._act(client, message)
-        except (InfuseError, ValueError, TypeError) as exc:
-            reply = error_message(exc, request)
-        except Exception as exc:  # noqa: BLE001 - one bad request must not end the service
+        except Exception as exc:  # noqa: BLE001 - typed errors name the problem; no request ends the service
             reply = error_message(exc, request)
         if client is not None:
             client.put(reply)
