@@ -408,12 +408,13 @@ class Locomotion(Controller):
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
         stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
         land where the feet stand) and lays the feet down: each foot turns toward lying as in the
-        idle, its ankle toward its lowest height, fully in the middle of a stance and 60% in the
-        swing (a low step), by its stance share ``support`` (F, 2), so nothing jumps at strike or toe off.
+        idle, its ankle toward its lowest height, fully in the middle of a stance and not in the
+        swing (a foot that stepped low and slow would shuffle along the ground), by its stance
+        share ``support`` (F, 2), so nothing jumps at strike or toe off.
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
         stance_feet = b["stance_feet"]
         feet_rot, pos = chain_fk(b["skeleton"], rot, root, jt, b["shorten_joints"])  # hips, ankles[, balls]
-        down = settle[:, None] * (0.6 + 0.4 * support)  # (F, 2)
+        down = settle[:, None] * support  # (F, 2)
         feet = feet_rot[:, 2:4, None]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
             flat = quat.multiply(turn_q[:, None, None], stance_feet)
