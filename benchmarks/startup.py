@@ -5,8 +5,8 @@ Rows (each a whole process, started from outside, timed from its start to its ex
 - ``infuse --version`` and ``infuse --help``;
 - ``infuse info`` on a small BVH file (a 28 KB Bandai clip);
 - ``infuse batch`` rerun with nothing to do (2 characters x 2 motions, all done by a first run);
-- ``infuse --help`` with the command list not cached yet (the first run after installing or editing
-  a command plugin: every command plugin is imported once).
+- ``infuse --help`` without the plugin index (a fresh installation: every command plugin is imported
+  once).
 
 Each row runs ``--runs`` times after one run that is not counted; the table gives the median and the
 range of the wall clock and of the CPU seconds (user + system) the operating system charged the
@@ -150,8 +150,8 @@ def update_docs(header: str, table: str) -> None:
             "read importing only the readers that claim its extension.\n"
             "- scipy is imported by the functions that use it (rotation vectors, Euler angles, Delaunay "
             "tessellation, FBX rotations), not by `infuse.quaternions` or a plugin at import.\n"
-            "- The last row is the first run after a command plugin is installed or edited: every command plugin "
-            "is imported once to learn its commands again.\n")
+            "- The last row runs without the index (a fresh installation): every command plugin is imported once "
+            "to learn its commands. After a plugin is installed or edited, only that plugin is.\n")
     if SECTION in text:
         start = text.index(SECTION)
         end = text.find("\n## ", start + len(SECTION))
