@@ -149,6 +149,31 @@ def off_middle(view: SkeletonView, legs: LimbPair, arms: LimbPair) -> float:
     return min(1.0, offset / max(0.5 * legs.length, 1e-9))
 
 
+def _hands_below(view: SkeletonView) -> np.ndarray:
+    """(J,) bool: the joint or one below it has three or more children that are not end, twist or
+    control markers (a hand with its digits)."""
+    kids, _ = view.digit_counts()
+    below = kids >= 3
+    parents = view.parents
+    for j in range(view.n - 1, -1, -1):
+        if below[j] and parents[j] >= 0:
+            below[parents[j]] = True
+    return below
+
+
+def _best_per_branch(pairs: list[LimbPair], score: dict, keep: int, per_branch: int = 2) -> list[LimbPair]:
+    """The ``keep`` best pairs, at most ``per_branch`` from one joint: many look-alike chains on one
+    joint (hair, skirt) must not crowd out the limbs elsewhere."""
+    out, count = [], {}
+    for p in sorted(pairs, key=lambda p: -score[p]):
+        if count.get(p.branch, 0) < per_branch:
+            out.append(p)
+            count[p.branch] = count.get(p.branch, 0) + 1
+            if len(out) == keep:
+                break
+    return out
+
+
 def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> BodyPlan | None:
     """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all.
 
@@ -161,14 +186,16 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> Bod
     P = view.P
     as_legs, as_arms = {}, {}
     ends = {}
+    hands = _hands_below(view)
     for p in pairs:
         leg_v, arm_v, bad = _role_votes(view, p)
         base = 2.0 * p.symmetry + 1.5 * p.length / span - 2.0 * bad
         as_legs[p] = base + 1.5 * (leg_v - arm_v)
-        as_arms[p] = base + 1.5 * (arm_v - leg_v)
+        # both limbs end in hands (a joint where three or more digits branch): arms, not hair or cloth
+        as_arms[p] = base + 1.5 * (arm_v - leg_v) + 0.6 * bool(hands[p.a] and hands[p.b])
         ends[p] = 0.5 * (P[view.far[p.a]] + P[view.far[p.b]])
-    leg_cands = sorted(pairs, key=lambda p: -as_legs[p])[:keep] + [None]
-    arm_cands = sorted(pairs, key=lambda p: -as_arms[p])[:keep] + [None]
+    leg_cands = _best_per_branch(pairs, as_legs, keep) + [None]
+    arm_cands = _best_per_branch(pairs, as_arms, keep) + [None]
     best: BodyPlan | None = None
     for legs in leg_cands:
         for arms in arm_cands:
