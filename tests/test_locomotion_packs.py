@@ -159,3 +159,17 @@ def test_imported_packs_steer_exactly(xbot, which, request):
     assert worst["drift_deg"] < 3.0
     assert worst["miss_m"] < 0.05 and worst["path_ratio"] < 1.15 and worst["loops"] == 0
     assert all(t.arrival_s is not None for t in trial.targets)
+
+
+def test_a_walk_taken_over_before_it_arrives_is_reported(xbot):
+    from infuse.scene import Scene
+
+    scene = Scene(fps=30, quiet=True)
+    scene.add_character(infuse.Character("x", xbot), "bob", packs=["locomotion-male"])
+    first = scene.walk_to("bob", (0.0, 6.0), at=0.0)
+    scene.walk_to("bob", (2.0, 0.0), at=2.0)  # replaces nothing: a second walk, two seconds into the first
+    scene.run()
+    (short,) = [e for e in scene.feedback.log if e.kind == "warningFeedback" and "short of its target" in e.description]
+    assert short.id.startswith(first)
+    metres = float(short.description.split(":")[1].split()[0])
+    assert 2.0 < metres < 5.5  # two seconds of walking from standing covered at most 2.6 m of the 6
