@@ -105,7 +105,8 @@ def main(argv: list[str] | None = None) -> int:
         cold_env = dict(env, XDG_CACHE_HOME=str(cold_cache))
 
         def forget_commands() -> None:
-            (cold_cache / "infuse" / "plugins.json").unlink(missing_ok=True)
+            for index in (cold_cache / "infuse").glob("plugins-*.json"):
+                index.unlink()
 
         rows = [
             ("`python -c pass`", [PYTHON, "-c", "pass"], None, env, None),

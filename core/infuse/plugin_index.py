@@ -2,17 +2,18 @@
 
 For every entry point of a kind, the index holds the name, the one-line description (a command's
 help) and the file extensions (readers, writers) of each descriptor its module offers. A module is
-imported once to learn them; they are kept in ``plugins.json`` in the cache folder
-(``$XDG_CACHE_HOME/infuse``, else ``~/.cache/infuse``), keyed by the entry point and stamped with
-the version of its distribution and the size and modification time of every Python file beside its
-module, and learnt again when the stamp changes. The command line lists commands from it, and a file
-is read by importing only the readers that claim its extension.
+imported once to learn them; they are kept in ``plugins-<environment>.json`` in the cache folder
+(``$XDG_CACHE_HOME/infuse``, else ``~/.cache/infuse``; one file per Python environment), keyed by the
+entry point and stamped with the version of its distribution and the size and modification time of
+every Python file beside its module, and learnt again when the stamp changes. The command line lists
+commands from it, and a file is read by importing only the readers that claim its extension.
 """
 from __future__ import annotations
 
 import hashlib
 import json
 import os
+import sys
 from dataclasses import dataclass
 from importlib.machinery import PathFinder
 from importlib.metadata import EntryPoint, entry_points
@@ -42,8 +43,10 @@ def distribution(ep: EntryPoint) -> str:
 
 
 def cache_file() -> Path:
+    """The index of this Python environment (one per environment: each has its own copies of the plugins)."""
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "infuse" / "plugins.json"
+    environment = hashlib.blake2b(sys.prefix.encode(), digest_size=6).hexdigest()
+    return Path(base) / "infuse" / f"plugins-{environment}.json"
 
 
 def module_file(module: str) -> Path | None:
