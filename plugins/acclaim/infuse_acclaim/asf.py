@@ -156,8 +156,11 @@ def _read_bone(lines: _Lines, start: int) -> Bone:
                 raise lines.error(line, f"bad dof list {' '.join(words)!r} (rx ry rz tx ty tz l, each once)")
         elif key == "limits":
             rest = " ".join(words)
-            while len(_LIMIT.findall(rest)) < len(bone.dof) and lines.peek() and lines.peek()[1].startswith("("):
-                rest += " " + lines.next("a limit")[1]
+            found = len(_LIMIT.findall(rest))  # counted line by line: re-reading the whole text each time was quadratic
+            while found < len(bone.dof) and lines.peek() and lines.peek()[1].startswith("("):
+                more = lines.next("a limit")[1]
+                rest += " " + more
+                found += len(_LIMIT.findall(more))
             pairs = _LIMIT.findall(rest)
             if len(pairs) != len(bone.dof):
                 raise lines.error(line, f"{len(pairs)} limits for {len(bone.dof)} dofs")
