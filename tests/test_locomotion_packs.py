@@ -48,6 +48,12 @@ def test_hull_intervals_are_exact():
     assert any("deg/s" in line for line in describe_coverage(table))
 
 
+def test_a_single_walk_limits_speed_to_its_own():
+    walk = Tessellation.build(("forward_speed", "lateral_speed", "turn_rate"), ["walk"], [(1.3, 0.0, 0.0)])
+    top, low = speed_limits(walk, [0.0, math.pi / 2])
+    assert top[0] == pytest.approx(1.3) and low[0] == pytest.approx(1.3) and top[1] == 0.0
+
+
 def test_a_speed_beyond_the_pack_is_reported_once_and_walked_at_the_top_speed(xbot):
     notes = []
     rt = Runtime(fps=30, report=lambda who, message: notes.append(message))

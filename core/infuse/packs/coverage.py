@@ -22,6 +22,9 @@ import numpy as np
 DIRECTIONS_DEG = (0.0, 45.0, 90.0, 135.0, 180.0, -135.0, -90.0, -45.0)
 #: Turn rates of the coverage table, degrees per second (+ left).
 TURNS_DEG_S = (-90.0, -45.0, 0.0, 45.0, 90.0)
+#: A line meets a hull of one point when it passes this close to it, in shares of the point's
+#: distance from zero (at least one unit).
+POINT_TOLERANCE = 0.02
 #: Turn rates over the examples' range at which the speed limits are found.
 TURN_SAMPLES = 25
 
@@ -51,11 +54,17 @@ class Hull:
     def interval(self, base, along) -> tuple[np.ndarray, np.ndarray]:
         """(Q,) lowest and highest ``s`` with ``base + s * along`` inside the hull, for (Q, D) ``base``
         and (Q, D) or (D,) ``along`` in the tessellation's coordinates; lowest > highest where the line
-        misses the hull (with no spread at all, every point is inside)."""
+        misses the hull (with no spread at all, the hull is the examples' point, which a line meets
+        when it passes within :data:`POINT_TOLERANCE` of its size)."""
         base = np.atleast_2d(np.asarray(base, dtype=np.float64))
         t = self.t
-        if t.dimension == 0:
-            return np.full(len(base), -np.inf), np.full(len(base), np.inf)
+        if t.dimension == 0:  # one example (or several alike): the line's nearest approach, if it passes by
+            along = np.broadcast_to(np.asarray(along, dtype=np.float64), base.shape)
+            gap = t.points.mean(axis=0) - base
+            s = (gap * along).sum(axis=1) / np.maximum((along * along).sum(axis=1), 1e-12)
+            miss = np.linalg.norm(gap - s[:, None] * along, axis=1)
+            hit = miss <= POINT_TOLERANCE * max(float(np.linalg.norm(t.points.mean(axis=0))), 1.0)
+            return np.where(hit, s, np.inf), np.where(hit, s, -np.inf)
         y0 = t.reduced(base)  # (Q, d)
         g = (np.broadcast_to(np.asarray(along, dtype=np.float64), base.shape) / t.scale) @ t.basis  # (Q, d)
         rate = g @ self.normals.T  # (Q, H)
