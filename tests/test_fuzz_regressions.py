@@ -216,6 +216,35 @@ def test_a_tiny_frame_time_is_refused_at_read_time(tmp_path):
     _limit(path, "MAX_FPS")
 
 
+ASF_ONE_BONE = """:version 1.10
+:name t
+:units
+  mass 1.0
+  length 1.0
+  angle deg
+:root
+  order TX TY TZ RX RY RZ
+  axis XYZ
+  position 0 0 0
+  orientation 0 0 0
+:bonedata
+  begin
+    id 1
+    name a
+    direction 0 1 0
+    length 1
+    axis 0 0 0 XYZ
+    dof rx rz
+    limits (-inf inf)
+           (-45.0 45.0)
+  end
+:hierarchy
+  begin
+    root a
+  end
+"""
+
+
 def test_info_json_is_valid_json_for_unbounded_acclaim_limits(tmp_path, capsys):
     asf = """:version 1.10
 :name t
@@ -351,3 +380,18 @@ def test_scene_file_numbers_are_bounded(tmp_path):
         assert info.value.file == str(path) and "must be within" in info.value.problem
     path.write_text(TINY_SCENE_TOML)
     assert len(read_scene_file(path).blocks) == 2
+
+
+def test_acclaim_long_lines_and_many_limit_lines_are_answered_at_once(tmp_path):
+    asf = tmp_path / "many.asf"
+    asf.write_text(ASF_ONE_BONE.replace("limits (-inf inf)", "limits (-inf inf)\n" + "(\n" * 20000))
+    started = time.process_time()
+    with pytest.raises(InputError, match="limits"):
+        infuse.load(asf)
+    assert time.process_time() - started < 2.0
+    amc = tmp_path / "long.amc"
+    amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0\na " + "1" * 200_000 + "\n")
+    (tmp_path / "long.asf").write_text(ASF_ONE_BONE)
+    with pytest.raises(InputError, match="characters long") as info:
+        infuse.load(amc, skeleton=str(tmp_path / "long.asf"))
+    assert info.value.place == "line 5"

@@ -29,19 +29,9 @@ class AmcFile:
             raise self.problems[0]
 
 
-#: Longest line of an ``.amc`` file: a bone name and its (at most seven) values.
-MAX_LINE_CHARS = 4096
-
-
 def parse_amc(path: Path, text: str) -> AmcFile:
     """Split ``.amc`` text into frames and per-bone value lines (each bone should appear once per frame)."""
-    lines = text.replace("\t", " ").split("\n")
-    # The lines become one fixed-width array: its width is the longest line's, so bound it first.
-    lengths = np.fromiter(map(len, lines), dtype=np.int64, count=len(lines))
-    if lengths.size and lengths.max() > MAX_LINE_CHARS:
-        line = int(np.argmax(lengths)) + 1
-        raise InputError(path, f"line {line}", f"is {int(lengths.max()):,} characters long; an AMC line holds a frame "
-                         f"number or one bone's values (at most {MAX_LINE_CHARS:,} characters)")
+    lines = text.replace("\t", " ").split("\n")  # every line short (see reader._read_text): one fixed-width array
     raw = np.array(lines)
     stripped = np.char.strip(np.char.partition(raw, "#")[:, 0]) if raw.size else raw
     numbers = np.nonzero(stripped != "")[0]

@@ -25,7 +25,9 @@ from .asf import ROTATION_DOFS, AsfFile, axis_rotation, parse_asf
 #: AMC files state no frame rate; the CMU database was captured at 120 Hz.
 DEFAULT_FPS = 120.0
 _INCH = conventions.UNIT_SCALES["inch"]
-_MAX_LINE = 100_000
+#: Longest line of an ``.asf`` or ``.amc`` file (a keyword and a few values, a bone and its values). The
+#: AMC parser makes the lines one fixed-width array, as wide as the longest line: this bounds it.
+MAX_LINE_CHARS = 4096
 
 
 def _read_text(path: Path) -> str:
@@ -33,9 +35,11 @@ def _read_text(path: Path) -> str:
     if b"\x00" in data[:4096]:
         raise InputError(path, None, "binary data, not Acclaim text")
     text = data.decode("utf-8", errors="replace")
-    longest = max(map(len, text.split("\n")))
-    if longest > _MAX_LINE:
-        raise InputError(path, None, f"a line of {longest} characters: not Acclaim text")
+    lengths = [len(line) for line in text.split("\n")]
+    longest = max(lengths)
+    if longest > MAX_LINE_CHARS:
+        raise InputError(path, f"line {lengths.index(longest) + 1}", f"is {longest:,} characters long: not Acclaim text "
+                         f"(a line holds a keyword or a bone and its values, at most {MAX_LINE_CHARS:,} characters)")
     return text
 
 
