@@ -14,8 +14,8 @@ the alternatives). Variants:
 - ``convention_*``: the labelled joints renamed into another naming convention (Mixamo with its
   namespace, Unreal, Blender ``.L``/``.R``), the other joints keep their names;
 - ``prefixed``: every name behind a namespace and a studio prefix (``Char01:rig_``);
-- ``a_pose`` / ``t_pose``: the arms turned 40 degrees down or up about the shoulders in the body's
-  frontal plane (the rest pose changes, the motion does not);
+- ``a_pose`` / ``t_pose``: the arms turned about the shoulders in the body's frontal plane to 45
+  degrees below the horizontal or to the horizontal (the rest pose changes, the motion does not);
 - ``rest_rotations``: random local rest rotations with the same joint positions;
 - ``named_helpers``: zero-length roll joints after each upper arm, forearm, thigh and shin
   (MotionBuilder style, named ``<joint>Roll``), a named IK target and pole per hand and foot;
@@ -304,8 +304,9 @@ def _subtree(skeleton: Skeleton, j: int) -> list[int]:
     return out
 
 
-def arms_turned(skeleton: Skeleton, poses, label: dict, degrees: float, name: str) -> Variant:
-    """Each arm turned ``degrees`` (positive: down) about its shoulder in the body's frontal plane."""
+def arms_posed(skeleton: Skeleton, poses, label: dict, elevation_deg: float, name: str) -> Variant:
+    """Each arm turned about its shoulder in the body's frontal plane until the shoulder-to-wrist line
+    is ``elevation_deg`` above the horizontal (0: T-pose, -45: A-pose)."""
     pos = skeleton.rest_global_positions.copy()
     ends = skeleton.rest_end_site_positions.copy() if len(skeleton.end_site_parents) else None
     m, idx = label["mapping"], skeleton.index
@@ -313,9 +314,16 @@ def arms_turned(skeleton: Skeleton, poses, label: dict, degrees: float, name: st
     if axes is not None:
         up, left = axes
         forward = np.cross(left, up)
-        for side, sign in (("l", 1.0), ("r", -1.0)):
+        for side, outward in (("l", left), ("r", -left)):
             shoulder = idx[m[f"{side}_shoulder"]]
-            q = quat.from_axis_angle(forward, sign * np.radians(degrees))
+            hand = idx.get(m.get(f"{side}_wrist") or m.get(f"{side}_elbow"))
+            if hand is None:
+                continue
+            d = pos[hand] - pos[shoulder]
+            now = np.arctan2(d @ up, d @ outward)
+            turn = np.radians(elevation_deg) - now
+            # about +forward a positive angle raises the left arm and lowers the right one
+            q = quat.from_axis_angle(forward, turn if side == "l" else -turn)
             moved = _subtree(skeleton, shoulder)
             pos[moved] = pos[shoulder] + quat.rotate(q, pos[moved] - pos[shoulder])
             if ends is not None:
@@ -361,11 +369,16 @@ def named_helpers(skeleton: Skeleton, poses, label: dict) -> Variant:
     m = label["mapping"]
     root = int(skeleton.roots[0])
     height = skeleton.height()
+    alternatives = {k: list(v) for k, v in (label.get("alternatives") or {}).items()}
     for side in ("l", "r"):
         for upper, lower in (("shoulder", "elbow"), ("elbow", "wrist"), ("hip", "knee"), ("knee", "ankle")):
             a, b = m.get(f"{side}_{upper}"), m.get(f"{side}_{lower}")
             if a in idx and b in idx and parents[idx[b]] == idx[a]:
                 _insert(names, parents, pos, pose_list, idx[b], 0.0, f"{a}Roll")
+                if upper == "elbow" and m.get(f"{side}_forearm") is None:
+                    # the first twist joint after the elbow is the canonical forearm (null accepted)
+                    m = {**m, f"{side}_forearm": f"{a}Roll"}
+                    alternatives[f"{side}_forearm"] = [None]
         for end in ("wrist", "ankle"):
             j = m.get(f"{side}_{end}")
             if j in idx:
@@ -374,7 +387,7 @@ def named_helpers(skeleton: Skeleton, poses, label: dict) -> Variant:
                       + np.array([0.0, 0.1, 0.3]) * height, f"{j}_IK_pole")
     names, parents, pos_arr, pose_arr = _topological(names, parents, pos, pose_list)
     sk = _with_end_sites(skeleton, names, parents, pos_arr)
-    mapping, alts = _translate(label, _identity(names))
+    mapping, alts = _translate({"mapping": m, "alternatives": alternatives}, _identity(names))
     return Variant("named_helpers", sk, pose_arr, mapping, alts, _identity(skeleton.names))
 
 
@@ -434,8 +447,8 @@ def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
     for table in CONVENTIONS:
         out.append(convention(skeleton, poses, label, table))
     out.append(prefixed(skeleton, poses, label))
-    out.append(arms_turned(skeleton, poses, label, 40.0, "a_pose"))
-    out.append(arms_turned(skeleton, poses, label, -40.0, "t_pose"))
+    out.append(arms_posed(skeleton, poses, label, -45.0, "a_pose"))
+    out.append(arms_posed(skeleton, poses, label, 0.0, "t_pose"))
     out.append(rest_rotations(skeleton, poses, label))
     out.append(named_helpers(skeleton, poses, label))
     for kind in ("fingers", "clavicles", "neck"):

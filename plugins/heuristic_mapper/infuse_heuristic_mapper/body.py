@@ -123,16 +123,18 @@ def _cos(u: np.ndarray, v: np.ndarray) -> float:
 
 def upper_anchor(view: SkeletonView, legs: LimbPair, arms: LimbPair | None) -> int | None:
     """The joint that stands for "up" from the legs' branch: the arms' branch, else the far end of
-    the longest branch that is not a leg."""
+    the longest chain (before any lone joint) that is not a leg, an arm or named a control or prop."""
     if arms is not None and arms.branch != legs.branch:
         return arms.branch
-    best, best_len = None, 0.0
+    best, best_key = None, (False, 0.0)
     for c in view.children[legs.branch]:
         if c in (legs.a, legs.b) or (arms is not None and c in (arms.a, arms.b)):
             continue
-        length = view.limb_length(legs.branch, c)
-        if length > best_len:
-            best, best_len = int(view.far[c]), length
+        if view.info[c].flagged(*NON_BODY_FLAGS):
+            continue  # an IK target or a prop hanging from the pelvis is not the way up
+        key = (bool(view.size[c] >= 2), view.limb_length(legs.branch, c))  # a chain before a lone leaf
+        if key > best_key:
+            best, best_key = int(view.far[c]), key
     return best
 
 
