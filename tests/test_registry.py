@@ -166,6 +166,7 @@ def odd_site(tmp_path_factory) -> Path:
         misspelled = infuse_test_misspelled
         unmarked = infuse_test_unmarked
         junk = infuse_test_junk
+        arguments = infuse_test_arguments
         """, {
         "infuse_test_clash": """\
             import infuse
@@ -195,6 +196,13 @@ def odd_site(tmp_path_factory) -> Path:
             @infuse.hookimpl
             def infuse_mappers():
                 return ["not a descriptor"]
+            """,
+        "infuse_test_arguments": """\
+            import infuse
+
+            @infuse.hookimpl
+            def infuse_mappers(skeleton):
+                return []
             """,
     })
     return site
@@ -238,9 +246,12 @@ def test_invalid_plugins_are_reported_and_skipped(odd_site, tmp_path):
             "infuse does not call it") in warnings
     assert ("plugin 'infuse-test-clash:infuse_test_junk' returned str from infuse_mappers, not a named Mapper; "
             "it is skipped") in warnings
+    assert "plugin 'arguments' (infuse-test-clash, group infuse.mappers) is invalid and is skipped: " in warnings
+    assert "'skeleton'" in warnings  # the argument the hook's specification does not have
     listing = infuse_cli(odd_site, tmp_path, "plugins", "--json")
     records = {r["name"]: r for r in json.loads(listing.stdout)}
     assert records["misspelled"]["error"].startswith("invalid plugin: unknown hook 'infuse_mapper'")
+    assert records["arguments"]["error"].startswith("invalid plugin: ")
     assert records["junk"]["error"] is None and records["heuristic"]["error"] is None
 
 
