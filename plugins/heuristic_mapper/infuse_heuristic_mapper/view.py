@@ -43,9 +43,11 @@ class SkeletonView:
         self._facts: dict[tuple, np.ndarray] = {}
         self._role_bits = np.array([i.role_bits for i in self.info], dtype=np.int64)
         self._flag_bits = np.array([i.flag_bits for i in self.info], dtype=np.int64)
-        # children a chain may follow: controls, props and secondary bones only when nothing else is there
+        # children a chain may follow: controls, props and secondary bones only when nothing else is
+        # there, and then only when they lead somewhere (a lone prop under a hand ends the arm)
         odd = self.flag("control", "prop", "secondary")
-        self.followable = tuple((tuple(c for c in kids if not odd[c]) or kids) if kids else kids
+        self.followable = tuple((tuple(c for c in kids if not odd[c])
+                                 or tuple(c for c in kids if self.children[c])) if kids else kids
                                 for kids in self.children)
         #: joints that carry an end site (BVH): a leaf with one is a real joint, not an end marker
         self.has_end_site = np.zeros(self.n, dtype=bool)
