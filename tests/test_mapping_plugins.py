@@ -132,3 +132,17 @@ def test_third_party_mapper_never_gives_a_studio_joint_twice():
     assert mapping["l_forearm"] is None and "by hand" in mapping.reasons["l_forearm"]
     used = list(mapping.mapped().values())
     assert len(used) == len(set(used))
+
+
+@pytest.mark.parametrize("name, side, role, flag", [
+    ("leftarm", 1, "upperarm", None), ("rightupleg", -1, "thigh", None), ("BrasGauche", 1, "upperarm", None),
+    ("mano_der", -1, "hand", None), ("r-ARMCONTROL", -1, "upperarm", "control"),
+    ("COM_LeftForeArm", 1, "forearm", "helper"), ("LeftAcromion", 1, None, "helper"), ("Wing1.L", 1, None, "secondary"),
+])
+def test_glued_and_foreign_names(name, side, role, flag):
+    """Words written together are split, a few other languages are known, landmarks and segment
+    centres of mass are helpers, wings are not limbs."""
+    info = analyse(name)
+    assert info.side == side
+    assert role is None or role in info.roles
+    assert flag is None or flag in info.flags

@@ -5,7 +5,9 @@ are not part of the body (IK targets, control bones, props, hair).
 
 Normalization: the namespace (``mixamorig:``), known rig prefixes (``Bip01``, ``CC_Base_``,
 ``DEF-``, ``J_Bip_``...) and the prefix shared by nearly all names are stripped; the rest is
-split at camelCase, digits, ``_``, ``.``, ``-`` and spaces. Common CJK body words are translated.
+split at camelCase, digits, ``_``, ``.``, ``-`` and spaces, and known words written together
+(``leftarm``, ``ARMCONTROL``) are split. Common CJK body words are translated; a few Spanish,
+French, German and Portuguese body and side words are known.
 """
 from __future__ import annotations
 
@@ -43,6 +45,17 @@ ROLE_WORDS: dict[str, str] = {
     "shin": "shin", "calf": "shin", "lowerleg": "shin", "knee": "shin", "tibia": "shin", "crus": "shin",
     "leg": "leg", "foot": "foot", "ankle": "foot", "tarsal": "foot",
     "toe": "toe", "toes": "toe", "toebase": "toe", "ball": "toe", "forefoot": "toe",
+    # Spanish, French, German and Portuguese words that mean nothing else in a rig
+    "cadera": "hips", "bassin": "hips", "becken": "hips", "quadril": "hips", "columna": "spine",
+    "colonne": "spine", "wirbelsaeule": "spine", "pecho": "chest", "poitrine": "chest", "brust": "chest",
+    "cuello": "neck", "cou": "neck", "hals": "neck", "pescoco": "neck", "cabeza": "head", "tete": "head",
+    "kopf": "head", "cabeca": "head", "hombro": "shoulder", "epaule": "shoulder", "schulter": "shoulder",
+    "ombro": "shoulder", "brazo": "upperarm", "bras": "upperarm", "oberarm": "upperarm", "braco": "upperarm",
+    "antebrazo": "forearm", "avantbras": "forearm", "unterarm": "forearm", "antebraco": "forearm",
+    "mano": "hand", "muslo": "thigh", "cuisse": "thigh", "oberschenkel": "thigh",
+    "coxa": "thigh", "pierna": "shin", "jambe": "shin", "unterschenkel": "shin", "canela": "shin", "pie": "foot",
+    "pied": "foot", "fuss": "foot", "dedo": "finger", "doigt": "finger", "pulgar": "thumb",
+    "pouce": "thumb", "daumen": "thumb", "polegar": "thumb", "indice": "index", "zeigefinger": "index",
 }
 
 #: Word -> flag for joints that are not (or not only) body joints.
@@ -76,7 +89,9 @@ FLAG_WORDS: dict[str, str] = {
 
 #: Tokens that say the joint is on the character's left (+1) or right (-1).
 SIDE_WORDS: dict[str, int] = {"l": 1, "left": 1, "lf": 1, "lft": 1, "lt": 1, "links": 1, "gauche": 1, "izq": 1,
-                              "r": -1, "right": -1, "rt": -1, "rgt": -1, "rechts": -1, "droite": -1, "der": -1}
+                              "izquierdo": 1, "izquierda": 1, "esquerdo": 1, "esquerda": 1,
+                              "r": -1, "right": -1, "rt": -1, "rgt": -1, "rechts": -1, "droite": -1, "der": -1,
+                              "derecho": -1, "derecha": -1, "direito": -1, "direita": -1}
 
 #: Pairs of adjacent tokens that form one word ("Fore" + "Arm").
 COMPOUNDS: dict[tuple[str, str], str] = {
@@ -200,11 +215,21 @@ def bits(words) -> int:
     return out
 
 
+_KNOWN = frozenset(ROLE_WORDS) | frozenset(FLAG_WORDS) | frozenset(SIDE_WORDS)
+_SIDE_AFFIXES = tuple(w for w in SIDE_WORDS if len(w) >= 4)  # "left", "right", "links", "gauche"...
+
+
 def _split_glued(token: str) -> tuple[str, ...]:
-    """A token of two known words written together without a case change or separator
-    (``ARMCONTROL``, ``legorient``) -> the two words; any other token as it is."""
-    if len(token) < 6 or token in ROLE_WORDS or token in FLAG_WORDS:
+    """A token of known words written together without a case change or separator -> the words:
+    a side word in front or behind (``leftarm``, ``rightupleg``, ``brasgauche``) and two body or
+    warning words (``ARMCONTROL``, ``legorient``); any other token as it is."""
+    if len(token) < 6 or token in _KNOWN:
         return (token,)
+    for side in _SIDE_AFFIXES:
+        if token.startswith(side) and len(token) - len(side) >= 3:
+            return (side,) + _split_glued(token[len(side):])
+        if token.endswith(side) and len(token) - len(side) >= 3:
+            return _split_glued(token[:-len(side)]) + (side,)
     for cut in range(3, len(token) - 2):
         head, tail = token[:cut], token[cut:]
         if (head in ROLE_WORDS or head in FLAG_WORDS) and (tail in ROLE_WORDS or tail in FLAG_WORDS):
@@ -229,7 +254,7 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
             text = text[len(rig):]
             break
     text = _translate_cjk(text)
-    raw = [t.lower() for t in _raw_tokens(text)]
+    raw = [part for t in _raw_tokens(text) for part in _split_glued(t.lower())]
     side = 0
     tokens: list[str] = []
     numbers: list[int] = []
@@ -256,7 +281,6 @@ def analyse(name: str, prefix: str = "") -> NameInfo:
         else:
             joined.append(tokens[i])
             i += 1
-    joined = [part for t in joined for part in _split_glued(t)]
     roles = {ROLE_WORDS[t] for t in joined if t in ROLE_WORDS}
     flags = {FLAG_WORDS[t] for t in joined if t in FLAG_WORDS}
     # "hip" names the thigh when a side is given (LeftHip, lhip) and the pelvis otherwise (Hip, hip)
