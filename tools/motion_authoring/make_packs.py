@@ -1,6 +1,6 @@
-"""Author the built-in behaviour packs: locomotion-male, locomotion-female and reaching.
+"""Author the built-in behaviour packs: locomotion-male, locomotion-female, reaching and gestures.
 
-Run from the repository root: ``python -m tools.motion_authoring.make_packs``. It writes each pack's
+Run from the repository root: ``python -m tools.motion_authoring.make_packs [pack ...]`` (default: all). It writes each pack's
 skeleton, clips (BVH), manifest and README into ``behaviour_libs/<pack>/infuse_pack_<pack>/pack/`` and
 builds the pack (``infuse pack build``). The style figures and their sources are in
 :data:`STYLES` and repeated in each locomotion pack's README.
@@ -19,6 +19,7 @@ from infuse.packs.manifest import write_manifest
 
 from .body import Body
 from .gait import Gait, gait_motion
+from .gestures import gesture_clips
 from .reach import grasp_motion, reach_motion, reach_targets
 
 ROOT = Path(__file__).resolve().parents[2] / "behaviour_libs"
@@ -121,11 +122,33 @@ def make_reaching(body: Body) -> Path:
     return write_manifest(folder / "manifest.toml", pack, entries)
 
 
-def main() -> None:
+def make_gestures(body: Body) -> Path:
+    """The gestures pack: each gesture for the hands it is made for, its phases as sync times and the BML
+    lexemes it realizes as tags."""
+    folder = pack_folder("gestures")
+    stand, _ = gait_motion(body, locomotion_clips("male")["idle"][0], "stand")
+    entries = []
+    for spec, hand, motion in gesture_clips(body, stand):
+        write_clip(body, motion, folder / "clips" / f"{motion.name}.bvh")
+        entries.append({"name": motion.name, "file": f"clips/{motion.name}.bvh", "role": "gesture",
+                        "tags": [spec.name, *(lexeme.lower() for lexeme in spec.lexemes)], "loop": False,
+                        "hand": hand, "sync": {k: round(v, 4) for k, v in motion.sync_points.items()}})
+    write_clip(body, infuse.Motion.rest_pose(body.skeleton, name="rest"), folder / "skeleton.bvh")
+    pack = {"name": "gestures", "version": "1.0.0", "kind": "gesture", "skeleton": "skeleton.bvh", "analysis": "analysis.json",
+            "description": "conversational gestures for each hand and both: beats, offer, reject, shrug, count, wave, "
+                           "this big, cycle, contrast, self-point, chin touch, thumbs-up (procedural)"}
+    return write_manifest(folder / "manifest.toml", pack, entries)
+
+
+def main(packs=("locomotion-male", "locomotion-female", "reaching", "gestures")) -> None:
     body = Body.canonical()
-    for manifest in (make_locomotion(body, "male"), make_locomotion(body, "female"), make_reaching(body)):
+    makers = {"locomotion-male": lambda: make_locomotion(body, "male"), "locomotion-female": lambda: make_locomotion(body, "female"),
+              "reaching": lambda: make_reaching(body), "gestures": lambda: make_gestures(body)}
+    for manifest in (makers[p]() for p in packs):
         print(summary(build_pack(manifest)))
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(tuple(sys.argv[1:]) or ("locomotion-male", "locomotion-female", "reaching", "gestures"))

@@ -31,6 +31,7 @@ import numpy as np
 from ..contacts import foot_contacts
 from ..errors import UnusableInputError
 from .cycles import steadiest_cycle
+from .manifest import GESTURE_PHASES
 
 LOCOMOTION_COORDINATES = ("forward_speed", "lateral_speed", "turn_rate")
 REACH_COORDINATES = ("x", "y", "z")
@@ -254,6 +255,9 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk, c
         if note:
             out["notes"].append(note)
         out.update(cycle=list(cycle), keys=keys, parameters=locomotion_parameters(root, heading, cycle, fps))
+    elif kind == "gesture":  # timed by its authored phases; nothing to blend by
+        sync = {GESTURE_PHASES[k]: t for k, t in entry.sync.items()}
+        out.update(stroke=sync["stroke"], stroke_frame=int(round(sync["stroke"] * fps)), sync=sync, parameters={})
     else:
         hand = entry.hand
         if hand is None:  # the wrist that travels farther

@@ -171,6 +171,9 @@ def summary(pack: Pack) -> str:
                 lines.append("    " + ", ".join(done + [f"loop closed ({made['closed_deg']:.0f} deg at most)"]))
             if c.get("transition"):
                 lines.append(f"    does: {c['transition'] if c['transition'] != 'none' else 'no locomotion'}")
+        elif pack.kind == "gesture":
+            lines.append(f"  {c['name']:<28} {c['hand'] or '':<5} " + "  ".join(f"{k} {v:.2f}" for k, v in c["sync"].items())
+                         + f"  end {c['duration']:.2f} s")
         else:
             lines.append(f"  {c['name']:<40} {c['role']:<6} {c['hand'] or '':<5} stroke {c.get('stroke', 0):.2f} s  "
                          f"wrist ({p['x']:+.2f}, {p['y']:+.2f}, {p['z']:+.2f}) m")

@@ -213,6 +213,11 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             contacts = contacts[c0:c1 + 1]
             phases = None if phases is None else phases[c0:c1 + 1]
             stroke = 0.0
+        elif pack.kind == "gesture":  # played by its phases (``info["sync"]``), not blended
+            sl = slice(a, b)
+            stroke = float(info["stroke"])
+            params = {}
+            keys = np.array([0.0, stroke, info["duration"]])
         else:
             sl = slice(a, b)
             stroke = float(info["stroke"])

@@ -5,7 +5,7 @@
     [pack]
     name = "locomotion-female"
     version = "1.0.0"
-    kind = "locomotion"            # or "reach"
+    kind = "locomotion"            # or "reach", "gesture"
     skeleton = "skeleton.bvh"      # relative to the manifest (pack import and pack new write only such)
     analysis = "analysis.json"     # written by 'infuse pack build'
     description = "..."
@@ -16,7 +16,9 @@
     role = "cycle"                 # cycle (a locomotion loop), idle, reach, grasp, other
     tags = ["walk"]
     loop = true
-    hand = "left"                  # reach examples: which hand
+    hand = "left"                  # reach and gesture examples: which hand ("both" for gestures)
+    sync = { ready = 0.4, stroke_start = 0.5, stroke = 0.6, stroke_end = 0.8, relax = 1.1 }
+                                   # gestures: their phases, seconds from the clip's start
 
 Everything else about a clip (contacts, cycles, keys, parameters) is computed by the builder.
 """
@@ -29,9 +31,12 @@ from pathlib import Path
 from ..atomic import atomic_path
 from ..errors import InputError
 
-KINDS = ("locomotion", "reach")
-ROLES = ("cycle", "idle", "reach", "grasp", "other")
-HANDS = ("left", "right")
+KINDS = ("locomotion", "reach", "gesture")
+ROLES = ("cycle", "idle", "reach", "grasp", "gesture", "other")
+HANDS = ("left", "right", "both")
+#: A gesture's phases in the order they happen: manifest key -> BML sync point.
+GESTURE_PHASES = {"ready": "ready", "stroke_start": "strokeStart", "stroke": "stroke", "stroke_end": "strokeEnd",
+                  "relax": "relax"}
 
 
 @dataclass(frozen=True)
@@ -44,6 +49,7 @@ class ClipEntry:
     tags: tuple[str, ...] = ()
     loop: bool = True
     hand: str | None = None
+    sync: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -114,17 +120,40 @@ def read_manifest(path: str | Path) -> Manifest:
             raise InputError(path, f"{where}.role", f"unknown role {role!r}; expected one of {', '.join(ROLES)}")
         hand = c.get("hand")
         if hand is not None and hand not in HANDS:
-            raise InputError(path, f"{where}.hand", "expected 'left' or 'right'")
+            raise InputError(path, f"{where}.hand", f"expected one of {', '.join(HANDS)}")
         tags = c.get("tags", [])
         if not isinstance(tags, list) or not all(isinstance(t, str) for t in tags):
             raise InputError(path, f"{where}.tags", "expected a list of strings")
-        clips.append(ClipEntry(name, _resolve(folder, c["file"]), role, tuple(tags), bool(c.get("loop", role in ("cycle", "idle"))), hand))
+        sync = _sync(path, f"{where}.sync", c.get("sync", {}))
+        if role == "gesture" and "stroke" not in sync:
+            raise InputError(path, f"{where}.sync", "a gesture names its phases (at least its stroke), seconds")
+        clips.append(ClipEntry(name, _resolve(folder, c["file"]), role, tuple(tags), bool(c.get("loop", role in ("cycle", "idle"))), hand,
+                               sync))
     extra = {k: v for k, v in pack.items() if k not in ("name", "version", "kind", "skeleton", "analysis", "description")}
     return Manifest(path.resolve(), pack["name"], pack["version"], pack["kind"], _resolve(folder, pack["skeleton"]),
                     _resolve(folder, pack.get("analysis", "analysis.json")), tuple(clips), str(pack.get("description", "")), extra)
 
 
+def _sync(path: Path, where: str, table) -> dict:
+    """A clip's phases: :data:`GESTURE_PHASES` keys -> seconds, in that order (not decreasing)."""
+    if not isinstance(table, dict):
+        raise InputError(path, where, "expected a table of phase = seconds")
+    unknown = sorted(set(table) - set(GESTURE_PHASES))
+    if unknown:
+        raise InputError(path, where, f"unknown phase {unknown[0]!r}; expected {', '.join(GESTURE_PHASES)}")
+    times = [(k, table[k]) for k in GESTURE_PHASES if k in table]
+    for k, t in times:
+        if isinstance(t, bool) or not isinstance(t, (int, float)) or not (t >= 0.0 and t < float("inf")):
+            raise InputError(path, f"{where}.{k}", f"expected seconds >= 0, got {t!r}")
+    for (k0, t0), (k1, t1) in zip(times, times[1:]):
+        if t1 < t0:
+            raise InputError(path, f"{where}.{k1}", f"{k1} ({t1:g} s) comes before {k0} ({t0:g} s)")
+    return {k: float(t) for k, t in times}
+
+
 def _toml_value(value) -> str:
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):
