@@ -254,5 +254,6 @@ def test_bad_calls_raise_clear_errors():
         scene.add_object("cup", (0, float("nan"), 0))
     with pytest.raises(UsageError, match="names no character"):
         scene.bml(None, f'<bml {BML} id="z"><head id="h" lexeme="NOD"/></bml>')
-    with pytest.raises(UsageError, match="facing"):
-        scene.add_character(corpus_character("rpm"), "eve", facing="nowhere")
+    scene.add_character(corpus_character("rpm"), "eve", facing="nowhere")  # "nowhere" may still be added
+    with pytest.raises(UsageError, match="facing 'nowhere'"):
+        scene.step()

@@ -36,7 +36,10 @@ def build_scene(spec: SceneSpec, quiet: bool = True) -> Scene:
     scene = Scene(spec.fps, tts=engine, tts_settings=tts, idle=spec.idle, seed=spec.seed, quiet=quiet)
     # A name to face is where that character or object stands (it may come later in the file).
     places = {o.name: o.position for o in spec.objects} | {c.name: c.position for c in spec.characters}
+    known = {name.lower() for name in places}
     for k, c in enumerate(spec.characters):
+        if isinstance(c.facing, str) and c.facing.lower() not in known:
+            raise InputError(spec.path, f"character[{k + 1}].facing", f"no character or object named {c.facing!r} in the scene")
         facing = places.get(c.facing, c.facing) if isinstance(c.facing, str) else c.facing
         with _place(spec, f"character[{k + 1}]"):
             scene.add_character(c.file, c.name, position=c.position, facing=facing, packs=c.packs, map=c.map,
