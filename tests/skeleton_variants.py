@@ -14,8 +14,9 @@ the alternatives). Variants:
 - ``convention_*``: the labelled joints renamed into another naming convention (Mixamo with its
   namespace, Unreal, Blender ``.L``/``.R``), the other joints keep their names;
 - ``prefixed``: every name behind a namespace and a studio prefix (``Char01:rig_``);
-- ``a_pose`` / ``t_pose``: the arms turned about the shoulders in the body's frontal plane to 45
-  degrees below the horizontal or to the horizontal (the rest pose changes, the motion does not);
+- ``a_pose`` / ``t_pose`` / ``arms_down``: the arms turned about the shoulders in the body's
+  frontal plane to 45 degrees below the horizontal, to the horizontal or to 80 degrees below it
+  (the rest pose changes, the motion does not);
 - ``rest_rotations``: random local rest rotations with the same joint positions;
 - ``named_helpers``: zero-length roll joints after each upper arm, forearm, thigh and shin
   (MotionBuilder style, named ``<joint>Roll``), a named IK target and pole per hand and foot;
@@ -449,6 +450,7 @@ def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
     out.append(prefixed(skeleton, poses, label))
     out.append(arms_posed(skeleton, poses, label, -45.0, "a_pose"))
     out.append(arms_posed(skeleton, poses, label, 0.0, "t_pose"))
+    out.append(arms_posed(skeleton, poses, label, -80.0, "arms_down"))
     out.append(rest_rotations(skeleton, poses, label))
     out.append(named_helpers(skeleton, poses, label))
     for kind in ("fingers", "clavicles", "neck"):

@@ -157,7 +157,7 @@ def _hands_on_ground(view: SkeletonView, plan) -> bool:
     ground = float(height[outside].min())
     hands = height[[view.far[arms.a], view.far[arms.b]]]
     leg_height = float(sockets @ up) - ground
-    return leg_height > 0 and float(hands.mean()) - ground < 0.2 * leg_height
+    return leg_height > 0 and float(hands.mean()) - ground < 0.08 * leg_height
 
 
 #: The body-part roles a joint's name may carry for each canonical name (by its part after the side).
