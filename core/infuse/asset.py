@@ -6,6 +6,8 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
+import numpy as np
+
 from .errors import PARSE_ERRORS, InfuseError, InputError
 from .mesh import SkinnedMesh
 from .motion import Motion
@@ -52,13 +54,19 @@ class Asset:
         if self.mesh_loader is None:
             return ()
         try:
-            return tuple(self.mesh_loader())
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # see fileio.load
+                meshes = tuple(self.mesh_loader())
         except InfuseError:
             raise
         except RecursionError:
             raise InputError(self.path, "meshes", "cannot be decoded: nesting too deep") from None
         except PARSE_ERRORS as exc:  # a malformed mesh the reader's own checks missed
             raise InputError(self.path, "meshes", f"cannot be decoded: {type(exc).__name__}: {exc}") from exc
+        for k, mesh in enumerate(meshes):
+            for name, value in vars(mesh).items():
+                if isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+                    raise InputError(self.path, f"mesh {k} {name}", "is not finite (NaN or infinity)")
+        return meshes
 
     @property
     def num_frames(self) -> int:

@@ -45,7 +45,10 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
         raise InputError(path, None, "is a folder, expected a file")
     reader = _pick("reader", registry.table_for_file("reader", path, format), path, format)
     try:
-        return reader.read(path, **options)
+        # Hostile numbers (1e308 offsets) may overflow in a reader's arithmetic; what it returns is then
+        # refused by the model's own checks (finite, bounded), so numpy's warnings would only be noise.
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return reader.read(path, **options)
     except InputError as exc:
         if exc.file is None:  # raised by the core model's own checks, which do not know the file
             raise exc.naming(path) from None
