@@ -18,7 +18,7 @@ from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
 
-from .body import X, Y, Z, Body, frame_rotation, rot, smooth, two_bone
+from .body import Y, Z, Body, frame_rotation, rot, smooth, two_bone
 from .gait import FPS
 
 PHASES = ("ready", "stroke_start", "stroke", "stroke_end", "relax")
@@ -93,7 +93,8 @@ SPECS = (
     GestureSpec("offer", {"ready": 0.4, "stroke_start": 0.45, "stroke": 0.68, "stroke_end": 0.9, "relax": 1.1}, 1.6,
                 {"ready": Key((-0.02, -0.32, 0.22), "in"), "stroke_start": Key((-0.02, -0.32, 0.24), "in"),
                  "stroke": Key((0.06, -0.30, 0.38), "up", "open"), "stroke_end": Key((0.06, -0.30, 0.37), "up", "open")},
-                ("OFFER", "PALM_UP", "GIVE", "YOU", "PRESENT", "PALMUP", "OPENHANDS", "OPEN_HANDS")),
+                ("OFFER", "PALM_UP", "GIVE", "YOU", "PRESENT", "PALMUP", "OPENHANDS", "OPEN_HANDS", "CONDUIT", "METAPHORIC",
+                 "ASK", "SUGGEST", "INFORM", "SPREAD", "EXPLAIN")),
     GestureSpec("reject", {"ready": 0.38, "stroke_start": 0.42, "stroke": 0.6, "stroke_end": 0.85, "relax": 1.05}, 1.55,
                 {"ready": Key((-0.02, -0.28, 0.22), "in"), "stroke_start": Key((-0.02, -0.24, 0.24), "out", "open"),
                  "stroke": Key((0.0, -0.10, 0.38), "out", "open"), "stroke_end": Key((0.0, -0.10, 0.36), "out", "open")},
@@ -105,7 +106,7 @@ SPECS = (
     GestureSpec("count", {"ready": 0.38, "stroke_start": 0.44, "stroke": 0.58, "stroke_end": 0.85, "relax": 1.0}, 1.5,
                 {"ready": Key((-0.02, -0.26, 0.24), "in", "point"), "stroke_start": Key((-0.03, -0.2, 0.26), "out", "point"),
                  "stroke": Key((-0.04, -0.12, 0.3), "out", "point"), "stroke_end": Key((-0.04, -0.13, 0.3), "out", "point")},
-                ("COUNT", "ONE", "ENUMERATE", "FIRST", "LIST")),
+                ("COUNT", "ONE", "ENUMERATE", "FIRST", "LIST", "INDEX")),
     GestureSpec("wave", {"ready": 0.45, "stroke_start": 0.55, "stroke": 0.65, "stroke_end": 1.55, "relax": 1.65}, 2.2,
                 {"ready": Key((0.08, -0.05, 0.16), "out", "open"), "stroke_start": Key((0.1, 0.02, 0.16), "out", "open"),
                  "stroke": Key((0.1, 0.02, 0.16), "out", "open"), "stroke_end": Key((0.1, 0.02, 0.16), "out", "open")},

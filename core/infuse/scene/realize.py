@@ -5,6 +5,7 @@
 | ``speech`` | the ``speech`` controller (lip sync of the very utterance the scheduler timed); the character speaks, so saccades pause; its audio goes to the exported WAV |
 | ``face`` | the ``face`` controller: a lexeme or action unit on the character's morphs, face poses or jaw, in from start to attackPeak, out from relax to end |
 | ``gaze``, ``head``, ``saccade``, ``blink``, ``breathing`` and any other installed kind | the installed controller's BML builder (:meth:`~infuse.runtime.Runtime.realize`); targets name scene objects, characters or ``character:joint`` |
+| ``gesture`` of the ``gestures`` pack | the ``gesture`` controller: the pack's gesture on the arms, its phases on the sync points, co-articulated with the gesture before it |
 | ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback |
 | ``locomotion``, ``reach``, ``grab``, ``ik_constraint``, ``pointing`` | the behaviour-pack controllers of that kind, when installed and the character was infused with a pack of that kind (a locomotion pack, a reaching pack); otherwise warningFeedback |
 | ``wait``, ``event`` | nothing to show (their sync points still give feedback) |
@@ -55,6 +56,8 @@ def realize(scene, activation: Activation):
         return _speech(scene, activation)
     if kind == "face" and "face" in installed:
         return _face(scene, activation)
+    if kind == "gesture" and activation.parameters.get("pack") and "gesture" in installed:
+        return _installed(scene, activation)  # a gestures pack's gesture: the gesture controller
     if kind in CLIP_KINDS:
         return _clip(scene, activation)
     if kind in PACK_KINDS and (kind not in installed or scene.pack_space(activation.character, PACK_SPACE[kind]) is None):

@@ -1,9 +1,15 @@
 """``<gesture>``, ``<pointing>``, SmartBody's ``<animation>`` and ``<blend>``: clips from behaviour packs when
-their timing is known, otherwise typical gesture phase durations."""
+their timing is known, otherwise typical gesture phase durations.
+
+A ``<gesture lexeme>`` the character has no clip of that name for is looked up in the installed
+``gestures`` pack (:mod:`.gesture_lexicon`) and timed by that gesture's phases; ``amplitude`` (1: as
+authored), ``speed`` (1: as authored) and ``repeats`` (strokes) shape it. A lexeme the pack does not
+know warns here, naming it."""
 from __future__ import annotations
 
 from infuse.bml import BehaviourError, BehaviourPlan, TimingModel
 
+from . import gesture_lexicon
 from .common import Notes, clip_model, number, with_sbm, word
 
 # Typical phase timing (seconds from start) of a beat and of larger gestures (deictic, iconic, metaphoric).
@@ -12,7 +18,8 @@ GESTURE_POINTS = {"start": 0.0, "ready": 0.45, "strokeStart": 0.5, "stroke": 0.6
 POINTING_POINTS = {"start": 0.0, "ready": 0.6, "strokeStart": 0.6, "stroke": 0.8, "strokeEnd": 1.6, "relax": 2.0, "end": 2.6}
 ANIMATION_DEFAULT_S = 2.0
 MODES = ("LEFT_HAND", "RIGHT_HAND", "BOTH_HANDS")
-GESTURE_ATTRIBUTES = {"lexeme", "mode", "type", "name", "emotion", "target", "poststroke_hold", "amount"} | with_sbm(
+GESTURE_ATTRIBUTES = {"lexeme", "mode", "type", "name", "emotion", "target", "poststroke_hold", "amount", "amplitude",
+                      "speed", "repeats"} | with_sbm(
     "joint-range", "frequency", "scale", "additive", "priority")
 POINTING_ATTRIBUTES = {"target", "mode"}
 ANIMATION_ATTRIBUTES = {"name", "speed"} | with_sbm("speed", "additive", "joint-range", "priority")
@@ -33,21 +40,46 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
     clip = word(behaviour, "name") or lexeme
     if clip is None:
         raise BehaviourError("it has neither a lexeme nor a name")
+    mode = _mode(behaviour, notes)
+    hold = number(behaviour, "poststroke_hold", 0.0, notes, minimum=0.0)
+    if lexeme and not context.clip_timing(clip) and gesture_lexicon.known():
+        found = gesture_lexicon.lookup(lexeme, mode)
+        if found is not None:
+            return _pack_gesture(behaviour, lexeme, found, hold, notes)
+        notes.append(f"lexeme {lexeme!r} is not a gesture of the gestures pack; known lexemes: "
+                     f"{', '.join(gesture_lexicon.lexemes())}")
     default = BEAT_POINTS if "beat" in (lexeme or clip).lower() else GESTURE_POINTS
     timing, source = clip_model(context, clip, default)
-    hold = number(behaviour, "poststroke_hold", 0.0, notes, minimum=0.0)
     if hold:
         points = dict(zip(timing.sync_ids, timing.offsets_s))
         cut = points["strokeEnd"] if "strokeEnd" in points else points["end"]
         timing = TimingModel.from_points({s: t + (hold if t > cut else 0.0) for s, t in points.items()})
     noise = {k: number(behaviour, with_sbm(k), 0.0, notes) for k in ("frequency", "scale")
              if word(behaviour, with_sbm(k))}
-    parameters = {"lexeme": lexeme, "clip": clip, "timing_source": source, "mode": _mode(behaviour, notes),
+    parameters = {"lexeme": lexeme, "clip": clip, "timing_source": source, "mode": mode,
                   "type": word(behaviour, "type"), "emotion": word(behaviour, "emotion"),
                   "target": word(behaviour, "target"), "poststroke_hold_s": hold,
                   "noise": ({"joints": (word(behaviour, with_sbm("joint-range")) or "").split(), **noise}
                             if noise else None)}
     return BehaviourPlan(timing, "gesture", parameters, notes=tuple(notes))
+
+
+def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes) -> BehaviourPlan:
+    """The plan of a gesture of the gestures pack: its phases, divided by ``speed``, the stroke phase
+    repeated ``repeats`` times, ``poststroke_hold`` seconds held after the stroke's end."""
+    gesture, clip, phases, note = found
+    if note:
+        notes.append(note)
+    speed = number(behaviour, "speed", 1.0, notes, minimum=0.05, maximum=20.0)
+    amplitude = number(behaviour, "amplitude", 1.0, notes, minimum=0.05, maximum=3.0)
+    repeats = int(round(number(behaviour, "repeats", 1.0, notes, minimum=1.0, maximum=20.0)))
+    extra = 2.0 * (phases["stroke"] - phases["strokeStart"]) * (repeats - 1)
+    points = {p: t + (extra if t > phases["stroke"] else 0.0) for p, t in phases.items()}
+    points = {p: t / speed + (hold if p in ("relax", "end") else 0.0) for p, t in points.items()}
+    parameters = {"lexeme": lexeme, "gesture": gesture, "clip": clip, "pack": gesture_lexicon.PACK,
+                  "timing_source": "pack", "amplitude": amplitude, "speed": speed, "repeats": repeats,
+                  "poststroke_hold_s": hold}
+    return BehaviourPlan(TimingModel.from_points(points), "gesture", parameters, notes=tuple(notes))
 
 
 def plan_pointing(behaviour, context) -> BehaviourPlan:

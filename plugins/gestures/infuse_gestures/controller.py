@@ -1,0 +1,151 @@
+"""The ``gesture`` controller: one clip of a gestures pack on the arms, over whatever plays below.
+
+The clip (retargeted onto the character by infusing it with the pack) drives the joints of the hands it
+is made for (shoulder girdle to fingertips), on the posture layer. Its phases land on the wanted times
+(:func:`~infuse_gestures.timewarp.phase_warp`: BML sync points, holds, repeated strokes). ``amplitude``
+scales each joint's movement away from the clip's ready pose (1: as authored). A gesture that starts
+before the previous one of the same character has retracted co-articulates: the previous one stays at
+its stroke's end and the new one blends from there to its own ready pose, never passing through rest.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.errors import MissingFeatureError, UsageError
+from infuse.runtime import Controller, Layer, Mode, sample_motion
+
+from .timewarp import PHASES, phase_warp
+
+#: A gesture that starts less than this after the previous one ends follows on from its stroke, seconds.
+COARTICULATION_GAP_S = 0.5
+_LEGS = ("hip", "knee", "ankle", "forefoot", "toe")
+_INFUSIONS: dict = {}
+
+
+def gesture_space(rig, pack: str):
+    """The :class:`~infuse.packs.BlendSpace` of gesture pack ``pack`` on the rig's character (infused once)."""
+    from infuse.packs import BlendSpace, infuse_character
+
+    if isinstance(pack, BlendSpace):
+        return pack
+    key = (id(rig.character), id(rig.mapping), str(pack))
+    if key not in _INFUSIONS:
+        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
+        _INFUSIONS[key] = (rig.character, next(iter(infusion.spaces.values())))
+    return _INFUSIONS[key][1]
+
+
+def authored_phases(pack, clip: str) -> dict:
+    """Seconds of every phase of :data:`PHASES` of ``clip`` as the pack authored it."""
+    from infuse.packs import load_pack
+
+    doc = load_pack(pack).require_built()
+    info = next((c for c in doc["clips"] if c["name"] == clip), None)
+    if info is None or "sync" not in info:
+        raise UsageError(f"pack {pack!r} has no gesture {clip!r}")
+    return {"start": 0.0, **info["sync"], "end": float(info["duration"])}
+
+
+class Gesture(Controller):
+    """Play gesture ``clip`` of ``pack``.
+
+    ``phases``: seconds from the start each phase of :data:`PHASES` is wanted at (default: as authored,
+    divided by ``speed``); ``repeats``: strokes; ``amplitude``: > 0, 1 as authored.
+    """
+
+    kind = "gesture"
+    layer = Layer.POSTURE
+    mode = Mode.OVERRIDE
+
+    def __init__(self, clip: str, pack: str = "gestures", phases: dict | None = None, repeats: int = 1,
+                 amplitude: float = 1.0, speed: float = 1.0):
+        if not (np.isfinite(amplitude) and amplitude > 0) or not (np.isfinite(speed) and speed > 0):
+            raise UsageError(f"gesture {clip!r}: amplitude and speed must be positive numbers")
+        if int(repeats) < 1:
+            raise UsageError(f"gesture {clip!r}: repeats must be at least 1, got {repeats}")
+        self.clip, self.pack = clip, pack
+        self.authored = authored_phases(pack, clip)
+        wanted = phases or {p: t / speed for p, t in self.authored.items()}
+        missing = [p for p in PHASES if p not in wanted]
+        if missing:
+            raise UsageError(f"gesture {clip!r}: no time for {', '.join(missing)}")
+        times = [float(wanted[p]) for p in PHASES]
+        if any(b < a - 1e-9 for a, b in zip(times, times[1:])):
+            raise UsageError(f"gesture {clip!r}: phases out of order: {dict(zip(PHASES, times))}")
+        self.phases = dict(zip(PHASES, times))
+        self.repeats, self.amplitude = int(repeats), float(amplitude)
+        self.enter_ready = False        # set when it follows on from another gesture's stroke
+        self.leave_at_stroke_end = False  # set when another gesture follows on from its stroke
+        self.duration_s = self.phases["end"]
+        self.blend_in_s = min(0.2, self.phases["ready"])
+        self.blend_out_s = min(0.2, self.phases["end"] - self.phases["relax"])
+
+    def describe(self) -> str:
+        return f"gesture {self.clip}"
+
+    def bind(self, rig, report):
+        space = gesture_space(rig, self.pack)
+        if self.clip not in space.clips:
+            raise UsageError(f"pack {space.pack!r} has no gesture {self.clip!r}")
+        clip = space.clips[self.clip]
+        sides = ("l", "r") if clip.hand == "both" else ((clip.hand or "right")[0],)
+        canonical = rig.mapping.inverse()
+        joints = [j for j, name in enumerate(rig.skeleton.names) if j > 0 and canonical.get(name, "")[:2] in
+                  {f"{s}_" for s in sides} and canonical[name].split("_", 1)[1] not in _LEGS]
+        if not joints:
+            raise MissingFeatureError(f"{rig.name}: no arm joints are mapped for gesture {self.clip!r}")
+        joints = np.array(joints, dtype=np.int64)
+        ready, _, _, _ = sample_motion(clip.motion, np.array([self.authored["ready"]]), loop=False, joints=joints)
+        return {"motion": clip.motion, "joints": joints, "ready": ready[0]}
+
+    def clip_times(self, local_times) -> np.ndarray:
+        """Clip seconds (F,) at ``local_times`` (F,) seconds from the gesture's start."""
+        return phase_warp(local_times, self.phases, self.authored, self.repeats, self.enter_ready,
+                          self.leave_at_stroke_end)
+
+    def evaluate_one(self, job, block) -> None:
+        b = job.binding
+        rotations, _, _, _ = sample_motion(b["motion"], self.clip_times(job.local_times), loop=False, joints=b["joints"])
+        if self.amplitude != 1.0:
+            rotations = self._scaled(rotations, b["ready"], job.local_times)
+        job.pose.set_rotations(b["joints"], rotations, job.weight, job.mode)
+
+    def _scaled(self, rotations: np.ndarray, ready: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(F, K, 4) rotations whose turn away from the ready pose (K, 4) is scaled by the amplitude, from
+        ready to the stroke's end, easing back to as authored by relax."""
+        p = self.phases
+        fade = np.clip((t - p["strokeEnd"]) / max(p["relax"] - p["strokeEnd"], 1e-6), 0.0, 1.0)
+        exponent = np.where((t >= p["ready"]) & (t <= p["relax"]), self.amplitude + (1.0 - self.amplitude) * fade, 1.0)
+        away = quat.multiply(quat.conjugate(np.broadcast_to(ready, rotations.shape)), rotations)
+        return quat.multiply(np.broadcast_to(ready, rotations.shape),
+                             quat.from_rotvec(quat.to_rotvec(away) * exponent[:, None, None]))
+
+
+def _previous(runtime, character: str, start_s: float):
+    """The character's latest gesture activity that started before ``start_s`` and ends after
+    ``start_s - COARTICULATION_GAP_S``, or None."""
+    found = [a for a in runtime.activities if a.rig.name == character and isinstance(a.controller, Gesture)
+             and a.start_s < start_s - 1e-9 and (a.end_s is None or a.end_s > start_s - COARTICULATION_GAP_S)]
+    return max(found, key=lambda a: a.start_s, default=None)
+
+
+def gesture_from_bml(parameters: dict, runtime, character: str, activation=None) -> Gesture:
+    """A :class:`Gesture` from a planned BML ``<gesture>``: its phases at the activation's sync times; a
+    gesture that follows another co-articulates with it (see the module doc)."""
+    start = activation.start if activation is not None else runtime.time
+    phases = None
+    if activation is not None and all(activation.time(p) is not None for p in PHASES[1:-1]):
+        phases = {p: activation.time(p) - start for p in PHASES[1:-1]}
+        phases.update(start=0.0, end=activation.end - start)
+    gesture = Gesture(parameters["clip"], parameters.get("pack") or "gestures", phases,
+                      int(parameters.get("repeats") or 1), float(parameters.get("amplitude") or 1.0),
+                      float(parameters.get("speed") or 1.0))
+    previous = _previous(runtime, character, start)
+    if previous is not None:
+        ready_s = start + gesture.phases["ready"]
+        previous.controller.leave_at_stroke_end = True
+        previous.end_s, previous.blend_out_s = max(ready_s, previous.start_s), 0.0
+        gesture.enter_ready = True
+        gesture.blend_in_s = max(gesture.phases["ready"], 1.0 / runtime.fps)
+    return gesture
