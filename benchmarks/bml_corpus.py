@@ -3,7 +3,7 @@
 Prints, per source folder: documents parsed and scheduled without a warning, with warnings, and invalid
 (refused with a clear error); documents realized on a character (the Ready Player Me avatar, one
 scene per document, every frame evaluated to the end of its blocks) and the behaviours that became
-runtime activities; the time taken; and how many of the expected timings stated in the OpenBMLParser
+runtime activities, and of the ``<gesture>`` behaviours how many are played; the time taken; and how many of the expected timings stated in the OpenBMLParser
 documents' header comments the scheduler reproduces.
 
     python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30]
@@ -52,8 +52,11 @@ def realize(document, character, fps: float) -> dict:
     scene.motion("character")
     scene.audio("character")
     warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
+    gestures = [(a.block, a.behaviour) for record in scene.scheduler.blocks.values() for a in record.activations
+                if a.element == "gesture"]
     return {"activities": len(scene.activities), "warnings": warnings, "frames": scene.runtime.frame,
-            "synthesis_s": scene.speech.synthesis_s}
+            "synthesis_s": scene.speech.synthesis_s, "gestures": len(gestures),
+            "gestures_played": sum(key in scene.activities for key in gestures)}
 
 
 def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -> dict:
@@ -106,6 +109,8 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
                 continue
             tally["realized"] += 1
             tally["activities"] += outcome["activities"]
+            tally["gestures"] += outcome["gestures"]
+            tally["gestures played"] += outcome["gestures_played"]
             frames += outcome["frames"]
             synthesis_s += outcome["synthesis_s"]
             if verbose:
@@ -125,6 +130,8 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
         print(f"{len(realized)} documents realized on {CHARACTER} at {realize_fps:g} fps: {frames} frames "
               f"({frames / realize_fps:.0f} s of animation) in {realize_s:.1f} CPU s, of which speech synthesis "
               f"{synthesis_s:.1f} s")
+        gestures = sum(t["gestures"] for t in counts.values())
+        print(f"<gesture> behaviours played: {sum(t['gestures played'] for t in counts.values())} of {gestures}")
 
     status = Counter(o.status for _, o in outcomes)
     checkable = status["matched"] + status["mismatched"]

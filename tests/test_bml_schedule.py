@@ -250,7 +250,7 @@ def test_failing_third_party_handler_is_a_warning():
 
 def test_smartbody_dialect_allows_starting_before_the_block():
     s = Scheduler()
-    (r,) = s.submit('<act><bml><gesture lexeme="DEICTIC" type="YOU" stroke="0" relax="2"/></bml></act>')
+    (r,) = s.submit('<act><bml><gesture lexeme="BEAT" type="YOU" stroke="0" relax="2"/></bml></act>')
     a = r.activations[0]
     assert a.time("stroke") == pytest.approx(0.0) and a.start < 0 and not r.issues
 

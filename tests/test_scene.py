@@ -216,12 +216,12 @@ def test_replace_interrupts_the_running_block():
 def test_behaviours_without_their_controller_are_reported():
     scene = two_characters()
     scene.walk_to("bob", (0.0, 1.0))
-    scene.bml("ann", f'<bml {BML} id="g"><gesture id="beat" lexeme="BEAT"/></bml>')
+    scene.bml("ann", f'<bml {BML} id="g"><gesture id="beat" lexeme="JUGGLE"/></bml>')  # no pack has it
     scene.gaze("ann", "nobody_here")
     warnings = {e.id: e for e in scene.feedback.log if e.kind == "warningFeedback"}
     walk = next(e for k, e in warnings.items() if k.startswith("walk"))
     assert walk.type == "CANNOT_CREATE_BEHAVIOR" and "no locomotion pack infused" in walk.description
-    assert warnings["g:beat"].type == "CANNOT_CREATE_BEHAVIOR" and "BEAT" in warnings["g:beat"].description
+    assert warnings["g:beat"].type == "CANNOT_CREATE_BEHAVIOR" and "JUGGLE" in warnings["g:beat"].description
     missing = next(e for k, e in warnings.items() if k.startswith("gaze"))
     assert missing.type == "NO_SUCH_TARGET" and "nobody_here" in missing.description
     scene.run(1.0)  # the rest plays

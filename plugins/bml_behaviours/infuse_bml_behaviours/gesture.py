@@ -46,8 +46,8 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         found = gesture_lexicon.lookup(lexeme, mode)
         if found is not None:
             return _pack_gesture(behaviour, lexeme, found, hold, notes)
-        notes.append(f"lexeme {lexeme!r} is not a gesture of the gestures pack; known lexemes: "
-                     f"{', '.join(gesture_lexicon.lexemes())}")
+        notes.append(f"lexeme {lexeme!r} names no gesture of the gestures pack (its gestures: "
+                     f"{', '.join(gesture_lexicon.gestures())})")
     default = BEAT_POINTS if "beat" in (lexeme or clip).lower() else GESTURE_POINTS
     timing, source = clip_model(context, clip, default)
     if hold:

@@ -73,7 +73,7 @@ def lookup(lexeme: str, mode: str | None) -> tuple[str, str, dict, str | None] |
     return gesture, name, dict(phases), note
 
 
-def lexemes() -> list[str]:
-    """Every lexeme the installed pack realizes (upper case), for messages."""
+def gestures() -> list[str]:
+    """The installed pack's gestures (their lexemes are listed in its manifest and docs/bml.md)."""
     lexicon = _lexicon()
-    return sorted(t.upper() for t in lexicon[0]) if lexicon else []
+    return sorted(lexicon[1]) if lexicon else []

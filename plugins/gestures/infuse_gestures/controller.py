@@ -29,11 +29,12 @@ def gesture_space(rig, pack: str):
 
     if isinstance(pack, BlendSpace):
         return pack
-    key = (id(rig.character), id(rig.mapping), str(pack))
+    # Keyed by the asset and mapping, which scenes share when they add the same Character (kept alive with it).
+    key = (id(rig.character.asset), id(rig.mapping), str(pack))
     if key not in _INFUSIONS:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        _INFUSIONS[key] = (rig.character, next(iter(infusion.spaces.values())))
-    return _INFUSIONS[key][1]
+        _INFUSIONS[key] = (rig.character.asset, rig.mapping, next(iter(infusion.spaces.values())))
+    return _INFUSIONS[key][2]
 
 
 def authored_phases(pack, clip: str) -> dict:
