@@ -203,3 +203,53 @@ def test_lexemes_map_onto_the_pack_by_word_and_hand():
     gesture, clip, _, note = gesture_lexicon.lookup("THINK", "BOTH_HANDS")
     assert clip == "chin_touch_right" and "both" in note
     assert gesture_lexicon.lookup("JUGGLE_FLAMINGOS", None) is None
+
+
+def test_stroke_on_a_word_of_speech_lands_within_a_frame():
+    """``stroke="s1:tm1"``: the stroke lands on the synthesized word's time, measured on the wrist."""
+    scene = Scene(fps=FPS, quiet=True, idle=False, pack_cache=CACHE)
+    scene.add_character(corpus_character("rpm"), "bob", packs=("locomotion-male",))
+    if scene.speech.unavailable:
+        pytest.skip(f"no speech synthesis: {scene.speech.unavailable}")
+    scene.bml("bob", BML.format(id="b1", body='<speech id="s1"><text>I would like to <sync id="tm1"/>offer you '
+                                               'this.</text></speech><gesture id="g1" lexeme="BEAT" stroke="s1:tm1"/>'),
+              at=0.0)
+    scene.run(scene.end_time + 2.0 / FPS)
+    word = scene.activities[("b1", "s1")].source.time("tm1")
+    activation = scene.activities[("b1", "g1")].source
+    assert activation.time("stroke") == pytest.approx(word, abs=1e-9) and word > 0.3
+    rig = scene.runtime.rig("bob")
+    wrist = chest_wrist(rig, scene.motion("bob"), "r")
+    target, _ = authored_stroke(rig, activation.parameters["clip"], "r")
+    window = np.arange(int(activation.time("strokeStart") * FPS), int(np.ceil(activation.time("strokeEnd") * FPS)) + 1)
+    closest = window[np.argmin(np.linalg.norm(wrist[window] - target, axis=-1))]
+    assert abs(closest / FPS - word) <= 1.0 / FPS + 1e-9, (closest / FPS, word)
+
+
+def test_the_pack_has_every_gesture_for_each_hand_with_its_phases():
+    from infuse.packs import load_pack
+
+    doc = load_pack("gestures").require_built()
+    clips = {c["name"]: c for c in doc["clips"]}
+    for gesture in ("beat_small", "beat_medium", "beat_large", "offer", "reject", "shrug", "count", "wave", "this_big",
+                    "cycle", "contrast", "self_point", "chin_touch", "thumbs_up"):
+        for hand in ("left", "right"):
+            c = clips[f"{gesture}_{hand}"]
+            times = [0.0] + [c["sync"][p] for p in ("ready", "strokeStart", "stroke", "strokeEnd", "relax")] + [c["duration"]]
+            assert all(b > a for a, b in zip(times, times[1:])), (c["name"], times)
+            assert c["hand"] == hand and gesture in c["tags"]
+    assert not doc["report"]
+
+
+@pytest.mark.parametrize("sync,where", [("{ ready = 0.4 }", "clips[0].sync"),
+                                        ("{ ready = 0.4, stroke = 0.3 }", "clips[0].sync.stroke"),
+                                        ("{ stroke = 0.4, apex = 0.5 }", "clips[0].sync")])
+def test_bad_gesture_phases_in_a_manifest_name_the_place(tmp_path, sync, where):
+    from infuse.errors import InputError
+    from infuse.packs.manifest import read_manifest
+
+    (tmp_path / "manifest.toml").write_text('[pack]\nname = "g"\nversion = "1"\nkind = "gesture"\nskeleton = "s.bvh"\n\n'
+                                            f'[[clips]]\nfile = "a.bvh"\nrole = "gesture"\nsync = {sync}\n')
+    with pytest.raises(InputError) as caught:
+        read_manifest(tmp_path / "manifest.toml")
+    assert where in str(caught.value) and "manifest.toml" in str(caught.value)
