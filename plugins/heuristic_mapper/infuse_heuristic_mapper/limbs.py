@@ -281,7 +281,7 @@ def assign_legs(view: SkeletonView, branch: int, roots: list[int], up: np.ndarra
         if up is not None:  # thigh and shin point away from the head
             for seg, seg_len in ((thigh_v, thigh), (shin_v, shin)):
                 down = -(seg @ up) / np.maximum(seg_len, 1e-9)
-                cost += 6.0 * np.maximum(0.0, 0.5 - down)
+                cost += 6.0 * np.maximum(0.0, 0.5 - down) + 2.0 * np.maximum(0.0, 0.8 - down)
         cost += _stack(view, cs, lambda c: _leg_prefix_costs(view, c, anchor, scale, up))[:, h]
         skip = _stack(view, cs, lambda c: _skip_costs(view, c, scale))
         cost += _between(skip, h, k) + _between(skip, k, a)
