@@ -68,6 +68,11 @@ if want scene; then  # scenes.md
   cp "$WORK/scene/preview.png" "$OUT/scene.png"
 fi
 
+if want gestures; then  # bml.md, packs.md
+  INFUSE_CORPUS=$(cd "$CORPUS" && pwd) "$INFUSE" run examples/scenes/gestures.toml -o "$WORK/gestures" --strip 6 --quiet
+  cp "$WORK/gestures/preview.png" "$OUT/gestures.png"
+fi
+
 for png in "$OUT"/*.png; do
   size=$(stat -c %s "$png")
   [ "$size" -lt 307200 ] || { echo "make_images: $png is $size bytes, over 300 KB" >&2; exit 1; }
