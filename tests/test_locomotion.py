@@ -106,7 +106,7 @@ def test_turning_and_path_following_stop_at_the_end(xbot):
     end = base[-1]
     assert np.hypot(end[0] - 2.0, end[2] - 4.0) < 0.1
     assert np.linalg.norm(base[-1, [0, 2]] - base[-10, [0, 2]]) < 0.02  # stopped
-    mapping, m, _, g = walk(xbot, "locomotion-male", 4.0, speed=1.0, turn_rate=np.radians(40.0))
+    mapping, m, _, g = walk(xbot, "locomotion-male", 4.0, speed=1.0, turn_rate_deg_s=40.0)
     left = g[:, mapping.indices(m.skeleton)["l_hip"]] - g[:, mapping.indices(m.skeleton)["r_hip"]]
     heading = np.unwrap(np.arctan2(-left[:, 2], left[:, 0]))
     rate = np.degrees(np.polyfit(np.arange(len(heading))[30:] / 30.0, heading[30:], 1)[0])

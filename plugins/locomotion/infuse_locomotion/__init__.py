@@ -8,6 +8,5 @@
 from __future__ import annotations
 
 from .controller import Locomotion, infusion_for
-from .steering import Steering
 
-__all__ = ["Locomotion", "Steering", "infusion_for"]
+__all__ = ["Locomotion", "infusion_for"]

@@ -71,6 +71,7 @@ HANDOVER = 0.5
 #: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
 FREE, ANKLE, BALL = 0, 1, 2
 _ONES4 = np.ones(4)
+_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def infusion_for(rig, pack: str, cache=None):
@@ -145,10 +146,12 @@ class WalkPlan:
 class Locomotion(Controller):
     """Locomotion from a behaviour pack (an installed name, a folder, or a :class:`BlendSpace`).
 
-    - ``speed`` m/s, ``turn_rate`` rad/s (+ left), ``direction`` rad of travel from the facing (+ left):
-      numbers or functions of the activity's time; or ``path`` (ground points in the character's own
-      frame, metres) / ``target`` (one point) to walk to, stopping there.
-    - ``max_accel``, ``max_decel`` (m/s²), ``max_turn_rate`` (rad/s), ``max_turn_accel`` (rad/s²).
+    Angles are degrees and turn rates degrees per second, as everywhere the project prints them.
+
+    - ``speed`` m/s, ``turn_rate_deg_s`` (+ left), ``direction_deg`` of travel from the facing
+      (+ left): numbers or functions of the activity's time (seconds); or ``path`` (ground points in
+      the character's own frame, metres) / ``target`` (one point) to walk to, stopping there.
+    - ``max_accel``, ``max_decel`` (m/s²), ``max_turn_rate_deg_s``, ``max_turn_accel_deg_s2``.
     - ``pin_feet``: pin planted feet with leg IK (default on).
     """
 
@@ -158,16 +161,18 @@ class Locomotion(Controller):
     blend_in_s = 0.0
     blend_out_s = 0.3
 
-    def __init__(self, pack="locomotion-male", speed=1.3, turn_rate=0.0, direction=0.0, path=None, target=None,
-                 max_accel: float = 1.5, max_decel: float = 2.5, max_turn_rate: float = math.radians(90.0),
-                 max_turn_accel: float = math.radians(240.0), pin_feet: bool = True, cache=None):
+    def __init__(self, pack="locomotion-male", speed=1.3, turn_rate_deg_s=0.0, direction_deg=0.0, path=None, target=None,
+                 max_accel: float = 1.5, max_decel: float = 2.5, max_turn_rate_deg_s: float = 90.0,
+                 max_turn_accel_deg_s2: float = 240.0, pin_feet: bool = True, cache=None):
         if path is not None and target is not None:
             raise UsageError("give a path or a target, not both")
         if target is not None:
             path = [target]
         try:
-            self.steering = Steering(speed, turn_rate, direction, path, max_accel, max_decel, max_turn_rate, max_turn_accel)
-        except ValueError as exc:
+            # The steering works in radians: converted here, once.
+            self.steering = Steering(speed, _radians(turn_rate_deg_s), _radians(direction_deg), path, max_accel, max_decel,
+                                     math.radians(float(max_turn_rate_deg_s)), math.radians(float(max_turn_accel_deg_s2)))
+        except (TypeError, ValueError) as exc:
             raise UsageError(str(exc)) from None
         self.pack = pack
         self.pin_feet = bool(pin_feet)
@@ -248,7 +253,7 @@ class Locomotion(Controller):
         if not st:
             st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
                       anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
-                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), pin_yaw=np.zeros(2), yaw_offset=np.zeros(2), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
+                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), landed=np.tile(_IDENTITY, (2, 1)), landed_as=np.tile(_IDENTITY, (2, 1)), across=np.zeros((2, 3)), landed_spun=np.zeros(2), ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
@@ -442,11 +447,13 @@ class Locomotion(Controller):
 
     def _pin(self, b, st, rot, root, jt, contact, forward, dt, spun) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
-        (the foot pivoting about it, its heel rising further when the leg would not reach); a planted
+        (the foot pivoting about it, its heel rising further when the leg would not reach). A planted
         foot does not turn with the part of the heading's turn spun at the root (turning on the spot,
-        the body turns over it; the clips' own turning shows in their feet already); fade the
-        corrections out after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's
-        direction; ``spun`` (F,) the turn spun at the root so far (radians)."""
+        the body turns over it; the clips' own turning shows in their feet already), and on its ball
+        it only pitches (about the horizontal axis across it, rolling over its ball), keeping the yaw
+        and roll it had as the ball took over: the animation's twist or roll of a foot on the ground
+        (a take's, a blend's) would swing the ankle about the pinned ball. The corrections fade out
+        after toe off. ``spun`` (F,) is the turn spun at the root so far (radians). ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot, g_pos = chain_fk(b["skeleton"], rot, root, jt, b["pin_joints"])
@@ -456,22 +463,24 @@ class Locomotion(Controller):
         ankle_pos = g_pos[:, :, 2]
         heel_w, ball_w = contact[..., 0], contact[..., 1]
         anchors = np.where(np.maximum(heel_w, ball_w) > 0.5, np.where((ball_w > heel_w) & b["has_ball"], BALL, ANKLE), FREE)
+        # The feet one frame earlier (from the last block at the first frame).
+        before = np.concatenate((st["last"][None], feet_pos[:-1]))
         on_ball = (anchors == BALL)[..., None]
         points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
-        # The same anchors one frame earlier (from the last block at the first frame).
-        before = np.concatenate((st["last"][None], feet_pos[:-1]))
         points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
         goals = ankle_pos.copy()
         weights = np.zeros(anchors.shape)
         rises = np.zeros(ankle_pos.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
-        yaws = np.zeros(anchors.shape)  # turn about +Y keeping a planted foot as it landed (radians)
+        turns = np.zeros(anchors.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
+        turns[..., 3] = 1.0
         changes = np.diff(np.concatenate((st["anchor"][None], anchors)), axis=0) != 0
         for k in range(2):
-            goal, weight, rise, point, ankle = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k]
-            yaw_k = yaws[:, k]
+            goal, weight, rise, point, ankle, turn = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k], turns[:, k]
             prev = int(st["anchor"][k])
             offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
-            pin_yaw, yaw_offset = float(st["pin_yaw"][k]), float(st["yaw_offset"][k])
+            landed, landed_as, across, left = st["landed"][k].copy(), st["landed_as"][k].copy(), st["across"][k].copy(), st["foot_turn"][k].copy()
+            landed_spun, ball_offset = float(st["landed_spun"][k]), st["ball_offset"][k].copy()
+            lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
             bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
                 kind = int(anchors[s, k])
@@ -480,41 +489,70 @@ class Locomotion(Controller):
                         released = 0.0
                     age = released + dt * np.arange(1, e - s + 1)
                     fade = 1.0 - _ease(age / RELEASE_S)
-                    goal[s:e] = ankle[s:e] + offset * fade[:, None]
-                    yaw_k[s:e] = yaw_offset * fade
+                    # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
+                    # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
+                    # ground last, and the fading turn would swing it along the ground).
+                    turn[s:e] = quat.slerp(_IDENTITY, left, fade)
+                    hang = quat.rotate(turn[s:e], lever[s:e])
                     if lifted.any():
                         rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
+                        # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
+                        corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
+                        hang = quat.rotate(quat.from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
+                    goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:
-                        offset, lifted, yaw_offset = np.zeros(3), np.zeros(3), 0.0
+                        offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
                 else:
                     if kind != prev and prev == FREE:
                         # The anchor lands: it stays where the corrected foot puts it now.
-                        pin = point[s] + offset * (1.0 - _ease(released / RELEASE_S))
+                        fade = 1.0 - _ease(released / RELEASE_S)
+                        left = quat.slerp(_IDENTITY, left, fade)
+                        pin = feet_pos[s, k, 1] + ball_offset * fade
+                        if kind == ANKLE:
+                            pin = pin - quat.rotate(left, lever[s])
                         pin[1] = 0.0
-                        pin_yaw = spun[s] + yaw_offset * (1.0 - _ease(released / RELEASE_S))
                     elif kind != prev:
                         # The anchor passes from the ankle to the ball (or back): the new one stays
                         # where the corrected foot had it a frame ago, so the foot does not move on
                         # with the blend's drift at the switch.
                         pin = points_before[s, k] + offset
                         pin[1] = 0.0
-                    yaw_k[s:e] = pin_yaw - spun[s:e]
-                    goal[s:e] = pin + quat.rotate(yaw(yaw_k[s:e]), ankle[s:e] - point[s:e])
+                    if kind != prev:
+                        # The foot's orientation now (corrected as a frame ago), and the axis across it.
+                        landed, landed_spun = g_rot[s, k, 2], spun[s]
+                        landed_as = quat.multiply(left, landed)
+                        along = feet_pos[s, k, 1] - feet_pos[s, k, 0]
+                        along = along if math.hypot(along[0], along[2]) > 1e-6 else forward[s]
+                        across = np.array([along[2], 0.0, -along[0]]) / math.hypot(along[0], along[2])
+                    # The animation's turn of the foot since then (world frame): on its heel all of it
+                    # but the turn spun at the root, on its ball only its pitch (the twist about the
+                    # axis across the foot).
+                    since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
+                    if kind == ANKLE:
+                        kept = quat.multiply(yaw(landed_spun - spun[s:e]), since)
+                    else:
+                        kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
+                        kept /= np.maximum(np.linalg.norm(kept, axis=-1, keepdims=True), 1e-12)
+                    turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
+                    goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
                     goal[s:e, 1] = ankle[s:e, 1]
                     weight[s:e] = 1.0
+                    ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
                     if kind == BALL:
-                        goal[s:e], rise[s:e] = _heel_rise(g_rot[s:e, k, 2], g_pos[s:e, k, :3], goal[s:e],
-                                                          goal[s:e] + feet_pos[s:e, k, 1] - ankle[s:e])
-                    offset, lifted, yaw_offset = goal[e - 1] - ankle[e - 1], rise[e - 1], float(yaw_k[e - 1])
+                        balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
+                        goal[s:e], rise[s:e] = _heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
+                        ball_goal = balls[-1]
+                    offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
                 prev = kind
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
-            st["pin_yaw"][k], st["yaw_offset"][k] = pin_yaw, yaw_offset
+            st["landed"][k], st["landed_as"][k], st["across"][k], st["foot_turn"][k] = landed, landed_as, across, left
+            st["landed_spun"][k], st["ball_offset"][k] = landed_spun, ball_offset
         st["last"] = feet_pos[-1].copy()
         if rises.any():
             g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
-        feet_rot = quat.multiply(yaw(yaws), g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
+        feet_rot = quat.multiply(turns, g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
         solving = [k for k in range(2) if weights[:, k].any()]
         if len(solving) == 1:
             k = solving[0]
@@ -645,6 +683,13 @@ def _turn_feet(b, rot, rise) -> np.ndarray:
     if k.size:
         rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(delta[:, k]), rot[:, b["balls"][k]])
     return delta
+
+
+def _radians(value):
+    """A request in degrees (a number, or a function of seconds) in radians."""
+    if callable(value):
+        return lambda t: math.radians(float(value(t)))
+    return math.radians(float(value))
 
 
 def _towards(direction: float) -> str:

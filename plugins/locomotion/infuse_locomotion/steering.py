@@ -3,7 +3,9 @@
 Either constant or time-varying requests (``speed``, ``turn_rate``, ``direction`` as numbers or
 functions of seconds), or a path to follow (ground points, metres, in the character's own frame;
 one point is a target to go to). Speed changes are limited to ``max_accel`` / ``max_decel`` m/s²,
-turn-rate changes to ``max_turn_accel`` rad/s² and turn rates to ``max_turn_rate``.
+turn-rate changes to ``max_turn_accel`` rad/s² and turn rates to ``max_turn_rate``. The steering
+is the controller's own and works in radians; :class:`~.controller.Locomotion` takes degrees and
+converts them.
 
 Following a path the character **turns, then goes**: the farther a point lies off its facing, the
 slower it walks (not at all from :data:`TURN_IN_PLACE` off, where it turns on the spot), and never
