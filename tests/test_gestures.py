@@ -253,3 +253,19 @@ def test_bad_gesture_phases_in_a_manifest_name_the_place(tmp_path, sync, where):
     with pytest.raises(InputError) as caught:
         read_manifest(tmp_path / "manifest.toml")
     assert where in str(caught.value) and "manifest.toml" in str(caught.value)
+
+
+def test_a_gesture_plays_over_a_walk():
+    """The gesture is a layer: the walk goes on below it and the arm still reaches its stroke pose."""
+    body = ('<locomotion id="w1" target="0 3" manner="walk"/>'
+            '<gesture id="g1" lexeme="OFFER" stroke="2.0"/>')
+    scene, motion = play("xbot", body)
+    rig = scene.runtime.rig("bob")
+    clip = scene.activities[("b1", "g1")].source.parameters["clip"]
+    wrist = chest_wrist(rig, motion, "r")
+    target, _ = authored_stroke(rig, clip, "r")
+    f = int(round(2.0 * FPS))
+    assert np.linalg.norm(wrist[f] - target) < 0.01
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    pelvis = g_pos[:, rig.joint("base")]
+    assert np.linalg.norm(pelvis[f + 15, [0, 2]] - pelvis[f - 15, [0, 2]]) > 0.3  # still walking at the stroke
