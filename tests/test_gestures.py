@@ -152,8 +152,8 @@ def test_a_later_stroke_end_holds_the_stroke_pose():
     assert activation.time("strokeEnd") == pytest.approx(2.0)
     wrist = chest_wrist(rig, motion, "r")
     target, _ = authored_stroke(rig, activation.parameters["clip"], "r")
-    post_stroke_s = activation.parameters and (scene.activities[("b1", "g1")].controller.authored["strokeEnd"]
-                                                 - scene.activities[("b1", "g1")].controller.authored["stroke"])
+    authored = scene.activities[("b1", "g1")].controller.authored
+    post_stroke_s = authored["strokeEnd"] - authored["stroke"]
     # From the stroke until the authored post-stroke movement must begin, the wrist stays at the stroke.
     held = wrist[int(round(1.0 * FPS)):int((2.0 - post_stroke_s) * FPS) + 1]
     assert len(held) > 20
@@ -269,3 +269,14 @@ def test_a_gesture_plays_over_a_walk():
     _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
     pelvis = g_pos[:, rig.joint("base")]
     assert np.linalg.norm(pelvis[f + 15, [0, 2]] - pelvis[f - 15, [0, 2]]) > 0.3  # still walking at the stroke
+
+
+def test_gestures_of_different_hands_overlap_without_cutting_each_other():
+    alone = play("xbot", '<gesture id="g1" lexeme="OFFER" mode="RIGHT_HAND" stroke="1.2"/>')
+    both = play("xbot", '<gesture id="g1" lexeme="OFFER" mode="RIGHT_HAND" stroke="1.2"/>'
+                        '<gesture id="g2" lexeme="BEAT" mode="LEFT_HAND" stroke="1.5"/>')
+    rig = alone[0].runtime.rig("bob")
+    right_alone, right_both = (chest_wrist(rig, m, "r") for _, m in (alone, both))
+    frames = min(len(right_alone), len(right_both))
+    assert np.abs(right_alone[:frames] - right_both[:frames]).max() < 1e-6
+    assert both[0].activities[("b1", "g1")].end_s == pytest.approx(alone[0].activities[("b1", "g1")].end_s)

@@ -4,8 +4,10 @@ The clip (retargeted onto the character by infusing it with the pack) drives the
 is made for (shoulder girdle to fingertips), on the posture layer. Its phases land on the wanted times
 (:func:`~infuse_gestures.timewarp.phase_warp`: BML sync points, holds, repeated strokes). ``amplitude``
 scales each joint's movement away from the clip's ready pose (1: as authored). A gesture that starts
-before the previous one of the same character has retracted co-articulates: the previous one stays at
-its stroke's end and the new one blends from there to its own ready pose, never passing through rest.
+before the previous one of the same character with a hand in common has retracted co-articulates: the
+previous one stays at its stroke's end and the new one blends from there to its own ready pose, never
+passing through rest (an arm the new one leaves free retracts meanwhile). Gestures of different hands
+overlap freely.
 """
 from __future__ import annotations
 
@@ -37,15 +39,18 @@ def gesture_space(rig, pack: str):
     return _INFUSIONS[key][2]
 
 
-def authored_phases(pack, clip: str) -> dict:
-    """Seconds of every phase of :data:`PHASES` of ``clip`` as the pack authored it."""
+def authored_phases(pack, clip: str) -> tuple[dict, frozenset]:
+    """Seconds of every phase of :data:`PHASES` of ``clip`` as the pack authored it, and its hands
+    (``{"left"}``, ``{"right"}`` or both)."""
     from infuse.packs import load_pack
 
     doc = load_pack(pack).require_built()
     info = next((c for c in doc["clips"] if c["name"] == clip), None)
     if info is None or "sync" not in info:
         raise UsageError(f"pack {pack!r} has no gesture {clip!r}")
-    return {"start": 0.0, **info["sync"], "end": float(info["duration"])}
+    hand = info.get("hand") or "right"
+    hands = frozenset(("left", "right") if hand == "both" else (hand,))
+    return {"start": 0.0, **info["sync"], "end": float(info["duration"])}, hands
 
 
 class Gesture(Controller):
@@ -66,7 +71,7 @@ class Gesture(Controller):
         if int(repeats) < 1:
             raise UsageError(f"gesture {clip!r}: repeats must be at least 1, got {repeats}")
         self.clip, self.pack = clip, pack
-        self.authored = authored_phases(pack, clip)
+        self.authored, self.hands = authored_phases(pack, clip)
         wanted = phases or {p: t / speed for p, t in self.authored.items()}
         missing = [p for p in PHASES if p not in wanted]
         if missing:
@@ -90,7 +95,7 @@ class Gesture(Controller):
         if self.clip not in space.clips:
             raise UsageError(f"pack {space.pack!r} has no gesture {self.clip!r}")
         clip = space.clips[self.clip]
-        sides = ("l", "r") if clip.hand == "both" else ((clip.hand or "right")[0],)
+        sides = tuple(hand[0] for hand in sorted(self.hands))
         canonical = rig.mapping.inverse()
         joints = [j for j, name in enumerate(rig.skeleton.names) if j > 0 and canonical.get(name, "")[:2] in
                   {f"{s}_" for s in sides} and canonical[name].split("_", 1)[1] not in _LEGS]
@@ -123,11 +128,12 @@ class Gesture(Controller):
                              quat.from_rotvec(quat.to_rotvec(away) * exponent[:, None, None]))
 
 
-def _previous(runtime, character: str, start_s: float):
-    """The character's latest gesture activity that started before ``start_s`` and ends after
-    ``start_s - COARTICULATION_GAP_S``, or None."""
+def _previous(runtime, character: str, start_s: float, hands: frozenset):
+    """The character's latest gesture activity with a hand in ``hands`` that started before ``start_s`` and
+    ends after ``start_s - COARTICULATION_GAP_S``, or None."""
     found = [a for a in runtime.activities if a.rig.name == character and isinstance(a.controller, Gesture)
-             and a.start_s < start_s - 1e-9 and (a.end_s is None or a.end_s > start_s - COARTICULATION_GAP_S)]
+             and a.controller.hands & hands and a.start_s < start_s - 1e-9
+             and (a.end_s is None or a.end_s > start_s - COARTICULATION_GAP_S)]
     return max(found, key=lambda a: a.start_s, default=None)
 
 
@@ -142,11 +148,15 @@ def gesture_from_bml(parameters: dict, runtime, character: str, activation=None)
     gesture = Gesture(parameters["clip"], parameters.get("pack") or "gestures", phases,
                       int(parameters.get("repeats") or 1), float(parameters.get("amplitude") or 1.0),
                       float(parameters.get("speed") or 1.0))
-    previous = _previous(runtime, character, start)
+    previous = _previous(runtime, character, start, gesture.hands)
     if previous is not None:
         ready_s = start + gesture.phases["ready"]
         previous.controller.leave_at_stroke_end = True
-        previous.end_s, previous.blend_out_s = max(ready_s, previous.start_s), 0.0
+        if previous.controller.hands <= gesture.hands:  # the new one takes over every arm it moved
+            previous.end_s, previous.blend_out_s = max(ready_s, previous.start_s), 0.0
+        else:  # an arm the new one leaves free retracts through the blend, over the new one's preparation
+            previous.end_s = max(ready_s, previous.start_s)
+            previous.blend_out_s = max(ready_s - max(start, previous.start_s), 1.0 / runtime.fps)
         gesture.enter_ready = True
         gesture.blend_in_s = max(gesture.phases["ready"], 1.0 / runtime.fps)
     return gesture
