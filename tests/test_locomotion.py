@@ -184,3 +184,22 @@ def test_walks_to_targets_in_every_direction(xbot, angle):
     print(angle, "turned", round(float(turned), 1), "stands", standing_pose(g, ix))
     assert abs(turned) <= abs(angle) + 15.0 and abs((turned - angle + 180.0) % 360.0 - 180.0) <= 15.0  # no loop
     assert_stands(g, ix)
+
+
+def test_angles_are_degrees(xbot):
+    """Travel direction and turn rates are degrees (per second): a walk 90 degrees off the facing
+    travels to the left (+X) facing +Z; a turn rate given as a function of time turns at that many
+    degrees a second; a request that is not a number is a usage error."""
+    from infuse.errors import UsageError
+
+    mapping, m, _, g = walk(xbot, "locomotion-male", 3.0, speed=0.6, direction_deg=90.0)
+    base = g[:, mapping.indices(m.skeleton)["base"]]
+    d = base[-1] - base[30]
+    assert d[0] > 0.9 and abs(d[2]) < 0.15, d
+    mapping, m, _, g = walk(xbot, "locomotion-male", 4.0, speed=1.0, turn_rate_deg_s=lambda t: 30.0)
+    left = g[:, mapping.indices(m.skeleton)["l_hip"]] - g[:, mapping.indices(m.skeleton)["r_hip"]]
+    heading = np.unwrap(np.arctan2(-left[:, 2], left[:, 0]))
+    rate = np.degrees(np.polyfit(np.arange(len(heading))[30:] / 30.0, heading[30:], 1)[0])
+    assert rate == pytest.approx(30.0, abs=4.0)
+    with pytest.raises(UsageError, match="turn_rate_deg_s is degrees"):
+        Locomotion("locomotion-male", turn_rate_deg_s="fast")

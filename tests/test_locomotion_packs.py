@@ -179,3 +179,42 @@ def test_a_walk_taken_over_before_it_arrives_is_reported(xbot):
     assert short.id.startswith(first)
     metres = float(short.description.split(":")[1].split()[0])
     assert 2.0 < metres < 5.5  # two seconds of walking from standing covered at most 2.6 m of the 6
+
+
+def test_feet_of_an_imported_pack_stay_planted(xbot, bandai_masculinity):
+    """Straight walks over the forward range of recorded takes (Bandai masculinity) on Xbot: foot skate
+    at most 1.5 cm/m from the second-slowest speed up, at most 2.5 cm/m at the slowest walk (its heel
+    rises early and slowly, which the measure counts while the ankle is low); a planted foot does not
+    twist: the ankle-to-ball line turns less than 1.5 degrees a frame (95th percentile) while the ball
+    is down."""
+    from dataclasses import replace
+
+    from infuse.contacts import foot_contacts
+    from infuse.metrics import foot_skate
+    from infuse.packs import infuse_character
+    from infuse.packs.walk_test import forward_speeds
+
+    character = infuse.Character("x", xbot)
+    infusion = infuse_character(character, [bandai_masculinity])
+    space = next(iter(infusion.spaces.values()))
+    speeds = forward_speeds(space)
+    rt = Runtime(fps=30)
+    names = [rt.add_character(character, name=f"w{k}", mapping=infusion.mapping) for k in range(len(speeds))]
+    for name, v in zip(names, speeds):
+        rt.activate(name, Locomotion(space, speed=float(v), max_accel=50.0), 0.0)
+    rt.run(5.0)
+    base = infusion.mapping.indices(character.skeleton)["base"]
+    skates, twists = [], []
+    for name in names:
+        m = rt.motion(name)
+        g_rot, g_pos = infuse.motion_fk(m)
+        found = foot_contacts(m, infusion.mapping, fk=(g_rot, g_pos))
+        cut = replace(found, flags=found.flags[45:], lowest=found.lowest[45:])
+        skates.append(foot_skate(g_pos[45:], cut, base).per_metre)
+        for k in range(2):
+            lever = g_pos[:, found.points[2 * k + 1]] - g_pos[:, found.points[2 * k]]
+            turn = np.abs(np.diff(np.degrees(np.unwrap(np.arctan2(lever[:, 0], lever[:, 2])))))
+            down = found.flags[1:, 2 * k + 1] & found.flags[:-1, 2 * k + 1]
+            twists.append(float(np.percentile(turn[down], 95)) if down.any() else 0.0)
+    assert skates[0] <= 2.5 and max(skates[1:]) <= 1.5, skates
+    assert max(twists) < 1.5, twists

@@ -170,8 +170,9 @@ class Locomotion(Controller):
             path = [target]
         try:
             # The steering works in radians: converted here, once.
-            self.steering = Steering(speed, _radians(turn_rate_deg_s), _radians(direction_deg), path, max_accel, max_decel,
-                                     math.radians(float(max_turn_rate_deg_s)), math.radians(float(max_turn_accel_deg_s2)))
+            self.steering = Steering(speed, _radians(turn_rate_deg_s, "turn_rate_deg_s"), _radians(direction_deg, "direction_deg"),
+                                     path, max_accel, max_decel, _radians(max_turn_rate_deg_s, "max_turn_rate_deg_s", False),
+                                     _radians(max_turn_accel_deg_s2, "max_turn_accel_deg_s2", False))
         except (TypeError, ValueError) as exc:
             raise UsageError(str(exc)) from None
         self.pack = pack
@@ -685,11 +686,15 @@ def _turn_feet(b, rot, rise) -> np.ndarray:
     return delta
 
 
-def _radians(value):
-    """A request in degrees (a number, or a function of seconds) in radians."""
-    if callable(value):
+def _radians(value, name: str, timed: bool = True):
+    """A setting ``name`` in degrees in radians: a number, or where ``timed`` a function of seconds."""
+    if timed and callable(value):
         return lambda t: math.radians(float(value(t)))
-    return math.radians(float(value))
+    try:
+        return math.radians(float(value))
+    except (TypeError, ValueError):
+        kind = "a number or a function of seconds" if timed else "a number"
+        raise UsageError(f"{name} is degrees ({kind}), not {value!r}") from None
 
 
 def _towards(direction: float) -> str:
