@@ -144,15 +144,20 @@ def _prefix_costs(view: SkeletonView, chains: list[list[int]], anchor: np.ndarra
 
 def _leg_prefix_costs(view: SkeletonView, chain: list[int], anchor: np.ndarray, scale: float, up) -> np.ndarray:
     """Like :func:`_prefix_costs` for a leg: a joint whose bone to the next runs sideways (a pelvis
-    bone from the hips' centre to the hip socket) is cheap to leave out."""
+    bone from the hips' centre to the hip socket) is cheap to leave out; one whose bone goes down
+    costs more the longer that bone is next to the whole chain (a thigh is not a pelvis helper)."""
     P = view.P[chain]
     near = np.einsum("ij,ij->i", P - anchor, P - anchor) < (1e-3 * scale) ** 2
     sideways = np.zeros(len(chain), dtype=bool)
-    if up is not None and len(chain) > 1:
+    seg_len = np.zeros(len(chain))
+    if len(chain) > 1:
         seg = P[1:] - P[:-1]
-        n = np.sqrt(np.einsum("ij,ij->i", seg, seg))
-        sideways[:-1] = (n < 1e-3 * scale) | (-(seg @ up) < 0.5 * n)
-    steps = [0.3 if (near[i] or sideways[i] or view.info[j].flagged("helper")) else 0.9 for i, j in enumerate(chain)]
+        seg_len[:-1] = np.sqrt(np.einsum("ij,ij->i", seg, seg))
+        if up is not None:
+            sideways[:-1] = (seg_len[:-1] < 1e-3 * scale) | (-(seg @ up) < 0.5 * seg_len[:-1])
+    share = seg_len / max(float(seg_len.sum()), 1e-9)
+    cheap = near | sideways | view.flag("helper")[np.array(chain)]
+    steps = np.where(cheap, 0.3, 0.9 + 2.0 * share)
     return np.concatenate(([0.0], np.cumsum(steps)))
 
 
