@@ -2,10 +2,11 @@
 
 A humanoid has two pairs of limbs. Each pair hangs from one joint (the two subtrees are mirror
 images: the same path lengths along their main chains, about the same number of joints), the
-legs and the arms lie in different branches, and the legs point away from the head. Candidate
-pairs are scored on symmetry, length, names and rest geometry, and the best legs/arms combination
-wins. Path lengths do not depend on the pose, so this works on arbitrary rest poses; the geometry
-tests take the pose that makes a standing body.
+legs and the arms lie in different branches, both pairs are mirror images about one middle
+plane, and the legs point away from the head. Candidate pairs are scored on symmetry, length,
+names, hands at their ends and rest geometry, and the best legs/arms combination wins. Path
+lengths do not depend on the pose, so this works on arbitrary rest poses; the geometry tests take
+the pose that makes a standing body.
 """
 from __future__ import annotations
 

@@ -2,17 +2,23 @@
 
 Order of work (each step is its own module):
 
-1. :mod:`.body` finds the legs and arms as pairs of mirror-image limbs and checks the body stands
-   (legs point away from the head); a rest pose that is not a standing body (e.g. every bone along
-   one axis) is replaced by the caller's pose.
-2. :mod:`.limbs` places hip/knee/ankle and clavicle/shoulder/elbow/wrist on each limb's chain.
+1. :mod:`.body` finds the legs and arms as pairs of mirror-image limbs (every legs/arms
+   combination of the best candidates scored together) and the humanoid test checks the body
+   stands (legs point away from the head); a rest pose that is not a standing body (e.g. every
+   bone along one axis) is replaced by the caller's pose.
+2. :mod:`.limbs` places hip/knee/ankle and clavicle/shoulder/elbow/wrist on each limb's chain,
+   both limbs of a pair as one decision.
 3. The torso between the pelvis and the arms, the neck and the head come from the path between the
    two limb pairs; :mod:`.hands` names the fingers.
-4. Left and right come from the body's own axes (up from pelvis to chest, forward from the feet),
-   with names breaking ties.
+4. Left and right come from the body's own axes (up from pelvis to chest, forward from the toes,
+   knees or thumbs); names decide only when the body does not show its front, and the reasons say
+   when the geometry overrules them.
+5. Each entry's confidence is capped by what its joint's name says about the slot.
 
-A skeleton without any pair of limbs, or whose legs do not point away from its head (a
-quadruped), raises :class:`~infuse.errors.NotHumanoidError` with the reason.
+A skeleton without two legs and two arms on a trunk (no or one pair of limbs, limbs named as wings
+or tails), whose legs do not point away from its head (a quadruped, a lying body), whose front
+limbs stand on the ground, or with more limbs as long as its legs beside them (an insect, a
+spider) raises :class:`~infuse.errors.NotHumanoidError` with the reason.
 """
 from __future__ import annotations
 
