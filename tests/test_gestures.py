@@ -11,10 +11,8 @@ from infuse.bml import Scheduler, parse_bml
 from infuse.kinematics import forward_kinematics
 from infuse.scene import Scene
 
+from infuse_gestures.controller import gesture_space
 from runtime_characters import corpus_character
-
-pytest.importorskip("infuse_gestures", reason="the gesture controller plugin is not installed")
-from infuse_gestures.controller import gesture_space  # noqa: E402
 
 FPS = 30.0
 CACHE = None  # set per session below
