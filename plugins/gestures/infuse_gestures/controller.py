@@ -11,6 +11,8 @@ overlap freely.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from infuse import quaternions as quat
@@ -39,6 +41,7 @@ def gesture_space(rig, pack: str):
     return _INFUSIONS[key][2]
 
 
+@lru_cache(maxsize=256)
 def authored_phases(pack, clip: str) -> tuple[dict, frozenset]:
     """Seconds of every phase of :data:`PHASES` of ``clip`` as the pack authored it, and its hands
     (``{"left"}``, ``{"right"}`` or both)."""
@@ -71,7 +74,8 @@ class Gesture(Controller):
         if int(repeats) < 1:
             raise UsageError(f"gesture {clip!r}: repeats must be at least 1, got {repeats}")
         self.clip, self.pack = clip, pack
-        self.authored, self.hands = authored_phases(pack, clip)
+        authored, self.hands = authored_phases(pack, clip)
+        self.authored = dict(authored)
         wanted = phases or {p: t / speed for p, t in self.authored.items()}
         missing = [p for p in PHASES if p not in wanted]
         if missing:
