@@ -75,7 +75,7 @@ def test_beat_strokes_land_within_a_frame_of_their_sync_reference(key):
         assert abs(closest / FPS - wanted) <= 1.0 / FPS + 1e-9, (name, closest / FPS, wanted)
 
 
-@pytest.mark.parametrize("key", ["xbot", "rpm"])
+@pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
 @pytest.mark.parametrize("lexeme,mode", [("OFFER", "RIGHT_HAND"), ("REJECT", "LEFT_HAND"), ("THUMBS_UP", "RIGHT_HAND"),
                                          ("THINK", "LEFT_HAND"), ("SHRUG", "BOTH_HANDS")])
 def test_wrist_reaches_the_authored_stroke_pose_at_the_stroke(key, lexeme, mode):
