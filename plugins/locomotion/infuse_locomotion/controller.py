@@ -516,9 +516,10 @@ class Locomotion(Controller):
                         pin[1] = 0.0
                     elif kind != prev:
                         # The anchor passes from the ankle to the ball (or back): the new one stays
-                        # where the corrected foot had it a frame ago, so the foot does not move on
-                        # with the blend's drift at the switch.
-                        pin = points_before[s, k] + offset
+                        # where the corrected foot had it a frame ago (the ball's correction is the
+                        # ankle's and the foot's turn about it), so the foot does not move on with the
+                        # blend's drift at the switch, nor jump by the turn.
+                        pin = points_before[s, k] + (ball_offset if kind == BALL else offset)
                         pin[1] = 0.0
                     if kind != prev:
                         # The foot's orientation now (corrected as a frame ago), and the axis across it.
