@@ -148,11 +148,11 @@ def _mirror(v) -> np.ndarray:
     return np.asarray(v, dtype=np.float64) * np.array([-1.0, 1.0, 1.0])
 
 
-def _timeline(spec: GestureSpec, keys: dict, rest: Key) -> list[tuple[float, Key]]:
-    """(seconds, Key) from the rest pose at 0 through the phases (and extra keys) to rest at the end."""
+def _timeline(spec: GestureSpec, keys: dict, rest: Key, end: float) -> list[tuple[float, Key]]:
+    """(seconds, Key) from the rest pose at 0 through the phases (and extra keys) to rest at ``end``."""
     keys = dict(keys)
     keys.setdefault("relax", keys["stroke_end"])
-    line = [(0.0, rest)] + [(spec.times[p], keys[p]) for p in PHASES] + list(spec.extra) + [(spec.end, rest)]
+    line = [(0.0, rest)] + [(spec.times[p], keys[p]) for p in PHASES] + list(spec.extra) + [(end, rest)]
     return sorted(line, key=lambda k: k[0])
 
 
@@ -234,7 +234,7 @@ def gesture_motion(body: Body, stand: Motion, spec: GestureSpec, hand: str, name
         hang_d = quat.rotate(g_rot0[0, w_i], body.offset(f"{side}_middle1"))
         hang_n = quat.rotate(g_rot0[0, w_i], -Y)
         rest = Key(tuple(hang * np.array([sign, 1.0, 1.0])), "rest", "relaxed")
-        line = _timeline(spec, keys, rest)
+        line = _timeline(spec, keys, rest, n / FPS)  # back at rest on the last frame
         shrug = _track(t, [(k_t, [k.shrug]) for k_t, k in line])[:, 0]
         shape = _track(t, [(k_t, SHAPES[k.shape]) for k_t, k in line])
         wrist = _track(t, [(k_t, np.asarray(k.wrist, dtype=np.float64)) for k_t, k in line]) + _oscillation(spec, t)
