@@ -278,3 +278,13 @@ def test_gestures_of_different_hands_overlap_without_cutting_each_other():
     frames = min(len(right_alone), len(right_both))
     assert np.abs(right_alone[:frames] - right_both[:frames]).max() < 1e-6
     assert both[0].activities[("b1", "g1")].end_s == pytest.approx(alone[0].activities[("b1", "g1")].end_s)
+
+
+def test_speed_shortens_the_phases_and_the_stroke_still_lands():
+    scene, motion = play("xbot", '<gesture id="g1" lexeme="OFFER" speed="2" stroke="1.5"/>'
+                                 '<gesture id="g2" lexeme="OFFER" mode="LEFT_HAND" stroke="1.5"/>')
+    fast, normal = (scene.activities[("b1", g)].source for g in ("g1", "g2"))
+    assert fast.end - fast.start == pytest.approx((normal.end - normal.start) / 2.0)
+    rig = scene.runtime.rig("bob")
+    target, _ = authored_stroke(rig, fast.parameters["clip"], "r")
+    assert np.linalg.norm(chest_wrist(rig, motion, "r")[int(round(1.5 * FPS))] - target) < 0.01
