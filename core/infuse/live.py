@@ -78,7 +78,9 @@ class LiveFrame:
 class LiveStats:
     """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), commands
     applied, the current block size, and the evaluation time per frame of the last blocks, on the wall
-    clock and in the loop thread's CPU time (milliseconds; they differ when the machine is loaded)."""
+    clock and in the loop thread's CPU time (milliseconds; they differ when the machine is loaded).
+    ``blocks``: the last blocks evaluated, (first frame, frames) each: a session replayed offline with
+    the same blocks and commands gives the same frames (walks differ by millimetres between partitions)."""
 
     def __init__(self, window: int = 3600):
         self.shown = 0
@@ -87,6 +89,7 @@ class LiveStats:
         self.block_frames = 1
         self.evaluate_ms: deque[float] = deque(maxlen=window)
         self.evaluate_cpu_ms: deque[float] = deque(maxlen=window)
+        self.blocks: deque[tuple[int, int]] = deque(maxlen=window)  # (first frame, frames) of each block
 
     def summary(self) -> dict:
         """Counts and evaluation-time percentiles (ms) over the window."""
@@ -255,6 +258,7 @@ class LiveScene:
         count = scene.runtime.frame - first
         self.stats.evaluate_ms.append(spent * 1e3 / count)
         self.stats.evaluate_cpu_ms.append((time.thread_time() - started_cpu) * 1e3 / count)
+        self.stats.blocks.append((first, count))
         # a moving average, so that one late block (the machine busy elsewhere) does not resize blocks
         per_frame = self._cost_s = spent / count if self._cost_s is None else 0.7 * self._cost_s + 0.3 * spent / count
         if per_frame > 0.6 * self.period_s and self.block_frames < self.max_block_frames:

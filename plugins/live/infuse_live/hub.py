@@ -156,6 +156,8 @@ class Hub:
                     "format": client.format}
         if message.type == "status":
             mine = {"frames_skipped": client.skipped} if client is not None else {}  # replaced before it read them
+            if fields.get("blocks"):
+                mine["blocks"] = [list(b) for b in list(self.live.stats.blocks)]
             return {"type": "status", "request": request, "frame": self.live.scene.runtime.frame,
                     "time": self.live.scene.time, **self.live.stats.summary(), "clients": len(self.clients), **mine}
         if message.type == "target":

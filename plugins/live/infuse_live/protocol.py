@@ -11,7 +11,8 @@ Client to server (one JSON object per WebSocket text message, or an HTTP POST bo
 - ``{"type": "subscribe", "frames": true, "feedback": "all", "format": "binary"}``: receive the pose
   stream (as JSON ``frame`` messages, or binary messages: :func:`binary_frame`); feedback of every block
   (default: only of the blocks this client sent);
-- ``{"type": "status"}``: frame counts and timings;
+- ``{"type": "status", "blocks": true}``: frame counts and timings (and the last blocks evaluated,
+  [first frame, frames] each, to replay the session offline);
 - ``{"type": "add", "name": "carl", "file": "carl.glb", "position": [x, y, z], "facing": ..., "packs": [...]}``:
   a character joins the running scene (only when the server allows it: ``--allow-add``).
 
@@ -82,7 +83,7 @@ def parse_message(text: str | bytes, where: str = "message") -> Message:
 
 def _check(kind: str, fields: dict, where: str) -> None:
     allowed = {"bml": {"bml", "character"}, "call": {"method", "character", "args"}, "target": {"name", "position"},
-               "subscribe": {"frames", "feedback", "format"}, "status": set(),
+               "subscribe": {"frames", "feedback", "format"}, "status": {"blocks"},
                "add": {"name", "file", "position", "facing", "packs"}}[kind]
     for key in fields:
         if key not in allowed:
@@ -109,6 +110,8 @@ def _check(kind: str, fields: dict, where: str) -> None:
             raise InputError(where, "name", "a target is named by a non-empty string without ':'")
         if not _point(fields.get("position")):
             raise InputError(where, "position", "expected [x, y, z]: three finite numbers, metres")
+    if kind == "status" and not isinstance(fields.get("blocks", False), bool):
+        raise InputError(where, "blocks", "expected true or false")
     if kind == "add":
         if not (isinstance(fields.get("file"), str) and fields["file"]):
             raise InputError(where, "file", "expected the character's file (a path on the server)")
