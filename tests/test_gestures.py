@@ -288,3 +288,10 @@ def test_speed_shortens_the_phases_and_the_stroke_still_lands():
     rig = scene.runtime.rig("bob")
     target, _ = authored_stroke(rig, fast.parameters["clip"], "r")
     assert np.linalg.norm(chest_wrist(rig, motion, "r")[int(round(1.5 * FPS))] - target) < 0.01
+
+
+def test_a_lexeme_that_matches_nothing_falls_back_on_its_type():
+    scheduler = Scheduler()
+    (record,) = scheduler.submit(parse_bml(BML.format(id="b1", body='<gesture id="g1" lexeme="DEICTIC" type="YOU" '
+                                                                     'mode="LEFT_HAND" stroke="1"/>')))
+    assert record.activations[0].parameters["clip"] == "offer_left" and not record.issues

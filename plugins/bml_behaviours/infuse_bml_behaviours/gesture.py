@@ -2,7 +2,7 @@
 their timing is known, otherwise typical gesture phase durations.
 
 A ``<gesture lexeme>`` the character has no clip of that name for is looked up in the installed
-``gestures`` pack (:mod:`.gesture_lexicon`) and timed by that gesture's phases; ``amplitude`` (1: as
+``gestures`` pack (:mod:`.gesture_lexicon`; then its ``type``) and timed by that gesture's phases; ``amplitude`` (1: as
 authored), ``speed`` (1: as authored) and ``repeats`` (strokes) shape it. A lexeme the pack does not
 know warns here, naming it."""
 from __future__ import annotations
@@ -43,7 +43,9 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
     mode = _mode(behaviour, notes)
     hold = number(behaviour, "poststroke_hold", 0.0, notes, minimum=0.0)
     if lexeme and not context.clip_timing(clip) and gesture_lexicon.known():
-        found = gesture_lexicon.lookup(lexeme, mode)
+        # SmartBody's gesture maps name a variant in ``type`` (DEICTIC YOU, DEICTIC ME): tried when the lexeme fails.
+        kind = word(behaviour, "type")
+        found = gesture_lexicon.lookup(lexeme, mode) or (gesture_lexicon.lookup(kind, mode) if kind else None)
         if found is not None:
             return _pack_gesture(behaviour, lexeme, found, hold, notes)
         notes.append(f"lexeme {lexeme!r} names no gesture of the gestures pack (its gestures: "
