@@ -313,3 +313,25 @@ def test_mirrored_side_names_follow_the_geometry():
     assert mapping["l_hip"] == "r_hip" and mapping["r_wrist"] == "l_wrist"
     assert "opposite" in mapping.reasons["l_hip"] and "geometry decides" in mapping.reasons["l_hip"]
     assert mapping.confidence["l_hip"] <= 0.85
+
+
+def test_long_skirt_chains_do_not_make_a_many_legged_body():
+    """Four skirt chains of three joints from the pelvis down to the shins (as long as the legs),
+    with names that say nothing: a humanoid in a long skirt, not a many-legged body (its legs stand
+    on the ground, the skirt does not)."""
+    sk = canonical_skeleton(extras=False)
+    names, parents = list(sk.names), [int(p) for p in sk.parents]
+    pos = list(sk.rest_global_positions)
+    base = sk.index["base"]
+    drop = 0.7 * pos[base][1]  # the canonical body stands on y = 0
+    for k, (x, z) in enumerate(((0.12, 0.1), (-0.12, 0.1), (0.12, -0.1), (-0.12, -0.1))):
+        parent = base
+        for step in (1, 2, 3):
+            names.append(f"s{k}_{step}")
+            parents.append(parent)
+            pos.append(pos[base] + np.array([x * step / 2, -drop * step / 3, z]))
+            parent = len(names) - 1
+    new = skeleton_variants._from_positions(names, parents, np.array(pos))
+    mapping = map_skeleton(new)
+    for name in BODY_NAMES:
+        assert mapping[name] == name, (name, mapping[name], mapping.reasons[name])

@@ -238,15 +238,26 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> Bod
 
 def extra_limbs(view: SkeletonView, plan: BodyPlan, pairs: list[LimbPair]) -> list[LimbPair]:
     """Further mirror-image pairs of limbs that hang from the legs' or the arms' joint beside them,
-    as long as the legs and jointed like them (three joints or more): the legs of an insect or a
-    spider. Pairs whose names say they are not body parts (wings, tails, hair, props) do not count."""
+    as long as the legs, jointed like them (three joints or more) and standing on the ground with
+    them: the legs of a spider. Pairs whose names say they are not body parts (wings, tails, hair,
+    props) do not count, nor do chains that end above the ground (a skirt, a coat)."""
     legs, arms = plan.legs, plan.arms
     taken = {legs.a, legs.b, arms.a, arms.b}
+    top = legs_top(view, legs)
+    up = view.P[arms.branch] - top
+    norm = float(np.sqrt(up @ up))
+    if norm < 1e-9:
+        return []
+    height = view.P @ (up / norm)
+    ground = float(height.min())
+    standing = max(float(top @ (up / norm)) - ground, 1e-9)
     out = []
     for p in pairs:
         if p.branch not in (legs.branch, arms.branch) or {p.a, p.b} & taken or p.length < 0.6 * legs.length:
             continue
         if any(view.info[j].flagged(*NON_BODY_FLAGS) for j in (p.a, p.b)):
+            continue
+        if 0.5 * (height[view.far[p.a]] + height[view.far[p.b]]) - ground > 0.15 * standing:
             continue
         chains = [view.main_chain(j, 4) for j in (p.a, p.b)]
         if all(sum(view.bone[c] > 0.05 * p.length for c in chain[1:]) >= 2 for chain in chains):
