@@ -38,7 +38,8 @@ def _packs(args) -> int:
     if not rows:
         print("no behaviour packs installed")
     for r in rows:
-        spaces = ", ".join(f"{g} {d}D" for g, d in r["blend_spaces"].items()) or "not built"
+        spaces = ", ".join(f"{g} {d}D" for g, d in r["blend_spaces"].items()) or (
+            "not built" if not r["built"] else "no blend space")
         print(f"{r['name']:<20} {r['version']:<8} {r['kind']:<10} {r['clips']:>3} clips  {spaces}  {r['description']}")
     return 0
 
