@@ -77,6 +77,10 @@ class MissingFeatureError(UnusableInputError):
     """An optional extra or system package is needed; the message says how to install it."""
 
 
+class MissingJointsError(UnusableInputError):
+    """A character lacks joints that a behaviour pack or controller drives; the message names them."""
+
+
 class NotHumanoidError(UnusableInputError):
     """A skeleton is not a humanoid; ``reason`` says why."""
 

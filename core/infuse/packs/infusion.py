@@ -26,7 +26,7 @@ from .. import __version__, fileio, registry
 from ..asset import Asset, Character
 from ..atomic import atomic_path
 from ..contacts import feet, lowest_points
-from ..errors import MissingFeatureError, UsageError
+from ..errors import MissingFeatureError, MissingJointsError, UsageError
 from ..kinematics import forward_kinematics
 from ..mapping import Mapping, map_skeleton
 from ..motion import Motion
@@ -239,6 +239,46 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
     return BlendSpace(pack.name, pack.version, pack.kind, clips, tess)
 
 
+#: The limbs a pack of each kind poses with IK, root to end ("{s}": each side its clips use, "l" and "r"
+#: for locomotion). Each joint must be mapped and hang below the one before it.
+DRIVEN_LIMBS = {
+    "locomotion": (("{s}_hip", "{s}_knee", "{s}_ankle"),),
+    "reach": (("{s}_shoulder", "{s}_elbow", "{s}_wrist"),),
+    "gesture": (("{s}_shoulder", "{s}_elbow", "{s}_wrist"),),
+}
+
+
+def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
+    """Refuse (exit 3) a pack whose limbs the character lacks or does not hold as chains, naming them."""
+    hands = {c.hand for c in pack.manifest.clips if c.hand}
+    sides = ("l", "r") if pack.kind == "locomotion" or "both" in hands else \
+        tuple(sorted({h[0] for h in hands}))
+    parents = character.skeleton.parents
+    index = {n: k for k, n in enumerate(character.skeleton.names)}
+    missing, detached = [], []
+    for limb in DRIVEN_LIMBS.get(pack.kind, ()):
+        for s in sides:
+            names = [n.format(s=s) for n in limb]
+            missing += [n for n in names if mapping.get(n) is None]
+            joints = [index.get(mapping.get(n)) for n in names]
+            for upper, lower, name in zip(joints, joints[1:], names[1:]):
+                if upper is None or lower is None:
+                    continue
+                k = parents[lower]
+                while k > upper:
+                    k = parents[k]
+                if k != upper:
+                    detached.append(name)
+    if missing:
+        raise MissingJointsError(character.asset.path, f"pack '{pack.name}' drives {', '.join(missing)}, which "
+                                 f"the character's mapping does not have (see infuse map)")
+    if detached:
+        raise MissingJointsError(character.asset.path, f"pack '{pack.name}' poses limbs with IK, but "
+                                 f"{', '.join(detached)} {'does' if len(detached) == 1 else 'do'} not hang below the joint before it "
+                                 f"in its limb "
+                                 f"(a foot or hand driven from outside its limb)")
+
+
 def _restraightened(motion: Motion, params: dict, index: dict[str, int]) -> tuple[Motion, dict]:
     """A cycle the builder straightened (or aligned with its travel), retargeted: what is left of its turn
     taken out and its travel aligned again as measured on the character (retargeting moves the hips a
@@ -346,6 +386,8 @@ def infuse_character(character, packs, mapping: Mapping | None = None, cache=Non
     if mapping is None:
         mapping = character.mapping if character.mapping is not None else map_skeleton(character.asset, mapper=mapper or "heuristic")
     character.mapping = mapping
+    for p in loaded:
+        _require_joints(p, character, mapping)
     key = cache_key(character, mapping, loaded, retargeter) if cache is not None else ""
     spaces = load_infusion(character, mapping, key, cache) if cache is not None else None
     cached = spaces is not None
