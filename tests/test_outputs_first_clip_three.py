@@ -14,7 +14,7 @@ from infuse.cli import main
 from infuse_gltf.container import parse_file
 from infuse_viewer.content import sources
 from infuse_viewer.server import Site, ViewerServer
-from infuse_viewer.vendor import ensure_vendor
+from infuse.three import ensure_vendor
 from viewer_support import ViewerPage, chromium_context
 
 WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"

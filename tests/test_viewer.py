@@ -19,7 +19,8 @@ from infuse.canonical import CANONICAL_NAMES
 from infuse.cli import main
 from infuse.errors import InputError, MissingFeatureError
 from infuse.mapping import map_skeleton
-from infuse_viewer import content, vendor
+from infuse import three as vendor
+from infuse_viewer import content
 from infuse_viewer.page import BASE64_TYPE, VIEWER_SPECIFIER
 from infuse_viewer.server import Site, ViewerServer
 from infuse_viewer.targets import parse_targets, to_file_frame

@@ -17,7 +17,7 @@ from infuse.cli import main
 from infuse.mapping import map_skeleton
 from infuse_viewer.content import LOW_CONFIDENCE, sources
 from infuse_viewer.server import Site, ViewerServer
-from infuse_viewer.vendor import ensure_vendor
+from infuse.three import ensure_vendor
 from viewer_support import (TARGETS, ViewerPage, add_wave_clip, changed_fraction, chromium_context, glb_animation_names,
                             write_tone)
 

@@ -62,10 +62,13 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.packs.manifest": "pack manifests",
     "infuse.scene": "scenes: characters, objects and timed BML",
     "infuse.scene.scenefile": "reading scene files",
+    "infuse.scene.command": "build_scene: a Scene from a scene file's document, as `infuse run` builds it",
+    "infuse.scene.speech": "utterance_samples: an utterance's audio as the scene mixes it",
     "infuse.live": "running a scene live",
     # drawing and the command line
     "infuse.render": "Camera, Figure, Marker, render",
     "infuse.render.camera": "camera views",
+    "infuse.three": "three.js modules for pages served to a browser (import-map specifiers and files)",
     "infuse.render.command": "parse_size: the --size option shared by commands that draw",
     "infuse.cli.builtin": "options shared by commands that read a file: add_read_options, read_options",
     "infuse.cli.map_command": "options shared by commands that map: add_mapping_options, mapping_from_args",

@@ -71,7 +71,7 @@ def run(args) -> int:
         print(f"infuse serve: warning: listening on {args.host} without --token: anyone who reaches it can drive the scene",
               file=sys.stderr)
 
-    from infuse_viewer.vendor import ensure_vendor
+    from infuse.three import ensure_vendor
 
     from .page import LiveSite
     from .vmc import VmcSender

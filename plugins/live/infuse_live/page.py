@@ -1,6 +1,6 @@
 """What the HTTP side of ``infuse serve`` answers to GET: the live viewer page, its scripts and models.
 
-The page (``live.html`` and ``live.js`` of the viewer plugin) loads three.js from ``/vendor/...``, each
+The page (``static/live.html`` and ``static/live.js`` beside this module) loads three.js from ``/vendor/...``, each
 character's model from ``/characters/<name>.glb`` (the character as the scene holds it, at rest, written
 once on first request), then connects to the WebSocket and plays the pose stream and the speech audio.
 """
@@ -10,13 +10,18 @@ import json
 import tempfile
 import threading
 from dataclasses import replace
+from importlib import resources
 from pathlib import Path
 
 import infuse
-from infuse_viewer.page import static_text
-from infuse_viewer.vendor import Vendor
+from infuse.three import Vendor
 
 LIVE_SPECIFIER = "infuse-live"
+
+
+def static_text(name: str) -> str:
+    """A file of the live page (``static/`` beside this module)."""
+    return resources.files("infuse_live").joinpath("static", name).read_text(encoding="utf-8")
 
 
 class LiveSite:

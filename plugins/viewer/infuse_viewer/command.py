@@ -17,7 +17,7 @@ from infuse.mapping import read_map
 from .content import LOW_CONFIDENCE, prepare, sources
 from .page import offline_page
 from .server import HOST, Site, ViewerServer
-from .vendor import ensure_vendor
+from infuse.three import ensure_vendor
 
 DEFAULT_PORT = 8765
 

@@ -15,7 +15,7 @@ import re
 from importlib import resources
 
 from .content import Prepared, Source
-from .vendor import Vendor
+from infuse.three import Vendor
 
 VIEWER_SPECIFIER = "infuse-viewer"
 BASE64_TYPE = "application/x-infuse-base64"

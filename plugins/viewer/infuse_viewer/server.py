@@ -21,7 +21,7 @@ from infuse.errors import InfuseError, UsageError
 
 from .content import Prepared, Source, prepare
 from .page import served_info, served_page, static_text
-from .vendor import Vendor
+from infuse.three import Vendor
 
 HOST = "127.0.0.1"
 _ENTRY = re.compile(r"/entries/(\d+)/(info\.json|model\.glb|audio/(\d+)\.wav)")

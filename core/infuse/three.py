@@ -1,4 +1,4 @@
-"""three.js for the viewer page, taken from the npm package ``three`` that ``make setup`` installs.
+"""three.js for the pages infuse serves (the viewer, the live page), taken from the npm package ``three`` that ``make setup`` installs.
 
 The project ships no copy of three.js. At first use the modules the page needs (``three``, the
 glTF loader, orbit controls and whatever they import) are copied from the installed package into
