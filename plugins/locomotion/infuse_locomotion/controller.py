@@ -62,6 +62,10 @@ SLOW_EPS = 1e-3
 STOP_CADENCE = 1.2
 CADENCE_RAMP = 3.0
 SETTLE_PHASE = 0.05
+#: Phase share over which a foot's stance share rises after strike and falls before toe off
+#: (:func:`~.phase_keys.stance_of`), and the least phase a stop holds before the trailing foot's fall starts.
+STANCE_RAMP = 0.05
+SETTLE_MARGIN = 0.005
 #: Turning on the spot faster than this (rad/s) beyond what the blend shows, the feet step.
 SPIN_STEP = 0.15
 #: Seconds over which a stopped character fades into the pack's idle.
@@ -291,7 +295,7 @@ class Locomotion(Controller):
         wm = np.where(b["idle"][None], 0.0, w)
         wm = (wm + SLOW_EPS * b["slowest"][None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
-        phase, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()))
+        phase, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()), _settle_phases(b, wm))
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -382,7 +386,7 @@ class Locomotion(Controller):
             # in the frame whose span holds its strike, and is pinned from there.
             early = events.copy()
             early[:, :, 0] -= half_frame[:, None]
-            flags, share = stance_of(early, phase, HANDOVER)
+            flags, share = stance_of(early, phase, HANDOVER, STANCE_RAMP)
             contact += flags * ws.sum(axis=1)[:, None, None]
             support += share * ws.sum(axis=1)[:, None]
         if fade.size:
@@ -742,7 +746,23 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     return w, slow
 
 
-def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _settle_phases(b, w) -> np.ndarray:
+    """(F, 2) phases past a landing of the left foot (phase 0) and of the right (0.5) at which a stop
+    holds the gait: :data:`SETTLE_PHASE`, or earlier where the trailing foot's stance share would start
+    to fall before it (its toe off less the stance ramp), so the stop's last frame does not move the
+    trailing foot (its stance share lays the feet down). ``w`` (F, N): the moving clips' weights."""
+    out = np.full((len(w), 2), SETTLE_PHASE)
+    stepping = np.nonzero(b["stepping"])[0]
+    if not stepping.size:
+        return out
+    ws = w[:, stepping]
+    events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b["events"][stepping].reshape(-1, 8)).reshape(-1, 2, 4)
+    # Toe off of the trailing foot after each landing: the right foot's after the left strike (0), the left's after 0.5.
+    trailing = np.stack((np.mod(events[:, 1, 3], 1.0), np.mod(events[:, 0, 3] - 0.5, 1.0)), axis=1)
+    return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
+
+
+def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The blend's phase (F,) in [0, 1), stride factor (F,), idle share (F,) and how far it has come
     to rest (F,) (the idle share's easing, with an idle or not) for moving shares
     ``slow`` (F,) of the slowest walk, the steering's ``stopping`` (F,) flags, ``spinning`` (F,)
@@ -789,7 +809,9 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool) -> tuple[np.nda
                 count = st["landings"] + np.cumsum(landed)
                 ready = landed & (count >= 2)
                 if ready.any():
-                    goal = np.floor(2.0 * ph[int(np.argmax(ready))]) / 2.0 + SETTLE_PHASE
+                    j = int(np.argmax(ready))
+                    landed = np.floor(2.0 * ph[j]) / 2.0
+                    goal = landed + settle_at[a + j, int(round(2.0 * landed)) % 2]
                 st["landings"] = int(count[-1])
             stride[a:e] = slow[a:e] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
             if goal is not None:
