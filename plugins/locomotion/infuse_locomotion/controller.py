@@ -773,8 +773,9 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
     ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
     character nearly still (below :data:`STAND_FRACTION`): both then stand under the body; the phase holds in the double support
-    after that landing and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it steps
-    the same way and settles again once the turn is over."""
+    after that landing, ``settle_at`` (F, 2) past a left (phase 0) or right (0.5) landing (see
+    :func:`_settle_phases`), and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it
+    steps the same way and settles again once the turn is over."""
     f = len(slow)
     stop = (slow < STAND_FRACTION) | stopping
     rate = np.sqrt(slow)
