@@ -258,7 +258,10 @@ class Locomotion(Controller):
         if not st:
             st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
                       anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
-                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), landed=np.tile(_IDENTITY, (2, 1)), landed_as=np.tile(_IDENTITY, (2, 1)), across=np.zeros((2, 3)), landed_spun=np.zeros(2), ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)), settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
+                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), landed=np.tile(_IDENTITY, (2, 1)),
+                      landed_as=np.tile(_IDENTITY, (2, 1)), across=np.zeros((2, 3)), landed_spun=np.zeros(2),
+                      ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)),
+                      settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
         x0, z0, h0 = st["x"], st["z"], st["heading"]
@@ -458,7 +461,8 @@ class Locomotion(Controller):
         it only pitches (about the horizontal axis across it, rolling over its ball), keeping the yaw
         and roll it had as the ball took over: the animation's twist or roll of a foot on the ground
         (a take's, a blend's) would swing the ankle about the pinned ball. The corrections fade out
-        after toe off. ``spun`` (F,) is the turn spun at the root so far (radians). ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction."""
+        after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
+        (F,) the turn spun at the root so far (radians)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot, g_pos = chain_fk(b["skeleton"], rot, root, jt, b["pin_joints"])
@@ -811,8 +815,8 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
                 ready = landed & (count >= 2)
                 if ready.any():
                     j = int(np.argmax(ready))
-                    landed = np.floor(2.0 * ph[j]) / 2.0
-                    goal = landed + settle_at[a + j, int(round(2.0 * landed)) % 2]
+                    strike = np.floor(2.0 * ph[j]) / 2.0  # the landing's phase: a left (whole) or right (half) strike
+                    goal = strike + settle_at[a + j, int(round(2.0 * strike)) % 2]
                 st["landings"] = int(count[-1])
             stride[a:e] = slow[a:e] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
             if goal is not None:
