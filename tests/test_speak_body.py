@@ -2,6 +2,9 @@
 blinks, moves its eyes and nods on the beats, while the mouth speaks; ``--face-only`` moves the face only."""
 from __future__ import annotations
 
+import json
+import struct
+
 import numpy as np
 import pytest
 
@@ -95,3 +98,47 @@ def test_merged_morph_tracks_keep_the_blinks_under_the_speech():
     assert merged["weights"]["eyeBlinkLeft"].tolist() == [0.0, 1.0, 0.2, 0.0]
     assert merged["weights"]["viseme_aa"].tolist() == [0.0, 0.5, 0.9, 0.1]
     assert merged_tracks(None, speech) is speech and merged_tracks(idle, None) is idle
+
+
+def _as_vrm(source, target):
+    """``source`` (a glb) written as a VRM 1.0 file: humanoid bones from the mapper, expressions bound to its
+    mouth and eyelid morph targets (VRoid's ``Fcl_`` set), the binary chunk unchanged."""
+    data = source.read_bytes()
+    n = struct.unpack_from("<I", data, 12)[0]
+    doc, rest = json.loads(data[20:20 + n]), data[20 + n:]
+    mapping = map_skeleton(infuse.load(source))
+    nodes = {nd.get("name"): i for i, nd in enumerate(doc["nodes"])}
+    canonical = {"hips": "base", "spine": "spine1", "chest": "spine3", "neck": "spine4", "head": "skullbase"}
+    for side, s in (("left", "l"), ("right", "r")):
+        canonical.update({side + "UpperLeg": s + "_hip", side + "LowerLeg": s + "_knee", side + "Foot": s + "_ankle",
+                          side + "UpperArm": s + "_shoulder", side + "LowerArm": s + "_elbow", side + "Hand": s + "_wrist"})
+    face = next(i for i, nd in enumerate(doc["nodes"]) if "mesh" in nd
+                and doc["meshes"][nd["mesh"]].get("extras", {}).get("targetNames"))
+    targets = doc["meshes"][doc["nodes"][face]["mesh"]]["extras"]["targetNames"]
+    bind = lambda name: {"morphTargetBinds": [{"node": face, "index": targets.index(name), "weight": 1.0}]}  # noqa: E731
+    doc.setdefault("extensionsUsed", []).append("VRMC_vrm")
+    doc.setdefault("extensions", {})["VRMC_vrm"] = {
+        "specVersion": "1.0", "meta": {"name": "vrm", "authors": ["infuse tests"], "licenseUrl": "https://vrm.dev/licenses/1.0/"},
+        "humanoid": {"humanBones": {bone: {"node": nodes[mapping.joints[c]]} for bone, c in canonical.items()}},
+        "expressions": {"preset": {"aa": bind("Fcl_MTH_A"), "ih": bind("Fcl_MTH_I"), "ou": bind("Fcl_MTH_U"),
+                                   "ee": bind("Fcl_MTH_E"), "oh": bind("Fcl_MTH_O"), "blink": bind("Fcl_EYE_Close")}}}
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    target.write_bytes(struct.pack("<III", 0x46546C67, 2, 20 + len(text) + len(rest))
+                       + struct.pack("<II", len(text), 0x4E4F534A) + text + rest)
+    return target
+
+
+def test_a_vrm_character_speaks_breathes_and_blinks(espeak, tmp_path):
+    require_corpus()
+    vrm = _as_vrm(corpus_file(VROID), tmp_path / "avatar.vrm")
+    assert infuse.load(vrm).meta["vrm_version"] == "1.0"
+    out = tmp_path / "out.glb"
+    assert main(["speak", str(vrm), TEXT, "-o", str(out)]) == 0
+    asset = infuse.load(out)
+    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    assert max(np.max(weights[k]) for k in ("Fcl_MTH_A", "Fcl_MTH_O")) > 0.5  # the VRM mouth speaks
+    assert max(np.max(weights[k]) for k in weights if "blink" in k.lower()) > 0.5  # the eyes blink
+    mapping = map_skeleton(asset)
+    turns = _turns_deg(asset, [mapping.joints[n] for n in ("spine3", "skullbase")])
+    assert all(t > 0.5 for t in turns.values()), turns  # it breathes and nods
