@@ -298,13 +298,11 @@ class Locomotion(Controller):
         wm = np.where(b["idle"][None], 0.0, w)
         wm = (wm + SLOW_EPS * b["slowest"][None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
         period = np.maximum(wm @ b["durations"], 1e-3)
-        phase, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()), _settle_phases(b, wm))
+        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()),
+                                                        _settle_phases(b, wm))
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
-        advance = np.mod(np.diff(phase, append=phase[-1:]), 1.0)  # each frame's step of the phase (the last: its predecessor's)
-        if len(advance) > 1:
-            advance[-1] = advance[-2]
         rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times, 0.5 * advance)
         if not b["idle"].any() and rest.any():
             # Come to rest without an idle: both feet stay down where they are, laid flat about their
@@ -766,9 +764,10 @@ def _settle_phases(b, w) -> np.ndarray:
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
 
 
-def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The blend's phase (F,) in [0, 1), stride factor (F,), idle share (F,) and how far it has come
-    to rest (F,) (the idle share's easing, with an idle or not) for moving shares
+def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, ...]:
+    """The blend's phase (F,) in [0, 1), each frame's step of it to the next frame (F,) (from that
+    frame's own cadence: the same whichever frames are evaluated with it), stride factor (F,), idle
+    share (F,) and how far it has come to rest (F,) (the idle share's easing, with an idle or not) for moving shares
     ``slow`` (F,) of the slowest walk, the steering's ``stopping`` (F,) flags, ``spinning`` (F,)
     flags (the root turns on the spot) and cycle durations ``period`` (F,) seconds; updates ``st``.
 
@@ -844,7 +843,7 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
         level[a:e] = np.clip(ramp, 0.0, 1.0)
         st["stand"] = float(level[e - 1])
     rest = _ease(level)
-    return phase % 1.0, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
+    return phase % 1.0, advance, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
 
 
 def mean_rotations(motion) -> np.ndarray:
