@@ -398,3 +398,24 @@ def test_acclaim_long_lines_and_many_limit_lines_are_answered_at_once(tmp_path):
     with pytest.raises(InputError, match="characters long") as info:
         infuse.load(amc, skeleton=str(tmp_path / "long.asf"))
     assert info.value.place == "line 5"
+
+
+def test_amc_of_millions_of_short_lines_is_refused_before_its_array_is_made(tmp_path):
+    (tmp_path / "t.asf").write_text(ASF_ONE_BONE)
+    amc = tmp_path / "t.amc"
+    amc.write_text(":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 0 0 0 0 0 " + "0" * 60 + "\na 0 0\n" + "(\n" * 2_000_000)
+    started = time.process_time()
+    with pytest.raises(InputError, match="unequal length") as info:
+        infuse.load(amc, skeleton=str(tmp_path / "t.asf"))
+    assert info.value.place == "line 4" and time.process_time() - started < 5.0
+
+
+def test_xml_scene_attributes_naming_elements_are_refused(tmp_path):
+    from fuzz_support import TINY_SCENE_XML
+
+    (tmp_path / "bob.bvh").write_text(TINY_BVH)
+    (tmp_path / "block.xml").write_text(TINY_BML)
+    path = tmp_path / "scene.xml"
+    path.write_text(TINY_SCENE_XML.replace('<scene fps="30"', '<scene character="30"'))
+    with pytest.raises(InputError, match="is an element, not an attribute"):
+        read_scene_file(path)

@@ -305,6 +305,9 @@ def _xml_document(path: Path) -> dict:
         raise InputError(path, f"line {root.sourceline}", f"the root element is <{etree.QName(root).localname}>, not <scene>")
     doc: dict = dict(root.attrib)
     kinds = {"character": "character", "object": "object", "block": "block", "tts": "tts"}
+    nested = sorted(set(doc) & set(kinds))
+    if nested:
+        raise InputError(path, f"line {root.sourceline}", f"<scene {nested[0]}=...>: {nested[0]} is an element, not an attribute")
     for child in root:
         if not isinstance(child.tag, str):
             continue  # comments, processing instructions

@@ -29,11 +29,24 @@ class AmcFile:
             raise self.problems[0]
 
 
+#: Most the longest line of an ``.amc`` may exceed the mean line (frame numbers and bone rows: about 3).
+MAX_WIDTH_RATIO = 16
+
+
 def parse_amc(path: Path, text: str) -> AmcFile:
     """Split ``.amc`` text into frames and per-bone value lines (each bone should appear once per frame)."""
     # One fixed-width byte array of the lines (every line is short, see reader._read_text; bytes take a
     # quarter of the memory of str), processed whole.
-    raw = np.array(text.replace("\t", " ").encode("utf-8").split(b"\n"))
+    lines = text.replace("\t", " ").encode("utf-8").split(b"\n")
+    # The array is as wide as the longest line: lines of very unequal length (a few long ones among
+    # millions of short ones) would make it many times the file's size. An AMC's lines are alike.
+    widest = max(lines, key=len)
+    if len(lines) * len(widest) > MAX_WIDTH_RATIO * len(text) + (1 << 20):
+        line = lines.index(widest) + 1
+        raise InputError(path, f"line {line}", f"lines of very unequal length ({len(widest)} characters here, "
+                         f"{len(text) / len(lines):.1f} on average): not an AMC motion")
+    raw = np.array(lines)
+    del lines
     stripped = np.char.strip(np.char.partition(raw, b"#")[:, 0]) if raw.size else raw
     del raw
     numbers = np.nonzero(stripped != b"")[0]
