@@ -215,12 +215,12 @@ class Gaze(Controller):
                 try:
                     target = block.runtime.target(target) if isinstance(target, str) else target
                     slots = ()
-                    if len(spans[c]) == 1 and isinstance(target, JointTarget) and target.character in index:
+                    if isinstance(target, JointTarget) and target.character in index:
                         slots = _slots_of(target, rows[target.character][0], block)
-                    if slots:
+                    if slots:  # on the frames this gaze leads, whether or not another leads the rest of the block
                         other = index[target.character]
-                        refine.append((c, other, slots))
-                        arrays["targets"][c] = positions[other][:, list(slots)].mean(axis=1)
+                        refine.append((c, other, slots, these))
+                        arrays["targets"][c, these] = positions[other][these][:, list(slots)].mean(axis=1)
                     else:
                         arrays["targets"][c, these] = target.positions(block.times, block)[these]
                 except UsageError as exc:  # a target that names nothing in the scene: this gaze rests

@@ -63,8 +63,8 @@ class SolverInput:
       move; ``fractions`` (C, F, G): share of the remaining turn; ``limits`` (C, F, G, 4): heading, up,
       down, roll; ``smoothing`` (C, F, G): share per frame; ``max_step`` (C, F, G): radians per frame;
       ``offsets`` (C, F, 2): heading and pitch added to the target direction.
-    - ``refine``: (c, c2, slots) triples: character c looks at the mean of ``slots`` of character c2,
-      taken from a first solve of the block.
+    - ``refine``: (c, c2, slots, frames) entries: character c looks at the mean of ``slots`` of
+      character c2 on ``frames`` (a slice or an (F,) mask), taken from a first solve of the block.
     """
 
     frames_world: np.ndarray
@@ -335,8 +335,8 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
     first = groups_state.copy() if first_state is None else first_state
     _, positions = _solve_once(inp, block, first, eyes_state, eyes=False, place=True)
     targets = inp.targets.copy()
-    for c, c2, slots in inp.refine:
-        targets[c] = positions[c2][:, list(slots)].mean(axis=1)
+    for c, c2, slots, frames in inp.refine:
+        targets[c, frames] = positions[c2][frames][:, list(slots)].mean(axis=1)
     return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)[0]
 
 

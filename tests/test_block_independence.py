@@ -1,0 +1,178 @@
+"""A scene gives the same frames whatever block size it is evaluated in: frame by frame (``step(1)``, as
+the live server does), in blocks of 7 frames, or in the default blocks of :meth:`Scene.run`.
+
+Joint positions are compared by forward kinematics on every frame of the written motion, morph weights
+on every frame. The bound, 1e-6 m (and 1e-6 of a weight), is rounding: state carried from block to
+block (position, heading, phase, planted feet) is summed in other groupings, which moves the last
+bits of a float by some 1e-8 m over a scene of a few seconds.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+from infuse.kinematics import motion_fk
+from infuse.scene import Scene
+from infuse.speech import tts_engine
+
+from corpus_data import corpus_file
+
+FPS = 30.0
+#: Frame by frame, a small odd block, and the default (None).
+BLOCKS = (1, 7, None)
+BOUND_M = 1e-6
+
+
+class OnceSpoken:
+    """The espeak engine, each text synthesized once and its utterance reused: two syntheses of the same
+    text may differ by some milliseconds (the library's state), which is not what is compared here."""
+
+    def __init__(self):
+        self.engine = tts_engine("espeak")
+        self.utterances = {}
+
+    def synthesize(self, text, *args, **kwargs):
+        if text not in self.utterances:
+            self.utterances[text] = self.engine.synthesize(text, *args, **kwargs)
+        return self.utterances[text]
+
+
+@lru_cache(maxsize=1)
+def once_spoken() -> OnceSpoken:
+    return OnceSpoken()
+
+
+def evaluate(build, block: int | None, seconds: float) -> Scene:
+    """The scene ``build(scene)`` makes, evaluated for ``seconds`` in blocks of ``block`` frames
+    (1: :meth:`Scene.step` frame by frame; None: :meth:`Scene.run` with the default block size)."""
+    options = dict(fps=FPS, quiet=True, tts=once_spoken())
+    scene = Scene(**options) if block is None else Scene(**options, block_frames=block)
+    build(scene)
+    frames = int(round(seconds * FPS))
+    if block == 1:
+        for _ in range(frames):
+            scene.step(1)
+    else:
+        scene.run(seconds)
+    return scene
+
+
+def joint_positions(scene: Scene, name: str) -> np.ndarray:
+    """(F, J, 3) world joint positions, metres, of a character's scene motion."""
+    return motion_fk(scene.motion(name))[1]
+
+
+def largest_difference(runs: dict, name: str, block: int) -> tuple[float, int]:
+    """The largest joint distance (metres) between the run in blocks of ``block`` and the default run,
+    and the first frame where it exceeds :data:`BOUND_M` (-1: none)."""
+    default, other = joint_positions(runs[None], name), joint_positions(runs[block], name)
+    assert default.shape == other.shape
+    per_frame = np.linalg.norm(default - other, axis=-1).max(axis=1)
+    over = np.flatnonzero(per_frame > BOUND_M)
+    return float(per_frame.max()), int(over[0]) if over.size else -1
+
+
+def add_bob(scene: Scene, facing=0.0) -> None:
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), name="bob", position=(-1.6, 0.0, -1.2),
+                        facing=facing, packs=["locomotion-male"])
+
+
+def turning_walk(scene: Scene) -> None:
+    """Bob, facing +Z, walks to a point 55 degrees to his right, turning on the way, and stops there."""
+    add_bob(scene)
+    scene.walk_to("bob", (0.4, 0.2), at=0.3)
+
+
+def walk_stop_walk(scene: Scene) -> None:
+    """Bob walks ahead, stops and settles into his idle, then walks back behind him (a turn from standing)."""
+    add_bob(scene, facing=(0.0, 0.0, 0.9))
+    scene.walk_to("bob", (0.0, 0.6), at=0.3)
+    scene.walk_to("bob", (-1.0, -1.0), at=5.5)
+
+
+WALKS = {"turning_walk": (turning_walk, 5.5), "walk_stop_walk": (walk_stop_walk, 11.5)}
+
+
+@pytest.fixture(scope="module", params=sorted(WALKS))
+def walk_runs(request):
+    build, seconds = WALKS[request.param]
+    return request.param, {block: evaluate(build, block, seconds) for block in BLOCKS}
+
+
+@pytest.mark.parametrize("block", [b for b in BLOCKS if b is not None])
+def test_a_walk_does_not_depend_on_the_block_size(walk_runs, block):
+    label, runs = walk_runs
+    difference, frame = largest_difference(runs, "bob", block)
+    assert difference < BOUND_M, f"{label} in blocks of {block}: {difference * 1000:.3f} mm apart from frame {frame} on"
+
+
+def test_the_walks_walk_and_stop(walk_runs):
+    """The compared walks cover ground, turn and come to a stand (else the test would show nothing)."""
+    label, runs = walk_runs
+    scene = runs[None]
+    hips = joint_positions(scene, "bob")[:, 0]
+    travel = np.linalg.norm(np.diff(hips[:, [0, 2]], axis=0), axis=1)
+    assert travel.sum() > 1.5, f"{label}: bob walked only {travel.sum():.2f} m"
+    assert travel[-15:].max() < 0.01, f"{label}: bob still moves at the end ({travel[-15:].max() * FPS:.2f} m/s)"
+    walks = scene.walks.walks["bob"]
+    assert all(w.settled is not None for w in walks), f"{label}: a walk never handed over to the idle"
+    heading = np.degrees(np.ptp([w.final["heading"] for w in walks] + [0.0]))
+    assert heading > 30.0, f"{label}: the walks turned only {heading:.1f} degrees"
+
+
+def conversation(scene: Scene) -> None:
+    """Ann and Bob face each other (blinking, breathing, saccades); they gaze at each other, Bob nods,
+    Ann speaks (lip sync), reaches for a cup, glances at it and gestures."""
+    add_bob(scene, facing="ann")
+    scene.add_character(corpus_file("talkinghead/avatars/brunette-t.glb"), name="ann", position=(0.0, 0.0, 0.6),
+                        facing="bob", packs=["locomotion-female", "reaching", "gestures"])
+    scene.add_object("cup", (0.25, 1.0, 0.15), size=0.09)
+    scene.bml("bob", """
+<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" xmlns:sbm="http://ict.usc.edu" id="bob_look">
+  <gazeShift id="g1" target="ann" influence="HEAD"/>
+  <sbm:saccade id="sc1" mode="listen"/>
+  <head id="nod" lexeme="NOD" repetition="2" amount="0.6" start="1.2"/>
+</bml>""", at=0.0)
+    scene.bml("ann", """
+<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" xmlns:sbm="http://ict.usc.edu" id="ann_talk">
+  <gazeShift id="g1" target="bob" influence="SHOULDER"/>
+  <sbm:saccade id="sc1" mode="talk"/>
+  <speech id="speech" start="0.5"><text>Could you pass me that <sync id="cup"/>cup? Never mind.</text></speech>
+  <sbm:reach id="reach" target="cup" sbm:action="touch" sbm:reach-type="right" start="speech:cup"/>
+  <gaze id="look_cup" target="cup" influence="HEAD" start="speech:cup" end="reach:stroke+0.4"/>
+  <gesture id="beat" lexeme="BEAT" stroke="1.2"/>
+</bml>""", at=0.0)
+
+
+CONVERSATION_S = 6.0
+
+
+@pytest.fixture(scope="module")
+def conversation_runs():
+    return {block: evaluate(conversation, block, CONVERSATION_S) for block in BLOCKS}
+
+
+@pytest.mark.parametrize("block", [b for b in BLOCKS if b is not None])
+def test_the_other_controllers_do_not_depend_on_the_block_size(conversation_runs, block):
+    runs = conversation_runs
+    for name in ("ann", "bob"):
+        difference, frame = largest_difference(runs, name, block)
+        assert difference < BOUND_M, f"{name} in blocks of {block}: {difference * 1000:.3f} mm apart from frame {frame} on"
+        weights, other = runs[None].runtime.morph_weights(name), runs[block].runtime.morph_weights(name)
+        assert weights.shape == other.shape
+        if weights.size:
+            assert np.abs(weights - other).max() < 1e-6, f"{name}'s morph weights in blocks of {block}"
+
+
+def test_the_conversation_moves_the_body_and_the_face(conversation_runs):
+    """Every controller compared above shows (else the test would show nothing for it)."""
+    scene = conversation_runs[None]
+    kinds = {a.controller.kind for a in scene.runtime.activities}
+    for kind in ("gaze", "head", "reach", "blink", "breathing", "saccade", "speech", "clip"):
+        assert kind in kinds, f"no {kind} activity in the conversation: {sorted(kinds)}"
+    weights = scene.runtime.morph_weights("ann")
+    assert np.ptp(weights, axis=0).max() > 0.2, "ann's face hardly moved: no lip sync or blinks to compare"
+    hand = joint_positions(scene, "ann")
+    assert np.ptp(hand, axis=0).max() > 0.2, "ann hardly moved: no reach or gesture to compare"
