@@ -183,7 +183,9 @@ def main(argv=None) -> int:
         version = subprocess.run([str(BLENDER_PYTHON), "-c", "import bpy; print(bpy.app.version_string)"],
                                  capture_output=True, text=True, check=True).stdout.strip().splitlines()[-1]
         done = subprocess.run([str(BLENDER_PYTHON), str(folder / "blender_side.py"), str(folder / "jobs.json")],
-                              capture_output=True, text=True, check=True)
+                              capture_output=True, text=True)
+        if done.returncode:
+            sys.exit(f"Blender's side failed (exit {done.returncode}):\n{done.stderr[-3000:]}")
         rows = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     print(f"Blender {version}, {args.frames} frames per clip; heights in mm, Blender's world Z")
     print("| command | file | active action | new clip | ground | infuse | feet | rest ground | rest feet | joints | joint err (mm) |")
