@@ -1,7 +1,6 @@
 """Lip sync without characters: tables, coarticulation, holds, timing against real espeak-ng speech."""
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
@@ -13,7 +12,7 @@ from infuse_lipsync.expressions import action_units
 from infuse_lipsync.lipsync import LipSyncSettings, lipsync, viseme_curves
 from infuse_lipsync.tables import VISEME_SETS, phoneme_viseme, viseme_set
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
+from espeak_support import require_espeak
 
 # SmartBody's 15-viseme phoneme table (FaceFX style), as SmartBody documents it; "hh" has no shape of
 # its own here (it takes its neighbours'), so it is left out.
@@ -124,13 +123,7 @@ def test_plain_data_without_a_character():
 
 @pytest.fixture(scope="module")
 def speech():
-    try:
-        from infuse_tts_espeak.library import espeak
-        espeak()
-    except Exception as exc:
-        if UNDER_CI:
-            pytest.fail(f"espeak-ng is required under CI: {exc}")
-        pytest.skip(f"espeak-ng not available: {exc}")
+    require_espeak()
     text = ("The old lighthouse keeper climbed the spiral stairs every evening at dusk. He carried a small brass lamp, "
             "a notebook, and a thermos of sweet black tea. From the gallery at the top he could see the whole bay: "
             "the fishing boats coming home, and the gulls circling over the harbour.")

@@ -2,14 +2,14 @@
 from __future__ import annotations
 
 import json
-import os
 import wave
 
 import numpy as np
 import pytest
 
 import infuse
-from corpus_data import corpus_file
+from corpus_data import UNDER_CI, corpus_file
+from espeak_support import require_espeak
 from infuse import quaternions as quat
 from infuse.cli import main
 from infuse.errors import InputError, UnusableInputError
@@ -19,7 +19,6 @@ from infuse_lipsync.expressions import Expression, expression_targets
 from infuse_lipsync.lipsync import LipSyncSettings, lipsync
 from infuse_lipsync.tables import viseme_set
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
 RPM = "talkinghead/avatars/brunette-t.glb"
 VROID = "talkinghead/avatars/vroid.glb"
 VRM1 = "vrm-specification/samples/VRMC_vrm_expressions_isBinary_Overrides/vrm/VRMC_vrm_expressions_isBinary_Overrides.vrm"
@@ -29,13 +28,7 @@ TEXT = 'Bob met <sync id="pam"/>Pam at the map shop. Wow, five ships!'
 
 @pytest.fixture(scope="module")
 def utterance():
-    try:
-        from infuse_tts_espeak.library import espeak
-        espeak()
-    except Exception as exc:
-        if UNDER_CI:
-            pytest.fail(f"espeak-ng is required under CI: {exc}")
-        pytest.skip(f"espeak-ng not available: {exc}")
+    require_espeak()
     return tts_engine("espeak").synthesize(TEXT)
 
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import infuse
-from corpus_data import UNDER_CI, corpus_file, require_corpus
+from corpus_data import corpus_file, require_corpus
+from espeak_support import require_espeak
 from infuse import quaternions as quat
 from infuse.cli import main
 from infuse.contacts import feet, lowest_points
@@ -26,13 +27,7 @@ TEXT = "Hello, I am infused. It is good to meet you all here today."
 
 @pytest.fixture(scope="module")
 def espeak():
-    try:
-        from infuse_tts_espeak.library import espeak as load
-        load()
-    except Exception as exc:
-        if UNDER_CI:
-            pytest.fail(f"espeak-ng is required under CI: {exc}")
-        pytest.skip(f"espeak-ng not available: {exc}")
+    require_espeak()
 
 
 def _speak(tmp_path, rel: str, *options) -> infuse.Asset:

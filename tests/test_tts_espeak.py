@@ -1,7 +1,6 @@
 """The espeak TTS engine: real espeak-ng synthesis, timings checked against the WAV itself."""
 from __future__ import annotations
 
-import os
 import struct
 import threading
 import time
@@ -14,19 +13,13 @@ import pytest
 from infuse.errors import InputError, MissingFeatureError
 from infuse.speech import SILENCE, common_phonemes, tts_engine, tts_engines
 
-UNDER_CI = os.environ.get("CI", "").lower() == "true"
+from espeak_support import require_espeak
 
 
 def _espeak_or_skip():
     if "espeak" not in tts_engines():
         pytest.fail("the espeak TTS plugin is not installed")
-    try:
-        from infuse_tts_espeak.library import espeak
-        espeak()
-    except Exception as exc:  # espeak-ng itself missing on this machine
-        if UNDER_CI:
-            pytest.fail(f"espeak-ng is required under CI: {exc}")
-        pytest.skip(f"espeak-ng not available: {exc}")
+    require_espeak()
 
 
 @pytest.fixture(scope="module")
