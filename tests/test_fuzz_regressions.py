@@ -419,3 +419,12 @@ def test_xml_scene_attributes_naming_elements_are_refused(tmp_path):
     path.write_text(TINY_SCENE_XML.replace('<scene fps="30"', '<scene character="30"'))
     with pytest.raises(InputError, match="is an element, not an attribute"):
         read_scene_file(path)
+
+
+def test_gltf_top_level_arrays_must_hold_objects(tmp_path, capsys):
+    for key, value in (("images", 5), ("nodes", [1, 2]), ("extensionsUsed", [3]), ("scene", "main")):
+        path = _gltf(tmp_path, lambda doc, key=key, value=value: doc.update({key: value}), f"{key}.gltf")
+        with pytest.raises(InputError) as info:
+            infuse.load(path)
+        assert info.value.place.startswith(key), key
+    assert "images" in assert_info_exits_2(tmp_path / "images.gltf", capsys)
