@@ -36,12 +36,12 @@ def allow_external(allowed: bool = True):
         _ALLOWED.reset(token)
 
 
-def resolve(referrer: str | Path, reference: str, place: str, what: str = "file") -> Path:
-    """The regular file that ``reference`` (a path, relative to ``referrer``'s folder) names.
+def inside(referrer: str | Path, reference: str, place: str, what: str = "file") -> Path:
+    """The path ``reference`` (relative to ``referrer``'s folder) names, checked to stay in that folder
+    (unless allowed) and, when something is there, to be a regular file; it need not exist yet.
 
-    Raises :class:`~infuse.errors.ExternalReferenceError` for a reference out of the folder (unless
-    allowed) or to something that is not a regular file, :class:`~infuse.errors.InputError` for a
-    missing one."""
+    Raises :class:`~infuse.errors.ExternalReferenceError` for a reference out of the folder or to
+    something that is not a regular file."""
     referrer = Path(referrer)
     if not reference or "\x00" in reference:
         raise InputError(referrer, place, f"{what} reference {reference!r} is not a file name")
@@ -58,10 +58,20 @@ def resolve(referrer: str | Path, reference: str, place: str, what: str = "file"
     if not external_allowed() and not target.is_relative_to(folder):
         raise ExternalReferenceError(referrer, place, f"{what} {reference!r} leads out of the file's folder "
                                      f"(set {SETTING}=1 to allow)")
+    if target.exists() and not target.is_file():
+        raise ExternalReferenceError(referrer, place, f"{what} {reference!r} is not a regular file")
+    return target
+
+
+def resolve(referrer: str | Path, reference: str, place: str, what: str = "file") -> Path:
+    """The regular file that ``reference`` (a path, relative to ``referrer``'s folder) names.
+
+    Raises :class:`~infuse.errors.ExternalReferenceError` for a reference out of the folder (unless
+    allowed) or to something that is not a regular file, :class:`~infuse.errors.InputError` for a
+    missing one."""
+    target = inside(referrer, reference, place, what)
     if not target.exists():
         raise InputError(referrer, place, f"missing {what} {reference!r}")
-    if not target.is_file():
-        raise ExternalReferenceError(referrer, place, f"{what} {reference!r} is not a regular file")
     return target
 
 

@@ -20,7 +20,9 @@
     sync = { ready = 0.4, stroke_start = 0.5, stroke = 0.6, stroke_end = 0.8, relax = 1.1 }
                                    # gestures: their phases, seconds from the clip's start
 
-Everything else about a clip (contacts, cycles, keys, parameters) is computed by the builder.
+Everything else about a clip (contacts, cycles, keys, parameters) is computed by the builder. The files a
+manifest names must lie in its folder or below it (no absolute paths, no ``..`` out of it) unless
+``INFUSE_ALLOW_EXTERNAL=1`` allows them elsewhere (:mod:`infuse.references`).
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..atomic import atomic_path
+from .. import references
 from ..errors import InputError
 
 KINDS = ("locomotion", "reach", "gesture")
@@ -77,9 +80,9 @@ class Manifest:
         raise KeyError(name)
 
 
-def _resolve(folder: Path, value: str) -> Path:
-    p = Path(value)
-    return p if p.is_absolute() else (folder / p)
+def _resolve(manifest: Path, value: str, place: str) -> Path:
+    """A file the manifest names, kept inside the pack's folder (:mod:`infuse.references`)."""
+    return references.inside(manifest, value, place, "pack file")
 
 
 def read_manifest(path: str | Path) -> Manifest:
@@ -101,7 +104,6 @@ def read_manifest(path: str | Path) -> Manifest:
             raise InputError(path, f"pack.{key}", "expected a non-empty string")
     if pack["kind"] not in KINDS:
         raise InputError(path, "pack.kind", f"unknown kind {pack['kind']!r}; expected one of {', '.join(KINDS)}")
-    folder = path.parent.resolve()
     clips = []
     names = set()
     raw = doc.get("clips")
@@ -127,11 +129,11 @@ def read_manifest(path: str | Path) -> Manifest:
         sync = _sync(path, f"{where}.sync", c.get("sync", {}))
         if role == "gesture" and "stroke" not in sync:
             raise InputError(path, f"{where}.sync", "a gesture names its phases (at least its stroke), seconds")
-        clips.append(ClipEntry(name, _resolve(folder, c["file"]), role, tuple(tags), bool(c.get("loop", role in ("cycle", "idle"))), hand,
+        clips.append(ClipEntry(name, _resolve(path, c["file"], f"{where}.file"), role, tuple(tags), bool(c.get("loop", role in ("cycle", "idle"))), hand,
                                sync))
     extra = {k: v for k, v in pack.items() if k not in ("name", "version", "kind", "skeleton", "analysis", "description")}
-    return Manifest(path.resolve(), pack["name"], pack["version"], pack["kind"], _resolve(folder, pack["skeleton"]),
-                    _resolve(folder, pack.get("analysis", "analysis.json")), tuple(clips), str(pack.get("description", "")), extra)
+    return Manifest(path.resolve(), pack["name"], pack["version"], pack["kind"], _resolve(path, pack["skeleton"], "pack.skeleton"),
+                    _resolve(path, pack.get("analysis", "analysis.json"), "pack.analysis"), tuple(clips), str(pack.get("description", "")), extra)
 
 
 def _sync(path: Path, where: str, table) -> dict:
