@@ -49,6 +49,11 @@ def _chain_profile(view: SkeletonView, branch: int, child: int, depth: int = 6) 
     return np.cumsum(view.bone[chain])
 
 
+#: Branches of one joint compared as possible limbs, the longest first (a pelvis has two legs, a spine and
+#: perhaps a skirt's or a tail's chains; a chest two arms, a neck and perhaps hair).
+MAX_LIMB_BRANCHES = 24
+
+
 def limb_pairs(view: SkeletonView, min_fraction: float = 0.1) -> list[LimbPair]:
     """Every pair of sibling subtrees that look like mirror-image limbs."""
     out: list[LimbPair] = []
@@ -57,6 +62,8 @@ def limb_pairs(view: SkeletonView, min_fraction: float = 0.1) -> list[LimbPair]:
         kids = [c for c in view.children[j] if view.limb_length(j, c) > floor]
         if len(kids) < 2:
             continue
+        if len(kids) > MAX_LIMB_BRANCHES:  # limbs are among a joint's longest branches; pairs grow as the square
+            kids = sorted(kids, key=lambda c: -view.limb_length(j, c))[:MAX_LIMB_BRANCHES]
         profiles = {c: _chain_profile(view, j, c) for c in kids}
         for x, y in combinations(kids, 2):
             lx, ly = view.limb_length(j, x), view.limb_length(j, y)
