@@ -119,8 +119,14 @@ def entry_points_of(group: str) -> list[EntryPoint]:
     return sorted(entry_points(group=group), key=lambda e: (distribution(e), e.name))
 
 
+#: kind -> what its entry points offer, learnt once per process (the installed plugins do not change under it).
+_LEARNT: dict[str, list[Offer]] = {}
+
+
 def offers(kind: str, refresh: bool = False) -> list[Offer]:
-    """What every entry point of ``kind`` offers, in precedence order; ``refresh`` ignores the cache."""
+    """What every entry point of ``kind`` offers, in precedence order; ``refresh`` ignores the caches."""
+    if not refresh and kind in _LEARNT:
+        return list(_LEARNT[kind])
     from .registry import kind_of
 
     path = cache_file()
@@ -143,4 +149,5 @@ def offers(kind: str, refresh: bool = False) -> list[Offer]:
         out += [Offer(str(name), str(text), tuple(extensions), ep) for name, text, extensions in learnt]
     if entries != cached:
         _write_cache(path, entries)
-    return out
+    _LEARNT[kind] = out
+    return list(out)
