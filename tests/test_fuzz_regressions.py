@@ -249,33 +249,7 @@ ASF_ONE_BONE = """:version 1.10
 
 
 def test_info_json_is_valid_json_for_unbounded_acclaim_limits(tmp_path, capsys):
-    asf = """:version 1.10
-:name t
-:units
-  mass 1.0
-  length 1.0
-  angle deg
-:root
-  order TX TY TZ RX RY RZ
-  axis XYZ
-  position 0 0 0
-  orientation 0 0 0
-:bonedata
-  begin
-    id 1
-    name a
-    direction 0 1 0
-    length 1
-    axis 0 0 0 XYZ
-    dof rx rz
-    limits (-inf inf)
-           (-45.0 {high})
-  end
-:hierarchy
-  begin
-    root a
-  end
-"""
+    asf = ASF_ONE_BONE.replace("(-45.0 45.0)", "(-45.0 {high})")
     path = tmp_path / "t.asf"
     path.write_text(asf.format(high="inf"))
     assert main(["info", "--json", str(path)]) == 0
