@@ -258,6 +258,8 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk, c
     elif kind == "gesture":  # timed by its authored phases; nothing to blend by
         sync = {GESTURE_PHASES[k]: t for k, t in entry.sync.items()}
         out.update(stroke=sync["stroke"], stroke_frame=int(round(sync["stroke"] * fps)), sync=sync, parameters={})
+    elif kind == "posture":  # a standing loop, played whole; nothing to blend by
+        out.update(stroke=0.0, stroke_frame=0, parameters={})
     else:
         hand = entry.hand
         if hand is None:  # the wrist that travels farther

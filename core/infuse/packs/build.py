@@ -171,6 +171,9 @@ def summary(pack: Pack) -> str:
                 lines.append("    " + ", ".join(done + [f"loop closed ({made['closed_deg']:.0f} deg at most)"]))
             if c.get("transition"):
                 lines.append(f"    does: {c['transition'] if c['transition'] != 'none' else 'no locomotion'}")
+        elif pack.kind == "posture":
+            lines.append(f"  {c['name']:<28} {c['role']:<7} {'loop' if c['loop'] else 'once'} {c['duration']:.2f} s  "
+                         f"tags {', '.join(c['tags'])}")
         elif pack.kind == "gesture":
             lines.append(f"  {c['name']:<28} {c['hand'] or '':<5} " + "  ".join(f"{k} {v:.2f}" for k, v in c["sync"].items())
                          + f"  end {c['duration']:.2f} s")

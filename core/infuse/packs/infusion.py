@@ -213,7 +213,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             contacts = contacts[c0:c1 + 1]
             phases = None if phases is None else phases[c0:c1 + 1]
             stroke = 0.0
-        elif pack.kind == "gesture":  # played by its phases (``info["sync"]``), not blended
+        elif pack.kind in ("gesture", "posture"):  # played by its phases (``info["sync"]``) or looped, not blended
             sl = slice(a, b)
             stroke = float(info["stroke"])
             params = {}
@@ -245,13 +245,14 @@ DRIVEN_LIMBS = {
     "locomotion": (("{s}_hip", "{s}_knee", "{s}_ankle"),),
     "reach": (("{s}_shoulder", "{s}_elbow", "{s}_wrist"),),
     "gesture": (("{s}_shoulder", "{s}_elbow", "{s}_wrist"),),
+    "posture": (("{s}_hip", "{s}_knee", "{s}_ankle"), ("{s}_shoulder", "{s}_elbow", "{s}_wrist")),
 }
 
 
 def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
     """Refuse (exit 3) a pack whose limbs the character lacks or does not hold as chains, naming them."""
     hands = {c.hand for c in pack.manifest.clips if c.hand}
-    sides = ("l", "r") if pack.kind == "locomotion" or "both" in hands else \
+    sides = ("l", "r") if pack.kind in ("locomotion", "posture") or "both" in hands else \
         tuple(sorted({h[0] for h in hands}))
     parents = character.skeleton.parents
     index = {n: k for k, n in enumerate(character.skeleton.names)}

@@ -5,7 +5,7 @@
     [pack]
     name = "locomotion-female"
     version = "1.0.0"
-    kind = "locomotion"            # or "reach", "gesture"
+    kind = "locomotion"            # or "reach", "gesture", "posture"
     skeleton = "skeleton.bvh"      # relative to the manifest (pack import and pack new write only such)
     analysis = "analysis.json"     # written by 'infuse pack build'
     description = "..."
@@ -13,7 +13,7 @@
     [[clips]]
     name = "walk"
     file = "clips/walk.bvh"        # BVH or SmartBody .skm
-    role = "cycle"                 # cycle (a locomotion loop), idle, reach, grasp, other
+    role = "cycle"                 # cycle (a locomotion loop), idle, reach, grasp, gesture, posture, other
     tags = ["walk"]
     loop = true
     hand = "left"                  # reach and gesture examples: which hand ("both" for gestures)
@@ -34,8 +34,8 @@ from ..atomic import atomic_path
 from .. import references
 from ..errors import InputError
 
-KINDS = ("locomotion", "reach", "gesture")
-ROLES = ("cycle", "idle", "reach", "grasp", "gesture", "other")
+KINDS = ("locomotion", "reach", "gesture", "posture")
+ROLES = ("cycle", "idle", "reach", "grasp", "gesture", "posture", "other")
 HANDS = ("left", "right", "both")
 #: A gesture's phases in the order they happen: manifest key -> BML sync point.
 GESTURE_PHASES = {"ready": "ready", "stroke_start": "strokeStart", "stroke": "stroke", "stroke_end": "strokeEnd",

@@ -136,6 +136,7 @@ USAGE = {
     "locomotion": 'controller("locomotion", pack="{name}", speed=1.2)',
     "reach": 'controller("reach", target=(-0.3, 1.2, 0.4), hand="right", pack="{name}")',
     "gesture": 'controller("gesture", clip="<clip>", pack="{name}")',
+    "posture": 'controller("posture", clip="<clip>", pack="{name}")',
 }
 
 GITIGNORE = "build/\ndist/\n*.egg-info/\n__pycache__/\n"
