@@ -55,5 +55,10 @@ def infuse_bml_behaviours():
 
 
 @hookspec
+def infuse_bml_generators():
+    """Return a list of :class:`~infuse.plugin_types.BMLGenerator` (add behaviours to BML blocks before scheduling)."""
+
+
+@hookspec
 def infuse_commands():
     """Return a list of :class:`~infuse.plugin_types.Command` to add to the ``infuse`` CLI."""

@@ -125,6 +125,22 @@ class BMLBehaviour:
     priority: int = 0
 
 
+@dataclass(frozen=True)
+class BMLGenerator:
+    """Adds behaviours to a BML block before it is scheduled (nonverbal behaviour from speech...):
+    ``generate(block, context) -> infuse.bml.Generation``, see :mod:`infuse.bml.generate`.
+
+    A block turns it on or off with the attribute ``infuse:NAME="true"``/``"false"`` in the namespace
+    ``urn:infuse:bml`` (a scheduler or scene may turn it on for every block); ``attributes``: the other
+    ``infuse:`` block attributes it reads (names without the prefix).
+    """
+
+    name: str
+    generate: Callable[..., Any]
+    description: str = ""
+    attributes: frozenset[str] = frozenset()
+
+
 def normalized_extension(path: str | Path) -> str:
     """The lower-case suffix of ``path`` (``".glb"``), with ``".skeleton.xml"`` style double suffixes kept;
     a name that is only a suffix (``".bvh"``) has that suffix."""

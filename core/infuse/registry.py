@@ -33,7 +33,7 @@ from .config import current_config
 from .errors import UsageError
 from .plugin_index import distribution, entry_points_of, offers
 from .plugin_types import (
-    BehaviourPack, BMLBehaviour, Command, ControllerFactory, Mapper, Reader, Retargeter, TTSEngine, Writer,
+    BehaviourPack, BMLBehaviour, BMLGenerator, Command, ControllerFactory, Mapper, Reader, Retargeter, TTSEngine, Writer,
     normalized_extension,
 )
 
@@ -64,6 +64,7 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("behaviour-pack", "infuse.behaviour_packs", "infuse_behaviour_packs", BehaviourPack),
     Kind("tts", "infuse.tts", "infuse_tts_engines", TTSEngine, "espeak"),
     Kind("bml-behaviour", "infuse.bml_behaviours", "infuse_bml_behaviours", BMLBehaviour),
+    Kind("bml-generator", "infuse.bml_generators", "infuse_bml_generators", BMLGenerator),
     Kind("command", "infuse.commands", "infuse_commands", Command),
 )}
 

@@ -2,12 +2,17 @@
 
 ``parse_bml``/``parse_bml_file`` give a plain :class:`BmlDocument`; a :class:`Scheduler` turns its blocks
 into :class:`Activation` records (controller kind, parameters, global sync times) and feedback events.
-Behaviour elements are handled by plugins (hook ``infuse_bml_behaviours``, see :mod:`infuse.bml.behaviours`).
+Behaviour elements are handled by plugins (hook ``infuse_bml_behaviours``, see :mod:`infuse.bml.behaviours`);
+generators add behaviours to a block before it is scheduled (hook ``infuse_bml_generators``, see
+:mod:`infuse.bml.generate`).
 """
 from __future__ import annotations
 
 from .behaviours import BehaviourContext, BehaviourError, BehaviourPlan, handlers_from, installed_handlers
-from .feedback import BlockPrediction, BlockProgress, FeedbackBus, SyncPointProgress, WarningFeedback, feedback_xml
+from .feedback import (
+    BlockPrediction, BlockProgress, FeedbackBus, GeneratedBml, SyncPointProgress, WarningFeedback, feedback_xml,
+)
+from .generate import GenerationError, Generation, GeneratorContext, installed_generators
 from .model import Behaviour, Block, BmlDocument, Constraint, Issue, Node
 from .parse import DEFAULT_MAX_BYTES, parse_bml, parse_bml_file
 from .schedule import Activation, BlockSchedule, Scheduler
@@ -16,7 +21,8 @@ from .sync import STANDARD_SYNC_POINTS, SyncRef, SyncRefError, TimingError, Timi
 
 __all__ = [
     "BehaviourContext", "BehaviourError", "BehaviourPlan", "handlers_from", "installed_handlers",
-    "BlockPrediction", "BlockProgress", "FeedbackBus", "SyncPointProgress", "WarningFeedback", "feedback_xml",
+    "BlockPrediction", "BlockProgress", "FeedbackBus", "GeneratedBml", "SyncPointProgress", "WarningFeedback",
+    "feedback_xml", "GenerationError", "Generation", "GeneratorContext", "installed_generators",
     "Behaviour", "Block", "BmlDocument", "Constraint", "Issue", "Node",
     "DEFAULT_MAX_BYTES", "parse_bml", "parse_bml_file",
     "Activation", "BlockSchedule", "Scheduler",

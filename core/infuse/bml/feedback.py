@@ -3,6 +3,8 @@
 ``blockProgress`` marks a block's start and end (global seconds), ``syncPointProgress`` each sync point
 of each behaviour as it passes (``time`` from the block start, ``globalTime``), ``warningFeedback``
 something skipped or impossible, and ``blockPrediction`` the planned start and end of a block.
+``generatedBml`` (infuse's own, in its namespace ``urn:infuse:bml``) carries the BML a generator added
+to a block before it was scheduled.
 """
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from typing import Callable, Iterable
 
 from lxml import etree
 
-from .names import BML_NS
+from .names import BML_NS, INFUSE_NS
 
 
 def _make(tag: str, attributes: dict, text: str | None = None, parent=None):
@@ -89,6 +91,25 @@ class BlockPrediction:
         root = _make("predictionFeedback", {})
         _make("bml", {"id": self.block, "globalStart": self.global_start, "globalEnd": self.global_end,
                       "characterId": self.character}, parent=root)
+        return etree.tostring(root, encoding="unicode")
+
+
+@dataclass(frozen=True)
+class GeneratedBml:
+    """The BML ``generator`` added to block ``block`` (a ``<bml>`` document as text), before scheduling."""
+
+    block: str
+    generator: str
+    bml: str
+    character: str | None = None
+    kind = "generatedBml"
+
+    def to_xml(self) -> str:
+        root = etree.Element(f"{{{INFUSE_NS}}}generatedBml", nsmap={"infuse": INFUSE_NS})
+        for key, value in (("id", self.block), ("generator", self.generator), ("characterId", self.character)):
+            if value is not None:
+                root.set(key, value)
+        root.append(etree.fromstring(self.bml.encode("utf-8"), etree.XMLParser(resolve_entities=False, no_network=True)))
         return etree.tostring(root, encoding="unicode")
 
 

@@ -15,6 +15,8 @@ BML_DRAFT_NS = "http://www.mindmakers.org/projects/BML"
 BML_EXT_NS = "http://www.bml-initiative.org/bml/coreextensions-1.0"
 #: The namespace SmartBody's own parser binds to the ``sbm:`` prefix.
 SBM_NS = "http://ict.usc.edu"
+#: infuse's own namespace: block attributes that turn BML generators on (``infuse:nonverbal="true"``).
+INFUSE_NS = "urn:infuse:bml"
 #: Prefixes found undeclared in a document are bound to this URI plus the prefix.
 UNDECLARED_NS = "urn:infuse:undeclared-prefix:"
 
@@ -29,6 +31,7 @@ KNOWN_PREFIXES: dict[str, str] = {
     "http://asap-project.org/convanim": "convanim",
     "http://hmi.ewi.utwente.nl/stomprosnaoengine": "srne",
     "VIBNameSpace": "greta",
+    INFUSE_NS: "infuse",
 }
 _URI_OF_PREFIX = {prefix: uri for uri, prefix in KNOWN_PREFIXES.items()}
 

@@ -171,7 +171,7 @@ def _block(element, in_act: bool, declared: tuple, index: int) -> Block:
         issues.append(Issue(block_id, PARSING_FAILURE, f"unknown composition {composition_text!r}; MERGE is used", line))
         composition = "MERGE"
     for key in attrs:
-        if key not in _BLOCK_ATTRIBUTES:
+        if key not in _BLOCK_ATTRIBUTES and not key.startswith("infuse:"):  # the scheduler's generators read those
             issues.append(Issue(block_id, CUSTOM_ATTRIBUTE_NOT_SUPPORTED, f"block attribute {key!r} is not supported and is ignored", line))
     behaviours: list[Behaviour] = []
     constraints: list[Constraint] = []

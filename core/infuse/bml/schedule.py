@@ -6,7 +6,8 @@ REPLACE interrupts them first (ASAP's ``bmla:appendAfter``, ``bmla:chunkAfter`` 
 name the blocks explicitly). Each behaviour becomes an :class:`Activation`: the controller kind, its
 parameters and the global time of every sync point, for controllers to realize. Feedback goes to
 ``scheduler.feedback`` subscribers: warnings and predictions at once, progress as :meth:`Scheduler.advance`
-moves the clock.
+moves the clock. Before a block is scheduled, the BML generators it turns on (or the scheduler's
+``generators``) add behaviours to it (:meth:`Scheduler.generate`, :mod:`infuse.bml.generate`).
 """
 from __future__ import annotations
 
@@ -17,8 +18,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .. import limits
+from ..errors import InfuseError, UsageError
 from .behaviours import BehaviourContext, BehaviourError, installed_handlers
-from .feedback import BlockPrediction, BlockProgress, FeedbackBus, SyncPointProgress, WarningFeedback
+from .feedback import BlockPrediction, BlockProgress, FeedbackBus, GeneratedBml, SyncPointProgress, WarningFeedback
+from .generate import PREFIX, GenerationError, GeneratorContext, block_seed, choose, installed_generators, with_issues
 from .model import (
     BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, CUSTOM_ATTRIBUTE_NOT_SUPPORTED, CUSTOM_BEHAVIOUR_NOT_SUPPORTED,
     DIALECT_BML1, IMPOSSIBLE_TO_SCHEDULE, PARSING_FAILURE, Block, BmlDocument, Issue,
@@ -107,7 +110,10 @@ class Scheduler:
     ``handlers``: element -> handler (default: the installed BML behaviour plugins); ``speech_timer``:
     a :class:`~infuse.bml.speech.SpeechTimer` or a TTS engine (real timings), an estimate from the text
     when None; ``clip_timing`` and ``locate``: see
-    :class:`~infuse.bml.behaviours.BehaviourContext`.
+    :class:`~infuse.bml.behaviours.BehaviourContext`. ``generators``: names of BML generators on for every
+    block (a block turns one off with ``infuse:NAME="false"``); ``names()`` -> {name: ``"character"`` or
+    ``"object"``} tells them who and what is in the scene; ``seed`` makes their random choices repeatable;
+    ``generator_table``: name -> generator (default: the installed ones, loaded when first needed).
     """
 
     handlers: dict | None = None
@@ -116,10 +122,20 @@ class Scheduler:
     locate: object = None
     feedback: FeedbackBus = field(default_factory=FeedbackBus)
     now: float = 0.0
+    generators: tuple = ()
+    names: object = None
+    seed: int = 0
+    generator_table: dict | None = None
 
     def __post_init__(self):
         if self.handlers is None:
             self.handlers = installed_handlers()
+        self.generators = tuple(self.generators)
+        if self.generators:
+            unknown = [name for name in self.generators if name not in self._generator_table()]
+            if unknown:
+                raise UsageError(f"no BML generator named {', '.join(map(repr, unknown))}; installed: "
+                                 f"{', '.join(sorted(self._generator_table())) or 'none'}")
         if self.speech_timer is None:
             self.speech_timer = EstimatedSpeechTimer()
         elif not hasattr(self.speech_timer, "time_speech") and hasattr(self.speech_timer, "synthesize"):
@@ -139,7 +155,45 @@ class Scheduler:
             bml = parse_bml(bml)
         blocks = bml.blocks if isinstance(bml, BmlDocument) else (bml,)
         at = self.now if at is None else float(at)
-        return [self.schedule_block(block, at, character) for block in blocks]
+        return [self.schedule_block(b, at, character) for block in blocks for b in self.generate(block, character)]
+
+    # -- generation -----------------------------------------------------------------------------------------
+    def _generator_table(self) -> dict:
+        if self.generator_table is None:
+            self.generator_table = installed_generators()
+        return self.generator_table
+
+    def generate(self, block: Block, character: str | None = None) -> list[Block]:
+        """``block`` with what the generators it turns on add, then the blocks they make for other characters
+        (to schedule in this order, at the same time). Each generator's BML is delivered as ``generatedBml``
+        feedback; what goes wrong becomes warnings of the block."""
+        if not self.generators and not any(key.startswith(PREFIX) for key in block.attributes):
+            return [block]
+        character = block.character_id or character
+        generators, settings, issues = choose(block, self.generators, self._generator_table())
+        extra: list[Block] = []
+        names = self.names() if self.names is not None else {}
+        for generator in generators:
+            context = GeneratorContext(
+                character, block.dialect, tuple(n for n, kind in names.items() if kind == "character"),
+                tuple(n for n, kind in names.items() if kind == "object"), self.locate or (lambda name: None),
+                block_seed(self.seed, block, character), settings[generator.name])
+            try:
+                generation = generator.generate(block, context)
+            except (GenerationError, InfuseError) as exc:
+                issues.append(Issue(block.id, CANNOT_CREATE_BEHAVIOR, f"generator {generator.name!r} added nothing: {exc}",
+                                    block.line))
+                continue
+            except Exception as exc:  # a third-party generator's bug must not stop the block
+                issues.append(Issue(block.id, CANNOT_CREATE_BEHAVIOR, f"generator {generator.name!r} failed "
+                                    f"({type(exc).__name__}: {exc}); the block plays without it", block.line))
+                continue
+            block = generation.block
+            extra += generation.blocks
+            issues += [Issue(block.id, CANNOT_CREATE_BEHAVIOR, note, block.line) for note in generation.notes]
+            if generation.bml:
+                self.feedback.emit(GeneratedBml(block.id, generator.name, generation.bml, character))
+        return [with_issues(block, issues), *extra]
 
     def schedule_block(self, block: Block, at: float, character: str | None = None) -> BlockSchedule:
         character = block.character_id or character

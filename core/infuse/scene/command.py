@@ -33,7 +33,9 @@ def build_scene(spec: SceneSpec, quiet: bool = True) -> Scene:
     """A :class:`Scene` with the characters, objects and blocks of ``spec`` (nothing evaluated yet)."""
     tts = dict(spec.tts)
     engine = tts.pop("engine", "espeak")
-    scene = Scene(spec.fps, tts=engine, tts_settings=tts, idle=spec.idle, seed=spec.seed, quiet=quiet)
+    with _place(spec, "generators"):
+        scene = Scene(spec.fps, tts=engine, tts_settings=tts, idle=spec.idle, seed=spec.seed, quiet=quiet,
+                      generators=spec.generators)
     # A name to face is where that character or object stands (it may come later in the file).
     places = {o.name: o.position for o in spec.objects} | {c.name: c.position for c in spec.characters}
     known = {name.lower() for name in places}

@@ -95,10 +95,14 @@ class Scene:
     - ``seed``: makes blinks and saccades repeatable (each character draws its own).
     - ``quiet``: do not print warningFeedback to stderr (callbacks still get it).
     - ``pack_cache``: a folder where infused behaviour packs are cached (next loads are instant).
+    - ``generators``: BML generators on for every block (``("nonverbal",)``: gestures, nods and gaze from
+      speech); a block turns one on or off itself with ``infuse:NAME="true"|"false"``. ``seed`` makes
+      their choices repeatable too.
     """
 
     def __init__(self, fps: float = 30.0, *, tts="espeak", tts_settings: dict | None = None, idle: bool = True,
-                 seed: int = 0, quiet: bool = False, pack_cache=None, block_frames: int = 150):
+                 seed: int = 0, quiet: bool = False, pack_cache=None, block_frames: int = 150,
+                 generators: Iterable[str] = ()):
         self.runtime = Runtime(fps, block_frames=block_frames, report=self._note)
         self.fps = self.runtime.fps
         self.idle = bool(idle)
@@ -106,7 +110,8 @@ class Scene:
         self.pack_cache = pack_cache
         self._scheduling: str | None = None
         self.speech = SpeechCache(tts, tts_settings, voice_of=self._voice, warn=self._speech_warning)
-        self.scheduler = Scheduler(speech_timer=self.speech, clip_timing=self._clip_timing, locate=self.locate)
+        self.scheduler = Scheduler(speech_timer=self.speech, clip_timing=self._clip_timing, locate=self.locate,
+                                   generators=tuple(generators), names=self._names, seed=self.seed)
         self.feedback = self.scheduler.feedback
         self.characters: dict[str, SceneCharacter] = {}
         self.objects: dict[str, SceneObject] = {}
@@ -342,6 +347,10 @@ class Scene:
         known = {n.lower(): n for n in itertools.chain(self.characters, self.objects, self.targets)}
         return known.get(head.lower(), head) + sep + tail
 
+    def _names(self) -> dict:
+        """Name -> ``"character"`` or ``"object"``, for BML generators."""
+        return {**{name: "object" for name in self.objects}, **{name: "character" for name in self.characters}}
+
     def locate(self, name: str):
         """(x, y, z) metres of an object, or where a character stands; None for an unknown name."""
         if name in self.objects:
@@ -419,9 +428,8 @@ class Scene:
             name = self.resolve_name(name)
             self.character(name)
             blocks.append(replace(block, character_id=name))
-        ids = []
-        for block in blocks:
-            ids.append(block.id)
+        ids = [block.id for block in blocks]
+        for block in (generated for b in blocks for generated in self.scheduler.generate(b)):
             self._scheduling = block.character_id
             try:
                 record = self.scheduler.schedule_block(block, at)

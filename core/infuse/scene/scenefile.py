@@ -4,6 +4,7 @@ TOML::
 
     fps = 30                      # optional (30)
     duration = 12.0               # optional: seconds to realize (default: until every block has ended)
+    generators = ["nonverbal"]    # optional: BML generators on for every block (gestures from speech...)
     [tts]                         # optional: engine ("espeak"), voice, rate...
     rate = 160
 
@@ -55,7 +56,7 @@ _CHARACTER_KEYS = {"name", "file", "position", "facing", "packs", "map", "voice"
                    "idle"}
 _OBJECT_KEYS = {"name", "position", "size"}
 _BLOCK_KEYS = {"at", "character", "bml", "file"}
-_TOP_KEYS = {"fps", "duration", "tts", "seed", "idle", "character", "object", "block"}
+_TOP_KEYS = {"fps", "duration", "tts", "seed", "idle", "generators", "character", "object", "block"}
 _TTS_KEYS = {"engine", "voice", "rate", "volume"}
 
 
@@ -100,6 +101,7 @@ class SceneSpec:
     duration: float | None = None
     seed: int = 0
     idle: bool = True
+    generators: tuple = ()
     tts: dict = field(default_factory=dict)
     characters: list[CharacterSpec] = field(default_factory=list)
     objects: list[ObjectSpec] = field(default_factory=list)
@@ -229,6 +231,8 @@ def _spec(doc: dict, r: _Reader) -> SceneSpec:
         spec.seed = int(r.number(doc["seed"], "seed"))
     if "idle" in doc:
         spec.idle = r.flag(doc["idle"], "idle")
+    if "generators" in doc:
+        spec.generators = _names(doc["generators"], "generators", r)
     tts = doc.get("tts") or {}
     if not isinstance(tts, dict):
         r.fail("tts", "expected a table of TTS settings")
@@ -247,12 +251,7 @@ def _spec(doc: dict, r: _Reader) -> SceneSpec:
         if "position" in item:
             c.position = r.point(item["position"], f"{place}.position")
         c.facing = r.facing(item.get("facing"), f"{place}.facing")
-        packs = item.get("packs", ())
-        if isinstance(packs, str):
-            packs = [p for p in packs.replace(",", " ").split() if p]
-        if not isinstance(packs, (list, tuple)) or not all(isinstance(p, str) and p for p in packs):
-            r.fail(f"{place}.packs", f"expected a list of pack names, got {packs!r}")
-        c.packs = tuple(packs)
+        c.packs = _names(item.get("packs", ()), f"{place}.packs", r)
         if "map" in item:
             c.map = r.file(item["map"], f"{place}.map")
         for key in ("voice", "mapper", "format", "units", "up_axis"):
@@ -280,6 +279,15 @@ def _spec(doc: dict, r: _Reader) -> SceneSpec:
     if not spec.characters:
         r.fail("character", "the scene has no character")
     return spec
+
+
+def _names(value, place: str, r: _Reader) -> tuple[str, ...]:
+    """A list of names: a TOML list, or one string of names separated by commas or spaces (XML)."""
+    if isinstance(value, str):
+        value = [p for p in value.replace(",", " ").split() if p]
+    if not isinstance(value, (list, tuple)) or not all(isinstance(p, str) and p for p in value):
+        r.fail(place, f"expected a list of names, got {value!r}")
+    return tuple(value)
 
 
 def _tables(doc: dict, key: str, r: _Reader) -> list[dict]:
