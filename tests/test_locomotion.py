@@ -8,7 +8,7 @@ import pytest
 import infuse
 from infuse.contacts import FootContacts, foot_contacts
 from infuse.metrics import foot_skate, skate_weight
-from infuse.packs.analysis import phase_contacts
+from infuse.contacts import phase_contacts
 from infuse.runtime import Runtime
 
 from corpus_data import corpus_file, require_corpus

@@ -274,30 +274,6 @@ def test_aim_turns_the_foot_onto_its_goal_and_keeps_its_roll():
 
 
 # -- goals -----------------------------------------------------------------------------------------
-def test_pinned_goals_hold_still_and_glide_between_contacts():
-    frames = 120
-    flags = np.zeros(frames, dtype=bool)
-    flags[10:40] = flags[70:100] = True
-    ball_flags = np.zeros(frames, dtype=bool)
-    ball_flags[20:50] = ball_flags[80:110] = True
-    # A foot that slides a little while planted and swings 4 cm a frame in between.
-    step = np.where(flags | ball_flags, 0.001, 0.04)
-    warped = np.stack((0.003 * np.sin(np.arange(frames) / 3), 0.08 + np.where(flags, 0.0, 0.05), np.cumsum(step)))
-    warped += RNG.normal(scale=0.001, size=warped.shape)
-    ball = warped + np.array([[0.0], [-0.06], [0.138]])
-    ankle_goal, ball_goal = goals.pinned(warped, flags, 0.08, ball, ball_flags, 0.02, 0.15, blend_frames=4)
-    for a, b in ((10, 40), (70, 100)):
-        assert np.ptp(ankle_goal[:, a:b], axis=1).max() < 1e-12 and np.allclose(ankle_goal[1, a:b], 0.08)
-    for a, b in ((20, 50), (80, 110)):
-        assert np.ptp(ball_goal[:, a:b], axis=1).max() < 1e-12 and np.allclose(ball_goal[1, a:b], 0.02)
-    both = flags & ball_flags
-    assert np.allclose(cq.norm(ankle_goal[:, both] - ball_goal[:, both]), 0.15)
-    assert np.allclose(cq.norm(ankle_goal[:, ball_flags] - ball_goal[:, ball_flags]), 0.15)
-    # No pops: no frame moves much further than the swing does.
-    assert cq.norm(np.diff(ankle_goal, axis=1)).max() < 2.0 * cq.norm(np.diff(warped, axis=1)).max()
-    assert cq.norm(np.diff(ball_goal, axis=1)).max() < 2.0 * cq.norm(np.diff(ball, axis=1)).max()
-
-
 def test_warp_is_the_papers_recurrence():
     source = RNG.normal(size=(3, 40))
     start = RNG.normal(size=3)

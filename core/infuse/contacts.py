@@ -1,17 +1,23 @@
 """Foot contacts: when a foot rests on the ground, found from its speed and height.
 
+The start of the foot-contact component: these flags feed the planted positions and pinning goals
+of :mod:`infuse.footing`, which the leg IK of :mod:`infuse.runtime.limb_ik` enforces.
+
 Thresholds are normalized by the leg length (thigh + shin, metres), so one setting fits a child, an
 adult and a giant robot, and speeds are per second, so it fits any frame rate. The ground is the
 level of the lowest foot joint while a foot is planted (a joint centre, not a mesh sole), +Y up.
 
 Each foot has up to two contact points: the ankle (heel side) and the ball (``forefoot``, else
-``toe``). A point is in contact while it moves slower than ``speed`` leg lengths per second and sits
-less than ``height`` leg lengths above its own planted height; runs shorter than ``min_duration``
-seconds are dropped and gaps shorter than that are filled.
+``toe``). A point lands when it moves slower than ``speed`` leg lengths per second and sits less than
+``height`` leg lengths above its own planted height, and stays down until it passes either by the
+factor ``release`` (hysteresis: a point hovering at a threshold does not flicker); runs shorter than
+``min_duration`` seconds are dropped and gaps shorter than that are filled. :func:`contact_phases`
+then tells the heel (ankle) from the ball of each planted foot.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Union
 
 import numpy as np
 
@@ -20,7 +26,21 @@ from .kinematics import end_site_positions, motion_fk
 from .motion import Motion
 from .skeleton import Skeleton
 
+if TYPE_CHECKING:
+    from .mapping import Mapping
+
+#: A canonical mapping: a :class:`~infuse.mapping.Mapping`, or canonical name -> joint name or index.
+MappingLike = Union["Mapping", dict[str, str], dict[str, int]]
 SIDES = (("left", "l_"), ("right", "r_"))
+#: Factor by which a planted point's speed and height thresholds widen before it lifts off (:func:`detect`).
+RELEASE = 1.1
+#: How far (leg lengths) the ball may sit above its planted height and still be down: about 8 mm on
+#: an adult (:func:`contact_phases`).
+DOWN_TOLERANCE = 0.01
+#: How far (leg lengths) the ankle may rise above its planted height, the ball down, before the heel
+#: counts as off: about 2.5 mm on an adult, a heel rise of about 1 degree, so the foot starts to
+#: pivot about its ball as soon as the heel starts to rise (:func:`contact_phases`).
+RISE_TOLERANCE = 0.003
 
 
 @dataclass(frozen=True)
@@ -54,11 +74,11 @@ def _descendants(skeleton: Skeleton, joint: int) -> list[int]:
     return [int(j) for j in np.nonzero(inside)[0]]
 
 
-def joint_index(skeleton: Skeleton, mapping) -> dict[str, int]:
+def joint_index(skeleton: Skeleton, mapping: MappingLike) -> dict[str, int]:
     """Canonical name -> joint index from a :class:`~infuse.mapping.Mapping` or a dict whose values
     are joint names or indices."""
-    items = mapping.mapped().items() if hasattr(mapping, "mapped") else mapping.items()
-    out = {}
+    items = mapping.items() if isinstance(mapping, dict) else mapping.mapped().items()
+    out: dict[str, int] = {}
     for k, v in items:
         if isinstance(v, (int, np.integer)):
             out[k] = int(v)
@@ -67,7 +87,7 @@ def joint_index(skeleton: Skeleton, mapping) -> dict[str, int]:
     return out
 
 
-def feet(skeleton: Skeleton, mapping, file=None) -> tuple[Foot, Foot]:
+def feet(skeleton: Skeleton, mapping: MappingLike, file: object = None) -> tuple[Foot, Foot]:
     """The left and right :class:`Foot` of ``skeleton`` from a canonical mapping (see :func:`joint_index`).
 
     Raises :class:`UnusableInputError` when a hip, knee or ankle is not mapped.
@@ -88,7 +108,8 @@ def feet(skeleton: Skeleton, mapping, file=None) -> tuple[Foot, Foot]:
     return out[0], out[1]
 
 
-def leg_length(skeleton: Skeleton, pair: tuple[Foot, Foot], positions: np.ndarray | None = None, file=None) -> float:
+def leg_length(skeleton: Skeleton, pair: tuple[Foot, Foot], positions: np.ndarray | None = None,
+               file: object = None) -> float:
     """Mean thigh + shin length of the two legs in metres (joint distances, so any rest pose will do).
 
     ``positions`` (J, 3) defaults to the rest pose. Raises :class:`UnusableInputError` for a leg of
@@ -102,7 +123,8 @@ def leg_length(skeleton: Skeleton, pair: tuple[Foot, Foot], positions: np.ndarra
     return float(np.mean(lengths))
 
 
-def lowest_points(skeleton: Skeleton, pair, global_rotations: np.ndarray, global_positions: np.ndarray) -> np.ndarray:
+def lowest_points(skeleton: Skeleton, pair: tuple[Foot, Foot], global_rotations: np.ndarray,
+                  global_positions: np.ndarray) -> np.ndarray:
     """(F, 2) height (Y, metres) of the lowest joint or end site of each foot, left then right."""
     ends = end_site_positions(skeleton, global_rotations, global_positions) if len(skeleton.end_site_parents) else None
     out = []
@@ -187,6 +209,16 @@ class FootContacts:
         return {skeleton.names[j]: self.flags[:, k] for k, j in enumerate(self.points)}
 
 
+def hysteresis(enter: np.ndarray, stay: np.ndarray) -> np.ndarray:
+    """(F, P) flags that turn on in a frame where ``enter`` (F, P) holds and stay on, frame after
+    frame, for as long as ``stay`` (F, P) holds (``enter`` implies ``stay``)."""
+    stay = np.asarray(stay, dtype=bool) | enter
+    frames = np.arange(len(stay))[:, None]
+    broken = np.maximum.accumulate(np.where(stay, -1, frames), axis=0)  # the last frame ``stay`` failed
+    entered = np.maximum.accumulate(np.where(enter, frames, -1), axis=0)  # the last frame ``enter`` held
+    return stay & (entered > broken)
+
+
 def detect(
     positions: np.ndarray,
     fps: float,
@@ -195,13 +227,15 @@ def detect(
     *,
     speed: float = 0.5,
     height: float = 0.06,
+    release: float = RELEASE,
     min_duration: float = 0.05,
 ) -> np.ndarray:
     """(F, P) contact flags of points moving through ``positions`` (F, P, 3) metres.
 
-    A point is planted while its speed is below ``speed`` x ``leg`` per second and its height above
-    its own planted height (its 5th-percentile height, at least ``ground``) is below ``height`` x
-    ``leg``. Runs shorter than ``min_duration`` seconds are dropped, gaps shorter are filled.
+    A point lands when its speed is below ``speed`` x ``leg`` per second and its height above its
+    own planted height (its 5th-percentile height, at least ``ground``) is below ``height`` x
+    ``leg``, and stays planted until either exceeds its threshold times ``release`` (>= 1). Runs
+    shorter than ``min_duration`` seconds are dropped, gaps shorter are filled.
     """
     pos = np.asarray(positions, dtype=np.float64)
     if len(pos) < 2:
@@ -210,11 +244,14 @@ def detect(
     sp = np.linalg.norm(vel, axis=-1)
     y = pos[..., 1]
     planted = np.maximum(np.percentile(y, 5.0, axis=0), ground)
-    flags = (sp < speed * leg) & (y - planted < height * leg)
+    rise = y - planted
+    loose = max(float(release), 1.0)
+    flags = hysteresis((sp < speed * leg) & (rise < height * leg), (sp < loose * speed * leg) & (rise < loose * height * leg))
     return clean_runs(flags, max(1, int(round(min_duration * fps))))
 
 
-def foot_contacts(motion: Motion, mapping, fk=None, **thresholds) -> FootContacts:
+def foot_contacts(motion: Motion, mapping: MappingLike, fk: tuple[np.ndarray, np.ndarray] | None = None,
+                  **thresholds: float) -> FootContacts:
     """Contacts of both feet of ``motion`` (see :func:`detect` for ``thresholds``).
 
     ``mapping`` names the legs (canonical ``l_hip``... ``r_toe``); ``fk`` optionally passes
@@ -230,3 +267,49 @@ def foot_contacts(motion: Motion, mapping, fk=None, **thresholds) -> FootContact
     foot_of = np.array([k for k, f in enumerate(pair) for _ in f.points], dtype=np.int64)
     flags = detect(g_pos[:, points], motion.fps, leg, ground, **thresholds)
     return FootContacts(points, foot_of, flags, ground, leg, lowest)
+
+
+def contact_phases(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE,
+                   rise: float = RISE_TOLERANCE) -> np.ndarray:
+    """(F, 2, 2) flags of each foot (left, right) having its heel (ankle) and its ball down.
+
+    ``found``: the clip's :class:`FootContacts`; ``positions`` (F, J, 3) metres. A foot's ball is
+    down while the foot is planted and the ball sits within ``tolerance`` leg lengths of its planted
+    height (its lower quartile while the foot is planted: the ball is down for most of a stance);
+    the heel is down while the foot is planted, except when the ankle has risen more than ``rise``
+    leg lengths with the ball down, or after the ball was down in that stance (heel off, the push
+    off on the toes, or a landing on the ball). During the heel rocker (toes up after heel strike)
+    only the heel is down. A foot without a ball point has its heel down whenever it is planted.
+    """
+    planted = found.foot_flags()
+    out = np.zeros(planted.shape + (2,), dtype=bool)
+    eps = tolerance * found.leg_length
+    for k in (0, 1):
+        pts = found.points[found.foot_of_point == k]
+        ankle = positions[:, pts[0], 1]
+        raised = ankle - np.percentile(ankle[planted[:, k]] if planted[:, k].any() else ankle, 5.0) > rise * found.leg_length
+        if len(pts) > 1:
+            y = positions[:, pts[1], 1]
+            ball = planted[:, k] & (y - np.percentile(y[planted[:, k]] if planted[:, k].any() else y, 25.0) <= eps)
+        else:
+            ball = np.zeros(len(planted), dtype=bool)
+        frames = np.arange(len(ball))
+        stance_start = np.maximum.accumulate(np.where(planted[:, k] & ~np.roll(planted[:, k], 1), frames, 0))
+        ball_seen = np.maximum.accumulate(np.where(ball, frames, -1)) >= stance_start
+        out[:, k, 0] = planted[:, k] & ~(ball_seen & raised)
+        out[:, k, 1] = ball
+    return out
+
+
+def phase_contacts(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE,
+                   rise: float = RISE_TOLERANCE) -> FootContacts:
+    """``found`` with each point's flags narrowed to when it is on the ground: the ankle while the
+    heel is down, the ball while the ball is down (see :func:`contact_phases`), e.g. for
+    :func:`infuse.metrics.foot_skate`."""
+    phases = contact_phases(found, positions, tolerance, rise)
+    flags = np.zeros_like(found.flags)
+    for k in (0, 1):
+        cols = np.nonzero(found.foot_of_point == k)[0]
+        for n, col in enumerate(cols[:2]):
+            flags[:, col] = phases[:, k, n]
+    return replace(found, flags=flags)

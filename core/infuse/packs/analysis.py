@@ -3,7 +3,8 @@
 All from the motion itself (nothing typed by hand), in the core frame (metres, seconds, +Y up, +Z
 forward, +X the character's left); angles in radians, headings about +Y (+ turns to the left).
 
-- **Contacts** from :mod:`infuse.contacts` (foot speed and height, normalized by leg length).
+- **Contacts** from :mod:`infuse.contacts` (foot speed and height, normalized by leg length, with
+  hysteresis; the heel and the ball of each foot apart, :func:`~infuse.contacts.contact_phases`).
 - **Steps**: a heel strike is the start of a foot's contact, a toe off its end; between them the
   foot flat (the ball comes down) and the heel off (the heel rises while the ball stays down).
 - **Contact phases** per foot: the heel (ankle) is down from heel strike to heel off, the ball from
@@ -28,7 +29,7 @@ import math
 
 import numpy as np
 
-from ..contacts import foot_contacts
+from ..contacts import contact_phases, foot_contacts
 from ..errors import UnusableInputError
 from .cycles import steadiest_cycle
 from .manifest import GESTURE_PHASES
@@ -66,67 +67,10 @@ def _runs(flags: np.ndarray, loop: bool) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in runs]
 
 
-#: How far (leg lengths) the ball may sit above its planted height and still be down: about 8 mm on
-#: an adult.
-DOWN_TOLERANCE = 0.01
-#: How far (leg lengths) the ankle may rise above its planted height, the ball down, before the heel
-#: counts as off: about 2.5 mm on an adult, a heel rise of about 1 degree, so the foot starts to
-#: pivot about its ball as soon as the heel starts to rise.
-RISE_TOLERANCE = 0.003
-
-
-def contact_phases(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE,
-                   rise: float = RISE_TOLERANCE) -> np.ndarray:
-    """(F, 2, 2) flags of each foot (left, right) having its heel (ankle) and its ball down.
-
-    ``found``: :class:`~infuse.contacts.FootContacts` of the clip; ``positions`` (F, J, 3) metres.
-    A foot's ball is down while the foot is planted and the ball sits within ``tolerance`` leg
-    lengths of its planted height (its lower quartile while the foot is planted: the ball is down
-    for most of a stance); the heel is down while the foot is planted, except when the ankle has
-    risen more than ``rise`` leg lengths with the ball down, or after the ball was down in that
-    stance (heel off, the push off on the toes, or a landing on the ball). During the heel rocker
-    (toes up after heel strike) only the heel is down. A foot without a ball point has its heel down
-    whenever it is planted.
-    """
-    planted = found.foot_flags()
-    out = np.zeros(planted.shape + (2,), dtype=bool)
-    eps = tolerance * found.leg_length
-    for k in (0, 1):
-        pts = found.points[found.foot_of_point == k]
-        ankle = positions[:, pts[0], 1]
-        raised = ankle - np.percentile(ankle[planted[:, k]] if planted[:, k].any() else ankle, 5.0) > rise * found.leg_length
-        if len(pts) > 1:
-            y = positions[:, pts[1], 1]
-            ball = planted[:, k] & (y - np.percentile(y[planted[:, k]] if planted[:, k].any() else y, 25.0) <= eps)
-        else:
-            ball = np.zeros(len(planted), dtype=bool)
-        frames = np.arange(len(ball))
-        stance_start = np.maximum.accumulate(np.where(planted[:, k] & ~np.roll(planted[:, k], 1), frames, 0))
-        ball_seen = np.maximum.accumulate(np.where(ball, frames, -1)) >= stance_start
-        out[:, k, 0] = planted[:, k] & ~(ball_seen & raised)
-        out[:, k, 1] = ball
-    return out
-
-
-def phase_contacts(found, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE, rise: float = RISE_TOLERANCE):
-    """``found`` (:class:`~infuse.contacts.FootContacts`) with each point's flags narrowed to when it is
-    on the ground: the ankle while the heel is down, the ball while the ball is down (see
-    :func:`contact_phases`), e.g. for :func:`infuse.metrics.foot_skate`."""
-    from dataclasses import replace
-
-    phases = contact_phases(found, positions, tolerance, rise)
-    flags = np.zeros_like(found.flags)
-    for k in (0, 1):
-        cols = np.nonzero(found.foot_of_point == k)[0]
-        for n, col in enumerate(cols[:2]):
-            flags[:, col] = phases[:, k, n]
-    return replace(found, flags=flags)
-
-
 def steps(foot_flags: np.ndarray, fps: float, loop: bool, phases: np.ndarray | None = None) -> list[dict]:
     """Steps of (F, 2) contact flags, in time order: ``{"foot", "strike", "flat", "heel_off", "off"}``
     seconds (heel strike, foot flat, heel off, toe off; from ``phases`` (F, 2, 2) of
-    :func:`contact_phases` when given, else flat = strike and heel off = toe off). In a loop a step
+    :func:`~infuse.contacts.contact_phases` when given, else flat = strike and heel off = toe off). In a loop a step
     may run past the end: its times then pass the clip's duration."""
     out = []
     f = len(foot_flags)

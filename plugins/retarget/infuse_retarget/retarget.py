@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from infuse import contacts as contact_detection
+from infuse import contacts as contact_detection, footing
 from infuse.errors import UsageError
 from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
@@ -179,17 +179,17 @@ class _Solver:
         ankle_t = np.broadcast_to(pos[tgt_foot.ankle], ankle_s.shape)
         # Planted heights come from the plain transfer (which stands the target on its own ground);
         # the swing lifts off them by the source's lift, scaled.
-        ankle_h = goals.planted(ankle_t[1], ankle_flags)
+        ankle_h = footing.planted_height(ankle_t[1], ankle_flags)
         ankle_w = goals.warp(ankle_t[:, 0], ankle_s, s)
-        ankle_w[1] = ankle_h + s * (ankle_s[1] - goals.planted(ankle_s[1], ankle_flags))
+        ankle_w[1] = ankle_h + s * (ankle_s[1] - footing.planted_height(ankle_s[1], ankle_flags))
         if ball_t is None:
-            return goals.pinned(ankle_w, ankle_flags, ankle_h)[0], None
+            return footing.pinned(ankle_w, ankle_flags, ankle_h)[0], None
         length = self._foot_length(pos, ankle_t, ball_t)
         ball_t_path = np.broadcast_to(pos[ball_t], ankle_s.shape)
-        ball_h = goals.planted(ball_t_path[1], ball_flags)
-        height = ball_h + s * (ball_s[1] - goals.planted(ball_s[1], ball_flags))
+        ball_h = footing.planted_height(ball_t_path[1], ball_flags)
+        height = ball_h + s * (ball_s[1] - footing.planted_height(ball_s[1], ball_flags))
         ball_w = self._ball_on_foot(ankle_w, height, self._lateral(k), length)
-        return goals.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
+        return footing.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
 
     def _lateral(self, k: int) -> np.ndarray:
         """(3, F) the side-to-side axis of foot ``k`` as transferred (the canonical +X the ankle carries)."""
@@ -210,8 +210,8 @@ class _Solver:
         src_foot = self.plan.source.feet[k]
         flags = found.flags[:, list(found.points).index(src_foot.ball)]
         height = self.state.source_positions[src_foot.ball][1]
-        lift = (height - goals.planted(height, flags)) / max(found.leg_length, 1e-9)
-        w = 1.0 - goals.smoothstep((lift - GROUND_LIFT[0]) / (GROUND_LIFT[1] - GROUND_LIFT[0]))
+        lift = (height - footing.planted_height(height, flags)) / max(found.leg_length, 1e-9)
+        w = 1.0 - footing.smoothstep((lift - GROUND_LIFT[0]) / (GROUND_LIFT[1] - GROUND_LIFT[0]))
         toward = ball_now + w * (ball_goal - ball_now) - ankle
         return ankle + length * toward / np.maximum(cq.norm(toward), 1e-12)
 

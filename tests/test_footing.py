@@ -1,0 +1,126 @@
+"""The foot-contact component: contact flags with hysteresis, heel and ball phases, plant positions,
+pinning goals over frames, anchors and the heel's rise about a pinned ball."""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse import footing
+from infuse import quaternions as quat
+from infuse.contacts import FootContacts, contact_phases, detect, hysteresis
+
+RNG = np.random.default_rng(11)
+
+
+def _norm(v: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.sum(v * v, axis=0))
+
+
+def test_hysteresis_lands_on_the_tight_threshold_and_lifts_on_the_loose_one():
+    enter = np.array([0, 0, 1, 0, 0, 0, 1, 0, 0], bool)[:, None]
+    stay = np.array([1, 1, 1, 1, 1, 0, 1, 1, 0], bool)[:, None]
+    assert hysteresis(enter, stay)[:, 0].tolist() == [False, False, True, True, True, False, True, True, False]
+
+
+def test_release_keeps_a_point_hovering_at_the_threshold_down():
+    fps, leg = 30.0, 1.0
+    frames = 60
+    # Down, rising slowly to hover just over the landing height (6 cm) for a second, then up and away.
+    y = np.concatenate((np.zeros(10), np.linspace(0.0, 0.062, 6)[1:], 0.062 + 0.003 * np.sin(np.arange(30)),
+                        np.linspace(0.1, 0.4, 15)))
+    points = np.stack((np.zeros(frames), y, np.zeros(frames)), axis=1)[:, None]
+    tight = detect(points, fps, leg, ground=0.0, release=1.0)[:, 0]
+    loose = detect(points, fps, leg, ground=0.0, release=1.25)[:, 0]
+    # Without it the point lets go as it first passes 6 cm and lands again wherever it dips under.
+    assert tight[:14].all() and not tight[14] and tight[15:45].any() and not tight[15:45].all()
+    assert loose[:44].all() and not loose[46:].any()
+
+
+def test_heel_and_ball_phases_of_a_rolling_foot():
+    # A stance: heel strike (ball 3 cm up), foot flat, heel off (ankle rising), toe off.
+    frames, leg = 40, 0.9
+    ankle = np.full(frames, 0.08)
+    ball = np.full(frames, 0.02)
+    ball[:8] = np.linspace(0.05, 0.02, 8)
+    ankle[25:] = 0.08 + np.linspace(0.0, 0.06, 15)
+    positions = np.zeros((frames, 4, 3))
+    positions[:, 0, 1], positions[:, 1, 1] = ankle, ball
+    positions[:, 2, 1], positions[:, 3, 1] = 0.3, 0.3  # the other foot in the air
+    flags = np.zeros((frames, 4), bool)
+    flags[:36, :2] = True
+    found = FootContacts(np.arange(4), np.array([0, 0, 1, 1]), flags, 0.0, leg, np.zeros((frames, 2)))
+    phases = contact_phases(found, positions)
+    heel, down = phases[:, 0, 0], phases[:, 0, 1]
+    assert heel[:25].all() and not heel[27:].any()
+    assert not down[:5].any() and down[8:36].all() and not down[36:].any()
+    assert not phases[:, 1].any()
+
+
+def test_pinned_goals_hold_still_and_glide_between_contacts():
+    frames = 120
+    flags = np.zeros(frames, dtype=bool)
+    flags[10:40] = flags[70:100] = True
+    ball_flags = np.zeros(frames, dtype=bool)
+    ball_flags[20:50] = ball_flags[80:110] = True
+    # A foot that slides a little while planted and swings 4 cm a frame in between.
+    step = np.where(flags | ball_flags, 0.001, 0.04)
+    path = np.stack((0.003 * np.sin(np.arange(frames) / 3), 0.08 + np.where(flags, 0.0, 0.05), np.cumsum(step)))
+    path += RNG.normal(scale=0.001, size=path.shape)
+    ball = path + np.array([[0.0], [-0.06], [0.138]])
+    ankle_goal, ball_goal = footing.pinned(path, flags, 0.08, ball, ball_flags, 0.02, 0.15, blend_frames=4)
+    assert ball_goal is not None
+    for a, b in ((10, 40), (70, 100)):
+        assert np.ptp(ankle_goal[:, a:b], axis=1).max() < 1e-12 and np.allclose(ankle_goal[1, a:b], 0.08)
+    for a, b in ((20, 50), (80, 110)):
+        assert np.ptp(ball_goal[:, a:b], axis=1).max() < 1e-12 and np.allclose(ball_goal[1, a:b], 0.02)
+    both = flags & ball_flags
+    assert np.allclose(_norm(ankle_goal[:, both] - ball_goal[:, both]), 0.15)
+    assert np.allclose(_norm(ankle_goal[:, ball_flags] - ball_goal[:, ball_flags]), 0.15)
+    # No pops: no frame moves much further than the swing does.
+    assert _norm(np.diff(ankle_goal, axis=1)).max() < 2.0 * _norm(np.diff(path, axis=1)).max()
+    assert _norm(np.diff(ball_goal, axis=1)).max() < 2.0 * _norm(np.diff(ball, axis=1)).max()
+
+
+def test_plant_positions_and_heights():
+    path = RNG.normal(size=(3, 20))
+    flags = np.zeros(20, bool)
+    flags[4:9] = True
+    pins = footing.plant_positions(path, flags, 0.05)
+    assert np.allclose(pins[[0, 2], 4:9], path[[0, 2], 4:9].mean(axis=1, keepdims=True)) and np.allclose(pins[1, 4:9], 0.05)
+    assert np.array_equal(pins[:, ~flags], path[:, ~flags])
+    heights = np.linspace(0.0, 1.0, 20)
+    assert footing.planted_height(heights, flags) == np.median(heights[4:9])
+    assert footing.planted_height(heights, np.zeros(20, bool)) == np.percentile(heights, 5.0)
+
+
+def test_anchors_follow_the_more_planted_point():
+    heel = np.array([[0.0, 0.0], [1.0, 1.0], [0.6, 0.6], [0.2, 0.2]])
+    ball = np.array([[0.3, 0.3], [0.0, 0.0], [0.9, 0.9], [0.8, 0.8]])
+    out = footing.anchors(heel, ball, np.array([True, False]))
+    assert out[:, 0].tolist() == [footing.FREE, footing.ANKLE, footing.BALL, footing.BALL]
+    assert out[:, 1].tolist() == [footing.FREE, footing.ANKLE, footing.ANKLE, footing.ANKLE]
+
+
+def test_heel_rises_about_the_ball_only_as_far_as_the_leg_needs():
+    frames = 30
+    hip = np.tile([0.0, 0.8, 0.0], (frames, 1))
+    knee = hip + [0.0, -0.42, 0.02]
+    ankle = knee + [0.0, -0.42, -0.02]
+    leg = np.stack((hip, knee, ankle), axis=1)
+    ball_goal = np.stack((np.zeros(frames), np.zeros(frames), np.linspace(0.42, 0.56, frames)), axis=-1)
+    ankle_goal = ball_goal + [0.0, 0.06, -0.13]
+    rotation = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 1))
+    out, rise = footing.heel_rise(rotation, leg, ankle_goal, ball_goal)
+    length = footing.REACH * 2.0 * np.hypot(0.42, 0.02)
+    reach = np.linalg.norm(out - hip, axis=-1)
+    near = np.linalg.norm(ankle_goal - hip, axis=-1) <= length
+    assert np.allclose(out[near], ankle_goal[near]) and not rise[near].any()
+    # Farther, the ankle turns about the ball (its distance kept) to within reach, and no more than a degree past.
+    far = ~near & (np.linalg.norm(rise, axis=-1) < np.radians(59.5))  # within the largest rise
+    assert far.sum() > 3
+    assert np.allclose(np.linalg.norm(out - ball_goal, axis=-1), np.linalg.norm(ankle_goal - ball_goal, axis=-1))
+    assert (reach[far] <= length + 1e-9).all()
+    angle = np.linalg.norm(rise[far], axis=-1)
+    back = quat.rotate(quat.from_rotvec(-rise[far]), out[far] - ball_goal[far])
+    assert np.allclose(back, (ankle_goal - ball_goal)[far], atol=1e-9)
+    assert np.all(np.linalg.norm(ball_goal[far] + quat.rotate(quat.from_rotvec(rise[far] * (1.0 - np.radians(1.0) / angle)[:, None]),
+                                                                (ankle_goal - ball_goal)[far]) - hip[far], axis=-1) > length)
