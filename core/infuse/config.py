@@ -7,10 +7,14 @@ The file is TOML, found at ``$INFUSE_CONFIG``, else ``$XDG_CONFIG_HOME/infuse/co
     mapper = "names"
     retargeter = "paper"
 
+    [defaults.controller]   # the controller that realizes a BML behaviour kind
+    gaze = "soft-gaze"
+
     [prefer.controller]     # two installed distributions offer a controller "gaze": this one wins
     gaze = "infuse-fancy-gaze"
 
-Keys of ``[defaults]`` and ``[prefer]`` are plugin kinds (:data:`infuse.registry.KINDS`).
+Keys of ``[defaults]`` and ``[prefer]`` are plugin kinds (:data:`infuse.registry.KINDS`); those of
+``[defaults.controller]`` BML behaviour kinds (:func:`infuse.registry.realizer`).
 """
 from __future__ import annotations
 
@@ -25,11 +29,13 @@ from .errors import InputError
 
 @dataclass(frozen=True)
 class Config:
-    """What the configuration file says. ``defaults``: kind -> plugin name; ``prefer``: kind -> {name: distribution}."""
+    """What the configuration file says. ``defaults``: kind -> plugin name; ``prefer``: kind -> {name:
+    distribution}; ``realizers``: BML behaviour kind -> controller name."""
 
     path: Path
     defaults: dict[str, str] = field(default_factory=dict)
     prefer: dict[str, dict[str, str]] = field(default_factory=dict)
+    realizers: dict[str, str] = field(default_factory=dict)
 
 
 def config_path() -> Path:
@@ -54,11 +60,16 @@ def read_config(path: Path, kinds: frozenset[str]) -> Config:
     unknown = sorted(set(doc) - {"defaults", "prefer"})
     if unknown:
         raise InputError(path, f"[{unknown[0]}]", "unknown section; the sections are [defaults] and [prefer.KIND]")
-    defaults = _table(path, doc.get("defaults", {}), "defaults", kinds)
+    defaults = doc.get("defaults", {})
+    realizers = {}
+    if isinstance(defaults, dict) and isinstance(defaults.get("controller"), dict):
+        defaults = dict(defaults)
+        realizers = _table(path, defaults.pop("controller"), "defaults.controller", None)
+    defaults = _table(path, defaults, "defaults", kinds)
     prefer = {}
     for kind, names in _table(path, doc.get("prefer", {}), "prefer", kinds, values=dict).items():
         prefer[kind] = _table(path, names, f"prefer.{kind}", None)
-    return Config(path, defaults, prefer)
+    return Config(path, defaults, prefer, realizers)
 
 
 def _table(path: Path, table, place: str, kinds: frozenset[str] | None, values: type = str) -> dict:

@@ -77,14 +77,35 @@ class ControllerFactory:
     """A controller kind of the runtime: ``factory(**settings) -> Controller`` builds one (usually the
     :class:`~infuse.runtime.Controller` subclass itself).
 
-    ``from_bml(parameters, runtime, character, activation) -> Controller | None`` (optional) builds it
-    from a scheduled BML activation; without it the activation's parameters go to ``factory``.
+    Realizing BML (see :mod:`infuse.stage`; :func:`infuse.registry.realizer` picks the controller of a
+    behaviour kind):
+
+    - ``realizes``: the behaviour kinds (an :class:`~infuse.bml.Activation`'s ``controller``) it
+      realizes; empty: the kind of its own name. Listing a kind named after another controller
+      replaces that one.
+    - ``realize(activation, stage) -> Activity | None`` (optional): realizes an activation in a scene
+      through the :class:`~infuse.stage.Stage`: builds controllers, asks where things are, starts
+      activities, reports what it cannot show.
+    - ``from_bml(parameters, runtime, character, activation) -> Controller | None`` (optional) builds it
+      from an activation when there is no ``realize``, played from the activation's start to its end;
+      without it the activation's parameters go to ``factory``.
+    - ``idle(index, seed) -> dict`` (optional) makes it an idle default: every character of a scene
+      plays it from the start with these settings (``index``: the character's place in the scene,
+      ``seed``: the scene's), until BML realizes the same controller on it.
     """
 
     name: str
     factory: Callable[..., Any]
     description: str = ""
     from_bml: Callable[..., Any] | None = None
+    realize: Callable[..., Any] | None = None
+    realizes: tuple[str, ...] = ()
+    idle: Callable[[int, int], dict] | None = None
+
+    @property
+    def behaviour_kinds(self) -> tuple[str, ...]:
+        """The behaviour kinds it realizes (``realizes``, else its own name)."""
+        return self.realizes or (self.name,)
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,8 @@ is asked for, and a file is read importing only the readers that claim its exten
   registered by the program (:meth:`PluginSet.register`), else the distribution the configuration
   file prefers (``[prefer.KIND]``, :mod:`infuse.config`), else the first by distribution name and
   entry-point name, the same in every environment.
+- A BML behaviour kind maps to the controller that realizes it through :func:`realizer` (its own
+  precedence, described there).
 - A plugin that fails to import, implements a hook infuse does not declare (a misspelled name, found by
   pluggy's ``check_pending``), raises in its hook or returns something other than its kind's
   descriptors is reported once on stderr and skipped, as is a hook function left unmarked; the rest
@@ -247,6 +249,13 @@ class PluginSet:
         self._tables[kind] = (key, table)
         return table
 
+    def distribution_of(self, kind: str, descriptor: Any) -> str:
+        """The distribution offering ``descriptor`` (one of ``kind``), ``"?"`` when none registered offers it."""
+        for plugin_name, items in self.offers(kind):
+            if descriptor in items:
+                return self._rank(plugin_name)[1]
+        return "?"
+
     def _rank(self, plugin_name: str) -> tuple:
         return self._order.get(plugin_name, (2, plugin_name, ""))
 
@@ -309,6 +318,49 @@ def get(kind: str, name: str | None = None) -> Any:
         why = f" (the default, from {source})" if source else ""
         raise UsageError(f"no {kind} named {chosen!r}{why}; installed: {', '.join(sorted(found)) or 'none'}")
     return found[chosen]
+
+
+def realizer_variable(kind: str) -> str:
+    """The variable that names the controller realizing BML behaviour ``kind``: ``INFUSE_DEFAULT_CONTROLLER_GAZE``."""
+    return "INFUSE_DEFAULT_CONTROLLER_" + "".join(c if c.isalnum() else "_" for c in kind.upper())
+
+
+def realizer(kind: str) -> ControllerFactory | None:
+    """The installed controller that realizes BML behaviours of ``kind`` (an activation's ``controller``),
+    or None when none does.
+
+    Candidates are the controllers whose :attr:`~infuse.plugin_types.ControllerFactory.behaviour_kinds`
+    hold ``kind``. The first of these wins:
+
+    1. the controller named by ``INFUSE_DEFAULT_CONTROLLER_<KIND>``, else by ``[defaults.controller]``
+       in the configuration file (:class:`UsageError` when it names no candidate);
+    2. a controller that replaces the one named after the kind (it lists ``kind`` in ``realizes``
+       under another name), over the one named after it;
+    3. among several replacements, the first by name, with a warning naming them all and how to choose.
+    """
+    controllers = table("controller")
+    candidates = [d for d in controllers.values() if kind in d.behaviour_kinds]
+    variable = realizer_variable(kind)
+    config = current_config(frozenset(KINDS))
+    chosen, source = os.environ.get(variable), variable
+    if not chosen and kind in config.realizers:
+        chosen, source = config.realizers[kind], f"[defaults.controller] {kind} in {config.path}"
+    if chosen:
+        for descriptor in candidates:
+            if descriptor.name == chosen:
+                return descriptor
+        names = ", ".join(sorted(d.name for d in candidates)) or "none"
+        raise UsageError(f"{source} names controller {chosen!r}, which does not realize BML {kind!r} behaviours; "
+                         f"those that do: {names}")
+    replacements = sorted((d for d in candidates if d.name != kind), key=lambda d: d.name)
+    if not replacements:
+        return candidates[0] if candidates else None
+    if len(replacements) > 1:
+        listed = " and ".join(f"{d.name} ({plugins().distribution_of('controller', d)})" for d in replacements)
+        plugins().report(f"{len(replacements)} controllers replace BML {kind!r} behaviours: {listed}; using "
+                         f"{replacements[0].name} (choose with {variable}=NAME, or [defaults.controller] {kind} = "
+                         f"\"NAME\" in {config.path})")
+    return replacements[0]
 
 
 def table_for_file(kind: str, path: str | Path, format: str | None = None) -> dict[str, Any]:

@@ -245,7 +245,8 @@ class Runtime:
         return sorted(spans)
 
     def realize(self, activation, character=None) -> Activity | None:
-        """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller of its kind.
+        """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller that
+        realizes its kind (:func:`infuse.registry.realizer`).
 
         The controller's ``from_bml(parameters, runtime, character, activation)`` (its
         :class:`~infuse.plugin_types.ControllerFactory`) builds
@@ -254,13 +255,13 @@ class Runtime:
         Returns None, and reports why, when no installed controller realizes that kind. The activity
         runs from the activation's start to its end (persistent ones: until stopped), cut at ``stop_s``.
         """
-        from . import controller_components
+        from .. import registry
 
         name = character if character is not None else activation.character
         rig = self.rig(name)
         if activation.stop_s is not None and activation.stop_s <= activation.start:
             return None  # interrupted before it started
-        component = controller_components().get(activation.controller)
+        component = registry.realizer(activation.controller)
         if component is None:
             self.report(rig.name, f"no installed controller realizes <{activation.element}> ({activation.controller!r}); skipped")
             return None

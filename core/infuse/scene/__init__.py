@@ -6,6 +6,7 @@ behaviour is realized, and :mod:`infuse.scene.scenefile` for the scene file form
 """
 from __future__ import annotations
 
-from .scene import BEHAVIOR_DEGRADED, Scene, SceneCharacter, SceneObject
+from ..bml.model import BEHAVIOR_DEGRADED
+from .scene import Scene, SceneCharacter, SceneObject
 
 __all__ = ["BEHAVIOR_DEGRADED", "Scene", "SceneCharacter", "SceneObject"]

@@ -1,31 +1,31 @@
 """How a scene realizes scheduled BML activations (:class:`~infuse.bml.Activation`) on its characters.
 
-| controller kind | realized by |
+The registry maps an activation's behaviour kind (``activation.controller``) to the installed controller
+that realizes it (:func:`infuse.registry.realizer`); that controller's plugin realizes it through the
+scene's :class:`~infuse.stage.Stage`. The scene itself keeps only the kinds no controller owns:
+
+| kind | realized by |
 |---|---|
-| ``speech`` | the ``speech`` controller (lip sync of the very utterance the scheduler timed); the character speaks, so saccades pause; its audio goes to the exported WAV |
-| ``face`` | the ``face`` controller: a lexeme or action unit on the character's morphs, face poses or jaw, in from start to attackPeak, out from relax to end |
-| ``gaze``, ``head``, ``saccade``, ``blink``, ``breathing`` and any other installed kind | the installed controller's BML builder (:meth:`~infuse.runtime.Runtime.realize`); targets name scene objects, characters or ``character:joint`` |
-| ``gesture`` of the ``gestures`` pack | the ``gesture`` controller: the pack's gesture on the arms, its phases on the sync points, co-articulated with the gesture before it |
-| ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback |
-| ``locomotion``, ``reach``, ``grab``, ``ik_constraint``, ``pointing`` | the behaviour-pack controllers of that kind, when installed and the character was infused with a pack of that kind (a locomotion pack, a reaching pack); otherwise warningFeedback |
 | ``wait``, ``event`` | nothing to show (their sync points still give feedback) |
+| ``speech`` | the scene synthesizes it and keeps its audio for the exported WAV; the controller realizing ``speech`` moves the mouth (without one the character speaks without lip sync, and saccades pause) |
+| ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback. A behaviour naming a behaviour pack (``pack``) goes to the controller realizing its kind |
+| any other kind | the realizing controller's ``realize(activation, stage)``; without one, the controller its ``from_bml`` builds, from the activation's start to its end; targets name scene objects, characters or ``character:joint`` |
 
 A behaviour that cannot be realized, or only partly, gives warningFeedback; the rest of its block plays.
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from .. import quaternions as quat
+from .. import registry
 from ..bml import Activation
-from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from ..bml.model import BEHAVIOR_DEGRADED, BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from ..errors import InfuseError
 from ..runtime import Clip, controller, controller_components
+from ..stage import end_s as _end
+from ..stage import until_s as _until
 
-#: warningFeedback type of a behaviour realized only in part (what the character lacks is described).
-BEHAVIOR_DEGRADED = "BEHAVIOR_DEGRADED"
 #: Kinds with nothing to show.
 SILENT_KINDS = frozenset({"wait", "event"})
 #: Kinds played from a clip of the character, and the priority of that clip on the base layer (above
@@ -49,17 +49,18 @@ def realize(scene, activation: Activation):
     """Play ``activation`` on its character in ``scene``; returns the runtime activity, or None (then
     warningFeedback says why, unless the kind has nothing to show)."""
     kind = activation.controller
-    installed = controller_components()
     if kind in SILENT_KINDS:
         return None
     if kind == "speech":
         return _speech(scene, activation)
+    descriptor = registry.realizer(kind)
+    if kind in CLIP_KINDS and (descriptor is None or not activation.parameters.get("pack")):
+        return play_clip(scene, activation)
+    if descriptor is not None and descriptor.realize is not None:
+        return descriptor.realize(activation, scene.stage)
+    installed = controller_components()
     if kind == "face" and "face" in installed:
         return _face(scene, activation)
-    if kind == "gesture" and activation.parameters.get("pack") and "gesture" in installed:
-        return _installed(scene, activation)  # a gestures pack's gesture: the gesture controller
-    if kind in CLIP_KINDS:
-        return _clip(scene, activation)
     if kind in PACK_KINDS and (kind not in installed or scene.pack_space(activation.character, PACK_SPACE[kind]) is None):
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: {PACK_KINDS[kind]}")
         return None
@@ -67,34 +68,11 @@ def realize(scene, activation: Activation):
         return _locomotion(scene, activation)
     if kind == "reach":
         return _reach(scene, activation)
-    if kind in installed:
-        return _installed(scene, activation)
+    if descriptor is not None:
+        return scene.stage.play(activation)
     scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
                f"<{activation.element}>: no installed controller realizes {kind!r} behaviours")
     return None
-
-
-def _end(activation: Activation) -> float | None:
-    """When the activity ends: the activation's end (None when persistent), cut at its interruption."""
-    end = None if activation.persistent else activation.end
-    if activation.stop_s is not None:
-        end = activation.stop_s if end is None else min(end, activation.stop_s)
-    return end
-
-
-def _installed(scene, activation: Activation):
-    target = activation.parameters.get("target")
-    if isinstance(target, str) and scene.resolve_name(target) != target:  # names match without regard to case
-        activation = replace(activation, parameters={**activation.parameters, "target": scene.resolve_name(target)})
-    if activation.controller in ("blink", "breathing"):  # an explicit emitter replaces the idle default
-        scene.stop_idle(activation.character, activation.controller, activation.start)
-    return scene.realize_with_runtime(activation)
-
-
-def _until(activation: Activation) -> float:
-    """When a behaviour that is not persistent stops: its end, or its interruption."""
-    end = _end(activation)
-    return activation.end if end is None else end
 
 
 def _speech(scene, activation: Activation):
@@ -138,7 +116,8 @@ def _face(scene, activation: Activation):
     return scene.activate(activation, face, _end(activation), **blend)
 
 
-def _clip(scene, activation: Activation):
+def play_clip(scene, activation: Activation):
+    """The activation as a clip of its character on the base layer (see the module doc)."""
     p = activation.parameters
     name = p.get("clip") or p.get("blend")
     kind = activation.controller

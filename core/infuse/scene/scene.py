@@ -37,13 +37,14 @@ import numpy as np
 from .. import quaternions as quat
 from ..asset import Asset, Character
 from ..bml import BmlDocument, Scheduler, WarningFeedback, parse_bml, parse_bml_file
-from ..bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from ..bml.model import BEHAVIOR_DEGRADED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from ..errors import InfuseError, UsageError
-from ..runtime import Runtime, controller, controller_components
+from ..runtime import Runtime
 from ..runtime.rig import Rig
 from . import builder
-from .realize import BEHAVIOR_DEGRADED, realize
+from .realize import realize
 from .speech import SpeechCache, mix, utterance_samples, write_wav
+from .stage import SceneStage
 from .walks import Walks
 
 
@@ -120,6 +121,7 @@ class Scene:
         self._spoken: dict[str, list[_Spoken]] = {}
         self._interrupted: set[tuple[str, str]] = set()
         self.walks = Walks(self)
+        self.stage = SceneStage(self)
         self._recorder = None
         self._realizing = None
         self._realize_notes: list[str] = []
@@ -311,18 +313,14 @@ class Scene:
         self.runtime.activate(name, Clip(first), 0.0)
 
     def _start_idle(self, entry: SceneCharacter, index: int) -> None:
-        installed = controller_components()
-        settings = {"blink": {"activity": "conversation", "seed": self.seed + 101 * index},
-                    "breathing": {"phase": (0.37 * index) % 1.0}}
-        for kind, options in settings.items():
-            if kind in installed:
-                entry.idle[kind] = self.runtime.activate(entry.name, controller(kind, **options), 0.0)
+        """Start the idle defaults, the installed controllers that declare themselves such
+        (:attr:`~infuse.plugin_types.ControllerFactory.idle`), on the ``index``-th character."""
+        from .. import registry
 
-    def stop_idle(self, name: str, kind: str, at_s: float) -> None:
-        """Stop a character's default ``kind`` (blink or breathing) at ``at_s``, when BML sets its own."""
-        activity = self.character(name).idle.pop(kind, None)
-        if activity is not None:
-            self.runtime.stop(activity, at_s)
+        for kind, descriptor in registry.table("controller").items():
+            if descriptor.idle is not None:
+                settings = descriptor.idle(index, self.seed)
+                entry.idle[kind] = self.runtime.activate(entry.name, descriptor.factory(**settings), 0.0)
 
     def stop_reaches(self, name: str, at_s: float) -> None:
         """End the character's reaches at ``at_s`` (SmartBody's reach finish)."""
@@ -478,10 +476,6 @@ class Scene:
                     if spoken.activity is activity and activity is not None:
                         spoken.stop_s = activation.stop_s
 
-    def realize_with_runtime(self, activation):
-        """Play an activation through the installed controller of its kind (see :meth:`Runtime.realize`)."""
-        return self.runtime.realize(activation, activation.character)
-
     def activate(self, activation, controller_, end_s, **options):
         """Start ``controller_`` for ``activation`` on its character at the activation's start, until ``end_s``."""
         return self.runtime.activate(activation.character, controller_, activation.start, end_s, source=activation,
@@ -591,7 +585,7 @@ class Scene:
     @property
     def end_time(self) -> float:
         """When everything scheduled has ended, every walk standing at its target (seconds; 0 for an empty scene)."""
-        return max([0.0, self.walks.end_s()] + [r.end_s if r.interrupted_at is None else r.interrupted_at
+        return max([0.0, self.walks.end_s(), self.stage.end_s()] + [r.end_s if r.interrupted_at is None else r.interrupted_at
                                                 for r in self.scheduler.blocks.values() if not r.failed])
 
     def run(self, seconds: float | None = None, progress=None) -> None:
@@ -608,7 +602,8 @@ class Scene:
         done = 0
         while done < frames:
             self.walks.before_block()
-            n = self.walks.frames_until_handover(min(self.runtime.block_frames, frames - done))
+            self.stage.before_block()
+            n = self.stage.frames_ahead(self.walks.frames_until_handover(min(self.runtime.block_frames, frames - done)))
             self.runtime.step(n)
             done += n
             self._deliver()
@@ -621,7 +616,8 @@ class Scene:
         self._check_facing()
         while frames > 0:
             self.walks.before_block()
-            n = self.walks.frames_until_handover(frames)
+            self.stage.before_block()
+            n = self.stage.frames_ahead(self.walks.frames_until_handover(frames))
             self.runtime.step(n)
             frames -= n
         self._deliver()

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import quaternions as quat
 from ..runtime import Clip
-from .realize import BEHAVIOR_DEGRADED
+from ..bml.model import BEHAVIOR_DEGRADED
 
 #: Crossfade from a walk that has arrived to the idle clip, seconds.
 SETTLE_BLEND_S = 0.5

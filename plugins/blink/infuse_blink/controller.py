@@ -149,3 +149,9 @@ def blink_from_bml(parameters: dict, runtime, character: str, activation=None) -
     """ASAP's blink emitter: ``mean_interval_s`` between blinks sets the rate (else the resting rate)."""
     interval = float(parameters.get("mean_interval_s") or 0.0)
     return Blink(rate_per_min=float(np.clip(60.0 / interval, 0.1, 120.0)) if interval > 0 else None)
+
+
+def idle_settings(index: int, seed: int) -> dict:
+    """A scene's idle blinking of its ``index``-th character: conversational rate, each character its own
+    draw of intervals from the scene's ``seed``."""
+    return {"activity": "conversation", "seed": seed + 101 * index}

@@ -92,3 +92,9 @@ def breathing_from_bml(parameters: dict, runtime, character: str, activation=Non
     """ASAP's breathing emitter: ``mean_interval_s`` between breaths sets the rate."""
     interval = float(parameters.get("mean_interval_s") or 0.0)
     return Breathing(rate_bpm=float(np.clip(60.0 / interval, 1.0, 60.0)) if interval > 0 else 14.0)
+
+
+def idle_settings(index: int, seed: int) -> dict:
+    """A scene's idle breathing of its ``index``-th character: the resting rate, each character at its own
+    phase of the cycle so that they do not breathe in step."""
+    return {"phase": (0.37 * index) % 1.0}

@@ -1,0 +1,95 @@
+"""Which installed controller realizes a BML behaviour kind (``registry.realizer``): the one named after the
+kind, a replacement that lists the kind in ``realizes``, an explicit choice (environment variable or
+configuration file), and the warning when several replacements compete."""
+from __future__ import annotations
+
+import types
+
+import pytest
+
+import infuse
+from infuse import registry
+from infuse.errors import UsageError
+from infuse.plugin_types import ControllerFactory
+
+
+def _controllers_module(name: str, *factories: ControllerFactory) -> types.ModuleType:
+    module = types.ModuleType(name)
+
+    @infuse.hookimpl
+    def infuse_controllers():
+        return list(factories)
+
+    module.infuse_controllers = infuse_controllers
+    return module
+
+
+@pytest.fixture
+def settings(monkeypatch, tmp_path):
+    """No user configuration and no realizer variable; returns the configuration file's path."""
+    config = tmp_path / "config.toml"
+    monkeypatch.setenv("INFUSE_CONFIG", str(config))
+    monkeypatch.delenv("INFUSE_DEFAULT_CONTROLLER_GAZE", raising=False)
+    monkeypatch.delenv("INFUSE_DEFAULT_CONTROLLER_HEAD", raising=False)
+    return config
+
+
+@pytest.fixture
+def registered():
+    """Register program modules for one test: ``registered(module)``."""
+    modules = []
+
+    def register(module):
+        registry.plugins().register(module)
+        modules.append(module)
+
+    yield register
+    for module in modules:
+        registry.plugins().unregister(module)
+
+
+def _gaze(**options):
+    return registry.table("controller")["gaze"].factory(**options)
+
+
+def test_the_controller_named_after_a_kind_realizes_it(settings):
+    assert registry.realizer("gaze").name == "gaze"
+    assert registry.realizer("head").name == "head"
+    assert registry.realizer("no-such-kind") is None
+
+
+def test_a_replacement_wins_over_the_controller_named_after_the_kind(settings, registered, capsys):
+    registered(_controllers_module("soft_gaze", ControllerFactory("soft-gaze", _gaze, realizes=("gaze",))))
+    assert registry.realizer("gaze").name == "soft-gaze"
+    assert registry.realizer("head").name == "head"  # other kinds keep theirs
+    assert "controller" not in capsys.readouterr().err  # one replacement: nothing to warn about
+
+
+def test_several_replacements_warn_and_the_first_by_name_wins(settings, registered, capsys):
+    registered(_controllers_module("zeta_gaze", ControllerFactory("zeta-gaze", _gaze, realizes=("gaze",))))
+    registered(_controllers_module("alpha_gaze", ControllerFactory("alpha-gaze", _gaze, realizes=("gaze", "head"))))
+    assert registry.realizer("gaze").name == "alpha-gaze"
+    err = capsys.readouterr().err
+    assert "2 controllers replace BML 'gaze' behaviours" in err
+    assert "alpha-gaze" in err and "zeta-gaze" in err and "INFUSE_DEFAULT_CONTROLLER_GAZE" in err
+    assert registry.realizer("head").name == "alpha-gaze"  # one factory may realize several kinds
+
+
+def test_an_explicit_choice_wins_environment_first(settings, registered, monkeypatch):
+    registered(_controllers_module("soft_gaze", ControllerFactory("soft-gaze", _gaze, realizes=("gaze",))))
+    settings.write_text('[defaults.controller]\ngaze = "gaze"\n')
+    assert registry.realizer("gaze").name == "gaze"  # the configuration file brings the built-in back
+    monkeypatch.setenv("INFUSE_DEFAULT_CONTROLLER_GAZE", "soft-gaze")
+    assert registry.realizer("gaze").name == "soft-gaze"  # the variable wins over the file
+
+
+def test_choosing_a_controller_that_does_not_realize_the_kind_is_an_error(settings, monkeypatch):
+    monkeypatch.setenv("INFUSE_DEFAULT_CONTROLLER_GAZE", "blink")
+    with pytest.raises(UsageError, match="INFUSE_DEFAULT_CONTROLLER_GAZE names controller 'blink'.*those that do: gaze"):
+        registry.realizer("gaze")
+
+
+def test_a_realizer_table_in_the_configuration_must_hold_strings(settings):
+    settings.write_text("[defaults.controller]\ngaze = 3\n")
+    with pytest.raises(infuse.InputError, match=r"\[defaults.controller\] gaze.*must be a string"):
+        registry.realizer("gaze")
