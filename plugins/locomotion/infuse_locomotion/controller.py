@@ -577,7 +577,6 @@ def _prepare(space, clips, sk, legs) -> dict:
     same for every walk of a character with that pack, so :meth:`Locomotion.bind` keeps it."""
     prepared = [canonical_clip(c) for c in clips]
     p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
-    events = [foot_events(c) if c.role != "idle" else None for c in clips]
     idle = np.array([c.role == "idle" for c in clips])
     speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
     # The slowest straight walk forward (not a strafe or a turn): what slow walks and stops play.
@@ -604,13 +603,23 @@ def _prepare(space, clips, sk, legs) -> dict:
         _, pos = chain_fk(sk, np.concatenate([m.local_rotations[c] for m, c in zip(motions, cycles)]),
                           np.concatenate([m.root_translations[c] for m, c in zip(motions, cycles)]),
                           np.concatenate([m.local_translations()[c] for m, c in zip(motions, cycles)]) if moved else None,
-                          [legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
-        ankles = pos[:, 2:] - 0.5 * (pos[:, 0] + pos[:, 1])[:, None]
-        start = 0
+                          [legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + [leg[2] if leg[3] is None else leg[3] for leg in legs])
+        ankles = pos[:, 2:4] - 0.5 * (pos[:, 0] + pos[:, 1])[:, None]
+        start, heights = 0, []
         for i, c in enumerate(cycles):
             ankle_means[i] = ankles[start:start + c.stop].mean(axis=0)
-            ankle_low[i] = pos[start:start + c.stop, 2:, 1].min(axis=0)
+            ankle_low[i] = pos[start:start + c.stop, 2:4, 1].min(axis=0)
+            feet = pos[start:start + c.stop, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
+            heights.append(np.concatenate((feet, feet[:1])))  # the loop closed
             start += c.stop
+        rest = sk.rest_global_positions
+        leg_length = float(np.mean([np.linalg.norm(rest[leg[1]] - rest[leg[0]]) + np.linalg.norm(rest[leg[2]] - rest[leg[1]])
+                                    for leg in legs]))
+        # Strikes where the heels reach the ground, toe offs where the balls leave it (the takes' feet
+        # land and push off moving, on the ground a few frames beyond their contacts).
+        events = [foot_events(c, h, leg_length) if c.role != "idle" else None for c, h in zip(clips, heights)]
+    else:
+        events = [foot_events(c) if c.role != "idle" else None for c in clips]
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     stance_feet = None

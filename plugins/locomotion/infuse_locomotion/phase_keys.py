@@ -31,17 +31,57 @@ def unwarp(keys: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.where(u < keys[1], 0.5 * (u - keys[0]) / (keys[1] - keys[0]), 0.5 + 0.5 * (u - keys[1]) / (keys[2] - keys[1]))
 
 
-def foot_events(clip) -> np.ndarray | None:
+#: How far (leg lengths) a foot point may sit above its height at a strike or toe off and count as
+#: on the ground: about 2.7 mm on an adult.
+GROUNDED = 0.003
+
+
+#: Share of a swing each of its ends may give to the stance next to it (:func:`grounded_frames`).
+GROUNDED_SHARE = 0.25
+
+
+def grounded_frames(heights: np.ndarray, swinging: np.ndarray, frame: int, tolerance: float, way: int) -> int:
+    """How many frames of the swing (``swinging`` (F,) flags) before (``way`` -1) or after (+1)
+    frame ``frame`` a foot point stays on the ground: within ``tolerance`` metres of its height
+    at that frame, going from it until the first frame it is not, at most :data:`GROUNDED_SHARE`
+    of the swing (a shuffling foot may skim the ground all through it). ``heights`` (F,) metres of
+    a cycle whose last frame repeats the first (indices wrap over F - 1 frames).
+
+    A contact detector finds a strike once the heel has slowed down and a toe off once the ball
+    has sped up: a heel that lands moving (as real takes do) reaches the ground a few frames before
+    its strike and slides there, a ball that pushes off moving slides a few frames after its toe off
+    before it lifts. Pinned over these frames, neither slides."""
+    n = max(len(heights) - 1, 1)
+    frames = (frame + way * np.arange(1, n)) % n
+    swing = swinging[frames]
+    down = (heights[frames] <= heights[frame % n] + tolerance) & swing
+    within = int(np.argmin(down)) if not down.all() else 0
+    return min(within, int(GROUNDED_SHARE * (np.argmin(swing) if not swing.all() else 0)))
+
+
+def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0) -> np.ndarray | None:
     """(2, 4) phases of each foot's (left, right) strike, flat, heel off and toe off in a looping
-    clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once."""
+    clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once.
+    With the feet's heights (F, 2, 2) metres over the cycle (ankle, ball), a strike is where the heel
+    reached the ground and a toe off where the ball left it (:func:`grounded_frames`, within
+    :data:`GROUNDED` leg lengths of ``leg_length`` metres)."""
     found = steps(clip.contacts, clip.motion.fps, True, clip.phases)
+    fps = clip.motion.fps
     out = np.zeros((2, 4))
     for k, foot in enumerate(("left", "right")):
         mine = [s for s in found if s["foot"] == foot]
         if len(mine) != 1:
             return None
+        times = np.array([mine[0][e] for e in EVENTS])
+        if heights is not None:
+            swinging = ~clip.contacts[:, k].astype(bool)
+            tolerance = GROUNDED * leg_length
+            times[0] -= grounded_frames(heights[:, k, 0], swinging, int(round(times[0] * fps)), tolerance, -1) / fps
+            # The toe off's frame is the first of the swing (a contact's end is exclusive).
+            off = int(round(times[3] * fps))
+            times[3] += grounded_frames(heights[:, k, 1], swinging, off - 1, tolerance, 1) / fps
         # A contact flag holds for its frame's half-frame either side (frames are sampled nearest).
-        ph = unwarp(clip.keys, np.array([mine[0][e] for e in EVENTS]) - 0.5 / clip.motion.fps)
+        ph = unwarp(clip.keys, times - 0.5 / fps)
         ph = np.where(ph > 1.0 - 1e-6, ph - 1.0, ph)  # a strike on a key rounded just below it
         ph[1:] += np.where(ph[1:] < ph[0], 1.0, 0.0)  # events past the cycle's end
         out[k] = np.maximum.accumulate(ph)
