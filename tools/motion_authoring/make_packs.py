@@ -1,4 +1,4 @@
-"""Author the built-in behaviour packs: locomotion-male, locomotion-female, reaching and gestures.
+"""Author the built-in behaviour packs: locomotion-male, locomotion-female, reaching, gestures and postures.
 
 Run from the repository root: ``python -m tools.motion_authoring.make_packs [pack ...]`` (default: all). It writes each pack's
 skeleton, clips (BVH), manifest and README into ``behaviour_libs/<pack>/infuse_pack_<pack>/pack/`` and
@@ -20,6 +20,7 @@ from infuse.packs.manifest import write_manifest
 from .body import Body
 from .gait import Gait, gait_motion
 from .gestures import gesture_clips
+from .postures import posture_clips
 from .reach import grasp_motion, reach_motion, reach_targets
 
 ROOT = Path(__file__).resolve().parents[2] / "behaviour_libs"
@@ -140,10 +141,29 @@ def make_gestures(body: Body) -> Path:
     return write_manifest(folder / "manifest.toml", pack, entries)
 
 
-def main(packs=("locomotion-male", "locomotion-female", "reaching", "gestures")) -> None:
+def make_postures(body: Body) -> Path:
+    """The postures pack: each standing posture's looping idle, the BML lexemes it realizes as tags."""
+    folder = pack_folder("postures")
+    entries = []
+    for spec, motion in posture_clips(body):
+        write_clip(body, motion, folder / "clips" / f"{motion.name}.bvh")
+        entries.append({"name": motion.name, "file": f"clips/{motion.name}.bvh", "role": "posture",
+                        "tags": list(dict.fromkeys([spec.name, *(lexeme.lower() for lexeme in spec.lexemes)])), "loop": True})
+    write_clip(body, infuse.Motion.rest_pose(body.skeleton, name="rest"), folder / "skeleton.bvh")
+    pack = {"name": "postures", "version": "1.0.0", "kind": "posture", "skeleton": "skeleton.bvh", "analysis": "analysis.json",
+            "description": "standing postures with their idles: neutral, weight on the left or right leg, arms crossed, "
+                           "hands on hips, behind the back or clasped, leaning forward or back (procedural)"}
+    return write_manifest(folder / "manifest.toml", pack, entries)
+
+
+ALL = ("locomotion-male", "locomotion-female", "reaching", "gestures", "postures")
+
+
+def main(packs=ALL) -> None:
     body = Body.canonical()
     makers = {"locomotion-male": lambda: make_locomotion(body, "male"), "locomotion-female": lambda: make_locomotion(body, "female"),
-              "reaching": lambda: make_reaching(body), "gestures": lambda: make_gestures(body)}
+              "reaching": lambda: make_reaching(body), "gestures": lambda: make_gestures(body),
+              "postures": lambda: make_postures(body)}
     for manifest in (makers[p]() for p in packs):
         print(summary(build_pack(manifest)))
 
@@ -151,4 +171,4 @@ def main(packs=("locomotion-male", "locomotion-female", "reaching", "gestures"))
 if __name__ == "__main__":
     import sys
 
-    main(tuple(sys.argv[1:]) or ("locomotion-male", "locomotion-female", "reaching", "gestures"))
+    main(tuple(sys.argv[1:]) or ALL)
