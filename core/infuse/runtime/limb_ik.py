@@ -1,13 +1,22 @@
-"""Two-joint limb IK on a character's own joints, vectorized over frames (legs for planted feet,
-arms for reaches).
+"""Two-joint limb IK, vectorized over frames: the end of the foot-contact component (the legs reach
+the goals of :mod:`infuse.footing`), and arms for reaches.
 
-The limb is three joints a (hip, shoulder), b (knee, elbow), c (ankle, wrist) anywhere in the
-hierarchy (twist joints between them are carried along). The interior angles at a and b are set by
-the law of cosines so that c lands at the goal, the bend staying in the limb's current plane (or
-toward ``pole`` when the limb is straight), and the end joint keeps its global rotation. Positions
-are metres in the character's own frame; quaternions (x, y, z, w).
+The limb is three joints a (hip, shoulder), b (knee, elbow), c (ankle, wrist). The bend at b is set
+by the law of cosines so that c lies as far from a as the goal, then a turns by the shortest arc
+that brings c onto the goal. Two entry points share that solution:
+
+- :func:`solve_limb` works on a character's local rotations (F, J, 4), joints anywhere in the
+  hierarchy (twist joints between them are carried along), the bend staying in the limb's current
+  plane (or toward ``pole`` when the limb is straight), the end joint keeping its global rotation.
+- :func:`turn_limb` works on world positions and returns world turns of the limb's two segments,
+  for callers that keep their own pose (the retargeter), bending about a hinge axis they give
+  (:func:`hinge_axes`) and never straightening a limb past a least flexion.
+
+Positions are metres; quaternions (x, y, z, w).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -41,6 +50,87 @@ def _unit(v: np.ndarray) -> np.ndarray:
 
 def _arccos(cosine: np.ndarray) -> np.ndarray:
     return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
+
+
+#: Margin (metres) inside a limb's reach for a goal to count as reachable (:func:`turn_limb`).
+REACH_MARGIN = 5e-4
+
+
+@dataclass(frozen=True)
+class LimbTurns:
+    """World turns that solve a two-bone limb (:func:`turn_limb`), and how close its end came.
+
+    ``root`` (F, 4): the turn about joint a of everything below a; ``middle`` (F, 4): the turn of
+    everything below b instead (it includes ``root``); ``end`` (F, 3): where c ends up;
+    ``residual`` (F,): its distance from the goal, metres; ``reachable`` (F,): whether the goal lay
+    inside the limb's reach by at least :data:`REACH_MARGIN`.
+    """
+
+    root: np.ndarray
+    middle: np.ndarray
+    end: np.ndarray
+    residual: np.ndarray
+    reachable: np.ndarray
+
+
+def hinge_axes(root: np.ndarray, middle: np.ndarray, end: np.ndarray,
+               reference: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Hinge axes (F, 3) and flexions (F,, radians) of two-bone limbs a, b, c at ``root``, ``middle``
+    and ``end`` (F, 3).
+
+    A clearly bent limb bends about its own plane's normal; a nearly straight one about
+    ``reference`` (F, 3) (e.g. the canonical hinge the joint carries), made perpendicular to the
+    upper bone; in between the two are blended. The normal's sign follows the reference, so the
+    flexion is positive for a limb bent the natural way. The axes are perpendicular to the upper bone.
+    """
+    u = _unit(middle - root)
+    v = _unit(end - middle)
+    n = _cross(u, v)
+    sin_bend = _norm(n)
+    ref = _unit(reference - _dot(reference, u)[..., None] * u)
+    n = np.where((_dot(n, ref) < 0.0)[..., None], -n, n) / np.maximum(sin_bend, 1e-12)[..., None]
+    w = np.clip((sin_bend - 0.03) / 0.07, 0.0, 1.0)
+    w = (w * w * (3.0 - 2.0 * w))[..., None]
+    axis = _unit(w * n + (1.0 - w) * ref)
+    return axis, np.arctan2(_dot(axis, _cross(u, v)), _dot(u, v))
+
+
+def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.ndarray, hinge: np.ndarray,
+              flexion: np.ndarray, min_flexion: float = 0.0) -> LimbTurns:
+    """Bring the end c of limbs a, b, c at ``root``, ``middle``, ``end`` (F, 3) to ``goal`` (F, 3).
+
+    b bends about ``hinge`` (F, 3, unit, perpendicular to a->b; :func:`hinge_axes`) from its
+    ``flexion`` (F,, radians) to the flexion the goal's distance from a needs, then a turns by the
+    shortest arc that points c at the goal: the limb moves only as much as the goal needs. The hinge
+    never straightens past ``min_flexion`` radians (no hyperextension), but a limb already
+    straighter is not made to bend; a goal out of reach is moved onto the reachable shell, so the
+    limb stretches toward it.
+    """
+    upper, lower = middle - root, end - middle
+    a, b = _norm(upper), _norm(lower)
+    straightest = np.maximum(np.minimum(flexion, min_flexion), 0.0)
+    far = np.sqrt(a * a + b * b + 2.0 * a * b * np.cos(straightest)) * (1.0 - 1e-6)
+    near = np.abs(a - b) * (1.0 + 1e-6)
+    offset = goal - root
+    dist = _norm(offset)
+    reachable = (dist <= far - REACH_MARGIN) & (dist >= near + REACH_MARGIN)
+    reach = np.clip(dist, near, far)
+    # Turning the lower bone by t about the hinge h (perpendicular to the upper bone u) gives
+    # u . lower(t) = A cos t + B sin t with A = u . lower and B = u . (h x lower); the distance
+    # from a to c fixes u . lower(t), so t = atan2(B, A) + arccos(...) (the branch that bends the
+    # natural way, the law of cosines when h is the limb plane's normal).
+    along = _dot(upper, lower)
+    across = _dot(upper, _cross(hinge, lower))
+    size = np.maximum(np.hypot(along, across), 1e-12)
+    wanted = 0.5 * (reach * reach - a * a - b * b)
+    bend = np.arctan2(across, along) + _arccos(wanted / size)
+    bend = np.maximum(bend, np.minimum(0.0, min_flexion - flexion))
+    q_bend = quat.from_axis_angle(hinge, bend)
+    bent = upper + quat.rotate(q_bend, lower)
+    target = np.where((dist > 1e-12)[..., None], offset, bent)
+    q_root = quat.between(bent, target)
+    new_end = root + quat.rotate(q_root, bent)
+    return LimbTurns(q_root, quat.multiply(q_root, q_bend), new_end, _norm(goal - new_end), reachable)
 
 
 def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
@@ -126,7 +216,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     r0, r1, r2 = turns[..., 0, :], turns[..., 1, :], turns[..., 2, :]
     columns = limbs if several else limbs[0]
     old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
-    new = quat.multiply(old, np.stack((quat.multiply(r0, r2), r1), axis=-2))
+    # a bends in the limb's plane first (c stays on the line a->c), then turns that line onto the goal;
+    # turning first would bend about a normal the turn has moved (off the goal unless the plane holds it).
+    new = quat.multiply(old, np.stack((quat.multiply(r2, r0), r1), axis=-2))
     if weight is not None:  # both joints in one interpolation
         w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
