@@ -21,7 +21,6 @@ from .. import quaternions as quat
 from .. import registry
 from ..bml import Activation
 from ..bml.model import BEHAVIOR_DEGRADED, BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
-from ..errors import InfuseError
 from ..runtime import Clip, controller, controller_components
 from ..stage import end_s as _end
 from ..stage import until_s as _until
@@ -59,8 +58,6 @@ def realize(scene, activation: Activation):
     if descriptor is not None and descriptor.realize is not None:
         return descriptor.realize(activation, scene.stage)
     installed = controller_components()
-    if kind == "face" and "face" in installed:
-        return _face(scene, activation)
     if kind in PACK_KINDS and (kind not in installed or scene.pack_space(activation.character, PACK_SPACE[kind]) is None):
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: {PACK_KINDS[kind]}")
         return None
@@ -76,6 +73,7 @@ def realize(scene, activation: Activation):
 
 
 def _speech(scene, activation: Activation):
+    """The utterance the scheduler timed: its audio always, the lip sync when a controller realizes speech."""
     name = activation.character
     text = (activation.parameters.get("text") or "").strip()
     if not text:
@@ -86,34 +84,16 @@ def _speech(scene, activation: Activation):
         reason = scene.speech.unavailable or "it was not synthesized"
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<speech> is shown without audio or lip sync: {reason}")
         return None
-    if "speech" not in controller_components():
-        scene.runtime.add_speech(name, activation.start, _until(activation))
+    descriptor = registry.realizer("speech")
+    activity = None
+    if descriptor is None:
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, "<speech>: no lip-sync plugin is installed; only its audio is kept")
-        scene.keep_audio(name, activation, utterance, None)
-        return None
-    speech = controller("speech", utterance=utterance, fps=scene.fps, map_file=scene.character(name).map_file)
-    activity = scene.activate(activation, speech, _until(activation))
+    else:
+        activity = descriptor.realize(activation, scene.stage) if descriptor.realize else scene.stage.play(activation)
+    if activity is None:  # it speaks all the same: saccades pause
+        scene.runtime.add_speech(name, activation.start, _until(activation))
     scene.keep_audio(name, activation, utterance, activity)
     return activity
-
-
-def _face(scene, activation: Activation):
-    p = activation.parameters
-    amount = float(p.get("amount", 0.5))
-    try:
-        what = {"expression": f"AU{int(p['au'])}", "side": p.get("side")} if p.get("kind") == "facs" \
-            else {"lexeme": str(p.get("lexeme") or "")}
-        face = controller("face", amount=amount, map_file=scene.character(activation.character).map_file, **what)
-    except (InfuseError, ValueError, KeyError) as exc:
-        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot be shown: {exc}")
-        return None
-    peak, relax = activation.time("attackPeak"), activation.time("relax")
-    blend = {}
-    if peak is not None:
-        blend["blend_in_s"] = max(peak - activation.start, 0.0)
-    if relax is not None and not activation.persistent:
-        blend["blend_out_s"] = max(activation.end - relax, 0.0)
-    return scene.activate(activation, face, _end(activation), **blend)
 
 
 def play_clip(scene, activation: Activation):

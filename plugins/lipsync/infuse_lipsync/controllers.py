@@ -231,9 +231,9 @@ class FaceExpression(Controller):
 
 
 def speech_from_bml(parameters: dict, runtime, character: str, activation=None) -> Speech | None:
-    """A :class:`Speech` from a BML ``<speech>`` activation. When the scheduler timed it with a TTS engine its
-    phonemes come with the activation (``parameters["tts"]``); otherwise the text is synthesized with the
-    default engine. Empty speech plays nothing."""
+    """A :class:`Speech` from a BML ``<speech>`` activation played on a runtime alone. When the scheduler
+    timed it with a TTS engine its phonemes come with the activation (``parameters["tts"]``); otherwise
+    the text is synthesized with the default engine. Empty speech plays nothing."""
     text = (parameters.get("text") or "").strip()
     if not text:
         return None
@@ -249,14 +249,14 @@ def speech_from_bml(parameters: dict, runtime, character: str, activation=None) 
     return Speech(utterance, fps=runtime.fps)
 
 
-def face_from_bml(parameters: dict, runtime, character: str, activation=None) -> FaceExpression:
-    """A :class:`FaceExpression` from a BML face activation (``kind`` ``"lexeme"`` or ``"facs"``); it blends
-    in from start to attackPeak and out from relax to end."""
+def face_from_bml(parameters: dict, runtime, character: str, activation=None, map_file=None) -> FaceExpression:
+    """A :class:`FaceExpression` from a BML face activation (``kind`` ``"lexeme"`` or ``"facs"``) on the face
+    channels ``map_file`` declares; it blends in from start to attackPeak and out from relax to end."""
     amount = float(parameters.get("amount", 0.5))
     if parameters.get("kind") == "facs":
-        controller = FaceExpression(f"AU{int(parameters['au'])}", amount, parameters.get("side"))
+        controller = FaceExpression(f"AU{int(parameters['au'])}", amount, parameters.get("side"), map_file=map_file)
     else:
-        controller = FaceExpression(amount=amount, lexeme=str(parameters.get("lexeme") or ""))
+        controller = FaceExpression(amount=amount, lexeme=str(parameters.get("lexeme") or ""), map_file=map_file)
     if activation is not None:
         peak, relax = activation.time("attackPeak"), activation.time("relax")
         if peak is not None:

@@ -15,9 +15,21 @@ def infuse_commands():
                              "timeline", command.add_arguments, command.run)]
 
 
+def _realize_speech(activation, stage):
+    from .realize import realize_speech
+
+    return realize_speech(activation, stage)
+
+
+def _realize_face(activation, stage):
+    from .realize import realize_face
+
+    return realize_face(activation, stage)
+
+
 @hookimpl
 def infuse_controllers():
     return [ControllerFactory("speech", Speech, "lip sync of an utterance on the character's mouth (morphs, face poses or jaw)",
-                              from_bml=speech_from_bml),
+                              from_bml=speech_from_bml, realize=_realize_speech),
             ControllerFactory("face", FaceExpression, "a facial lexeme or FACS action unit held on the character's face",
-                              from_bml=face_from_bml)]
+                              from_bml=face_from_bml, realize=_realize_face)]

@@ -1,0 +1,35 @@
+"""BML ``<speech>`` and face behaviours realized in a scene, through its :class:`~infuse.stage.Stage`.
+
+The scene synthesizes an utterance once, times the block with it and keeps its audio; the lip sync
+plays that very utterance on the character's mouth channels (its map file's face entry, if any).
+"""
+from __future__ import annotations
+
+from infuse.bml.model import CANNOT_CREATE_BEHAVIOR
+from infuse.errors import InfuseError
+from infuse.stage import end_s, until_s
+
+from .controllers import Speech, face_from_bml
+
+
+def realize_speech(activation, stage):
+    """Lip sync of the utterance the scene synthesized for ``activation``, until the speech ends or is
+    interrupted; None (warned) when there is none."""
+    utterance = stage.utterance(activation)
+    if utterance is None:
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: no synthesized utterance to lip-sync")
+        return None
+    speech = Speech(utterance, fps=stage.fps, map_file=stage.map_file(activation.character))
+    return stage.activate(activation, speech, until_s(activation))
+
+
+def realize_face(activation, stage):
+    """A facial lexeme or action unit on the character's face channels, in from start to attackPeak and
+    out from relax to end; None (warned) when it names nothing the face can show."""
+    try:
+        face = face_from_bml(activation.parameters, stage.runtime, activation.character, activation,
+                             map_file=stage.map_file(activation.character))
+    except (InfuseError, ValueError, KeyError) as exc:
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot be shown: {exc}")
+        return None
+    return stage.activate(activation, face, end_s(activation))
