@@ -34,14 +34,14 @@ def test_morph_targets_of_the_rpm_avatar_follow_the_curve():
     blink = Blink("conversation", seed=2)
     rt.activate("rpm", blink, 0.0)
     rt.run(20.0)
-    tracks = rt.morph_tracks("rpm")
-    assert set(tracks["weights"]) == {"eyeBlinkLeft", "eyeBlinkRight"}
-    left = tracks["weights"]["eyeBlinkLeft"]
-    assert np.array_equal(left, tracks["weights"]["eyeBlinkRight"])
+    played = rt.motion("rpm")
+    assert set(played.morph_names) == {"eyeBlinkLeft", "eyeBlinkRight"}
+    left = played.morph_weight("eyeBlinkLeft")
+    assert np.array_equal(left, played.morph_weight("eyeBlinkRight"))
     starts = rt.activities[0].binding["schedule"].until(20.0)
     expected = np.zeros_like(left)
     for s in starts[starts < 20.0]:
-        expected = np.maximum(expected, closure(tracks["times"] - s))
+        expected = np.maximum(expected, closure(played.frame_times - s))
     assert np.allclose(left, expected)
     assert 4 <= len(starts[starts < 20.0]) <= 16 and left.max() > 0.9
 
@@ -56,7 +56,7 @@ def test_a_vrm_blink_expression_without_morph_targets_is_left_alone(tmp_path):
     rt.add_character(Character("vrm", asset, mapping=map_skeleton(asset)))
     rt.activate("vrm", Blink(rate_per_min=30, seed=1), 0.0)
     rt.run(10.0)
-    assert rt.morph_tracks("vrm")["weights"] == {}
+    assert rt.motion("vrm").morph_names == ()
     infuse.save(rt.export("vrm", "blinking"), tmp_path / "vrm.glb")
     assert list(infuse.load(tmp_path / "vrm.glb").motions) == ["blinking"]
 

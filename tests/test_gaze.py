@@ -259,7 +259,7 @@ def test_gaze_command_renders_and_saves(tmp_path):
                  "--target-path", path, "--blink", "--saccades", "talk", "--save", str(saved)])
     assert code == 0 and out.stat().st_size > 10_000
     back = infuse.load(saved)
-    weights = back.meta["morph_weight_tracks"]["gaze"]["weights"]
+    weights = dict(zip(back.motions["gaze"].morph_names, back.motions["gaze"].morph_weights.T))
     assert back.motions["gaze"].num_frames == 60
     assert {n for n, w in weights.items() if np.any(w > 0)} <= {"eyeBlinkLeft", "eyeBlinkRight"}
     assert main(["gaze", str(corpus_file(CORPUS_CHARACTERS["rpm"])), "-o", str(out), "--target-path", "1,2"]) == 2

@@ -68,7 +68,7 @@ def test_cli_info_json_on_a_vrm():
     assert run.returncode == 0, run.stderr
     summary = json.loads(run.stdout)
     assert summary["format"] == "vrm" and summary["meta"]["vrm_version"] == "1.0"
-    assert summary["meta"]["vrm_humanoid"]["hips"] == "Hips" and summary["meta"]["vrm_humanoid"]["leftHand"] == "Hand.L"
+    assert summary["humanoid"]["hips"] == "Hips" and summary["humanoid"]["leftHand"] == "Hand.L"
     # its two expressions bind no morph target (only materials): listed, but nothing can animate them
     assert summary["meta"]["vrm_expressions"] == ["happy", "blink"] and summary["morph_targets"] == []
 
@@ -89,9 +89,9 @@ def test_corpus_facts(assets):
     robot = assets["adibkn1-robot/RobotExpressive.glb"]
     assert robot.morph_targets == ["Angry", "Surprised", "Sad"]
     assert len(robot.motions) == 14 and all(m.fps == 24 for m in robot.motions.values())
-    tracks = robot.meta["morph_weight_tracks"]
-    assert set(tracks) >= {"Dance", "Idle"} and set(tracks["Dance"]["weights"]) == {"Angry", "Surprised", "Sad"}
-    assert len(tracks["Dance"]["times"]) == robot.motions["Dance"].num_frames
+    dance = robot.motions["Dance"]
+    assert set(dance.morph_names) == {"Angry", "Surprised", "Sad"} and robot.motions["Idle"].morph_names
+    assert dance.morph_weights.shape == (dance.num_frames, 3) and dance.animated_joints is None
     assert not robot.meta["bind_pose"]["matches_rest"]  # its rest pose is not the bind pose
     brunette = assets["talkinghead/avatars/brunette-t.glb"]
     assert brunette.morph_targets[:2] == ["viseme_sil", "viseme_PP"] and len(brunette.morph_targets) == 67
@@ -102,9 +102,9 @@ def test_corpus_facts(assets):
     assert vroid.meta["bind_pose"]["checked"] and vroid.meta["bind_pose"]["matches_rest"]
     assert vroid.meta["bind_pose"]["max_translation_deviation_m"] < 1e-4
     vrma = assets["three-vrm/packages/three-vrm-animation/examples/models/test.vrma"]
-    assert vrma.format == "vrma" and vrma.meta["vrm_humanoid"]["rightUpperArm"] == "rightUpperArm"
+    assert vrma.format == "vrma" and vrma.humanoid["rightUpperArm"] == "rightUpperArm"
     assert {"happy", "lookAt"}.isdisjoint(vrma.skeleton.names)  # expression and gaze nodes are not joints
-    happy = vrma.meta["morph_weight_tracks"]["animation0"]["weights"]["happy"]
+    happy = vrma.motions["animation0"].morph_weight("happy")
     assert happy.min() >= 0 and happy.max() > 0.5
     cesium = assets["chromedays-lab0/assets/CesiumMan.glb"]
     assert cesium.meta["folded_nodes"] == ["Z_UP", "Armature"]  # matrix nodes above the skeleton
@@ -192,7 +192,7 @@ def _drivable_target(asset) -> str | None:
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
-    """Every corpus glb/vrm/vrma read, given a clip (and a morph-weight track), written and validated once:
+    """Every corpus glb/vrm/vrma read, given a clip (with morph weights), written and validated once:
     relative path -> (asset with the clip, written path, validator report)."""
     require_corpus()
     if not validator.available():
@@ -201,12 +201,11 @@ def written(tmp_path_factory):
     out = {}
     for rel in _corpus_gltf_files():
         asset = infuse.load(corpus_file(rel))
-        asset.motions[NEW_CLIP] = _added_clip(asset)
+        clip = _added_clip(asset)
         target_name = _drivable_target(asset)
         if target_name:
-            times = np.arange(31) / 15.0
-            asset.meta.setdefault("morph_weight_tracks", {})[NEW_CLIP] = {
-                "times": times, "weights": {target_name: np.sin(times) ** 2}}
+            clip = clip.replace(morph_names=[target_name], morph_weights=np.sin(clip.frame_times)[:, None] ** 2)
+        asset.motions[NEW_CLIP] = clip
         target = out_dir / rel.replace("/", "__")
         infuse.save(asset, target)
         out[rel] = (asset, target)
@@ -229,11 +228,9 @@ def test_written_copy_passes_validator_and_reads_back(written, rel):
         assert np.abs(after.motions[name].local_rotations - before.motions[name].local_rotations).max() < 1e-6
     assert after.morph_targets == before.morph_targets
     target_name = _drivable_target(before)
-    if target_name:  # the track comes back resampled on the clip's frame times
-        track = before.meta["morph_weight_tracks"][NEW_CLIP]
-        back = after.meta["morph_weight_tracks"][NEW_CLIP]
-        expected = np.interp(back["times"], track["times"], track["weights"][target_name])
-        assert np.abs(back["weights"][target_name] - expected).max() < 1e-5
+    if target_name:  # the weights come back on the clip's frames
+        back = after.motions[NEW_CLIP].morph_weight(target_name)  # (the mesh's other targets at their defaults)
+        assert np.abs(back - before.motions[NEW_CLIP].morph_weight(target_name)).max() < 1e-6
     source = parse_file(corpus_file(rel)).json
     copy = parse_file(path).json
     for key in ("meshes", "skins", "materials", "textures", "images", "extensionsUsed"):

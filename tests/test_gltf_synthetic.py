@@ -82,9 +82,9 @@ def test_animation_folds_parents_and_interpolates(mini_glb):
     turned[n["spine"]]["rotation"] = list(quat.from_axis_angle(np.array([1.0, 0, 0]), 0.6))
     world = world_matrices(b.doc)
     np.testing.assert_allclose(pos[-1], world[[n[k] for k in sk.names], :3, 3], atol=1e-9)
-    tracks = asset.meta["morph_weight_tracks"]["wave"]
-    np.testing.assert_allclose(tracks["weights"]["smile"][[0, 15, 30]], [0, 0.5, 1.0], atol=1e-7)
-    np.testing.assert_allclose(tracks["weights"]["blink"][[0, 30]], [0, 0.5], atol=1e-7)
+    wave = asset.motions["wave"]
+    np.testing.assert_allclose(wave.morph_weight("smile")[[0, 15, 30]], [0, 0.5, 1.0], atol=1e-7)
+    np.testing.assert_allclose(wave.morph_weight("blink")[[0, 30]], [0, 0.5], atol=1e-7)
 
 
 def test_cubic_spline_follows_the_hermite_form(tmp_path):
@@ -222,7 +222,7 @@ def test_vrm0_faces_minus_z_and_is_turned(tmp_path):
     assert asset.meta["facing"] == "-Z" and asset.meta["facing_rotated"] and asset.meta["facing_detected_by"] == "humanoid arms"
     sk = asset.skeleton
     assert sk.rest_global_positions[sk.index["LeftArm"], 0] == pytest.approx(0.2)  # left at +X in the core
-    assert asset.meta["vrm_humanoid"] == {"hips": "Hips", "spine": "Spine", "leftUpperArm": "LeftArm", "rightUpperArm": "RightArm"}
+    assert asset.humanoid == {"hips": "Hips", "spine": "Spine", "leftUpperArm": "LeftArm", "rightUpperArm": "RightArm"}
     assert asset.morph_targets == ["mesh0.0", "a"]  # "joy" binds no morph target: nothing to animate
     assert asset.meta["vrm_expressions"] == ["a", "joy"]
     kept = infuse.load(path, facing="+Z")
@@ -231,16 +231,16 @@ def test_vrm0_faces_minus_z_and_is_turned(tmp_path):
     turn = quat.from_axis_angle(np.tile(Y, (20, 1)), np.linspace(0, 1, 20))
     rots = np.broadcast_to(sk.rest_rotations, (20, sk.num_joints, 4)).copy()
     rots[:, 0] = quat.multiply(turn, sk.rest_rotations[0])
-    asset.motions["turn"] = infuse.Motion(sk, 30, rots, np.tile(sk.rest_translations[0], (20, 1)), name="turn")
-    asset.meta["morph_weight_tracks"] = {"turn": {"times": np.arange(20) / 30, "weights": {"a": np.linspace(0, 1, 20)}}}
+    asset.motions["turn"] = infuse.Motion(sk, 30, rots, np.tile(sk.rest_translations[0], (20, 1)), name="turn",
+                                          morph_names=["a"], morph_weights=np.linspace(0, 1, 20)[:, None])
     out = tmp_path / "out.vrm"
     infuse.save(asset, out)
     back = infuse.load(out)
     np.testing.assert_allclose(motion_fk(back.motions["turn"])[1], motion_fk(asset.motions["turn"])[1], atol=1e-6)
-    np.testing.assert_allclose(back.meta["morph_weight_tracks"]["turn"]["weights"]["mesh0.0"], np.linspace(0, 1, 20), atol=1e-6)
+    np.testing.assert_allclose(back.motions["turn"].morph_weight("mesh0.0"), np.linspace(0, 1, 20), atol=1e-6)
     assert json.loads(json.dumps(parse_bytes(out.read_bytes()).json["nodes"])) == parse_bytes(path.read_bytes()).json["nodes"]
     with pytest.raises(UsageError, match="without morph target binds"):
-        asset.meta["morph_weight_tracks"] = {"turn": {"times": [0.0, 1.0], "weights": {"joy": [0, 1]}}}
+        asset.motions["turn"] = asset.motions["turn"].replace(morph_names=["joy"])
         infuse.save(asset, tmp_path / "bad.vrm")
 
 
@@ -252,13 +252,22 @@ def test_untouched_clips_keep_their_animation_and_dropped_clips_go(tmp_path, min
     copy = json.loads(out.read_text())
     assert copy["animations"] == source["animations"]
     assert copy["buffers"][0]["uri"].startswith("data:")
-    del asset.motions["wave"]
-    asset.meta.pop("morph_weight_tracks")
+    wave = asset.motions.pop("wave")
     infuse.save(asset, out)
     assert "animations" not in json.loads(out.read_text())
+    # A clip of morph weights alone is an animation of weights channels only.
+    talk = infuse.Motion.rest_pose(asset.skeleton, frames=2, name="talk").replace(
+        morph_names=["smile"], morph_weights=[[0.0], [1.0]], animated_joints=np.zeros(asset.skeleton.num_joints, bool))
+    asset.motions["talk"] = talk
+    infuse.save(asset, out)
+    channels = json.loads(out.read_text())["animations"][0]["channels"]
+    assert [c["target"]["path"] for c in channels] == ["weights"]
+    back = infuse.load(out).motions["talk"]
+    assert not back.animated_mask.any() and np.allclose(back.morph_weight("smile"), [0.0, 1.0])
     with pytest.raises(UsageError, match="does not have: frown"):
-        asset.meta["morph_weight_tracks"] = {"talk": {"times": [0.0, 0.5], "weights": {"frown": [0.0, 1.0]}}}
+        asset.motions["talk"] = talk.replace(morph_names=["frown"])
         infuse.save(asset, out)
+    assert wave.morph_names
 
 
 def _meshopt_clip(tmp_path, filters: dict | None = None) -> tuple[Path, np.ndarray, np.ndarray]:
@@ -361,12 +370,12 @@ def test_vrma_output_carries_the_humanoid_map(tmp_path):
     sk = _bvh_like_skeleton()
     motion = infuse.Motion.rest_pose(sk, frames=10, name="still")
     asset = infuse.Asset(path=None, format="bvh", skeleton=sk, motions={"still": motion},
-                         meta={"vrm_humanoid": {"hips": "root", "spine": "spine", "head": "head"}})
+                         humanoid={"hips": "root", "spine": "spine", "head": "head"})
     out = infuse.save(asset, tmp_path / "clip.vrma")
     assert validator.validate(out)["issues"]["numErrors"] == 0
     back = infuse.load(out)
-    assert back.format == "vrma" and back.meta["vrm_humanoid"] == {"hips": "root", "spine": "spine", "head": "head"}
-    asset.meta = {}
+    assert back.format == "vrma" and back.humanoid == {"hips": "root", "spine": "spine", "head": "head"}
+    asset.humanoid = {}
     with pytest.raises(UsageError, match="humanoid"):
         infuse.save(asset, tmp_path / "nomap.vrma")
 
@@ -427,19 +436,19 @@ def test_vrm_character_clip_exported_as_vrma(tmp_path):
     frames = 30
     rots = np.broadcast_to(sk.rest_rotations, (frames, sk.num_joints, 4)).copy()
     rots[:, 1] = quat.multiply(sk.rest_rotations[1], quat.from_axis_angle(np.tile(Y, (frames, 1)), np.linspace(0, 0.8, frames)))
-    asset.motions = {"nod": infuse.Motion(sk, 30, rots, np.tile(sk.rest_translations[0], (frames, 1)), name="nod")}
     weights = {"aa": np.linspace(0, 1, frames), "a": np.linspace(1, 0, frames)}
-    asset.meta["morph_weight_tracks"] = {"nod": {"times": np.arange(frames) / 30, "weights": weights}}
+    asset.motions = {"nod": infuse.Motion(sk, 30, rots, np.tile(sk.rest_translations[0], (frames, 1)), name="nod",
+                                          morph_names=list(weights), morph_weights=np.stack(list(weights.values()), axis=1))}
     out = infuse.save(asset, tmp_path / "nod.vrma")
     report = validator.validate(out)
     assert report["issues"]["numErrors"] == 0, validator.errors(report)
     back = infuse.load(out)
-    assert back.format == "vrma" and back.meta["vrm_humanoid"] == asset.meta["vrm_humanoid"]
+    assert back.format == "vrma" and back.humanoid == asset.humanoid
     assert back.skeleton.names == sk.names and back.morph_targets == ["aa", "a"]
     ext = parse_bytes(out.read_bytes()).json["extensions"]["VRMC_vrm_animation"]
     assert set(ext["expressions"]["preset"]) == {"aa"} and set(ext["expressions"]["custom"]) == {"a"}
     np.testing.assert_allclose(motion_fk(back.motions["nod"])[1], motion_fk(asset.motions["nod"])[1], atol=1e-6)
     for name, w in weights.items():
-        np.testing.assert_allclose(back.meta["morph_weight_tracks"]["nod"]["weights"][name], w, atol=1e-6)
+        np.testing.assert_allclose(back.motions["nod"].morph_weight(name), w, atol=1e-6)
     with pytest.raises(UsageError, match=".vrm output needs a VRM character"):
         infuse.save(infuse.load(out), tmp_path / "not_a_character.vrm")

@@ -38,11 +38,18 @@ def _posing_clip(sk: infuse.Skeleton, frames: int = 6) -> infuse.Motion:
     return infuse.Motion(sk, 30.0, rot, root, name=POSE_CLIP)
 
 
-def _plain_asset(source: infuse.Asset, motions: dict, meta: dict | None = None) -> infuse.Asset:
+def _plain_asset(source: infuse.Asset, motions: dict) -> infuse.Asset:
     """An asset without a glTF payload, with the source's skeleton and meshes."""
     return infuse.Asset(path=None, format="test", skeleton=source.skeleton, motions=motions,
-                        morph_targets=list(source.morph_targets), meta=dict(meta or {}),
-                        mesh_loader=lambda: source.meshes)
+                        morph_targets=list(source.morph_targets), mesh_loader=lambda: source.meshes)
+
+
+def _morph_clip(skeleton: infuse.Skeleton, name: str, weights: dict) -> infuse.Motion:
+    """A clip of morph weights alone ({target: (F,)} at 30 fps): no joint animated."""
+    frames = len(next(iter(weights.values())))
+    return infuse.Motion.rest_pose(skeleton, frames, name=name).replace(
+        morph_names=list(weights), morph_weights=np.stack(list(weights.values()), axis=1),
+        animated_joints=np.zeros(skeleton.num_joints, dtype=bool))
 
 
 @pytest.fixture(scope="module")
@@ -168,36 +175,36 @@ def test_joint_nodes_times_inverse_binds_keep_the_bind_pose(written):
         np.testing.assert_allclose(position["max"], mesh.positions.max(axis=0))
 
 
-def test_morph_weight_tracks_drive_the_written_meshes(tmp_path):
+def test_a_clips_morph_weights_drive_the_written_meshes(tmp_path):
     source = infuse.load(corpus_file(SOURCES["brunette"]))
     times = np.arange(16) / 30.0
     driven = {"viseme_aa": np.sin(times * 5) ** 2, "eyeBlinkLeft": np.linspace(0.0, 1.0, len(times))}
-    tracks = {"talk": {"times": times, "weights": driven}}
-    asset = _plain_asset(source, {}, {"morph_weight_tracks": tracks})
+    asset = _plain_asset(source, {"talk": _morph_clip(source.skeleton, "talk", driven)})
     out = infuse.save(asset, tmp_path / "talk.glb")
     report = validator.validate(out)
     assert report["issues"]["numErrors"] == 0, validator.errors(report)
     back = infuse.load(out)
-    track = back.meta["morph_weight_tracks"]["talk"]
-    np.testing.assert_allclose(track["times"], times, atol=1e-6)
+    clip = back.motions["talk"]
+    np.testing.assert_allclose(clip.frame_times, times, atol=1e-6)
     for name, weights in driven.items():
-        np.testing.assert_allclose(track["weights"][name], weights, atol=1e-6)
+        np.testing.assert_allclose(clip.morph_weight(name), weights, atol=1e-6)
     doc = parse_file(out).json
+    assert {c["target"]["path"] for c in doc["animations"][0]["channels"]} == {"weights"}  # no joint moves
     animated = {c["target"]["node"] for c in doc["animations"][0]["channels"] if c["target"]["path"] == "weights"}
     target_names = [(m.get("extras") or {}).get("targetNames", []) for m in doc["meshes"]]
     with_targets = {i for i, n in enumerate(doc["nodes"]) if "mesh" in n and "viseme_aa" in target_names[n["mesh"]]}
     assert with_targets and animated == with_targets
 
-    asset.meta["morph_weight_tracks"] = {"talk": {"times": times, "weights": {"noSuchShape": times}}}
+    asset.motions["talk"] = _morph_clip(source.skeleton, "talk", {"noSuchShape": times})
     with pytest.raises(UsageError, match="noSuchShape"):
         infuse.save(asset, tmp_path / "bad.glb")
 
 
 def test_tracks_need_morph_targets(tmp_path):
     source = infuse.load(corpus_file(SOURCES["xbot"]))
-    tracks = {"talk": {"times": np.arange(3) / 30.0, "weights": {"smile": np.zeros(3)}}}
+    talk = _morph_clip(source.skeleton, "talk", {"smile": np.zeros(3)})
     with pytest.raises(UsageError, match="morph targets"):
-        infuse.save(_plain_asset(source, {}, {"morph_weight_tracks": tracks}), tmp_path / "x.glb")
+        infuse.save(_plain_asset(source, {"talk": talk}), tmp_path / "x.glb")
     assert not (tmp_path / "x.glb").exists()
 
 

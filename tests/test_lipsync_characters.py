@@ -170,9 +170,9 @@ def test_speak_command_writes_animation_wav_and_timeline(tmp_path, utterance, ca
     end = _glb_animation_end(out)
     assert audio_s <= end + 1e-6 < audio_s + 1 / 30  # audio and animation agree within one frame
     reread = infuse.load(out)
-    track = reread.meta["morph_weight_tracks"]["speech"]
-    assert track["weights"]["viseme_PP"].max() == pytest.approx(1.0, abs=1e-6)
-    assert track["weights"]["mouthSmileLeft"].max() == pytest.approx(0.3, abs=1e-6)
+    speech = reread.motions["speech"]
+    assert speech.morph_weight("viseme_PP").max() == pytest.approx(1.0, abs=1e-6)
+    assert speech.morph_weight("mouthSmileLeft").max() == pytest.approx(0.3, abs=1e-6)
     from infuse_gltf import validate as validator
     try:
         report = validator.validate(out)
@@ -231,9 +231,10 @@ def test_lipsync_plays_in_the_controller_runtime(rpm, utterance):
     name = runtime.add_character(rpm)
     runtime.activate(name, result.controller(), start_s=0.0)
     runtime.run(utterance.duration_s)
-    played = runtime.morph_tracks(name)
-    assert set(played["weights"]) == set(result.morph_weights)
-    inside = (played["times"] > 0.15) & (played["times"] < utterance.duration_s - 0.15)  # past the blend in and out
-    for target, weights in played["weights"].items():
-        expected = np.interp(played["times"][inside], result.times, result.morph_weights[target])
+    played = runtime.motion(name)
+    assert set(played.morph_names) == set(result.morph_weights)
+    times = played.frame_times
+    inside = (times > 0.15) & (times < utterance.duration_s - 0.15)  # past the blend in and out
+    for target, weights in zip(played.morph_names, played.morph_weights.T):
+        expected = np.interp(times[inside], result.times, result.morph_weights[target])
         np.testing.assert_allclose(weights[inside], expected, atol=1e-9)

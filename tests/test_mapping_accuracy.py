@@ -12,7 +12,7 @@ import pytest
 
 import infuse
 from infuse.canonical import BODY_NAMES, CANONICAL_NAMES
-from infuse.mapping import map_skeleton, sample_poses
+from infuse.mapping import animated_joint_names, map_skeleton, sample_poses
 
 import skeleton_variants
 from corpus_data import corpus_file, labels, require_corpus
@@ -108,7 +108,7 @@ def distinct_skeletons(corpus):
     """One labelled humanoid file per distinct skeleton (motion files share theirs)."""
     seen, out = set(), []
     for label, asset, mapping, refused, _ in corpus:
-        key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
+        key = (asset.skeleton.names, tuple(animated_joint_names(asset) or ()))
         if label["humanoid"] and key not in seen:
             seen.add(key)
             out.append((label, asset))
@@ -123,11 +123,10 @@ def test_generated_variants(distinct_skeletons):
     per_kind: dict[str, list[int]] = {}
     for label, asset in distinct_skeletons:
         poses = sample_poses(asset)
-        animated = asset.meta.get("channel_joints")
+        animated = animated_joint_names(asset)
         for v in skeleton_variants.all_variants(asset.skeleton, poses, label):
-            meta = {"channel_joints": v.translate(animated)} if animated else {}
             try:
-                joints = map_skeleton(v.skeleton, pose=v.poses, meta=meta).joints
+                joints = map_skeleton(v.skeleton, pose=v.poses, animated=v.translate(animated) if animated else None).joints
             except infuse.NotHumanoidError:
                 joints = {}
             r, _ = score(joints, v.mapping, v.alternatives)

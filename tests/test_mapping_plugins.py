@@ -75,7 +75,7 @@ def test_names_mapper_on_known_conventions(fragment):
 def test_names_mapper_uses_the_vrm_humanoid_map():
     require_corpus()
     asset = infuse.load(corpus_file(_label("test.vrma")["file"]))
-    humanoid = asset.meta["vrm_humanoid"]
+    humanoid = asset.humanoid
     renamed = {bone: node for bone, node in humanoid.items()}
     mapping = map_skeleton(asset, mapper="names")
     assert "VRM humanoid map" in mapping.reasons["base"]

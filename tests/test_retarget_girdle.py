@@ -34,8 +34,7 @@ GIRDLE = ("sternoclavicular", "acromioclavicular")
 def _load(rel: str):
     """(asset, canonical mapping as the retarget command makes it, first clip or None)."""
     asset = infuse.load(corpus_file(rel))
-    meta = {k: v for k, v in asset.meta.items() if k != "channel_joints"}
-    mapping = map_skeleton(asset.skeleton, pose=sample_poses(asset), meta=meta, file=asset.path)
+    mapping = map_skeleton(asset.skeleton, pose=sample_poses(asset), meta=asset.meta, file=asset.path)
     return asset, mapping, next(iter(asset.motions.values()), None)
 
 

@@ -144,12 +144,12 @@ def test_tracks_write_morph_weights_and_export():
                 blend_in_s=0.0, blend_out_s=0.0)
     rt.run(1.0)
     assert rt.activities[0].end_s == 1.0
-    tracks = rt.morph_tracks("face")
-    assert set(tracks["weights"]) == {"smile"} and tracks["times"].shape == (30,)
-    assert np.allclose(tracks["weights"]["smile"], np.interp(np.arange(30) / 30, times, [0, 1, 0]))
+    played = rt.motion("face")
+    assert played.morph_names == ("smile",) and played.morph_weights.shape == (30, 1)
+    assert np.allclose(played.morph_weight("smile"), np.interp(np.arange(30) / 30, times, [0, 1, 0]))
     assert ("face", "tracks: no morph target 'frown'; its track is skipped") in rt.notes
     asset = rt.export("face", "talk")
-    assert list(asset.motions) == ["talk"] and "talk" in asset.meta["morph_weight_tracks"]
+    assert list(asset.motions) == ["talk"] and np.array_equal(asset.motions["talk"].morph_weights, played.morph_weights)
 
 
 def test_reports_once_and_degrades_without_eyes(capsys):

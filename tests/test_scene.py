@@ -150,7 +150,7 @@ def test_speech_audio_matches_the_clip(conversation, tmp_path):
     assert not samples[first + len(utterance.samples):].any()
     back = infuse.load(tmp_path / "ann.glb")
     assert list(back.motions) == ["scene"] and back.motions["scene"].num_frames == frames
-    tracks = back.meta["morph_weight_tracks"]["scene"]["weights"]
+    tracks = dict(zip(back.motions["scene"].morph_names, back.motions["scene"].morph_weights.T))
     during = slice(int(speech.start * 30) + 3, int(speech.end * 30) - 3)
     visemes = np.stack([w for k, w in tracks.items() if k.startswith("viseme_") and k != "viseme_sil"])
     assert visemes[:, during].max() > 0.5 and visemes[:, :int(speech.start * 30)].max() < 1e-6
@@ -233,7 +233,8 @@ def test_expressions_on_the_face():
     scene.expression("ann", "RAISE_LEFT_BROW", at=0.0, amount=1.0, duration=1.0)
     scene.bml("ann", f'<bml {BML} id="au"><faceFacs id="f" au="12" side="RIGHT" amount="0.5" start="1" end="2"/></bml>')
     scene.run(2.5)
-    tracks = scene.runtime.morph_tracks("ann")["weights"]
+    played = scene.runtime.motion("ann")
+    tracks = dict(zip(played.morph_names, played.morph_weights.T))
     assert tracks["browOuterUpLeft"][15] == pytest.approx(1.0) and "browOuterUpRight" not in tracks
     assert tracks["browInnerUp"][15] == pytest.approx(1.0)  # inner brows are one shape on this avatar
     assert tracks["mouthSmileRight"][45] == pytest.approx(0.5) and "mouthSmileLeft" not in tracks

@@ -66,7 +66,7 @@ def test_run_writes_characters_audio_feedback_and_preview(tmp_path, capsys):
                                                      "preview.png", "sam.glb"]
     ann = infuse.load(out / "ann.glb")
     frames = ann.motions["scene"].num_frames
-    assert ann.motions["scene"].fps == 25 and ann.meta["morph_weight_tracks"]["scene"]["weights"]
+    assert ann.motions["scene"].fps == 25 and ann.motions["scene"].morph_names
     with wave.open(str(out / "ann.wav")) as f:
         assert abs(f.getnframes() / f.getframerate() - frames / 25) <= 1 / 25
     sam = infuse.load(out / "sam.glb")

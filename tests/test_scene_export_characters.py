@@ -36,7 +36,7 @@ def test_default_idle_exports_on_the_ground(kind, tmp_path):
     motion = back.motions["scene"]
     assert motion.num_frames == 90
     assert abs(foot_height(back, map_skeleton(back), motion)) < 1e-4  # SmartBody's Brad was a metre down
-    tracks = back.meta.get("morph_weight_tracks", {}).get("scene", {}).get("weights", {})
+    tracks = dict(zip(motion.morph_names, motion.morph_weights.T))
     assert set(tracks) <= set(back.morph_targets)
     if kind == "ready-player-me":  # it has eyelid morph targets: it blinks
         assert np.max(tracks["eyeBlinkLeft"]) > 0.8

@@ -14,7 +14,7 @@ UTAH = "smartbody/behaviorsets/MaleLocomotion/skeletons/test_utah.sk"
 COMMON = "smartbody/behaviorsets/reaching/skeletons/common.sk"
 
 
-def _channel_joints(text: str) -> list[str]:
+def _channel_joint_names(text: str) -> list[str]:
     lines = text.splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith("channels"))
     names = [line.split()[0] for line in lines[start + 1:start + 1 + int(lines[start].split()[1])]]
@@ -25,7 +25,7 @@ def test_lone_motion_falls_back_to_flat_skeleton(tmp_path):
     lone = tmp_path / "walk.skm"
     lone.symlink_to(corpus_file(WALK))
     asset = infuse.load(lone)
-    joints = _channel_joints(corpus_file(WALK).read_text())
+    joints = _channel_joint_names(corpus_file(WALK).read_text())
     assert list(asset.skeleton.names) == joints
     assert np.all(asset.skeleton.parents == -1)
     assert asset.meta["skeleton_file"] is None and "flat" in asset.meta["skeleton_note"]

@@ -18,7 +18,7 @@ from infuse.grounding import foot_height
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse_gltf.container import parse_file
-from infuse_lipsync.body import beats, idle_body, merged_tracks
+from infuse_lipsync.body import beats, idle_body, with_face
 
 RPM = "talkinghead/avatars/brunette-t.glb"
 VROID = "talkinghead/avatars/vroid.glb"
@@ -56,7 +56,7 @@ def test_the_body_lives_while_the_mouth_speaks(espeak, tmp_path, rel):
     asset = _speak(tmp_path, rel)
     motion = asset.motions["speech"]
     mapping = map_skeleton(asset)
-    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    weights = dict(zip(asset.motions["speech"].morph_names, asset.motions["speech"].morph_weights.T))
     assert max(np.max(weights[k]) for k in weights if k.startswith("viseme_")) > 0.5  # the mouth speaks
     assert max(np.max(weights[k]) for k in weights if "blink" in k.lower()) > 0.5  # the eyes blink
     turns = _turns_deg(asset, [mapping.joints[n] for n in ("spine3", "skullbase", "eyeball_left")])
@@ -72,7 +72,7 @@ def test_the_body_lives_while_the_mouth_speaks(espeak, tmp_path, rel):
 
 def test_face_only_leaves_the_body_at_rest(espeak, tmp_path):
     asset = _speak(tmp_path, VROID, "--face-only")
-    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    weights = dict(zip(asset.motions["speech"].morph_names, asset.motions["speech"].morph_weights.T))
     assert all(np.max(weights[k]) == 0.0 for k in weights if "blink" in k.lower())
     rotations = asset.motions["speech"].local_rotations  # a morph face: every joint holds its rest
     assert np.all(quat.angle_between(rotations, asset.skeleton.rest_rotations[None]) < 1e-6)
@@ -85,14 +85,26 @@ def test_a_character_that_is_not_a_humanoid_keeps_only_its_face():
     assert idle is None and body.startswith("face only (")
 
 
-def test_merged_morph_tracks_keep_the_blinks_under_the_speech():
-    times = np.arange(4) / 30.0
-    idle = {"times": times, "weights": {"eyeBlinkLeft": np.array([0.0, 1.0, 0.2, 0.0])}}
-    speech = {"times": times, "weights": {"eyeBlinkLeft": np.zeros(4), "viseme_aa": np.array([0.0, 0.5, 0.9, 0.1])}}
-    merged = merged_tracks(idle, speech)
-    assert merged["weights"]["eyeBlinkLeft"].tolist() == [0.0, 1.0, 0.2, 0.0]
-    assert merged["weights"]["viseme_aa"].tolist() == [0.0, 0.5, 0.9, 0.1]
-    assert merged_tracks(None, speech) is speech and merged_tracks(idle, None) is idle
+def test_the_speech_laid_over_the_idle_keeps_the_blinks_and_the_body():
+    sk = infuse.Skeleton(["hips", "head", "jaw"], [-1, 0, 1], np.array([[0, 1, 0], [0, 0.5, 0], [0, 0.1, 0.0]]),
+                         np.tile(quat.IDENTITY, (3, 1)))
+    nod = quat.from_axis_angle([1, 0, 0], np.linspace(0.0, 0.3, 5))
+    body_rot = np.tile(quat.IDENTITY, (5, 3, 1))
+    body_rot[:, 1] = nod
+    idle = infuse.Motion(sk, 30.0, body_rot, np.zeros((5, 3)), name="speech", morph_names=["eyeBlinkLeft"],
+                         morph_weights=np.array([[0.0], [1.0], [0.2], [0.0], [0.0]]))
+    jaw = quat.from_axis_angle([1, 0, 0], np.array([0.0, 0.1, 0.2, 0.1]))
+    face_rot = np.tile(quat.IDENTITY, (4, 3, 1))
+    face_rot[:, 2] = jaw
+    speech = infuse.Motion(sk, 30.0, face_rot, np.zeros((4, 3)), name="speech", animated_joints=[False, False, True],
+                           morph_names=["eyeBlinkLeft", "viseme_aa"],
+                           morph_weights=np.array([[0.0, 0.0], [0.0, 0.5], [0.0, 0.9], [0.0, 0.1]]))
+    merged = with_face(idle, speech)
+    assert merged.num_frames == 4 and merged.morph_names == ("eyeBlinkLeft", "viseme_aa")
+    assert merged.morph_weight("eyeBlinkLeft").tolist() == [0.0, 1.0, 0.2, 0.0]  # the blink is not held open
+    assert merged.morph_weight("viseme_aa").tolist() == [0.0, 0.5, 0.9, 0.1]
+    assert np.allclose(merged.local_rotations[:, 2], jaw) and np.allclose(merged.local_rotations[:, 1], nod[:4])
+    assert with_face(idle, None) is idle
 
 
 def _as_vrm(source, target):
@@ -131,7 +143,7 @@ def test_a_vrm_character_speaks_breathes_and_blinks(espeak, tmp_path):
     out = tmp_path / "out.glb"
     assert main(["speak", str(vrm), TEXT, "-o", str(out)]) == 0
     asset = infuse.load(out)
-    weights = asset.meta["morph_weight_tracks"]["speech"]["weights"]
+    weights = dict(zip(asset.motions["speech"].morph_names, asset.motions["speech"].morph_weights.T))
     assert max(np.max(weights[k]) for k in ("Fcl_MTH_A", "Fcl_MTH_O")) > 0.5  # the VRM mouth speaks
     assert max(np.max(weights[k]) for k in weights if "blink" in k.lower()) > 0.5  # the eyes blink
     mapping = map_skeleton(asset)

@@ -20,16 +20,21 @@ class Asset:
 
     - ``skeleton``: the joint hierarchy (for a motion-only file: the joints its channels name,
       with the skeleton found beside it when there is one).
-    - ``motions``: clip name -> :class:`Motion` (may be empty).
+    - ``motions``: clip name -> :class:`Motion` (may be empty); a clip carries every track it
+      animates (joints, root motion, morph weights, the mask of animated joints).
     - ``morph_targets``: names of blend shapes / morph targets, in file order.
     - ``source_units`` / ``source_up_axis``: what the file used, e.g. ``"cm"`` and ``"Z"``;
       ``units_detected_by``: ``"file"`` (declared), ``"guess"`` or ``"override"``.
-    - ``meta``: format-specific facts (VRM humanoid map, channel orders, sync points...).
+    - ``meta``: format-specific facts for people and the format's own writer (channel orders,
+      warnings...); no other plugin reads it.
     - ``payload``: format-specific data a writer needs to keep what the core does not model
       (mesh, skin, materials); opaque to the core.
     - ``mesh_loader``: a callable returning the file's :class:`~infuse.mesh.SkinnedMesh` surfaces,
       called once, on first use of :attr:`meshes` (decoding geometry and textures costs more than
       reading a skeleton, and most commands never draw). ``None`` for files without meshes.
+    - ``humanoid``: the file's own humanoid map, VRM humanoid bone name (``hips``, ``leftUpperArm``...)
+      -> joint name, for files that declare one (VRM, VRMA); empty otherwise. Mappers use it first,
+      and a ``.vrma`` writer needs it.
     """
 
     path: Path | None
@@ -43,6 +48,7 @@ class Asset:
     meta: dict[str, Any] = field(default_factory=dict)
     payload: Any = None
     mesh_loader: Callable[[], Sequence[SkinnedMesh]] | None = field(default=None, repr=False, compare=False)
+    humanoid: dict[str, str] = field(default_factory=dict)
 
     @cached_property
     def meshes(self) -> tuple[SkinnedMesh, ...]:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 
@@ -245,7 +245,8 @@ def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
 
 
 def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, pose: np.ndarray | None = None,
-                 meta: dict | None = None, **options) -> Mapping:
+                 meta: dict | None = None, humanoid: dict | None = None, animated: Sequence[str] | None = None,
+                 **options) -> Mapping:
     """Map a skeleton (or the skeleton of an :class:`~infuse.asset.Asset`) to the canonical names.
 
     - ``mapper``: the name of an installed mapper plugin (see ``infuse plugins``); ``None`` is the
@@ -255,7 +256,12 @@ def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, po
     - ``pose``: optional (J, 3) or (F, J, 3) global joint positions in metres (core frame) of
       representative poses, for skeletons whose rest pose is arbitrary; sampled from an Asset's
       first clip when not given (:func:`sample_poses`). Mappers receive it as an array or as a
-      zero-argument callable returning one (see :func:`resolve_pose`). ``meta``: format facts (e.g. ``vrm_humanoid``), from an Asset.
+      zero-argument callable returning one (see :func:`resolve_pose`). ``meta``: format facts, from an Asset.
+    - ``humanoid``: the file's own humanoid map {VRM humanoid bone: joint name} (``Asset.humanoid``,
+      taken from an Asset when not given). Mappers receive ``meta`` and ``humanoid`` as keywords.
+    - ``animated``: names of the joints a motion file has data for; entries naming other joints
+      become ``None`` (:func:`restrict_to_animated`). From an Asset, the joints its clips animate
+      (:func:`animated_joint_names`); map its ``skeleton`` instead to map every joint.
 
     Raises :class:`UsageError` for an unknown mapper, :class:`InputError` for a map naming joints the
     skeleton does not have, :class:`~infuse.errors.NotHumanoidError` when the mapper refuses the skeleton.
@@ -267,6 +273,8 @@ def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, po
         skeleton = source.skeleton
         file = file or getattr(source, "path", None)
         meta = dict(source.meta) if meta is None else meta
+        humanoid = source.humanoid if humanoid is None else humanoid
+        animated = animated_joint_names(source) if animated is None else animated
         if pose is None:
             asset = source
             pose = lambda: sample_poses(asset)  # noqa: E731 - computed only if the mapper asks
@@ -277,22 +285,32 @@ def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, po
             return Mapping.build(skeleton, saved.joints, saved.confidence, saved.reasons, mapper=saved.mapper or "saved")
     plugin = get_mapper(mapper)
     fixed = dict(saved.joints) if saved is not None else None
-    result = plugin.map(skeleton, pose=pose, meta=meta or {}, fixed=fixed, file=file, **options)
+    result = plugin.map(skeleton, pose=pose, meta=meta or {}, humanoid=humanoid or {}, fixed=fixed, file=file, **options)
     if not isinstance(result, Mapping):  # a plain {canonical: joint} dict from a simple plugin
         result = Mapping.build(skeleton, dict(result), mapper=plugin.name)
     elif not result.mapper:
         result.mapper = plugin.name
     _check_result(result, skeleton, plugin.name)
-    result = restrict_to_animated(result, skeleton, (meta or {}).get("channel_joints"))
+    result = restrict_to_animated(result, skeleton, animated)
     return complete(saved, result, skeleton) if saved is not None else result
+
+
+def animated_joint_names(asset) -> list[str] | None:
+    """Names of the joints an Asset's clips animate (the union of their ``animated_joints``), or
+    ``None`` when a clip animates every joint or no clip says which joints it animates."""
+    masks = [m.animated_joints for m in asset.motions.values() if m.skeleton.names == asset.skeleton.names]
+    if not masks or any(mask is None for mask in masks):
+        return None
+    union = np.logical_or.reduce(masks)
+    return [name for name, animated in zip(asset.skeleton.names, union) if animated] or None
 
 
 def restrict_to_animated(mapping: Mapping, skeleton: Skeleton, animated) -> Mapping:
     """Drop entries naming joints a motion file does not animate.
 
-    A motion file (e.g. SmartBody ``.skm``) may animate only some joints of the skeleton it names;
-    its reader lists them in ``meta["channel_joints"]``. Canonical names pointing elsewhere become
-    ``None``: the file has no data for them.
+    A motion file (e.g. SmartBody ``.skm``) may animate only some joints of the skeleton it names
+    (``animated``: their names, from :func:`animated_joint_names`). Canonical names pointing
+    elsewhere become ``None``: the file has no data for them.
     """
     if not animated:
         return mapping

@@ -1,7 +1,10 @@
-"""A motion: per-frame local joint rotations and root translation on one skeleton.
+"""A motion: one animation clip on one skeleton, as a set of frame-major tracks.
 
-Arrays are struct-of-arrays over frames (no per-frame objects). Units are metres and seconds;
-quaternions are (x, y, z, w); axes are the core's (+Y up, +Z forward, right-handed).
+The clip holds every animated quantity on one uniform frame grid: local joint rotations, root
+motion, local joint translations, morph-target / expression weights, and the mask of joints it
+animates. Arrays are struct-of-arrays over frames (no per-frame objects), frame-major (axis 0 is
+the frame). Units are metres and seconds; quaternions are (x, y, z, w); axes are the core's
+(+Y up, +Z forward, right-handed).
 """
 from __future__ import annotations
 
@@ -26,6 +29,13 @@ class Motion:
       file animates them (BVH position channels on inner joints, glTF translation tracks); column 0
       is ignored in favour of ``root_translations``. ``None`` means rest offsets.
     - ``name``: the clip name; ``sync_points``: named times in seconds (ready, stroke, relax...).
+    - ``morph_names``: (M,) morph target or expression names the clip animates (a mesh target, a
+      VRM expression...); ``morph_weights``: (F, M) their weights, usually 0..1, one column per
+      name. Targets not named keep the character's own weights. Empty (M = 0) by default.
+    - ``animated_joints``: optional (J,) bool mask of the joints the clip has data for (a SmartBody
+      motion names only some joints of its skeleton; a clip of morph weights alone animates none).
+      The others hold their rest pose in the arrays above, and writers leave them out. ``None``
+      means every joint.
     """
 
     skeleton: Skeleton
@@ -35,6 +45,9 @@ class Motion:
     joint_translations: np.ndarray | None = None
     name: str = ""
     sync_points: dict = field(default_factory=dict)
+    morph_names: tuple[str, ...] = ()
+    morph_weights: np.ndarray | None = None
+    animated_joints: np.ndarray | None = None
 
     def __post_init__(self):
         lr = np.array(self.local_rotations, dtype=np.float64)
@@ -43,7 +56,13 @@ class Motion:
         object.__setattr__(self, "root_translations", rt)
         if self.joint_translations is not None:
             object.__setattr__(self, "joint_translations", np.array(self.joint_translations, dtype=np.float64))
-        for a in (lr, rt, self.joint_translations):
+        object.__setattr__(self, "morph_names", tuple(str(n) for n in self.morph_names))
+        frames = lr.shape[0] if lr.ndim else 0
+        weights = np.zeros((frames, len(self.morph_names))) if self.morph_weights is None else self.morph_weights
+        object.__setattr__(self, "morph_weights", np.array(weights, dtype=np.float64))
+        if self.animated_joints is not None:
+            object.__setattr__(self, "animated_joints", np.array(self.animated_joints, dtype=bool))
+        for a in (lr, rt, self.joint_translations, self.morph_weights, self.animated_joints):
             if a is not None:
                 a.setflags(write=False)
         self.validate()
@@ -61,8 +80,17 @@ class Motion:
             raise InputError(file, where, f"root_translations has shape {self.root_translations.shape}, expected ({f}, 3)")
         if self.joint_translations is not None and self.joint_translations.shape != (f, j, 3):
             raise InputError(file, where, "joint_translations does not match (F, J, 3)")
+        m = len(self.morph_names)
+        if self.morph_weights.shape != (f, m):
+            raise InputError(file, where, f"morph_weights has shape {self.morph_weights.shape}, expected ({f}, {m}) "
+                                          "(frames, morph names)")
+        if len(set(self.morph_names)) != m:
+            repeated = next(n for k, n in enumerate(self.morph_names) if n in self.morph_names[:k])
+            raise InputError(file, where, f"morph target {repeated!r} is named twice")
+        if self.animated_joints is not None and self.animated_joints.shape != (j,):
+            raise InputError(file, where, f"animated_joints has shape {self.animated_joints.shape}, expected ({j},)")
         for label, arr in (("rotation", self.local_rotations), ("root translation", self.root_translations),
-                           ("joint translation", self.joint_translations)):
+                           ("joint translation", self.joint_translations), ("morph weight", self.morph_weights)):
             if arr is not None and not np.all(np.isfinite(arr)):
                 frame = int(np.argmax(~np.isfinite(arr.reshape(f, -1)).all(axis=1)))
                 raise InputError(file, f"{where} frame {frame}", f"{label} is not finite (NaN or infinity)")
@@ -81,6 +109,24 @@ class Motion:
         """Seconds from the first to the last frame."""
         return max(self.num_frames - 1, 0) / self.fps
 
+    @property
+    def frame_times(self) -> np.ndarray:
+        """(F,) seconds of each frame from the clip's start."""
+        return np.arange(self.num_frames) / self.fps
+
+    @property
+    def animated_mask(self) -> np.ndarray:
+        """(J,) bool: the joints the clip has data for (``animated_joints``, or every joint)."""
+        if self.animated_joints is None:
+            return np.ones(self.skeleton.num_joints, dtype=bool)
+        return self.animated_joints
+
+    def morph_weight(self, name: str) -> np.ndarray | None:
+        """(F,) weights of morph target ``name``, or ``None`` when the clip does not animate it."""
+        if name not in self.morph_names:
+            return None
+        return self.morph_weights[:, self.morph_names.index(name)]
+
     def local_translations(self) -> np.ndarray:
         """(F, J, 3) local translations of every joint, metres."""
         if self.joint_translations is not None:
@@ -91,12 +137,23 @@ class Motion:
         return out
 
     def replace(self, **changes) -> "Motion":
-        """A copy with some fields replaced."""
+        """A copy with some fields replaced.
+
+        Tracks that no longer fit are left out unless given: the morph weights when the number of
+        frames changes, the joint mask when the skeleton's number of joints does.
+        """
         fields = dict(
             skeleton=self.skeleton, fps=self.fps, local_rotations=self.local_rotations,
             root_translations=self.root_translations, joint_translations=self.joint_translations,
-            name=self.name, sync_points=dict(self.sync_points),
+            name=self.name, sync_points=dict(self.sync_points), morph_names=self.morph_names,
+            morph_weights=self.morph_weights, animated_joints=self.animated_joints,
         )
+        frames = np.shape(changes.get("local_rotations", self.local_rotations))[0]
+        if frames != self.num_frames and "morph_weights" not in changes:
+            fields.update(morph_names=(), morph_weights=None)
+        joints = changes.get("skeleton", self.skeleton).num_joints
+        if joints != self.skeleton.num_joints and "animated_joints" not in changes:
+            fields.update(animated_joints=None)
         fields.update(changes)
         return Motion(**fields)
 

@@ -45,13 +45,15 @@ def asset_summary(asset) -> dict:
         "parents": [int(p) for p in sk.parents],
         "frames": first.num_frames if first else 0,
         "fps": first.fps if first else None,
-        "clips": [{"name": n, "frames": m.num_frames, "fps": m.fps, "duration_s": round(m.duration, 6)}
+        "clips": [{"name": n, "frames": m.num_frames, "fps": m.fps, "duration_s": round(m.duration, 6),
+                   "animated_joints": int(m.animated_mask.sum()), "morph_targets": list(m.morph_names)}
                   for n, m in asset.motions.items()],
         "units": asset.source_units,
         "units_detected_by": asset.units_detected_by,
         "up_axis": asset.source_up_axis,
         "height_m": round(sk.height(), 6),
         "morph_targets": list(asset.morph_targets),
+        "humanoid": dict(asset.humanoid),
         "meta": fileio.json_ready(asset.meta),
     }
 

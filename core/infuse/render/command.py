@@ -105,8 +105,7 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
     meshes = drawable_meshes(asset, asset.skeleton if motion is None else motion.skeleton, args.style, path)
     if motion is None:
         return Figure.from_skeleton(asset.skeleton, meshes=meshes, **options)
-    tracks = (asset.meta.get("morph_weight_tracks") or {}).get(motion.name) if meshes else None
-    return Figure.from_motion(motion, meshes=meshes, morph_weights=(tracks or {}).get("weights"), **options)
+    return Figure.from_motion(motion, meshes=meshes, **options)
 
 
 def _run(args) -> int:

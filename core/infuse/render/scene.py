@@ -209,17 +209,16 @@ class Figure:
 
     # -- construction ----------------------------------------------------------------------------
     @classmethod
-    def from_motion(cls, motion: Motion, meshes: Sequence[SkinnedMesh] = (),
-                    morph_weights: Mapping[str, np.ndarray] | None = None, **options) -> "Figure":
+    def from_motion(cls, motion: Motion, meshes: Sequence[SkinnedMesh] = (), **options) -> "Figure":
         """A figure playing ``motion`` (FK of every frame at once, end sites included).
 
         With ``meshes`` (surfaces bound to the motion's skeleton, e.g. ``asset.meshes``) it is drawn
-        as those surfaces skinned by the motion; ``morph_weights`` {target name: (F,)} moves their
-        morph targets.
+        as those surfaces skinned by the motion, their morph targets moved by the motion's morph weights.
         """
         g_rot, g_pos = motion_fk(motion)
         ends = end_site_positions(motion.skeleton, g_rot, g_pos) if len(motion.skeleton.end_site_parents) else None
         options.setdefault("label", motion.name)
+        morph_weights = dict(zip(motion.morph_names, motion.morph_weights.T))
         mesh = FigureMesh(meshes, g_rot, g_pos, morph_weights) if meshes else None
         return cls(motion.skeleton, g_pos, fps=motion.fps, end_sites=ends, mesh=mesh, **options)
 

@@ -7,8 +7,8 @@
     rt.activate(character, Clip(walk), 0.0)           # a base layer
     rt.activate(character, gaze, 1.0, end_s=4.0, blend_in_s=0.3)
     rt.run(5.0)                                       # or rt.step() for one frame
-    motion = rt.motion(character)                     # a Motion on the character's own skeleton
-    tracks = rt.morph_tracks(character)               # {"times": (K,), "weights": {target: (K,)}}
+    motion = rt.motion(character)                     # a Motion on the character's own skeleton, with
+                                                      # the morph weights any controller wrote
 
 Frame ``i`` is at ``i / fps`` seconds. Evaluation runs block by block (up to ``block_frames`` frames
 at once): each character's pose starts at its rest pose, then activities apply in order of layer,
@@ -323,12 +323,15 @@ class Runtime:
 
     # -- results ---------------------------------------------------------------------------------------
     def motion(self, character, name: str = "runtime") -> Motion:
-        """Every frame evaluated so far, as a :class:`~infuse.Motion` on the character's skeleton."""
+        """Every frame evaluated so far, as a :class:`~infuse.Motion` on the character's skeleton; its
+        morph weights are those of the morph targets any controller wrote."""
         track = self._track(character)
         rig = track.rig
         sk = rig.skeleton
         if not track.rotations:
             return Motion(sk, self.fps, np.zeros((0, sk.num_joints, 4)), np.zeros((0, 3)), name=name)
+        written = np.zeros(len(rig.morph_targets), dtype=bool) if track.morph_written is None else track.morph_written
+        columns = np.nonzero(written)[0]
         rotations = np.concatenate(track.rotations)
         roots = np.concatenate(track.roots)
         if rig.placed:  # the placement goes into the root joint (other roots, if any, stay where they are)
@@ -338,7 +341,8 @@ class Runtime:
             rest = sk.rest_translations
             translations = np.concatenate([np.repeat(rest[None], len(r), axis=0) if t is None else t
                                            for t, r in zip(track.translations, track.roots)])
-        return Motion(sk, self.fps, rotations, roots, translations, name=name)
+        return Motion(sk, self.fps, rotations, roots, translations, name=name,
+                      morph_names=[rig.morph_targets[i] for i in columns], morph_weights=self.morph_weights(character)[:, columns])
 
     def last_frames(self, character, count: int) -> tuple[np.ndarray, np.ndarray]:
         """Local rotations (n, J, 4) and root translations (n, 3) of the last ``count`` frames evaluated
@@ -402,29 +406,15 @@ class Runtime:
             return np.zeros((0, len(track.rig.morph_targets)))
         return np.concatenate(track.morphs)
 
-    def morph_tracks(self, character) -> dict:
-        """``{"times": (F,), "weights": {target: (F,)}}`` for the morph targets any controller wrote."""
-        track = self._track(character)
-        weights = self.morph_weights(character)
-        written = track.morph_written if track.morph_written is not None else np.zeros(weights.shape[1], dtype=bool)
-        targets = track.rig.morph_targets
-        return {"times": np.arange(len(weights)) / self.fps,
-                "weights": {targets[i]: weights[:, i].copy() for i in np.nonzero(written)[0]}}
-
     def export(self, character, clip: str = "runtime", ground: bool = True) -> Asset:
-        """The character's asset with the evaluated frames as its only clip (and morph-weight tracks),
+        """The character's asset with the evaluated frames as its only clip (morph weights included),
         ready for :func:`infuse.save`. With ``ground`` the clip is moved up or down so that the
         feet's lowest point, soles included, is at the height the character stands at (a rig that
         puts its hips at the origin would otherwise stand a leg's length below the ground)."""
         track = self._track(character)
         rig = track.rig
         asset = rig.character.asset
-        meta = dict(asset.meta)
-        tracks = self.morph_tracks(character)
-        meta.pop("morph_weight_tracks", None)
-        if tracks["weights"]:
-            meta["morph_weight_tracks"] = {clip: tracks}
         motion = self.motion(character, clip)
         if ground and motion.num_frames:
             motion = on_ground(asset, rig.mapping, motion, float(rig.position[1]))
-        return replace(asset, motions={clip: motion}, meta=meta)
+        return replace(asset, motions={clip: motion})

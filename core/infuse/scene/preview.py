@@ -75,8 +75,7 @@ def scene_figures(scene, style: str = "auto") -> list[Figure]:
                         for o in scene.objects.values()]
         asset = rig.character.asset
         meshes = drawable_meshes(asset, motions[name].skeleton, style)
-        morphs = scene.runtime.morph_tracks(name)["weights"] if meshes else None
-        figures.append(Figure.from_motion(motions[name], meshes=meshes, morph_weights=morphs, label=name,
+        figures.append(Figure.from_motion(motions[name], meshes=meshes, label=name,
                                           color=PALETTE[k % len(PALETTE)],
                                           sides=sides_from_mapping(rig.skeleton, rig.mapping), markers=markers))
     return figures

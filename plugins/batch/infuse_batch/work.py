@@ -133,8 +133,8 @@ def _fingerprint(skeleton) -> str:
 def _source_mapping(asset: Asset, mapper: str | None) -> Mapping:
     """A motion file's mapping over its whole skeleton, as ``infuse retarget`` makes it: a file
     animating only some joints still moves the others through them."""
-    meta = {k: v for k, v in asset.meta.items() if k != "channel_joints"}
-    return map_skeleton(asset.skeleton, mapper=mapper, pose=sample_poses(asset), meta=meta, file=asset.path)
+    return map_skeleton(asset.skeleton, mapper=mapper, pose=sample_poses(asset), meta=asset.meta, humanoid=asset.humanoid,
+                        file=asset.path)
 
 
 def _retargeter(name: str | None):
@@ -157,11 +157,10 @@ def _file_name(name: str) -> str:
 
 
 def _writable(loaded: _Loaded, name: str, motion) -> Asset:
-    """The character with only this clip (its own clips and their morph tracks left out), the clip
-    standing on the ground (its feet's lowest point at y = 0)."""
-    meta = {k: v for k, v in loaded.asset.meta.items() if k != "morph_weight_tracks"}
+    """The character with only this clip (its own clips left out), the clip standing on the ground
+    (its feet's lowest point at y = 0)."""
     motion = grounded(motion, foot_height(loaded.asset, loaded.mapping, motion, loaded.sole))
-    return dataclasses.replace(loaded.asset, motions={name: motion}, meta=meta)
+    return dataclasses.replace(loaded.asset, motions={name: motion})
 
 
 def run_unit(unit: Unit | PackUnit) -> UnitResult:

@@ -25,17 +25,18 @@ Animations
     rate when every key sits on one grid (12 to 240 fps), else 30 fps (``fps=`` overrides). STEP,
     LINEAR (slerp for rotations) and CUBICSPLINE are evaluated vectorized. Channels on the non-joint
     nodes above the skeleton become root motion; translation and scale channels on other joints
-    become ``joint_translations``. Morph weight channels (and VRMA expression nodes) are kept in
-    ``meta["morph_weight_tracks"] = {clip: {"times": (F,), "weights": {target name: (F,)}}}`` on the
-    clip's frame times.
+    become ``joint_translations``. Morph weight channels (and VRMA expression nodes) become the
+    clip's ``morph_names`` / ``morph_weights`` (F, M), on its frames. An animation that moves no
+    joint (morph weights alone) is a clip whose ``animated_joints`` is all false.
 
 Other facts
     ``morph_targets``: mesh morph target names in file order, then the names of the VRM expressions
     that bind morph targets (``meta["vrm_expressions"]`` lists them all).
+    ``humanoid``: for VRM files, {VRM humanoid bone name: joint name}.
     ``meta``: ``container``, ``generator``, ``extensions_used``, ``extensions_required``,
     ``compression``, ``skins``, ``folded_nodes``, ``bind_pose``, ``clips`` (per clip: animation index,
     fps and how it was found, interpolations, ignored channels), ``warnings``, and for VRM files
-    ``vrm_version``, ``vrm_humanoid`` {VRM bone name: joint name}, ``vrm_expressions``.
+    ``vrm_version`` and ``vrm_expressions``.
     ``payload``: a :class:`GltfPayload` with the whole parsed document, for the writer.
     ``meshes`` (decoded on first use): the skinned surfaces, see :mod:`infuse_gltf.mesh`.
 
@@ -107,7 +108,6 @@ class SourceClip:
 
     animation: int
     motion: Motion
-    tracks: dict | None
 
 
 @dataclass
@@ -222,19 +222,19 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
     # -- morph targets and VRM ------------------------------------------------------------------
     target_names = mesh_target_names(js)
     morph_targets = unique_in_order([t for t in target_names if t])
+    humanoid: dict[str, str] = {}
     if vrm is not None:
         # Only expressions a weight can show: those binding morph targets (or a VRMA expression
         # node). One that binds materials only is listed in meta, but nothing animates it.
         shown = [e.name for e in vrm.expressions if e.binds or e.node is not None]
         morph_targets = unique_in_order([morph_targets, shown])
         meta["vrm_version"] = vrm.version
-        meta["vrm_humanoid"] = {bone: names[joint_nodes.index(n)] for bone, n in vrm.bones.items() if n in joint_nodes}
+        humanoid = {bone: names[joint_nodes.index(n)] for bone, n in vrm.bones.items() if n in joint_nodes}
         meta["vrm_expressions"] = [e.name for e in vrm.expressions]
     meta["bind_pose"] = _bind_pose_check(skins, skin_joints, world, accessors, core_from_file[2], names, joint_nodes)
 
     # -- clips ----------------------------------------------------------------------------------
     motions: dict[str, Motion] = {}
-    tracks_by_clip: dict[str, dict] = {}
     payload = GltfPayload(doc, rig, skeleton, vrm=vrm, target_names=target_names)
     meta["clips"] = {}
     for a, clip in enumerate(clips):
@@ -244,20 +244,16 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
         if result is None:
             warnings.append(f"animations[{a}] ({name!r}) moves nothing of the skeleton or morph targets: skipped")
             continue
-        motion, tracks, info = result
+        motion, info = result
         motions[name] = motion
         meta["clips"][name] = info
-        if tracks:
-            tracks_by_clip[name] = tracks
-        payload.clips[name] = SourceClip(a, motion, tracks)
-    if tracks_by_clip:
-        meta["morph_weight_tracks"] = tracks_by_clip
+        payload.clips[name] = SourceClip(a, motion)
 
     fmt = "vrma" if vrm and vrm.version.startswith("vrma") else "vrm" if vrm else doc.container
     has_mesh = any(isinstance(n.get("mesh"), int) for n in nodes)
     meshes = MeshLoader(doc, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
     return Asset(
-        path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets,
+        path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets, humanoid=humanoid,
         source_units=units or "m", source_up_axis=up_axis or "Y",
         units_detected_by="override" if units else "file", meta=meta, payload=payload, mesh_loader=meshes,
     )
@@ -481,7 +477,7 @@ def _bind_pose_check(skins, skin_joints, world, accessors: AccessorReader, unit:
 
 def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skeleton: Skeleton, rest_t, rest_r, rest_s,
                nodes, target_names, vrm, fps_override, file):
-    """One animation resampled on a uniform grid: (Motion, morph tracks or None, info), or None."""
+    """One animation resampled on a uniform grid: (Motion, info), or None."""
     col = posing.col
     expression_nodes = {e.node: e.name for e in vrm.expressions if e.node is not None} if vrm else {}
     trs, weights, ignored = [], [], 0
@@ -549,27 +545,28 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
     rot, trans, _ = posing.pose(t, r, sc, still_above=all(col[n] < n_joints for n, _, _ in trs))
     rest_trans = skeleton.rest_translations
     moving = np.abs(trans[:, 1:] - rest_trans[1:]).max() > STILL_M if len(rest_trans) > 1 else False
-    motion = Motion(skeleton, fps, quat.make_continuous(rot), trans[:, 0], trans if moving else None, name=name)
-
-    tracks = None
-    if weights:
-        tracks = {"times": query - start, "weights": {}}
-        for node, path, s in weights:
-            interp = clip["samplers"][s][2]
-            if path == "translation":  # a VRMA expression node: translation.x is the weight
-                vals = _output(accessors, clip, s, times[s], interp, 3, place, file)
-                accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")  # finite check
-                tracks["weights"].setdefault(expression_nodes[node], sample(times[s], vals, interp, query, False)[:, 0])
-                continue
-            names_ = target_names[nodes[node]["mesh"]]
-            vals = _output(accessors, clip, s, times[s], interp, len(names_), place, file)
+    tracks: dict[str, np.ndarray] = {}
+    for node, path, s in weights:
+        interp = clip["samplers"][s][2]
+        if path == "translation":  # a VRMA expression node: translation.x is the weight
+            vals = _output(accessors, clip, s, times[s], interp, 3, place, file)
             accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")  # finite check
-            out = sample(times[s], vals, interp, query, False)
-            for k, tn in enumerate(names_):
-                tracks["weights"].setdefault(tn, out[:, k])
+            tracks.setdefault(expression_nodes[node], sample(times[s], vals, interp, query, False)[:, 0])
+            continue
+        names_ = target_names[nodes[node]["mesh"]]
+        vals = _output(accessors, clip, s, times[s], interp, len(names_), place, file)
+        accessors.read(clip["samplers"][s][1], f"{place}.samplers[{s}].output")  # finite check
+        out = sample(times[s], vals, interp, query, False)
+        for k, tn in enumerate(names_):
+            tracks.setdefault(tn, out[:, k])
+    weight_names = tuple(tracks)
+    morph_weights = np.stack([tracks[n] for n in weight_names], axis=1) if tracks else None
+    animated = None if trs else np.zeros(skeleton.num_joints, dtype=bool)
+    motion = Motion(skeleton, fps, quat.make_continuous(rot), trans[:, 0], trans if moving else None, name=name,
+                    morph_names=weight_names, morph_weights=morph_weights, animated_joints=animated)
     info = {"animation": a, "fps": fps, "fps_detected_by": fps_by, "start_time": start, "frames": f,
             "interpolations": sorted({clip["samplers"][s][2] for s in used_samplers}), "ignored_channels": ignored}
-    return motion, tracks, info
+    return motion, info
 
 
 def _output(accessors: AccessorReader, clip, s: int, times: np.ndarray, interp: str, width: int, place: str, file) -> np.ndarray:

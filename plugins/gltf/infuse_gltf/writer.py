@@ -4,39 +4,38 @@ A character read from glTF/VRM (``asset.payload`` is a :class:`~infuse_gltf.read
 written back as a copy: meshes, skins, materials, textures, extensions and every node stay as they
 were, and its animations become ``asset.motions``:
 
-- a clip the reader produced and nobody replaced (the same Motion object, and the same morph track
-  object) keeps its original glTF animation, byte for byte;
-- any other Motion becomes a new animation: a rotation track on every joint node, a translation track
-  on the first joint and on joints whose offsets move (LINEAR, at the clip's frame times), converted
-  back to the file's node frames (parents, scale and axes the reader folded are undone);
+- a clip the reader produced and nobody replaced (the same Motion object) keeps its original glTF
+  animation, byte for byte;
+- any other Motion becomes a new animation: a rotation track on every joint node the clip animates
+  (``Motion.animated_joints``, every joint by default), a translation track on the first joint and
+  on joints whose offsets move (LINEAR, at the clip's frame times), converted back to the file's
+  node frames (parents, scale and axes the reader folded are undone), and a weights track from the
+  clip's morph weights;
 - clips the reader found but that are no longer in ``asset.motions`` are dropped;
-- the animations follow the order of ``asset.motions`` (then morph-track-only clips, then
-  animations the reader did not turn into clips): the first is the one Blender makes active and
-  three.js code playing ``animations[0]`` plays.
+- the animations follow the order of ``asset.motions`` (then animations the reader did not turn
+  into clips): the first is the one Blender makes active and three.js code playing
+  ``animations[0]`` plays.
 
-Morph-weight tracks come from ``asset.meta["morph_weight_tracks"]``::
-
-    {clip name: {"times": (K,) seconds, increasing,
-                 "weights": {target name: (K,) weights, usually 0..1}}}
-
-A clip name may or may not also name a Motion (its animation then holds both). A target name is a
-mesh morph target name (every mesh node with that target is driven), a VRM expression (its morph
-target binds are driven, scaled by their weights) or a VRMA expression (its node's translation.x).
-Targets of a driven mesh that no track names keep the mesh's default weights. A name nothing in the
-file matches raises :class:`~infuse.errors.UsageError`.
+A clip's morph weights (``Motion.morph_names``, ``Motion.morph_weights`` (F, M)) drive targets by
+name, at the clip's frame times: a mesh morph target name (every mesh node with that target is
+driven), a VRM expression (its morph target binds are driven, scaled by their weights) or a VRMA
+expression (its node's translation.x). Targets of a driven mesh that the clip does not name keep
+the mesh's default weights. A name nothing in the file matches raises
+:class:`~infuse.errors.UsageError`. A clip that animates no joint and no morph target writes no
+animation.
 
 Any other asset (from BVH, SmartBody, COLLADA, FBX...) is written as a new glTF: one node per joint
 (rest translation and rotation, metres, +Y up, +Z forward), end sites as leaf nodes marked
 ``extras.infuse_end_site``, a skin listing every joint with its inverse bind matrix (so readers
 know the whole skeleton), the asset's skinned meshes (``asset.meshes``, each with its own skin,
 material and named morph targets, see :mod:`infuse_gltf.mesh_writer`), and one animation per
-Motion. Morph-weight tracks drive those meshes' targets by name; an asset without morph targets
-cannot carry them (:class:`~infuse.errors.UsageError`).
+Motion. Morph weights drive those meshes' targets by name; an asset without morph targets cannot
+carry them (:class:`~infuse.errors.UsageError`).
 
 A ``.vrma`` (VRM Animation) is written the same way from any asset with a humanoid map in
-``asset.meta["vrm_humanoid"]`` (a VRM character has one): the skeleton, the clips, the
-``VRMC_vrm_animation`` humanoid map, and one expression node per morph-weight track name (VRM 1.0
-preset names go under ``preset``, others under ``custom``). A ``.vrm`` is only written from a VRM
+``asset.humanoid`` (a VRM character has one): the skeleton, the clips, the ``VRMC_vrm_animation``
+humanoid map, and one expression node per morph name the clips animate (VRM 1.0 preset names go
+under ``preset``, others under ``custom``). A ``.vrm`` is only written from a VRM
 character (it needs the VRM extension the file came with).
 
 New binary data is appended to buffer 0 (the GLB BIN chunk). External buffers and images of a
@@ -164,23 +163,22 @@ def write(asset: infuse.Asset, path: str | Path) -> None:
     path = Path(path)
     suffix = path.suffix.lower()
     binary = suffix in BINARY_SUFFIXES
-    tracks = asset.meta.get("morph_weight_tracks") or {}
     payload = asset.payload if isinstance(asset.payload, GltfPayload) else None
     version = payload.vrm.version if payload is not None and payload.vrm is not None else None
     if suffix == ".vrm" and version not in ("0.x", "1.0"):
         raise UsageError(".vrm output needs a VRM character (one read from a .vrm file); write a .glb instead")
     if payload is not None and not (suffix == ".vrma" and version != "vrma-1.0"):
         doc, bin_writer, other = _copy_document(payload, binary)
-        _write_animations(doc, bin_writer, asset, tracks, payload, payload.vrm)
+        _write_animations(doc, bin_writer, asset, payload, payload.vrm)
         _finish(doc, bin_writer, other, path, binary)
         return
     # A new document: the skeleton as nodes, its meshes (for .vrma, the humanoid map and expression nodes).
     vrma = suffix == ".vrma"
     meshes = () if vrma else asset.meshes
-    if tracks and not vrma and not any(m.morph_names for m in meshes):
-        raise UsageError("morph-weight tracks need a character with morph targets (this asset's meshes have none)")
-    doc, bin_writer, other, vrm = _skeleton_document(asset, vrma, tracks, meshes)
-    _write_animations(doc, bin_writer, asset, tracks, None, vrm)
+    if any(m.morph_names for m in asset.motions.values()) and not vrma and not any(m.morph_names for m in meshes):
+        raise UsageError("morph weights need a character with morph targets (this asset's meshes have none)")
+    doc, bin_writer, other, vrm = _skeleton_document(asset, vrma, meshes)
+    _write_animations(doc, bin_writer, asset, None, vrm)
     _finish(doc, bin_writer, other, path, binary)
 
 
@@ -208,10 +206,10 @@ def _copy_document(payload: GltfPayload, binary: bool):
     return doc, _Binary(doc, 0, data[0]), data
 
 
-def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict, meshes):
+def _skeleton_document(asset: infuse.Asset, vrma: bool, meshes):
     """A new document with the skeleton as nodes, a skin of every joint and ``meshes`` (core surfaces,
     see :mod:`infuse_gltf.mesh_writer`); for a VRMA, also the humanoid map and one expression node per
-    morph-weight track name."""
+    morph name the clips animate."""
     sk = asset.skeleton
     doc: dict = {"asset": {"version": "2.0", "generator": f"infuse {infuse.__version__}"}, "buffers": [{"byteLength": 0}]}
     nodes = [{"name": n, "translation": [float(v) for v in t], "rotation": [float(v) for v in q]}
@@ -242,13 +240,13 @@ def _skeleton_document(asset: infuse.Asset, vrma: bool, tracks: dict, meshes):
     roots += add_meshes(doc, bin_writer, meshes, range(sk.num_joints))
     vrm = None
     if vrma:
-        humanoid = asset.meta.get("vrm_humanoid")
+        humanoid = asset.humanoid
         if not humanoid:
-            raise UsageError("a .vrma needs a VRM humanoid map (asset.meta['vrm_humanoid'] = {vrm bone: joint name})")
+            raise UsageError("a .vrma needs a VRM humanoid map (asset.humanoid = {vrm bone: joint name})")
         bones = {bone: {"node": sk.index[j]} for bone, j in humanoid.items() if j in sk.index}
         ext: dict = {"specVersion": "1.0", "humanoid": {"humanBones": bones}}
         expressions = []
-        for name in dict.fromkeys(n for track in tracks.values() for n in (track.get("weights") or {})):
+        for name in dict.fromkeys(n for motion in asset.motions.values() for n in motion.morph_names):
             nodes.append({"name": name})  # a VRMA expression: its translation.x carries the weight
             roots.append(len(nodes) - 1)
             group = "preset" if name in VRM_PRESET_EXPRESSIONS else "custom"
@@ -268,7 +266,7 @@ def _rest_world(sk) -> np.ndarray:
 
 
 # -- animations -----------------------------------------------------------------------------------
-def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, tracks: dict, payload: GltfPayload | None,
+def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, payload: GltfPayload | None,
                       vrm: VrmInfo | None):
     if payload is not None:
         rig = payload.rig
@@ -277,7 +275,7 @@ def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, track
         source = payload.document.json.get("animations") or []
         from_clips = {sc.animation for sc in payload.clips.values()}
         kept = {name: sc.animation for name, sc in payload.clips.items()
-                if asset.motions.get(name) is sc.motion and tracks.get(name) is sc.tracks}
+                if asset.motions.get(name) is sc.motion}
     else:
         sk = asset.skeleton
         ident = (np.zeros(3), quat.IDENTITY, 1.0)
@@ -287,17 +285,16 @@ def _write_animations(doc: dict, bin_writer: _Binary, asset: infuse.Asset, track
     # The asset's clips come first, in their order (a viewer plays the first animation), then any
     # animation the reader did not turn into a clip, untouched.
     animations = []
-    names = list(asset.motions) + [n for n in tracks if n not in asset.motions]
-    for name in names:
+    for name, motion in asset.motions.items():
         if name in kept:
             animations.append(copy.deepcopy(source[kept[name]]))
             continue
+        if not (motion.animated_mask.any() or motion.morph_names):
+            continue
         anim = {"name": name, "channels": [], "samplers": []}
-        motion = asset.motions.get(name)
-        if motion is not None:
-            _motion_channels(anim, bin_writer, target, motion)
-        if name in tracks:
-            _weight_channels(anim, bin_writer, doc, vrm, name, tracks[name])
+        time_acc = _times_accessor(bin_writer, motion.frame_times)
+        _motion_channels(anim, bin_writer, target, motion, time_acc)
+        _weight_channels(anim, bin_writer, doc, vrm, motion, time_acc)
         if anim["channels"]:
             animations.append(anim)
     animations += [copy.deepcopy(a) for i, a in enumerate(source) if i not in from_clips]
@@ -313,16 +310,17 @@ def _times_accessor(bin_writer: _Binary, times: np.ndarray) -> int:
     return bin_writer.accessor(view, 0, len(times), "SCALAR", times[:, None])
 
 
-def _motion_channels(anim: dict, bin_writer: _Binary, target: _Target, motion: Motion) -> None:
+def _motion_channels(anim: dict, bin_writer: _Binary, target: _Target, motion: Motion, time_acc: int) -> None:
+    """Rotation and translation channels on the joint nodes the clip animates."""
     joints, rot, trans = target.file_pose(motion)
-    times = np.arange(motion.num_frames) / motion.fps
-    time_acc = _times_accessor(bin_writer, times)
-    moving = target.moving(motion, joints)
-    rot_acc = bin_writer.blocks([rot[:, k] for k in range(len(joints))], "VEC4")
+    animated = motion.animated_mask
+    moving = [k for k in target.moving(motion, joints) if animated[k]]
+    rotating = np.nonzero(animated)[0]
+    rot_acc = bin_writer.blocks([rot[:, k] for k in rotating], "VEC4")
     trans_acc = bin_writer.blocks([trans[:, k] for k in moving], "VEC3")
     for k, acc in zip(moving, trans_acc):
         _channel(anim, time_acc, acc, target.joint_nodes[joints[k]], "translation")
-    for k, acc in enumerate(rot_acc):
+    for k, acc in zip(rotating, rot_acc):
         _channel(anim, time_acc, acc, target.joint_nodes[joints[k]], "rotation")
 
 
@@ -331,23 +329,22 @@ def _channel(anim: dict, time_acc: int, out_acc: int, node: int, path: str) -> N
     anim["channels"].append({"sampler": len(anim["samplers"]) - 1, "target": {"node": node, "path": path}})
 
 
-def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, vrm: VrmInfo | None, clip: str, track: dict) -> None:
-    """Weights channels on the mesh nodes (and VRMA expression translations) that ``track`` drives."""
-    times = np.asarray(track.get("times"), dtype=np.float64).reshape(-1)
-    if times.size == 0 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0) or times[0] < 0:
-        raise UsageError(f"morph-weight track {clip!r}: times must be finite, >= 0 and strictly increasing")
-    weights = {str(k): np.asarray(v, dtype=np.float64).reshape(-1) for k, v in (track.get("weights") or {}).items()}
-    for name, w in weights.items():
-        if w.shape != times.shape or not np.all(np.isfinite(w)):
-            raise UsageError(f"morph-weight track {clip!r} target {name!r}: {w.size} finite weights expected {times.size}")
+def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, vrm: VrmInfo | None, motion: Motion,
+                     time_acc: int) -> None:
+    """Weights channels on the mesh nodes (and VRMA expression translations) the clip's morph weights drive."""
+    if not motion.morph_names:
+        return
+    clip = motion.name
+    weights = dict(zip(motion.morph_names, motion.morph_weights.T))
     binds = _target_binds(doc, vrm)
     unknown = [n for n in weights if n not in binds]
     if unknown:
-        raise UsageError(f"morph-weight track {clip!r} names targets this character does not have: {', '.join(unknown[:8])}")
+        raise UsageError(f"clip {clip!r}: morph weights name targets this character does not have: {', '.join(unknown[:8])}")
     unbound = [n for n in weights if not binds[n]]
     if unbound:
-        raise UsageError(f"morph-weight track {clip!r}: VRM expressions without morph target binds cannot be animated: "
+        raise UsageError(f"clip {clip!r}: VRM expressions without morph target binds cannot be animated: "
                          f"{', '.join(unbound[:8])}")
+    frames = motion.num_frames
     per_node: dict[int, np.ndarray] = {}
     touched: dict[int, set] = {}
     expression_nodes: dict[int, np.ndarray] = {}
@@ -362,20 +359,17 @@ def _weight_channels(anim: dict, bin_writer: _Binary, doc: dict, vrm: VrmInfo | 
                 mesh = meshes[nodes[node]["mesh"]]
                 n_targets = len(mesh["primitives"][0].get("targets", []))
                 default = np.asarray(nodes[node].get("weights") or mesh.get("weights") or np.zeros(n_targets), dtype=np.float64)
-                per_node[node] = np.broadcast_to(default, (len(times), n_targets)).copy()
+                per_node[node] = np.broadcast_to(default, (frames, n_targets)).copy()
                 touched[node] = set()
             if k not in touched[node]:
                 per_node[node][:, k] = 0.0
                 touched[node].add(k)
             per_node[node][:, k] += w * scale
-    if not per_node and not expression_nodes:
-        return
-    time_acc = _times_accessor(bin_writer, times)
     nodes_sorted = sorted(per_node)
     for node, acc in zip(nodes_sorted, bin_writer.blocks([per_node[n] for n in nodes_sorted], "SCALAR")):
         _channel(anim, time_acc, acc, node, "weights")
     for node in sorted(expression_nodes):
-        xyz = np.zeros((len(times), 3))
+        xyz = np.zeros((frames, 3))
         xyz[:, 0] = expression_nodes[node]
         _channel(anim, time_acc, bin_writer.blocks([xyz], "VEC3")[0], node, "translation")
 

@@ -3,9 +3,9 @@
 A scene (:class:`infuse.scene.Scene`) stands the character in the idle clip of a behaviour pack
 (weight on both feet, arms down, however the file's rest pose holds them), with its default
 breathing and blinks, talk-mode saccades and a small nod on the speech's beats. The speech itself
-is laid over the result: its face joints replace the idle's (:func:`with_face`) and a morph
-target both drive takes the larger weight (:func:`merged_tracks`), so the mouth says exactly what
-the lip sync made and the eyes still blink.
+is laid over the result (:func:`with_face`): its face joints replace the idle's and a morph target
+both drive takes the larger weight, so the mouth says exactly what the lip sync made and the eyes
+still blink.
 """
 from __future__ import annotations
 
@@ -66,33 +66,26 @@ def idle_body(asset: Asset, frames: int, fps: float, words=(), pack: str | None 
     return runtime.export(name, clip, ground=ground), f"{stance}, breathing, blinks, saccades, {nods} nod{'s' * (nods != 1)}"
 
 
-def with_face(body: Motion, face: Motion | None, joints) -> Motion:
-    """``body`` with the face joints ``joints`` (names) taken from ``face`` (same skeleton and frame
-    count; its local rotations and, where it has them, local translations)."""
-    if face is None or not joints:
+def with_face(body: Motion, face: Motion | None) -> Motion:
+    """``body`` with the speech clip ``face`` laid over it (same skeleton and frame rate; the first
+    frames of both when their lengths differ): the joints ``face`` animates take its local rotations
+    and, where it has them, local translations; a morph target both drive takes the larger weight
+    (the speech writes its neutral channels at 0, which must not hold the eyelids open through a
+    blink)."""
+    if face is None:
         return body
-    sk = body.skeleton
-    index = [sk.index[j] for j in joints]
-    rotations = body.local_rotations.copy()
-    rotations[:, index] = face.local_rotations[:, index]
-    translations = body.joint_translations
+    n = min(body.num_frames, face.num_frames)
+    index = np.nonzero(face.animated_mask)[0]
+    rotations = body.local_rotations[:n].copy()
+    rotations[:, index] = face.local_rotations[:n, index]
+    translations = None if body.joint_translations is None else body.joint_translations[:n]
     if face.joint_translations is not None:
-        translations = body.local_translations().copy()
-        translations[:, index] = face.joint_translations[:, index]
-    return body.replace(local_rotations=rotations, joint_translations=translations)
-
-
-def merged_tracks(body: dict | None, face: dict | None) -> dict | None:
-    """One morph-weight track (``{"times", "weights"}``) from the idle's and the speech's on the same
-    frames; a target both drive takes the larger weight (the speech writes its neutral channels
-    at 0, which must not hold the eyelids open through a blink)."""
-    if not body or not body.get("weights"):
-        return face
-    if not face or not face.get("weights"):
-        return body
-    n = min(len(body["times"]), len(face["times"]))
-    weights = {k: np.asarray(v)[:n] for k, v in body["weights"].items()}
-    for k, v in face["weights"].items():
-        v = np.asarray(v)[:n]
-        weights[k] = np.maximum(weights[k], v) if k in weights else v
-    return {"times": np.asarray(face["times"])[:n], "weights": weights}
+        translations = body.local_translations()[:n]
+        translations[:, index] = face.joint_translations[:n, index]
+    names = tuple(dict.fromkeys(body.morph_names + face.morph_names))
+    weights = np.zeros((n, len(names)))
+    weights[:, [names.index(m) for m in body.morph_names]] = body.morph_weights[:n]
+    spoken = [names.index(m) for m in face.morph_names]
+    weights[:, spoken] = np.maximum(weights[:, spoken], face.morph_weights[:n])
+    return body.replace(local_rotations=rotations, root_translations=body.root_translations[:n],
+                        joint_translations=translations, morph_names=names, morph_weights=weights)

@@ -19,7 +19,7 @@ from infuse.grounding import on_ground
 from infuse.mapping import map_skeleton
 from infuse.speech import tts_engine
 
-from .body import IDLE_PACK, idle_body, merged_tracks, with_face
+from .body import IDLE_PACK, idle_body, with_face
 from .channels import detect_face
 from .expressions import Expression
 from .lipsync import LipSyncSettings, choose_viseme_set, lipsync
@@ -106,20 +106,15 @@ def run(args) -> int:
         utterance = engine.synthesize(args.text, wav_tmp)
         result = lipsync(utterance, face, args.viseme_set, LipSyncSettings(fps=args.fps), asset.skeleton, expressions)
         face_motion = result.motion(asset.skeleton, args.clip)
-        face_track = result.morph_weight_track() if result.morph_weights else None
         idle, body = (None, "face only") if args.face_only else idle_body(
             asset, len(result.times), args.fps, utterance.words, args.idle_pack, args.map, clip=args.clip, ground=args.ground)
         if idle is None:
-            motion, track = face_motion, face_track
-            if motion is not None and args.ground:
+            motion = face_motion
+            if motion is not None and args.ground and motion.animated_mask.any():
                 motion = _on_ground(asset, motion, args.map)
         else:
-            motion = with_face(idle.motions[args.clip], face_motion, result.joint_rotations)
-            track = merged_tracks(idle.meta.get("morph_weight_tracks", {}).get(args.clip), face_track)
+            motion = with_face(idle.motions[args.clip], face_motion)
         asset.motions = {args.clip: motion} if motion is not None else {}
-        asset.meta = {k: v for k, v in asset.meta.items() if k != "morph_weight_tracks"}
-        if track is not None:
-            asset.meta["morph_weight_tracks"] = {args.clip: track}
         fileio.save(asset, out)
         doc = dict(result.timeline, wav=wav.name, animation=out.name, clip=args.clip,
                    character=str(args.character), joints=sorted(result.joint_rotations))

@@ -112,11 +112,11 @@ class PoseFace:
         return rotations, translations
 
 
-def face_motion(skeleton: Skeleton, fps: float, rotations: dict[int, np.ndarray], translations: dict[int, np.ndarray] | None,
-                name: str) -> Motion:
-    """A clip of the whole skeleton at rest except the face joints: ``rotations`` joint index -> (K, 4)
-    local rotations, ``translations`` joint index -> (K, 3) local translations (metres)."""
-    K = len(next(iter(rotations.values())))
+def face_motion(skeleton: Skeleton, fps: float, K: int, rotations: dict[int, np.ndarray], translations: dict[int, np.ndarray] | None,
+                name: str, morph_names: tuple[str, ...] = (), morph_weights: np.ndarray | None = None) -> Motion:
+    """A clip of ``K`` frames of the whole skeleton at rest except the face joints, which are its animated
+    joints: ``rotations`` joint index -> (K, 4) local rotations, ``translations`` joint index -> (K, 3)
+    local translations (metres); ``morph_weights`` (K, M) of ``morph_names``."""
     local = np.tile(skeleton.rest_rotations[None], (K, 1, 1))
     for j, r in rotations.items():
         local[:, j] = r
@@ -126,4 +126,7 @@ def face_motion(skeleton: Skeleton, fps: float, rotations: dict[int, np.ndarray]
         for j, t in translations.items():
             joint_translations[:, j] = t
     root = np.tile(skeleton.rest_translations[0], (K, 1))
-    return Motion(skeleton, fps, local, root, joint_translations, name=name)
+    animated = np.zeros(skeleton.num_joints, dtype=bool)
+    animated[list(rotations)] = True
+    return Motion(skeleton, fps, local, root, joint_translations, name=name, morph_names=morph_names,
+                  morph_weights=morph_weights, animated_joints=animated)

@@ -70,10 +70,6 @@ class LipSync:
     timeline: dict = field(default_factory=dict)
     fps: float = 30.0
 
-    def morph_weight_track(self) -> dict:
-        """``{"times": (K,), "weights": {target: (K,)}}``, the form glTF writers take."""
-        return {"times": self.times, "weights": dict(self.morph_weights)}
-
     def sample(self, t) -> dict[str, np.ndarray]:
         """Channel weights at times ``t`` (seconds, scalar or array), linearly interpolated."""
         t = np.asarray(t, float)
@@ -87,12 +83,15 @@ class LipSync:
         return Tracks(self.times, dict(self.joint_rotations), dict(self.morph_weights), speaks=True, name=name)
 
     def motion(self, skeleton: Skeleton, name: str = "speech") -> Motion | None:
-        """The joint face as a clip of ``skeleton`` (rest pose elsewhere), or ``None`` without face joints."""
-        if not self.joint_rotations:
+        """The speech as a clip of ``skeleton`` at ``fps``: its face joints (the clip's animated joints;
+        the rest pose elsewhere) and its morph weights; ``None`` when it moves neither."""
+        if not self.joint_rotations and not self.morph_weights:
             return None
         rot = {skeleton.index[j]: r for j, r in self.joint_rotations.items()}
         trans = {skeleton.index[j]: t for j, t in self.joint_translations.items()}
-        return face_motion(skeleton, self.fps, rot, trans, name)
+        names = tuple(self.morph_weights)
+        weights = np.stack([self.morph_weights[n] for n in names], axis=1) if names else None
+        return face_motion(skeleton, self.fps, len(self.times), rot, trans, name, names, weights)
 
 
 def _phoneme_rows(utterance: Utterance, vs: VisemeSet):

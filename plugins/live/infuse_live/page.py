@@ -57,9 +57,8 @@ class LiveSite:
         with self._lock:
             if name not in self._models:
                 asset = self.scene.characters[name].character.asset
-                meta = {k: v for k, v in asset.meta.items() if k != "morph_weight_tracks"}
                 with tempfile.TemporaryDirectory(prefix="infuse-serve-") as tmp:
                     out = Path(tmp) / f"{name}.glb"
-                    infuse.save(replace(asset, motions={}, meta=meta), out)
+                    infuse.save(replace(asset, motions={}), out)
                     self._models[name] = out.read_bytes()
             return self._models[name]

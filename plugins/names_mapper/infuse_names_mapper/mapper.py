@@ -3,7 +3,7 @@
 Each convention (:mod:`.conventions`) is tried against the skeleton's normalized joint names and
 the one that names the most canonical joints wins; its torso and neck joints are then numbered by
 the labelling rule (chest = spine3, one neck joint = spine4...) using their order in the hierarchy.
-A VRM file's own humanoid map (``Asset.meta["vrm_humanoid"]``) is used first when present.
+A VRM file's own humanoid map (``Asset.humanoid``, given as ``humanoid=``) is used first when present.
 """
 from __future__ import annotations
 
@@ -96,7 +96,7 @@ def _assemble(hits: dict[str, list[str]], skeleton) -> dict[str, str]:
     return joints
 
 
-def _from_vrm_meta(humanoid, skeleton) -> dict[str, str]:
+def _from_vrm_humanoid(humanoid, skeleton) -> dict[str, str]:
     """Canonical -> joint from a VRM humanoid map (VRM bone name -> node name)."""
     if not isinstance(humanoid, dict):
         return {}
@@ -114,13 +114,12 @@ def _from_vrm_meta(humanoid, skeleton) -> dict[str, str]:
     return _assemble(hits, skeleton)
 
 
-def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_options) -> Mapping:
+def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, humanoid=None, **_options) -> Mapping:
     """Map ``skeleton`` by its joint names (see the module docstring)."""
     index: dict[str, str] = {}
     for n in skeleton.names:
         index.setdefault(normalize(n), n)
-    meta = meta or {}
-    joints = _from_vrm_meta(meta.get("vrm_humanoid"), skeleton)
+    joints = _from_vrm_humanoid(humanoid, skeleton)
     source = "the file's VRM humanoid map" if joints else ""
     if len(joints) < MIN_NAMES:
         best_name, best = "", {}

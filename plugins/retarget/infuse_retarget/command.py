@@ -57,13 +57,12 @@ def _clip(asset, name, path):
 def source_mapping(asset, mapper: str | None, saved_map):
     """The motion file's canonical mapping, over its whole skeleton.
 
-    A motion file may animate only some joints (``meta["channel_joints"]``), but every joint has a
+    A motion file may animate only some joints (``Motion.animated_joints``), but every joint has a
     global orientation, so the mapping is not restricted to the animated ones: a SmartBody reach
     that turns ``l_sternoclavicular`` moves the unanimated clavicle joint below it.
     """
-    meta = {k: v for k, v in asset.meta.items() if k != "channel_joints"}
     return map_skeleton(asset.skeleton, mapper=mapper, saved_map=saved_map, pose=sample_poses(asset),
-                        meta=meta, file=asset.path)
+                        meta=asset.meta, humanoid=asset.humanoid, file=asset.path)
 
 
 def run(args) -> int:
@@ -92,8 +91,7 @@ def run(args) -> int:
     motions = {name: motion.replace(name=name), **kept}
     if args.ground:
         motions = {k: grounded(m, foot_height(character, tgt_map, m)) for k, m in motions.items()}
-    meta = character.meta if kept else {k: v for k, v in character.meta.items() if k != "morph_weight_tracks"}
-    fileio.save(dataclasses.replace(character, motions=motions, meta=meta), out)
+    fileio.save(dataclasses.replace(character, motions=motions), out)
     unmet = [k for k, r in result.residual.items() if (r[result.reachable[k]] > 1e-3).any()]
     print(f"wrote {out}: clip {name!r}, {motion.num_frames} frames at {motion.fps:g} fps, "
           f"leg scale {result.scale:.3f}, feet: {args.ik}"

@@ -110,11 +110,11 @@ def read_skm(path: Path, units: str | None = None, up_axis: str | None = None, s
     A channel naming a joint the skeleton lacks is an error; with no skeleton found (or
     ``skeleton="none"``) the joints are the channel joints alone, all roots at the origin.
     ``meta["skeleton_file"]`` says which ``.sk`` was used. Timing metadata (ready, stroke, relax...) become ``sync_points`` in seconds
-    from the first frame.
+    from the first frame. The motion's ``animated_joints`` marks the joints its channels name.
     """
     path = Path(path)
     skm = parse_skm(path, _read_text(path))
-    meta: dict = {"name": skm.name, "channels": len(skm.channels), "channel_joints": skm.joints}
+    meta: dict = {"name": skm.name, "channels": len(skm.channels)}
     if skeleton == "none":
         sk, meta["skeleton_found_in"] = None, "not used (skeleton='none')"
     elif skeleton is not None:
@@ -167,7 +167,8 @@ def read_skm(path: Path, units: str | None = None, up_axis: str | None = None, s
         meta["metadata"] = skm.metadata
     meta["first_key_time"] = float(skm.key_times[0])
     try:
-        motion = Motion(skel, fps, rotations, translations[:, 0], joint_translations, name=skm.name, sync_points=sync)
+        motion = Motion(skel, fps, rotations, translations[:, 0], joint_translations, name=skm.name, sync_points=sync,
+                        animated_joints=np.isin(skel.names, skm.joints))
     except InputError as exc:
         raise exc.naming(path) from None
     return Asset(path, "smartbody-skm", skel, {skm.name: motion}, source_units=unit, source_up_axis=axis,
