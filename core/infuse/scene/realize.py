@@ -33,13 +33,12 @@ CLIP_KINDS = {"gesture": 20_000, "animation": 20_000, "posture": 10_000, "blend"
 #: Kinds behaviour packs provide, and what is missing when they are not installed.
 PACK_KINDS = {
     "locomotion": "no locomotion pack infused: the character does not walk",
-    "reach": "no reaching pack infused: the character does not reach",
     "grab": "no reaching pack infused: the character does not grab",
     "ik_constraint": "no reaching pack infused: the effector is not held on its target",
     "pointing": "no reaching pack infused: the character does not point",
 }
 #: The kind of blend space each of those kinds needs.
-PACK_SPACE = {"locomotion": "locomotion", "reach": "reach", "grab": "reach", "ik_constraint": "reach", "pointing": "reach"}
+PACK_SPACE = {"locomotion": "locomotion", "grab": "reach", "ik_constraint": "reach", "pointing": "reach"}
 #: Stances a character already has without any clip.
 _STANDING = {None, "STANDING"}
 
@@ -63,8 +62,6 @@ def realize(scene, activation: Activation):
         return None
     if kind == "locomotion":
         return _locomotion(scene, activation)
-    if kind == "reach":
-        return _reach(scene, activation)
     if descriptor is not None:
         return scene.stage.play(activation)
     scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
@@ -185,52 +182,4 @@ def _locomotion(scene, activation: Activation):
         scene.walks.start(name, activity, max(activation.end, activation.start + plan.rests_s), plan.state,
                           arrives_s=activation.start + plan.arrives_s)
     scene.character(name).destination = (float(points[-1][0]), float(points[-1][1]))
-    return activity
-
-
-#: BML reach actions -> the reach controller's.
-REACH_ACTIONS = {"touch": "touch", "pick-up": "grab", "put-down": "put"}
-
-
-def _reach(scene, activation: Activation):
-    """Reach with the character's reaching pack: touch, pick up (the object then follows the hand) or put
-    down (the object it holds, at the target)."""
-    p = activation.parameters
-    name = activation.character
-    action = p.get("action")
-    if action == "finish":
-        scene.stop_reaches(name, activation.start)
-        return None
-    if action not in REACH_ACTIONS:
-        scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> action {action!r} is not realized "
-                                                       f"(realized: {', '.join(REACH_ACTIONS)})")
-        return None
-    target = p.get("target")
-    if p.get("target_position") is not None:
-        target = tuple(float(v) for v in p["target_position"])
-    else:
-        target = scene.resolve_name(target)
-        if target not in scene.objects and target not in scene.targets and ":" not in target:
-            scene.warn(activation, NO_SUCH_TARGET, f"<{activation.element}>: no object named {target!r}")
-            return None
-    obj = None
-    if action == "pick-up":
-        if not isinstance(target, str) or target not in scene.objects:
-            scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: only a scene object can be picked up")
-            return None
-        obj = target
-    elif action == "put-down":
-        obj = scene.character(name).holding
-        if obj is None:
-            scene.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: the character holds nothing to put down")
-            return None
-    reach = controller("reach", target=target, hand=p.get("hand") or "auto", pack=scene.pack_space(name, "reach"),
-                       action=REACH_ACTIONS[action], obj=obj)
-    span = _until(activation) - activation.start
-    if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
-        reach.hold_s = span - reach.stroke_s - reach.blend_out_s
-    activity = scene.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)
-    if obj is not None:  # it follows the hand, or stays where it is put, from the stroke on
-        scene.note_object_move(obj, activation.start + reach.stroke_s)
-    scene.character(name).holding = obj if action == "pick-up" else None if action == "put-down" else scene.character(name).holding
     return activity

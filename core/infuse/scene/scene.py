@@ -52,8 +52,8 @@ from .walks import Walks
 class SceneCharacter:
     """A character of a scene: its runtime name, the :class:`~infuse.Character` (asset, mapping and clips), the
     file it came from, its map file (joint and face channels), behaviour packs, voice, the
-    :class:`~infuse.packs.Infusion` of its packs, the activities it idles with, where its last walk ends
-    ((x, z) metres), and the object it holds."""
+    :class:`~infuse.packs.Infusion` of its packs, the activities it idles with, and where its last walk ends
+    ((x, z) metres)."""
 
     name: str
     character: Character
@@ -64,7 +64,6 @@ class SceneCharacter:
     infusion: object = None
     idle: dict = field(default_factory=dict)
     destination: tuple | None = None
-    holding: str | None = None
 
 
 @dataclass(frozen=True)
@@ -322,13 +321,6 @@ class Scene:
                 settings = descriptor.idle(index, self.seed)
                 entry.idle[kind] = self.runtime.activate(entry.name, descriptor.factory(**settings), 0.0)
 
-    def stop_reaches(self, name: str, at_s: float) -> None:
-        """End the character's reaches at ``at_s`` (SmartBody's reach finish)."""
-        for activity in list(self.activities.values()):
-            if activity.rig.name == name and activity.controller.kind == "reach" and \
-                    (activity.end_s is None or activity.end_s > at_s):
-                self.runtime.stop(activity, at_s)
-
     def stop_postures(self, name: str, at_s: float) -> None:
         """Stop a character's lasting posture clips at ``at_s`` (a new posture replaces them)."""
         for activity in self.activities.values():
@@ -475,6 +467,11 @@ class Scene:
                 for spoken in self._spoken.get(activation.character, ()):
                     if spoken.activity is activity and activity is not None:
                         spoken.stop_s = activation.stop_s
+
+    @property
+    def stagehands(self) -> dict:
+        """The helpers the realizing plugins keep in this scene, by key (:meth:`infuse.stage.Stage.stagehand`)."""
+        return self.stage.stagehands
 
     def activate(self, activation, controller_, end_s, **options):
         """Start ``controller_`` for ``activation`` on its character at the activation's start, until ``end_s``."""

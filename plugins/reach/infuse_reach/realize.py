@@ -1,0 +1,78 @@
+"""BML ``<sbm:reach>`` realized in a scene through its :class:`~infuse.stage.Stage`: touch, pick up (the object
+then follows the hand) or put down (the object the character holds, at the target), with the character's
+reaching pack; ``finish`` ends its reaches. What each character holds is kept by the scene's
+:class:`Hands` stagehand.
+"""
+from __future__ import annotations
+
+from infuse.bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from infuse.stage import until_s
+
+from .controller import Reach
+
+#: BML reach actions -> the reach controller's.
+REACH_ACTIONS = {"touch": "touch", "pick-up": "grab", "put-down": "put"}
+
+
+class Hands:
+    """What each character of one scene holds: character -> object name (absent: nothing)."""
+
+    def __init__(self, stage):
+        self.holding: dict[str, str] = {}
+
+
+def hands(stage) -> Hands:
+    """The scene's :class:`Hands`."""
+    return stage.stagehand("reach", Hands)
+
+
+def realize_reach(activation, stage):
+    """Reach with the character's reaching pack; returns the activity, or None (warned, or a finish)."""
+    p = activation.parameters
+    name = activation.character
+    action = p.get("action")
+    space = stage.blend_space(name, "reach")
+    if space is None:
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: no reaching pack infused: "
+                                                       "the character does not reach")
+        return None
+    if action == "finish":
+        for activity in stage.activities(name):
+            if isinstance(activity.controller, Reach) and (activity.end_s is None or activity.end_s > activation.start):
+                stage.runtime.stop(activity, activation.start)
+        return None
+    if action not in REACH_ACTIONS:
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> action {action!r} is not realized "
+                                                       f"(realized: {', '.join(REACH_ACTIONS)})")
+        return None
+    if p.get("target_position") is not None:
+        target = tuple(float(v) for v in p["target_position"])
+    else:
+        target = stage.resolve(p.get("target"))
+        if stage.what(target) not in ("object", "target") and ":" not in target:
+            stage.warn(activation, NO_SUCH_TARGET, f"<{activation.element}>: no object named {target!r}")
+            return None
+    held = hands(stage).holding
+    obj = None
+    if action == "pick-up":
+        if not isinstance(target, str) or stage.what(target) != "object":
+            stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: only a scene object can be picked up")
+            return None
+        obj = target
+    elif action == "put-down":
+        obj = held.get(name)
+        if obj is None:
+            stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: the character holds nothing to put down")
+            return None
+    reach = Reach(target=target, hand=p.get("hand") or "auto", pack=space, action=REACH_ACTIONS[action], obj=obj)
+    span = until_s(activation) - activation.start
+    if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
+        reach.hold_s = span - reach.stroke_s - reach.blend_out_s
+    activity = stage.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)
+    if obj is not None:  # it follows the hand, or stays where it is put, from the stroke on
+        stage.note_object_move(obj, activation.start + reach.stroke_s)
+    if action == "pick-up":
+        held[name] = obj
+    elif action == "put-down":
+        held.pop(name, None)
+    return activity
