@@ -1,0 +1,1 @@
+"""Nonverbal behaviour generated from speech: a BML generator (see :mod:`infuse_nvbg.plugin`)."""
