@@ -1,5 +1,6 @@
 """The foot-contact component: contact flags with hysteresis, heel and ball phases, plant positions,
-pinning goals over frames, anchors and the heel's rise about a pinned ball."""
+pinning goals over frames, anchors, the heel's rise about a pinned ball, and the two-bone IK in world
+turns that enforces the goals."""
 from __future__ import annotations
 
 import numpy as np
@@ -7,6 +8,7 @@ import numpy as np
 from infuse import footing
 from infuse import quaternions as quat
 from infuse.contacts import FootContacts, contact_phases, detect, hysteresis
+from infuse.runtime import limb_ik
 
 RNG = np.random.default_rng(11)
 
@@ -124,3 +126,44 @@ def test_heel_rises_about_the_ball_only_as_far_as_the_leg_needs():
     assert np.allclose(back, (ankle_goal - ball_goal)[far], atol=1e-9)
     assert np.all(np.linalg.norm(ball_goal[far] + quat.rotate(quat.from_rotvec(rise[far] * (1.0 - np.radians(1.0) / angle)[:, None]),
                                                                 (ankle_goal - ball_goal)[far]) - hip[far], axis=-1) > length)
+
+
+def _limb(frames: int, bend: float = 0.4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    root = np.zeros((frames, 3))
+    middle = np.tile([0.0, -0.45, 0.0], (frames, 1))
+    end = middle + [0.0, -0.44 * np.cos(bend), -0.44 * np.sin(bend)]
+    return root, middle, end
+
+
+def test_turn_limb_meets_reachable_goals_by_the_shortest_turns():
+    frames = 400
+    root, middle, end = _limb(frames)
+    direction = RNG.normal(size=(frames, 3))
+    direction[:, 1] = -np.abs(direction[:, 1]) - 0.5
+    goal = direction / np.linalg.norm(direction, axis=1, keepdims=True) * RNG.uniform(0.15, 0.88, size=(frames, 1))
+    axis, flexion = limb_ik.hinge_axes(root, middle, end, np.tile([1.0, 0.0, 0.0], (frames, 1)))
+    assert np.allclose(axis, [1.0, 0.0, 0.0]) and np.allclose(flexion, 0.4)
+    solution = limb_ik.turn_limb(root, middle, end, goal, axis, flexion)
+    assert solution.reachable.all() and solution.residual.max() < 1e-9
+    # The knee bends about its hinge only; the hip's turn is the shortest arc onto the goal.
+    knee = root + quat.rotate(solution.root, middle - root)
+    assert np.allclose(np.linalg.norm(knee - root, axis=1), 0.45) and np.allclose(np.linalg.norm(solution.end - knee, axis=1), 0.44)
+    bent = quat.rotate(quat.multiply(quat.conjugate(solution.root), solution.middle), end - middle)
+    assert np.allclose(bent[:, 0], end[:, 0] - middle[:, 0])
+    assert np.allclose(quat.angle_between(solution.root, quat.between(middle + bent - root, goal - root)), 0.0, atol=1e-7)
+    # A goal where the end already is moves nothing.
+    still = limb_ik.turn_limb(root, middle, end, end, axis, flexion)
+    assert np.allclose(still.root, [0.0, 0.0, 0.0, 1.0], atol=1e-9) and np.allclose(still.end, end, atol=1e-9)
+
+
+def test_turn_limb_stretches_toward_unreachable_goals_without_hyperextending():
+    frames = 50
+    root, middle, end = _limb(frames)
+    goal = np.tile([0.3, -1.2, 0.4], (frames, 1))
+    axis, flexion = limb_ik.hinge_axes(root, middle, end, np.tile([1.0, 0.0, 0.0], (frames, 1)))
+    solution = limb_ik.turn_limb(root, middle, end, goal, axis, flexion, min_flexion=np.radians(1.0))
+    reach = np.linalg.norm(solution.end - root, axis=1)
+    straight = np.sqrt(0.45 ** 2 + 0.44 ** 2 + 2 * 0.45 * 0.44 * np.cos(np.radians(1.0)))
+    assert not solution.reachable.any() and np.allclose(reach, straight, atol=1e-6)
+    pointing = np.sum((solution.end - root) * (goal - root), axis=1) / (reach * np.linalg.norm(goal - root, axis=1))
+    assert np.all(pointing > 1 - 1e-9)

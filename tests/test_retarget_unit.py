@@ -226,41 +226,7 @@ def test_ancestors_of_the_base_hold_their_pose(source):
     _same_mapped_positions(clip, cmap, out, identity_map(clip.skeleton))
 
 
-# -- IK --------------------------------------------------------------------------------------------
-def _limb(frames, bend=0.4):
-    root = np.zeros((3, frames))
-    middle = np.tile([[0.0], [-0.45], [0.0]], frames)
-    end = middle + np.array([[0.0], [-0.44 * np.cos(bend)], [-0.44 * np.sin(bend)]])
-    return root, middle, end
-
-
-def test_limb_ik_meets_reachable_goals_and_keeps_the_swivel():
-    frames = 400
-    root, middle, end = _limb(frames)
-    direction = RNG.normal(size=(3, frames))
-    direction[1] = -np.abs(direction[1]) - 0.5
-    goal = direction / np.linalg.norm(direction, axis=0) * RNG.uniform(0.15, 0.88, size=frames)
-    axis, flexion = ik.hinge_axes(root, middle, end, np.tile([[1.0], [0.0], [0.0]], frames))
-    solution = ik.solve_limb(root, middle, end, goal, axis, flexion)
-    assert solution.residual.max() < 1e-4
-    # Null space: a goal where the end already is moves nothing.
-    still = ik.solve_limb(root, middle, end, end, axis, flexion)
-    assert np.allclose(still.root, [[0.0], [0.0], [0.0], [1.0]], atol=1e-9)
-    assert np.allclose(still.end_position, end, atol=1e-9)
-
-
-def test_limb_ik_stretches_toward_unreachable_goals_without_hyperextending():
-    frames = 50
-    root, middle, end = _limb(frames)
-    goal = np.tile([[0.3], [-1.2], [0.4]], frames)
-    axis, flexion = ik.hinge_axes(root, middle, end, np.tile([[1.0], [0.0], [0.0]], frames))
-    solution = ik.solve_limb(root, middle, end, goal, axis, flexion)
-    reach = cq.norm(solution.end_position - root)
-    assert np.all(reach > 0.889) and np.all(reach <= 0.89 + 1e-9)
-    pointing = cq.dot(solution.end_position - root, goal - root) / (reach * cq.norm(goal - root))
-    assert np.all(pointing > 1 - 1e-6)
-
-
+# -- the foot's aim at its ball ---------------------------------------------------------------------
 def test_aim_turns_the_foot_onto_its_goal_and_keeps_its_roll():
     frames = 30
     pivot = np.zeros((3, frames))

@@ -4,7 +4,8 @@
 
 - ``"none"``: the plain transfer (rotations and scaled root).
 - ``"paper"``: each ankle follows the paper's warped trajectory ``p(0) + s·(p_s(t) − p_s(0))``
-  through the whole clip, enforced by damped pseudo-inverse IK on hip–knee–ankle, and the ball of
+  through the whole clip, enforced by the two-bone leg IK of :mod:`infuse.runtime.limb_ik` on
+  hip–knee–ankle (the knee bent by the law of cosines, the hip turned by the shortest arc), and the ball of
   the foot rides on it as the transferred foot carries it (a warped path of its own would drag a
   foot built unlike the source's along the source foot's geometry).
 - ``"contacts"`` (default): the same IK, but foot contacts are detected on the source (speed and
@@ -27,6 +28,7 @@ from infuse import contacts as contact_detection, footing
 from infuse.errors import UsageError
 from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
+from infuse.runtime import limb_ik
 from infuse.skeleton import Skeleton
 
 from . import cq, goals, ik
@@ -119,22 +121,24 @@ class _Solver:
     def limb(self, root: str, middle: str, end: str, goal: np.ndarray, upper_segment, lower_segment):
         """Solve a two-bone limb for ``goal`` (3, F) and turn its segments: joints driven by the
         canonical names ``upper_segment`` (between root and middle) and ``lower_segment`` (below
-        the middle joint). Returns the :class:`ik.LimbSolution`."""
+        the middle joint) by :func:`infuse.runtime.limb_ik.turn_limb`. Returns the lower segment's
+        world turn (4, F) and where the end joint ends up (3, F)."""
         plan, state = self.plan, self.state
         tgt = plan.target.index
         pos = plan.positions(state, [tgt[root], tgt[middle], tgt[end]])
         r, m, e = pos[tgt[root]], pos[tgt[middle]], pos[tgt[end]]
         reference = cq.rotate(plan.canonical_delta(state.rotations, middle), np.array(HINGES[middle])[:, None])
-        axis, flexion = ik.hinge_axes(r, m, e, reference)
-        solution = ik.solve_limb(r, m, e, goal, axis, flexion, min_flexion=MIN_FLEXION)
-        self.turn(upper_segment, solution.root)
-        self.turn(lower_segment, solution.middle)
+        axis, flexion = limb_ik.hinge_axes(r.T, m.T, e.T, reference.T)
+        solution = limb_ik.turn_limb(r.T, m.T, e.T, goal.T, axis, flexion, min_flexion=MIN_FLEXION)
+        root_turn, middle_turn = np.ascontiguousarray(solution.root.T), np.ascontiguousarray(solution.middle.T)
+        self.turn(upper_segment, root_turn)
+        self.turn(lower_segment, middle_turn)
         name = self.names[tgt[end]]
         self.result.goals[name] = goal.T
         self.result.residual[name] = solution.residual
         self.result.reachable[name] = solution.reachable
         self.result.hard[name] = np.ones(len(solution.residual), dtype=bool)
-        return solution
+        return middle_turn, np.ascontiguousarray(solution.end.T)
 
     def foot(self, k: int, mode: str) -> None:
         plan, state = self.plan, self.state
@@ -153,19 +157,20 @@ class _Solver:
         else:
             ankle_goal, ball_goal = self._pinned_goals(k, pos, ankle_s, ball_s, ball_t)
         foot = [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
-        solution = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"], [f"{side}_knee"] + foot)
+        shin_turn, ankle = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"],
+                                     [f"{side}_knee"] + foot)
         if ball_t is None:
             return
-        ball_now = solution.end_position + cq.rotate(solution.middle, pos[ball_t] - ankle_t)
+        ball_now = ankle + cq.rotate(shin_turn, pos[ball_t] - ankle_t)
         length = self._foot_length(pos, ankle_t, ball_t)
         if mode != "paper":
-            ball_goal = self._near_ground(ball_goal, ball_now, solution.end_position, length, k)
-        turn, ball_end = ik.aim(solution.end_position, ball_now, ball_goal, solution.middle)
+            ball_goal = self._near_ground(ball_goal, ball_now, ankle, length, k)
+        turn, ball_end = ik.aim(ankle, ball_now, ball_goal, shin_turn)
         self.turn(foot, turn)
         name = self.names[ball_t]
         self.result.goals[name] = ball_goal.T
         self.result.residual[name] = cq.norm(ball_end - ball_goal)
-        self.result.reachable[name] = np.abs(cq.norm(ball_goal - solution.end_position) - length) < ik.REACH_MARGIN
+        self.result.reachable[name] = np.abs(cq.norm(ball_goal - ankle) - length) < limb_ik.REACH_MARGIN
         planted = self.result.contacts.flags[:, list(self.result.contacts.points).index(src_foot.ball)]
         self.result.hard[name] = np.ones(len(planted), dtype=bool) if mode == "paper" else planted
 
