@@ -1,0 +1,195 @@
+"""The ``nonverbal`` BML generator: what each rule adds, where its sync points fall, the listener's
+backchannel, the seed, the author's own behaviours, and mistakes in a rules file."""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from infuse.bml import GeneratorContext, Scheduler, parse_bml
+from infuse.errors import InputError
+from infuse.scene.scenefile import read_scene_file
+from infuse_nvbg.generate import generate
+from infuse_nvbg.rules import DEFAULT_RULES, load_rules
+
+BML = "http://www.bml-initiative.org/bml/bml-1.0"
+CAST = {"ann": "character", "bob": "character", "cup": "object"}
+
+
+def block(text: str, extra: str = "", flag: str = 'infuse:nonverbal="true"', block_id: str = "b1"):
+    return (f'<bml xmlns="{BML}" xmlns:infuse="urn:infuse:bml" id="{block_id}" characterId="ann" {flag}>'
+            f'<speech id="s1"><text>{text}</text></speech>{extra}</bml>')
+
+
+def schedule(text: str, extra: str = "", seed: int = 0, names=CAST, **options):
+    scheduler = Scheduler(names=lambda: names, seed=seed, **options)
+    return scheduler, scheduler.submit(block(text, extra))
+
+
+def certain_rules(tmp_path: Path, **changes) -> Path:
+    """The built-in rules with every probability 1 (or as ``changes`` say), written to a file."""
+    text = DEFAULT_RULES.read_text()
+    for key in ("probability", "aversion_probability", "look_back_probability"):
+        text = "\n".join(line.split("=")[0] + "= 1.0" if line.strip().startswith(key + " ") else line
+                         for line in text.splitlines())
+    for old, new in changes.items():
+        text = text.replace(old, new)
+    path = tmp_path / "rules.toml"
+    path.write_text(text)
+    return path
+
+
+def generated(text: str, rules_path: Path, names=CAST, settings=None, extra: str = ""):
+    (parsed,) = parse_bml(block(text, extra)).blocks
+    context = GeneratorContext("ann", characters=tuple(n for n, k in names.items() if k == "character"),
+                               objects=tuple(n for n, k in names.items() if k == "object"), seed=5,
+                               settings=settings or {})
+    return generate(parsed, context, load_rules(rules_path))
+
+
+def elements(generation) -> list[tuple[str, dict]]:
+    speech = next(b for b in generation.block.behaviours if b.element == "speech")
+    marks = dict(speech.marks)
+    out = []
+    for b in generation.block.behaviours:
+        if b.id.startswith("nv"):
+            where = {s: speech.text[marks[r.sync]:].split()[0].strip(".,?!") if r.sync in marks else r.sync
+                     for s, r in b.sync_refs.items()}
+            out.append((b.element, {**b.attributes, **where}))
+    return out
+
+
+def test_each_rule_puts_its_behaviour_on_its_word(tmp_path):
+    rules = certain_rules(tmp_path)
+    g = generated("Hello. Could you pass me that cup? No, because this one here is really important.", rules)
+    found = elements(g)
+    assert ("gesture", {"lexeme": "WAVE", "mode": found[0][1]["mode"], "stroke": "Hello"}) == found[0]
+    assert ("pointing", {"target": "cup", "stroke": "that"}) in found                  # on the demonstrative
+    assert ("head", {"lexeme": "SHAKE", "amount": "0.4", "repetition": "2", "stroke": "No"}) in found
+    assert ("faceLexeme", {"lexeme": "RAISE_BROWS", "amount": "0.6", "attackPeak": "cup"}) in found  # question's last word
+    assert ("faceLexeme", {"lexeme": "RAISE_BROWS", "amount": "0.45", "attackPeak": "really"}) in found
+    assert any(e == "gesture" and a["lexeme"] == "BEAT_LARGE" and a["stroke"] == "really" for e, a in found)
+    gaze = [(e, a) for e, a in found if e in ("gaze", "gazeShift")]
+    assert [e for e, _ in gaze] == ["gaze", "gazeShift"] and gaze[0][1]["start"] == "start"
+    assert gaze[0][1]["end"] == gaze[1][1]["start"] and gaze[0][1]["target"] == "bob"
+
+
+def test_deictics_need_something_to_point_at(tmp_path):
+    rules = certain_rules(tmp_path)
+    alone = {"ann": "character"}
+    found = elements(generated("Could you pass me that cup over there?", rules, names=alone))
+    assert not any(e == "pointing" for e, _ in found) and not any(e.startswith("gaze") for e, _ in found)
+    found = elements(generated("I have been thinking about it for a long while, and you are right.", rules))
+    assert ("gesture", {"lexeme": "SELF", "mode": "RIGHT_HAND", "stroke": "I"}) in found
+    assert ("pointing", {"target": "bob", "stroke": "you"}) in found
+    assert any(e == "head" and a["lexeme"] == "NOD" and a["stroke"] == "right" for e, a in found)
+
+
+def test_strokes_keep_their_channel_gap_in_estimated_time(tmp_path):
+    scheduler, (record, _) = schedule("Bring the red box, the green bag, the old lamp and the new chair to the door, "
+                                      "because the big truck leaves early tomorrow morning.", seed=3)
+    strokes = sorted(a.time("stroke") for a in record.activations if a.controller in ("gesture", "pointing"))
+    gap = load_rules().gap_s["hands"]
+    assert len(strokes) >= 3 and min(b - a for a, b in zip(strokes, strokes[1:])) >= gap - 1e-9
+
+
+def test_every_stroke_is_on_its_words_mark():
+    scheduler, records = schedule("So here is the plan: we take the long road north, then we cross the river, "
+                                  "and finally we meet the others at the old bridge. Is that clear?", seed=11)
+    record = records[0]
+    speech = record.activation("s1")
+    marks = {m: speech.start + t for m, t in speech.parameters["marks_s"].items()}
+    refs = {b.id: b.sync_refs for b in record.block.behaviours}
+    checked = 0
+    for a in record.activations:
+        for sync, ref in refs[a.behaviour].items():
+            if ref.behaviour == "s1" and ref.sync in marks:
+                assert a.sync_times[sync] == pytest.approx(marks[ref.sync], abs=1e-9)
+                checked += 1
+    assert checked >= 6
+
+
+def test_the_listener_nods_on_the_speakers_phrase_ends():
+    scheduler, records = schedule("Well, the first thing you have to know is that the machine is old, "
+                                  "and the second thing is that nobody has the manual anymore.", seed=2)
+    speaker, listener = records
+    assert listener.character == "bob" and listener.id == "b1_bob_nv"
+    speech = speaker.activation("s1")
+    ends = {speech.start + t for m, t in speech.parameters["marks_s"].items() if m.startswith("nve")}
+    nods = [a for a in listener.activations if a.controller == "head"]
+    assert nods and all(any(abs(a.time("stroke") - t) < 1e-9 for t in ends) for a in nods)
+
+
+def test_the_added_bml_is_feedback_and_the_seed_repeats_it():
+    def feedback(seed):
+        scheduler, _ = schedule("Now let me show you the whole thing, step by step, from the very beginning.", seed=seed)
+        return next(e.bml for e in scheduler.feedback.log if e.kind == "generatedBml")
+    first = feedback(7)
+    assert first == feedback(7) and first != feedback(8)
+    assert first.startswith("<act>") and 'characterId="bob"' in first and '<sync id="nvw' in first
+
+
+def test_the_author_keeps_the_channels_it_uses(tmp_path):
+    rules = certain_rules(tmp_path)
+    found = elements(generated("No, that cup is really important, I am sure.", rules,
+                               extra='<gesture id="mine" lexeme="OFFER"/><gaze id="look" target="bob"/>'))
+    channels = {e for e, _ in found}
+    assert "gesture" not in channels and "pointing" not in channels and "gaze" not in channels
+    assert "head" in channels and "faceLexeme" in channels
+
+
+def test_off_by_default_on_by_flag_scene_key_or_scheduler(tmp_path):
+    text = "Yes, absolutely, I agree with every word of that."
+    plain = Scheduler(names=lambda: CAST)
+    (record,) = plain.submit(block(text, flag=""))
+    assert [a.behaviour for a in record.activations] == ["s1"]
+    on = Scheduler(names=lambda: CAST, generators=("nonverbal",))
+    records = on.submit(block(text, flag=""))
+    assert len(records[0].activations) > 1
+    off = on.submit(block(text, flag='infuse:nonverbal="false"', block_id="b2"))
+    assert [a.behaviour for a in off[0].activations] == ["s1"]
+    scene_file = tmp_path / "scene.toml"
+    scene_file.write_text('generators = ["nonverbal"]\n[[character]]\nname = "ann"\nfile = "ann.bvh"\n')
+    (tmp_path / "ann.bvh").write_text("")
+    assert read_scene_file(scene_file).generators == ("nonverbal",)
+
+
+def test_settings_name_the_listener_and_the_seed(tmp_path):
+    rules = certain_rules(tmp_path)
+    cast = {"ann": "character", "bob": "character", "cid": "character"}
+    g = generated("You know, the machine is old and nobody has the manual anymore.", rules, names=cast,
+                  settings={"listener": "CID"})
+    assert g.blocks[0].character_id == "cid" and ("pointing", {"target": "cid", "stroke": "You"}) in elements(g)
+    g = generated("You know, the machine is old.", rules, names=cast, settings={"listener": "dan"})
+    assert g.blocks == () and "infuse:listener='dan' names no character" in g.notes[0]
+    scheduler = Scheduler(names=lambda: CAST)
+    scheduler.submit(block("Fine.", flag='infuse:nonverbal="true" infuse:seed="x"'))
+    assert any("infuse:seed='x' is not an integer" in e.description for e in scheduler.feedback.log
+               if e.kind == "warningFeedback")
+
+
+@pytest.mark.parametrize("change, place, problem", [
+    ('channel = "hands"', "rule[1].channel", "expected one of hands, head, face"),
+    ('on = "greeting"', None, None),
+    ("bml = '<gesture lexeme=\"WAVE\" mode=\"{hand}\"/>'", "rule[1].bml", "the element sets its own sync points"),
+    ("\nprobability = 1.0", "listener.probability", "expected a number in [0, 1]"),
+])
+def test_a_mistake_in_the_rules_names_the_file_and_the_key(tmp_path, change, place, problem):
+    broken = {'channel = "hands"': 'channel = "feet"',
+              'on = "greeting"': 'on = "greetings"',
+              "bml = '<gesture lexeme=\"WAVE\" mode=\"{hand}\"/>'": "bml = '<gesture lexeme=\"WAVE\" stroke=\"1\"/>'",
+              "\nprobability = 1.0": "\nprobability = 1.5"}[change]
+    text = certain_rules(tmp_path).read_text().replace(change, broken, 1)
+    assert text != certain_rules(tmp_path).read_text()
+    path = tmp_path / "broken.toml"
+    path.write_text(text)
+    tomllib.loads(text)
+    with pytest.raises(InputError) as caught:
+        load_rules(path)
+    message = str(caught.value)
+    assert str(path) in message
+    if place is None:
+        assert "rule[1].on" in message and "'greetings' is no word class" in message
+    else:
+        assert place in message and problem in message
