@@ -42,7 +42,7 @@ def test_walks_reach_their_spots_in_the_world(walked):
     assert np.linalg.norm(path[stay] - (3.0, -0.9), axis=1).max() < 0.15  # there, and staying there
     assert np.linalg.norm(path[-20:] - (4.5, -0.8), axis=1).max() < 0.15  # then at the second spot
     assert np.linalg.norm(path[0] - (1.0, -1.0)) < 0.15  # from where it was placed
-    first_walk, _ = scene.walks.walks["bob"]
+    first_walk, _ = scene.stagehands["locomotion"].walks["bob"]
     assert first_walk.settled is not None  # it stood on the pack's idle in between
     steps = np.linalg.norm(np.diff(path, axis=0), axis=1)
     assert steps.max() < 2.5 / 30  # no jump anywhere: the idle took over there, the second walk went on from it
@@ -114,7 +114,7 @@ def test_an_arrived_walk_hands_over_to_the_idle_where_it_stands():
     scene.add_character(corpus_character("xbot"), "bob", packs=["locomotion-male"])
     scene.walk_to("bob", (0.2, 2.0), at=0.2)
     scene.run(6.0)
-    (walk,) = scene.walks.walks["bob"]
+    (walk,) = scene.stagehands["locomotion"].walks["bob"]
     assert walk.settled is not None and walk.activity.end_s is not None  # the idle clip took over
     assert walk.settled.start_s <= walk.end_s + 0.5  # at rest by the end its walk was planned to have
     rig = scene.runtime.rig("bob")
@@ -133,7 +133,7 @@ def test_an_arrived_walk_hands_over_to_the_idle_where_it_stands():
 def test_a_walk_settles_into_the_idle_only_once_its_stop_is_over(monkeypatch):
     """Standing still for half a second is not enough: the stop steps and the fade into the pack's idle
     must be over (the locomotion controller's ``at_rest``) when the idle clip takes over."""
-    from infuse.scene import walks
+    from infuse_locomotion import walks
 
     checks = []  # (locomotion state when the scene looked, whether the idle took over)
     settle = walks.Walks._settle
@@ -148,7 +148,7 @@ def test_a_walk_settles_into_the_idle_only_once_its_stop_is_over(monkeypatch):
     scene.add_character(corpus_character("xbot"), "bob", packs=["locomotion-male"])
     scene.walk_to("bob", (-2.0, -1.0), at=0.5)
     scene.run(8.0)
-    (walk,) = scene.walks.walks["bob"]
+    (walk,) = scene.stagehands["locomotion"].walks["bob"]
     controller = walk.activity.controller
     assert walk.settled is not None and checks[-1][1]
     assert controller.at_rest(checks[-1][0])  # at rest when the idle clip took over

@@ -45,7 +45,6 @@ from . import builder
 from .realize import realize
 from .speech import SpeechCache, mix, utterance_samples, write_wav
 from .stage import SceneStage
-from .walks import Walks
 
 
 @dataclass
@@ -119,7 +118,6 @@ class Scene:
         self.activities: dict[tuple[str, str], object] = {}
         self._spoken: dict[str, list[_Spoken]] = {}
         self._interrupted: set[tuple[str, str]] = set()
-        self.walks = Walks(self)
         self.stage = SceneStage(self)
         self._recorder = None
         self._realizing = None
@@ -581,8 +579,9 @@ class Scene:
     # -- evaluation -----------------------------------------------------------------------------------
     @property
     def end_time(self) -> float:
-        """When everything scheduled has ended, every walk standing at its target (seconds; 0 for an empty scene)."""
-        return max([0.0, self.walks.end_s(), self.stage.end_s()] + [r.end_s if r.interrupted_at is None else r.interrupted_at
+        """When everything scheduled has ended and every stagehand is done, e.g. every walk standing at its target
+        (seconds; 0 for an empty scene)."""
+        return max([0.0, self.stage.end_s()] + [r.end_s if r.interrupted_at is None else r.interrupted_at
                                                 for r in self.scheduler.blocks.values() if not r.failed])
 
     def run(self, seconds: float | None = None, progress=None) -> None:
@@ -598,9 +597,8 @@ class Scene:
         self._check_facing()
         done = 0
         while done < frames:
-            self.walks.before_block()
             self.stage.before_block()
-            n = self.stage.frames_ahead(self.walks.frames_until_handover(min(self.runtime.block_frames, frames - done)))
+            n = self.stage.frames_ahead(min(self.runtime.block_frames, frames - done))
             self.runtime.step(n)
             done += n
             self._deliver()
@@ -612,9 +610,8 @@ class Scene:
         frames = int(frames)
         self._check_facing()
         while frames > 0:
-            self.walks.before_block()
             self.stage.before_block()
-            n = self.stage.frames_ahead(self.walks.frames_until_handover(frames))
+            n = self.stage.frames_ahead(frames)
             self.runtime.step(n)
             frames -= n
         self._deliver()

@@ -7,7 +7,13 @@ from infuse.plugin_types import ControllerFactory
 from .controller import Locomotion
 
 
+def _realize(activation, stage):
+    from .realize import realize_walk
+
+    return realize_walk(activation, stage)
+
+
 @infuse.hookimpl
 def infuse_controllers():
     return [ControllerFactory("locomotion", Locomotion,
-                              "walk, run, turn and strafe by blending a locomotion pack (base layer)")]
+                              "walk, run, turn and strafe by blending a locomotion pack (base layer)", realize=_realize)]

@@ -1,4 +1,5 @@
-"""Walks that go on from one another, and characters that stand where a walk left them.
+"""Walks that go on from one another, and characters that stand where a walk left them: the
+:class:`Walks` stagehand a scene keeps for the locomotion plugin (:mod:`infuse.stage`).
 
 A locomotion activity starts from the character's own origin unless told otherwise. So when a character
 walks again, the new walk takes over the state of the one before (where it is, its heading, speed, gait
@@ -18,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import quaternions as quat
-from ..runtime import Clip
-from ..bml.model import BEHAVIOR_DEGRADED
+from infuse import quaternions as quat
+from infuse.bml.model import BEHAVIOR_DEGRADED
+from infuse.runtime import Clip
 
 #: Crossfade from a walk that has arrived to the idle clip, seconds.
 SETTLE_BLEND_S = 0.5
@@ -53,8 +54,8 @@ class Walks:
     settles it at ``2k + 3``, so each blends over the one before (the pack's first idle plays at 0).
     """
 
-    def __init__(self, scene):
-        self.scene = scene
+    def __init__(self, stage):
+        self.stage = stage
         self.walks: dict[str, list[Walk]] = {}
         self._handovers: list[tuple[int, object, object]] = []
 
@@ -79,7 +80,7 @@ class Walks:
         it is planned to arrive at its last point at ``arrives_s`` (default ``end_s``) and to be at rest
         there by ``end_s``, its steering then in state ``final``; the scene looks whether it stands
         from its arrival on."""
-        runtime = self.scene.runtime
+        runtime = self.stage.runtime
         walks = self.walks.setdefault(name, [])
         previous = walks[-1] if walks else None
         if previous is not None:  # the old pose shows until the new walk has blended in
@@ -87,7 +88,7 @@ class Walks:
             runtime.stop(previous.activity, until, blend_out_s=0.0)
             if previous.settled is not None:
                 runtime.stop(previous.settled, until, blend_out_s=0.0)
-        fps = self.scene.fps
+        fps = self.stage.fps
         first_look = end_s if arrives_s is None else arrives_s
         walks.append(Walk(activity, float(end_s), math.ceil(first_look * fps - 1e-9), final=final))
         frame = max(math.ceil(activity.start_s * fps - 1e-9), 0)
@@ -101,17 +102,17 @@ class Walks:
                 if walk.settled is None and (after is None or after.activity.start_s > walk.end_s + STILL_S):
                     yield name, walk, after
 
-    def frames_until_handover(self, most: int) -> int:
+    def frames_ahead(self, most: int) -> int:
         """How many frames to evaluate next: at most ``most``, stopping at the frame a walk takes over or
         should be seen standing."""
-        frame = self.scene.runtime.frame
+        frame = self.stage.runtime.frame
         ahead = [f - frame for f, _, _ in self._handovers if f > frame]
         ahead += [w.check_frame - frame for _, w, _ in self._waiting() if w.check_frame > frame]
         return max(min([most] + ahead), 1)
 
     def before_block(self) -> None:
         """Hand over the walks that start now, and settle those that have arrived."""
-        frame = self.scene.runtime.frame
+        frame = self.stage.runtime.frame
         due = [h for h in self._handovers if h[0] <= frame]
         self._handovers = [h for h in self._handovers if h[0] > frame]
         for _, activity, previous in due:
@@ -119,8 +120,9 @@ class Walks:
                 self._report_short(previous)
                 activity.state.update(activity.controller.handover(previous.state))
         for name, walk, after in list(self._waiting()):
-            started = walk.activity.start_s <= self.scene.time
-            if started and frame >= walk.check_frame and (after is None or after.activity.start_s > self.scene.time + SETTLE_BLEND_S):
+            now = self.stage.time
+            if walk.activity.start_s <= now and frame >= walk.check_frame and \
+                    (after is None or after.activity.start_s > now + SETTLE_BLEND_S):
                 self._settle(name, walk, after)
 
     def _report_short(self, activity) -> None:
@@ -130,13 +132,13 @@ class Walks:
             return
         short = math.hypot(activity.state["x"] - path[-1][0], activity.state["z"] - path[-1][1])
         if short > SHORT_M:
-            self.scene.warn(activity.source, BEHAVIOR_DEGRADED, f"<{activity.source.element}>: {short:.2f} m short of its "
-                                                                f"target when the next walk took over at {self.scene.time:.2f} s")
+            self.stage.warn(activity.source, BEHAVIOR_DEGRADED, f"<{activity.source.element}>: {short:.2f} m short of its "
+                                                                f"target when the next walk took over at {self.stage.time:.2f} s")
 
     def _settle(self, name: str, walk: Walk, after: Walk | None) -> None:
-        scene, runtime = self.scene, self.scene.runtime
-        idle = scene.find_clip(name, "idle")
-        still = int(round(STILL_S * scene.fps))
+        stage, runtime = self.stage, self.stage.runtime
+        idle = stage.clip(name, "idle")
+        still = int(round(STILL_S * stage.fps))
         walk.check_frame = runtime.frame + still  # unless it settles now, look again then
         if idle is None or idle.skeleton.names != runtime.rig(name).skeleton.names or runtime.frame <= still:
             return
@@ -157,7 +159,7 @@ class Walks:
         here = root[-1] * np.array([1.0, 0.0, 1.0])
         placed = idle.replace(local_rotations=rotations, root_translations=here + quat.rotate(turn, idle.root_translations - start),
                               name="idle")
-        at = scene.time
+        at = stage.time
         walk.settled = runtime.activate(name, Clip(placed, loop=True), at, blend_in_s=SETTLE_BLEND_S,
                                         priority=walk.activity.priority + 1)
         runtime.stop(walk.activity, at + SETTLE_BLEND_S, blend_out_s=0.0)
