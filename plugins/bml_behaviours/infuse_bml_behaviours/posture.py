@@ -1,8 +1,18 @@
-"""``<posture>``, ``<postureShift>``, SmartBody's ``<body posture=...>`` and Greta's ``<torso>``."""
+"""``<posture>``, ``<postureShift>``, SmartBody's ``<body posture=...>`` and Greta's ``<torso>``.
+
+A standing stance and its pose lexemes (BML 1.0 ``<stance type="STANDING"/><pose part="ARMS"
+lexeme="ARMS_CROSSED"/>``), a SmartBody posture name or a torso lexeme name a posture of the installed
+``postures`` pack (:mod:`.posture_lexicon`); the plan then carries it as ``posture`` (and ``pack``) for
+the posture controller. ``STANDING`` alone is the neutral posture. A SmartBody posture the character has a
+clip of keeps that clip. A name the pack does not know, or a stance other than standing, warns here,
+naming what the pack knows. ``<posture>`` is temporary (into it by ``ready``, back out from ``relax``);
+``<postureShift>`` and ``<body>`` last until the next one.
+"""
 from __future__ import annotations
 
 from infuse.bml import BehaviourError, BehaviourPlan, TimingModel
 
+from . import posture_lexicon
 from .common import Notes, number, with_sbm, word
 
 #: A temporary posture (seconds): into it, held, back.
@@ -16,7 +26,13 @@ BODY_ATTRIBUTES = {"posture"} | with_sbm("posture", "blend", "duration")
 TORSO_ATTRIBUTES = {"lexeme"}
 
 
+def _unknown(what: str) -> str:
+    return f"{what} names no posture of the postures pack (its postures: {posture_lexicon.described()})"
+
+
 def _stance_and_poses(behaviour, notes: Notes) -> dict:
+    """The stance and poses of the behaviour, and the pack's posture they name (``posture``, ``pack``) when
+    one does."""
     stance = next((c.attributes.get("type") for c in behaviour.children if c.name == "stance"), None)
     if stance and stance.upper() not in STANCES:
         notes.append(f"stance {stance!r} is not one of {', '.join(STANCES)}")
@@ -24,7 +40,23 @@ def _stance_and_poses(behaviour, notes: Notes) -> dict:
              for c in behaviour.children if c.name == "pose"]
     if stance is None and not poses:
         raise BehaviourError("it has neither a <stance> nor a <pose>")
-    return {"stance": stance.upper() if stance else None, "poses": poses}
+    parameters = {"stance": stance.upper() if stance else None, "poses": poses}
+    if not posture_lexicon.known():
+        return parameters
+    if parameters["stance"] not in (None, "STANDING"):
+        notes.append(f"stance {parameters['stance']} is not realized: every posture of the postures pack stands")
+        return parameters
+    found = None
+    for pose in poses:
+        found = posture_lexicon.lookup(pose["lexeme"])
+        if found is not None:
+            break
+        notes.append(_unknown(f"pose {pose['part']}={pose['lexeme']}"))
+    if found is None and parameters["stance"] == "STANDING":
+        found = posture_lexicon.NEUTRAL  # standing, the pose unnamed or unknown: the neutral stance
+    if found is not None:
+        parameters.update(posture=found, pack=posture_lexicon.PACK)
+    return parameters
 
 
 def plan_posture(behaviour, context) -> BehaviourPlan:
@@ -42,7 +74,8 @@ def plan_posture_shift(behaviour, context) -> BehaviourPlan:
 
 def plan_body(behaviour, context) -> BehaviourPlan:
     """SmartBody ``<body posture=...>``: a lasting idle posture. SmartBody reads a plain number in ``ready`` as the
-    time to blend into the posture from its start (``relax`` has no meaning for a lasting posture)."""
+    time to blend into the posture from its start (``relax`` has no meaning for a lasting posture). A clip of
+    the character of that name plays; else the pack's posture the name says."""
     notes = Notes()
     posture = word(behaviour, ("posture", "sbm:posture"))
     if posture is None:
@@ -54,14 +87,26 @@ def plan_body(behaviour, context) -> BehaviourPlan:
         if "ready" in own:
             transition = max(behaviour.sync_refs["ready"].time, 0.0)
     points = {"start": 0.0, "ready": transition, "relax": transition, "end": transition}
-    return BehaviourPlan(TimingModel.from_points(points), "posture",
-                         {"clip": posture, "stance": None, "poses": [], "transition_s": transition},
-                         True, tuple(notes), own)
+    parameters = {"clip": posture, "stance": None, "poses": [], "transition_s": transition}
+    if not context.clip_timing(posture) and posture_lexicon.known():
+        found = posture_lexicon.lookup(posture)
+        if found is None:
+            notes.append(_unknown(f"posture {posture!r}"))
+        else:
+            parameters.update(clip=None, posture=found, pack=posture_lexicon.PACK, lexeme=posture)
+    return BehaviourPlan(TimingModel.from_points(points), "posture", parameters, True, tuple(notes), own)
 
 
 def plan_torso(behaviour, context) -> BehaviourPlan:
+    notes = Notes()
     lexeme = word(behaviour, "lexeme")
     if lexeme is None:
         raise BehaviourError("it has no lexeme")
-    return BehaviourPlan(TimingModel.from_points(POSTURE_POINTS), "posture",
-                         {"stance": None, "poses": [{"part": "TORSO", "lexeme": lexeme}]})
+    parameters = {"stance": None, "poses": [{"part": "TORSO", "lexeme": lexeme}]}
+    if posture_lexicon.known():
+        found = posture_lexicon.lookup(lexeme)
+        if found is None:
+            notes.append(_unknown(f"torso lexeme {lexeme!r}"))
+        else:
+            parameters.update(posture=found, pack=posture_lexicon.PACK)
+    return BehaviourPlan(TimingModel.from_points(POSTURE_POINTS), "posture", parameters, notes=tuple(notes))

@@ -12,7 +12,9 @@ gestures, gaze, head and face.
 
 A posture started while another plays takes its footprints from the pose that one makes (postures
 are evaluated in the order they started); a lasting posture ends the lasting ones before it once it
-has blended in; a temporary one blends back out to what plays below it.
+has blended in; a temporary one blends back out to what plays below it. When the pose below walks
+away (the hips more than :data:`WALK_AWAY_M` from where they stood), the posture gives way: it blends
+out, letting the feet go with it.
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import MissingJointsError, UsageError
 from infuse.kinematics import forward_kinematics
-from infuse.runtime import Controller, Layer, Mode, sample_motion
+from infuse.runtime import Controller, Layer, Mode, sample_motion, smoothstep
 from infuse.runtime.limb_ik import solve_limb
 
 #: Base-layer priority: above walks (which count up from 1) and the scene's idle clip.
@@ -30,6 +32,8 @@ PRIORITY = 10_000
 TRANSITION_S = 1.0
 #: A standing leg reaches at most this share of its length (the knee never locks).
 LEG_REACH = 0.995
+#: The hips of the pose below this far (metres, horizontally) from where they stood: the character walks off.
+WALK_AWAY_M = 0.15
 _INFUSIONS: dict = {}
 
 
@@ -107,6 +111,7 @@ class Posture(Controller):
             if not started.size:
                 return
             state.update(self._footprints(pose, b["legs"], int(started[0])))
+        pin = self._leaving(job, block)
         live = job.weight > 0.0
         if not live.any():
             return
@@ -122,23 +127,42 @@ class Posture(Controller):
         jt = pose.joint_translations
         goals = np.broadcast_to(state["ankles"], (len(root), 2, 3))
         root = self._lowered(sk, rotations, root, jt, b["legs"], goals, b["reach"])
-        solve_limb(sk, rotations, root, jt, b["legs"], goals, weight=np.repeat(live[:, None], 2, axis=1).astype(float),
+        solve_limb(sk, rotations, root, jt, b["legs"], goals, weight=np.repeat((pin * live)[:, None], 2, axis=1),
                    pole=state["forward"], end_rotation=np.broadcast_to(state["ankle_rotations"], (len(root), 2, 4)),
                    distance=False)
         on = live.astype(float)
         pose.set_rotations(np.arange(sk.num_joints), rotations, on)
         pose.set_root(root, on)
 
+    def _leaving(self, job, block) -> np.ndarray:
+        """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
+        (then the activity ends after its blend out, and ``job.weight`` fades with it)."""
+        state = job.state
+        if "leave_s" not in state:
+            hips = job.pose.chain_pose(job.binding["legs"][:, 0])[1].mean(axis=1)  # (F, 3) in the world
+            away = (np.linalg.norm((hips - state["hips"])[:, [0, 2]], axis=-1) > WALK_AWAY_M) & (job.local_times >= 0.0)
+            if not away.any():
+                return np.ones(len(block))
+            state["leave_s"] = float(block.times[int(np.argmax(away))])
+            activity = job.activity
+            end = state["leave_s"] + activity.blend_out_s
+            activity.end_s = end if activity.end_s is None else min(activity.end_s, end)
+        fade = 1.0 - smoothstep((block.times - state["leave_s"]) / max(job.activity.blend_out_s, 1e-9))
+        job.weight = job.weight * fade
+        return fade
+
     @staticmethod
     def _footprints(pose, legs: np.ndarray, k: int) -> dict:
         """Where the pose below stands at frame ``k``: ankle positions (2, 3) and global rotations (2, 4),
-        their centre (3,), its facing (radians) and forward (3,), in the character's own frame."""
+        their centre (3,), its facing (radians) and forward (3,), in the character's own frame; the hips'
+        centre (3,) in the world."""
         jt = None if pose.joint_translations is None else pose.joint_translations[k:k + 1]
         g_rot, g_pos = forward_kinematics(pose.rig.skeleton, pose.local_rotations[k:k + 1], pose.root_translations[k:k + 1], jt)
         ankles = g_pos[0, legs[:, 2]]
         yaw = facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]])
+        hips = pose.chain_pose(legs[:, 0])[1][k].mean(axis=0)
         return {"ankles": ankles, "ankle_rotations": g_rot[0, legs[:, 2]], "centre": ankles.mean(axis=0), "yaw": yaw,
-                "forward": np.array([np.sin(yaw), 0.0, np.cos(yaw)])}
+                "forward": np.array([np.sin(yaw), 0.0, np.cos(yaw)]), "hips": hips}
 
     @staticmethod
     def _lowered(sk, rotations, root, jt, legs, goals, reach) -> np.ndarray:

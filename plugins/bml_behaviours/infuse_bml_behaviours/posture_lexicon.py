@@ -1,0 +1,84 @@
+"""BML posture names -> a posture of the installed ``postures`` pack, read from the pack's manifest.
+
+Each posture clip of the pack lists, as tags (lower case), its name and the lexemes it realizes (BML
+1.0 pose lexemes such as ``ARMS_CROSSED``, SmartBody's and other realizers' words). A name matches a
+posture when the whole name is one of its tags (also with ``_``, ``-`` and spaces removed:
+``ArmsCrossed``), else when two neighbouring words of it are (``ChrBrad@Idle01_ArmsCrossed`` ->
+``arms_crossed``), else when one word is (``ChrMarine@Idle01`` -> ``idle``: neutral). Words are split at
+``_``, ``-``, ``@``, ``.``, spaces and lower-to-upper case changes, trailing digits dropped. A more
+specific posture wins over the neutral one.
+"""
+from __future__ import annotations
+
+import re
+from functools import lru_cache
+
+PACK = "postures"
+NEUTRAL = "neutral"
+
+
+@lru_cache(maxsize=1)
+def _lexicon() -> tuple[dict, dict] | None:
+    """(tag -> posture, posture -> its BML lexemes in manifest order) of the installed pack, or None."""
+    from infuse import registry
+    from infuse.errors import InfuseError
+    from infuse.packs import load_pack
+
+    if PACK not in registry.table("behaviour-pack"):
+        return None
+    try:
+        doc = load_pack(PACK).require_built()
+    except InfuseError:
+        return None
+    tags, lexemes = {}, {}
+    for c in doc["clips"]:
+        if c.get("role") != "posture":
+            continue
+        lexemes[c["name"]] = [t.upper() for t in c["tags"]] or [c["name"].upper()]
+        for tag in (c["name"], *c["tags"]):
+            tags.setdefault(tag, c["name"])
+            tags.setdefault(_squashed(tag), c["name"])
+    return tags, lexemes
+
+
+def _squashed(name: str) -> str:
+    return re.sub(r"[\s_\-.@]+", "", name).lower()
+
+
+def _words(name: str) -> list[str]:
+    spaced = re.sub(r"([a-z])([A-Z])", r"\1 \2", name)
+    return [w.rstrip("0123456789").lower() for w in re.split(r"[_\-@.\s]+", spaced) if w.rstrip("0123456789")]
+
+
+def known() -> bool:
+    """Whether a postures pack is installed."""
+    return _lexicon() is not None
+
+
+def lookup(name: str | None) -> str | None:
+    """The posture of the pack that ``name`` (a lexeme, a SmartBody posture, a Greta torso lexeme) names, or None."""
+    lexicon = _lexicon()
+    if lexicon is None or not name or not name.strip():
+        return None
+    tags = lexicon[0]
+    whole = tags.get(name.strip().lower()) or tags.get(_squashed(name))
+    if whole is not None:
+        return whole
+    words = _words(name)
+    pairs = [f"{a}_{b}" for a, b in zip(words, words[1:])]
+    found = [tags[k] for k in pairs + words if k in tags]
+    return next((p for p in found if p != NEUTRAL), found[0] if found else None)
+
+
+def postures() -> list[str]:
+    """The installed pack's postures."""
+    lexicon = _lexicon()
+    return list(lexicon[1]) if lexicon else []
+
+
+def described() -> str:
+    """The pack's postures with the first lexemes each realizes, for warnings: ``arms_crossed (ARMS_CROSSED, ...)``."""
+    lexicon = _lexicon()
+    if lexicon is None:
+        return "no postures pack is installed"
+    return "; ".join(f"{p} ({', '.join(lex[:3])})" for p, lex in lexicon[1].items())
