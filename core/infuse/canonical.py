@@ -43,7 +43,7 @@ def canonical_joints() -> tuple[CanonicalJoint, ...]:
     text = resources.files("infuse").joinpath("data/canonical_skeleton.toml").read_text(encoding="utf-8")
     rows = tomllib.loads(text)["joints"]
     joints = tuple(
-        CanonicalJoint(r["name"], r["parent"] or None, r["group"], r["side"], tuple(float(v) for v in r["position"]),
+        CanonicalJoint(r["name"], r["parent"] or None, r["group"], r["side"], (float(r["position"][0]), float(r["position"][1]), float(r["position"][2])),
                        bool(r.get("extra", False)))
         for r in rows
     )

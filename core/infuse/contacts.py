@@ -17,6 +17,7 @@ then tells the heel (ankle) from the ball of each planted foot.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Union
 
 import numpy as np
@@ -89,7 +90,7 @@ def joint_index(skeleton: Skeleton, mapping: MappingLike) -> dict[str, int]:
     return out
 
 
-def feet(skeleton: Skeleton, mapping: MappingLike, file: object = None) -> tuple[Foot, Foot]:
+def feet(skeleton: Skeleton, mapping: MappingLike, file: str | Path | None = None) -> tuple[Foot, Foot]:
     """The left and right :class:`Foot` of ``skeleton`` from a canonical mapping (see :func:`joint_index`).
 
     Raises :class:`UnusableInputError` when a hip, knee or ankle is not mapped.
@@ -111,7 +112,7 @@ def feet(skeleton: Skeleton, mapping: MappingLike, file: object = None) -> tuple
 
 
 def leg_length(skeleton: Skeleton, pair: tuple[Foot, Foot], positions: np.ndarray | None = None,
-               file: object = None) -> float:
+               file: str | Path | None = None) -> float:
     """Mean thigh + shin length of the two legs in metres (joint distances, so any rest pose will do).
 
     ``positions`` (J, 3) defaults to the rest pose. Raises :class:`UnusableInputError` for a leg of

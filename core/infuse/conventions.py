@@ -136,7 +136,7 @@ def body_height(positions: np.ndarray, parents: np.ndarray, sites: np.ndarray | 
     """
     body = body_joints(parents)
     points = np.asarray(positions, dtype=np.float64)[body]
-    if sites is not None and len(sites):
+    if sites is not None and site_parents is not None and len(sites):
         points = np.concatenate((points, np.asarray(sites, dtype=np.float64)[np.isin(site_parents, body)]))
     return figure_height(points, 0)
 

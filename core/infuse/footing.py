@@ -29,8 +29,9 @@ _RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
 
 def smoothstep(x: np.ndarray | float) -> np.ndarray:
     """``3x² - 2x³`` of ``x`` clipped to [0, 1]: 0 and 1 with zero slope at both ends."""
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
+    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+    out: np.ndarray = x * x * (3.0 - 2.0 * x)
+    return out
 
 
 def planted_height(heights: np.ndarray, flags: np.ndarray) -> float:
@@ -60,7 +61,8 @@ def glide(values: np.ndarray, inside: np.ndarray) -> np.ndarray:
     lo = np.where(prev >= 0, prev, nxt)
     hi = np.where(nxt < f, nxt, prev)
     w = smoothstep((np.arange(f) - lo) / np.maximum(hi - lo, 1))
-    return values[:, lo] * (1.0 - w) + values[:, hi] * w
+    out: np.ndarray = values[:, lo] * (1.0 - w) + values[:, hi] * w
+    return out
 
 
 def weight_near(inside: np.ndarray, frames: float) -> np.ndarray:

@@ -121,15 +121,15 @@ class SkinnedMesh:
             w = weights[:, k]
             if np.any(w):
                 blend += w[:, None] * flat[:, joints[:, k]]
-        blend = blend.reshape(frames, -1, 3, 4)
+        affine = blend.reshape(frames, -1, 3, 4)
         rest = self.positions[sel]
         if morph_weights is not None and self.morph_positions is not None and np.any(morph_weights):
             mw = np.asarray(morph_weights, dtype=np.float32).reshape(frames, -1)
             rest = rest + np.einsum("fm,mvc->fvc", mw, self.morph_positions[:, sel], optimize=True)
-            positions = np.einsum("fvij,fvj->fvi", blend[..., :3], rest) + blend[..., 3]
+            positions = np.einsum("fvij,fvj->fvi", affine[..., :3], rest) + affine[..., 3]
         else:
-            positions = np.einsum("fvij,vj->fvi", blend[..., :3], rest) + blend[..., 3]
-        normals = np.einsum("fvij,vj->fvi", blend[..., :3], self.normals[sel])
+            positions = np.einsum("fvij,vj->fvi", affine[..., :3], rest) + affine[..., 3]
+        normals = np.einsum("fvij,vj->fvi", affine[..., :3], self.normals[sel])
         normals /= np.maximum(np.linalg.norm(normals, axis=-1, keepdims=True), 1e-12)
         return positions, normals
 
@@ -178,7 +178,9 @@ def merge(meshes: Sequence[SkinnedMesh], name: str = "merged", morph_names: Sequ
         raise ValueError("merge needs at least one mesh")
     offsets = np.cumsum([0] + [m.num_vertices for m in meshes])
     keys: dict[tuple, int] = {}
-    bone_joints, bone_matrices, joint_maps = [], [], []
+    bone_joints: list[int] = []
+    bone_matrices: list[np.ndarray] = []
+    joint_maps: list[np.ndarray] = []
     for m in meshes:
         table = np.empty(len(m.bind_joints), dtype=np.int32)
         for b, (j, ib) in enumerate(zip(m.bind_joints, m.inverse_bind)):
@@ -204,7 +206,7 @@ def merge(meshes: Sequence[SkinnedMesh], name: str = "merged", morph_names: Sequ
         row = {n: i for i, n in enumerate(morph_names)}
         for m, a in zip(meshes, offsets):
             for i, n in enumerate(m.morph_names):
-                if n in row:
+                if n in row and m.morph_positions is not None:
                     morph_positions[row[n], a:a + m.num_vertices] = m.morph_positions[i]
     return SkinnedMesh(
         name, np.concatenate([m.positions for m in meshes]), np.concatenate([m.normals for m in meshes]),

@@ -162,7 +162,7 @@ def make_continuous(q: np.ndarray, axis: int = 0) -> np.ndarray:
     return np.moveaxis(q, 0, axis)
 
 
-def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def from_axis_angle(axis: np.ndarray, angle: np.ndarray | float) -> np.ndarray:
     """Quaternions from unit ``axis`` (...,3) and ``angle`` in radians (...)."""
     axis = np.asarray(axis, dtype=np.float64)
     half = 0.5 * np.asarray(angle, dtype=np.float64)[..., None]

@@ -43,9 +43,9 @@ def decode_image(source: bytes | str | Path, size: int = TEXTURE_SIZE) -> np.nda
             raise ValueError(f"an image of {width} x {height} pixels is over the limit of {limits.MAX_IMAGE_PIXELS:,} "
                              "(infuse.limits.MAX_IMAGE_PIXELS)")
         img.draft("RGB", (size, size))  # JPEG decodes straight at a reduced scale
-        img = img.convert("RGBA")
-        img.thumbnail((size, size))
-        rgba = np.asarray(img, dtype=np.float64) / 255.0
+        converted = img.convert("RGBA")
+        converted.thumbnail((size, size))
+        rgba = np.asarray(converted, dtype=np.float64) / 255.0
     rgba[..., :3] = srgb_to_linear(rgba[..., :3])
     return rgba
 

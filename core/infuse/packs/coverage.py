@@ -146,13 +146,14 @@ def coverage(tessellation) -> dict:
     """The coverage table: for each direction of :data:`DIRECTIONS_DEG` and turn rate of
     :data:`TURNS_DEG_S`, the speeds (m/s) the blend shows as asked (``shown``: lowest, top) and the top
     speed of the direction at any turn (``top``, the turn then partly spun at the root)."""
-    out = {"directions_deg": list(DIRECTIONS_DEG), "turns_deg_s": list(TURNS_DEG_S), "shown": [], "top": []}
+    shown: list[list[list[float]]] = []
+    out = {"directions_deg": list(DIRECTIONS_DEG), "turns_deg_s": list(TURNS_DEG_S), "shown": shown, "top": []}
     d = np.radians(DIRECTIONS_DEG)
     top, _ = speed_limits(tessellation, d)
     out["top"] = top.tolist()
     for w in TURNS_DEG_S:
         hi, lo = speed_limits(tessellation, d, math.radians(w))
-        out["shown"].append([[float(a), float(b)] for a, b in zip(lo, hi)])
+        shown.append([[float(a), float(b)] for a, b in zip(lo, hi)])
     return out
 
 

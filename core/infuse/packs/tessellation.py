@@ -104,14 +104,14 @@ class Tessellation:
             best[outside] = nearest
             chosen[outside] = clamped[nearest, :, np.arange(outside.size)]
         out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
-        return out, inside
+        return out, np.asarray(inside)
 
     def contains(self, query) -> np.ndarray:
         """(Q,) flags of (Q, D) query points inside the hull (as :meth:`weights` reports them), without the weights."""
         y = self.reduced(query)
         if self.dimension == 0:
             return np.ones(len(y), dtype=bool)
-        return self._barycentric(y)[1].any(axis=0)
+        return np.asarray(self._barycentric(y)[1].any(axis=0))
 
     def _barycentric(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Barycentric coordinates (S, d+1, Q) of reduced points ``y`` (Q, d) in every simplex, and (S, Q)

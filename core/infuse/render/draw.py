@@ -21,7 +21,7 @@ def mix(color: RGB, other: RGB, amount: float) -> RGB:
 
 
 @lru_cache(maxsize=32)
-def font(size: int) -> ImageFont.FreeTypeFont:
+def font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     """Pillow's bundled scalable font at ``size`` pixels (no system fonts needed)."""
     return ImageFont.load_default(size=max(int(size), 6))
 

@@ -44,7 +44,8 @@ class FigureMesh:
             raise ValueError(f"figure mesh: a surface is bound to a joint beyond the skeleton's {joints}")
         self.num_frames = len(self.rotations)
         targets = {n for m in meshes for n in m.morph_names}
-        moved = [n for n in (morph_weights or {}) if n in targets and np.any(np.asarray(morph_weights[n]) != 0)]
+        morph_weights = morph_weights or {}
+        moved = [n for n in morph_weights if n in targets and np.any(np.asarray(morph_weights[n]) != 0)]
         self.mesh = merge(meshes, "figure", moved)
         self.weights = None
         if moved:

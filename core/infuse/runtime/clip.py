@@ -246,12 +246,12 @@ class Clip(Controller):
         first_moved = None if moved is None else motion.joint_translations[0]
         if b["mover"] == 0:
             root = root + cycles[:, None] * b["step"] if self.root_motion else np.broadcast_to(first_root, root.shape)
-        elif moved is not None:
+        elif moved is not None and first_moved is not None:
             travel = moved[:, b["mover"]]
             moved[:, b["mover"]] = travel + cycles[:, None] * b["step"] if self.root_motion else first_moved[b["mover"]]
         if b["drives_root"]:
             job.pose.set_root(root - first_root if additive else root, job.weight, job.mode)
-        if moved is not None and b["moved_joints"].size:
+        if moved is not None and first_moved is not None and b["moved_joints"].size:
             values = moved[:, b["moved_columns"]]
             if additive:
                 values = values - first_moved[b["moved_columns"]]

@@ -163,7 +163,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
                            None if chains is None else tuple(c[:, k] for c in chains), distance)
                 for k, limb in enumerate(limbs)]
-        return np.stack(left, axis=1) if distance else None
+        return np.stack([d for d in left if d is not None], axis=1) if distance else None
     if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
         rows = np.column_stack((limbs, parents)) if hung.all() else limbs  # (K, R)
         g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
@@ -243,7 +243,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     if keep_end or end_rotation is not None:
         target = g_rot[..., 2, :] if end_rotation is None else end_rotation
         local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
-    return _norm(position - T) if distance else None
+    return _norm(position - T) if position is not None else None
 
 
 def _down(skeleton, local_rotations, joint_translations, steps, position, rotation):

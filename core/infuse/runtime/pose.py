@@ -44,10 +44,11 @@ class PoseBlock:
         self.frames = frames
         self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0)
         self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0)
-        self.joint_translations = None  # (F, J, 3) once a controller moves joints other than the root
+        #: (F, J, 3) once a controller moves joints other than the root
+        self.joint_translations: np.ndarray | None = None
         self.morph_weights = np.zeros((frames, len(rig.morph_targets)))
         self.morph_written = np.zeros(len(rig.morph_targets), dtype=bool)
-        self._fk = None
+        self._fk: tuple[np.ndarray, np.ndarray] | None = None
 
     # -- joints ----------------------------------------------------------------------------------
     def set_rotations(self, joints, rotations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
@@ -94,10 +95,11 @@ class PoseBlock:
         if self.joint_translations is None:
             rest = self.rig.skeleton.rest_translations
             self.joint_translations = np.repeat(rest[None], self.frames, axis=0)
+        moved = self.joint_translations
         w = _weights(weight, self.frames)
-        current = self.joint_translations[:, joints]
+        current = moved[:, joints]
         target = current + translations if Mode(mode) is Mode.ADDITIVE else translations
-        self.joint_translations[:, joints] = current + w * (target - current)
+        moved[:, joints] = current + w * (target - current)
         self._fk = None
 
     def set_root(self, translations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:

@@ -141,7 +141,7 @@ def as_target(value) -> Target:
     if arr.shape == (3,):
         if not np.all(np.isfinite(arr)):
             raise UsageError("a target point must be finite")
-        return PointTarget(tuple(float(v) for v in arr))
+        return PointTarget((float(arr[0]), float(arr[1]), float(arr[2])))
     if arr.ndim == 2 and arr.shape[1] == 3:
         return TrackTarget(arr)
     raise UsageError(f"cannot use {type(value).__name__} of shape {arr.shape} as a target")
