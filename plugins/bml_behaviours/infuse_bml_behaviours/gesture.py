@@ -1,4 +1,4 @@
-"""``<gesture>``, ``<pointing>``, SmartBody's ``<animation>`` and ``<blend>``: clips from behaviour packs when
+"""``<gesture>``, SmartBody's ``<animation>`` and ``<blend>``: clips from behaviour packs when
 their timing is known, otherwise typical gesture phase durations.
 
 A ``<gesture lexeme>`` the character has no clip of that name for is looked up in the installed
@@ -15,13 +15,11 @@ from .common import Notes, clip_model, number, with_sbm, word
 # Typical phase timing (seconds from start) of a beat and of larger gestures (deictic, iconic, metaphoric).
 BEAT_POINTS = {"start": 0.0, "ready": 0.25, "strokeStart": 0.3, "stroke": 0.4, "strokeEnd": 0.55, "relax": 0.7, "end": 1.1}
 GESTURE_POINTS = {"start": 0.0, "ready": 0.45, "strokeStart": 0.5, "stroke": 0.65, "strokeEnd": 0.85, "relax": 1.3, "end": 1.8}
-POINTING_POINTS = {"start": 0.0, "ready": 0.6, "strokeStart": 0.6, "stroke": 0.8, "strokeEnd": 1.6, "relax": 2.0, "end": 2.6}
 ANIMATION_DEFAULT_S = 2.0
 MODES = ("LEFT_HAND", "RIGHT_HAND", "BOTH_HANDS")
 GESTURE_ATTRIBUTES = {"lexeme", "mode", "type", "name", "emotion", "target", "poststroke_hold", "amount", "amplitude",
                       "speed", "repeats"} | with_sbm(
     "joint-range", "frequency", "scale", "additive", "priority")
-POINTING_ATTRIBUTES = {"target", "mode"}
 ANIMATION_ATTRIBUTES = {"name", "speed"} | with_sbm("speed", "additive", "joint-range", "priority")
 BLEND_ATTRIBUTES = {"name", "x", "y", "z"} | with_sbm("wrap-mode", "schedule-mode", "blend-mode", "partial-joint")
 
@@ -82,15 +80,6 @@ def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes) -> B
                   "timing_source": "pack", "amplitude": amplitude, "speed": speed, "repeats": repeats,
                   "poststroke_hold_s": hold}
     return BehaviourPlan(TimingModel.from_points(points), "gesture", parameters, notes=tuple(notes))
-
-
-def plan_pointing(behaviour, context) -> BehaviourPlan:
-    notes = Notes()
-    target = word(behaviour, "target")
-    if target is None:
-        raise BehaviourError("it has no target")
-    return BehaviourPlan(TimingModel.from_points(POINTING_POINTS), "pointing",
-                         {"target": target, "mode": _mode(behaviour, notes)}, notes=tuple(notes))
 
 
 def plan_animation(behaviour, context) -> BehaviourPlan:

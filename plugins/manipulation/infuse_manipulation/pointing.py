@@ -1,0 +1,266 @@
+"""The ``pointing`` controller: a hand points at a target, the body turning when the target is behind.
+
+Aim: the ray from the pointing arm's shoulder joint (the head of the upper arm) through the index
+fingertip passes through the target. The fingertip is put on that ray by two-joint arm IK, at a
+fraction of the arm's length from the shoulder (``extension``; a near target stops it 8 cm short), the
+hand turned so that the wrist-to-fingertip line lies along the ray with the palm down, the index
+finger straight and the other fingers curled (:mod:`.hands`; a rig without fingers points its wrist).
+
+Phases (seconds from the activity's start): the arm rises from the pose below until ``ready``
+(the blend-in), reaches out furthest at ``stroke`` (the extension peaks there), holds until ``relax``
+and returns by the end (the blend-out). Targets move with the frames they are sampled at.
+
+Body turn: a target more than 100° to the pointing hand's side, or more than 35° across the body (its
+azimuth about the chest, measured from the pelvis's forward), is brought within that range by turning
+the spine (70 % of the turn, shared by its joints) and the pelvis (30 %, the feet held where they were
+by leg IK), 80° at most in all.
+
+It runs on the gaze layer, after the gazes, so that a gaze turning the chest does not move the ray off
+its target.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from infuse import quaternions as quat
+from infuse.errors import MissingFeatureError, UsageError
+from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.layers import smoothstep
+from infuse.runtime.limb_ik import solve_limb
+from infuse.runtime.pose import chain_fk
+from infuse.runtime.swing import local_offsets, swing
+
+from .hands import POINTING_SHAPE, bind_hand, reference_locals, reference_tip, set_shape
+from .targets import own_positions, resolve_target
+
+HANDS = ("auto", "left", "right", "both")
+#: Comfortable azimuths of a pointing arm about the chest, radians (positive: to the character's left),
+#: for the right hand; the left hand's are mirrored.
+RIGHT_RANGE = (np.radians(-100.0), np.radians(35.0))
+#: Most the body turns, radians, and the pelvis's share of the turn.
+MAX_TURN = np.radians(80.0)
+PELVIS_SHARE = 0.3
+#: Extension (fraction of the arm's length from the shoulder to the fingertip) at ready and at the stroke.
+EXTENSION_READY, EXTENSION_STROKE = 0.86, 0.94
+#: How far short of a near target the fingertip stops, metres.
+CLEARANCE_M = 0.08
+_SPINE = ("spine1", "spine2", "spine3")
+
+
+class Pointing(Controller):
+    """Point at ``target`` (a point, ``"character:joint"``, a runtime target's name, or a
+    :class:`~infuse.runtime.targets.Target`) with ``hand`` (``"left"``, ``"right"``, ``"both"`` or
+    ``"auto"``: the hand on the target's side).
+
+    ``ready_s``, ``stroke_s``, ``relax_s``: phase times in seconds from the start (see the module doc);
+    ``duration_s``: the whole movement; ``extension``: scales the arm's reach (1: as in the module doc);
+    ``turn``: whether the body may turn.
+    """
+
+    kind = "pointing"
+    layer = Layer.GAZE
+    mode = Mode.OVERRIDE
+    priority = 100
+
+    def __init__(self, target, hand: str = "auto", ready_s: float = 0.6, stroke_s: float | None = None,
+                 relax_s: float | None = None, duration_s: float = 2.6, extension: float = 1.0, turn: bool = True):
+        if hand not in HANDS:
+            raise UsageError(f"pointing hand must be one of {', '.join(HANDS)}, got {hand!r}")
+        times = [float(v) for v in (ready_s, stroke_s if stroke_s is not None else ready_s,
+                                    relax_s if relax_s is not None else duration_s - 0.6, duration_s)]
+        if not all(np.isfinite(times)) or times[0] < 0 or np.any(np.diff(times) < -1e-9):
+            raise UsageError(f"pointing phases must satisfy 0 <= ready <= stroke <= relax <= end, got {times}")
+        if not (np.isfinite(extension) and 0.3 <= extension <= 1.05):
+            raise UsageError(f"pointing extension must lie in [0.3, 1.05], got {extension}")
+        self.target, self.hand, self.turn = target, hand, bool(turn)
+        self.ready_s, self.stroke_s, self.relax_s, self.duration_s = times
+        self.blend_in_s = self.ready_s
+        self.blend_out_s = self.duration_s - self.relax_s
+        self.extension = float(extension)
+
+    def describe(self) -> str:
+        return f"pointing ({self.hand} hand)"
+
+    def bind(self, rig, report):
+        arms = {}
+        for side in ("left", "right"):
+            s = side[0]
+            chain = [rig.joint(f"{s}_{n}") for n in ("shoulder", "elbow", "wrist")]
+            if None in chain:
+                continue
+            hand = bind_hand(rig, side)
+            if not hand.has_fingers:
+                report(f"no fingers are mapped on the {side} hand: the wrist points")
+            arms[side] = _arm(rig, hand, chain)
+        if not arms:
+            raise MissingFeatureError(f"{rig.name}: no mapped shoulder, elbow and wrist: it cannot point")
+        spine = [j for j in (rig.joint(n) for n in _SPINE) if j is not None]
+        legs = [tuple(rig.joint(f"{s}_{n}") for n in ("hip", "knee", "ankle")) for s in "lr"]
+        legs = [leg for leg in legs if None not in leg]
+        base = rig.joint("base")
+        return {"arms": arms, "spine": np.array(spine, dtype=np.int64), "spine_aligned": rig.aligned[spine],
+                "base": base, "base_aligned": None if base is None else rig.aligned[base], "legs": legs,
+                "hips": (rig.joint("l_hip"), rig.joint("r_hip")), "chest": spine[-1] if spine else base}
+
+    def evaluate_one(self, job, block) -> None:
+        b, st, rig = job.binding, job.state, job.rig
+        active = np.nonzero((job.local_times >= -1e-9) & (job.weight > 0))[0]
+        if not active.size:
+            return
+        runtime = job.activity.runtime
+        target = resolve_target(runtime, self.target)
+        goal = own_positions(rig, target.positions(block.times, block))[active]  # (F, 3)
+        weight = job.weight[active]
+        t = job.local_times[active]
+        pose = job.pose
+        sk = rig.skeleton
+        rot = pose.local_rotations[active].copy()
+        root = pose.root_translations[active]
+        jt = None if pose.joint_translations is None else pose.joint_translations[active]
+        if "hands" not in st:
+            st["hands"] = self._hands(b, sk, rot[:1], root[:1], None if jt is None else jt[:1], goal[:1])
+            close = self._too_close(b, sk, rot[:1], root[:1], jt, goal[:1], st["hands"])
+            if close:
+                job.report(close)
+        hands = st["hands"]
+        changed = set()
+        if self.turn and b["chest"] is not None and None not in b["hips"]:
+            changed |= self._turn(b, sk, rot, root, jt, goal, weight, hands)
+        extension = self._extension(t)
+        for side in hands:
+            arm = b["arms"][side]
+            self._aim(arm, sk, rot, root, jt, goal, weight, extension)
+            changed |= set(arm["chain"])
+        joints = np.array(sorted(changed), dtype=np.int64)
+        full = pose.local_rotations[:, joints].copy()
+        full[active] = rot[:, joints]
+        pose.set_rotations(joints, full)
+        for side in hands:
+            w = np.zeros(len(job.weight))
+            w[active] = weight
+            set_shape(pose, b["arms"][side]["hand"], POINTING_SHAPE, w)
+
+    # -- the parts ---------------------------------------------------------------------------------
+    def _hands(self, b, sk, rot, root, jt, goal) -> tuple[str, ...]:
+        """The pointing hands: as asked, or the side of the target (the body's frame at the first frame)."""
+        arms = b["arms"]
+        if self.hand == "both":
+            return tuple(s for s in ("left", "right") if s in arms)
+        if self.hand in arms:
+            return (self.hand,)
+        if self.hand != "auto" or len(arms) == 1:
+            return (next(iter(arms)),)
+        l_hip, r_hip = b["hips"]
+        if l_hip is None or r_hip is None:
+            return ("right",)
+        _, pos = chain_fk(sk, rot, root, jt, [l_hip, r_hip])
+        left = pos[0, 0] - pos[0, 1]
+        middle = 0.5 * (pos[0, 0] + pos[0, 1])
+        return ("left",) if np.dot(goal[0] - middle, left) >= 0.0 else ("right",)
+
+    def _too_close(self, b, sk, rot, root, jt, goal, hands) -> str | None:
+        arm = b["arms"][hands[0]]
+        _, pos = chain_fk(sk, rot, root, None if jt is None else jt[:1], [arm["chain"][0]])
+        distance = float(np.linalg.norm(goal[0] - pos[0, 0]))
+        if distance < 2.0 * CLEARANCE_M:
+            return f"the pointing target is {distance * 100:.0f} cm from the shoulder: too close to point at"
+        return None
+
+    def _extension(self, t: np.ndarray) -> np.ndarray:
+        """(F,) fraction of the arm's length: rising from ready to the stroke, back down by relax."""
+        rise = smoothstep((t - self.ready_s) / max(self.stroke_s - self.ready_s, 1e-6))
+        fall = smoothstep((self.relax_s - t) / max(self.relax_s - self.stroke_s, 1e-6))
+        bump = np.where(t <= self.stroke_s, rise, fall)
+        bump = np.where(t < self.ready_s, 0.0, bump)
+        return self.extension * (EXTENSION_READY + (EXTENSION_STROKE - EXTENSION_READY) * bump)
+
+    def _turn(self, b, sk, rot, root, jt, goal, weight, hands) -> set:
+        """Turn the spine and pelvis (in ``rot``, in place) toward a target outside the arm's range;
+        returns the joints changed."""
+        l_hip, r_hip = b["hips"]
+        _, pos = chain_fk(sk, rot, root, jt, [l_hip, r_hip, b["chest"]])
+        left = pos[:, 0] - pos[:, 1]
+        left[:, 1] = 0.0
+        left /= np.maximum(np.linalg.norm(left, axis=1, keepdims=True), 1e-9)
+        forward = np.cross(left, np.array([0.0, 1.0, 0.0]))
+        d = goal - pos[:, 2]
+        azimuth = np.arctan2(np.sum(d * left, axis=1), np.sum(d * forward, axis=1))  # (F,) positive: left
+        low, high = RIGHT_RANGE
+        if hands == ("left",):
+            low, high = -high, -low
+        elif len(hands) == 2:
+            low, high = -0.5 * (high - low), 0.5 * (high - low)
+        excess = azimuth - np.clip(azimuth, low, high)
+        wrapped = azimuth - 2.0 * np.pi * np.sign(azimuth)  # the same direction, the other way round
+        other = wrapped - np.clip(wrapped, low, high)
+        excess = np.where(np.abs(other) < np.abs(excess), other, excess)
+        turn = np.clip(excess, -MAX_TURN, MAX_TURN) * weight  # (F,) radians, positive: to the left
+        if not np.any(np.abs(turn) > 1e-6):
+            return set()
+        changed = set()
+        pelvis = PELVIS_SHARE if b["base"] is not None and len(b["legs"]) == 2 else 0.0
+        spine = b["spine"]
+        if spine.size:
+            each = (1.0 - pelvis) * turn / spine.size
+            offsets = local_offsets(b["spine_aligned"], swing(each[:, None], 0.0))
+            rot[:, spine] = quat.multiply(rot[:, spine], offsets)
+            changed |= set(spine.tolist())
+        else:
+            pelvis = 1.0
+        if pelvis and b["base"] is not None:
+            legs = np.array(b["legs"], dtype=np.int64)
+            feet_rot, feet_pos = chain_fk(sk, rot, root, jt, legs[:, 2])
+            base = b["base"]
+            offset = local_offsets(b["base_aligned"], swing(pelvis * turn, 0.0))
+            rot[:, base] = quat.multiply(rot[:, base], offset)
+            if len(legs) == 2:
+                solve_limb(sk, rot, root, jt, legs, feet_pos, end_rotation=feet_rot, distance=False)
+                changed |= set(legs.ravel().tolist())
+            changed.add(base)
+        return changed
+
+    def _aim(self, arm, sk, rot, root, jt, goal, weight, extension) -> None:
+        """Arm IK (in ``rot``, in place): the fingertip on the shoulder-target ray, the hand along it."""
+        shoulder, elbow, wrist = arm["chain"]
+        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist])
+        s = g_pos[:, 0]
+        to_goal = goal - s
+        distance = np.linalg.norm(to_goal, axis=1)
+        u = to_goal / np.maximum(distance, 1e-9)[:, None]
+        reach = np.minimum(extension * arm["length"], np.maximum(distance - CLEARANCE_M, 0.35 * arm["length"]))
+        tip = s + reach[:, None] * u
+        side = np.array([1.0 if arm["hand"].side == "left" else -1.0, 0.0, 0.0])
+        hint = np.array([0.0, -1.0, 0.0]) - 0.3 * quat.rotate(arm["body"], side)  # palm down, a little inward
+        palm = hint - np.sum(hint * u, axis=1, keepdims=True) * u
+        palm /= np.maximum(np.linalg.norm(palm, axis=1, keepdims=True), 1e-9)
+        target_frame = np.stack((u, palm, np.cross(u, palm)), axis=2)  # (F, 3, 3) columns
+        turn = quat.from_matrix(target_frame @ arm["frame"].T)
+        wanted = quat.multiply(turn, arm["wrist_reference"])  # (F, 4) the wrist's global rotation
+        wrist_goal = tip - quat.rotate(wanted, arm["tip_local"])
+        end = quat.slerp(g_rot[:, 1], wanted, weight)
+        solve_limb(sk, rot, root, jt, (shoulder, elbow, wrist), wrist_goal, weight=weight, end_rotation=end,
+                   distance=False)
+
+
+def _arm(rig, hand, chain) -> dict:
+    """What aiming one arm needs, from the reference pose (the character's own frame, metres)."""
+    from infuse.kinematics import forward_kinematics
+
+    sk = rig.skeleton
+    locals_ = reference_locals(rig)
+    g_rot, g_pos = forward_kinematics(sk, locals_[None], sk.rest_translations[None, 0], None)
+    g_rot, g_pos = g_rot[0], g_pos[0]
+    shoulder, elbow, wrist = chain
+    tip = reference_tip(rig, hand)
+    along = tip - g_pos[wrist]
+    if np.linalg.norm(along) < 1e-6:  # no fingers: the forearm's direction
+        along = g_pos[wrist] - g_pos[elbow]
+    f = along / np.linalg.norm(along)
+    palm = hand.palm - np.dot(hand.palm, f) * f
+    palm /= max(np.linalg.norm(palm), 1e-9)
+    length = (np.linalg.norm(g_pos[elbow] - g_pos[shoulder]) + np.linalg.norm(g_pos[wrist] - g_pos[elbow])
+              + np.linalg.norm(tip - g_pos[wrist]))
+    return {"chain": (shoulder, elbow, wrist), "hand": hand, "length": float(length),
+            "frame": np.stack((f, palm, np.cross(f, palm)), axis=1), "wrist_reference": g_rot[wrist],
+            "tip_local": quat.rotate(quat.conjugate(g_rot[wrist]), tip - g_pos[wrist]), "body": rig.body}
+
