@@ -209,7 +209,7 @@ def analyse_clip(motion, entry, kind: str, index: dict[str, int], mapping, fk, c
         if hand is None:  # the wrist that travels farther
             travel = {h: np.ptp(g_pos[:, index[f"{h[0]}_wrist"]], axis=0).max() for h in ("left", "right")
                       if f"{h[0]}_wrist" in index}
-            hand = max(travel, key=travel.get)
+            hand = max(travel, key=lambda h: travel[h])
         wrist = g_pos[:, index[f"{hand[0]}_wrist"]]
         stroke = stroke_frame(wrist, fps)
         point = body_frame_point(wrist[stroke], root[0], float(heading[0]), found.ground)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -79,7 +80,7 @@ def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: li
     motion = motions[entry.name]
     turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
     align = alignment(p["direction"])
-    derived = {}
+    derived: dict[str, float] = {}
     if turn or align:
         motion = straighten(motion, p, cycle, turn, align)
         derived.update(straightened_deg_s=float(np.degrees(turn)), aligned_deg=float(np.degrees(align)))
@@ -104,6 +105,8 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         if skeleton_asset is None:
             skeleton_asset = fileio.load(entry.file)
         motions[entry.name] = m
+    if skeleton_asset is None:
+        raise UnusableInputError(manifest.path, "no clips to read the skeleton of its .skm skeleton file with")
     skeleton = skeleton_asset.skeleton
     motions = {n: on_skeleton(m, skeleton, manifest.clip(n).file).replace(name=n) for n, m in motions.items()}
     first = next(iter(motions.values()))
@@ -137,7 +140,7 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
     }, digits=6)
     names = list(motions)
     bounds = np.cumsum([0] + [motions[n].num_frames for n in names])
-    arrays = dict(names=np.array(skeleton.names), parents=skeleton.parents, rest_translations=skeleton.rest_translations,
+    arrays: dict[str, Any] = dict(names=np.array(skeleton.names), parents=skeleton.parents, rest_translations=skeleton.rest_translations,
                   rest_rotations=skeleton.rest_rotations, end_site_parents=skeleton.end_site_parents,
                   end_site_offsets=skeleton.end_site_offsets, bounds=bounds,
                   rotations=np.concatenate([motions[n].local_rotations for n in names]),

@@ -19,6 +19,7 @@ import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -261,7 +262,7 @@ def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
         for s in sides:
             names = [n.format(s=s) for n in limb]
             missing += [n for n in names if mapping.get(n) is None]
-            joints = [index.get(mapping.get(n)) for n in names]
+            joints = [index.get(mapping.get(n) or "") for n in names]
             for upper, lower, name in zip(joints, joints[1:], names[1:]):
                 if upper is None or lower is None:
                     continue
@@ -316,8 +317,9 @@ def _cache_paths(cache, key: str) -> tuple[Path, Path]:
 def save_infusion(infusion: Infusion, key: str, cache) -> Path:
     """Write the infusion's clips (.npz) and metadata (.json) atomically; returns the .npz path."""
     npz, meta = _cache_paths(cache, key)
-    arrays = {}
-    doc = {"format": CACHE_FORMAT, "key": key, "infuse": __version__, "mapping": infusion.mapping.mapped(), "spaces": {}}
+    arrays: dict[str, Any] = {}
+    spaces: dict[str, dict[str, Any]] = {}
+    doc = {"format": CACHE_FORMAT, "key": key, "infuse": __version__, "mapping": infusion.mapping.mapped(), "spaces": spaces}
     for name, space in infusion.spaces.items():
         names = list(space.clips)
         ms = [space.clips[n].motion for n in names]
@@ -328,7 +330,7 @@ def save_infusion(infusion: Infusion, key: str, cache) -> Path:
         arrays[f"{name}/bounds"] = np.cumsum([0] + [m.num_frames for m in ms])
         arrays[f"{name}/contacts"] = np.concatenate([space.clips[n].contacts for n in names]).astype(np.int8)
         arrays[f"{name}/phases"] = np.concatenate([space.clips[n].phases for n in names]).astype(np.int8)
-        doc["spaces"][name] = {
+        spaces[name] = {
             "version": space.version, "kind": space.kind,
             "clips": [{"name": c.name, "role": c.role, "hand": c.hand, "loop": c.loop, "fps": c.motion.fps,
                        "keys": c.keys.tolist(), "parameters": c.parameters, "stroke": c.stroke} for c in (space.clips[n] for n in names)],

@@ -130,7 +130,7 @@ class Pack:
         out = {}
         bounds = data["bounds"]
         jt = data.get("joint_translations")
-        for k, clip in enumerate(self.analysis["clips"]):
+        for k, clip in enumerate(self.require_built()["clips"]):
             a, b = int(bounds[k]), int(bounds[k + 1])
             out[clip["name"]] = Motion(sk, float(clip["fps"]), data["rotations"][a:b], data["roots"][a:b],
                                        None if jt is None else jt[a:b], name=clip["name"])

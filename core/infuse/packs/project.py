@@ -224,7 +224,7 @@ def new_pack_project(name: str, *, from_folder=None, import_kind: str | None = N
         shutil.rmtree(project, ignore_errors=True)
         raise
     licence = find_licence(origin if origin.is_dir() else origin.parent)
-    licence_files = ()
+    licence_files: tuple[str, ...] = ()
     note = ""
     if licence is not None:
         shutil.copyfile(licence, project / "LICENSE")

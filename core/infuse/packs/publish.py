@@ -57,7 +57,7 @@ def run_build(args) -> int:
     if not manifests:
         raise UsageError(f"{folder}: a project without a pack (no */pack/manifest.toml)")
     project = folder.resolve() if in_project else (find_project(folder) if args.wheel else None)
-    if args.wheel:
+    if args.wheel and project is not None:
         if not set(manifests) <= set(pack_manifests(project)):
             raise UsageError(f"{folder}: not the pack of a pack project ({project}/*/pack/manifest.toml); "
                              f"make one with 'infuse pack new NAME --from {folder}'")
@@ -68,7 +68,7 @@ def run_build(args) -> int:
         print(f"wrote {pack.manifest.analysis}")
         if project is not None and refresh_figures(project / "README.md", pack):
             print(f"wrote the figures in {project / 'README.md'}")
-    if args.wheel:
+    if args.wheel and project is not None:
         print(f"wrote {build_wheel(project, args.dist)}")
         if project_table(project).get("license", LICENSE_PLACEHOLDER) == LICENSE_PLACEHOLDER:
             print(f"note: {project / 'pyproject.toml'}: license is still {LICENSE_PLACEHOLDER}; "

@@ -183,7 +183,7 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
     trial.drift_speed = walk_speed
     window = int(WINDOW_S * FPS)
     targets = [(d, a) for d in distances for a in angles]
-    settings = [dict(speed=walk_speed, max_accel=50.0)]
+    settings: list[dict[str, object]] = [dict(speed=walk_speed, max_accel=50.0)]
     settings += [dict(speed=walk_speed, target=(d * math.sin(math.radians(a)), d * math.cos(math.radians(a))))
                  for d, a in targets]
     longest = max([DRIFT_S + SETTLE_S] + [d / walk_speed + 8.0 for d in distances])

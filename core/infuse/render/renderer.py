@@ -77,13 +77,24 @@ class _Panel:
     def __init__(self, members: list[int], rect: tuple[float, float, float, float]):
         self.members = members
         self.rect = rect  # (x, y, w, h) integer pixels of the whole panel on the (supersampled) canvas
-        self.view: PanelView | None = None
+        self._view: PanelView | None = None
         self.ground = 0.0
         self.height = 1.0  # a figure height (metres), for sizes in the scene
         self.near_range = (0.0, 1.0)
         self.grid: tuple[np.ndarray, np.ndarray] | None = None
         self.labels: list[tuple[int, float, float, str]] = []  # (figure, x, y, text) of the names at the top
         self.label_height = 0.0
+
+    @property
+    def view(self) -> PanelView:
+        """The panel's framed view (set as the renderer frames its panels)."""
+        if self._view is None:
+            raise RuntimeError("the panel is drawn before it is framed")
+        return self._view
+
+    @view.setter
+    def view(self, view: PanelView) -> None:
+        self._view = view
 
 
 class Renderer:
