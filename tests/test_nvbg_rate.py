@@ -4,7 +4,7 @@
   speech, 67 a minute, a gesture-rich style; their strokes fall on pitch-accented syllables, as Loehr (2004)
   found in conversation. The generator stays below that rate (at least a third of it is our own aim for an
   explaining speaker) and puts every hand stroke on the onset of a new content word or of a word its rules name.
-- Kendon (1967, as summarized by Beattie, 1978): over 70 % of long utterances begin with the speaker looking
+- Kendon (1967, as summarized by Rutter et al., 1978): over 70 % of long utterances begin with the speaker looking
   away and over 70 % end with the speaker looking at the listener.
 """
 from __future__ import annotations
