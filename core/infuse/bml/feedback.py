@@ -96,7 +96,7 @@ class BlockPrediction:
 
 @dataclass(frozen=True)
 class GeneratedBml:
-    """The BML ``generator`` added to block ``block`` (a ``<bml>`` document as text), before scheduling."""
+    """The BML ``generator`` added to block ``block`` before scheduling (a ``<bml>`` or ``<act>`` document as text)."""
 
     block: str
     generator: str

@@ -2,8 +2,8 @@
 
 A generator (hook ``infuse_bml_generators``, :class:`~infuse.plugin_types.BMLGenerator`) gets a parsed
 :class:`~infuse.bml.Block` and a :class:`GeneratorContext` and returns a :class:`Generation`: the block
-with what it added, blocks for other characters (a listener's backchannel), and the added BML as a
-``<bml>`` document, which the scheduler reports as ``generatedBml`` feedback. A block turns generator
+with what it added, blocks for other characters (a listener's backchannel), and the added BML as text
+(a ``<bml>`` document, or an ``<act>`` of several), which the scheduler reports as ``generatedBml`` feedback. A block turns generator
 NAME on or off with the attribute ``infuse:NAME="true"`` / ``"false"`` (namespace ``urn:infuse:bml``);
 a scheduler's ``generators`` are on for every block that does not say. The generators run in the order
 of that list, each on the block the previous one returned.
@@ -49,8 +49,8 @@ class GeneratorContext:
 @dataclass(frozen=True)
 class Generation:
     """A generator's answer: ``block`` (the input with what was added), ``blocks`` (new blocks, each naming
-    its character, scheduled after it at the same time), ``bml`` (everything added, as one ``<bml>``
-    document of text, or ``""`` when nothing was) and ``notes`` (warnings about the block)."""
+    its character, scheduled after it at the same time), ``bml`` (everything added, as the text of a ``<bml>``
+    document or of an ``<act>`` of several, ``""`` when nothing was) and ``notes`` (warnings about the block)."""
 
     block: Block
     blocks: tuple[Block, ...] = ()
