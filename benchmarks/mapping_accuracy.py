@@ -6,9 +6,11 @@ generated variants of their skeletons; the calibration of confidences and the ti
 
 A prediction is right when it equals the label or one of its alternatives (``null`` counts as a
 label). Body joints are base, spine1, spine3, spine4, skullbase, clavicle to wrist and hip to the
-ball of the foot. Non-humanoid files must be refused (NotHumanoidError). A family is the label's
-``convention`` up to its first parenthesis. Calibration: of the entries given a confidence of at
-least 0.9, the share that is right, and the share right per confidence bin. Times are the mapper
+ball of the foot. Non-humanoid files and the non-humanoid variants (legs or arms removed) must be
+refused (NotHumanoidError). A family is the label's ``convention`` up to its first parenthesis.
+Calibration: of the entries given a confidence of at least 0.9, the share that is right; the share
+right per confidence band (< 0.8, 0.8 - 0.9, >= 0.9); and of the wrong entries, the share given
+less than 0.8 (flagged for checking). Times are the mapper
 call alone (the file is read before the clock starts), as CPU time of this process, the best of
 three runs per file. Data are read in place from ``INFUSE_CORPUS`` (default ``../shared/corpus``)
 and ``INFUSE_WILD`` (default ``../shared/wild``), both beside the repository.
@@ -29,7 +31,7 @@ sys.path.insert(0, str(REPO / "tests"))
 
 import infuse  # noqa: E402
 from infuse.canonical import BODY_NAMES, CANONICAL_NAMES  # noqa: E402
-from infuse.mapping import map_skeleton, sample_poses  # noqa: E402
+from infuse.mapping import animated_joint_names, map_skeleton, sample_poses  # noqa: E402
 
 import skeleton_variants  # noqa: E402
 
@@ -38,7 +40,8 @@ ROOTS = {
     "wild": Path(os.environ.get("INFUSE_WILD", REPO.parent / "shared" / "wild")).resolve(),
 }
 CONFIDENT = 0.9
-BINS = (0.0, 0.6, 0.8, 0.9, 1.01)  # confidence bins of the calibration table
+BINS = (0.0, 0.8, 0.9, 1.01)  # confidence bands of the calibration table: < 0.8 (check it), 0.8 - 0.9, >= 0.9
+FLAG = 0.8  # entries below this confidence are the ones a user should check
 
 
 def score(mapping: dict, expected: dict, alternatives: dict, names=CANONICAL_NAMES) -> tuple[int, int, list]:
@@ -137,26 +140,35 @@ def count_bins(confidence: dict, wrong: set, bins: list) -> None:
         bins[b][1] += 1
 
 
-def variant_results(asset, label: dict, mapper: str, bins: list, verbose: bool = False) -> list[tuple[str, int, float]]:
-    """(variant name, right joints, cpu seconds) of every generated variant of one skeleton; the
-    entries of the variants that were mapped are added to the confidence ``bins``."""
+def variant_results(asset, label: dict, mapper: str, bins: list, verbose: bool = False) -> list[tuple]:
+    """(variant name, humanoid, right joints or 1 when refused, cpu seconds) of every generated
+    variant of one skeleton, humanoid ones (scored on their joints) and non-humanoid ones (right
+    when refused); the entries of the humanoid variants that were mapped are added to the
+    confidence ``bins``."""
     out = []
     poses = sample_poses(asset)
-    animated = asset.meta.get("channel_joints")
-    for v in skeleton_variants.all_variants(asset.skeleton, poses, label):
-        meta = {"channel_joints": v.translate(animated)} if animated else {}
+    animated = animated_joint_names(asset)
+    variants = (skeleton_variants.all_variants(asset.skeleton, poses, label)
+                + skeleton_variants.non_humanoid_variants(asset.skeleton, poses, label))
+    for v in variants:
         t0 = time.process_time()
         try:
-            mapping = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses, meta=meta)
+            mapping = map_skeleton(v.skeleton, mapper=mapper, pose=v.poses,
+                                   animated=v.translate(animated) if animated else None)
         except infuse.NotHumanoidError:
             mapping = None
         seconds = time.process_time() - t0
+        if not v.humanoid:
+            if verbose and mapping is not None:
+                print(f"  variant {v.name} of {label['file']}: mapped, not refused", file=sys.stderr)
+            out.append((v.name, False, int(mapping is None), seconds))
+            continue
         right, _, wrong = score(mapping.joints if mapping else {}, v.mapping, v.alternatives)
         if mapping is not None:
             count_bins(mapping.confidence, {k for k, *_ in wrong}, bins)
         if verbose and wrong:
             print(f"  variant {v.name} of {label['file']}: {len(wrong)} wrong {wrong[:6]}", file=sys.stderr)
-        out.append((v.name, right, seconds))
+        out.append((v.name, True, right, seconds))
     return out
 
 
@@ -212,7 +224,8 @@ def main(argv=None) -> int:
             return 2
     failures: list[str] = []
     all_results: list[FileResult] = []
-    variants: dict[str, list[int]] = {}
+    variants: dict[str, list[int]] = {}  # humanoid variant -> [right joints, labelled joints]
+    refusals: dict[str, list[int]] = {}  # non-humanoid variant -> [refused, variants]
     variant_seconds: list[float] = []
     variant_bins = [[0, 0] for _ in BINS[:-1]]
     seen: set = set()
@@ -226,13 +239,14 @@ def main(argv=None) -> int:
             results.append(r)
             if args.verbose and (r.wrong or (r.refused and label["humanoid"])):
                 print(f"  {label['file']}: {r.refused or r.wrong}", file=sys.stderr)
-            key = (asset.skeleton.names, tuple(sorted(asset.meta.get("channel_joints") or ())))
+            key = (asset.skeleton.names, tuple(animated_joint_names(asset) or ()))
             if "variants" in sets and label["humanoid"] and key not in seen:
                 seen.add(key)
-                for kind, right, seconds in variant_results(asset, label, args.mapper, variant_bins, args.verbose):
-                    acc = variants.setdefault(kind, [0, 0])
+                for kind, humanoid, right, seconds in variant_results(asset, label, args.mapper, variant_bins,
+                                                                      args.verbose):
+                    acc = (variants if humanoid else refusals).setdefault(kind, [0, 0])
                     acc[0] += right
-                    acc[1] += len(CANONICAL_NAMES)
+                    acc[1] += len(CANONICAL_NAMES) if humanoid else 1
                     variant_seconds.append(seconds)
         if name in sets:
             print_families(name, results)
@@ -247,14 +261,25 @@ def main(argv=None) -> int:
             print(f"| {kind} | {_pct(a, b)} |")
         a, b = sum(v[0] for v in variants.values()), sum(v[1] for v in variants.values())
         print(f"| **all** | {_pct(a, b)} |")
+    if refusals:
+        print("\n| non-humanoid variant | refused |")
+        print("|---|---:|")
+        for kind, (a, b) in refusals.items():
+            print(f"| {kind} | {_pct(a, b)} |")
     sure_right = sum(r.confident[0] for r in all_results)
     sure = sum(r.confident[1] for r in all_results)
     print(f"\ncalibration: of the entries given confidence >= {CONFIDENT}, {_pct(sure_right, sure)} are right\n")
     print("| confidence | labelled files: entries right | generated variants: entries right |")
     print("|---|---:|---:|")
+    file_bins = [[sum(r.bins[i][k] for r in all_results) for k in (0, 1)] for i in range(len(BINS) - 1)]
     for i in range(len(BINS) - 1):
-        a, b = sum(r.bins[i][0] for r in all_results), sum(r.bins[i][1] for r in all_results)
-        print(f"| {BINS[i]:.1f} - {min(BINS[i + 1], 1.0):.1f} | {_pct(a, b)} | {_pct(*variant_bins[i])} |")
+        band = (f"< {BINS[i + 1]:.1f}" if i == 0 else f">= {BINS[i]:.1f}" if i == len(BINS) - 2
+                else f"{BINS[i]:.1f} - {BINS[i + 1]:.1f}")
+        print(f"| {band} | {_pct(*file_bins[i])} | {_pct(*variant_bins[i])} |")
+    flagged = BINS.index(FLAG)  # the bands below FLAG
+    for title, bins in (("labelled files", file_bins), ("generated variants", variant_bins)):
+        wrong = [b[1] - b[0] for b in bins]
+        print(f"{title}: wrong entries given confidence < {FLAG}: {_pct(sum(wrong[:flagged]), sum(wrong))}")
     times = [r.seconds for r in all_results]
     near_70 = [r.seconds for r in all_results if 60 <= r.joints <= 80]
     if times:

@@ -23,7 +23,14 @@ the alternatives). Variants:
 - ``no_fingers`` / ``no_clavicles`` / ``no_neck``: those joints removed (children re-parented);
 - ``mirrored_names``: every left joint takes the name of its right counterpart and vice versa
   (geometry must decide the sides);
+- ``cartoon`` / ``cartoon_arms_down``: cartoon proportions (arms 1.35 times as long, legs 0.65
+  times, the head 1.8 times as big); the second also with the arms hanging 85 degrees down (the hands reach
+  below the feet), lying as if Z were up and facing +X;
 - ``everything``: extra joints, reordered, turned, rescaled and renamed at once.
+
+:func:`non_humanoid_variants` makes bodies a mapper must refuse from the same skeletons: ``no_legs``
+(both legs and what hangs from them removed: a flying head or trunk with arms) and ``no_arms``
+(both arms removed: legs and a trunk).
 """
 from __future__ import annotations
 
@@ -43,8 +50,10 @@ ROTATIONS = {
 class Variant:
     """A skeleton, its poses (F, J, 3) or None, and its expected mapping."""
 
-    def __init__(self, name: str, skeleton: Skeleton, poses, mapping: dict, alternatives: dict, rename: dict):
+    def __init__(self, name: str, skeleton: Skeleton, poses, mapping: dict, alternatives: dict, rename: dict,
+                 humanoid: bool = True):
         self.name = name
+        self.humanoid = humanoid  # False: a body without two legs and two arms, to be refused
         self.skeleton = skeleton
         self.poses = poses
         self.mapping = mapping
@@ -402,6 +411,10 @@ def removed(skeleton: Skeleton, poses, label: dict, kind: str) -> Variant:
         for k, j in m.items():
             if k[2:-1] in FINGERS and j in idx:
                 drop.update(_subtree(skeleton, idx[j]))
+    elif kind in LIMB_PARTS:  # the limb from its first long bone down, and IK-driven ends hanging elsewhere
+        for k, j in m.items():
+            if k[:2] in ("l_", "r_") and _part(k) in LIMB_PARTS[kind] and j in idx:
+                drop.update(_subtree(skeleton, idx[j]))
     elif kind == "clavicles":
         drop.update(idx[m[k]] for k in ("l_acromioclavicular", "r_acromioclavicular", "l_sternoclavicular",
                                         "r_sternoclavicular") if m.get(k) in idx)
@@ -433,7 +446,68 @@ def removed(skeleton: Skeleton, poses, label: dict, kind: str) -> Variant:
                                  for k, vals in (label.get("alternatives") or {}).items()}}
     mapping, alts = _translate(expected, _identity(kept_names))
     rename = {n: n for n in kept_names}
-    return Variant(f"no_{kind}", sk, new_poses, mapping, alts, rename)
+    return Variant(f"no_{kind}", sk, new_poses, mapping, alts, rename, humanoid=kind not in LIMB_PARTS)
+
+
+#: The canonical parts (after the side) of each limb, from its first long bone down.
+LIMB_PARTS = {
+    "legs": frozenset({"hip", "knee", "ankle", "forefoot", "toe"}),
+    "arms": frozenset({"shoulder", "elbow", "forearm", "wrist"} | set(FINGERS)),
+}
+
+
+def _part(canonical: str) -> str:
+    """``l_index2`` -> ``index``, ``r_knee`` -> ``knee``: the part of a sided canonical name."""
+    rest = canonical[2:]
+    return rest[:-1] if rest[:-1] in FINGERS else rest
+
+
+def proportioned(skeleton: Skeleton, poses, label: dict, factors: dict[str, float], name: str) -> Variant:
+    """Body parts scaled about their first joint: ``factors`` maps "arms", "legs" or "head" to a
+    length factor. A limb is everything below its upper arm or thigh joint plus its labelled joints
+    hanging elsewhere (IK-driven hands and feet); the head everything below the head joint. Poses
+    are scaled the same way about the same joints in every frame."""
+    m, idx = label["mapping"], skeleton.index
+    pos = skeleton.rest_global_positions.copy()
+    ends = skeleton.rest_end_site_positions.copy() if len(skeleton.end_site_parents) else None
+    new_poses = None if poses is None else np.array(poses, dtype=np.float64, copy=True)
+    groups = []  # (pivot joint, moved joints, factor)
+    for part, factor in factors.items():
+        if part == "head":
+            if m.get("skullbase") in idx:
+                head = idx[m["skullbase"]]
+                groups.append((head, set(_subtree(skeleton, head)) - {head}, factor))
+            continue
+        first = "hip" if part == "legs" else "shoulder"
+        for side in ("l", "r"):
+            if m.get(f"{side}_{first}") not in idx:
+                continue
+            pivot = idx[m[f"{side}_{first}"]]
+            moved = set(_subtree(skeleton, pivot))
+            for k, j in m.items():
+                if k.startswith(f"{side}_") and _part(k) in LIMB_PARTS[part] and j in idx:
+                    moved.update(_subtree(skeleton, idx[j]))
+            groups.append((pivot, moved - {pivot}, factor))
+    for pivot, moved, factor in groups:
+        sel = np.array(sorted(moved), dtype=np.int64)
+        pos[sel] = pos[pivot] + factor * (pos[sel] - pos[pivot])
+        if ends is not None:
+            e = np.isin(skeleton.end_site_parents, sel)
+            ends[e] = pos[pivot] + factor * (ends[e] - skeleton.rest_global_positions[pivot])
+        if new_poses is not None:
+            new_poses[..., sel, :] = new_poses[..., [pivot], :] + factor * (new_poses[..., sel, :]
+                                                                            - new_poses[..., [pivot], :])
+    sk = _from_positions(skeleton.names, skeleton.parents, pos, skeleton.end_site_parents, ends)
+    mapping, alts = _translate(label, _identity(skeleton.names))
+    return Variant(name, sk, new_poses, mapping, alts, _identity(skeleton.names))
+
+
+CARTOON = {"arms": 1.35, "legs": 0.65, "head": 1.8}
+
+
+def non_humanoid_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
+    """Bodies without two legs and two arms made from one labelled humanoid skeleton: to be refused."""
+    return [removed(skeleton, poses, label, "legs"), removed(skeleton, poses, label, "arms")]
 
 
 def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
@@ -456,6 +530,13 @@ def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
     for kind in ("fingers", "clavicles", "neck"):
         out.append(removed(skeleton, poses, label, kind))
     out.append(mirrored_names(skeleton, poses, label))
+    out.append(proportioned(skeleton, poses, label, CARTOON, "cartoon"))
+    cartoon = proportioned(skeleton, poses, label, CARTOON, "cartoon")
+    down = arms_posed(cartoon.skeleton, cartoon.poses, label, -85.0, "cartoon_arms_down")
+    for rot in ("z_up", "facing_+x"):
+        down = transformed(down.skeleton, down.poses, label, rotation=rot)
+    down.name = "cartoon_arms_down"
+    out.append(down)
     combo = extra_joints(skeleton, poses, label)
     combo = reordered(combo.skeleton, combo.poses, {"mapping": combo.mapping, "alternatives": combo.alternatives})
     combo = transformed(combo.skeleton, combo.poses, {"mapping": combo.mapping, "alternatives": combo.alternatives},

@@ -57,7 +57,7 @@ MAX_LIMB_BRANCHES = 24
 def limb_pairs(view: SkeletonView, min_fraction: float = 0.1) -> list[LimbPair]:
     """Every pair of sibling subtrees that look like mirror-image limbs."""
     out: list[LimbPair] = []
-    floor = min_fraction * view.scale
+    floor = min_fraction * view.body_scale
     for j in range(view.n):
         kids = [c for c in view.children[j] if view.limb_length(j, c) > floor]
         if len(kids) < 2:
@@ -111,14 +111,15 @@ def legs_top(view: SkeletonView, legs: LimbPair) -> np.ndarray:
 
 
 def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
-    """Cosine between the legs' direction (from their top, :func:`legs_top`, to their far ends) and
-    the body's up (from there to ``up_from``); about -1 for a standing body, about 0 for a
-    four-legged one."""
+    """Cosine between the legs' direction (from their top, :func:`legs_top`, or from the middle of
+    their first joints, whichever makes the straighter body: a pelvis joint may sit well in front of
+    the hips) and the body's up (from there to ``up_from``); about -1 for a standing body, about 0
+    for a four-legged one."""
     if up_from is None:
         return -1.0
     P = view.P
-    sockets = legs_top(view, legs)
-    return _cos(P[up_from] - sockets, 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]]) - sockets)
+    feet = 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]])
+    return min(_cos(P[up_from] - top, feet - top) for top in (legs_top(view, legs), 0.5 * (P[legs.a] + P[legs.b])))
 
 
 def _cos(u: np.ndarray, v: np.ndarray) -> float:
@@ -151,11 +152,17 @@ def off_middle(view: SkeletonView, legs: LimbPair, arms: LimbPair) -> float:
     or more, measured along the line between the hips). Both pairs of a body are mirror images
     about one plane; the digits of one hand, or two limbs of one side, are not."""
     P = view.P
-    across = P[legs.a] - P[legs.b]
+    a, b = legs.a, legs.b
+    # limbs that start at one place (zero-length first joints, digits of one hand): the first joints
+    # along their chains that lie apart
+    for a, b in zip(view.main_chain(legs.a, 4), view.main_chain(legs.b, 4)):
+        if float(np.sum((P[a] - P[b]) ** 2)) > (1e-3 * view.scale) ** 2:
+            break
+    across = P[a] - P[b]
     width = float(np.sqrt(across @ across))
     if width < 1e-6 * view.scale:
         return 0.0
-    offset = abs(float((0.5 * (P[arms.a] + P[arms.b] - P[legs.a] - P[legs.b])) @ across)) / width
+    offset = abs(float((0.5 * (P[arms.a] + P[arms.b] - P[a] - P[b])) @ across)) / width
     return min(1.0, offset / max(0.5 * legs.length, 1e-9))
 
 
@@ -204,8 +211,10 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> Bod
         # both limbs end in hands (a joint where three or more digits branch): arms, not hair or cloth
         as_arms[p] = base + 1.5 * (arm_v - leg_v) + 0.6 * bool(hands[p.a] and hands[p.b])
         ends[p] = 0.5 * (P[view.far[p.a]] + P[view.far[p.b]])
-    leg_cands = _best_per_branch(pairs, as_legs, keep) + [None]
-    arm_cands = _best_per_branch(pairs, as_arms, keep) + [None]
+    # a leg or an arm has two joints at least (thigh and shin, upper arm and forearm)
+    jointed = [p for p in pairs if len(view.main_chain(p.a, 2)) == 2 and len(view.main_chain(p.b, 2)) == 2]
+    leg_cands = _best_per_branch(jointed, as_legs, keep) + [None]
+    arm_cands = _best_per_branch(jointed, as_arms, keep) + [None]
     best: BodyPlan | None = None
     for legs in leg_cands:
         for arms in arm_cands:

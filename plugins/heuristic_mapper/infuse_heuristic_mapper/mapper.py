@@ -27,14 +27,13 @@ from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
-from .body import LimbPair, choose_plan, extra_limbs, legs_down, legs_top, limb_pairs, upper_anchor
+from .body import LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
 from .hands import assign_fingers
+from .humanoid import STANDING_COS, refusal
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
 from .view import SkeletonView, length, lengths
 
 NAME = "heuristic"
-#: cos(legs direction, spine direction) above which a body is not standing (about 140 degrees)
-STANDING_COS = -0.75
 _NOT_BODY = ("control", "secondary", "prop", "face")
 
 
@@ -116,54 +115,14 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
             view, plan, pairs, cos = view_pose, plan_pose, pairs_pose, cos_pose
             used_pose = "first frame (the rest pose is not a standing body)"
     result = _Result(view)
-    if plan is None:
-        if _map_face_only(view, result):
-            return _finish(skeleton, result, 0.3)
-        raise NotHumanoidError(file, f"no pair of mirror-image limbs among its {view.n} joints"
-                               + (" (a single chain)" if all(len(c) <= 1 for c in view.children) else ""))
-    if plan.legs is None or plan.arms is None:
-        one = "arms" if plan.legs is None else "legs"
-        raise NotHumanoidError(file, f"only one pair of mirror-image limbs (taken as {one}) among its {view.n} "
-                               "joints: a humanoid has two legs and two arms on a trunk")
-    named_otherwise = [view.names[j] for j in (plan.arms.a, plan.arms.b, plan.legs.a, plan.legs.b)
-                       if view.info[j].flagged("secondary")]
-    if named_otherwise:
-        raise NotHumanoidError(file, f"the limbs taken as its arms or legs are named as wings, tails, hair or cloth "
-                               f"({', '.join(named_otherwise)}): not two legs and two arms (a winged creature)")
-    if cos > STANDING_COS:
-        angle = np.degrees(np.arccos(np.clip(cos, -1, 1)))
-        raise NotHumanoidError(file, f"its legs do not point away from its head (they are {angle:.0f} degrees "
-                               "from the spine's direction instead of about 180): a four-legged or lying body")
-    if _hands_on_ground(view, plan):
-        raise NotHumanoidError(file, "its front limbs reach the ground like its legs: a four-legged body")
-    extra = extra_limbs(view, plan, pairs)
-    if extra:
-        limbs = len({j for p in extra for j in (p.a, p.b)})
-        raise NotHumanoidError(file, f"{limbs} more limbs as long as its legs hang beside its legs or arms: "
-                               "a many-legged body (a humanoid has two legs and two arms)")
+    if plan is None and _map_face_only(view, result):
+        return _finish(skeleton, result, 0.3)
+    why = refusal(view, plan, pairs, cos)
+    if why is not None:
+        raise NotHumanoidError(file, why)
     _map_body(view, plan, result, frames, used_pose)
     overall = np.mean([result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
     return _finish(skeleton, result, float(overall))
-
-
-def _hands_on_ground(view: SkeletonView, plan) -> bool:
-    """True when the arms' far ends are as low as the ground the legs stand on (a quadruped's front
-    legs). The ground is the lowest joint outside the arms: an IK-driven foot may hang elsewhere."""
-    legs, arms = plan.legs, plan.arms
-    sockets = legs_top(view, legs)
-    up = view.P[arms.branch] - sockets
-    norm = length(up)
-    if norm < 1e-9:
-        return False
-    up /= norm
-    height = view.P @ up
-    outside = np.ones(view.n, dtype=bool)
-    outside[view.subtree(arms.a)] = False
-    outside[view.subtree(arms.b)] = False
-    ground = float(height[outside].min())
-    hands = height[[view.far[arms.a], view.far[arms.b]]]
-    leg_height = float(sockets @ up) - ground
-    return leg_height > 0 and float(hands.mean()) - ground < 0.08 * leg_height
 
 
 #: The body-part roles a joint's name may carry for each canonical name (by its part after the side).

@@ -29,7 +29,9 @@ class SkeletonView:
     - ``reach[j]``: longest path length (sum of bone lengths) from ``j`` down to a descendant;
       ``far[j]``: that descendant.
     - ``size[j]``: joints in the subtree of ``j`` (itself included).
-    - ``scale``: the longest path between two joints of the tree (the body's span), metres.
+    - ``scale``: the longest path between two joints of the tree (the body's span), metres;
+      ``body_scale``: the same without joints named as controls or props (an IK control far from
+      the body does not make its limbs shorter).
     - ``info[j]``: :class:`~.names.NameInfo` of the name.
     """
 
@@ -52,6 +54,13 @@ class SkeletonView:
         #: joints that carry an end site (BVH): a leaf with one is a real joint, not an end marker
         self.has_end_site = np.zeros(self.n, dtype=bool)
         self.has_end_site[np.asarray(skeleton.end_site_parents, dtype=np.int64)] = True
+        # joints named as controls or props, and everything below them: not part of the body's size
+        off = self.flag("control", "prop").copy()
+        for j in range(self.n):
+            p = self.parents[j]
+            if p >= 0 and off[p]:
+                off[j] = True
+        self._off_body = off
         self.set_pose(positions)
         # pre/post order for subtree tests
         tin = np.zeros(self.n, dtype=np.int64)
@@ -102,7 +111,24 @@ class SkeletonView:
         self.reach = reach
         self.far = far
         self.scale = float(max(np.max(reach + best2), 1e-9))
+        self.body_scale = self._span(np.where(self._off_body, 0.0, bone)) if self._off_body.any() else self.scale
         self._chains: dict[tuple[int, int], list[int]] = {}
+
+    def _span(self, bone: np.ndarray) -> float:
+        """The longest path between two joints of the tree with these bone lengths (J,)."""
+        reach = np.zeros(self.n)
+        best2 = np.zeros(self.n)
+        for j in range(self.n - 1, -1, -1):
+            p = self.parents[j]
+            if p < 0:
+                continue
+            cand = reach[j] + bone[j]
+            if cand > reach[p]:
+                best2[p] = reach[p]
+                reach[p] = cand
+            elif cand > best2[p]:
+                best2[p] = cand
+        return float(max(np.max(reach + best2), 1e-9))
 
     # -- name facts as arrays ------------------------------------------------------------------------
     def role(self, name: str) -> np.ndarray:
