@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -244,7 +244,8 @@ def complete(saved: SavedMap, produced: Mapping, skeleton: Skeleton) -> Mapping:
     return Mapping.build(skeleton, joints, confidence, reasons, mapper=mapper)
 
 
-def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *, pose: np.ndarray | None = None,
+def map_skeleton(source, mapper: str | None = None, saved_map: Any = None, *,
+                 pose: np.ndarray | Callable[[], np.ndarray | None] | None = None,
                  meta: dict | None = None, humanoid: dict | None = None, animated: Sequence[str] | None = None,
                  **options) -> Mapping:
     """Map a skeleton (or the skeleton of an :class:`~infuse.asset.Asset`) to the canonical names.

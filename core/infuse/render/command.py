@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-
+from typing import TYPE_CHECKING
 
 from .. import fileio, registry
 from ..cli.builtin import add_read_options, read_options
@@ -15,6 +15,9 @@ from ..plugin_types import Command
 from .camera import VIEWS, Camera
 from .output import check_suffix, render
 from .scene import STYLES, Figure, drawable_meshes, sides_from_mapping
+
+if TYPE_CHECKING:
+    from ..motion import Motion
 
 MAX_SIDE = 8192
 #: Mapping entries below this confidence are ringed by ``--canonical``.
@@ -84,7 +87,7 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
         if args.clip not in asset.motions:
             known = ", ".join(repr(n) for n in asset.motions) or "none"
             raise InputError(path, f"clip {args.clip!r}", f"no such clip; clips: {known}")
-        motion = asset.motions[args.clip]
+        motion: Motion | None = asset.motions[args.clip]
     else:
         motion = next(iter(asset.motions.values()), None)
     if motion is not None and motion.num_frames == 0:
@@ -92,7 +95,7 @@ def _figure(path: Path, args, many: bool, highlight: list[str]) -> Figure:
     clip = motion.name if motion is not None and motion.name else ("rest pose" if motion is None else "clip")
     label = (path.name if clip == path.stem else f"{path.name}: {clip}") if many else clip
     ringed = [n for n in highlight if n in asset.skeleton.index]
-    names = True if args.names else None
+    names: bool | dict[str, str] | None = True if args.names else None
     mapping = _mapping(asset, args)
     sides = None
     if mapping is not None:

@@ -164,6 +164,7 @@ def write_mp4(renderer: Renderer, path: str | Path, fps: float, progress: Progre
                "-an", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-preset", "medium", "-crf", "20",
                "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4", str(tmp)]
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        assert proc.stdin is not None and proc.stderr is not None  # both piped
         try:
             for k in range(len(renderer)):
                 proc.stdin.write(renderer.image(k).tobytes())
@@ -232,6 +233,7 @@ def render(
     with Progress(len(renderer), f"render {Path(path).name}", enabled=progress) as bar:
         if kind == ".png":
             return write_strip(renderer, path, title, bar)
+        rate = figures[0].fps if fps is None else fps  # set above for every moving output
         if kind == ".gif":
-            return write_gif(renderer, path, fps, bar)
-        return write_mp4(renderer, path, fps, bar)
+            return write_gif(renderer, path, rate, bar)
+        return write_mp4(renderer, path, rate, bar)
