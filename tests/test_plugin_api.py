@@ -16,7 +16,7 @@ def plugin_packages() -> dict[str, Path]:
     """Import package name -> its folder, for every distribution folder of the repository."""
     out = {}
     for top in PLUGIN_FOLDERS:
-        for dist in sorted((ROOT / top).glob("*/pyproject.toml")):
+        for dist in sorted([*(ROOT / top).glob("*/pyproject.toml"), *(ROOT / top).glob("*/*/pyproject.toml")]):
             for package in sorted(dist.parent.glob("*/__init__.py")):
                 if "build" not in package.parent.relative_to(ROOT).parts:
                     out[package.parent.name] = package.parent
