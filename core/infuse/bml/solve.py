@@ -296,7 +296,8 @@ class BlockSolver:
                     self.unavailable[drop.key] = "its timing cannot be met"
                     solution.dropped[drop.key] = drop.reason
                     where = f"{self.block.id}:{drop.key}"
-                    line = self.block.behaviour(drop.key).line
+                    dropped = self.block.behaviour(drop.key)
+                    line = dropped.line if dropped is not None else None
                     is_required = drop.key in required
                 else:
                     self.dropped_constraints[drop.key] = drop.reason

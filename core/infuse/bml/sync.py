@@ -82,6 +82,8 @@ def parse_sync_ref(text: str) -> SyncRef:
         return SyncRef(raw, time=value)
     parts = [p.strip() for p in text.split(":")]
     last = _LAST_PART.fullmatch(parts[-1])
+    if last is None:  # a line break inside the name
+        raise SyncRefError(f"sync reference {raw!r} is not a name with an optional offset")
     offset = float(last.group("offset").replace(" ", "")) if last.group("offset") else 0.0
     _check_time(raw, offset)
     parts[-1] = last.group("name")
