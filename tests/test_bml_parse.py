@@ -107,7 +107,7 @@ def test_sync_reference_grammar(text, expected):
         assert getattr(ref, key) == value, key
 
 
-@pytest.mark.parametrize("text", ["nod1:relax:2", "a:b:c:d", ":end", "nod1", "g1:stroke:0"])
+@pytest.mark.parametrize("text", ["nod1:relax:2", "a:b:c:d", ":end", "nod1", "g1:stroke:0", "b1:st\nart"])
 def test_invalid_sync_references(text):
     with pytest.raises(SyncRefError):
         parse_sync_ref(text)
