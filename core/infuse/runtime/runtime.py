@@ -5,7 +5,7 @@
     rt = Runtime(fps=30)
     rt.add_character(character)                      # an infuse.Character (mapped on the way if needed)
     rt.activate(character, Clip(walk), 0.0)           # a base layer
-    rt.activate(character, gaze, 1.0, end_s=4.0, blend_in_s=0.3)
+    rt.activate(character, nod, 1.0, end_s=4.0, blend_in_s=0.3)
     rt.run(5.0)                                       # or rt.step() for one frame
     motion = rt.motion(character)                     # a Motion on the character's own skeleton, with
                                                       # the morph weights any controller wrote
@@ -39,7 +39,7 @@ class Activity:
     """A controller active on one character.
 
     ``start_s`` / ``end_s``: global seconds (``end_s`` None: until stopped); the weight ramps up over
-    ``blend_in_s`` from the start and down over ``blend_out_s`` to reach 0 at the end. ``binding`` is
+    ``blend_in_s`` from the start and down over ``blend_out_s`` to 0 at the end. ``binding`` is
     what the controller prepared for the character; ``state`` persists between blocks.
     ``source`` is what it was made from (a BML activation, if any).
     """
@@ -277,11 +277,10 @@ class Runtime:
         end = None if activation.persistent else activation.end
         if activation.stop_s is not None:
             end = activation.stop_s if end is None else min(end, activation.stop_s)
-        blend = {}
-        for key, name_ in (("fade_in_s", "blend_in_s"), ("fade_out_s", "blend_out_s")):
-            if activation.parameters.get(key) is not None:
-                blend[name_] = float(activation.parameters[key])
-        return self.activate(rig.name, controller, activation.start, end, source=activation, **blend)
+        fade_in, fade_out = (activation.parameters.get(key) for key in ("fade_in_s", "fade_out_s"))
+        return self.activate(rig.name, controller, activation.start, end, source=activation,
+                             blend_in_s=None if fade_in is None else float(fade_in),
+                             blend_out_s=None if fade_out is None else float(fade_out))
 
     # -- evaluation ------------------------------------------------------------------------------------
     def run(self, seconds: float) -> None:
@@ -342,7 +341,7 @@ class Runtime:
             translations = np.concatenate([np.repeat(rest[None], len(r), axis=0) if t is None else t
                                            for t, r in zip(track.translations, track.roots)])
         return Motion(sk, self.fps, rotations, roots, translations, name=name,
-                      morph_names=[rig.morph_targets[i] for i in columns], morph_weights=self.morph_weights(character)[:, columns])
+                      morph_names=tuple(rig.morph_targets[i] for i in columns), morph_weights=self.morph_weights(character)[:, columns])
 
     def last_frames(self, character, count: int) -> tuple[np.ndarray, np.ndarray]:
         """Local rotations (n, J, 4) and root translations (n, 3) of the last ``count`` frames evaluated
@@ -377,11 +376,11 @@ class Runtime:
         rig = track.rig
         if not rotations:
             return (np.zeros((0, rig.skeleton.num_joints, 4)), np.zeros((0, 3)), np.zeros((0, len(rig.morph_targets))))
-        rotations = np.concatenate(rotations[::-1])
-        roots = np.concatenate(roots[::-1])
+        local = np.concatenate(rotations[::-1])
+        root = np.concatenate(roots[::-1])
         if rig.placed:
-            rotations[:, 0], roots = rig.place(rotations[:, 0], roots)
-        return rotations, roots, np.concatenate(morphs[::-1])
+            local[:, 0], root = rig.place(local[:, 0], root)
+        return local, root, np.concatenate(morphs[::-1])
 
     def forget(self, keep_s: float) -> None:
         """Drop the evaluated frames older than ``keep_s`` seconds (whole blocks; :meth:`motion` then starts
