@@ -35,7 +35,8 @@ REACH_TOLERANCE_M = 0.02
 class IKConstraint(Controller):
     """Keep ``effector`` on ``target`` (a point, ``"character:joint"``, a runtime target's name or a
     :class:`~infuse.runtime.targets.Target`) shifted by ``offset_m`` (3,) metres; ``root``: the top joint
-    of a chain effector (canonical or own name). ``blend_in_s``/``blend_out_s``: the fades, seconds."""
+    of a chain effector (canonical or own name). ``blend_in_s``/``blend_out_s``: the fades, seconds;
+    ``purpose``: what the constraint is for, in its report (default: the constraint on the effector)."""
 
     kind = "ik_constraint"
     layer = Layer.HEAD
@@ -45,10 +46,11 @@ class IKConstraint(Controller):
     blend_out_s = 0.3
 
     def __init__(self, effector: str, target, offset_m=(0.0, 0.0, 0.0), root: str | None = None,
-                 blend_in_s: float | None = None, blend_out_s: float | None = None):
+                 blend_in_s: float | None = None, blend_out_s: float | None = None, purpose: str | None = None):
         if not isinstance(effector, str) or not effector.strip():
             raise UsageError("an IK constraint names its effector joint")
         self.effector, self.target, self.root = effector.strip(), target, root
+        self.purpose = purpose or f"the constraint on {self.effector!r}"
         self.offset_m = np.array(check_point(offset_m, "the constraint's offset"))
         for name, value in (("blend_in_s", blend_in_s), ("blend_out_s", blend_out_s)):
             if value is not None:
@@ -103,7 +105,7 @@ class IKConstraint(Controller):
         miss = np.linalg.norm(reached - goal, axis=1)[held]
         if miss.size and miss.max() > REACH_TOLERANCE_M and not job.state.get("reported"):
             job.state["reported"] = True
-            job.report(f"constraint on {self.effector!r}: the target is out of reach by up to {miss.max() * 100:.0f} cm")
+            job.report(f"{self.purpose}: the target is out of reach by up to {miss.max() * 100:.0f} cm")
 
 
 def _joint(rig, name: str) -> int | None:

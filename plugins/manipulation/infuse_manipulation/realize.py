@@ -157,7 +157,8 @@ def start_grab(runtime, character: str, activation, parameters: dict, pack, acti
         arm.stroke_s = reach_s  # the wrist arrives at ready
         activate(arm, back, blend_out_s=GRAB_RETURN_S)
     else:
-        arm = IKConstraint(f"{hand[0]}_wrist", before, blend_in_s=reach_s, blend_out_s=GRAB_RETURN_S)
+        arm = IKConstraint(f"{hand[0]}_wrist", before, blend_in_s=reach_s, blend_out_s=GRAB_RETURN_S,
+                           purpose=f"the {hand} hand reaching for {name!r}")
         activate(arm, back)
     held = HeldObject(before, character, wrist, stroke)
     runtime.add_target(name, held)
