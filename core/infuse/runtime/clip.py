@@ -3,7 +3,8 @@
 The motion must be on the character's skeleton, or share joint names with it (joints it does not
 name keep the pose below), or come with its own mapping for an installed retargeter to transfer it.
 Looping carries the root forward: each cycle adds the clip's horizontal root displacement, so a walk
-cycle walks on. Rotations between frames are interpolated (normalized lerp on the shorter arc).
+cycle walks on. Rotations between frames are interpolated (normalized lerp on the shorter arc),
+morph weights linearly; the clip's morph weights drive the character's morph targets of those names.
 """
 from __future__ import annotations
 
@@ -56,6 +57,23 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     return rot, root, jt, cycles
 
 
+def sample_morph_weights(motion: Motion, times: np.ndarray, loop: bool) -> np.ndarray:
+    """(T, M) morph weights of ``motion`` at ``times`` seconds from its start, linear between frames;
+    held at the ends, or wrapped over its duration when ``loop`` (as :func:`sample_motion`)."""
+    f = motion.num_frames
+    weights = motion.morph_weights
+    position = np.asarray(times, dtype=np.float64) * motion.fps
+    if f == 1:
+        return np.repeat(weights, len(position), axis=0)
+    span = f - 1
+    if loop:
+        position = position - np.floor(position / span + 1e-9) * span
+    position = np.clip(position, 0.0, span)
+    i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
+    frac = (position - i0)[:, None]
+    return weights[i0] + frac * (weights[i0 + 1] - weights[i0])
+
+
 class LoopTable:
     """Several looping motions of one skeleton stacked into one table, so that a blend of them is
     sampled in one gather, each joint at one of a few times (a leg at its own foot's time).
@@ -65,7 +83,7 @@ class LoopTable:
     same values to rounding. The tables and the samples are component-major ((4, ...) quaternions,
     (3, ...) translations): weighting a sample frame by frame then runs over contiguous rows, where
     numpy broadcasts a weight along a last axis of 3 or 4 several times slower. Built once per set
-    of motions (a locomotion binding).
+    of motions (a blend space's binding).
     """
 
     def __init__(self, motions):
@@ -214,7 +232,14 @@ class Clip(Controller):
             rest = rig.skeleton.rest_translations
             moved = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and n in rig.skeleton.index
                      and np.abs(motion.joint_translations[:, i] - rest[rig.skeleton.index[n]]).max() > 1e-9]
+        morph_sources = [k for k, n in enumerate(self.motion.morph_names) if n in rig.morph_index]
+        if len(morph_sources) < len(self.motion.morph_names):
+            lacking = [n for n in self.motion.morph_names if n not in rig.morph_index]
+            report(f"clip {motion.name!r}: the character has no morph target {', '.join(map(repr, lacking[:8]))}; "
+                   "those weights are skipped")
         return {"motion": motion, "columns": columns, "joints": targets, "step": step,
+                "morph_sources": np.array(morph_sources, dtype=np.int64),
+                "morph_columns": np.array([rig.morph_index[self.motion.morph_names[k]] for k in morph_sources], dtype=np.int64),
                 "identity_columns": bool(np.array_equal(columns, np.arange(len(columns)))),
                 "mover": mover, "mover_target": rig.skeleton.index.get(mover_name),
                 "drives_root": src.names[0] == rig.skeleton.names[0],
@@ -256,3 +281,6 @@ class Clip(Controller):
             if additive:
                 values = values - first_moved[b["moved_columns"]]
             job.pose.set_translations(b["moved_joints"], values, job.weight, job.mode)
+        if b["morph_columns"].size:  # from the clip as given: a retargeted copy keeps no morph weights
+            weights = sample_morph_weights(self.motion, local, self.loop)[:, b["morph_sources"]]
+            job.pose.set_morphs(b["morph_columns"], weights, job.weight, job.mode)

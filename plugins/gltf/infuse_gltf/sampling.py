@@ -48,8 +48,13 @@ def detect_fps(times: list[np.ndarray]) -> tuple[float, str]:
 
 
 def frame_times(start: float, end: float, fps: float) -> np.ndarray:
-    """Uniform frame times from ``start`` covering ``end`` (the last frame may hold the last key)."""
-    count = int(np.ceil((end - start) * fps - 1e-6)) + 1
+    """Uniform frame times from ``start`` covering ``end`` (the last frame may hold the last key).
+
+    Key times are float32 in glTF: an end that is a whole number of frames, rounded up in float32,
+    does not add a frame (79 frames at 24 fps end at 3.2916667461 s, 79.000002 frames).
+    """
+    slack = max(1e-6, 4.0 * float(np.spacing(np.float32(max(abs(start), abs(end))))) * fps)
+    count = int(np.ceil((end - start) * fps - slack)) + 1
     return start + np.arange(max(count, 1)) / fps
 
 
