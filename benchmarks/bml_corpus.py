@@ -4,7 +4,9 @@ Prints, per source folder: documents parsed and scheduled without a warning, wit
 (refused with a clear error); documents realized on a character (the Ready Player Me avatar, one
 scene per document, every frame evaluated to the end of its blocks) and the behaviours that became
 runtime activities, and of the ``<gesture>`` behaviours how many are played; the time taken; and how many of the expected timings stated in the OpenBMLParser
-documents' header comments the scheduler reproduces.
+documents' header comments the scheduler reproduces. Then the scheduled behaviours played on the
+character: those that became activities, those with nothing to show (a wait, an event), and every one not
+played with the warning that says why, those naming an object or character the scene does not have apart.
 
     python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30]
 
@@ -15,6 +17,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 import time
 from collections import Counter
 from pathlib import Path
@@ -29,6 +32,11 @@ CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")
 CHARACTER = "talkinghead/avatars/brunette-t.glb"
 #: Longest stretch of a document evaluated, seconds.
 MAX_SECONDS = 60.0
+#: Words of a realization warning that names an object or character absent from the scene.
+ABSENT = ("no character or object named", "no object named", "no target or character named", "has no joint",
+          "no character, object or target named", "no character '")
+#: The behaviour packs the character is infused with, those installed: walks, reaches and postures.
+PACKS = ("locomotion-female", "reaching", "postures")
 
 
 def shared_character(corpus: Path):
@@ -40,13 +48,20 @@ def shared_character(corpus: Path):
     return infuse.Character("character", asset, map_skeleton(asset))
 
 
-def realize(document, character, fps: float) -> dict:
-    """Realize ``document`` on ``character`` in a scene of its own and evaluate it to its end: counts of
-    activities and warnings, frames evaluated, CPU seconds spent synthesizing speech."""
+def installed_packs() -> tuple[str, ...]:
+    from infuse import registry
+
+    return tuple(p for p in PACKS if p in registry.table("behaviour-pack"))
+
+
+def realize(document, character, fps: float, packs=(), pack_cache=None) -> dict:
+    """Realize ``document`` on ``character`` (infused with ``packs``) in a scene of its own and evaluate it
+    to its end: counts of activities and warnings, frames evaluated, CPU seconds spent synthesizing speech,
+    the behaviours with nothing to show and those not played (with the warning saying why)."""
     from infuse.scene import Scene
 
-    scene = Scene(fps=fps, quiet=True)
-    scene.add_character(character, "character")
+    scene = Scene(fps=fps, quiet=True, pack_cache=pack_cache)
+    scene.add_character(character, "character", packs=packs)
     scene.bml("character", document)
     scene.run(min(scene.end_time, MAX_SECONDS) + 1.0 / fps)
     scene.motion("character")
@@ -54,9 +69,23 @@ def realize(document, character, fps: float) -> dict:
     warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
     gestures = [(a.block, a.behaviour) for record in scene.scheduler.blocks.values() for a in record.activations
                 if a.element == "gesture"]
+    reasons = {}
+    for w in warnings:
+        reasons[w.id] = w  # the last warning about a behaviour is what realizing it said
+    silent, missed = 0, []
+    for record in scene.scheduler.blocks.values():
+        for a in record.activations:
+            if (a.block, a.behaviour) in scene.activities:
+                continue
+            why = reasons.get(f"{a.block}:{a.behaviour}")
+            if why is None:
+                silent += 1
+            else:
+                missed.append((f"{a.block}:{a.behaviour}", a.element, why.description,
+                               any(words in why.description for words in ABSENT) or why.type == "NO_SUCH_TARGET"))
     return {"activities": len(scene.activities), "warnings": warnings, "frames": scene.runtime.frame,
             "synthesis_s": scene.speech.synthesis_s, "gestures": len(gestures),
-            "gestures_played": sum(key in scene.activities for key in gestures)}
+            "gestures_played": sum(key in scene.activities for key in gestures), "silent": silent, "missed": missed}
 
 
 def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -> dict:
@@ -96,13 +125,16 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
 
     realize_s = synthesis_s = 0.0
     frames = 0
+    missed = []
+    packs = installed_packs()
+    cache = tempfile.TemporaryDirectory(prefix="infuse-bml-corpus-")
     if realized:
         character = shared_character(corpus)
         cpu = time.process_time()
         for folder, path, document in realized:
             tally = counts[folder]
             try:
-                outcome = realize(document, character, realize_fps)
+                outcome = realize(document, character, realize_fps, packs, cache.name)
             except Exception as exc:  # a crash: the benchmark counts it and goes on
                 tally["crashed"] += 1
                 print(f"  CRASH    {folder}/{path.name}: {type(exc).__name__}: {exc}")
@@ -111,12 +143,15 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
             tally["activities"] += outcome["activities"]
             tally["gestures"] += outcome["gestures"]
             tally["gestures played"] += outcome["gestures_played"]
+            tally["silent"] += outcome["silent"]
+            missed += [(f"{folder}/{path.name}", *m) for m in outcome["missed"]]
             frames += outcome["frames"]
             synthesis_s += outcome["synthesis_s"]
             if verbose:
                 for w in outcome["warnings"]:
                     print(f"  realize  {folder}/{path.name}: {w.id} {w.type}: {w.description}")
         realize_s = time.process_time() - cpu
+    cache.cleanup()
 
     print(f"{'folder':<15}{'documents':>10}{'ok':>6}{'warnings':>10}{'invalid':>9}{'behaviours':>12}"
           + (f"{'realized':>10}{'crashed':>9}{'activities':>12}" if realized else ""))
@@ -127,11 +162,20 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
     print(f"{len(files)} documents parsed and scheduled in {elapsed * 1000:.0f} ms "
           f"({elapsed / len(files) * 1000:.2f} ms per document)")
     if realized:
-        print(f"{len(realized)} documents realized on {CHARACTER} at {realize_fps:g} fps: {frames} frames "
+        print(f"{len(realized)} documents realized on {CHARACTER} (packs: {', '.join(packs) or 'none'}) at "
+              f"{realize_fps:g} fps: {frames} frames "
               f"({frames / realize_fps:.0f} s of animation) in {realize_s:.1f} CPU s, of which speech synthesis "
               f"{synthesis_s:.1f} s")
         gestures = sum(t["gestures"] for t in counts.values())
         print(f"<gesture> behaviours played: {sum(t['gestures played'] for t in counts.values())} of {gestures}")
+        scheduled = sum(t["behaviours"] for t in counts.values())
+        silent = sum(t["silent"] for t in counts.values())
+        absent = [m for m in missed if m[4]]
+        print(f"behaviours played on the character: {scheduled - len(missed)} of {scheduled} "
+              f"({sum(t['activities'] for t in counts.values())} as activities, {silent} with nothing to show); "
+              f"not played: {len(missed)}, of which {len(absent)} name an object or character the scene does not have")
+        for where, behaviour, element, why, is_absent in sorted(missed, key=lambda m: (not m[4], m[0], m[1])):
+            print(f"  {'absent' if is_absent else 'not played'}  {where} {behaviour} <{element}>: {why}")
 
     status = Counter(o.status for _, o in outcomes)
     checkable = status["matched"] + status["mismatched"]
