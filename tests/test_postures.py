@@ -1,0 +1,267 @@
+"""The postures pack (tools/motion_authoring/postures.py) and the posture controller, measured by FK: every
+posture stands on the same footprints and loops; BML posture names map to the pack's postures (unknown ones
+warn at scheduling); on Xbot, the Ready Player Me avatar and SmartBody's utah skeleton the feet stay planted
+through postures, transitions and returns, the arms reach the authored places, breathing and gaze still add,
+a walk ends a lasting posture, and the forearms and hands stay out of the torso's skin."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import infuse
+from infuse import quaternions as quat
+from infuse.bml import Scheduler
+from infuse.kinematics import forward_kinematics
+from infuse.mesh import skinning_matrices
+from infuse.runtime import Runtime
+from infuse.scene import Scene
+
+from infuse_postures.controller import posture_space
+from runtime_characters import corpus_character
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from tools.motion_authoring.body import Body  # noqa: E402
+from tools.motion_authoring.postures import LEG_REACH, SPECS, footprints, posture_motion  # noqa: E402
+
+FPS = 30.0
+PACK = Path(__file__).resolve().parents[1] / "behaviour_libs" / "postures" / "infuse_pack_postures" / "pack"
+BML = '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="{id}" characterId="bob">{body}</bml>'
+SHIFT = '<postureShift id="{id}" start="{start}"><stance type="STANDING"/><pose part="ARMS" lexeme="{lexeme}"/></postureShift>'
+
+
+@pytest.fixture(scope="module")
+def body():
+    return Body.canonical()
+
+
+@pytest.fixture(scope="module")
+def pack_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("infusions")
+
+
+# -- authoring ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("spec", SPECS, ids=lambda s: s.name)
+def test_each_posture_stands_on_the_shared_footprints_and_loops(body, spec):
+    motion = posture_motion(body, spec)
+    g_rot, g_pos = forward_kinematics(body.skeleton, motion.local_rotations, motion.root_translations)
+    for side, (ankle, yaw) in footprints(body).items():
+        assert np.abs(g_pos[:, body.i(f"{side}_ankle")] - ankle).max() < 1e-4  # planted on its footprint, every frame
+        forward = quat.rotate(g_rot[:, body.i(f"{side}_ankle")], np.array([0.0, 0.0, 1.0]))
+        assert np.degrees(np.abs(np.arctan2(forward[:, 0], forward[:, 2]) - yaw)).max() < 0.01  # flat and toed out
+        reach = np.linalg.norm(g_pos[:, body.i(f"{side}_ankle")] - g_pos[:, body.i(f"{side}_hip")], axis=-1)
+        assert reach.max() <= LEG_REACH * body.leg + 1e-6  # the knee never locks
+    assert np.abs(motion.local_rotations[0] - motion.local_rotations[-1]).max() < 1e-9  # a seamless loop
+    assert np.abs(motion.root_translations[0] - motion.root_translations[-1]).max() < 1e-9
+    sway = np.ptp(motion.root_translations[:, [0, 2]], axis=0)
+    assert 0.005 < sway.max() < 0.04  # the idle shifts the weight, a little
+
+
+@pytest.mark.parametrize("spec", [s for s in SPECS if s.arms], ids=lambda s: s.name)
+def test_placed_hands_are_where_the_posture_puts_them(body, spec):
+    motion = posture_motion(body, spec)
+    g_rot, g_pos = forward_kinematics(body.skeleton, motion.local_rotations, motion.root_translations)
+    for side, place in spec.arms.items():
+        frame = body.i("spine3" if place.frame == "chest" else "base")
+        wrist = quat.rotate(quat.conjugate(g_rot[:, frame]), g_pos[:, body.i(f"{side}_wrist")] - g_pos[:, frame])
+        wanted = np.asarray(place.wrist) * np.array([1.0 if side == "l" else -1.0, 1.0, 1.0])
+        assert np.linalg.norm(wrist - wanted, axis=-1).max() < 0.002, side
+
+
+def test_the_committed_clips_are_what_the_generator_makes(body):
+    for spec in SPECS:
+        committed = next(iter(infuse.load(PACK / "clips" / f"{spec.name}.bvh").motions.values()))
+        made = posture_motion(body, spec)
+        _, a = forward_kinematics(body.skeleton, made.local_rotations, made.root_translations)
+        _, b = forward_kinematics(committed.skeleton, committed.local_rotations, committed.root_translations)
+        assert np.abs(a - b[:, [committed.skeleton.index[n] for n in body.skeleton.names]]).max() < 1e-3, spec.name
+
+
+# -- BML ----------------------------------------------------------------------------------------------------
+def schedule(body: str):
+    scheduler = Scheduler()
+    warnings = []
+    scheduler.feedback.subscribe(warnings.append, kinds=["warningFeedback"])
+    (block,) = scheduler.submit(body if body.lstrip().startswith("<act") else BML.format(id="b1", body=body), at=0.0)
+    return block.activations, warnings
+
+
+@pytest.mark.parametrize("body,posture", [
+    (SHIFT.format(id="p", start=0, lexeme="ARMS_CROSSED"), "arms_crossed"),
+    (SHIFT.format(id="p", start=0, lexeme="HANDS_ON_HIP"), "hands_on_hips"),
+    (SHIFT.format(id="p", start=0, lexeme="ARMS_AKIMBO"), "hands_on_hips"),
+    (SHIFT.format(id="p", start=0, lexeme="HANDS_BEHIND_BACK"), "hands_behind_back"),
+    (SHIFT.format(id="p", start=0, lexeme="HANDS_CLASPED"), "hands_clasped"),
+    ('<posture id="p"><stance type="STANDING"/><pose part="WHOLEBODY" lexeme="LEANING_FORWARD"/></posture>', "leaning_forward"),
+    ('<posture id="p"><pose part="WHOLEBODY" lexeme="LEANING_BACKWARD"/></posture>', "leaning_back"),
+    ('<postureShift id="p"><stance type="STANDING"/><pose part="LEGS" lexeme="WEIGHT_ON_LEFT_LEG"/></postureShift>',
+     "weight_left"),
+    ('<postureShift id="p"><stance type="STANDING"/></postureShift>', "neutral"),
+    ('<act><bml><body posture="ChrBrad@Idle01"/></bml></act>', "neutral"),
+    ('<act><bml><body posture="ChrBrad@Idle01_ArmsCrossed01"/></bml></act>', "arms_crossed"),
+    ('<torso id="t" lexeme="BodyRecline"/>', "leaning_back"),
+])
+def test_bml_names_map_to_the_packs_postures(body, posture):
+    (activation,), warnings = schedule(body)
+    assert activation.controller == "posture" and activation.parameters["pack"] == "postures"
+    assert activation.parameters["posture"] == posture
+    assert not warnings
+
+
+def test_unknown_names_and_other_stances_warn_at_scheduling_naming_the_postures():
+    activations, warnings = schedule('<postureShift id="p1"><stance type="STANDING"/><pose part="ARMS" lexeme="JUGGLING"/>'
+                                     '</postureShift><postureShift id="p2" start="2"><stance type="SITTING"/></postureShift>'
+                                     '<torso id="t1" start="4" lexeme="Twisted_Sideways"/>')
+    by_id = {w.id: w.description for w in warnings}
+    assert "JUGGLING" in by_id["b1:p1"] and "arms_crossed (ARMS_CROSSED" in by_id["b1:p1"]
+    assert "SITTING" in by_id["b1:p2"] and "stands" in by_id["b1:p2"]
+    assert "Twisted_Sideways" in by_id["b1:t1"] and "hands_on_hips" in by_id["b1:t1"]
+    postures = {a.behaviour: a.parameters.get("posture") for a in activations}
+    assert postures == {"p1": "neutral", "p2": None, "t1": None}  # standing, the pose unknown: the neutral stance
+
+
+# -- on characters ------------------------------------------------------------------------------------------
+def play(key: str, body: str, cache, idle: bool = False, seconds: float | None = None):
+    scene = Scene(fps=FPS, tts=None, quiet=True, idle=idle, pack_cache=cache)
+    scene.add_character(corpus_character(key), "bob", packs=("locomotion-male",))
+    scene.add_object("cup", (1.2, 1.6, 1.0))
+    scene.bml("bob", BML.format(id="b1", body=body), at=0.0)
+    scene.run(seconds if seconds is not None else scene.end_time + 1.0)
+    return scene, scene.motion("bob")
+
+
+def chest_frame(rig, motion, joint: str) -> np.ndarray:
+    """(F, 3) ``joint`` in the frame of the joint the arms hang from (the chest)."""
+    sk = motion.skeleton
+    shoulder = rig.joint("l_acromioclavicular") or rig.joint("l_shoulder")
+    chest = sk.parents[shoulder]
+    g_rot, g_pos = forward_kinematics(sk, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    return quat.rotate(quat.conjugate(g_rot[:, chest]), g_pos[:, rig.joint(joint)] - g_pos[:, chest])
+
+
+def feet_travel_m(rig, motion, frames) -> float:
+    """The largest horizontal distance any ankle or ball of the foot moves from where it stands at the first of ``frames``."""
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    joints = [rig.joint(f"{s}_{j}") for s in "lr" for j in ("ankle", "forefoot") if rig.joint(f"{s}_{j}") is not None]
+    p = g_pos[frames][:, joints][:, :, [0, 2]]
+    return float(np.linalg.norm(p - p[0], axis=-1).max())
+
+
+SEQUENCE = (SHIFT.format(id="p1", start=0.5, lexeme="ARMS_CROSSED")
+            + '<posture id="p2" start="3" ready="4" relax="6" end="7"><stance type="STANDING"/>'
+              '<pose part="ARMS" lexeme="HANDS_ON_HIP"/></posture>'
+            + SHIFT.format(id="p3", start=8, lexeme="LEANING_FORWARD"))
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
+def test_postures_follow_each_other_with_the_feet_planted(key, pack_cache):
+    scene, motion = play(key, SEQUENCE, pack_cache, seconds=11.0)
+    rig = scene.runtime.rig("bob")
+    assert feet_travel_m(rig, motion, np.arange(motion.num_frames)) < 0.003  # through three transitions and a return
+    space = posture_space(rig, "postures")
+    for side in "lr":
+        wrist = chest_frame(rig, motion, f"{side}_wrist")
+        for t, clip, start in ((2.5, "arms_crossed", 0.5), (5.0, "hands_on_hips", 3.0), (7.5, "arms_crossed", 0.5)):
+            authored = chest_frame(rig, space.clips[clip].motion, f"{side}_wrist")
+            loop = int(round((t - start) * FPS)) % (space.clips[clip].motion.num_frames - 1)
+            assert np.linalg.norm(wrist[int(round(t * FPS))] - authored[loop]) < 0.002, (side, t, clip)
+    # Leaning forward: the trunk pitches forward of where it stood (the chest ahead of the hips).
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    chest, hips = g_pos[:, rig.joint("spine3")], g_pos[:, rig.joint("base")]
+    heading = quat.rotate(rig.rotation, np.array([0.0, 0.0, 1.0]))
+    ahead = np.sum((chest - hips) * heading, axis=-1)
+    assert ahead[int(10.5 * FPS)] - ahead[int(2.0 * FPS)] > 0.04
+
+
+def test_breathing_and_gaze_still_add_to_a_posture(pack_cache):
+    body = SHIFT.format(id="p1", start=0.2, lexeme="ARMS_CROSSED") + '<gaze id="g1" target="cup" start="2" end="5"/>'
+    plain, still = play("rpm", SHIFT.format(id="p1", start=0.2, lexeme="ARMS_CROSSED"), pack_cache, seconds=5.0)
+    scene, lively = play("rpm", body, pack_cache, idle=True, seconds=5.0)
+    rig = scene.runtime.rig("bob")
+    frames = np.arange(still.num_frames)
+    assert feet_travel_m(rig, lively, frames) < 0.003
+    chest = rig.joint("spine3")
+    breath = np.degrees(quat.angle_between(still.local_rotations[:, chest], lively.local_rotations[:, chest]))
+    assert 0.1 < breath[15:60].max() < 5.0  # before the gaze, the breathing controller moves the chest over the posture
+    g_rot, g_pos = forward_kinematics(lively.skeleton, lively.local_rotations, lively.root_translations)
+    p_rot, p_pos = forward_kinematics(still.skeleton, still.local_rotations, still.root_translations)
+    head, f = rig.joint("skullbase"), int(4.0 * FPS)
+    cup = quat.rotate(quat.conjugate(rig.rotation), np.array([1.2, 1.6, 1.0]) - rig.position)  # in the character's frame
+    # The head's forward axis in its own frame, from the posture without gaze (the face looks straight ahead).
+    axis = quat.rotate(quat.conjugate(p_rot[f, head]), np.array([0.0, 0.0, 1.0]))
+
+    def off_target_deg(rot, pos):
+        forward, to = quat.rotate(rot[f, head], axis), cup - pos[f, head]
+        return np.degrees(np.arccos(np.dot(forward, to) / np.linalg.norm(to)))
+
+    assert off_target_deg(g_rot, g_pos) < off_target_deg(p_rot, p_pos) - 20.0  # the gaze turns the head to the cup
+
+
+def test_a_walk_ends_a_lasting_posture(pack_cache):
+    scene, motion = play("xbot", SHIFT.format(id="p1", start=0.2, lexeme="ARMS_CROSSED")
+                         + '<locomotion id="w1" target="0 3" start="3"/>', pack_cache)
+    posture = scene.activities[("b1", "p1")]
+    assert posture.end_s is not None and 3.0 < posture.end_s < 3.0 + 2.0
+    rig = scene.runtime.rig("bob")
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    assert np.linalg.norm(g_pos[-1, rig.joint("base"), [0, 2]] - g_pos[0, rig.joint("base"), [0, 2]]) > 2.0
+    assert feet_travel_m(rig, motion, np.arange(int(3.0 * FPS))) < 0.003
+    # Walking, the arms swing again: the wrist leaves the crossed place.
+    wrist = chest_frame(rig, motion, "l_wrist")
+    assert np.linalg.norm(wrist[-1] - wrist[int(2.5 * FPS)]) > 0.15
+
+
+# -- the arms and the body ----------------------------------------------------------------------------------
+def _descendants(parents, roots) -> set[int]:
+    out = set(roots)
+    for j in range(len(parents)):
+        p = j
+        while p >= 0 and p not in out:
+            p = parents[p]
+        if p >= 0:
+            out.add(j)
+    return out
+
+
+def _skinned(mesh, g_rot, g_pos) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex positions (V, 3) and unit normals (V, 3) of ``mesh`` posed by one frame's global joints."""
+    m = skinning_matrices(mesh, g_rot, g_pos)[0].astype(np.float64)
+    blended = np.einsum("vk,vkij->vij", mesh.weights.astype(np.float64), m[mesh.joints])
+    v = np.einsum("vij,vj->vi", blended[:, :, :3], mesh.positions.astype(np.float64)) + blended[:, :, 3]
+    n = np.einsum("vij,vj->vi", blended[:, :, :3], mesh.normals.astype(np.float64))
+    return v, n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
+
+
+def penetration_m(character, motion, frame: int) -> float:
+    """How deep (metres) any forearm or hand vertex lies inside the torso's skin at ``frame``: beneath the
+    nearest torso vertex (within 5 cm) along that vertex's normal."""
+    sk = character.skeleton
+    index = character.mapping.indices(sk)
+    g_rot, g_pos = forward_kinematics(sk, motion.local_rotations[frame:frame + 1], motion.root_translations[frame:frame + 1])
+    arms = _descendants(sk.parents, [index["l_elbow"], index["r_elbow"]])
+    torso = [index[n] for n in ("base", "spine1", "spine2", "spine3", "spine4") if n in index]
+    torso_v, torso_n, arm_v = [], [], []
+    for mesh in character.asset.meshes:
+        owner = mesh.bind_joints[mesh.joints[np.arange(len(mesh.joints)), np.argmax(mesh.weights, axis=1)]]
+        v, n = _skinned(mesh, g_rot, g_pos)
+        torso_v.append(v[np.isin(owner, torso)])
+        torso_n.append(n[np.isin(owner, torso)])
+        arm_v.append(v[np.isin(owner, list(arms))])
+    torso_v, torso_n, arm_v = (np.concatenate(a) for a in (torso_v, torso_n, arm_v))
+    distance, nearest = cKDTree(torso_v).query(arm_v)
+    depth = -np.einsum("ij,ij->i", arm_v - torso_v[nearest], torso_n[nearest])
+    return float(np.max(depth[(depth > 0) & (distance < 0.05)], initial=0.0))
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm"])
+def test_forearms_and_hands_stay_out_of_the_torso(key):
+    character = corpus_character(key)
+    rt = Runtime(fps=FPS)
+    rt.add_character(character, "bob")
+    space = posture_space(rt.rig("bob"), "postures")
+    for name, clip in space.clips.items():
+        deepest = max(penetration_m(character, clip.motion, f) for f in range(0, clip.motion.num_frames, 40))
+        assert deepest < 0.025, (name, deepest)  # skin against skin at most: hands on the hips, clasped, crossed arms
