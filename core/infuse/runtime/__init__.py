@@ -26,7 +26,7 @@ def controller_components() -> dict:
 
 
 def controller(kind: str, **settings) -> Controller:
-    """Build the installed controller ``kind`` (``"gaze"``, ``"blink"``, ``"clip"``...) with ``settings``."""
+    """Build the installed controller ``kind`` (``"clip"``, ``"head"``...) with ``settings``."""
     from ..errors import UsageError
 
     table = controller_components()

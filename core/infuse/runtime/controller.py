@@ -1,6 +1,6 @@
 """The controller contract: what a controller plugin builds and the runtime calls.
 
-A :class:`Controller` is one behaviour for one character (a gaze at a target, a nod, a clip). The
+A :class:`Controller` is one behaviour for one character (a look at a target, a nod, a clip). The
 runtime plays it as an :class:`~infuse.runtime.runtime.Activity` between two times, and evaluates
 frames in blocks: for each block, every activity of one controller class, layer and priority, over
 all characters, is handed to the class at once (``evaluate(jobs, block)``), so a controller can

@@ -14,9 +14,9 @@ import numpy as np
 class Layer(enum.IntEnum):
     """Where a controller acts, in evaluation order."""
 
-    BASE = 1      # base motion and blends (clips, locomotion)
-    POSTURE = 2   # posture and gestures (breathing, reaching, gestures)
-    GAZE = 3      # gaze and saccades
+    BASE = 1      # base motion and blends (clips, walking)
+    POSTURE = 2   # posture and gestures (the chest, the arms, gestures)
+    GAZE = 3      # where the eyes, head and spine look
     HEAD = 4      # head movements (nod, shake, toss, tilt)
     FACE = 5      # face: blinks, lip sync, expressions (morph weights and face joints)
 
@@ -42,7 +42,7 @@ def smoothstep(x) -> np.ndarray:
 def blend_weights(times, start_s: float, end_s: float | None, blend_in_s: float, blend_out_s: float) -> np.ndarray:
     """(F,) weights in [0, 1] of an activity at ``times`` (seconds).
 
-    The weight is 0 before ``start_s``, ramps up over ``blend_in_s``, and ramps down to reach 0 at
+    The weight is 0 before ``start_s``, ramps up over ``blend_in_s``, and ramps down to 0 at
     ``end_s`` (never, when ``end_s`` is None). Ramps are :func:`smoothstep`; a zero blend time is a step.
     """
     t = np.asarray(times, dtype=np.float64)

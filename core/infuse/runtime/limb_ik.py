@@ -1,5 +1,5 @@
-"""Two-joint limb IK, vectorized over frames: the end of the foot-contact component (the legs reach
-the goals of :mod:`infuse.footing`), and arms for reaches.
+"""Two-joint limb IK, vectorized over frames: the end of the foot-contact component (the legs get to
+the goals of :mod:`infuse.footing`), and arms that take things.
 
 The limb is three joints a (hip, shoulder), b (knee, elbow), c (ankle, wrist). The bend at b is set
 by the law of cosines so that c lies as far from a as the goal, then a turns by the shortest arc
@@ -52,7 +52,7 @@ def _arccos(cosine: np.ndarray) -> np.ndarray:
     return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
 
 
-#: Margin (metres) inside a limb's reach for a goal to count as reachable (:func:`turn_limb`).
+#: Margin (metres) inside a limb's span for a goal to count as reachable (:func:`turn_limb`).
 REACH_MARGIN = 5e-4
 
 
@@ -63,7 +63,7 @@ class LimbTurns:
     ``root`` (F, 4): the turn about joint a of everything below a; ``middle`` (F, 4): the turn of
     everything below b instead (it includes ``root``); ``end`` (F, 3): where c ends up;
     ``residual`` (F,): its distance from the goal, metres; ``reachable`` (F,): whether the goal lay
-    inside the limb's reach by at least :data:`REACH_MARGIN`.
+    inside the limb's span by at least :data:`REACH_MARGIN`.
     """
 
     root: np.ndarray
@@ -103,7 +103,7 @@ def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.nd
     ``flexion`` (F,, radians) to the flexion the goal's distance from a needs, then a turns by the
     shortest arc that points c at the goal: the limb moves only as much as the goal needs. The hinge
     never straightens past ``min_flexion`` radians (no hyperextension), but a limb already
-    straighter is not made to bend; a goal out of reach is moved onto the reachable shell, so the
+    straighter is not made to bend; a goal out of its span is moved onto the reachable shell, so the
     limb stretches toward it.
     """
     upper, lower = middle - root, end - middle
@@ -114,7 +114,7 @@ def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.nd
     offset = goal - root
     dist = _norm(offset)
     reachable = (dist <= far - REACH_MARGIN) & (dist >= near + REACH_MARGIN)
-    reach = np.clip(dist, near, far)
+    span = np.clip(dist, near, far)
     # Turning the lower bone by t about the hinge h (perpendicular to the upper bone u) gives
     # u . lower(t) = A cos t + B sin t with A = u . lower and B = u . (h x lower); the distance
     # from a to c fixes u . lower(t), so t = atan2(B, A) + arccos(...) (the branch that bends the
@@ -122,7 +122,7 @@ def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.nd
     along = _dot(upper, lower)
     across = _dot(upper, _cross(hinge, lower))
     size = np.maximum(np.hypot(along, across), 1e-12)
-    wanted = 0.5 * (reach * reach - a * a - b * b)
+    wanted = 0.5 * (span * span - a * a - b * b)
     bend = np.arctan2(across, along) + _arccos(wanted / size)
     bend = np.maximum(bend, np.minimum(0.0, min_flexion - flexion))
     q_bend = quat.from_axis_angle(hinge, bend)
@@ -137,8 +137,8 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                joints, goal: np.ndarray, weight=None, pole: np.ndarray | None = None,
                keep_end: bool = True, end_rotation: np.ndarray | None = None, chains=None,
                distance: bool = True) -> np.ndarray | None:
-    """Rotate joints a and b of ``joints`` so that c reaches ``goal`` (F, 3); writes ``local_rotations``
-    (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within reach), or None
+    """Rotate joints a and b of ``joints`` so that c gets to ``goal`` (F, 3); writes ``local_rotations``
+    (F, J, 4) in place and returns the distance (F,) left to the goal (0 when within its span), or None
     with ``distance=False`` (c's new position is then not computed).
 
     ``weight`` (F,) in [0, 1] blends from the current pose to the solved one; ``pole`` (F, 3) or (3,)

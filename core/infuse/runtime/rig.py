@@ -87,7 +87,7 @@ class Rig:
       that is; ``reference_rotations``: (J, 4) its global rotations; ``aligned``: (J, 4) every joint's ``A_j``;
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
     - ``notes``: what had to be assumed about the character; ``state``: what controllers that act once
-      per character (one gaze at a time) keep between blocks.
+      per character (one look at a time) keep between blocks.
     """
 
     name: str

@@ -1,4 +1,4 @@
-"""Things to look at or reach for: a point, a moving point, or a joint of a character.
+"""Things to look at or take: a point, a moving point, or a joint of a character.
 
 A target gives global positions (metres, core frame) at any times (seconds) at once:
 ``target.positions(times, block) -> (F, 3)``. :func:`as_target` turns plain values into targets:

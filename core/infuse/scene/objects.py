@@ -1,8 +1,8 @@
 """Where a scene's objects are at every evaluated frame.
 
-Objects move when characters move them: a picked-up object follows the hand from the reach's stroke, a
-put-down one stays where it was left from the stroke on (the reach controller swaps the object's runtime
-target when the stroke falls in the frames it evaluates). Two controllers that change no pose keep the
+Objects move when characters move them: a picked-up object follows the hand from the stroke of the
+hand's movement, a put-down one stays where it was left from the stroke on (the controller moving it
+swaps the object's runtime target when the stroke falls in the frames it evaluates). Two controllers that change no pose keep the
 record: :class:`ObjectsBefore` runs first in every block and notes each object's runtime target;
 :class:`ObjectRecorder` runs last, when every pose is final, and samples the targets over the block's
 frames, the old target before a swap and the new one from it (the scene says when: :meth:`switches`).

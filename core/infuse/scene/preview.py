@@ -1,7 +1,7 @@
 """Preview renders of a scene: its characters where they stand (their meshes, with the morph targets the
 controllers moved, else stick figures), its objects as spheres where they are (carried ones move with the
 hand), and
-each character's gaze as a dashed ray from its eyes (or head) along where they point, ending at what it
+each character's line of sight as a dashed ray from its eyes (or head) along where they point, ending at what it
 looks at (a character's face or an object within 15 degrees of the ray) or 1.2 m ahead."""
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def look_joints(rig) -> list[int]:
     return [] if head is None else [head]
 
 
-def gaze_rays(rig, g_rot: np.ndarray, g_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+def sight_rays(rig, g_rot: np.ndarray, g_pos: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """(origins (F, 3), unit directions (F, 3)) of where a character looks, from its global joint rotations
     (F, J, 4) and positions (F, J, 3); None without eyes or head."""
     joints = look_joints(rig)
@@ -49,14 +49,14 @@ def gaze_rays(rig, g_rot: np.ndarray, g_pos: np.ndarray) -> tuple[np.ndarray, np
 
 
 def scene_figures(scene, style: str = "auto") -> list[Figure]:
-    """One figure per character of ``scene`` (every frame so far), with its gaze ray, drawn as ``style``
+    """One figure per character of ``scene`` (every frame so far), with its line of sight, drawn as ``style``
     (see :data:`infuse.render.STYLES`); the objects go with the first figure."""
     names = list(scene.characters)
     if not names or scene.runtime.frame == 0:
         return []
     motions = {n: scene.motion(n) for n in names}
     poses = {n: motion_fk(m) for n, m in motions.items()}
-    rays = {n: gaze_rays(scene.runtime.rig(n), *poses[n]) for n in names}
+    rays = {n: sight_rays(scene.runtime.rig(n), *poses[n]) for n in names}
     faces = {n: r[0] for n, r in rays.items() if r is not None}
     objects = {o: scene.object_track(o) for o in scene.objects}
     figures = []
@@ -114,7 +114,7 @@ def render_scene(scene, path, *, strip: int | None = None, overlay: bool = True,
                  view: str | tuple[float, float] | None = None, title: str | None = None,
                  progress: bool | None = None, style: str = "auto") -> Path:
     """Render the scene so far to ``path`` (.png still or filmstrip with ``strip=N``, .gif, .mp4): every
-    character in one panel (``overlay``, default) or side by side, objects as spheres, gaze rays. ``view``:
+    character in one panel (``overlay``, default) or side by side, objects as spheres, lines of sight. ``view``:
     a named view or (azimuth, elevation) degrees (default :func:`auto_view`); ``style``: each character as its
     mesh, a stick figure, or ``auto`` (the mesh where it has one)."""
     from ..errors import UsageError

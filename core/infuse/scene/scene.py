@@ -9,13 +9,13 @@
     scene.add_character("avatar.glb", name="ann", position=(0, 0, 2.5), facing="bob")
     scene.add_object("cup", (0.35, 1.0, 1.9), size=0.08)
     scene.on("warningFeedback", print)
-    scene.gaze("bob", "ann")                       # builder calls write BML, like scene.bml(...)
+    scene.nod("bob", at=2.0)                       # builder calls write BML, like scene.bml(...)
     scene.say("ann", 'Hello <sync id="tm1"/>Bob!', at=0.5)
     scene.bml("bob", '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b1">'
                      '<head id="h1" lexeme="NOD" stroke="0.4"/></bml>', at=1.0)
     scene.run()                                    # to the end of everything scheduled (or run(seconds), step())
     scene.export("ann", "ann.glb")                 # ann.glb (mesh, clip, morph tracks) and ann.wav
-    scene.render("scene.png", strip=6)             # a preview: characters, objects, gaze rays
+    scene.render("scene.png", strip=6)             # a preview: characters, objects, lines of sight
 
 Time is global seconds from 0; frame ``i`` is at ``i / fps``. ``bml`` schedules a document's blocks at
 ``at`` (default: now, the time of the next frame) and realizes their behaviours at once as runtime
@@ -37,11 +37,12 @@ import numpy as np
 from .. import quaternions as quat
 from ..asset import Asset, Character
 from ..bml import BmlDocument, Scheduler, WarningFeedback, parse_bml, parse_bml_file
+from ..bml import builder
+from ..bml.builder import BuilderCalls
 from ..bml.model import BEHAVIOR_DEGRADED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from ..errors import InfuseError, UsageError
 from ..runtime import Runtime
 from ..runtime.rig import Rig
-from . import builder
 from .realize import realize
 from .speech import SpeechCache, mix, utterance_samples, write_wav
 from .stage import SceneStage
@@ -84,18 +85,19 @@ class _Spoken:
     activity: object
 
 
-class Scene:
+class Scene(BuilderCalls):
     """Characters, objects and BML, realized by the layered runtime (see the module doc).
 
     - ``fps``: frames per second of the animation.
     - ``tts``: the TTS engine name (``"espeak"``) or an engine object; ``tts_settings`` its settings
       (``voice``, ``rate``...). Speech is timed, lip-synced and heard from the same synthesis.
-    - ``idle``: give every character blinks and breathing from the start (BML can change them).
+    - ``idle``: start the idle defaults on every character (the installed controllers that declare
+      themselves such, :attr:`~infuse.plugin_types.ControllerFactory.idle`; BML can change them).
     - ``seed``: makes blinks and saccades repeatable (each character draws its own).
     - ``quiet``: do not print warningFeedback to stderr (callbacks still get it).
     - ``pack_cache``: a folder where infused behaviour packs are cached (next loads are instant).
-    - ``generators``: BML generators on for every block (``("nonverbal",)``: gestures, nods and gaze from
-      speech); a block turns one on or off itself with ``infuse:NAME="true"|"false"``. ``seed`` makes
+    - ``generators``: BML generators on for every block (``("nonverbal",)``: gestures, nods and looks
+      from speech); a block turns one on or off itself with ``infuse:NAME="true"|"false"``. ``seed`` makes
       their choices repeatable too.
     """
 
@@ -140,8 +142,8 @@ class Scene:
         whose entries win, and whose ``"face"`` entry declares face channels) and infused with ``packs``
         (behaviour packs, when installed). ``position`` (metres) is where it stands; ``facing`` which way
         its front looks: degrees about +Y (0 = +Z, 90 = +X), a point (x, z) or (x, y, z), or the name of
-        a character or object (default: as in its file). ``voice``: its TTS voice. ``idle``: blinks and
-        breathing (default: the scene's ``idle``). ``format``, ``units``, ``up_axis``: reader options.
+        a character or object (default: as in its file). ``voice``: its TTS voice. ``idle``: its idle defaults
+        (default: the scene's ``idle``). ``format``, ``units``, ``up_axis``: reader options.
         """
         from .. import fileio
         from ..mapping import map_skeleton
@@ -180,7 +182,7 @@ class Scene:
         return name
 
     def add_object(self, name: str, position, size: float = 0.1) -> str:
-        """Add an object (something to look at, walk to or reach for) at ``position`` (x, y, z) metres, ``size``
+        """Add an object (something to look at, walk to or take) at ``position`` (x, y, z) metres, ``size``
         metres across; returns its name."""
         self._check_new_name(name)
         if not (np.isfinite(size) and size > 0):
@@ -351,7 +353,7 @@ class Scene:
         return None
 
     def pack_space(self, name: str, kind: str):
-        """The :class:`~infuse.packs.BlendSpace` of ``kind`` (``"locomotion"``, ``"reach"``) the character was
+        """The :class:`~infuse.packs.BlendSpace` of pack kind ``kind`` the character was
         infused with (the first of its packs), or None."""
         infusion = self.character(name).infusion
         spaces = infusion.spaces.values() if infusion is not None else ()
@@ -499,7 +501,7 @@ class Scene:
         ``"warningFeedback"``, ``"blockPrediction"``; None: all); returns a function that unsubscribes."""
         return self.feedback.subscribe(callback, kinds=[kinds] if isinstance(kinds, str) else kinds)
 
-    # -- the builder ----------------------------------------------------------------------------------
+    # -- the builder (its calls: :class:`~infuse.bml.builder.BuilderCalls`) ----------------------------
     def _block_id(self, what: str) -> str:
         while True:
             block_id = f"{what}{next(self._ids)}"
@@ -521,60 +523,6 @@ class Scene:
         while name in self.characters or name in self.objects or name in self.targets:
             name = f"point{next(self._points)}"
         return self.add_target(name, point)
-
-    def say(self, character: str, text: str, at: float | None = None, voice: str | None = None) -> str:
-        """Speak ``text`` (BML ``<sync id="..."/>`` marks allowed); returns the block id."""
-        content = builder.element("text", {}, builder.speech_text(text))
-        return self._submit(character, "say", builder.element("speech", {"id": "s1", "voice": voice}, content), at)
-
-    def gaze(self, character: str, target, at: float | None = None, duration: float | None = None,
-             influence: str = "HEAD", offset_angle_deg: float | None = None, offset_direction: str | None = None) -> str:
-        """Look at ``target`` (a character, an object, ``"character:joint"`` or a point) with ``influence``
-        (EYES, HEAD, SHOULDER, WAIST, WHOLE): from now on (a gazeShift), or for ``duration`` seconds."""
-        attributes = {"id": "g1", "target": self._target_name(target), "influence": influence,
-                      "offsetAngle": offset_angle_deg, "offsetDirection": offset_direction}
-        if duration is None:
-            return self._submit(character, "gaze", builder.element("gazeShift", attributes), at)
-        if not duration > 0:
-            raise UsageError("a gaze lasts a positive number of seconds")
-        return self._submit(character, "gaze", builder.element("gaze", {**attributes, "start": 0.0, "end": float(duration)}), at)
-
-    def head(self, character: str, lexeme: str = "NOD", at: float | None = None, repeats: float = 1.0,
-             amount: float = 0.5, velocity_hz: float | None = None) -> str:
-        """A head movement: NOD, SHAKE, TOSS, TILT, WIGGLE, WAGGLE."""
-        attributes = {"id": "h1", "lexeme": lexeme, "repetition": float(repeats), "amount": float(amount),
-                      "sbm:velocity": None if velocity_hz is None else float(velocity_hz)}
-        return self._submit(character, "head", builder.element("head", attributes), at)
-
-    def nod(self, character: str, at: float | None = None, repeats: float = 1.0, amount: float = 0.5) -> str:
-        """Nod (down first)."""
-        return self.head(character, "NOD", at, repeats, amount)
-
-    def shake(self, character: str, at: float | None = None, repeats: float = 2.0, amount: float = 0.5) -> str:
-        """Shake the head (to the character's right first)."""
-        return self.head(character, "SHAKE", at, repeats, amount)
-
-    def expression(self, character: str, lexeme: str, at: float | None = None, amount: float = 0.7,
-                   duration: float | None = None) -> str:
-        """A facial expression (BML faceLexeme: ``smile``, ``RAISE_BROWS``...) for ``duration`` seconds (default
-        the natural 1.6 s)."""
-        attributes = {"id": "f1", "lexeme": lexeme, "amount": float(amount)}
-        if duration is not None:
-            attributes.update(start=0.0, end=float(duration))
-        return self._submit(character, "face", builder.element("faceLexeme", attributes), at)
-
-    def walk_to(self, character: str, target, at: float | None = None, manner: str = "walk",
-                speed: float | None = None) -> str:
-        """Walk (jog, run) to a point (x, z) / (x, y, z) or a named object or character (BML locomotion)."""
-        where = target if isinstance(target, str) else builder.point_text(target)
-        attributes = {"id": "l1", "target": where, "manner": manner, "speed": None if speed is None else float(speed)}
-        return self._submit(character, "walk", builder.element("locomotion", attributes), at)
-
-    def reach(self, character: str, target, at: float | None = None, action: str = "touch",
-              hand: str | None = None) -> str:
-        """Reach for an object (``action``: touch, pick-up, put-down, point-at; ``hand``: left or right)."""
-        attributes = {"id": "r1", "target": self._target_name(target), "sbm:action": action, "sbm:reach-type": hand}
-        return self._submit(character, "reach", builder.element("sbm:reach", attributes), at)
 
     # -- evaluation -----------------------------------------------------------------------------------
     @property

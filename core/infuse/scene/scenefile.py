@@ -13,7 +13,7 @@ TOML::
     file = "${INFUSE_CORPUS:-../corpus}/runxaway-models/Xbot.glb"
     position = [0.0, 0.0, 0.0]    # metres (default the origin)
     facing = "ann"                # degrees about +Y (0 = +Z), a point [x, z] / [x, y, z], or a name
-    packs = ["locomotion-male"]   # behaviour packs (optional)
+    packs = ["gestures"]          # behaviour packs (optional)
     map = "bob.map.json"          # a saved joint map, may declare face channels (optional)
     voice = "en-us"               # TTS voice (optional)
 
