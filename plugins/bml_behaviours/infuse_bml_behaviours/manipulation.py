@@ -25,6 +25,10 @@ POINT_HOLD_S = 1.0
 #: The pointing arm's return, seconds.
 POINT_RETURN_S = 0.6
 GRAB_STATES = ("start", "reach", "release", "finish")
+#: A constraint's fade in and out when the BML gives none, seconds.
+CONSTRAINT_FADE_S = 0.3
+#: Natural span of a constraint given an end, after its fade-in, seconds (the end given stretches it).
+CONSTRAINT_HOLD_S = 1.0
 ACTIONS = ("touch", "pick-up", "put-down", "point-at")
 REACH_DURATION_S = 1.0
 #: How long the hand stays at a touched or pointed-at target before it returns, seconds.
@@ -147,7 +151,7 @@ def plan_constraint(behaviour, context) -> BehaviourPlan:
     target, position = _target(behaviour, notes)
     if effector is None or (target is None and position is None):
         raise BehaviourError("it needs an effector and a target")
-    fade_in = number(behaviour, with_sbm("fade-in"), 0.0, notes, minimum=0.0)
+    fade_in = number(behaviour, with_sbm("fade-in"), CONSTRAINT_FADE_S, notes, minimum=0.0)
     text = word(behaviour, with_sbm("offset"))
     offset = floats(text, 3) if text else None
     if text and offset is None:
@@ -157,9 +161,13 @@ def plan_constraint(behaviour, context) -> BehaviourPlan:
         notes.append(f"constraint-type {kind!r}: only the effector's position is held")
     parameters = {"effector": effector, "effector_root": word(behaviour, with_sbm("effector-root")), "target": target,
                   "target_position": position, "offset": offset, "handle": word(behaviour, with_sbm("handle")),
-                  "fade_in_s": fade_in, "fade_out_s": number(behaviour, with_sbm("fade-out"), 0.0, notes, minimum=0.0)}
-    return BehaviourPlan(TimingModel.from_points({"start": 0.0, "ready": fade_in, "end": fade_in}), "ik_constraint",
-                         parameters, True, tuple(notes))
+                  "fade_in_s": fade_in,
+                  "fade_out_s": number(behaviour, with_sbm("fade-out"), CONSTRAINT_FADE_S, notes, minimum=0.0)}
+    # SmartBody's constraint stays until replaced; one given an end lasts until then, faded out by it.
+    lasting = "end" not in behaviour.sync_refs
+    end = fade_in if lasting else fade_in + CONSTRAINT_HOLD_S
+    return BehaviourPlan(TimingModel.from_points({"start": 0.0, "ready": fade_in, "end": end}), "ik_constraint",
+                         parameters, lasting, tuple(notes))
 
 
 def plan_pointing(behaviour, context) -> BehaviourPlan:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
@@ -64,7 +64,7 @@ class IKConstraint(Controller):
     def bind(self, rig, report):
         end = _joint(rig, self.effector)
         if end is None:
-            raise MissingFeatureError(f"{rig.name} has no joint {self.effector!r} (canonical or own name) to constrain")
+            raise MissingJointsError(rig.character.asset.path, f"{rig.name} has no joint {self.effector!r} (canonical or own name) to constrain")
         canonical = rig.mapping.inverse().get(rig.skeleton.names[end])
         if canonical in LIMBS and self.root is None:
             upper = [rig.joint(n) for n in LIMBS[canonical]]
@@ -72,7 +72,7 @@ class IKConstraint(Controller):
                 return {"limb": (upper[0], upper[1], end), "chain": None, "end": end}
         chain = _chain(rig, end, self.root)
         if not chain:
-            raise MissingFeatureError(f"{rig.name}: joint {self.effector!r} has no joint above it to move")
+            raise MissingJointsError(rig.character.asset.path, f"{rig.name}: joint {self.effector!r} has no joint above it to move")
         return {"limb": None, "chain": np.array(chain, dtype=np.int64), "end": end}
 
     def evaluate_one(self, job, block) -> None:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.layers import smoothstep
 from infuse.runtime.targets import Target
@@ -123,7 +123,7 @@ class Grab(Controller):
     def bind(self, rig, report):
         hand = bind_hand(rig, self.hand)
         if hand is None:
-            raise MissingFeatureError(f"{rig.name} has no mapped {self.hand} wrist: it cannot hold anything")
+            raise MissingJointsError(rig.character.asset.path, f"{rig.name} has no mapped {self.hand} wrist: it cannot hold anything")
         if not hand.has_fingers:
             report(f"no fingers are mapped on the {self.hand} hand: it holds without closing them")
         return {"hand": hand}

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.layers import smoothstep
 from infuse.runtime.limb_ik import solve_limb
@@ -93,7 +93,7 @@ class Pointing(Controller):
                 report(f"no fingers are mapped on the {side} hand: the wrist points")
             arms[side] = _arm(rig, hand, chain)
         if not arms:
-            raise MissingFeatureError(f"{rig.name}: no mapped shoulder, elbow and wrist: it cannot point")
+            raise MissingJointsError(rig.character.asset.path, f"{rig.name}: no mapped shoulder, elbow and wrist: it cannot point")
         spine = [j for j in (rig.joint(n) for n in _SPINE) if j is not None]
         legs = [tuple(rig.joint(f"{s}_{n}") for n in ("hip", "knee", "ankle")) for s in "lr"]
         legs = [leg for leg in legs if None not in leg]
