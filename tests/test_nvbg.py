@@ -86,6 +86,15 @@ def test_deictics_need_something_to_point_at(tmp_path):
     assert any(e == "head" and a["lexeme"] == "NOD" and a["stroke"] == "right" for e, a in found)
 
 
+def test_one_pointing_per_target_and_sentence_and_no_shake_on_a_question_tag(tmp_path):
+    rules = certain_rules(tmp_path)
+    found = elements(generated("Please switch on that cup over there, next to the window. It is simple, isn't it?", rules))
+    assert [a["stroke"] for e, a in found if e == "pointing"] == ["that"]
+    assert not any(e == "head" and a["lexeme"] == "SHAKE" for e, a in found)
+    found = elements(generated("It is not simple at all, and the window is broken too.", rules))
+    assert any(e == "head" and a["lexeme"] == "SHAKE" and a["stroke"] == "not" for e, a in found)
+
+
 def test_strokes_keep_their_channel_gap_in_estimated_time(tmp_path):
     scheduler, (record, _) = schedule("Bring the red box, the green bag, the old lamp and the new chair to the door, "
                                       "because the big truck leaves early tomorrow morning.", seed=3)

@@ -179,6 +179,7 @@ def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _
     """Every rule over every word, in order: an element where the rule matches, its draw passes, its
     placeholders name something and its channel has room."""
     placed: dict[str, list[float]] = {channel: [] for channel in rules.gap_s}
+    pointed: set[tuple] = set()  # (sentence, who or what): one deictic at a target per sentence
     out = []
     questions = _question_words(words, rules.words["function"])
     for rule in rules.rules:
@@ -196,6 +197,10 @@ def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _
             time_s = onset[words[anchor].start]
             if any(abs(time_s - t) < rules.gap_s[rule.channel] for t in placed[rule.channel]):
                 continue
+            targets = {(word.sentence, values[k]) for k in ("object", "listener") if k in values}
+            if targets & pointed:
+                continue
+            pointed |= targets
             placed[rule.channel].append(time_s)
             sync = {rule.sync: f"{speech_id}:{marks.onset(anchor, words[anchor])}"}
             out.append(_Placed(time_s, _element(rule.bml, values, ids.next(), sync)))
@@ -209,6 +214,8 @@ def _matches(on: str, index: int, word: Word, rules: Rules, objects: dict, quest
         return _object_of(word, objects) is not None
     if on == "question":
         return index in questions
+    if on == "negation" and word.tag:
+        return False
     return word.text in rules.words[on]
 
 

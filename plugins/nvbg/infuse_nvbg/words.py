@@ -1,5 +1,6 @@
-"""An utterance's words: where each starts and ends in the text, its sentence and phrase, and whether it
-is accented (a new content word, the words a speaker stresses with pitch accents and beats)."""
+"""An utterance's words: where each starts and ends in the text, its sentence and phrase, whether it is
+accented (a new content word, the words a speaker stresses with pitch accents and beats), and whether it
+is the auxiliary of a question tag ("isn't it?", "don't you?"), which asks rather than denies."""
 from __future__ import annotations
 
 import re
@@ -14,7 +15,8 @@ _PHRASE_END = re.compile(r"[,;:—–]")
 class Word:
     """One word: ``text`` lower-case (curly apostrophes straightened), ``start``/``end`` character offsets in
     the utterance, its ``sentence`` index, ``question`` (its sentence ends in "?"), ``sentence_end`` and
-    ``phrase_end`` (punctuation follows it), ``accented``."""
+    ``phrase_end`` (punctuation follows it), ``accented``, ``tag`` (a contracted negative auxiliary one word
+    before the end of a question)."""
 
     text: str
     start: int
@@ -24,6 +26,7 @@ class Word:
     sentence_end: bool = False
     phrase_end: bool = False
     accented: bool = False
+    tag: bool = False
 
 
 def words_of(text: str, function_words: frozenset) -> list[Word]:
@@ -43,5 +46,7 @@ def words_of(text: str, function_words: frozenset) -> list[Word]:
         if ends_sentence:
             if "?" in gap:
                 out[first:] = [replace(w, question=True) for w in out[first:]]
+                if len(out) - first >= 3 and out[-2].text.endswith("n't"):
+                    out[-2] = replace(out[-2], tag=True)
             first, sentence = len(out), sentence + 1
     return out
