@@ -44,10 +44,10 @@ from typing import Callable, Iterable
 
 import numpy as np
 
-from .bml import BmlDocument, Scheduler, parse_bml
+from .bml import BmlDocument, Scheduler, builder, parse_bml
 from .errors import BusyError, UsageError
 from .runtime.targets import Target
-from .scene import Scene, builder
+from .scene import Scene
 
 #: Seconds of evaluated frames kept (walks look back 0.5 s to see a character standing).
 KEEP_S = 2.0
