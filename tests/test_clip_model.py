@@ -132,3 +132,37 @@ def test_a_clip_writes_channels_only_on_the_joints_it_animates(tmp_path):
     assert [(nodes[c["target"]["node"]]["name"], c["target"]["path"]) for c in channels] == [("head", "rotation")]
     back = infuse.load(out).motions["nod"]
     np.testing.assert_allclose(infuse.motion_fk(back)[1], infuse.motion_fk(nod)[1], atol=1e-6)
+
+
+def test_joints_a_clip_does_not_animate_keep_the_pose_below():
+    """A clip on a higher layer that animates the head only (a SmartBody motion naming few joints, a
+    face clip) leaves the rest of the body to the clip below; a clip of morph weights alone moves no joint."""
+    from infuse.runtime import Layer
+
+    runtime = Runtime(fps=30)
+    name = runtime.add_character(synthetic_character("body", morphs=("smile",)))
+    sk = runtime.rig(name).skeleton
+    frames = 10
+    lean = quat.from_axis_angle(np.array([1.0, 0, 0]), 0.4)
+    body = infuse.Motion.rest_pose(sk, frames, name="lean")
+    rotations = np.array(body.local_rotations)
+    rotations[:, sk.index["spine1"]] = lean
+    body = body.replace(local_rotations=rotations)
+    turn = quat.from_axis_angle(np.array([0, 1.0, 0]), 0.6)
+    head_rotations = np.array(body.local_rotations)
+    head_rotations[:, :] = quat.IDENTITY
+    head_rotations[:, sk.index["skullbase"]] = turn
+    head = body.replace(local_rotations=head_rotations, name="look",
+                        animated_joints=np.isin(sk.names, ["skullbase"]))
+    smile = infuse.Motion.rest_pose(sk, frames, name="smile").replace(
+        morph_names=["smile"], morph_weights=np.full((frames, 1), 0.7), animated_joints=np.zeros(sk.num_joints, bool))
+    runtime.activate(name, Clip(body), 0.0)
+    runtime.activate(name, Clip(head), 0.0, priority=1)
+    clip = Clip(smile)
+    clip.layer = Layer.FACE
+    runtime.activate(name, clip, 0.0)
+    runtime.run(0.2)
+    played = runtime.motion(name)
+    assert quat.angle_between(played.local_rotations[:, sk.index["spine1"]], lean).max() < 1e-9
+    assert quat.angle_between(played.local_rotations[:, sk.index["skullbase"]], turn).max() < 1e-9
+    assert np.allclose(played.morph_weight("smile"), 0.7)

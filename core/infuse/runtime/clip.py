@@ -1,7 +1,8 @@
 """The ``clip`` base controller: plays a :class:`~infuse.Motion` on a character, looping or once.
 
 The motion must be on the character's skeleton, or share joint names with it (joints it does not
-name keep the pose below), or come with its own mapping for an installed retargeter to transfer it.
+name, or does not animate (``Motion.animated_joints``), keep the pose below), or come with its own
+mapping for an installed retargeter to transfer it.
 Looping carries the root forward: each cycle adds the clip's horizontal root displacement, so a walk
 cycle walks on. Rotations between frames are interpolated (normalized lerp on the shorter arc),
 morph weights linearly; the clip's morph weights drive the character's morph targets of those names.
@@ -217,6 +218,10 @@ class Clip(Controller):
             missing = rig.skeleton.num_joints - len(targets)
             if missing:
                 report(f"clip {motion.name!r} does not animate {missing} of its joints; they keep the pose below")
+        animated = motion.animated_mask
+        if not animated.all():  # joints the clip has no data for keep the pose below too
+            keep = animated[columns]
+            columns, targets = columns[keep], targets[keep]
         # The joint that travels: the root, or the first joint whose position channels move (a
         # SmartBody "base" under a fixed "initial_base").
         mover, travel = 0, motion.root_translations
@@ -230,7 +235,7 @@ class Clip(Controller):
         moved = []
         if motion.joint_translations is not None:  # only joints whose channels leave the character's rest offset
             rest = rig.skeleton.rest_translations
-            moved = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and n in rig.skeleton.index
+            moved = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and animated[i] and n in rig.skeleton.index
                      and np.abs(motion.joint_translations[:, i] - rest[rig.skeleton.index[n]]).max() > 1e-9]
         morph_sources = [k for k, n in enumerate(self.motion.morph_names) if n in rig.morph_index]
         if len(morph_sources) < len(self.motion.morph_names):
@@ -242,7 +247,7 @@ class Clip(Controller):
                 "morph_columns": np.array([rig.morph_index[self.motion.morph_names[k]] for k in morph_sources], dtype=np.int64),
                 "identity_columns": bool(np.array_equal(columns, np.arange(len(columns)))),
                 "mover": mover, "mover_target": rig.skeleton.index.get(mover_name),
-                "drives_root": src.names[0] == rig.skeleton.names[0],
+                "drives_root": src.names[0] == rig.skeleton.names[0] and bool(animated[0]),
                 "moved_columns": np.array([m[0] for m in moved], dtype=np.int64),
                 "moved_joints": np.array([m[1] for m in moved], dtype=np.int64)}
 
