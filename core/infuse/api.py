@@ -24,9 +24,9 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.registry": "other installed plugins by kind and name: table(kind), get(kind, name=None)",
     "infuse.errors": "typed errors naming the input, the place and the problem",
     # the data model and its maths
-    "infuse.asset": "Asset and Character: a skeleton, its clips, mesh and morph targets",
+    "infuse.asset": "Asset and Character: a skeleton, its clips, mesh, morph targets and humanoid map",
     "infuse.skeleton": "Skeleton: joint names, parents, rest pose",
-    "infuse.motion": "Motion: a clip's joint rotations and root motion",
+    "infuse.motion": "Motion: one clip's tracks: joint rotations, root motion, morph weights, animated joints",
     "infuse.mesh": "skinned meshes and morph targets",
     "infuse.texture": "texture sampling shared by the mesh readers",
     "infuse.canonical": "the canonical humanoid joint table",
