@@ -9,6 +9,7 @@ import pytest
 
 from infuse.bml import GeneratorContext, Scheduler, parse_bml
 from infuse.errors import InputError
+from infuse.scene.command import build_scene
 from infuse.scene.scenefile import read_scene_file
 from infuse_nvbg.generate import generate
 from infuse_nvbg.rules import DEFAULT_RULES, load_rules
@@ -158,10 +159,19 @@ def test_off_by_default_on_by_flag_scene_key_or_scheduler(tmp_path):
     assert len(records[0].activations) > 1
     off = on.submit(block(text, flag='infuse:nonverbal="false"', block_id="b2"))
     assert [a.behaviour for a in off[0].activations] == ["s1"]
+    (tmp_path / "ann.bvh").write_text("")
     scene_file = tmp_path / "scene.toml"
     scene_file.write_text('generators = ["nonverbal"]\n[[character]]\nname = "ann"\nfile = "ann.bvh"\n')
-    (tmp_path / "ann.bvh").write_text("")
     assert read_scene_file(scene_file).generators == ("nonverbal",)
+    xml_file = tmp_path / "scene.xml"
+    xml_file.write_text('<scene generators="nonverbal"><character name="ann" file="ann.bvh"/></scene>')
+    assert read_scene_file(xml_file).generators == ("nonverbal",)
+    scene_file.write_text('generators = ["talkative"]\n[[character]]\nname = "ann"\nfile = "ann.bvh"\n')
+    with pytest.raises(InputError, match=r"scene.toml:generators: no BML generator named 'talkative'; installed: .*nonverbal"):
+        build_scene(read_scene_file(scene_file))
+    scene_file.write_text('generators = [3]\n[[character]]\nname = "ann"\nfile = "ann.bvh"\n')
+    with pytest.raises(InputError, match=r"scene.toml:generators: expected a list of names, got \[3\]"):
+        read_scene_file(scene_file)
 
 
 def test_settings_name_the_listener_and_the_seed(tmp_path):
