@@ -48,8 +48,8 @@ TARGETS_REACH = ["bvh11/resources/131_03.bvh", "runxaway-models/Xbot.glb"]
 def load(rel: str):
     """(asset, mapping over the whole skeleton, first clip or None)."""
     asset = infuse.load(CORPUS / rel)
-    meta = {k: v for k, v in asset.meta.items() if k != "channel_joints"}
-    mapping = map_skeleton(asset.skeleton, pose=sample_poses(asset), meta=meta, file=asset.path)
+    mapping = map_skeleton(asset.skeleton, pose=sample_poses(asset), meta=asset.meta, humanoid=asset.humanoid,
+                           file=asset.path)
     return asset, mapping, next(iter(asset.motions.values()), None)
 
 
