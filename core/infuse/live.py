@@ -163,22 +163,22 @@ class LiveScene:
 
     # -- the loop -------------------------------------------------------------------------------------
     def warm_up(self, seconds: float = 0.5) -> None:
-        """Prepare what each character's first walk and reach would prepare (pack bindings, clip tables)
-        by playing them for ``seconds`` on a scratch runtime, so that the first one does not stall a frame."""
+        """Prepare what each character's first walk or reach would prepare (pack bindings, clip tables) by
+        playing the installed controllers' warm-ups (:attr:`~infuse.plugin_types.ControllerFactory.warm_up`)
+        for ``seconds`` on a scratch runtime, so that the first one does not stall a frame."""
         for name in list(self.scene.characters):
             self._warm_up(name, seconds)
 
     def _warm_up(self, name: str, seconds: float = 0.5) -> None:
-        from .runtime import Runtime, controller, controller_components
+        from . import registry
+        from .runtime import Runtime
 
-        installed = controller_components()
-        trials = (("locomotion", {"path": [(0.0, 1.0)]}), ("reach", {"target": (0.25, 1.2, 0.35), "hand": "auto"}))
         scratch = Runtime(self.fps, report=lambda character, message: None)
         scratch.add_character(self.scene.characters[name].character, name, self.scene.runtime.rig(name).mapping)
-        for kind, options in trials:
-            space = self.scene.pack_space(name, kind)
-            if space is not None and kind in installed:
-                scratch.activate(name, controller(kind, pack=space, **options), 0.0)
+        for descriptor in registry.table("controller").values():
+            trial = descriptor.warm_up(self.scene.stage, name) if descriptor.warm_up is not None else None
+            if trial is not None:
+                scratch.activate(name, trial, 0.0)
         if scratch.activities:
             scratch.run(seconds)
 

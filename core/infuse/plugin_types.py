@@ -92,6 +92,9 @@ class ControllerFactory:
     - ``idle(index, seed) -> dict`` (optional) makes it an idle default: every character of a scene
       plays it from the start with these settings (``index``: the character's place in the scene,
       ``seed``: the scene's), until BML realizes the same controller on it.
+    - ``warm_up(stage, character) -> Controller | None`` (optional): a controller whose short play on a
+      scratch copy of the character prepares what its first real activity would (pack bindings, clip
+      tables); a live scene plays it before it starts, so that the first one does not stall a frame.
     """
 
     name: str
@@ -101,6 +104,7 @@ class ControllerFactory:
     realize: Callable[..., Any] | None = None
     realizes: tuple[str, ...] = ()
     idle: Callable[[int, int], dict] | None = None
+    warm_up: Callable[[Any, str], Any] | None = None
 
     @property
     def behaviour_kinds(self) -> tuple[str, ...]:

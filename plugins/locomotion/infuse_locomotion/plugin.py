@@ -13,7 +13,14 @@ def _realize(activation, stage):
     return realize_walk(activation, stage)
 
 
+def _warm_up(stage, character):
+    from .realize import warm_up
+
+    return warm_up(stage, character)
+
+
 @infuse.hookimpl
 def infuse_controllers():
     return [ControllerFactory("locomotion", Locomotion,
-                              "walk, run, turn and strafe by blending a locomotion pack (base layer)", realize=_realize)]
+                              "walk, run, turn and strafe by blending a locomotion pack (base layer)", realize=_realize,
+                              warm_up=_warm_up)]

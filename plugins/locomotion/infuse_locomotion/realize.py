@@ -23,6 +23,12 @@ def walks(stage) -> Walks:
     return stage.stagehand("locomotion", Walks)
 
 
+def warm_up(stage, character: str) -> Locomotion | None:
+    """A short walk with the character's locomotion pack (None without one), to prepare its binding."""
+    space = stage.blend_space(character, "locomotion")
+    return None if space is None else Locomotion(pack=space, path=[(0.0, 1.0)])
+
+
 def realize_walk(activation, stage):
     """Walk the activation's path (points (x, z) metres, or names of objects and characters); returns the
     activity, or None (warned)."""

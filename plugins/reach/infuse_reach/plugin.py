@@ -13,7 +13,13 @@ def _realize(activation, stage):
     return realize_reach(activation, stage)
 
 
+def _warm_up(stage, character):
+    from .realize import warm_up
+
+    return warm_up(stage, character)
+
+
 @infuse.hookimpl
 def infuse_controllers():
     return [ControllerFactory("reach", Reach, "reach, touch, grab or put down with one hand (posture layer)",
-                              realize=_realize)]
+                              realize=_realize, warm_up=_warm_up)]

@@ -26,6 +26,12 @@ def hands(stage) -> Hands:
     return stage.stagehand("reach", Hands)
 
 
+def warm_up(stage, character: str) -> Reach | None:
+    """A reach in front of the character with its reaching pack (None without one), to prepare its binding."""
+    space = stage.blend_space(character, "reach")
+    return None if space is None else Reach(target=(0.25, 1.2, 0.35), hand="auto", pack=space)
+
+
 def realize_reach(activation, stage):
     """Reach with the character's reaching pack; returns the activity, or None (warned, or a finish)."""
     p = activation.parameters
