@@ -22,20 +22,22 @@ from infuse.runtime.pose import chain_fk
 from infuse.runtime.targets import PointTarget, Target, as_target
 
 ACTIONS = ("touch", "grab", "put")
-_INFUSIONS: dict = {}
 _UPPER = ("spine1", "spine2", "spine3", "spine4", "spine5", "skullbase")
 
 
 def space_for(rig, pack):
+    """The reaching blend space of ``pack`` (a BlendSpace, returned as is, or a pack's name or folder) on
+    the runtime character ``rig``: infused once per rig and pack, kept in the rig's state (it goes with
+    its runtime)."""
     from infuse.packs import BlendSpace, infuse_character
 
     if isinstance(pack, BlendSpace):
         return pack
-    key = (id(rig.character), id(rig.mapping), str(pack))
-    if key not in _INFUSIONS:
+    spaces = rig.state.setdefault("reach_spaces", {})
+    if str(pack) not in spaces:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        _INFUSIONS[key] = (rig.character, next(iter(infusion.spaces.values())))
-    return _INFUSIONS[key][1]
+        spaces[str(pack)] = next(iter(infusion.spaces.values()))
+    return spaces[str(pack)]
 
 
 def _mean_stroke(pack) -> float:
