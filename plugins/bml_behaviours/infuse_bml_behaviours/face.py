@@ -1,4 +1,9 @@
-"""``<faceLexeme>``, ``<faceFacs>`` and the older ``<face>`` (SmartBody ``type="facs"``, draft ``<lexeme>`` child)."""
+"""``<faceLexeme>``, ``<faceFacs>`` and the older ``<face>`` (SmartBody ``type="facs"``, draft ``<lexeme>`` child).
+
+A lexeme is checked at scheduling against the installed controller that realizes face behaviours: one
+it does not know (its constructor refuses it with a :class:`~infuse.errors.UsageError`, naming the
+lexemes it knows) warns here and the behaviour is not shown.
+"""
 from __future__ import annotations
 
 import re
@@ -26,11 +31,26 @@ def _persistent(behaviour, context) -> bool:
     return context.dialect == "smartbody" and not ({"relax", "end"} & set(behaviour.sync_refs))
 
 
+def _check(lexeme: str) -> None:
+    """Raise :class:`BehaviourError` when the installed face controller does not know ``lexeme``."""
+    from infuse import registry
+    from infuse.errors import UsageError
+
+    descriptor = registry.realizer("face")
+    if descriptor is None:
+        return  # nothing realizes faces: the scene says so when it plays the block
+    try:
+        descriptor.factory(lexeme=lexeme)
+    except UsageError as exc:
+        raise BehaviourError(str(exc)) from None
+
+
 def plan_lexeme(behaviour, context) -> BehaviourPlan:
     notes = Notes()
     lexeme = word(behaviour, "lexeme")
     if lexeme is None:
         raise BehaviourError("it has no lexeme")
+    _check(lexeme)
     parameters = {"kind": "lexeme", "lexeme": lexeme, "amount": number(behaviour, "amount", 0.5, notes, -1.0, 1.0)}
     return BehaviourPlan(_timing(), "face", parameters, _persistent(behaviour, context), tuple(notes))
 
@@ -65,6 +85,7 @@ def plan_face(behaviour, context) -> BehaviourPlan:
                                                 if c.name == "lexeme" and c.attributes.get("lexeme")), None)
     if lexeme is None:
         raise BehaviourError("it has neither an au nor a lexeme")
+    _check(lexeme)
     notes = Notes()
     parameters = {"kind": "lexeme", "lexeme": lexeme, "amount": number(behaviour, "amount", 0.5, notes, -1.0, 1.0)}
     return BehaviourPlan(_timing(), "face", parameters, _persistent(behaviour, context), tuple(notes))

@@ -26,13 +26,14 @@ from infuse.speech import Utterance
 
 from .channels import detect_face
 from .expressions import expression_targets
+from .tables import expressions_table
 from .joints import JawRig, PoseFace
 from .lipsync import LipSyncSettings, lipsync
 
 #: BML 1.0 facial lexemes (and a few other realizers' names) -> a lexeme of ``expressions.toml`` or action
 #: units, and the side they act on.
 BML_LEXEMES = {
-    "OBLIQUE_BROWS": ({"AU1": 1.0, "AU4": 0.5}, "BOTH"),
+    "OBLIQUE_BROWS": ("oblique_brows", "BOTH"),
     "RAISE_BROWS": ("raised_brows", "BOTH"), "RAISE_LEFT_BROW": ("raised_brows", "LEFT"),
     "RAISE_RIGHT_BROW": ("raised_brows", "RIGHT"),
     "LOWER_BROWS": ("AU4", "BOTH"), "LOWER_LEFT_BROW": ("AU4", "LEFT"), "LOWER_RIGHT_BROW": ("AU4", "RIGHT"),
@@ -41,12 +42,15 @@ BML_LEXEMES = {
     "RAISE_MOUTH_CORNERS": ("AU12", "BOTH"), "RAISE_LEFT_MOUTH_CORNER": ("AU12", "LEFT"),
     "RAISE_RIGHT_MOUTH_CORNER": ("AU12", "RIGHT"),
     "OPEN_MOUTH": ("AU26", "BOTH"), "OPEN_LIPS": ("AU25", "BOTH"), "WIDEN_EYES": ("AU5", "BOTH"),
-    "CLOSE_EYES": ("AU43", "BOTH"), "WINK": ("AU46L", "LEFT"),
+    "CLOSE_EYES": ("AU43", "BOTH"), "WINK": ("AU46L", "LEFT"), "BARE_TEETH": ("bare_teeth", "BOTH"),
+    "SMILE": ("smile", "BOTH"), "FROWN": ("frown", "BOTH"),
 }
 # Words in other lexicons' names (Greta's Eyebrows_Raise, Smile_Small_Open, joy...) -> a lexeme.
 _LEXEME_WORDS = (
     (("smile", "joy", "happy", "happiness"), "smile"), (("frown",), "frown"), (("surprise", "surprised"), "surprise"),
     (("sad", "sadness"), "sad"), (("angry", "anger"), "angry"), (("blink",), "blink"),
+    (("fear", "afraid", "scared", "fearful"), "fear"), (("disgust", "disgusted"), "disgust"),
+    (("contempt", "sneer"), "contempt"),
 )
 _SIDE_SUFFIX = re.compile(r"(left|right|lf|rt|_l|_r|\.l|\.r)$")
 
@@ -74,7 +78,15 @@ def expression_for(lexeme: str) -> tuple[str | dict, str]:
             return name, side
     if key.lower() in ("raised_brows", "questioning"):
         return "raised_brows", side
-    raise UsageError(f"facial lexeme {lexeme!r} is unknown")
+    raise UsageError(f"facial lexeme {lexeme!r} is unknown; known: {', '.join(known_lexemes())}, action units "
+                     "(AU12, 12_left) and names containing one of these words")
+
+
+def known_lexemes() -> list[str]:
+    """The facial lexemes :func:`expression_for` knows by name: BML 1.0's, then the expressions of
+    ``expressions.toml`` and their other words (``happy``, ``afraid``...)."""
+    words = [w for names, _ in _LEXEME_WORDS for w in names]
+    return list(dict.fromkeys([*BML_LEXEMES, *expressions_table()["lexemes"], *words]))
 
 
 def target_side(name: str) -> str | None:
@@ -178,7 +190,7 @@ class FaceExpression(Controller):
         if self.amount < 0:
             report(f"face {self.expression!r}: a negative amount ({self.amount:g}) is not shown; its size is used")
         try:
-            targets = expression_targets(self.expression, face, min(abs(self.amount), 1.0))
+            targets = expression_targets(self.expression, face, min(abs(self.amount), 1.0), direct=self.side == "BOTH")
         except UsageError as exc:
             report(f"face: {exc}; not shown")
             return None
@@ -186,20 +198,25 @@ class FaceExpression(Controller):
             targets = {t: w for t, w in targets.items() if target_side(t) in (None, self.side)}
         targets = {t: w for t, w in targets.items() if w > 0.0}
         columns = [(rig.morph_index[t], w) for t, w in targets.items() if t in rig.morph_index]
-        joint_offsets = self._joint_offsets(rig, face, targets, report)
+        joint_offsets, shifts = self._joint_offsets(rig, face, targets, report)
         if not columns and not joint_offsets:
             report(f"face {self.expression!r}: the character has no face channel for it; not shown")
             return None
         joints = sorted(joint_offsets)
+        moved = sorted(shifts)
         return {"columns": np.array([c for c, _ in columns], dtype=np.int64), "values": np.array([w for _, w in columns]),
                 "joints": np.array(joints, dtype=np.int64),
-                "offsets": np.array([joint_offsets[j] for j in joints]).reshape(len(joints), 4)}
+                "offsets": np.array([joint_offsets[j] for j in joints]).reshape(len(joints), 4),
+                "moved": np.array(moved, dtype=np.int64), "shifts": np.array([shifts[j] for j in moved]).reshape(len(moved), 3)}
 
     @staticmethod
-    def _joint_offsets(rig, face, targets: dict, report) -> dict[int, np.ndarray]:
-        """Joint index -> local offset (x, y, z, w) from rest for face poses and the jaw among ``targets``."""
+    def _joint_offsets(rig, face, targets: dict, report) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
+        """Joint index -> local rotation offset (x, y, z, w) from rest, and joint index -> local translation
+        offset (3,) metres from rest, for face poses (SmartBody's move brows and lips by both) and the jaw among
+        ``targets``."""
         sk = rig.skeleton
         offsets: dict[int, np.ndarray] = {}
+        shifts: dict[int, np.ndarray] = {}
         poses = [t for t in targets if t in face.poses]
         if poses:
             try:
@@ -208,15 +225,18 @@ class FaceExpression(Controller):
                 report(f"face poses cannot be read ({exc}); not shown")
                 pose_face = None
             if pose_face is not None and len(pose_face.joints):
-                rotations, _ = pose_face.blend(np.array([[targets[p] for p in poses]]), [[(p, 1.0)] for p in poses])
+                rotations, translations = pose_face.blend(np.array([[targets[p] for p in poses]]), [[(p, 1.0)] for p in poses])
                 for m, j in enumerate(pose_face.joints):
                     offsets[int(j)] = quat.multiply(quat.conjugate(sk.rest_rotations[j]), rotations[0, m])
+                    shift = translations[0, m] - sk.rest_translations[j]
+                    if np.abs(shift).max() > 1e-7:
+                        shifts[int(j)] = shift
         if face.jaw is not None and face.jaw in targets:
             rig_jaw = JawRig.from_skeleton(sk, face.jaw)
             rotation = rig_jaw.rotations(np.array([targets[face.jaw]]), np.radians(LipSyncSettings().jaw_max_angle_deg))[0]
             j = sk.index[face.jaw]
             offsets[j] = quat.multiply(offsets.get(j, quat.identity()), quat.multiply(quat.conjugate(sk.rest_rotations[j]), rotation))
-        return offsets
+        return offsets, shifts
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -228,6 +248,9 @@ class FaceExpression(Controller):
         if b["joints"].size:
             job.pose.set_rotations(b["joints"], np.broadcast_to(b["offsets"], (n,) + b["offsets"].shape), job.weight,
                                    job.mode)
+        if b["moved"].size:
+            job.pose.set_translations(b["moved"], np.broadcast_to(b["shifts"], (n,) + b["shifts"].shape), job.weight,
+                                      job.mode)
 
 
 def speech_from_bml(parameters: dict, runtime, character: str, activation=None) -> Speech | None:

@@ -49,19 +49,21 @@ def action_units(expression) -> dict[str, float]:
                      f"{', '.join(table['action_units'])}")
 
 
-def expression_targets(expression, face: FaceChannels, intensity: float = 1.0) -> dict[str, float]:
-    """Target (morph target, VRM expression, face pose or the jaw joint) -> weight for ``expression``."""
+def expression_targets(expression, face: FaceChannels, intensity: float = 1.0, direct: bool = True) -> dict[str, float]:
+    """Target (morph target, VRM expression, face pose or the jaw joint) -> weight for ``expression``.
+    ``direct=False`` goes through the action units even where the character has the lexeme's own
+    expression (whole-face expressions have no sides: a one-sided request needs the action units)."""
     table = expressions_table()
     channels: dict[tuple[str, str], float] = {}
     lexeme = table["lexemes"].get(str(expression).lower()) if not isinstance(expression, dict) else None
-    direct = [v for v in AU_VOCABULARY_ORDER if lexeme and v in lexeme and v in face.vocabularies]
+    direct = [v for v in AU_VOCABULARY_ORDER if direct and lexeme and v in lexeme and _offers(face, v, lexeme[v])]
     if direct:
         for c, w in lexeme[direct[0]].items():
             channels[(direct[0], c)] = channels.get((direct[0], c), 0.0) + w
     else:
         for au, level in action_units(expression).items():
             spec = table["action_units"][au]
-            vocab = next((v for v in AU_VOCABULARY_ORDER if v in spec and (v in face.vocabularies or (v == "jaw" and face.jaw))), None)
+            vocab = next((v for v in AU_VOCABULARY_ORDER if v in spec and _offers(face, v, spec[v])), None)
             if vocab is None:
                 continue
             for c, w in spec[vocab].items():
@@ -72,6 +74,15 @@ def expression_targets(expression, face: FaceChannels, intensity: float = 1.0) -
         for target, bw in binds:
             targets[target] = min(1.0, targets.get(target, 0.0) + w * bw * intensity)
     return targets
+
+
+def _offers(face: FaceChannels, vocabulary: str, channels: dict) -> bool:
+    """Whether the character binds any of ``channels`` of ``vocabulary`` (a vocabulary found by a few of its
+    names, VRM's "happy" and "sad" read as SmartBody's, may lack the others)."""
+    if vocabulary == "jaw":
+        return face.jaw is not None
+    bound = face.vocabularies.get(vocabulary, {})
+    return any(bound.get(c) for c in channels)
 
 
 def envelope(times: np.ndarray, start_s: float, end_s: float, ramp_s: float) -> np.ndarray:
