@@ -42,7 +42,7 @@ from infuse.runtime.clip import LoopTable, continuous_rotations
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from .phase_keys import foot_events, foot_phase, stance_of, warp
+from .phase_keys import GROUNDED, foot_events, foot_phase, stance_of, warp
 from .steering import STAY as STAY_M, Steering
 
 _INFUSIONS: dict = {}
@@ -53,6 +53,8 @@ _BINDINGS: dict = {}
 #: heel rise (a leg that could not reach its pinned ball) in the early swing.
 RELEASE_S = 0.3
 RISE_RELEASE_S = 0.1
+#: Seconds a released ball is held where it was let go at most, while it has not left the ground.
+HOLD_S = 0.1
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
 #: Share of the slowest walk mixed into the moving clips' weights as the speed nears zero.
@@ -260,7 +262,7 @@ class Locomotion(Controller):
                       anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
                       last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), landed=np.tile(_IDENTITY, (2, 1)),
                       landed_as=np.tile(_IDENTITY, (2, 1)), across=np.zeros((2, 3)), landed_spun=np.zeros(2),
-                      ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)),
+                      ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)), let_go=np.full((2, 3), -np.inf), free_s=np.full(2, 1e9),
                       settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
@@ -487,14 +489,25 @@ class Locomotion(Controller):
             offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
             landed, landed_as, across, left = st["landed"][k].copy(), st["landed_as"][k].copy(), st["across"][k].copy(), st["foot_turn"][k].copy()
             landed_spun, ball_offset = float(st["landed_spun"][k]), st["ball_offset"][k].copy()
+            let_go, free_s = st["let_go"][k].copy(), float(st["free_s"][k])
             lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
             bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
                 kind = int(anchors[s, k])
                 if kind == FREE:
                     if prev != FREE:
-                        released = 0.0
-                    age = released + dt * np.arange(1, e - s + 1)
+                        released, free_s = 0.0, 0.0
+                    # The ball stays where it was let go until it leaves the ground (a take's ball may push
+                    # off moving along it), at most HOLD_S, and the release's clock runs from then on.
+                    since = free_s + dt * np.arange(1, e - s + 1)
+                    up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b["grounded_m"]) | (since > HOLD_S)
+                    free_s = float(since[-1])
+                    down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
+                    if down[-1] >= 0:
+                        ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
+                    else:
+                        ball_offset = np.broadcast_to(ball_offset, (e - s, 3))
+                    age = released + dt * np.cumsum(up)
                     fade = 1.0 - _ease(age / RELEASE_S)
                     # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
                     # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
@@ -507,6 +520,14 @@ class Locomotion(Controller):
                         corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
                         hang = quat.rotate(quat.from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
                     goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
+                    held = np.nonzero(~up)[0]
+                    if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
+                        h = s + held
+                        goal[h], more = _heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
+                        rise[h] += more
+                        if held[-1] == e - s - 1:  # the rise the release fades from
+                            lifted = rise[e - 1].copy()
+                    ball_offset = ball_offset[-1].copy()
                     weight[s:e] = fade > 0.0
                     released = float(age[-1])
                     if fade[-1] <= 0.0:
@@ -553,10 +574,11 @@ class Locomotion(Controller):
                         goal[s:e], rise[s:e] = _heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
                         ball_goal = balls[-1]
                     offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
+                    let_go = ball_goal.copy()
                 prev = kind
             st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
             st["landed"][k], st["landed_as"][k], st["across"][k], st["foot_turn"][k] = landed, landed_as, across, left
-            st["landed_spun"][k], st["ball_offset"][k] = landed_spun, ball_offset
+            st["landed_spun"][k], st["ball_offset"][k], st["let_go"][k], st["free_s"][k] = landed_spun, ball_offset, let_go, free_s
         st["last"] = feet_pos[-1].copy()
         if rises.any():
             g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
@@ -597,6 +619,7 @@ def _prepare(space, clips, sk, legs) -> dict:
     signs = [np.where(np.sum(m * means[0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
     ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
     ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
+    grounded_m = 0.0
     if len(legs) == 2:  # one FK over every clip's cycle (its closing frame left out)
         cycles = [slice(0, max(m.num_frames - 1, 1)) for m in motions]
         moved = any(m.joint_translations is not None for m in motions)
@@ -615,6 +638,7 @@ def _prepare(space, clips, sk, legs) -> dict:
         rest = sk.rest_global_positions
         leg_length = float(np.mean([np.linalg.norm(rest[leg[1]] - rest[leg[0]]) + np.linalg.norm(rest[leg[2]] - rest[leg[1]])
                                     for leg in legs]))
+        grounded_m = GROUNDED * leg_length
         # Strikes where the heels reach the ground, toe offs where the balls leave it (the takes' feet
         # land and push off moving, on the ground a few frames beyond their contacts).
         events = [foot_events(c, h, leg_length) if c.role != "idle" else None for c, h in zip(clips, heights)]
@@ -642,7 +666,7 @@ def _prepare(space, clips, sk, legs) -> dict:
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
            "stepping": np.array([e is not None for e in events]), "table": LoopTable(motions), "idle": idle,
-           "slowest": slowest, "limbs": limbs, "body": body,
+           "slowest": slowest, "limbs": limbs, "body": body, "grounded_m": grounded_m,
            # The clips' sign-aligned mean rotations of the joints outside the legs (N, B * 4).
            "body_means": (np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
            "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet}
