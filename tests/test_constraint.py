@@ -113,3 +113,24 @@ def test_limb_ik_is_exact_in_one_step_on_an_arm_bent_out_of_the_goal_plane():
     left = solve_limb(sk, rots, np.repeat(root, len(goals), axis=0), None, arm, goals)
     reached = chain_fk(sk, rots, np.repeat(root, len(goals), axis=0), None, [arm[2]])[1][:, 0]
     assert np.abs(left).max() < 1e-9 and np.linalg.norm(reached - goals, axis=1).max() < 1e-9
+
+
+def test_smartbody_constraint_document_with_a_clavicle_root():
+    """SmartBody's ConstraintDemo (``effector-root="l_sternoclavicular"``, a joint the RPM avatar lacks): the
+    wrist held on the pawn by limb IK."""
+    from corpus_data import corpus_file
+
+    require_corpus()
+    pawn = np.array([0.25, 1.15, 0.3])
+    for key in ("rpm", "utah"):
+        scene = Scene(fps=FPS, idle=False, quiet=True)
+        warnings = []
+        scene.on("warningFeedback", warnings.append)
+        scene.add_character(corpus_character(key), name="ChrBrad0")
+        scene.add_object("pawn3", pawn)
+        scene.bml("ChrBrad0", corpus_file("bml/smartbody/sb09_constraint_lwrist.xml"), at=0.0)
+        scene.run(2.0)
+        assert not warnings, [w.description for w in warnings]
+        g = infuse.motion_fk(scene.motion("ChrBrad0"))[1]
+        ix = scene.runtime.rig("ChrBrad0").mapping.indices(scene.runtime.rig("ChrBrad0").skeleton)
+        assert np.linalg.norm(g[int(1.0 * FPS):, ix["l_wrist"]] - pawn, axis=1).max() < 1e-3, key

@@ -181,3 +181,26 @@ def test_a_rig_without_fingers_points_its_wrist():
     g = infuse.motion_fk(scene.motion("plain"))[1]
     ix = scene.runtime.rig("plain").mapping.indices(scene.runtime.rig("plain").skeleton)
     assert _ray_distance(g[30, ix["l_shoulder"]], g[30, ix["l_wrist"]], np.array([1.0, 2.0, 2.0])) < 0.05
+
+
+def test_smartbody_point_at_document():
+    """SmartBody's ReachDemo ``sbm:reach sbm:action="point-at"``: a pointing, its ray through the pawn."""
+    from corpus_data import corpus_file
+
+    require_corpus()
+    pawn = np.array([-1.5, 1.5, 2.0])
+    scene = Scene(fps=FPS, idle=False, quiet=True)
+    warnings = []
+    scene.on("warningFeedback", warnings.append)
+    scene.add_character(corpus_character("utah"), name="ChrBrad1")
+    scene.add_object("pointPawn", pawn)
+    scene.bml("ChrBrad1", corpus_file("bml/smartbody/sb35_reach_point_at.xml"), at=0.0)
+    scene.run(3.0)
+    assert not warnings, [w.description for w in warnings]
+    (activity,) = scene.activities.values()
+    assert activity.controller.kind == "pointing"
+    frame = int(round(activity.source.time("stroke") * FPS))
+    g = infuse.motion_fk(scene.motion("ChrBrad1"))[1]
+    ix = scene.runtime.rig("ChrBrad1").mapping.indices(scene.runtime.rig("ChrBrad1").skeleton)
+    s = activity.state["hands"][0][0]
+    assert _ray_distance(g[frame, ix[f"{s}_shoulder"]], g[frame, ix[f"{s}_index4"]], pawn) < 0.05

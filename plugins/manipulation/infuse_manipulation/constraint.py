@@ -3,7 +3,8 @@
 The effector is a joint by canonical name or the character's own name. A wrist or an ankle is carried
 by two-joint limb IK (shoulder-elbow-wrist, hip-knee-ankle; the hand or foot keeps the orientation the
 pose below gives it); any other joint (the head, a fingertip) by cyclic coordinate descent over the
-joints from ``root`` (default: three joints up, never the pelvis) down to it, vectorized over frames.
+joints from ``root`` (default: three joints up, never the pelvis) down to it, vectorized over frames;
+a wrist's or ankle's ``root`` at or above the limb (SmartBody names the clavicle) keeps limb IK.
 The goal is the target's position plus ``offset_m`` (metres, world axes). The activity's weight is the
 constraint's: it fades in over ``blend_in_s`` and out over ``blend_out_s``.
 
@@ -66,9 +67,11 @@ class IKConstraint(Controller):
         if end is None:
             raise MissingJointsError(rig.character.asset.path, f"{rig.name} has no joint {self.effector!r} (canonical or own name) to constrain")
         canonical = rig.mapping.inverse().get(rig.skeleton.names[end])
-        if canonical in LIMBS and self.root is None:
+        if canonical in LIMBS:
             upper = [rig.joint(n) for n in LIMBS[canonical]]
-            if None not in upper:
+            top = None if self.root is None else _joint(rig, self.root)
+            # A root at or above the limb's top (a clavicle; or one the rig lacks) still moves only the limb.
+            if None not in upper and (top is None or top in _ancestors(rig, upper[0])):
                 return {"limb": (upper[0], upper[1], end), "chain": None, "end": end}
         chain = _chain(rig, end, self.root)
         if not chain:
@@ -111,6 +114,15 @@ class IKConstraint(Controller):
 def _joint(rig, name: str) -> int | None:
     j = rig.joint(name)
     return rig.skeleton.index.get(name) if j is None else j
+
+
+def _ancestors(rig, joint: int) -> set[int]:
+    """``joint`` and every joint above it."""
+    out, j = set(), int(joint)
+    while j >= 0:
+        out.add(j)
+        j = int(rig.skeleton.parents[j])
+    return out
 
 
 def _chain(rig, end: int, root_name: str | None) -> list[int]:
