@@ -74,8 +74,8 @@ def import_bvh_folder(source: str | Path, dest: str | Path, name: str | None = N
     files = sorted(p for p in source.iterdir() if p.suffix.lower() == ".bvh" and fnmatch.fnmatch(p.name, pattern))
     if not files:
         raise InputError(source, None, f"no BVH files matching {pattern!r}")
-    clips = [{"name": f.stem, "file": str(f), "role": "cycle" if kind == "locomotion" else "reach", "tags": _tags(f.stem),
-              "loop": False} for f in files]
+    role = {"locomotion": "cycle", "posture": "posture"}.get(kind, "reach")
+    clips = [{"name": f.stem, "file": str(f), "role": role, "tags": _tags(f.stem), "loop": kind == "posture"} for f in files]
     pack = {"name": name or f"bvh-{source.name.lower()}", "version": version, "kind": kind, "skeleton": str(files[0]),
             "analysis": "analysis.json", "description": description or f"BVH clips from {source.name} ({pattern})"}
     return write_pack_folder(dest, pack, clips)
