@@ -96,6 +96,14 @@ def test_one_pointing_per_target_and_sentence_and_no_shake_on_a_question_tag(tmp
     assert any(e == "head" and a["lexeme"] == "SHAKE" and a["stroke"] == "not" for e, a in found)
 
 
+def test_nothing_starts_before_its_block_when_the_speech_is_pinned_to_its_start():
+    for start, nods in (("0.2", 0), ("1.5", 1)):
+        scheduler = Scheduler(names=lambda: {"ann": "character"})
+        (record,) = scheduler.submit(block("Yes.").replace('<speech id="s1">', f'<speech id="s1" start="{start}">'))
+        assert sum(a.controller == "head" for a in record.activations) == nods
+        assert not [e for e in scheduler.feedback.log if e.kind == "warningFeedback"]
+
+
 def test_strokes_keep_their_channel_gap_in_estimated_time(tmp_path):
     scheduler, (record, _) = schedule("Bring the red box, the green bag, the old lamp and the new chair to the door, "
                                       "because the big truck leaves early tomorrow morning.", seed=3)

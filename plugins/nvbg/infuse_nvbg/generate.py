@@ -65,7 +65,8 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
             continue
         marks = _Marks(speech)
         onset = EstimatedSpeechTimer().char_times(speech.text)
-        placed = _word_rules(rules, words, onset, speech.id, marks, ids, rng, listener, objects, taken)
+        pinned = _pinned_start(speech, context.dialect)
+        placed = _word_rules(rules, words, onset, speech.id, marks, ids, rng, listener, objects, taken, pinned)
         if "gaze" not in taken and listener is not None:
             placed += _gaze(rules, words, onset, speech.id, marks, ids, rng, listener)
         speaker_xml += [p.xml for p in sorted(placed, key=lambda p: p.time_s)]
@@ -174,10 +175,17 @@ def _element(template: str, values: dict, behaviour_id: str, syncs: dict) -> str
     return _TAG.sub(lambda m: m.group(0) + attributes, text, count=1)
 
 
+def _pinned_start(speech, dialect: str) -> float | None:
+    """Seconds from its block's start at which a BML 1.0 speech is pinned (``start="0.2"``), else None."""
+    ref = speech.sync_refs.get("start")
+    return ref.time if dialect == "bml1.0" and ref is not None and ref.is_absolute else None
+
+
 def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _Marks, ids: _Ids, rng, listener,
-                objects: dict, taken: set) -> list[_Placed]:
+                objects: dict, taken: set, pinned: float | None) -> list[_Placed]:
     """Every rule over every word, in order: an element where the rule matches, its draw passes, its
-    placeholders name something and its channel has room."""
+    placeholders name something, its channel has room and, when the speech is pinned at ``pinned`` seconds
+    after its block's start, it need not start before the block."""
     placed: dict[str, list[float]] = {channel: [] for channel in rules.gap_s}
     pointed: set[tuple] = set()  # (sentence, who or what): one deictic at a target per sentence
     out = []
@@ -196,6 +204,8 @@ def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _
                 continue
             time_s = onset[words[anchor].start]
             if any(abs(time_s - t) < rules.gap_s[rule.channel] for t in placed[rule.channel]):
+                continue
+            if pinned is not None and pinned + time_s < rules.lead_s[rule.channel]:
                 continue
             targets = {(word.sentence, values[k]) for k in ("object", "listener") if k in values}
             if targets & pointed:

@@ -66,13 +66,15 @@ class ListenerRules:
 
 @dataclass(frozen=True)
 class Rules:
-    """Everything ``rules.toml`` says: word classes (lower-case words), rules in order, gaps (seconds), the
-    amplitude range, how many words before an object's name a demonstrative may stand, hand weights."""
+    """Everything ``rules.toml`` says: word classes (lower-case words), rules in order, gaps and leads
+    (seconds, per channel), the amplitude range, how many words before an object's name a demonstrative
+    may stand, hand weights."""
 
     path: Path
     words: dict
     rules: tuple[Rule, ...]
     gap_s: dict
+    lead_s: dict
     amplitude: tuple[float, float]
     object_lookahead_words: int
     hands: tuple[tuple[str, float], ...]
@@ -91,6 +93,12 @@ class _Checker:
         value = doc.get(key)
         if not isinstance(value, dict):
             self.fail(key, "expected a table")
+        return value
+
+    def channels(self, doc: dict, key: str) -> dict:
+        value = doc.get(key)
+        if not isinstance(value, dict) or set(value) != set(CHANNELS):
+            self.fail(f"timing.{key}", f"expected a table of {', '.join(CHANNELS)}")
         return value
 
     def number(self, value, place: str, low: float, high: float) -> float:
@@ -147,10 +155,8 @@ def _load(path: Path) -> Rules:
         if needed not in words:
             c.fail(f"words.{needed}", "missing: the generator needs this word class")
     timing = c.table(doc, "timing")
-    gaps = timing.get("gap_s")
-    if not isinstance(gaps, dict) or set(gaps) != set(CHANNELS):
-        c.fail("timing.gap_s", f"expected a table of {', '.join(CHANNELS)}")
-    gap_s = {k: c.number(v, f"timing.gap_s.{k}", 0.0, 10.0) for k, v in gaps.items()}
+    gap_s, lead_s = ({k: c.number(v, f"timing.{key}.{k}", 0.0, 10.0) for k, v in c.channels(timing, key).items()}
+                     for key in ("gap_s", "lead_s"))
     amplitude = timing.get("amplitude")
     if not isinstance(amplitude, list) or len(amplitude) != 2:
         c.fail("timing.amplitude", "expected [lowest, highest]")
@@ -197,4 +203,4 @@ def _load(path: Path) -> Rules:
                              c.number(li.get("probability"), "listener.probability", 0.0, 1.0),
                              c.number(li.get("gap_s"), "listener.gap_s", 0.0, 60.0),
                              c.element(li.get("bml"), "listener.bml"), c.text(li.get("sync"), "listener.sync"))
-    return Rules(path, words, tuple(rules), gap_s, (low, high), lookahead, hands, gaze, listener)
+    return Rules(path, words, tuple(rules), gap_s, lead_s, (low, high), lookahead, hands, gaze, listener)
