@@ -506,8 +506,13 @@ CARTOON = {"arms": 1.35, "legs": 0.65, "head": 1.8}
 
 
 def non_humanoid_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:
-    """Bodies without two legs and two arms made from one labelled humanoid skeleton: to be refused."""
-    return [removed(skeleton, poses, label, "legs"), removed(skeleton, poses, label, "arms")]
+    """Bodies without two legs and two arms made from one labelled humanoid skeleton: to be refused.
+    Only limbs whose first two joints are labelled on both sides are removed (a label of a motion
+    file that animates only the face has none)."""
+    m = label["mapping"]
+    firsts = {"legs": ("hip", "knee"), "arms": ("shoulder", "elbow")}
+    return [removed(skeleton, poses, label, kind) for kind, parts in firsts.items()
+            if all(m.get(f"{side}_{part}") in skeleton.index for side in "lr" for part in parts)]
 
 
 def all_variants(skeleton: Skeleton, poses, label: dict) -> list[Variant]:

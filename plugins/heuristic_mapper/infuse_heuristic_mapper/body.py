@@ -192,13 +192,20 @@ def _best_per_branch(pairs: list[LimbPair], score: dict, keep: int, per_branch: 
 
 
 def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> BodyPlan | None:
-    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all.
+    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all."""
+    plans = rank_plans(view, pairs, keep)
+    return plans[0] if plans else None
+
+
+def rank_plans(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> list[BodyPlan]:
+    """Every legs/arms combination of the best candidate pairs (either may be missing), best first;
+    empty when there is no limb pair at all.
 
     Each pair is first scored alone as legs and as arms (symmetry, length, names); the best few of
     each are then combined and the combination scored on how they sit in the tree and in space.
     """
     if not pairs:
-        return None
+        return []
     span = view.scale
     P = view.P
     as_legs, as_arms = {}, {}
@@ -215,7 +222,7 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> Bod
     jointed = [p for p in pairs if len(view.main_chain(p.a, 2)) == 2 and len(view.main_chain(p.b, 2)) == 2]
     leg_cands = _best_per_branch(jointed, as_legs, keep) + [None]
     arm_cands = _best_per_branch(jointed, as_arms, keep) + [None]
-    best: BodyPlan | None = None
+    plans: list[BodyPlan] = []
     for legs in leg_cands:
         for arms in arm_cands:
             if legs is None and arms is None:
@@ -247,9 +254,9 @@ def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> Bod
                 why.append("no legs")
             if arms is None:
                 why.append("no arms")
-            if best is None or score > best.score:
-                best = BodyPlan(legs, arms, score, ", ".join(why))
-    return best
+            plans.append(BodyPlan(legs, arms, score, ", ".join(why)))
+    plans.sort(key=lambda plan: -plan.score)
+    return plans
 
 
 def extra_limbs(view: SkeletonView, plan: BodyPlan, pairs: list[LimbPair]) -> list[LimbPair]:

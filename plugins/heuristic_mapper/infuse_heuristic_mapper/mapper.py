@@ -27,7 +27,7 @@ from infuse.canonical import ALL_NAMES, CANONICAL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping, resolve_pose
 
-from .body import LimbPair, choose_plan, legs_down, limb_pairs, upper_anchor
+from .body import LimbPair, legs_down, limb_pairs, rank_plans, upper_anchor
 from .hands import assign_fingers
 from .humanoid import STANDING_COS, refusal
 from .limbs import LimbResult, assign_arms, assign_legs, forearm_twist, relocate, settle_coincident
@@ -81,10 +81,10 @@ class _Frames:
         return self._value
 
 
-def _plan_for(view: SkeletonView):
-    """(the body plan or None, every mirror-image pair of limbs)."""
+def _plans_for(view: SkeletonView):
+    """(the body plans, best first, every mirror-image pair of limbs)."""
     pairs = limb_pairs(view)
-    return choose_plan(view, pairs), pairs
+    return rank_plans(view, pairs), pairs
 
 
 def _standing(view: SkeletonView, plan) -> float:
@@ -104,25 +104,85 @@ def heuristic_map(skeleton, pose=None, meta=None, fixed=None, file=None, **_opti
     """
     view = SkeletonView(skeleton, skeleton.rest_global_positions)
     frames = _Frames(pose, view.n)
-    plan, pairs = _plan_for(view)
-    cos = _standing(view, plan)
+    plans, pairs = _plans_for(view)
+    cos = _standing(view, plans[0] if plans else None)
     used_pose = "rest pose"
-    if (plan is None or cos > STANDING_COS) and frames.get() is not None:
+    if (not plans or cos > STANDING_COS) and frames.get() is not None:
         view_pose = SkeletonView(skeleton, frames.get()[0])
-        plan_pose, pairs_pose = _plan_for(view_pose)
-        cos_pose = _standing(view_pose, plan_pose)
-        if plan_pose is not None and (plan is None or cos_pose < cos):
-            view, plan, pairs, cos = view_pose, plan_pose, pairs_pose, cos_pose
+        plans_pose, pairs_pose = _plans_for(view_pose)
+        cos_pose = _standing(view_pose, plans_pose[0] if plans_pose else None)
+        if plans_pose and (not plans or cos_pose < cos):
+            view, plans, pairs, cos = view_pose, plans_pose, pairs_pose, cos_pose
             used_pose = "first frame (the rest pose is not a standing body)"
-    result = _Result(view)
-    if plan is None and _map_face_only(view, result):
-        return _finish(skeleton, result, 0.3)
-    why = refusal(view, plan, pairs, cos)
-    if why is not None:
+    if not plans:
+        result = _Result(view)
+        if _map_face_only(view, result):
+            return _finish(skeleton, result, 0.3)
+    top = plans[0] if plans else None
+    why = refusal(view, top, pairs, cos)
+    # the best plan and its close rivals that pass the humanoid test, each assigned completely; one
+    # cost decides. Without any, the best plan's reason refuses the skeleton.
+    rivals = [p for p in plans[1:] if p.legs is not None and p.arms is not None
+              and p.score >= top.score - PLAN_WINDOW][:MAX_PLANS - 1]
+    candidates = ([top] if why is None else []) + [p for p in rivals if refusal(view, p, pairs, _standing(view, p)) is None]
+    if not candidates:
         raise NotHumanoidError(file, why)
-    _map_body(view, plan, result, frames, used_pose)
-    overall = np.mean([result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
-    return _finish(skeleton, result, float(overall))
+    assignments = sorted((_assign(view, p, frames, used_pose) for p in candidates), key=lambda a: a.cost)
+    best = assignments[0]
+    if len(assignments) > 1:
+        _cap_by_rival(best, assignments[1])
+    overall = np.mean([best.result.conf.get(n, 0.5) for n in CANONICAL_NAMES])
+    return _finish(skeleton, best.result, float(overall))
+
+
+#: How complete assignments of rival body plans are compared: one cost, the lower the better.
+PLAN_WINDOW = 2.0     # rival plans scoring at most this much below the best one are assigned too
+MAX_PLANS = 3         # ... at most this many plans in all
+PLAN_WEIGHT = 3.0     # cost per unit of a plan's score (symmetry, lengths, names, how the pairs sit)
+LIMB_WEIGHT = 0.25    # cost per unit of the limb joints' placement cost (:mod:`.limbs`)
+NAME_AGREES = -0.3    # cost per mapped joint whose name names its slot
+NAME_CONTRARY = 1.0   # cost per mapped joint whose name names another body part
+NO_HEAD = 2.0         # cost of an assignment without a head joint
+NO_TORSO = 1.0        # ... without a torso joint between the pelvis and the arms
+
+
+class _Assignment:
+    """One complete assignment of canonical names for one body plan, its cost and the cost's parts
+    (``plan``, ``limbs``, ``trunk``, ``names``)."""
+
+    def __init__(self, plan, result: _Result, parts: dict[str, float]):
+        self.plan = plan
+        self.result = result
+        self.parts = parts
+        self.cost = sum(parts.values())
+
+
+def _assign(view: SkeletonView, plan, frames, used_pose: str) -> _Assignment:
+    """Assign every canonical name for ``plan``; the cost sums the plan's score (hierarchy and
+    geometry of the limb pairs), the cost of placing every limb joint (proportions, bends,
+    skipped joints, names) and what the names of all mapped joints say about their slots."""
+    result = _Result(view)
+    limbs, trunk = _map_body(view, plan, result, frames, used_pose)
+    names = 0.0
+    for name, j in result.joint.items():
+        expected = EXPECTED_ROLES.get(name)
+        roles = view.info[j].roles
+        if expected is not None and roles:
+            names += NAME_AGREES if roles & expected else NAME_CONTRARY
+    return _Assignment(plan, result, {"plan": -PLAN_WEIGHT * plan.score, "limbs": LIMB_WEIGHT * limbs,
+                                      "trunk": trunk, "names": names})
+
+
+def _cap_by_rival(best: _Assignment, rival: _Assignment) -> None:
+    """Entries the runner-up assignment gives to other joints are as sure as the cost margin
+    between the two: a close rival marks them for checking."""
+    margin = rival.cost - best.cost
+    cap = 0.5 + 0.48 * (1.0 - np.exp(-margin / 1.5))
+    for name in set(best.result.conf) | set(rival.result.conf):
+        if best.result.joint.get(name) != rival.result.joint.get(name) and name in best.result.conf:
+            if cap < best.result.conf[name]:
+                best.result.conf[name] = cap
+                best.result.reason[name] += f"; a rival body plan costs only {margin:.2f} more (check it)"
 
 
 #: The body-part roles a joint's name may carry for each canonical name (by its part after the side).
@@ -200,7 +260,8 @@ def _named_eyes(view: SkeletonView, candidates) -> dict[str, int]:
 
 
 # -- body ------------------------------------------------------------------------------------------------
-def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> None:
+def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> tuple[float, float]:
+    """Fill ``result`` for ``plan``; returns the costs of placing the limb joints and the trunk."""
     legs: LimbPair = plan.legs
     arms: LimbPair = plan.arms
     up_guess = None
@@ -252,6 +313,8 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     # eyes
     if head >= 0:
         _put_eyes(view, result, head, up, left)
+    limbs = sum(r.cost for r in leg_res.values()) + sum(r.cost for r in arm_res.values())
+    return limbs, NO_HEAD * (head < 0) + NO_TORSO * (not torso)
 
 
 def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body_chain: set[int]) -> None:
