@@ -2,7 +2,7 @@
 
 The effector is a joint by canonical name or the character's own name. A wrist or an ankle is carried
 by two-joint limb IK (shoulder-elbow-wrist, hip-knee-ankle; the hand or foot keeps the orientation the
-pose below gives it); any other joint (the head, a fingertip) by cyclic coordinate descent over the
+pose below gives it, or with ``straight_end`` lies in line with the limb as in the reference pose); any other joint (the head, a fingertip) by cyclic coordinate descent over the
 joints from ``root`` (default: three joints up, never the pelvis) down to it, vectorized over frames;
 a wrist's or ankle's ``root`` at or above the limb (SmartBody names the clavicle) keeps limb IK.
 The goal is the target's position plus ``offset_m`` (metres, world axes). The activity's weight is the
@@ -21,6 +21,7 @@ from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
+from .hands import reference_locals
 from .targets import check_point, own_positions, resolve_target
 
 #: Effectors solved as two-joint limbs: the canonical end joint -> its limb's upper joints.
@@ -37,7 +38,9 @@ class IKConstraint(Controller):
     """Keep ``effector`` on ``target`` (a point, ``"character:joint"``, a runtime target's name or a
     :class:`~infuse.runtime.targets.Target`) shifted by ``offset_m`` (3,) metres; ``root``: the top joint
     of a chain effector (canonical or own name). ``blend_in_s``/``blend_out_s``: the fades, seconds;
-    ``purpose``: what the constraint is for, in its report (default: the constraint on the effector)."""
+    ``purpose``: what the constraint is for, in its report (default: the constraint on the effector);
+    ``straight_end``: a limb's end joint takes its reference-pose local rotation (a hand in line with
+    the forearm) instead of keeping its orientation."""
 
     kind = "ik_constraint"
     layer = Layer.HEAD
@@ -47,11 +50,13 @@ class IKConstraint(Controller):
     blend_out_s = 0.3
 
     def __init__(self, effector: str, target, offset_m=(0.0, 0.0, 0.0), root: str | None = None,
-                 blend_in_s: float | None = None, blend_out_s: float | None = None, purpose: str | None = None):
+                 blend_in_s: float | None = None, blend_out_s: float | None = None, purpose: str | None = None,
+                 straight_end: bool = False):
         if not isinstance(effector, str) or not effector.strip():
             raise UsageError("an IK constraint names its effector joint")
         self.effector, self.target, self.root = effector.strip(), target, root
         self.purpose = purpose or f"the constraint on {self.effector!r}"
+        self.straight_end = bool(straight_end)
         self.offset_m = np.array(check_point(offset_m, "the constraint's offset"))
         for name, value in (("blend_in_s", blend_in_s), ("blend_out_s", blend_out_s)):
             if value is not None:
@@ -72,7 +77,8 @@ class IKConstraint(Controller):
             top = None if self.root is None else _joint(rig, self.root)
             # A root at or above the limb's top (a clavicle; or one the rig lacks) still moves only the limb.
             if None not in upper and (top is None or top in _ancestors(rig, upper[0])):
-                return {"limb": (upper[0], upper[1], end), "chain": None, "end": end}
+                return {"limb": (upper[0], upper[1], end), "chain": None, "end": end,
+                        "straight": reference_locals(rig)[end] if self.straight_end else None}
         chain = _chain(rig, end, self.root)
         if not chain:
             raise MissingJointsError(rig.character.asset.path, f"{rig.name}: joint {self.effector!r} has no joint above it to move")
@@ -93,8 +99,12 @@ class IKConstraint(Controller):
         jt = None if pose.joint_translations is None else pose.joint_translations[active]
         weight = job.weight[active]
         if b["limb"] is not None:
-            solve_limb(sk, rot, root, jt, b["limb"], goal, weight=weight, distance=False)
+            solve_limb(sk, rot, root, jt, b["limb"], goal, weight=weight, keep_end=b["straight"] is None,
+                       distance=False)
             joints = np.array(b["limb"], dtype=np.int64)
+            if b["straight"] is not None:
+                end = b["end"]
+                rot[:, end] = quat.slerp(rot[:, end], np.broadcast_to(b["straight"], rot[:, end].shape), weight)
         else:
             joints = b["chain"]
             before = rot[:, joints].copy()

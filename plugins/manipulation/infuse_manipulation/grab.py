@@ -2,7 +2,8 @@
 
 The hand gets to the object by the installed ``reach`` controller when the character has a reaching
 pack (its examples blended, then arm IK), else by arm IK alone (:class:`~.constraint.IKConstraint` on
-the wrist, faded in); either way the wrist arrives at the object at ``ready``. The fingers close from
+the wrist, faded in); either way the wrist arrives at ``ready`` short of the object by half the hand's
+length along the line from the shoulder (:class:`Approach`), so the object lies in the palm. The fingers close from
 ``ready`` to ``stroke`` (:data:`~.hands.GRIP_SHAPE`); from ``stroke`` the object follows the wrist at
 the offset it had then (:class:`HeldObject`, the object's runtime target); the arm then returns to the
 pose below, carrying it. :meth:`Grab.release` opens the hand at a time: the object stays where the hand
@@ -24,7 +25,7 @@ from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.layers import smoothstep
 from infuse.runtime.targets import Target
 
-from .hands import GRIP_SHAPE, bind_hand, set_shape
+from .hands import GRIP_SHAPE, bind_hand, reference_globals, set_shape
 
 #: Closing (and opening) the hand, seconds.
 GRASP_S = 0.3
@@ -86,6 +87,33 @@ class HeldObject(Target):
         if self.left_at is not None:
             out[times >= self.release_s - 1e-9] = self.left_at
         return out
+
+
+class Approach(Target):
+    """Where a wrist goes to take an object: ``distance_m`` short of it (its target ``target``) along the
+    line from ``shoulder`` (3,), a world point, metres."""
+
+    def __init__(self, target: Target, shoulder, distance_m: float):
+        self.target, self.shoulder, self.distance_m = target, np.asarray(shoulder, dtype=np.float64), float(distance_m)
+
+    def positions(self, times, block=None) -> np.ndarray:
+        where = np.asarray(self.target.positions(times, block), dtype=np.float64)
+        along = where - self.shoulder
+        return where - self.distance_m * along / np.maximum(np.linalg.norm(along, axis=-1, keepdims=True), 1e-9)
+
+
+def approach(rig, hand: str, target: Target) -> Approach:
+    """The :class:`Approach` of ``hand`` to ``target``: from the shoulder as the character stands (its
+    reference pose),
+    half the wrist-to-middle-knuckle length short (none without fingers)."""
+    s = hand[0]
+    positions = reference_globals(rig)[1]
+    shoulder = rig.joint(f"{s}_shoulder")
+    wrist = rig.joint(f"{s}_wrist")
+    knuckle = next((j for j in (rig.joint(f"{s}_{f}1") for f in ("middle", "index", "ring")) if j is not None), None)
+    half_hand = 0.5 * float(np.linalg.norm(positions[knuckle] - positions[wrist])) if knuckle is not None else 0.0
+    own = positions[shoulder] if shoulder is not None else positions[wrist]
+    return Approach(target, quat.rotate(rig.rotation, own) + rig.position, half_hand)
 
 
 class Grab(Controller):

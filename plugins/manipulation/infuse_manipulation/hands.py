@@ -61,7 +61,7 @@ def bind_hand(rig, side: str) -> Hand | None:
     wrist = rig.joint(f"{s}_wrist")
     if wrist is None:
         return None
-    _, positions = _reference_positions(rig)
+    _, positions = reference_globals(rig)
     chains = {f: [rig.joint(f"{s}_{f}{k}") for k in (1, 2, 3, 4)] for f in FINGERS}
     knuckle = {f: next((j for j in c if j is not None), None) for f, c in chains.items()}
     w = positions[wrist]
@@ -112,11 +112,12 @@ def set_shape(pose, hand: Hand, shape: np.ndarray, weight: np.ndarray) -> None:
 
 def reference_tip(rig, hand: Hand) -> np.ndarray:
     """(3,) position of the pointing tip in the reference pose, the character's own frame (metres)."""
-    rot, pos = _reference_positions(rig)
+    rot, pos = reference_globals(rig)
     return pos[hand.tip] + quat.rotate(rot[hand.tip], hand.tip_extra_m)
 
 
-def _reference_positions(rig) -> tuple[np.ndarray, np.ndarray]:
+def reference_globals(rig) -> tuple[np.ndarray, np.ndarray]:
+    """Global rotations (J, 4) and positions (J, 3) of the reference pose, the character's own frame."""
     from infuse.kinematics import forward_kinematics
 
     locals_ = reference_locals(rig)

@@ -15,7 +15,7 @@ from infuse.errors import InfuseError, UsageError
 from infuse.stage import end_s
 
 from .constraint import IKConstraint
-from .grab import GRASP_S, Grab, HeldObject, side_of
+from .grab import GRASP_S, Grab, HeldObject, approach, side_of
 from .pointing import Pointing
 from .targets import check_point, resolve_target
 
@@ -153,12 +153,12 @@ def start_grab(runtime, character: str, activation, parameters: dict, pack, acti
     reach_s = max(ready - start, MIN_REACH_S)
     back = start + reach_s + (stroke - ready) + GRAB_HOLD_S + GRAB_RETURN_S
     if pack is not None:
-        arm = build("reach", target=before, hand=hand, pack=pack, action="touch", hold_s=GRAB_HOLD_S)
+        arm = build("reach", target=approach(rig, hand, before), hand=hand, pack=pack, action="touch", hold_s=GRAB_HOLD_S)
         arm.stroke_s = reach_s  # the wrist arrives at ready
         activate(arm, back, blend_out_s=GRAB_RETURN_S)
     else:
-        arm = IKConstraint(f"{hand[0]}_wrist", before, blend_in_s=reach_s, blend_out_s=GRAB_RETURN_S,
-                           purpose=f"the {hand} hand reaching for {name!r}")
+        arm = IKConstraint(f"{hand[0]}_wrist", approach(rig, hand, before), blend_in_s=reach_s, blend_out_s=GRAB_RETURN_S,
+                           purpose=f"the {hand} hand reaching for {name!r}", straight_end=True)
         activate(arm, back)
     held = HeldObject(before, character, wrist, stroke)
     runtime.add_target(name, held)
