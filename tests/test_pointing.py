@@ -204,3 +204,23 @@ def test_smartbody_point_at_document():
     ix = scene.runtime.rig("ChrBrad1").mapping.indices(scene.runtime.rig("ChrBrad1").skeleton)
     s = activity.state["hands"][0][0]
     assert _ray_distance(g[frame, ix[f"{s}_shoulder"]], g[frame, ix[f"{s}_index4"]], pawn) < 0.05
+
+
+def test_a_bare_runtime_realizes_pointing_from_bml():
+    """Without a scene: the scheduler's activation through the controller's ``from_bml``."""
+    from infuse.bml import Scheduler
+    from infuse.runtime import Runtime
+
+    require_corpus()
+    (block,) = Scheduler().submit('<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b1" characterId="bob">'
+                                  '<pointing id="p1" target="bob:l_ankle" mode="RIGHT_HAND" stroke="1.5"/></bml>', at=0.0)
+    (activation,) = block.activations
+    rt = Runtime(fps=FPS)
+    bob = rt.add_character(corpus_character("xbot"), "bob")
+    activity = rt.realize(activation, bob)
+    rt.run(3.0)
+    g = infuse.motion_fk(rt.motion(bob))[1]
+    ix = rt.rig(bob).mapping.indices(rt.rig(bob).skeleton)
+    frame = int(round(1.5 * FPS))
+    assert activity.state["hands"] == ("right",)
+    assert _ray_distance(g[frame, ix["r_shoulder"]], g[frame, ix["r_index4"]], g[frame, ix["l_ankle"]]) < 0.05
