@@ -8,7 +8,10 @@ documents' header comments the scheduler reproduces. Then the scheduled behaviou
 character: those that became activities, those with nothing to show (a wait, an event), and every one not
 played with the warning that says why, those naming an object or character the scene does not have apart.
 
-    python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30]
+    python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30] [--nonverbal]
+
+``--nonverbal`` realizes every document with the ``nonverbal`` generator on (docs/nonverbal.md) and
+counts the behaviours it added and how many of those play.
 
 The corpus is read from INFUSE_CORPUS (default ../shared/corpus from the repository root).
 """
@@ -54,42 +57,49 @@ def installed_packs() -> tuple[str, ...]:
     return tuple(p for p in PACKS if p in registry.table("behaviour-pack"))
 
 
-def realize(document, character, fps: float, packs=(), pack_cache=None) -> dict:
-    """Realize ``document`` on ``character`` (infused with ``packs``) in a scene of its own and evaluate it
-    to its end: counts of activities and warnings, frames evaluated, CPU seconds spent synthesizing speech,
-    the behaviours with nothing to show and those not played (with the warning saying why)."""
+def realize(document, character, fps: float, packs=(), pack_cache=None, generators=()) -> dict:
+    """Realize ``document`` on ``character`` (infused with ``packs``, with BML ``generators`` on) in a scene
+    of its own and evaluate it to its end: counts of activities and warnings, frames evaluated, CPU seconds
+    spent synthesizing speech, the behaviours with nothing to show and those not played (with the warning
+    saying why), and of the behaviours generators added, how many and how many play."""
+    from infuse.bml import parse_bml
     from infuse.scene import Scene
 
-    scene = Scene(fps=fps, quiet=True, pack_cache=pack_cache)
+    scene = Scene(fps=fps, quiet=True, pack_cache=pack_cache, generators=generators)
     scene.add_character(character, "character", packs=packs)
     scene.bml("character", document)
     scene.run(min(scene.end_time, MAX_SECONDS) + 1.0 / fps)
     scene.motion("character")
     scene.audio("character")
     warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
-    gestures = [(a.block, a.behaviour) for record in scene.scheduler.blocks.values() for a in record.activations
-                if a.element == "gesture"]
+    added = {(block.id, b.id) for e in scene.feedback.log if e.kind == "generatedBml"
+             for block in parse_bml(e.bml).blocks for b in block.behaviours if b.element != "speech"}
+    own = [a for record in scene.scheduler.blocks.values() for a in record.activations
+           if (a.block, a.behaviour) not in added]
+    gestures = [(a.block, a.behaviour) for a in own if a.element == "gesture"]
     reasons = {}
     for w in warnings:
         reasons[w.id] = w  # the last warning about a behaviour is what realizing it said
     silent, missed = 0, []
-    for record in scene.scheduler.blocks.values():
-        for a in record.activations:
-            if (a.block, a.behaviour) in scene.activities:
-                continue
-            why = reasons.get(f"{a.block}:{a.behaviour}")
-            if why is None:
-                silent += 1
-            else:
-                missed.append((f"{a.block}:{a.behaviour}", a.element, why.description,
-                               any(words in why.description for words in ABSENT) or why.type == "NO_SUCH_TARGET"))
-    return {"activities": len(scene.activities), "warnings": warnings, "frames": scene.runtime.frame,
+    for a in own:
+        if (a.block, a.behaviour) in scene.activities:
+            continue
+        why = reasons.get(f"{a.block}:{a.behaviour}")
+        if why is None:
+            silent += 1
+        else:
+            missed.append((f"{a.block}:{a.behaviour}", a.element, why.description,
+                           any(words in why.description for words in ABSENT) or why.type == "NO_SUCH_TARGET"))
+    return {"activities": sum((a.block, a.behaviour) in scene.activities for a in own), "warnings": warnings,
+            "frames": scene.runtime.frame,
+            "generated": len(added), "generated_played": sum(key in scene.activities for key in added),
             "synthesis_s": scene.speech.synthesis_s, "gestures": len(gestures),
             "gestures_played": sum(key in scene.activities for key in gestures), "silent": silent, "missed": missed}
 
 
-def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -> dict:
-    """Counts per folder, oracle outcomes and timings; also printed. ``realize_fps`` None: no realizing."""
+def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0, generators=()) -> dict:
+    """Counts per folder, oracle outcomes and timings; also printed. ``realize_fps`` None: no realizing;
+    ``generators``: BML generators on while realizing."""
     files = sorted((corpus / "bml").glob("*/*.xml"))
     if not files:
         raise SystemExit(f"no BML documents under {corpus / 'bml'} (set INFUSE_CORPUS)")
@@ -134,7 +144,7 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
         for folder, path, document in realized:
             tally = counts[folder]
             try:
-                outcome = realize(document, character, realize_fps, packs, cache.name)
+                outcome = realize(document, character, realize_fps, packs, cache.name, generators)
             except Exception as exc:  # a crash: the benchmark counts it and goes on
                 tally["crashed"] += 1
                 print(f"  CRASH    {folder}/{path.name}: {type(exc).__name__}: {exc}")
@@ -144,6 +154,9 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
             tally["gestures"] += outcome["gestures"]
             tally["gestures played"] += outcome["gestures_played"]
             tally["silent"] += outcome["silent"]
+            tally["generated"] += outcome["generated"]
+            tally["generated played"] += outcome["generated_played"]
+            tally["generated documents"] += outcome["generated"] > 0
             missed += [(f"{folder}/{path.name}", *m) for m in outcome["missed"]]
             frames += outcome["frames"]
             synthesis_s += outcome["synthesis_s"]
@@ -176,6 +189,12 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0) -
               f"not played: {len(missed)}, of which {len(absent)} name an object or character the scene does not have")
         for where, behaviour, element, why, is_absent in sorted(missed, key=lambda m: (not m[4], m[0], m[1])):
             print(f"  {'absent' if is_absent else 'not played'}  {where} {behaviour} <{element}>: {why}")
+        if generators:
+            total = {key: sum(t[key] for t in counts.values()) for key in ("generated", "generated played",
+                                                                             "generated documents")}
+            print(f"behaviours added by {', '.join(generators)}: {total['generated']} in {total['generated documents']} "
+                  f"documents, {total['generated played']} played (the others, and the behaviours not played above, "
+                  "include those tied to speech the document's own timing drops)")
 
     status = Counter(o.status for _, o in outcomes)
     checkable = status["matched"] + status["mismatched"]
@@ -195,8 +214,9 @@ def main(argv=None) -> int:
     parser.add_argument("--verbose", action="store_true", help="print every warning and error")
     parser.add_argument("--no-realize", action="store_true", help="parse and schedule only")
     parser.add_argument("--fps", type=float, default=30.0, help="frame rate of the realized animation (default 30)")
+    parser.add_argument("--nonverbal", action="store_true", help="realize with the nonverbal generator on")
     args = parser.parse_args(argv)
-    run(CORPUS, args.verbose, None if args.no_realize else args.fps)
+    run(CORPUS, args.verbose, None if args.no_realize else args.fps, ("nonverbal",) if args.nonverbal else ())
     return 0
 
 
