@@ -103,3 +103,28 @@ def test_grab_warnings_name_the_reason():
     assert got["b:g"][0] == CANNOT_CREATE_BEHAVIOR and "is a character" in got["b:g"][1]
     assert got["c:g"][0] == CANNOT_CREATE_BEHAVIOR and "holds no 'cup'" in got["c:g"][1]
     assert not any("reaching pack" in d for _, d in got.values())
+
+
+def test_frames_do_not_depend_on_the_block_size():
+    """A grab, a pointing and a constraint give the same frames and object track in blocks of 1, 7 and 150."""
+    require_corpus()
+    bml = ('<act><bml id="b1"><sbm:grab id="g" target="cup"/>'
+           '<sbm:constraint id="c" effector="l_wrist" target="lamp" start="0.5" end="2.5"/></bml></act>')
+    release = GRAB.format(id="drop", target="cup", extra=' sbm:grab-state="release"')
+    point = ('<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b2">'
+             '<pointing id="p" target="lamp" mode="RIGHT_HAND" stroke="3.2"/></bml>')
+    results = []
+    for block in (1, 7, 150):
+        scene = Scene(fps=FPS, idle=False, quiet=True, block_frames=block)
+        scene.add_character(corpus_character("xbot"), name="bob")
+        scene.add_object("cup", CUP, size=0.08)
+        scene.add_object("lamp", (0.35, 1.3, 0.3))
+        scene.bml("bob", bml, at=0.2)
+        scene.bml("bob", release, at=2.2)
+        scene.bml("bob", point, at=2.4)
+        scene.run(5.0)
+        results.append((scene.motion("bob").local_rotations, scene.object_track("cup")))
+    assert np.ptp(results[0][1], axis=0).max() > 0.1  # the cup was carried
+    for rotations, cup in results[1:]:
+        assert np.abs(quat.canonical_sign(rotations) - quat.canonical_sign(results[0][0])).max() < 1e-9
+        assert np.abs(cup - results[0][1]).max() < 1e-9
