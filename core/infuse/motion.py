@@ -34,8 +34,8 @@ class Motion:
       name. Targets not named keep the character's own weights. Empty (M = 0) by default.
     - ``animated_joints``: optional (J,) bool mask of the joints the clip has data for (a SmartBody
       motion names only some joints of its skeleton; a clip of morph weights alone animates none).
-      The others hold their rest pose in the arrays above, and writers leave them out. ``None``
-      means every joint.
+      The others hold their rest pose in the arrays above; writers leave them out and a runtime
+      clip leaves them to the pose below. ``None`` means every joint.
     """
 
     skeleton: Skeleton
