@@ -18,7 +18,7 @@ infuse) and prints one row per file:
 
 infuse's core frame is +Y up, +Z forward; Blender's importer turns glTF's +Y up into +Z up:
 (x, y, z) -> (x, -z, y). A VRM 0.x file that infuse turned 180° about +Y to face +Z is turned back
-first (``meta["facing_rotated"]``). Blender plays a glTF time t at frame t × scene fps.
+first (``Asset.facing_turned``). Blender plays a glTF time t at frame t × scene fps.
 
     benchmarks/setup_blender.sh
     .venv/bin/python benchmarks/blender_check.py [--frames 5] [--keep DIR]
@@ -82,7 +82,7 @@ def infuse_expectations(path: Path, clip: str, frames: int) -> dict:
     motion = asset.motions[clip]
     picks = np.unique(np.linspace(0, motion.num_frames - 1, frames).round().astype(int))
     positions = motion_fk(motion)[1][picks]                          # (K, J, 3) core frame, metres
-    if asset.meta.get("facing_rotated"):
+    if asset.facing_turned:
         positions = positions * np.array([-1.0, 1.0, -1.0])         # back to the file's -Z front
     blender = np.stack([positions[..., 0], -positions[..., 2], positions[..., 1]], axis=-1)
     mapping = map_skeleton(asset, meta=asset.meta)

@@ -219,7 +219,7 @@ def test_vrm0_faces_minus_z_and_is_turned(tmp_path):
     path = _vrm0(tmp_path)
     asset = infuse.load(path)
     assert asset.format == "vrm" and asset.meta["vrm_version"] == "0.x"
-    assert asset.meta["facing"] == "-Z" and asset.meta["facing_rotated"] and asset.meta["facing_detected_by"] == "humanoid arms"
+    assert asset.meta["facing"] == "-Z" and asset.facing_turned and asset.meta["facing_detected_by"] == "humanoid arms"
     sk = asset.skeleton
     assert sk.rest_global_positions[sk.index["LeftArm"], 0] == pytest.approx(0.2)  # left at +X in the core
     assert asset.humanoid == {"hips": "Hips", "spine": "Spine", "leftUpperArm": "LeftArm", "rightUpperArm": "RightArm"}

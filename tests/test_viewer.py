@@ -69,7 +69,7 @@ def test_targets_points_tracks_and_defaults():
     assert parsed["reach_right"]["kind"] == "reach" and parsed["reach_right"]["from"] == "r_wrist"
     assert parsed["reach_right"]["times"] == [0.0, 1.0, 2.0]
     assert parsed["look"]["from"] == "eyeball_left"
-    turned = {t["name"]: t for t in to_file_frame(list(parsed.values()), facing_rotated=True)}
+    turned = {t["name"]: t for t in to_file_frame(list(parsed.values()), facing_turned=True)}
     assert turned["door"]["positions"] == [[-1.0, 2.0, -3.0]]
 
 

@@ -35,6 +35,8 @@ class Asset:
     - ``humanoid``: the file's own humanoid map, VRM humanoid bone name (``hips``, ``leftUpperArm``...)
       -> joint name, for files that declare one (VRM, VRMA); empty otherwise. Mappers use it first,
       and a ``.vrma`` writer needs it.
+    - ``facing_turned``: the reader turned the file 180 degrees about +Y so that its characters face
+      +Z (a VRM 0.x model faces -Z); what shows the file as it is turns core-frame points with it.
     """
 
     path: Path | None
@@ -49,6 +51,7 @@ class Asset:
     payload: Any = None
     mesh_loader: Callable[[], Sequence[SkinnedMesh]] | None = field(default=None, repr=False, compare=False)
     humanoid: dict[str, str] = field(default_factory=dict)
+    facing_turned: bool = False
 
     @cached_property
     def meshes(self) -> tuple[SkinnedMesh, ...]:

@@ -18,7 +18,7 @@ Rest pose and frames
     ``up_axis=`` (the file's up axis) and ``facing=`` (``"+Z"`` or ``"-Z"``, the file's front).
     VRM 0.x models face -Z (detected from the humanoid's left/right arms when present): they are
     turned 180° about +Y into the core frame, recorded as ``meta["facing"] = "-Z"`` and
-    ``meta["facing_rotated"] = True``; every other file is taken to face +Z as the glTF spec says.
+    ``facing_turned``; every other file is taken to face +Z as the glTF spec says.
 
 Animations
     One :class:`~infuse.motion.Motion` per glTF animation, resampled to a uniform rate: the keyframe
@@ -205,7 +205,6 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
     else:
         meta["facing_detected_by"] = "override"
     meta["facing"] = facing
-    meta["facing_rotated"] = facing == "-Z"
     q_core = quat.multiply(TURN_Y, q_up) if facing == "-Z" else q_up
     core_from_file = (np.zeros(3), q_core, np.float64(UNIT_SCALES[units or "m"]))
     meta["up_axis_detected_by"] = "override" if up_axis else "file"
@@ -254,6 +253,7 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
     meshes = MeshLoader(doc, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
     return Asset(
         path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets, humanoid=humanoid,
+        facing_turned=facing == "-Z",
         source_units=units or "m", source_up_axis=up_axis or "Y",
         units_detected_by="override" if units else "file", meta=meta, payload=payload, mesh_loader=meshes,
     )

@@ -217,7 +217,7 @@ def prepare(source: Source, mapper: str | None = None, saved_map=None, low_confi
     targets_file = source.targets or sidecar_for(path)
     targets = []
     if source.targets is not None or targets_file.is_file():
-        targets = to_file_frame(read_targets(targets_file), bool(asset.meta.get("facing_rotated")))
+        targets = to_file_frame(read_targets(targets_file), asset.facing_turned)
     audio = _audio_for(path, clips)
     info = {
         "name": source.name,

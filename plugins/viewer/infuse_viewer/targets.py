@@ -99,9 +99,9 @@ def read_targets(path: str | Path) -> list[dict]:
     return parse_targets(doc, path)
 
 
-def to_file_frame(targets: list[dict], facing_rotated: bool) -> list[dict]:
-    """Positions in the glTF scene's frame: a model the reader turned to face +Z (VRM 0.x faces -Z)
-    is shown unturned, so its targets turn 180 degrees about +Y with it."""
-    if not facing_rotated:
+def to_file_frame(targets: list[dict], facing_turned: bool) -> list[dict]:
+    """Positions in the glTF scene's frame: a model the reader turned to face +Z (VRM 0.x faces -Z,
+    ``Asset.facing_turned``) is shown unturned, so its targets turn 180 degrees about +Y with it."""
+    if not facing_turned:
         return targets
     return [dict(t, positions=[[-x, y, -z] for x, y, z in t["positions"]]) for t in targets]
