@@ -4,7 +4,8 @@ The reference pose (:attr:`~infuse.runtime.rig.Rig.reference_rotations`, the res
 holds the fingers straight on the rigs infuse reads (T- and A-poses). Its geometry gives, per hand, the
 finger direction and the palm normal (the palm faces ``sign · (f × a)``, with ``f`` from the wrist to
 the middle knuckle, ``a`` from the little finger's knuckle to the index finger's, ``sign`` +1 on the left
-hand and -1 on the right), and per finger joint the local axis that curls it toward the palm. A shape
+hand and -1 on the right), and per finger joint the local axis that curls it toward the palm (the
+thumb's toward a point in front of the palm by the middle finger's second joint). A shape
 is a curl in radians per finger and joint; 0 is the reference pose, straight.
 """
 from __future__ import annotations
@@ -76,12 +77,18 @@ def bind_hand(rig, side: str) -> Hand | None:
         palm = _unit(down - np.dot(down, finger) * finger)
     locals_ = reference_locals(rig)
     joints, index, axes = [], [], []
+    # The thumb folds toward a point in front of the palm by the middle finger, not straight into the palm.
+    middle = next((j for j in chains["middle"][1:2] + chains["middle"][:1] + chains["index"][:1] if j is not None), None)
+    fold = None
+    if middle is not None and front is not None:
+        fold = positions[middle] + 0.3 * np.linalg.norm(positions[front] - w) * palm
     for f, chain in enumerate(FINGERS):
         mapped = [j for j in chains[chain] if j is not None]
         for k, j in enumerate(mapped[:3]):
             below = mapped[k + 1] if k + 1 < len(mapped) else None
             direction = _unit(positions[below] - positions[j]) if below is not None else finger
-            axis = np.cross(direction, palm)
+            toward = _unit(fold - positions[j]) if chain == "thumb" and fold is not None else palm
+            axis = np.cross(direction, toward)
             if np.linalg.norm(axis) < 1e-6:
                 continue
             joints.append(j)
