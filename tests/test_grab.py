@@ -23,22 +23,34 @@ CUP = (-0.2, 1.3, 0.3)  # inside the reaching pack's right-hand examples on X Bo
 GRAB = '<act><bml id="{id}"><sbm:grab id="g" target="{target}"{extra}/></bml></act>'
 
 
-def _grab_scene(key: str, packs=(), release_at=3.5):
+def _placed(cup, position, facing_deg):
+    """``cup`` (in front of a character at the origin facing +Z) for one at ``position`` facing ``facing_deg``."""
+    a = np.radians(facing_deg)
+    x, y, z = cup
+    return (position[0] + x * np.cos(a) + z * np.sin(a), y, position[2] - x * np.sin(a) + z * np.cos(a))
+
+
+def _grab_scene(key: str, packs=(), release_at=3.5, position=(0.0, 0.0, 0.0), facing=0.0):
     require_corpus()
     scene = Scene(fps=FPS, idle=False, quiet=True)
     warnings = []
     scene.on("warningFeedback", warnings.append)
-    scene.add_character(corpus_character(key), name="bob", packs=packs)
-    scene.add_object("cup", CUP, size=0.08)
+    scene.add_character(corpus_character(key), name="bob", packs=packs, position=position, facing=facing)
+    scene.add_object("cup", _placed(CUP, position, facing), size=0.08)
     scene.bml("bob", GRAB.format(id="take", target="cup", extra=""), at=0.5)
     scene.bml("bob", GRAB.format(id="drop", target="cup", extra=' sbm:grab-state="release"'), at=release_at)
     scene.run(release_at + 1.5)
     return scene, warnings
 
 
-@pytest.mark.parametrize("key, packs", [("xbot", ("reaching",)), ("xbot", ()), ("rpm", ())])
-def test_grab_carries_and_releases(key, packs):
-    scene, warnings = _grab_scene(key, packs)
+@pytest.mark.parametrize("key, packs, position, facing", [("xbot", ("reaching",), (0.0, 0.0, 0.0), 0.0),
+                                                          ("xbot", (), (0.0, 0.0, 0.0), 0.0),
+                                                          ("rpm", (), (0.0, 0.0, 0.0), 0.0),
+                                                          ("xbot", ("reaching",), (1.0, 0.0, 2.0), 90.0),
+                                                          ("rpm", (), (-1.5, 0.0, 0.5), -135.0)])
+def test_grab_carries_and_releases(key, packs, position, facing):
+    scene, warnings = _grab_scene(key, packs, position=position, facing=facing)
+    cup_at = np.array(_placed(CUP, position, facing))
     messages = [w.description for w in warnings]
     if packs:
         assert not messages, messages
@@ -55,16 +67,16 @@ def test_grab_carries_and_releases(key, packs):
     # the wrist stops half a hand short of the cup, which lies along the palm (wrist to middle knuckle)
     w, m = g_pos[ready, wrist], g_pos[ready, middle[0]]
     half_hand = 0.5 * np.linalg.norm(motion.skeleton.rest_global_positions[middle[0]] - motion.skeleton.rest_global_positions[wrist])
-    t = np.clip((np.array(CUP) - w) @ (m - w) / ((m - w) @ (m - w)), 0.0, 1.0)
-    palm = np.linalg.norm(np.array(CUP) - (w + t * (m - w)))
-    print(key, packs, f"wrist {np.linalg.norm(w - CUP) * 100:.2f} cm from the cup at ready (half a hand: "
+    t = np.clip((cup_at - w) @ (m - w) / ((m - w) @ (m - w)), 0.0, 1.0)
+    palm = np.linalg.norm(cup_at - (w + t * (m - w)))
+    print(key, packs, f"wrist {np.linalg.norm(w - cup_at) * 100:.2f} cm from the cup at ready (half a hand: "
                       f"{half_hand * 100:.2f} cm), the cup {palm * 100:.2f} cm from the palm line")
-    assert abs(np.linalg.norm(w - CUP) - half_hand) < 0.01 and palm < 0.05
+    assert abs(np.linalg.norm(w - cup_at) - half_hand) < 0.01 and palm < 0.05
     # the fingers close by the stroke and open again after the release
     span = np.linalg.norm(g_pos[:, middle[1]] - g_pos[:, middle[0]], axis=1)
     assert span[stroke] < 0.8 * span[0] and span[-1] == pytest.approx(span[0], abs=1e-6)
     # before the stroke the cup stays; from it to the release it keeps its place in the hand
-    assert np.allclose(cup[:stroke], CUP)
+    assert np.allclose(cup[:stroke], cup_at)
     in_hand = quat.rotate(quat.conjugate(g_rot[stroke:release, wrist]), cup[stroke:release] - g_pos[stroke:release, wrist])
     assert np.abs(in_hand - in_hand[0]).max() < 1e-6
     assert np.linalg.norm(cup[release - 1] - cup[stroke]) > 0.3  # carried back with the arm
