@@ -4,6 +4,8 @@ Each convention (:mod:`.conventions`) is tried against the skeleton's normalized
 the one that names the most canonical joints wins; its torso and neck joints are then numbered by
 the labelling rule (chest = spine3, one neck joint = spine4...) using their order in the hierarchy.
 A VRM file's own humanoid map (``Asset.humanoid``, given as ``humanoid=``) is used first when present.
+The joints found must make two legs and two arms on a trunk, the legs pointing away from the head
+(:mod:`.body_check`); otherwise the skeleton is refused with the reason.
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from infuse.canonical import ALL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping
 
+from .body_check import refusal
 from .conventions import CONVENTIONS, VRM, VRM0_THUMB
 
 NAME = "names"
@@ -121,18 +124,31 @@ def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, humanoid=No
         index.setdefault(normalize(n), n)
     joints = _from_vrm_humanoid(humanoid, skeleton)
     source = "the file's VRM humanoid map" if joints else ""
+    sources = {n: source for n in joints}
     if len(joints) < MIN_NAMES:
-        best_name, best = "", {}
-        for conv, table in CONVENTIONS.items():
-            found = _assemble(_hits(conv, table, index), skeleton)
-            if len(found) > len(best):
-                best_name, best = conv, found
+        found = sorted(((conv, _assemble(_hits(conv, table, index), skeleton)) for conv, table in CONVENTIONS.items()),
+                       key=lambda item: -len(item[1]))  # stable: the first listed convention wins a tie
+        best_name, best = found[0]
         if len(best) < MIN_NAMES:
-            raise NotHumanoidError(file, f"no known naming convention names its joints (best: {best_name or 'none'}, "
+            raise NotHumanoidError(file, f"no known naming convention names its joints (best: {best_name if best else 'none'}, "
                                          f"{len(best)} names); try --mapper heuristic")
-        joints, source = best, f"the {best_name} naming convention"
+        joints = dict(best)
+        sources = {n: f"the {best_name} naming convention" for n in joints}
+        # rigs that mix conventions (a hand of one beside a body of another): names the best one
+        # leaves out come from the others, never taking a joint twice
+        used = set(joints.values())
+        for conv, more in found[1:]:
+            for key, joint in more.items():
+                if key not in joints and joint not in used:
+                    joints[key] = joint
+                    used.add(joint)
+                    sources[key] = f"the {conv} naming convention"
+        source = f"the {best_name} naming convention"
+    why = refusal(skeleton, joints, pose)
+    if why is not None:
+        raise NotHumanoidError(file, why)
     conf = {n: (0.95 if n in joints else 0.7) for n in ALL_NAMES}
-    reasons = {n: (f"{joints[n]!r} in {source}" if n in joints else f"no joint of that name in {source}")
+    reasons = {n: (f"{joints[n]!r} in {sources[n]}" if n in joints else f"no joint of that name in {source}")
                for n in ALL_NAMES}
     # Hand-set entries (``fixed``) are applied by infuse.mapping.complete after every mapper.
     return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME,

@@ -1,0 +1,95 @@
+"""The humanoid test of both built-in mappers: any biped is accepted (cartoon proportions, arms hanging
+below the feet, any facing), bodies without two legs and two arms on a trunk are refused with the
+reason, by the ``heuristic`` and by the ``names`` mapper alike."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse import quaternions as quat
+from infuse.canonical import BODY_NAMES, CANONICAL_NAMES, canonical_skeleton
+from infuse.cli import main as cli_main
+from infuse.mapping import map_skeleton
+
+import skeleton_variants
+from wild_data import require_wild, wild_file, wild_labels
+
+LEGS = tuple(f"{s}_{j}" for s in "lr" for j in ("hip", "knee", "ankle", "forefoot", "toe"))
+
+
+def _canonical() -> tuple[infuse.Skeleton, dict]:
+    """The canonical skeleton (required joints) and its label (every name is its own joint)."""
+    sk = canonical_skeleton(extras=False)
+    return sk, {"mapping": {n: n for n in CANONICAL_NAMES}, "alternatives": {}}
+
+
+def _wrong(joints: dict, variant, names=BODY_NAMES) -> list:
+    return [(k, joints.get(k), variant.mapping[k]) for k in names
+            if joints.get(k) != variant.mapping[k] and joints.get(k) not in variant.alternatives.get(k, [])]
+
+
+@pytest.mark.parametrize("factors", [skeleton_variants.CARTOON, {"arms": 1.8, "legs": 0.5, "head": 2.2}],
+                         ids=["cartoon", "frog"])
+@pytest.mark.parametrize("arms_deg", [0.0, -45.0, -85.0], ids=["t_pose", "a_pose", "arms_down"])
+def test_cartoon_bipeds_are_accepted(factors, arms_deg):
+    """Long arms, short legs and a big head, arms level, at 45 degrees or hanging below the feet,
+    lying as if Z were up: every body joint right."""
+    sk, label = _canonical()
+    v = skeleton_variants.proportioned(sk, None, label, factors, "cartoon")
+    v = skeleton_variants.arms_posed(v.skeleton, None, label, arms_deg, "posed")
+    v = skeleton_variants.transformed(v.skeleton, None, label, rotation="z_up")
+    hands = v.skeleton.rest_global_positions[[v.skeleton.index["l_wrist"], v.skeleton.index["r_wrist"]]]
+    feet = v.skeleton.rest_global_positions[[v.skeleton.index["l_ankle"], v.skeleton.index["r_ankle"]]]
+    if arms_deg == -85.0 and factors["arms"] > 1.5:
+        assert hands[:, 2].max() < feet[:, 2].min()  # the hands hang below the feet
+    assert _wrong(map_skeleton(v.skeleton).joints, v) == []
+
+
+@pytest.mark.parametrize("mapper", ["heuristic", "names"])
+def test_generated_non_humanoids_are_refused(mapper):
+    """The canonical body without its legs (a trunk with arms) or without its arms: refused by both
+    mappers with the reason."""
+    sk, label = _canonical()
+    variants = skeleton_variants.non_humanoid_variants(sk, None, label)
+    assert [v.name for v in variants] == ["no_legs", "no_arms"]
+    for v in variants:
+        assert not v.humanoid
+        with pytest.raises(infuse.NotHumanoidError) as err:
+            map_skeleton(v.skeleton, mapper=mapper)
+        assert "two legs and two arms" in err.value.reason
+
+
+def _legs_turned(sk: infuse.Skeleton, degrees: float) -> np.ndarray:
+    """Rest positions with each leg turned forward about its hip by ``degrees`` (90: sitting)."""
+    pos = sk.rest_global_positions.copy()
+    q = quat.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.radians(-degrees))  # +X is the left: -X turns forward
+    for side in "lr":
+        hip = sk.index[f"{side}_hip"]
+        moved = [sk.index[f"{side}_{j}"] for j in ("knee", "ankle", "forefoot", "toe")]
+        pos[moved] = pos[hip] + quat.rotate(q, pos[moved] - pos[hip])
+    return pos
+
+
+def test_names_mapper_checks_the_body():
+    """Names alone do not make a humanoid: the names mapper maps the standing canonical body and
+    refuses it with its legs turned to point along the spine's line, with the reason."""
+    sk, _ = _canonical()
+    assert map_skeleton(sk, mapper="names")["l_hip"] == "l_hip"
+    assert sk.rest_global_positions[sk.index["l_toe"], 2] > sk.rest_global_positions[sk.index["l_ankle"], 2]
+    lying = skeleton_variants._from_positions(sk.names, sk.parents, _legs_turned(sk, 150.0))
+    with pytest.raises(infuse.NotHumanoidError) as err:
+        map_skeleton(lying, mapper="names")
+    assert "four-legged or lying" in err.value.reason
+
+
+def test_names_mapper_refuses_the_flying_head_with_exit_3(capsys):
+    """A flying head whose arms carry humanoid names: the names mapper refuses it on the command line
+    with one line and the reason."""
+    require_wild()
+    files = [label["file"] for label in wild_labels() if "flying head" in label["convention"]]
+    assert files
+    code = cli_main(["map", str(wild_file(files[0])), "--mapper", "names"])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert "not a humanoid" in err and "two legs and two arms" in err and len(err.strip().splitlines()) == 1
