@@ -103,6 +103,8 @@ def schedule(body: str):
     ('<act><bml><body posture="ChrBrad@Idle01"/></bml></act>', "neutral"),
     ('<act><bml><body posture="ChrBrad@Idle01_ArmsCrossed01"/></bml></act>', "arms_crossed"),
     ('<torso id="t" lexeme="BodyRecline"/>', "leaning_back"),
+    ('<gesture id="g" lexeme="ArmsCrossed" start="0" end="4"/>', "arms_crossed"),  # postures given as gestures
+    ('<gesture id="g" lexeme="HandsTogether"/>', "hands_clasped"),
 ])
 def test_bml_names_map_to_the_packs_postures(body, posture):
     (activation,), warnings = schedule(body)

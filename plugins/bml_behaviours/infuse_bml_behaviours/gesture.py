@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from infuse.bml import BehaviourError, BehaviourPlan, TimingModel
 
-from . import gesture_lexicon
+from . import gesture_lexicon, posture_lexicon
 from .common import Notes, clip_model, number, with_sbm, word
+from .posture import held_posture
 
 # Typical phase timing (seconds from start) of a beat and of larger gestures (deictic, iconic, metaphoric).
 BEAT_POINTS = {"start": 0.0, "ready": 0.25, "strokeStart": 0.3, "stroke": 0.4, "strokeEnd": 0.55, "relax": 0.7, "end": 1.1}
@@ -46,6 +47,9 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         found = gesture_lexicon.lookup(lexeme, mode) or (gesture_lexicon.lookup(kind, mode) if kind else None)
         if found is not None:
             return _pack_gesture(behaviour, lexeme, found, hold, notes)
+        posture = posture_lexicon.lookup(lexeme, words=False)
+        if posture is not None:  # a posture given as a gesture (Greta's ArmsCrossed): held over the gesture's span
+            return held_posture(posture, GESTURE_POINTS, notes)
         notes.append(f"lexeme {lexeme!r} names no gesture of the gestures pack (its gestures: "
                      f"{', '.join(gesture_lexicon.gestures())})")
     default = BEAT_POINTS if "beat" in (lexeme or clip).lower() else GESTURE_POINTS

@@ -59,6 +59,13 @@ def _stance_and_poses(behaviour, notes: Notes) -> dict:
     return parameters
 
 
+def held_posture(posture: str, points: dict, notes: Notes) -> BehaviourPlan:
+    """A temporary posture of the pack timed by ``points`` (sync point -> seconds): in by ``ready``, out
+    from ``relax``."""
+    return BehaviourPlan(TimingModel.from_points(points), "posture",
+                         {"stance": None, "poses": [], "posture": posture, "pack": posture_lexicon.PACK}, notes=tuple(notes))
+
+
 def plan_posture(behaviour, context) -> BehaviourPlan:
     notes = Notes()
     parameters = _stance_and_poses(behaviour, notes)

@@ -55,14 +55,15 @@ def known() -> bool:
     return _lexicon() is not None
 
 
-def lookup(name: str | None) -> str | None:
-    """The posture of the pack that ``name`` (a lexeme, a SmartBody posture, a Greta torso lexeme) names, or None."""
+def lookup(name: str | None, words: bool = True) -> str | None:
+    """The posture of the pack that ``name`` (a lexeme, a SmartBody posture, a Greta torso lexeme) names, or None;
+    ``words=False``: only the whole name (a gesture lexeme naming a posture)."""
     lexicon = _lexicon()
     if lexicon is None or not name or not name.strip():
         return None
     tags = lexicon[0]
     whole = tags.get(name.strip().lower()) or tags.get(_squashed(name))
-    if whole is not None:
+    if whole is not None or not words:
         return whole
     words = _words(name)
     pairs = [f"{a}_{b}" for a, b in zip(words, words[1:])]
