@@ -18,14 +18,13 @@ Times are global seconds; positions metres in the scene's frame (+Y up). The war
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable, Protocol, TypeVar, runtime_checkable
+from typing import Any, Callable, Protocol, TypeVar
 
 __all__ = ["Stage", "Stagehand", "end_s", "until_s"]
 
 T = TypeVar("T")
 
 
-@runtime_checkable
 class Stagehand(Protocol):
     """A plugin's helper for one scene (see the module doc). Each method is optional; the scene calls
     those it has."""

@@ -15,7 +15,6 @@ A behaviour that cannot be realized, or only partly, gives warningFeedback; the 
 """
 from __future__ import annotations
 
-
 from .. import registry
 from ..bml import Activation
 from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED, CANNOT_CREATE_BEHAVIOR
@@ -43,13 +42,18 @@ def realize(scene, activation: Activation):
     descriptor = registry.realizer(kind)
     if kind in CLIP_KINDS and (descriptor is None or not activation.parameters.get("pack")):
         return play_clip(scene, activation)
-    if descriptor is not None and descriptor.realize is not None:
+    if descriptor is None:
+        scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
+                   f"<{activation.element}>: no installed controller realizes {kind!r} behaviours")
+        return None
+    return _through(descriptor, scene, activation)
+
+
+def _through(descriptor, scene, activation: Activation):
+    """The activation realized by the controller ``descriptor``: its ``realize``, else the generic way."""
+    if descriptor.realize is not None:
         return descriptor.realize(activation, scene.stage)
-    if descriptor is not None:
-        return scene.stage.play(activation)
-    scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
-               f"<{activation.element}>: no installed controller realizes {kind!r} behaviours")
-    return None
+    return scene.stage.play(activation)
 
 
 def _speech(scene, activation: Activation):
@@ -69,7 +73,7 @@ def _speech(scene, activation: Activation):
     if descriptor is None:
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR, "<speech>: no lip-sync plugin is installed; only its audio is kept")
     else:
-        activity = descriptor.realize(activation, scene.stage) if descriptor.realize else scene.stage.play(activation)
+        activity = _through(descriptor, scene, activation)
     if activity is None:  # it speaks all the same: saccades pause
         scene.runtime.add_speech(name, activation.start, _until(activation))
     scene.keep_audio(name, activation, utterance, activity)
