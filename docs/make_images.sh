@@ -73,6 +73,11 @@ if want gestures; then  # bml.md, packs.md
   cp "$WORK/gestures/preview.png" "$OUT/gestures.png"
 fi
 
+if want pointing; then  # bml.md
+  INFUSE_CORPUS=$(cd "$CORPUS" && pwd) "$INFUSE" run examples/scenes/pointing.toml -o "$WORK/pointing" --strip 6 --quiet
+  cp "$WORK/pointing/preview.png" "$OUT/pointing.png"
+fi
+
 for png in "$OUT"/*.png; do
   size=$(stat -c %s "$png")
   [ "$size" -lt 307200 ] || { echo "make_images: $png is $size bytes, over 300 KB" >&2; exit 1; }
