@@ -59,14 +59,40 @@ def grounded_frames(heights: np.ndarray, swinging: np.ndarray, frame: int, toler
     return min(within, int(GROUNDED_SHARE * (np.argmin(swing) if not swing.all() else 0)))
 
 
+#: Seconds: a foot's contact flags broken for no longer than this are one contact (:func:`looped`).
+GAP_S = 0.1
+
+
+def looped(flags: np.ndarray, gap: int) -> np.ndarray:
+    """(F,) contact flags of a cycle whose last frame repeats the first, made one loop: the first
+    and the last frame down if either is (a contact that starts on the cycle's seam is found on one
+    side only), and breaks of at most ``gap`` frames (going round the seam) filled."""
+    f = np.array(flags[:-1], dtype=bool)
+    if len(flags) > 1:
+        f[0] |= bool(flags[-1])
+    if f.any() and not f.all():
+        start = int(np.argmax(f))
+        r = np.roll(f, -start)  # begins down
+        d = np.diff(np.concatenate((r.astype(np.int8), [1])))
+        for a, b in zip(np.nonzero(d == -1)[0] + 1, np.nonzero(d == 1)[0] + 1):
+            if b - a <= gap:
+                r[a:b] = True
+        f = np.roll(r, start)
+    return np.concatenate((f, f[:1]))
+
+
 def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0) -> np.ndarray | None:
     """(2, 4) phases of each foot's (left, right) strike, flat, heel off and toe off in a looping
     clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once.
     With the feet's heights (F, 2, 2) metres over the cycle (ankle, ball), a strike is where the heel
     reached the ground and a toe off where the ball left it (:func:`grounded_frames`, within
     :data:`GROUNDED` leg lengths of ``leg_length`` metres)."""
-    found = steps(clip.contacts, clip.motion.fps, True, clip.phases)
     fps = clip.motion.fps
+    gap = int(round(GAP_S * fps))
+    contacts = np.stack([looped(clip.contacts[:, k], gap) for k in range(2)], axis=1)
+    phases = None if clip.phases is None else \
+        np.stack([np.stack([looped(clip.phases[:, k, n], gap) for n in range(2)], axis=-1) for k in range(2)], axis=1)
+    found = steps(contacts, fps, True, phases)
     out = np.zeros((2, 4))
     for k, foot in enumerate(("left", "right")):
         mine = [s for s in found if s["foot"] == foot]
@@ -74,7 +100,7 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
             return None
         times = np.array([mine[0][e] for e in EVENTS])
         if heights is not None:
-            swinging = ~clip.contacts[:, k].astype(bool)
+            swinging = ~contacts[:, k]
             tolerance = GROUNDED * leg_length
             times[0] -= grounded_frames(heights[:, k, 0], swinging, int(round(times[0] * fps)), tolerance, -1) / fps
             # The toe off's frame is the first of the swing (a contact's end is exclusive).
