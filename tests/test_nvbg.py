@@ -41,11 +41,11 @@ def certain_rules(tmp_path: Path, **changes) -> Path:
     return path
 
 
-def generated(text: str, rules_path: Path, names=CAST, settings=None, extra: str = ""):
+def generated(text: str, rules_path: Path, names=CAST, settings=None, extra: str = "", said=()):
     (parsed,) = parse_bml(block(text, extra)).blocks
     context = GeneratorContext("ann", characters=tuple(n for n, k in names.items() if k == "character"),
                                objects=tuple(n for n, k in names.items() if k == "object"), seed=5,
-                               settings=settings or {})
+                               settings=settings or {}, said=said)
     return generate(parsed, context, load_rules(rules_path))
 
 
@@ -102,6 +102,19 @@ def test_nothing_starts_before_its_block_when_the_speech_is_pinned_to_its_start(
         (record,) = scheduler.submit(block("Yes.").replace('<speech id="s1">', f'<speech id="s1" start="{start}">'))
         assert sum(a.controller == "head" for a in record.activations) == nods
         assert not [e for e in scheduler.feedback.log if e.kind == "warningFeedback"]
+
+
+def test_words_the_conversation_said_recently_are_given_not_new(tmp_path):
+    rules = certain_rules(tmp_path)
+    earlier = ("The old pump pushes the water up to the garden.",)
+    text = "Yesterday, the pump broke."
+
+    def beats(said):
+        return [a["stroke"] for e, a in elements(generated(text, rules, said=said))
+                if e == "gesture" and a["lexeme"] == "BEAT"]
+    assert "pump" in beats(()) and "pump" not in beats(earlier)
+    remembered = load_rules(rules).remembered_utterances
+    assert "pump" in beats(earlier + ("Nothing else.",) * remembered)  # said too long ago: new again
 
 
 def test_strokes_keep_their_channel_gap_in_estimated_time(tmp_path):

@@ -30,7 +30,7 @@ def _add_nod(block, context):
                   f'<head id="back" lexeme="NOD" stroke="{block.id}:{speech.id}:end"/></bml>').blocks[0]
         for name in context.characters if name != context.character)
     return Generation(replace(block, behaviours=block.behaviours + extra.behaviours), listeners, added,
-                      notes=(f"seed {context.seed}",))
+                      notes=(f"seed {context.seed}, said before: {' / '.join(context.said) or 'nothing'}",))
 
 
 @pytest.fixture
@@ -75,6 +75,14 @@ def test_the_seed_depends_on_the_scheduler_seed_and_the_block(generator):
         scheduler.submit(SPEECH.format(flag=""))
         return next(e.description for e in scheduler.feedback.log if e.kind == "warningFeedback")
     assert seed_of(3) == seed_of(3) != seed_of(4)
+
+
+def test_a_generator_knows_what_was_said_before(generator):
+    scheduler = Scheduler(generators=("nodder",))
+    scheduler.submit(SPEECH.format(flag=""))
+    scheduler.submit(SPEECH.format(flag="").replace('"b1"', '"b2"').replace("Hello there.", "Hi again."))
+    notes = [e.description for e in scheduler.feedback.log if e.kind == "warningFeedback"]
+    assert notes[0].endswith("said before: nothing") and notes[1].endswith("said before: Hello there.")
 
 
 def test_off_unknown_and_failing_generators_warn_and_the_block_still_plays(generator):

@@ -34,7 +34,8 @@ class GeneratorContext:
     scene by name (empty for a scheduler without a scene); ``locate(name)`` -> (x, y, z) metres or None;
     ``seed``: this block's seed (the scheduler's seed mixed with the block id and character, so a block's
     draws do not depend on the blocks before it); ``settings``: the block's ``infuse:`` attributes the
-    generator declared, prefix dropped (name -> text).
+    generator declared, prefix dropped (name -> text); ``said``: the text of every speech scheduled before
+    this block, by any character, oldest first (what the conversation has already said).
     """
 
     character: str | None
@@ -44,6 +45,7 @@ class GeneratorContext:
     locate: Callable[[str], tuple | None] = lambda name: None
     seed: int = 0
     settings: dict = field(default_factory=dict)
+    said: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -141,6 +141,7 @@ class Scheduler:
         elif not hasattr(self.speech_timer, "time_speech") and hasattr(self.speech_timer, "synthesize"):
             self.speech_timer = EngineSpeechTimer(self.speech_timer)  # a TTS engine given directly
         self.blocks: dict[str, BlockSchedule] = {}
+        self._said: list[str] = []  # the text of every speech scheduled so far, for generators
         self._pending: list = []
         self._sequence = itertools.count()
 
@@ -177,7 +178,7 @@ class Scheduler:
             context = GeneratorContext(
                 character, block.dialect, tuple(n for n, kind in names.items() if kind == "character"),
                 tuple(n for n, kind in names.items() if kind == "object"), self.locate or (lambda name: None),
-                block_seed(self.seed, block, character), settings[generator.name])
+                block_seed(self.seed, block, character), settings[generator.name], tuple(self._said))
             try:
                 generation = generator.generate(block, context)
             except (GenerationError, InfuseError) as exc:
@@ -235,6 +236,8 @@ class Scheduler:
             else:
                 record = BlockSchedule(block, character, start, end, activations, tuple(issues))
         self.blocks[block.id] = record
+        self._said += [a.parameters["text"] for a in record.activations
+                       if a.controller == "speech" and a.parameters.get("text")]
         for issue in record.issues:
             self.feedback.emit(WarningFeedback(issue.id, issue.type, issue.description, character, issue.line))
         if not record.failed:

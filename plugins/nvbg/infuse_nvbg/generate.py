@@ -59,8 +59,10 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
     ids = _Ids({b.id for b in block.behaviours})
     speaker_xml, listener_xml, speeches = [], [], {}
     listener_ids = _Ids(set())
+    said = list(context.said[len(context.said) - rules.remembered_utterances:] if rules.remembered_utterances else ())
     for speech in (b for b in block.behaviours if b.element == "speech" and b.text):
-        words = words_of(speech.text, rules.words["function"])
+        words = words_of(speech.text, rules.words["function"], tuple(said))
+        said.append(speech.text)
         if not words:
             continue
         marks = _Marks(speech)

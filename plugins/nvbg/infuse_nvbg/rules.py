@@ -68,7 +68,7 @@ class ListenerRules:
 class Rules:
     """Everything ``rules.toml`` says: word classes (lower-case words), rules in order, gaps and leads
     (seconds, per channel), the amplitude range, how many words before an object's name a demonstrative
-    may stand, hand weights."""
+    may stand, how many earlier utterances make a word given, hand weights."""
 
     path: Path
     words: dict
@@ -77,6 +77,7 @@ class Rules:
     lead_s: dict
     amplitude: tuple[float, float]
     object_lookahead_words: int
+    remembered_utterances: int
     hands: tuple[tuple[str, float], ...]
     gaze: GazeRules
     listener: ListenerRules
@@ -164,6 +165,8 @@ def _load(path: Path) -> Rules:
     if low > high:
         c.fail("timing.amplitude", "the lowest is above the highest")
     lookahead = int(c.number(timing.get("object_lookahead_words"), "timing.object_lookahead_words", 0, 20))
+    remembered = int(c.number(c.table(doc, "discourse").get("remembered_utterances"),
+                              "discourse.remembered_utterances", 0, 1000))
     hands = tuple((mode, c.number(w, f"hands.{mode}", 0.0, 1e6)) for mode, w in c.table(doc, "hands").items())
     if not hands or sum(w for _, w in hands) <= 0:
         c.fail("hands", "expected at least one hand with a positive weight")
@@ -203,4 +206,4 @@ def _load(path: Path) -> Rules:
                              c.number(li.get("probability"), "listener.probability", 0.0, 1.0),
                              c.number(li.get("gap_s"), "listener.gap_s", 0.0, 60.0),
                              c.element(li.get("bml"), "listener.bml"), c.text(li.get("sync"), "listener.sync"))
-    return Rules(path, words, tuple(rules), gap_s, lead_s, (low, high), lookahead, hands, gaze, listener)
+    return Rules(path, words, tuple(rules), gap_s, lead_s, (low, high), lookahead, remembered, hands, gaze, listener)

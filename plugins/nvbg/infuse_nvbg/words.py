@@ -29,12 +29,13 @@ class Word:
     tag: bool = False
 
 
-def words_of(text: str, function_words: frozenset) -> list[Word]:
+def words_of(text: str, function_words: frozenset, said: tuple[str, ...] = ()) -> list[Word]:
     """The words of ``text``; a content word (not in ``function_words``, three letters or more) is accented
-    the first time the utterance says it."""
-    found = [(m.group(0).lower().replace("’", "'"), m.start(), m.end()) for m in _WORD.finditer(text)]
+    the first time the utterance says it, unless one of the texts ``said`` before it has it (it is given)."""
+    found = [(word, m.start(), m.end()) for word, m in _words(text)]
     out: list[Word] = []
-    sentence, first, seen = 0, 0, set()
+    sentence, first = 0, 0
+    seen = {word for earlier in said for word, _ in _words(earlier)}
     for k, (word, start, end) in enumerate(found):
         gap = text[end:found[k + 1][1]] if k + 1 < len(found) else text[end:]
         ends_sentence = bool(_SENTENCE_END.search(gap)) or k + 1 == len(found)
@@ -50,3 +51,8 @@ def words_of(text: str, function_words: frozenset) -> list[Word]:
                     out[-2] = replace(out[-2], tag=True)
             first, sentence = len(out), sentence + 1
     return out
+
+
+def _words(text: str):
+    """(lower-case word, match) of each word of ``text``."""
+    return [(m.group(0).lower().replace("’", "'"), m) for m in _WORD.finditer(text)]
