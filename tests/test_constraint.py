@@ -134,3 +134,17 @@ def test_smartbody_constraint_document_with_a_clavicle_root():
         g = infuse.motion_fk(scene.motion("ChrBrad0"))[1]
         ix = scene.runtime.rig("ChrBrad0").mapping.indices(scene.runtime.rig("ChrBrad0").skeleton)
         assert np.linalg.norm(g[int(1.0 * FPS):, ix["l_wrist"]] - pawn, axis=1).max() < 1e-3, key
+
+
+def test_a_constraint_of_the_same_handle_replaces_the_last():
+    """SmartBody's ``sbm:handle``: the second constraint named ``h`` takes the wrist elsewhere, the first fades out."""
+    scene, warnings, g, ix = _scene("xbot", '<sbm:constraint id="a" effector="r_wrist" target="cup" sbm:handle="h"/>'
+                                            '<sbm:constraint id="b" effector="r_wrist" target="fly" sbm:handle="h" start="1.5"/>'
+                                            '<sbm:constraint id="c" effector="l_wrist" target="cup" sbm:offset="0.4 0 0" '
+                                            'sbm:handle="other" start="1.5"/>', 3.0)
+    assert not warnings, [w.description for w in warnings]
+    first = scene.activities[("b1", "a")]
+    assert first.end_s == pytest.approx(1.5 + first.blend_out_s)
+    assert scene.activities[("b1", "c")].end_s is None
+    frames = np.arange(int(2.0 * FPS), int(3.0 * FPS))
+    assert np.linalg.norm(g[frames, ix["r_wrist"]] - _fly(frames / FPS), axis=1).max() < 1e-3

@@ -135,6 +135,10 @@ def plan_grab(behaviour, context) -> BehaviourPlan:
         hand = None
     parameters = {"target": target, "state": state, "handle": word(behaviour, with_sbm("handle")), "hand": hand,
                   "wrist": word(behaviour, with_sbm("wrist"))}
+    for name, instead in (("grab-type", "the hand closes as a grip"), ("grab-velocity", f"the hand closes in {GRASP_S:g} s"),
+                          ("source-joint", "the wrist holds the object")):
+        if word(behaviour, with_sbm(name)) is not None:
+            notes.append(f"{name} is not used: {instead}")
     if state in ("release", "finish"):
         return BehaviourPlan(TimingModel.from_points({"start": 0.0, "ready": GRASP_S, "stroke": GRASP_S, "end": GRASP_S}),
                              "grab", parameters, notes=tuple(notes))

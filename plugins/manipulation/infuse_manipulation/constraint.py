@@ -40,7 +40,8 @@ class IKConstraint(Controller):
     of a chain effector (canonical or own name). ``blend_in_s``/``blend_out_s``: the fades, seconds;
     ``purpose``: what the constraint is for, in its report (default: the constraint on the effector);
     ``straight_end``: a limb's end joint takes its reference-pose local rotation (a hand in line with
-    the forearm) instead of keeping its orientation."""
+    the forearm) instead of keeping its orientation; ``handle``: its name, as SmartBody's ``sbm:handle``
+    (a later constraint of the same handle on the character replaces it)."""
 
     kind = "ik_constraint"
     layer = Layer.HEAD
@@ -51,12 +52,13 @@ class IKConstraint(Controller):
 
     def __init__(self, effector: str, target, offset_m=(0.0, 0.0, 0.0), root: str | None = None,
                  blend_in_s: float | None = None, blend_out_s: float | None = None, purpose: str | None = None,
-                 straight_end: bool = False):
+                 straight_end: bool = False, handle: str | None = None):
         if not isinstance(effector, str) or not effector.strip():
             raise UsageError("an IK constraint names its effector joint")
         self.effector, self.target, self.root = effector.strip(), target, root
         self.purpose = purpose or f"the constraint on {self.effector!r}"
         self.straight_end = bool(straight_end)
+        self.handle = handle
         self.offset_m = np.array(check_point(offset_m, "the constraint's offset"))
         for name, value in (("blend_in_s", blend_in_s), ("blend_out_s", blend_out_s)):
             if value is not None:

@@ -65,12 +65,18 @@ def constraint(parameters: dict) -> IKConstraint:
     return IKConstraint(parameters.get("effector") or "", _target(parameters),
                         offset_m=(0.0, 0.0, 0.0) if offset is None else check_point(offset, "the constraint's offset"),
                         root=parameters.get("effector_root"), blend_in_s=parameters.get("fade_in_s"),
-                        blend_out_s=parameters.get("fade_out_s"))
+                        blend_out_s=parameters.get("fade_out_s"), handle=parameters.get("handle"))
 
 
 def constraint_from_bml(parameters: dict, runtime, character: str, activation) -> IKConstraint:
     controller = constraint(parameters)
     resolve_target(runtime, controller.target)
+    if controller.handle:  # SmartBody: the same handle names the same constraint, which the new one replaces
+        for activity in runtime.activities:
+            old = activity.controller
+            if activity.rig.name == character and isinstance(old, IKConstraint) and old.handle == controller.handle \
+                    and activity.start_s <= activation.start and (activity.end_s is None or activity.end_s > activation.start):
+                runtime.stop(activity, activation.start)
     return controller
 
 
