@@ -117,6 +117,22 @@ def test_words_the_conversation_said_recently_are_given_not_new(tmp_path):
     assert "pump" in beats(earlier + ("Nothing else.",) * remembered)  # said too long ago: new again
 
 
+def test_expressiveness_scales_how_much_the_speaker_does():
+    text = ("Well, the first thing you have to know is that the machine is old, and the second thing is that "
+            "nobody has the manual anymore, so we really must be careful with it.")
+
+    def added(value):
+        scheduler = Scheduler(names=lambda: CAST, seed=3)
+        flag = f'infuse:nonverbal="true" infuse:expressiveness="{value}"'
+        (record, *_) = scheduler.submit(block(text, flag=flag))
+        return sum(a.controller in ("gesture", "pointing", "head", "face") for a in record.activations), scheduler
+    counts = [added(v)[0] for v in ("0", "0.5", "1", "2")]
+    assert counts[0] == 0 and counts[0] < counts[1] < counts[2] <= counts[3], counts
+    _, scheduler = added("lots")
+    assert any("infuse:expressiveness='lots' is not a number from 0 to 3" in e.description
+               for e in scheduler.feedback.log if e.kind == "warningFeedback")
+
+
 def test_strokes_keep_their_channel_gap_in_estimated_time(tmp_path):
     scheduler, (record, _) = schedule("Bring the red box, the green bag, the old lamp and the new chair to the door, "
                                       "because the big truck leaves early tomorrow morning.", seed=3)

@@ -45,13 +45,15 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
     """``block`` with nonverbal behaviour for its speech, and the listener's backchannel block (see the module doc).
 
     ``context`` is the :class:`infuse.bml.GeneratorContext`; its settings ``listener`` (a character's name)
-    and ``seed`` (an integer) override the listener found in the scene and the block's seed."""
+    and ``seed`` (an integer) override the listener found in the scene and the block's seed;
+    ``expressiveness`` (0 to 3, default 1) multiplies the probability of every hand, head and face rule."""
     rules = rules or load_rules()
     settings = context.settings
     try:
         seed = int(settings["seed"]) if "seed" in settings else context.seed
     except ValueError:
         raise GenerationError(f"infuse:seed={settings['seed']!r} is not an integer") from None
+    scale = _expressiveness(settings.get("expressiveness"))
     rng = random.Random(seed)
     listener, notes = _listener(context)
     objects = {name.lower(): name for name in context.objects}
@@ -68,7 +70,7 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
         marks = _Marks(speech)
         onset = EstimatedSpeechTimer().char_times(speech.text)
         pinned = _pinned_start(speech, context.dialect)
-        placed = _word_rules(rules, words, onset, speech.id, marks, ids, rng, listener, objects, taken, pinned)
+        placed = _word_rules(rules, words, onset, speech.id, marks, ids, rng, listener, objects, taken, pinned, scale)
         if "gaze" not in taken and listener is not None:
             placed += _gaze(rules, words, onset, speech.id, marks, ids, rng, listener)
         speaker_xml += [p.xml for p in sorted(placed, key=lambda p: p.time_s)]
@@ -177,6 +179,18 @@ def _element(template: str, values: dict, behaviour_id: str, syncs: dict) -> str
     return _TAG.sub(lambda m: m.group(0) + attributes, text, count=1)
 
 
+def _expressiveness(text: str | None) -> float:
+    if text is None:
+        return 1.0
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 3.0:
+        raise GenerationError(f"infuse:expressiveness={text!r} is not a number from 0 to 3")
+    return value
+
+
 def _pinned_start(speech, dialect: str) -> float | None:
     """Seconds from its block's start at which a BML 1.0 speech is pinned (``start="0.2"``), else None."""
     ref = speech.sync_refs.get("start")
@@ -184,8 +198,9 @@ def _pinned_start(speech, dialect: str) -> float | None:
 
 
 def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _Marks, ids: _Ids, rng, listener,
-                objects: dict, taken: set, pinned: float | None) -> list[_Placed]:
-    """Every rule over every word, in order: an element where the rule matches, its draw passes, its
+                objects: dict, taken: set, pinned: float | None, scale: float) -> list[_Placed]:
+    """Every rule over every word, in order: an element where the rule matches, its draw (against its
+    probability times ``scale``) passes, its
     placeholders name something, its channel has room and, when the speech is pinned at ``pinned`` seconds
     after its block's start, it need not start before the block."""
     placed: dict[str, list[float]] = {channel: [] for channel in rules.gap_s}
@@ -198,7 +213,7 @@ def _word_rules(rules: Rules, words: list[Word], onset, speech_id: str, marks: _
         for index, word in enumerate(words):
             if not _matches(rule.on, index, word, rules, objects, questions):
                 continue
-            if rng.random() >= rule.probability:
+            if rng.random() >= min(rule.probability * scale, 1.0):
                 continue
             anchor = _anchor(index, words, rules) if rule.on == "object" else index
             values = _values(rule.bml, index, words, rules, rng, listener, objects)

@@ -6,8 +6,9 @@ from __future__ import annotations
 import infuse
 from infuse.plugin_types import BMLGenerator
 
-#: The ``infuse:`` block attributes the generator reads: who listens, and a seed of the block's own.
-SETTINGS = frozenset({"listener", "seed"})
+#: The ``infuse:`` block attributes the generator reads: who listens, a seed of the block's own, and how
+#: expressive the speaker is (a factor on the rules' probabilities).
+SETTINGS = frozenset({"listener", "seed", "expressiveness"})
 
 
 def _generate(block, context):
