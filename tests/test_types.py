@@ -20,6 +20,7 @@ def test_mypy_finds_nothing_in_the_core():
 
 def test_the_public_api_module_is_strictly_typed():
     proc = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--no-error-summary",
-                           "core/infuse/api.py", "core/infuse/footing.py", "core/infuse/contacts.py"],
+                           "core/infuse/api.py", "core/infuse/footing.py", "core/infuse/contacts.py",
+                           "core/infuse/stage.py"],
                           cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -18,7 +18,14 @@ Times are global seconds; positions metres in the scene's frame (+Y up). The war
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Callable, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, Callable, Protocol, TypeVar
+
+if TYPE_CHECKING:
+    from .bml import Activation
+    from .motion import Motion
+    from .packs.infusion import BlendSpace
+    from .runtime import Activity, Controller, Runtime
+    from .speech import Utterance
 
 __all__ = ["Stage", "Stagehand", "end_s", "until_s"]
 
@@ -50,7 +57,7 @@ class Stage(Protocol):
     #: Frames per second of the scene.
     fps: float
     #: The layered runtime the scene evaluates (:class:`~infuse.runtime.Runtime`): rigs, targets, activities.
-    runtime: Any
+    runtime: Runtime
 
     @property
     def time(self) -> float:
@@ -67,38 +74,39 @@ class Stage(Protocol):
         """What ``name`` (as the scene spells it) is: ``"character"``, ``"object"`` (a thing that can be
         carried), ``"target"`` (a named point or joint) or None."""
 
-    def blend_space(self, character: str, kind: str):
+    def blend_space(self, character: str, kind: str) -> BlendSpace | None:
         """The :class:`~infuse.packs.BlendSpace` of ``kind`` the character was infused with (the first of
         its behaviour packs that has one), or None."""
 
-    def clip(self, character: str, name: str):
+    def clip(self, character: str, name: str) -> Motion | None:
         """The character's clip ``name`` (:class:`~infuse.Motion`, from its behaviour packs, else its own
         file; case ignored), or None."""
 
     def map_file(self, character: str) -> Path | None:
         """The character's map file (joint and face channels), or None."""
 
-    def utterance(self, activation):
+    def utterance(self, activation: Activation) -> Utterance | None:
         """The :class:`~infuse.speech.Utterance` the scene synthesized for a speech activation (the one its
         timing came from), or None."""
 
-    def activate(self, activation, controller, end_s: float | None, **options):
+    def activate(self, activation: Activation, controller: Controller, end_s: float | None,
+                 **options: Any) -> Activity:
         """Start ``controller`` on the activation's character at its start until ``end_s`` (None: until
         stopped); ``options`` as :meth:`~infuse.runtime.Runtime.activate`. Returns the activity."""
 
-    def play(self, activation, **settings):
+    def play(self, activation: Activation) -> Activity | None:
         """Realize the activation the generic way: the controller its kind's ``from_bml`` (else its
-        factory, given the parameters and ``settings``) builds, from its start to :func:`end_s`. Returns
-        the activity, or None (reported)."""
+        factory, given the parameters) builds, from its start to :func:`end_s`; a controller that is an
+        idle default stops the character's idle one. Returns the activity, or None (reported)."""
 
-    def play_clip(self, activation):
+    def play_clip(self, activation: Activation) -> Activity | None:
         """Realize the activation as a clip of the character (``clip`` parameter) on the base layer, as
         the scene plays ``<animation>``; returns the activity or None (warned)."""
 
-    def activities(self, character: str) -> list:
+    def activities(self, character: str) -> list[Activity]:
         """The activities BML started on the character so far (oldest first)."""
 
-    def warn(self, activation, kind: str, message: str) -> None:
+    def warn(self, activation: Activation, kind: str, message: str) -> None:
         """warningFeedback of type ``kind`` (see :mod:`infuse.bml.model`)
         about the activation."""
 
@@ -111,11 +119,11 @@ class Stage(Protocol):
     def set_destination(self, character: str, x_m: float, z_m: float) -> None:
         """Where the character will stand once its walk ends: :meth:`locate` answers it from now on."""
 
-    def stagehand(self, key: str, make: Callable[["Stage"], T]) -> T:
+    def stagehand(self, key: str, make: Callable[[Stage], T]) -> T:
         """The plugin's :class:`Stagehand` ``key`` for this scene, made with ``make(stage)`` on first use."""
 
 
-def end_s(activation) -> float | None:
+def end_s(activation: Activation) -> float | None:
     """When an activity playing ``activation`` ends: its end (None when persistent), cut at its
     interruption (``stop_s``)."""
     end = None if activation.persistent else activation.end
@@ -124,7 +132,7 @@ def end_s(activation) -> float | None:
     return end
 
 
-def until_s(activation) -> float:
+def until_s(activation: Activation) -> float:
     """When a behaviour that does not persist stops: its end, or its interruption."""
     end = end_s(activation)
     return activation.end if end is None else end
