@@ -126,8 +126,8 @@ def test_unknown_names_and_other_stances_warn_at_scheduling_naming_the_postures(
 
 
 # -- on characters ------------------------------------------------------------------------------------------
-def play(key: str, body: str, cache, idle: bool = False, seconds: float | None = None):
-    scene = Scene(fps=FPS, tts=None, quiet=True, idle=idle, pack_cache=cache)
+def play(key: str, body: str, cache, idle: bool = False, seconds: float | None = None, block_frames: int = 150):
+    scene = Scene(fps=FPS, tts=None, quiet=True, idle=idle, pack_cache=cache, block_frames=block_frames)
     scene.add_character(corpus_character(key), "bob", packs=("locomotion-male",))
     scene.add_object("cup", (1.2, 1.6, 1.0))
     scene.bml("bob", BML.format(id="b1", body=body), at=0.0)
@@ -176,6 +176,16 @@ def test_postures_follow_each_other_with_the_feet_planted(key, pack_cache):
     heading = quat.rotate(rig.rotation, np.array([0.0, 0.0, 1.0]))
     ahead = np.sum((chest - hips) * heading, axis=-1)
     assert ahead[int(10.5 * FPS)] - ahead[int(2.0 * FPS)] > 0.04
+
+
+def test_the_frames_do_not_depend_on_the_block_size(pack_cache):
+    body = SEQUENCE.split("<postureShift id=\"p3\"")[0] + '<locomotion id="w1" target="0 2" start="7.5"/>'
+    scene, whole = play("xbot", body, pack_cache, seconds=10.0)
+    assert scene.activities[("b1", "p1")].end_s < 10.0  # the walk ended the posture in the run
+    _, blocks = play("xbot", body, pack_cache, seconds=10.0, block_frames=7)
+    _, a = forward_kinematics(whole.skeleton, whole.local_rotations, whole.root_translations, whole.joint_translations)
+    _, b = forward_kinematics(blocks.skeleton, blocks.local_rotations, blocks.root_translations, blocks.joint_translations)
+    assert np.abs(a - b).max() < 1e-6
 
 
 def test_breathing_and_gaze_still_add_to_a_posture(pack_cache):

@@ -146,10 +146,11 @@ class Posture(Controller):
             state["leave_s"] = float(block.times[int(np.argmax(away))])
             activity = job.activity
             end = state["leave_s"] + activity.blend_out_s
-            activity.end_s = end if activity.end_s is None else min(activity.end_s, end)
-        fade = 1.0 - smoothstep((block.times - state["leave_s"]) / max(job.activity.blend_out_s, 1e-9))
-        job.weight = job.weight * fade
-        return fade
+            if activity.end_s is None or end < activity.end_s:
+                activity.end_s = end
+                # This block's weights were taken before the activity had that end: the blend out, as later blocks have it.
+                job.weight = activity.weights(block.times)
+        return 1.0 - smoothstep((block.times - state["leave_s"]) / max(job.activity.blend_out_s, 1e-9))
 
     @staticmethod
     def _footprints(pose, legs: np.ndarray, k: int) -> dict:
