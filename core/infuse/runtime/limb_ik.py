@@ -2,8 +2,9 @@
 the goals of :mod:`infuse.footing`), and arms that take things.
 
 The limb is three joints a (hip, shoulder), b (knee, elbow), c (ankle, wrist). The bend at b is set
-by the law of cosines so that c lies as far from a as the goal, then a turns by the shortest arc
-that brings c onto the goal. Two entry points share that solution:
+by the law of cosines so that c lies as far from a as the goal, a swings in the limb's plane so that
+c keeps its direction from a, then a turns by the shortest arc that brings c onto the goal. Two
+entry points give that one solution:
 
 - :func:`solve_limb` works on a character's local rotations (F, J, 4), joints anywhere in the
   hierarchy (twist joints between them are carried along), the bend staying in the limb's current
@@ -100,8 +101,9 @@ def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.nd
     """Bring the end c of limbs a, b, c at ``root``, ``middle``, ``end`` (F, 3) to ``goal`` (F, 3).
 
     b bends about ``hinge`` (F, 3, unit, perpendicular to a->b; :func:`hinge_axes`) from its
-    ``flexion`` (F,, radians) to the flexion the goal's distance from a needs, then a turns by the
-    shortest arc that points c at the goal: the limb moves only as much as the goal needs. The hinge
+    ``flexion`` (F,, radians) to the flexion the goal's distance from a needs, a swings about the
+    hinge so that c keeps its direction from a, then a turns by the shortest arc that points c at
+    the goal: the limb moves only as much as the goal needs (as :func:`solve_limb` does). The hinge
     never straightens past ``min_flexion`` radians (no hyperextension), but a limb already
     straighter is not made to bend; a goal out of its span is moved onto the reachable shell, so the
     limb stretches toward it.
@@ -127,8 +129,9 @@ def turn_limb(root: np.ndarray, middle: np.ndarray, end: np.ndarray, goal: np.nd
     bend = np.maximum(bend, np.minimum(0.0, min_flexion - flexion))
     q_bend = quat.from_axis_angle(hinge, bend)
     bent = upper + quat.rotate(q_bend, lower)
-    target = np.where((dist > 1e-12)[..., None], offset, bent)
-    q_root = quat.between(bent, target)
+    line = end - root
+    target = np.where((dist > 1e-12)[..., None], offset, line)
+    q_root = quat.multiply(quat.between(line, target), quat.between(bent, line))
     new_end = root + quat.rotate(q_root, bent)
     return LimbTurns(q_root, quat.multiply(q_root, q_bend), new_end, _norm(goal - new_end), reachable)
 
