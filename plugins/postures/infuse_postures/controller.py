@@ -181,7 +181,8 @@ class Posture(Controller):
 def posture_from_bml(parameters: dict, runtime, character: str, activation=None) -> Posture | None:
     """A :class:`Posture` from a planned BML posture (``parameters["posture"]``: the pack's clip). It blends in
     from start to ready (a shift: over its whole span) and, when temporary, out from relax to end; a lasting
-    one ends the character's earlier lasting postures once it is in."""
+    one ends the character's earlier lasting postures (this controller's, or a posture clip of the character)
+    once it is in."""
     clip = parameters.get("posture")
     if not clip:
         return None
@@ -198,6 +199,7 @@ def posture_from_bml(parameters: dict, runtime, character: str, activation=None)
         posture.blend_out_s = max(activation.end - (relax if relax is not None else activation.end), 1.0 / runtime.fps)
     if persistent:
         for a in runtime.activities:
-            if a.rig.name == character and isinstance(a.controller, Posture) and a.end_s is None and a.start_s < start:
+            lasting_posture = isinstance(a.controller, Posture) or getattr(a.source, "controller", None) == "posture"
+            if a.rig.name == character and lasting_posture and a.end_s is None and a.start_s < start:
                 a.end_s, a.blend_out_s = start + posture.blend_in_s, 0.0
     return posture
