@@ -11,6 +11,7 @@ import pytest
 import infuse
 from infuse import quaternions as quat
 from infuse.bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from infuse.errors import UsageError
 from infuse.scene import Scene
 
 from corpus_data import require_corpus
@@ -140,3 +141,21 @@ def test_frames_do_not_depend_on_the_block_size():
     for rotations, cup in results[1:]:
         assert np.abs(quat.canonical_sign(rotations) - quat.canonical_sign(results[0][0])).max() < 1e-9
         assert np.abs(cup - results[0][1]).max() < 1e-9
+
+
+def test_builder_grab_and_release():
+    """``scene.grab`` and ``scene.release`` write the same sbm:grab blocks."""
+    require_corpus()
+    scene = Scene(fps=FPS, idle=False, quiet=True)
+    warnings = []
+    scene.on("warningFeedback", warnings.append)
+    scene.add_character(corpus_character("xbot"), name="bob")
+    scene.add_object("cup", CUP, size=0.08)
+    scene.grab("bob", "cup", at=0.5, hand="right")
+    scene.release("bob", "cup", at=3.0)
+    scene.run(4.0)
+    assert [w.description for w in warnings] == ["<sbm:grab>: no reaching pack infused: the arm reaches by IK alone"]
+    cup = scene.object_track("cup")
+    assert np.linalg.norm(cup[int(2.5 * FPS)] - CUP) > 0.3 and np.allclose(cup[int(3.0 * FPS):], cup[int(3.0 * FPS)])
+    with pytest.raises(UsageError):
+        scene.point("bob", "cup", hand="middle")

@@ -224,3 +224,18 @@ def test_a_bare_runtime_realizes_pointing_from_bml():
     frame = int(round(1.5 * FPS))
     assert activity.state["hands"] == ("right",)
     assert _ray_distance(g[frame, ix["r_shoulder"]], g[frame, ix["r_index4"]], g[frame, ix["l_ankle"]]) < 0.05
+
+
+def test_builder_point():
+    """``scene.point`` writes a <pointing> block: a point target, the hand as asked."""
+    require_corpus()
+    scene = Scene(fps=FPS, idle=False, quiet=True)
+    scene.add_character(corpus_character("rpm"), name="ann")
+    block = scene.point("ann", (1.0, 1.0, 2.0), at=0.2, hand="left")
+    scene.run(3.0)
+    (activity,) = [a for (b, _), a in scene.activities.items() if b == block]
+    assert activity.state["hands"] == ("left",)
+    frame = int(round(activity.source.time("stroke") * FPS))
+    g = infuse.motion_fk(scene.motion("ann"))[1]
+    ix = scene.runtime.rig("ann").mapping.indices(scene.runtime.rig("ann").skeleton)
+    assert _ray_distance(g[frame, ix["l_shoulder"]], g[frame, ix["l_index4"]], np.array([1.0, 1.0, 2.0])) < 0.05

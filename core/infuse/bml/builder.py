@@ -106,6 +106,25 @@ class BuilderCalls:
         attributes = {"id": "l1", "target": where, "manner": manner, "speed": None if speed is None else float(speed)}
         return self._submit(character, "walk", element("locomotion", attributes), at)
 
+    def point(self, character: str, target, at: float | None = None, hand: str | None = None) -> str:
+        """Point at ``target`` (a character, an object, ``"character:joint"`` or a point) with ``hand``: left,
+        right or both (default: the hand on the target's side)."""
+        modes = {None: None, "left": "LEFT_HAND", "right": "RIGHT_HAND", "both": "BOTH_HANDS"}
+        if hand not in modes:
+            raise UsageError(f"a pointing hand is left, right or both, not {hand!r}")
+        attributes = {"id": "p1", "target": self._target_name(target), "mode": modes[hand]}
+        return self._submit(character, "point", element("pointing", attributes), at)
+
+    def grab(self, character: str, obj: str, at: float | None = None, hand: str | None = None) -> str:
+        """Take object ``obj`` in a hand (left or right; default: the one on its side) and hold it (sbm:grab)."""
+        attributes = {"id": "g1", "target": self._target_name(obj), "sbm:reach-type": hand}
+        return self._submit(character, "grab", element("sbm:grab", attributes), at)
+
+    def release(self, character: str, obj: str | None = None, at: float | None = None) -> str:
+        """Let go of what the character holds (``obj``: only that object); it stays where the hand leaves it."""
+        attributes = {"id": "g1", "target": None if obj is None else self._target_name(obj), "sbm:grab-state": "release"}
+        return self._submit(character, "release", element("sbm:grab", attributes), at)
+
     def reach(self, character: str, target, at: float | None = None, action: str = "touch",
               hand: str | None = None) -> str:
         """Reach for an object (``action``: touch, pick-up, put-down, point-at; ``hand``: left or right)."""
