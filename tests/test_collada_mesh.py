@@ -121,8 +121,8 @@ def test_surfaces_hold_the_files_triangles_and_bind_shape_positions(rel, charact
             assert distance.max() < 1e-5
             assert np.all(np.abs(np.linalg.norm(mesh.normals, axis=1) - 1.0) < 1e-5)
     # The corpus has no texture images: the surfaces are drawn in plain colour, and it says so.
-    assert asset.meta["warnings"] == [w for w in asset.meta["warnings"] if w.startswith("texture images not found")]
-    assert len(asset.meta["warnings"]) == 1 and all(m.colors is None for m in asset.meshes)
+    assert asset.warnings == [w for w in asset.warnings if w.startswith("texture images not found")]
+    assert len(asset.warnings) == 1 and all(m.colors is None for m in asset.meshes)
 
 
 @pytest.mark.parametrize("rel", CHARACTERS, ids=lambda rel: Path(rel).name)
@@ -195,7 +195,7 @@ def test_utah_names_geometry_the_file_does_not_hold():
     assert asset.meshes == ()
     instances = len(_plain(path)[0].findall(".//instance_controller"))
     assert instances == 18
-    assert asset.meta["warnings"] == [f"line 2527 <instance_controller> and {instances - 1} more: not drawn: "
+    assert asset.warnings == [f"line 2527 <instance_controller> and {instances - 1} more: not drawn: "
                                       "the geometry its skin names is not in the file"]
 
 
@@ -340,7 +340,7 @@ def test_synthetic_skin_polygons_weights_and_colours(tmp_path):
     asset = infuse.load(write_case(tmp_path, "body", scene(), ".dae"))
     sk = asset.skeleton
     box, quad, pentagon = asset.meshes  # scene order: the prop sits in the skeleton, before the body
-    [warning] = asset.meta["warnings"]
+    [warning] = asset.warnings
     assert re.fullmatch(r"line \d+ <instance_geometry> in node 'Loose': not drawn: it has no skin and no joint above it", warning)
     assert (quad.name, quad.num_triangles, quad.num_vertices) == ("body.m1", 3, 5)
     assert (pentagon.name, pentagon.num_triangles, pentagon.num_vertices) == ("body.m2", 3, 5)  # the hole stays open
@@ -397,7 +397,7 @@ def test_missing_texture_gives_the_plain_colour_and_a_warning(tmp_path):
     asset = infuse.load(write_case(tmp_path, "body", scene(loose=False), ".dae"))  # no checker.png beside it
     pentagon = next(m for m in asset.meshes if m.name == "body.m2")
     assert pentagon.colors is None and np.allclose(pentagon.base_color, [0.8, 0.8, 0.8, 1.0])
-    assert asset.meta["warnings"] == ["texture images not found beside the file, plain colours used: checker.png"]
+    assert asset.warnings == ["texture images not found beside the file, plain colours used: checker.png"]
 
 
 def test_a_skinned_morph_keeps_its_targets(tmp_path):
@@ -424,7 +424,7 @@ def test_a_skinned_morph_keeps_its_targets(tmp_path):
 def test_unusable_geometry_is_left_out_with_a_warning(tmp_path, case, problem):
     asset = infuse.load(write_case(tmp_path, "body", scene(loose=False, **case), ".dae"))
     assert [m.name for m in asset.meshes] == ["box"]  # the rigid prop is still drawn
-    warning, *textures = asset.meta["warnings"]
+    warning, *textures = asset.warnings
     assert all(t.startswith("texture images not found") for t in textures)
     assert re.fullmatch(r"line \d+ <\w+.*>: not drawn: .*", warning) and warning.endswith(problem), warning
 

@@ -71,7 +71,7 @@ def test_corpus_mesh_matches_the_file_arrays(characters, rel):
     ends = np.nonzero(index < 0)[0]
     sizes = np.diff(np.concatenate(([-1], ends)))
     meshes = asset.meshes
-    assert meshes and not asset.meta["warnings"] or all("texture" in w for w in asset.meta["warnings"])
+    assert meshes and not asset.warnings or all("texture" in w for w in asset.warnings)
     assert sum(m.num_triangles for m in meshes) == int(np.sum(sizes - 2))
     corners = np.where(index < 0, ~index, index)
     total = sum(m.num_vertices for m in meshes)
@@ -266,7 +266,7 @@ def test_synthetic_cube_matches_explicit_matrices(tmp_path, encode):
     else:  # embedded, base64 in an ASCII file
         video = [("Content", [base64.b64encode(_png(ORANGE)).decode()], [])]
     asset = infuse.load(_write(tmp_path, encode, cube_scene(video=video)))
-    assert asset.meta["warnings"] == []
+    assert asset.warnings == []
     red, textured = sorted(asset.meshes, key=lambda m: m.name)
     assert (red.name, textured.name) == ("Body/Red", "Body/Textured")
     assert (red.num_triangles, textured.num_triangles) == (9, 4)  # 4 quads + the triangle, 2 quads
@@ -362,20 +362,20 @@ def test_malformed_geometry_is_skipped_with_a_warning(tmp_path, encode, case):
     asset = infuse.load(_write(tmp_path, encode, scene_records))
     names = sorted(m.name for m in asset.meshes)
     assert names == ["Body/Red", "Body/Textured"]  # the good cube is still drawn
-    assert any(w.startswith("mesh 'Prop' is not drawn") for w in asset.meta["warnings"]), asset.meta["warnings"]
+    assert any(w.startswith("mesh 'Prop' is not drawn") for w in asset.warnings), asset.warnings
 
 
 def test_bad_normals_and_bad_clusters(tmp_path):
     geom = _replace_layer(_geometry(50, "Cube"), "LayerElementNormal", "NormalsIndex", np.array([0, 1], dtype=np.int32))
     asset = infuse.load(_write(tmp_path, fbx_bytes, cube_scene(geom)))
-    assert len(asset.meshes) == 2 and any("smooth normals computed" in w for w in asset.meta["warnings"])
+    assert len(asset.meshes) == 2 and any("smooth normals computed" in w for w in asset.warnings)
     records = cube_scene()
     objects = records[1][2]
     k = next(i for i, o in enumerate(objects) if o[0] == "Deformer" and o[1][0] == 62)
     objects[k] = ("Deformer", objects[k][1], [c for c in objects[k][2] if c[0] != "Weights"] +
                   [("Weights", [np.array([0.5], dtype=np.float64)], [])])
     asset = infuse.load(_write(tmp_path, fbx_bytes, records))
-    assert asset.meshes == () and any("Indexes and Weights" in w for w in asset.meta["warnings"])
+    assert asset.meshes == () and any("Indexes and Weights" in w for w in asset.warnings)
 
 
 def test_unskinned_mesh_follows_its_joint_and_one_outside_is_left_out(tmp_path):
@@ -394,11 +394,11 @@ def test_unskinned_mesh_follows_its_joint_and_one_outside_is_left_out(tmp_path):
     posed, _ = stick.skin(sk.rest_global_rotations, sk.rest_global_positions)
     assert np.allclose(posed[0], stick.positions, atol=1e-6)
     assert "Scenery" not in {m.name for m in asset.meshes}
-    assert any("'Scenery' is not drawn" in w and "outside the skeleton" in w for w in asset.meta["warnings"])
+    assert any("'Scenery' is not drawn" in w and "outside the skeleton" in w for w in asset.warnings)
 
 
 def test_undecodable_texture_falls_back_to_the_colour(tmp_path):
     asset = infuse.load(_write(tmp_path, fbx_bytes, cube_scene(video=[("Content", [base64.b64encode(b"not an image").decode()], [])])))
     textured = next(m for m in asset.meshes if m.name.endswith("Textured"))
     assert textured.colors is None and np.allclose(textured.base_color, [0.0, 0.0, 1.0, 1.0])
-    assert any("cannot be decoded" in w for w in asset.meta["warnings"]), asset.meta["warnings"]
+    assert any("cannot be decoded" in w for w in asset.warnings), asset.warnings

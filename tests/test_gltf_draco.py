@@ -169,7 +169,7 @@ def test_compressed_copy_really_is_draco(characters, name):
     assert {"POSITION", "NORMAL", "TEXCOORD_0", "JOINTS_0", "WEIGHTS_0"} <= used
     assert all("bufferView" not in doc["accessors"][p["attributes"]["POSITION"]] for p in prims)  # only Draco holds them
     assert DRACO in draco.meta["compression"]
-    assert not [w for w in draco.meta["warnings"] if "not drawn" in w]
+    assert not [w for w in draco.warnings if "not drawn" in w]
 
 
 @pytest.mark.parametrize("name", list(SOURCES))
@@ -413,6 +413,6 @@ def test_without_dracopy_the_surfaces_are_skipped_with_a_warning(sheet, tmp_path
     monkeypatch.setitem(sys.modules, "DracoPy", None)  # as if the package were not installed
     asset = infuse.load(_broken(sheet, tmp_path, lambda doc, body: None))
     assert asset.meshes == ()  # every primitive is compressed, the morph triangle too
-    (warning,) = [w for w in asset.meta["warnings"] if "not drawn" in w]
+    (warning,) = [w for w in asset.warnings if "not drawn" in w]
     assert "DracoPy" in warning and "2 more primitives" in warning
     assert asset.skeleton.num_joints == 5  # the skeleton and clips never need the mesh data

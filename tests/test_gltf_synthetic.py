@@ -36,7 +36,7 @@ def test_rest_pose_folds_the_armature(mini_glb):
     asset = infuse.load(mini_glb)
     sk = asset.skeleton
     assert sk.names == ("hips", "spine", "head", "arm.L", "arm.R")
-    assert asset.meta["folded_nodes"] == ["Armature"] and asset.meta["warnings"] == []
+    assert asset.meta["folded_nodes"] == ["Armature"] and asset.warnings == []
     pos = sk.rest_global_positions
     np.testing.assert_allclose(pos[sk.index["hips"]], [0, 1.0, 0], atol=1e-9)
     np.testing.assert_allclose(pos[sk.index["head"]], [0, 1.5, 0], atol=1e-9)
@@ -159,7 +159,7 @@ def test_non_uniform_scale_is_approximated_with_a_warning(tmp_path):
     b, n = mini_rig(animated=False)
     b.doc["nodes"][n["Armature"]]["scale"] = [0.01, 0.01, 0.02]
     asset = infuse.load(b.write_glb(tmp_path / "uneven.glb"))
-    assert any("non-uniform scale" in w and "Armature" in w for w in asset.meta["warnings"])
+    assert any("non-uniform scale" in w and "Armature" in w for w in asset.warnings)
     assert asset.skeleton.rest_translations[1, 2] == pytest.approx(20 * (0.04 / 3))
 
 

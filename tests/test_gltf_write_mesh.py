@@ -101,7 +101,7 @@ def test_written_meshes_pass_the_validator(written, key, suffix):
     issues = report["issues"]
     assert issues["numErrors"] == 0, validator.errors(report)
     assert issues["numWarnings"] == 0, [m for m in issues["messages"] if m["severity"] == 1]
-    assert back.meta["warnings"] == []
+    assert back.warnings == []
 
 
 @pytest.mark.parametrize("key,suffix", CASES)

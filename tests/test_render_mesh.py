@@ -97,7 +97,7 @@ def test_meshopt_compressed_surfaces_are_decoded():
     require_corpus()
     avatar = infuse.load(corpus_file(VROID))
     meshes = avatar.meshes
-    assert meshes and not [w for w in avatar.meta["warnings"] if "not drawn" in w]
+    assert meshes and not [w for w in avatar.warnings if "not drawn" in w]
     body = max(meshes, key=lambda m: m.num_triangles if m.name.startswith("Body") else 0)
     edges = np.sort(body.triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
     _, uses = np.unique(edges, axis=0, return_counts=True)

@@ -26,7 +26,9 @@ class Asset:
     - ``source_units`` / ``source_up_axis``: what the file used, e.g. ``"cm"`` and ``"Z"``;
       ``units_detected_by``: ``"file"`` (declared), ``"guess"`` or ``"override"``.
     - ``meta``: format-specific facts for people and the format's own writer (channel orders,
-      warnings...); no other plugin reads it.
+      clip timing...); no other plugin reads it.
+    - ``warnings``: what the reader left out or approximated, one sentence each (a mesh not drawn,
+      a texture not found); the mesh loader adds its own when :attr:`meshes` is first used.
     - ``payload``: format-specific data a writer needs to keep what the core does not model
       (mesh, skin, materials); opaque to the core.
     - ``mesh_loader``: a callable returning the file's :class:`~infuse.mesh.SkinnedMesh` surfaces,
@@ -52,13 +54,14 @@ class Asset:
     mesh_loader: Callable[[], Sequence[SkinnedMesh]] | None = field(default=None, repr=False, compare=False)
     humanoid: dict[str, str] = field(default_factory=dict)
     facing_turned: bool = False
+    warnings: list[str] = field(default_factory=list)
 
     @cached_property
     def meshes(self) -> tuple[SkinnedMesh, ...]:
         """The skinned surfaces bound to :attr:`skeleton` (core frame, bind pose; see :mod:`infuse.mesh`).
 
         Empty for a file without meshes, or whose meshes the reader cannot decode (it says why in
-        ``meta["warnings"]``).
+        :attr:`warnings`).
         """
         if self.mesh_loader is None:
             return ()

@@ -54,6 +54,7 @@ def asset_summary(asset) -> dict:
         "height_m": round(sk.height(), 6),
         "morph_targets": list(asset.morph_targets),
         "humanoid": dict(asset.humanoid),
+        "warnings": list(asset.warnings),
         "meta": fileio.json_ready(asset.meta),
     }
 

@@ -337,7 +337,7 @@ def drawable_meshes(asset, skeleton: Skeleton, style: str = "auto", path=None) -
                                                f"{skeleton.height():.3g} m skeleton; use --style stick or auto")
             return ()
     if not meshes and style == "mesh":
-        why = [w for w in asset.meta.get("warnings", []) if "not drawn" in w]
+        why = [w for w in asset.warnings if "not drawn" in w]
         detail = f" ({why[0]})" if why else ""
         raise UnusableInputError(path, f"has no skinned mesh to draw{detail}; use --style stick or auto")
     return meshes

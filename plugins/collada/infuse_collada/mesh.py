@@ -17,7 +17,7 @@ edges keep their normals; a primitive without normals gets smooth ones (area-wei
 the corners of a position). Colours: see :mod:`infuse_collada.material`.
 
 What cannot be drawn (a geometry without ``<mesh>``, a skin naming a missing geometry, a
-malformed array in one instance) is left out with a warning in ``meta["warnings"]``; only when
+malformed array in one instance) is left out with a warning in ``Asset.warnings``; only when
 malformed data leaves nothing to draw does :class:`~infuse.errors.InputError` name it.
 """
 from __future__ import annotations
@@ -38,7 +38,7 @@ class MeshLoader:
 
     ``nodes``/``elements``: the flattened visual scene; ``joints``: the node index of each skeleton
     joint; ``world`` (N, 4, 4): every node's rest world matrix in file units; ``change`` (4, 4):
-    file to core frame; ``warnings``: the asset's ``meta["warnings"]``, appended to.
+    file to core frame; ``warnings``: the asset's ``warnings``, appended to.
     """
 
     def __init__(self, doc: Document, nodes: list[SceneNode], elements: list, joints: list[int],

@@ -6,7 +6,7 @@ defaults: metre, Y up) unless ``units=`` / ``up_axis=`` override them. Animation
 Motion per ``<animation_clip>``, or one for the whole timeline, sampled on the frame grid the key
 times lie on (30 fps when they fit none). The skinned meshes (``Asset.meshes``) are decoded on
 first use, in the skeleton's frame (:mod:`infuse_collada.mesh`); what cannot be drawn is said in
-``meta["warnings"]``.
+``Asset.warnings``.
 """
 from __future__ import annotations
 
@@ -78,11 +78,10 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
         meta["animation"] = {"fps": fps, "channels": len(chs), "skipped_channels": skipped,
                              "clip_start_s": {name: start for name, start, _, _ in clips}}
     warnings: list[str] = []
-    meta["warnings"] = warnings
     has_mesh = any(child.tag in ("instance_controller", "instance_geometry") for el in elements for child in el)
     meshes = MeshLoader(doc, nodes, elements, joints, world, change, skeleton, warnings) if has_mesh else None
     return Asset(path, "collada", skeleton, motions, _morph_targets(doc), source_units=unit_name,
-                 source_up_axis=up, units_detected_by=detected_by, meta=meta, mesh_loader=meshes)
+                 source_up_axis=up, units_detected_by=detected_by, meta=meta, mesh_loader=meshes, warnings=warnings)
 
 
 def _units(doc: Document, override: str | None) -> tuple[float, str, str]:

@@ -18,7 +18,7 @@ drawn). Normals come from the first ``LayerElementNormal`` (smooth normals are c
 one); the material of each polygon from ``LayerElementMaterial``; colours from :mod:`.material`.
 Blend-shape channels (``BlendShape`` -> ``BlendShapeChannel`` -> ``Shape`` with ``Indexes`` and
 ``Vertices`` offsets; the full-weight shape of each channel) become morph targets named after
-their channel. A geometry that cannot be used is left out with a warning in ``meta["warnings"]``.
+their channel. A geometry that cannot be used is left out with a warning in ``Asset.warnings``.
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ class MeshLoader:
 
     ``models`` (parents first) with ``world`` (N, 4, 4) their rest global matrices in the file's
     frame; ``joints``: the model index of each skeleton joint; ``change``: the 4x4 file -> core
-    frame change; ``warnings``: the asset's ``meta["warnings"]``, which reasons to skip go to.
+    frame change; ``warnings``: the asset's ``warnings``, which reasons to skip go to.
     """
 
     def __init__(self, doc: Document, models: list[Model], world: np.ndarray, joints: list[int], change: np.ndarray,

@@ -6,7 +6,7 @@ folded into the roots. The rest pose is the models' static ``Lcl`` transforms. U
 ``UpAxis``/``UpAxisSign``; ``units=`` / ``up_axis=`` override them. Each animation stack becomes a
 Motion sampled at the file's frame rate (``TimeMode``) over the stack's local time span. Names of
 blend-shape channels become ``morph_targets``. ``meshes`` (decoded on first use): the skinned
-surfaces, see :mod:`infuse_fbx.mesh`; geometry left out is explained in ``meta["warnings"]``.
+surfaces, see :mod:`infuse_fbx.mesh`; geometry left out is explained in ``Asset.warnings``.
 """
 from __future__ import annotations
 
@@ -84,11 +84,12 @@ def _read(path: Path, units: str | None, up_axis: str | None) -> Asset:
         takes_meta.append({"name": take.name, "start_s": take.start, "layers": take.layers})
     meta = {"fbx_version": version, "unit_scale_factor_cm": number(doc, settings, "UnitScaleFactor", 1.0),
             "axes": _axis_meta(doc, settings), "takes": takes_meta,
-            "folded_models": [ms[i].obj.name for i in folded], "warnings": []}
+            "folded_models": [ms[i].obj.name for i in folded]}
+    warnings: list[str] = []
     has_mesh = any(o.kind == "Geometry" and o.subclass == "Mesh" for o in doc.objects.values())
-    meshes = MeshLoader(doc, ms, world, joints, change, skeleton, meta["warnings"]) if has_mesh else None
+    meshes = MeshLoader(doc, ms, world, joints, change, skeleton, warnings) if has_mesh else None
     return Asset(path, "fbx", skeleton, motions, _morph_targets(doc), source_units=unit_name, source_up_axis=up,
-                 units_detected_by=units_by, meta=meta, mesh_loader=meshes)
+                 units_detected_by=units_by, meta=meta, mesh_loader=meshes, warnings=warnings)
 
 
 def _channel(track, static: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ times ``COLOR_0``. Triangles whose three vertices fall under the alpha cutoff (`
 mostly transparent (``BLEND``) are dropped. Morph targets keep their position offsets; default mesh
 weights are not applied. Compressed mesh data is decoded: meshopt views (indices, octahedral normals)
 and Draco primitives (:mod:`infuse_gltf.draco`, which needs the ``DracoPy`` package: without it they are
-skipped with a warning in ``meta["warnings"]``); points and lines are not surfaces and are left out.
+skipped with a warning in ``Asset.warnings``); points and lines are not surfaces and are left out.
 """
 from __future__ import annotations
 

@@ -14,7 +14,7 @@ Rest pose and frames
     (an ``Armature`` with scale 0.01, a Z-up correction matrix...) are folded into each root's rest
     transform, and every node scale is folded into its descendants' translations, so the skeleton
     has no scale. A non-uniform scale is replaced by the mean of its axes, with a warning in
-    ``meta["warnings"]``. Overrides: ``units=`` (file units are then that unit, not metres),
+    ``Asset.warnings``. Overrides: ``units=`` (file units are then that unit, not metres),
     ``up_axis=`` (the file's up axis) and ``facing=`` (``"+Z"`` or ``"-Z"``, the file's front).
     VRM 0.x models face -Z (detected from the humanoid's left/right arms when present): they are
     turned 180° about +Y into the core frame, recorded as ``meta["facing"] = "-Z"`` and
@@ -35,7 +35,7 @@ Other facts
     ``humanoid``: for VRM files, {VRM humanoid bone name: joint name}.
     ``meta``: ``container``, ``generator``, ``extensions_used``, ``extensions_required``,
     ``compression``, ``skins``, ``folded_nodes``, ``bind_pose``, ``clips`` (per clip: animation index,
-    fps and how it was found, interpolations, ignored channels), ``warnings``, and for VRM files
+    fps and how it was found, interpolations, ignored channels), and for VRM files
     ``vrm_version`` and ``vrm_expressions``.
     ``payload``: a :class:`GltfPayload` with the whole parsed document, for the writer.
     ``meshes`` (decoded on first use): the skinned surfaces, see :mod:`infuse_gltf.mesh`.
@@ -160,9 +160,8 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
         "extensions_required": list(js.get("extensionsRequired") or []),
         "compression": compression_extensions(js),
         "skins": len(skins),
-        "warnings": [],
     }
-    warnings: list[str] = meta["warnings"]
+    warnings: list[str] = []
 
     skin_joints = []
     for s, skin in enumerate(skins):
@@ -253,7 +252,7 @@ def asset_from_document(doc: GltfDocument, units=None, up_axis=None, facing=None
     meshes = MeshLoader(doc, graph, world, joint_nodes, core_from_file, skeleton, warnings) if has_mesh else None
     return Asset(
         path=doc.path, format=fmt, skeleton=skeleton, motions=motions, morph_targets=morph_targets, humanoid=humanoid,
-        facing_turned=facing == "-Z",
+        facing_turned=facing == "-Z", warnings=warnings,
         source_units=units or "m", source_up_axis=up_axis or "Y",
         units_detected_by="override" if units else "file", meta=meta, payload=payload, mesh_loader=meshes,
     )
