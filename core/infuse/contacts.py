@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from collections.abc import Mapping as NameTable
 from typing import TYPE_CHECKING, Union
 
 import numpy as np
@@ -31,7 +32,7 @@ if TYPE_CHECKING:
     from .mapping import Mapping
 
 #: A canonical mapping: a :class:`~infuse.mapping.Mapping`, or canonical name -> joint name or index.
-MappingLike = Union["Mapping", dict[str, str], dict[str, int]]
+MappingLike = Union["Mapping", NameTable[str, str | int]]
 SIDES = (("left", "l_"), ("right", "r_"))
 #: Factor by which a planted point's height threshold widens before it lifts off (:func:`detect`). The
 #: speed threshold does not widen: feet held into their lift-off measured more skate once retargeted
@@ -80,7 +81,7 @@ def _descendants(skeleton: Skeleton, joint: int) -> list[int]:
 def joint_index(skeleton: Skeleton, mapping: MappingLike) -> dict[str, int]:
     """Canonical name -> joint index from a :class:`~infuse.mapping.Mapping` or a dict whose values
     are joint names or indices."""
-    items = mapping.items() if isinstance(mapping, dict) else mapping.mapped().items()
+    items = mapping.items() if isinstance(mapping, NameTable) else mapping.mapped().items()
     out: dict[str, int] = {}
     for k, v in items:
         if isinstance(v, (int, np.integer)):
