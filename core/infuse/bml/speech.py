@@ -6,6 +6,7 @@ uses :class:`EstimatedSpeechTimer`.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Protocol, Sequence, runtime_checkable
 
@@ -62,7 +63,11 @@ class EstimatedSpeechTimer:
 @dataclass(frozen=True)
 class EngineSpeechTimer:
     """Real timings from a TTS engine (``engine.synthesize(text) -> infuse.speech.Utterance``, marks written as
-    ``<mark name="..."/>``). Only timing is kept here; the realizer asks the engine again for the audio."""
+    ``<mark name="..."/>``). Only timing is kept here; the realizer asks the engine again for the audio.
+
+    A mark the engine does not report (espeak-ng drops one that stands between two sentences) is timed at
+    the start of the word after it, from the utterance's words when the engine timed every word of the
+    text, else in proportion to its place in the text."""
 
     engine: object
 
@@ -81,5 +86,25 @@ class EngineSpeechTimer:
             markup = text
         utterance = self.engine.synthesize(markup)
         details = {"phonemes": [list(p) for p in utterance.phonemes], "words": [list(w) for w in utterance.words]}
-        mark_times = {m: float(utterance.marks.get(m, 0.0)) for m, _ in marks}
-        return SpeechTiming(float(utterance.duration_s), mark_times, getattr(self.engine, "name", "tts"), details)
+        return SpeechTiming(float(utterance.duration_s), mark_times(text, marks, utterance),
+                            getattr(self.engine, "name", "tts"), details)
+
+
+_WORD = re.compile(r"[^\W_](?:[\w'’-]*[^\W_])?")
+
+
+def mark_times(text: str, marks, utterance) -> dict:
+    """Mark id -> seconds in ``utterance`` (an :class:`infuse.speech.Utterance` of ``text``) for each (mark id,
+    character offset in ``text``) of ``marks``: the engine's time, else the start of the word after the
+    mark (see :class:`EngineSpeechTimer`)."""
+    return {m: float(utterance.marks[m]) if m in utterance.marks else _word_time(text, offset, utterance)
+            for m, offset in marks}
+
+
+def _word_time(text: str, offset: int, utterance) -> float:
+    """Seconds at which the word at or after character ``offset`` of ``text`` starts in ``utterance``."""
+    starts = [m.start() for m in _WORD.finditer(text)]
+    index = sum(start < offset for start in starts)
+    if len(starts) == len(utterance.words) and starts:
+        return float(utterance.words[index][0]) if index < len(starts) else float(utterance.duration_s)
+    return float(utterance.duration_s) * min(offset / max(len(text), 1), 1.0)

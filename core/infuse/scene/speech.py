@@ -19,6 +19,7 @@ import numpy as np
 
 from ..atomic import atomic_path
 from ..bml import EstimatedSpeechTimer, SpeechTiming
+from ..bml.speech import mark_times
 from ..errors import InputError, MissingFeatureError, UsageError
 from ..speech import Utterance, tts_engine
 
@@ -97,8 +98,8 @@ class SpeechCache:
         utterance = self.utterances[index]
         details = {"phonemes": [list(p) for p in utterance.phonemes], "words": [list(w) for w in utterance.words],
                    "utterance": index}
-        mark_times = {m: float(utterance.marks.get(m, 0.0)) for m, _ in marks}
-        return SpeechTiming(float(utterance.duration_s), mark_times, getattr(utterance, "engine", "") or "tts", details)
+        return SpeechTiming(float(utterance.duration_s), mark_times(text, marks, utterance),
+                            getattr(utterance, "engine", "") or "tts", details)
 
     def release(self, indices) -> None:
         """Let the utterances at ``indices`` go (a scene that runs for hours): their entries become None and
