@@ -192,6 +192,23 @@ def test_speak_joint_face_clip(tmp_path, utterance, brad):
     assert json.loads((tmp_path / "brad.timeline.json").read_text())["joints"]
 
 
+
+def test_speak_face_only_joint_clip_animates_the_face_joints_alone(tmp_path, utterance, brad):
+    """The speech clip's animated joints are the face joints: the glb has channels on those nodes only,
+    and every other joint reads back at rest."""
+    from infuse_gltf.container import parse_file
+
+    out = tmp_path / "face.glb"
+    assert main(["speak", str(corpus_file(BRAD)), "Open wide, papa.", "-o", str(out), "--face-only"]) == 0
+    face_joints = set(json.loads((tmp_path / "face.timeline.json").read_text())["joints"])
+    doc = parse_file(out).json
+    moved = {doc["nodes"][c["target"]["node"]]["name"] for c in doc["animations"][0]["channels"]}
+    assert face_joints and moved == face_joints
+    clip = infuse.load(out).motions["speech"]
+    others = [j for j, n in enumerate(clip.skeleton.names) if n not in face_joints]
+    rest = clip.skeleton.rest_rotations[others]
+    assert np.degrees(quat.angle_between(clip.local_rotations[:, others], rest)).max() < 1e-3
+
 def test_speak_errors(tmp_path, utterance, capsys, monkeypatch):
     rpm_path = str(corpus_file(RPM))
     assert main(["speak", rpm_path, "", "-o", str(tmp_path / "a.glb")]) == 2
