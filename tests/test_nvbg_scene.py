@@ -15,8 +15,8 @@ from espeak_support import require_espeak
 from runtime_characters import body_axes, corpus_character
 
 FPS = 30.0
-TEXT = ("Well, the thing about this old machine is that nobody really remembers how it was built, "
-        "so we have to take it apart, piece by piece, and draw every part before we start.")
+TEXT = ("Well, the thing about this old machine is that nobody really remembers how it was built. "
+        "So we have to take it apart, piece by piece, and draw every part before we start.")
 BML = ('<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" xmlns:infuse="urn:infuse:bml" id="talk" '
        'infuse:nonverbal="true" infuse:seed="{seed}"><speech id="s1"><text>' + TEXT + '</text></speech></bml>')
 LOOK = '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="{id}"><gazeShift id="g" target="{target}" influence="HEAD"/></bml>'
@@ -61,6 +61,14 @@ def test_every_generated_behaviour_plays(conversation):
         made = generated(conversation, name)
         assert made and all((a.block, a.behaviour) in conversation.activities for a in made), name
     assert not [e for e in conversation.feedback.log if e.kind == "warningFeedback" and e.id.startswith("talk")]
+
+
+def test_every_word_mark_is_timed_in_the_order_of_its_words(conversation):
+    speech = next(a for a in conversation.scheduler.activations("ann") if a.controller == "speech")
+    block = conversation.scheduler.blocks["talk"].block
+    offsets = dict(next(b for b in block.behaviours if b.id == "s1").marks)
+    times = [speech.parameters["marks_s"][m] for m in sorted(offsets, key=lambda m: (offsets[m], m.startswith("nvw")))]
+    assert len(times) >= 6 and all(b > a for a, b in zip(times, times[1:])), times
 
 
 def test_hand_gestures_are_on_the_arms_at_their_words(conversation):
