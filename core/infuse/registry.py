@@ -234,7 +234,8 @@ class PluginSet:
             self.load_kind(kind)
         caller = getattr(self.manager.hook, kind_of(kind).hook)
         config = current_config(frozenset(KINDS))
-        key = (id(config), *(id(impl.plugin) for impl in caller.get_hookimpls()))
+        prefer = config.prefer.get(kind, {})
+        key = (config.path, tuple(sorted(prefer.items())), *(id(impl.plugin) for impl in caller.get_hookimpls()))
         cached = self._tables.get(kind)
         if cached is not None and cached[0] == key:
             return cached[1]
@@ -242,7 +243,6 @@ class PluginSet:
         for plugin_name, items in self.offers(kind):
             for item in items:
                 offered.setdefault(item.name, []).append((plugin_name, item))
-        prefer = config.prefer.get(kind, {})
         table = {}
         for name, candidates in offered.items():
             table[name] = self._winner(kind, name, candidates, prefer.get(name))
