@@ -28,7 +28,7 @@ TOML::
     bml = '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b1"><head id="h1" lexeme="NOD"/></bml>'
     # or: file = "blocks/nod.xml"
 
-XML: ``<scene fps="30" duration="12">`` holding ``<tts engine=... voice=... rate=.../>``,
+XML: ``<scene fps="30" duration="12" generators="nonverbal">`` holding ``<tts engine=... voice=... rate=.../>``,
 ``<character name file position="0 0 0" facing packs="a,b" map voice/>``, ``<object name position size/>``
 and ``<block at character file=...>`` elements, the BML inline as the block's child element
 (``<bml>`` or SmartBody's ``<act>``).
