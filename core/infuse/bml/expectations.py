@@ -74,13 +74,15 @@ def _term(text: str) -> Term | None:
 
 def _relations(line: str):
     """The (left, op, right) triples of one line, or None when it is not a timing statement."""
-    relations, first = [], None
+    relations: list[tuple[Term, str, Term]] = []
+    first: Term | None = None
     for part in line.rstrip(";").split(","):
         pieces = re.split(r"\s*([=<>])\s*", part.strip())
         if pieces and pieces[0] == "" and first is not None:
             pieces[0] = "@first"
-        terms = [first if p == "@first" else _term(p) for p in pieces[0::2]]
-        if len(pieces) < 3 or any(t is None for t in terms):
+        found = [first if p == "@first" else _term(p) for p in pieces[0::2]]
+        terms = [t for t in found if t is not None]
+        if len(pieces) < 3 or len(terms) < len(found):
             return None
         first = first or terms[0]
         relations.extend((a, op, b) for a, op, b in zip(terms, pieces[1::2], terms[1:]))
@@ -114,9 +116,9 @@ def expectations_from_comments(comments) -> list[Expectation]:
                     found.append(Expectation(line, "timing", relations))
         if found:
             # A behaviour the comment says must be dropped: its timing lines restate the request, not the result.
-            dropped = {e.subject for e in found if e.kind == "dropped"}
+            dropped_ids = {e.subject for e in found if e.kind == "dropped"}
             return [e for e in found if e.kind != "timing" or not any(
-                t.behaviour in dropped for rel in e.relations for t in (rel[0], rel[2]))]
+                t.behaviour in dropped_ids for rel in e.relations for t in (rel[0], rel[2]))]
     return []
 
 
@@ -183,7 +185,7 @@ def _check_timing(e: Expectation, block, schedule, times, ids, elements) -> Outc
         sync_times = times[name]
         aliases = schedule.activation(name).sync_aliases
         sync = term.sync if term.sync in sync_times else aliases.get(term.sync) or next(
-            (s for s in sync_times if _squash(s) == _squash(term.sync)), None)
+            (s for s in sync_times if _squash(s) == _squash(term.sync or "")), None)
         if sync is None:
             if term.sync in STANDARD_SYNC_POINTS or term.sync == "attackPeak":
                 raise LookupError(f"{name} has no sync point {term.sync!r}")
