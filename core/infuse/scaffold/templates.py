@@ -334,7 +334,7 @@ joints' aligned frames (:mod:`infuse.runtime.swing`) mean the same on every skel
 import numpy as np
 
 from infuse import hookimpl
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.plugin_types import ControllerFactory
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.swing import local_offsets, swing
@@ -366,7 +366,7 @@ class $ident(Controller):
         """Per character: the head joint and its aligned frame."""
         head = rig.joint("skullbase")
         if head is None:
-            raise MissingFeatureError(f"{rig.name}: no head ('skullbase') is mapped")
+            raise MissingJointsError(rig.name, "no head ('skullbase') is mapped")
         return {"joints": np.array([head]), "aligned": rig.aligned[[head]]}
 
     def evaluate_one(self, job, block) -> None:

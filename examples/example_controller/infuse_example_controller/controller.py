@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.swing import local_offsets, swing
 
@@ -67,7 +67,7 @@ class Shrug(Controller):
                 joints.append(shoulder)
                 rolls.append(-sign)
         if not joints:
-            raise MissingFeatureError(f"{rig.name}: no clavicle is mapped; it cannot shrug")
+            raise MissingJointsError(rig.name, "no clavicle is mapped; it cannot shrug")
         if len(joints) < 4:
             report("a clavicle or an upper arm is not mapped; the shrug is partial")
         return {"joints": np.array(joints), "aligned": rig.aligned[joints], "rolls": np.radians(LIFT_DEG) * np.array(rolls)}

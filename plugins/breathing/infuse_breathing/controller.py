@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.swing import SWING_AXES, local_axes, local_turns
 
@@ -61,7 +61,7 @@ class Breathing(Controller):
                 joints.append(rig.joint(name))
                 heading.append(0.0), pitch.append(degrees), roll.append(0.0)
         if not joints:
-            raise MissingFeatureError(f"{rig.name}: no spine joint is mapped to breathe with")
+            raise MissingJointsError(rig.name, "no spine joint is mapped to breathe with")
         neck = rig.joint("spine4") if rig.joint("spine4") is not None else rig.joint("skullbase")
         if neck is not None:  # keep the head level
             joints.append(neck)

@@ -17,7 +17,7 @@ from typing import Mapping
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
 from infuse.runtime.pose import ancestors, chain_fk
 from infuse.runtime.swing import swing
@@ -117,7 +117,7 @@ class Gaze(Controller):
             slots[7:9] = -1
         if not present[6] and not has_eyes:
             if not present[4] and not present[5]:
-                raise MissingFeatureError(f"{rig.name}: cannot gaze: neither eyes nor a head or neck joint is mapped")
+                raise MissingJointsError(rig.name, "cannot gaze: neither eyes nor a head or neck joint is mapped")
             report("no head joint is mapped; gaze points the neck")
         counts = np.array([sum(present[s] for s in range(len(SLOTS)) if SLOT_GROUPS[s] == g) for g in range(len(GROUPS))])
         counts[EYES] = 1 if has_eyes else 0
@@ -128,7 +128,7 @@ class Gaze(Controller):
             if self.moving == ("eyes",):
                 moving = [g for g in INFLUENCES["HEAD"] if g in available]
         if not moving:
-            raise MissingFeatureError(f"{rig.name}: none of the gaze groups {', '.join(self.moving)} is mapped")
+            raise MissingJointsError(rig.name, f"none of the gaze groups {', '.join(self.moving)} is mapped")
         priority = GROUP_NAMES.index(self.priority_group)
         ranks = [GROUP_NAMES.index(g) for g in moving]
         if priority not in ranks:  # the nearest moving group below it, else the lowest above it

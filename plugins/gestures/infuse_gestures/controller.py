@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, sample_motion
 
 from .timewarp import PHASES, phase_warp
@@ -104,7 +104,7 @@ class Gesture(Controller):
         joints = [j for j, name in enumerate(rig.skeleton.names) if j > 0 and canonical.get(name, "")[:2] in
                   {f"{s}_" for s in sides} and canonical[name].split("_", 1)[1] not in _LEGS]
         if not joints:
-            raise MissingFeatureError(f"{rig.name}: no arm joints are mapped for gesture {self.clip!r}")
+            raise MissingJointsError(rig.name, f"no arm joints are mapped for gesture {self.clip!r}")
         joints = np.array(joints, dtype=np.int64)
         ready, _, _, _ = sample_motion(clip.motion, np.array([self.authored["ready"]]), loop=False, joints=joints)
         return {"motion": clip.motion, "joints": joints, "ready": ready[0]}

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from infuse.errors import MissingFeatureError, UsageError
+from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, smoothstep
 from infuse.runtime.swing import SWING_AXES, local_axes, local_offsets, local_turns, swing
 
@@ -80,7 +80,7 @@ class HeadMovement(Controller):
     def bind(self, rig, report):
         joints = [rig.joint(n) for n in NECK_JOINTS if rig.joint(n) is not None]
         if not joints:
-            raise MissingFeatureError(f"{rig.name}: no neck or head joint is mapped for a head movement")
+            raise MissingJointsError(rig.name, "no neck or head joint is mapped for a head movement")
         axis = AXES[self.lexeme]
         if axis != "direction":  # one axis of each joint's aligned frame
             axis = SWING_AXES[("heading", "pitch", "roll").index(axis)]

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingFeatureError
+from infuse.errors import MissingJointsError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.swing import direction_angles, swing
 from infuse.runtime.targets import as_target
@@ -42,10 +42,10 @@ class HeadGaze(Controller):
         """The head joint, its parent, and both joints' aligned frames."""
         head = rig.joint("skullbase")
         if head is None:
-            raise MissingFeatureError(f"{rig.name}: no head (skullbase) is mapped; it cannot turn its head")
+            raise MissingJointsError(rig.name, "no head (skullbase) is mapped; it cannot turn its head")
         parent = int(rig.skeleton.parents[head])
         if parent < 0:
-            raise MissingFeatureError(f"{rig.name}: the head is the root joint; it cannot turn it")
+            raise MissingJointsError(rig.name, "the head is the root joint; it cannot turn it")
         return {"head": head, "parent": parent, "parent_aligned": rig.aligned[parent],
                 "head_aligned_inverse": quat.conjugate(rig.aligned[head])}
 
