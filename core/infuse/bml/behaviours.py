@@ -10,12 +10,15 @@ when it cannot.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from .. import registry
 from .names import normalize_name
 from .speech import EstimatedSpeechTimer, SpeechTimer
 from .sync import TimingModel
+
+if TYPE_CHECKING:
+    from ..plugin_types import BMLBehaviour
 
 
 class BehaviourError(ValueError):
@@ -70,7 +73,7 @@ class Handler:
     """One element's handler, resolved from the plugins."""
 
     element: str
-    behaviour: object  # the plugin's BMLBehaviour
+    behaviour: BMLBehaviour
 
     @property
     def attributes(self):
