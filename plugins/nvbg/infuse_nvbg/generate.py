@@ -61,7 +61,7 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
     ids = _Ids({b.id for b in block.behaviours})
     speaker_xml, listener_xml, speeches = [], [], {}
     listener_ids = _Ids(set())
-    said = list(context.said[len(context.said) - rules.remembered_utterances:] if rules.remembered_utterances else ())
+    said = list(context.said[-rules.remembered_utterances:] if rules.remembered_utterances else ())
     for speech in (b for b in block.behaviours if b.element == "speech" and b.text):
         words = words_of(speech.text, rules.words["function"], tuple(said))
         said.append(speech.text)
@@ -101,6 +101,8 @@ def _listener(context) -> tuple[str | None, list[str]]:
     """The character spoken to: the ``listener`` setting, else the nearest other character of the scene."""
     others = [c for c in context.characters if c != context.character]
     named = context.settings.get("listener")
+    if named is not None and named.lower() == (context.character or "").lower():
+        return None, [f"infuse:listener={named!r} is the speaker; no listener behaviour"]
     if named is not None:
         if context.characters and named not in context.characters:
             match = next((c for c in context.characters if c.lower() == named.lower()), None)
