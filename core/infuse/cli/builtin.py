@@ -76,7 +76,9 @@ def _info(args) -> int:
     print(f"{summary['file']}: {summary['format']}, {len(summary['joints'])} joints, "
           f"height {summary['height_m']:.3f} m, units {summary['units']} ({summary['units_detected_by']}), up {summary['up_axis']}")
     for c in summary["clips"]:
-        print(f"  clip {c['name']!r}: {c['frames']} frames at {c['fps']:g} fps ({c['duration_s']:.2f} s)")
+        tracks = "" if c["animated_joints"] == len(summary["joints"]) else f", {c['animated_joints']} joints animated"
+        tracks += f", {len(c['morph_targets'])} morph weights" if c["morph_targets"] else ""
+        print(f"  clip {c['name']!r}: {c['frames']} frames at {c['fps']:g} fps ({c['duration_s']:.2f} s){tracks}")
     if summary["morph_targets"]:
         print(f"  {len(summary['morph_targets'])} morph targets: {', '.join(summary['morph_targets'][:12])}"
               + (" ..." if len(summary["morph_targets"]) > 12 else ""))
@@ -115,6 +117,11 @@ def _plugins(args) -> int:
         print("  ".join(c.ljust(w) for c, w in zip(r, widths)) + "  " + r[4])
     defaults = [(kind, *registry.default_name(kind)) for kind in registry.KINDS]
     print("defaults: " + ", ".join(f"{kind} {name} ({source})" for kind, name, source in defaults if name))
+    kinds = sorted({k for d in registry.table("controller").values() for k in d.behaviour_kinds})
+    chosen = [(kind, registry.realizer(kind)) for kind in kinds]
+    replaced = [f"{kind} by {d.name}" for kind, d in chosen if d is not None and d.name != kind]
+    if replaced:
+        print("BML behaviours realized by another controller: " + ", ".join(replaced))
     return 0
 
 
