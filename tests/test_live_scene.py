@@ -157,3 +157,47 @@ def test_a_character_joins_the_running_scene():
         poses = evaluated(live, "carl")
         turns = [quat.angle_between(poses[i][0][head], poses[start][0][head]) for i in range(start, start + 30)]
         assert max(turns) > np.radians(3)  # it nods
+
+
+def test_point_grab_and_release_as_live_calls():
+    """``call`` messages name point, grab and release (checked by the protocol, run by the live scene): Bob
+    points with the hand asked for, takes the cup, carries it and lets it go where his hand leaves it."""
+    import asyncio
+    import json
+
+    from infuse_live.hub import Hub
+
+    scene = _scene(idle=False)
+    scene.add_object("cup", (-0.2, 1.3, 0.3), size=0.08)  # before Bob (at the origin, facing Ann: +z)
+    with LiveScene(scene) as live:
+        frames = Frames(live)
+
+        async def calls():
+            hub = Hub(live, asyncio.get_running_loop())
+            try:
+                replies, hands = {}, None
+                for method, args in (("point", {"target": [0.0, 1.0, 2.0], "hand": "left"}),
+                                     ("grab", {"obj": "cup", "hand": "right"}), ("release", {"obj": "cup"})):
+                    message = {"type": "call", "method": method, "character": "bob", "args": args}
+                    (replies[method],) = await hub.handle(None, json.dumps(message))
+                    await asyncio.sleep(1.0)
+                    if method == "point":  # while it points (ended activities are forgotten later)
+                        hands = live.call(lambda: [a.state["hands"] for (b, _), a in scene.activities.items()
+                                                   if b == replies["point"]["blocks"][0]])
+                    await asyncio.sleep(1.5)
+                (wrong,) = await hub.handle(None, json.dumps({"type": "call", "method": "grab", "character": "bob",
+                                                              "args": {"object": "cup"}}))
+                return replies, hands, wrong
+            finally:
+                hub.close()
+        replies, hands, wrong = asyncio.run(calls())
+        assert all(r["type"] == "accepted" for r in replies.values()), replies
+        assert wrong["type"] == "error" and "args.object" in wrong["message"] and "grab takes hand, obj" in wrong["message"]
+        released = replies["release"]["frame"]
+        frames.wait(released + 30)
+        live.stop()
+        assert hands == [("left",)]
+        cup = scene.object_track("cup")
+        grabbed = replies["grab"]["frame"]
+        assert np.linalg.norm(cup[released - 1] - cup[grabbed]) > 0.1  # carried
+        assert np.allclose(cup[released:released + 30], cup[released])  # left where the hand let it go

@@ -415,7 +415,7 @@ class LiveScene:
 
     # -- the builder, live ----------------------------------------------------------------------------
     #: Scene builder methods a live scene offers, each starting on the next frame.
-    BUILDER = ("say", "gaze", "head", "nod", "shake", "expression", "walk_to", "reach")
+    BUILDER = ("say", "gaze", "head", "nod", "shake", "expression", "walk_to", "reach", "point", "grab", "release")
 
     def prepare_call(self, method: str, character: str, arguments: dict) -> None:
         """Check a builder call and synthesize its speech ahead (``say``), on the caller's thread."""
@@ -475,6 +475,18 @@ class LiveScene:
     def reach(self, character: str, target, action: str = "touch", hand: str | None = None) -> str:
         """Reach for an object from the next frame."""
         return self._build("reach", character, target=target, action=action, hand=hand)
+
+    def point(self, character: str, target, hand: str | None = None) -> str:
+        """Point at ``target`` (a name or a point) with ``hand`` (left, right, both) from the next frame."""
+        return self._build("point", character, target=target, hand=hand)
+
+    def grab(self, character: str, obj: str, hand: str | None = None) -> str:
+        """Take object ``obj`` in a hand (left or right) and hold it, from the next frame."""
+        return self._build("grab", character, obj=obj, hand=hand)
+
+    def release(self, character: str, obj: str | None = None) -> str:
+        """Let go of what the character holds (``obj``: only that object) from the next frame."""
+        return self._build("release", character, obj=obj)
 
     # -- the cast, live -------------------------------------------------------------------------------
     def add_character(self, source, name: str | None = None, *, position=(0.0, 0.0, 0.0), facing=None,

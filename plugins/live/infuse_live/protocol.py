@@ -5,7 +5,8 @@ Client to server (one JSON object per WebSocket text message, or an HTTP POST bo
 - ``{"type": "bml", "bml": "<bml ...>", "character": "ann", "request": 7}``: BML blocks from the next
   frame on (``character`` optional when each block names its ``characterId``);
 - ``{"type": "call", "method": "say", "character": "ann", "args": {"text": "Hi"}}``: the scene builder
-  (:data:`METHODS`: ``say``, ``gaze``, ``head``, ``nod``, ``shake``, ``expression``, ``walk_to``, ``reach``);
+  (:data:`METHODS`: ``say``, ``gaze``, ``head``, ``nod``, ``shake``, ``expression``, ``walk_to``, ``reach``,
+  ``point``, ``grab``, ``release``);
 - ``{"type": "target", "name": "ball", "position": [x, y, z]}``: a named target (added when new) stands
   there from the next frame on;
 - ``{"type": "subscribe", "frames": true, "feedback": "all", "format": "binary"}``: receive the pose
@@ -41,6 +42,9 @@ METHODS = {
     "expression": {"lexeme", "amount", "duration"},
     "walk_to": {"target", "manner", "speed"},
     "reach": {"target", "action", "hand"},
+    "point": {"target", "hand"},
+    "grab": {"obj", "hand"},
+    "release": {"obj"},
 }
 TYPES = ("bml", "call", "target", "subscribe", "status", "add")
 FORMATS = ("json", "binary")
