@@ -10,7 +10,10 @@ from infuse import quaternions as quat
 from infuse.bml import Scheduler
 from infuse.kinematics import forward_kinematics
 from infuse.scene import Scene
+from infuse.scene.command import build_scene
+from infuse.scene.scenefile import read_scene_file
 
+from corpus_data import REPO, require_corpus
 from espeak_support import require_espeak
 from runtime_characters import body_axes, corpus_character
 
@@ -128,3 +131,33 @@ def test_the_listener_nods_on_the_phrase_ends(conversation):
         window = tilt[frame(a.start):frame(a.end) + 1]
         swing = np.degrees(np.arccos(np.clip(window @ window[0], -1.0, 1.0))).max()
         assert swing > 3.0, (a.sync_times, swing)
+
+
+def test_the_conversation_example_points_at_the_lamp_and_bob_listens_with_his_arms_crossed(monkeypatch):
+    """``examples/scenes/conversation.toml`` (the demo's): Ann's index ray passes within 5 cm of the lamp at
+    her pointing's stroke; Bob's right wrist is by his left elbow while he listens, away once he answers."""
+    require_espeak()
+    monkeypatch.setenv("INFUSE_CORPUS", str(require_corpus()))
+    spec = read_scene_file(REPO / "examples" / "scenes" / "conversation.toml")
+    scene = build_scene(spec)
+    scene.run()
+    made = [a for a in scene.scheduler.activations() if a.behaviour.startswith("nv")]
+    assert made and all((a.block, a.behaviour) in scene.activities for a in made)
+    (pointing,) = [a for a in made if a.element == "pointing" and a.parameters["target"] == "lamp"]
+    ann, rig = scene.motion("ann"), scene.runtime.rig("ann")
+    _, pos = forward_kinematics(ann.skeleton, ann.local_rotations, ann.root_translations, ann.joint_translations)
+    at = frame(pointing.time("stroke"))
+    lamp = np.asarray(scene.objects["lamp"].position)
+    misses = []
+    for side in ("l", "r"):
+        wrist, tip = pos[at, rig.joint(f"{side}_wrist")], pos[at, rig.joint(f"{side}_index3")]
+        ray = (tip - wrist) / np.linalg.norm(tip - wrist)
+        misses.append(np.linalg.norm((lamp - wrist) - ray * max(np.dot(lamp - wrist, ray), 0.0)))
+    assert min(misses) < 0.05, misses
+    bob, rig = scene.motion("bob"), scene.runtime.rig("bob")
+    _, pos = forward_kinematics(bob.skeleton, bob.local_rotations, bob.root_translations, bob.joint_translations)
+    gap = np.linalg.norm(pos[:, rig.joint("r_wrist")] - pos[:, rig.joint("l_elbow")], axis=1)
+    answer = scene.scheduler.blocks["bob_answer"]
+    speech = answer.activation("s1")
+    assert gap[frame(2.0):frame(answer.start_s)].max() < 0.15
+    assert gap[frame(speech.end):].min() > 0.3, gap[frame(speech.end):].min()
