@@ -117,6 +117,11 @@ def _plugins(args) -> int:
         print("  ".join(c.ljust(w) for c, w in zip(r, widths)) + "  " + r[4])
     defaults = [(kind, *registry.default_name(kind)) for kind in registry.KINDS]
     print("defaults: " + ", ".join(f"{kind} {name} ({source})" for kind, name, source in defaults if name))
+    kinds = sorted({k for d in registry.table("controller").values() for k in d.behaviour_kinds})
+    chosen = [(kind, registry.realizer(kind)) for kind in kinds]
+    replaced = [f"{kind} by {d.name}" for kind, d in chosen if d is not None and d.name != kind]
+    if replaced:
+        print("BML behaviours realized by another controller: " + ", ".join(replaced))
     return 0
 
 
