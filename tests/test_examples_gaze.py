@@ -62,16 +62,21 @@ def site(tmp_path_factory) -> Path:
     return tmp / "site"
 
 
-def _scene(site: Path | None, home: Path, **env_vars: str) -> dict:
+def _child(site: Path | None, home: Path, code: str, *args: str, **env_vars: str) -> subprocess.CompletedProcess:
+    """Run ``code`` in a child Python with ``site`` on its path and its own cache and configuration."""
     env = dict(os.environ, XDG_CACHE_HOME=str(home / "cache"), INFUSE_CONFIG=str(home / "absent.toml"), **env_vars)
     if "INFUSE_DEFAULT_CONTROLLER_GAZE" not in env_vars:
         env.pop("INFUSE_DEFAULT_CONTROLLER_GAZE", None)
     env.pop("PYTHONPATH", None)
     if site is not None:
         env["PYTHONPATH"] = str(site)
-    proc = subprocess.run([sys.executable, "-c", SCENE, str(corpus_file(XBOT))], capture_output=True, text=True,
-                          env=env, timeout=300)
+    proc = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, env=env, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+    return proc
+
+
+def _scene(site: Path | None, home: Path, **env_vars: str) -> dict:
+    proc = _child(site, home, SCENE, str(corpus_file(XBOT)), **env_vars)
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
@@ -88,3 +93,12 @@ def test_without_it_or_when_chosen_away_the_built_in_gaze_plays(site, tmp_path):
     for result in (alone, chosen):
         assert result["kind"] == "gaze" and result["module"].startswith("infuse_gaze")
     assert abs(chosen["head_off_target_deg"] - alone["head_off_target_deg"]) < 1e-9  # the very same frames
+
+
+def test_infuse_plugins_lists_it_and_what_it_replaces(site, tmp_path):
+    out = _child(site, tmp_path, "from infuse.cli import main; raise SystemExit(main(['plugins']))").stdout
+    rows = [line.split() for line in out.splitlines()]
+    assert ["head-gaze", "controller", "infuse-anim-example-gaze", "0.1.0", "ok"] in rows
+    assert "BML behaviours realized by another controller: gaze by head-gaze" in out
+    alone = _child(None, tmp_path, "from infuse.cli import main; raise SystemExit(main(['plugins']))").stdout
+    assert "realized by another controller" not in alone
