@@ -415,9 +415,17 @@ def removed(skeleton: Skeleton, poses, label: dict, kind: str) -> Variant:
         for k, j in m.items():
             if k[:2] in ("l_", "r_") and _part(k) in LIMB_PARTS[kind] and j in idx:
                 drop.update(_subtree(skeleton, idx[j]))
-    elif kind == "clavicles":
-        drop.update(idx[m[k]] for k in ("l_acromioclavicular", "r_acromioclavicular", "l_sternoclavicular",
-                                        "r_sternoclavicular") if m.get(k) in idx)
+    elif kind == "clavicles":  # every joint between the torso and each upper arm (both ends of a clavicle)
+        trunk = {idx[m[k]] for k in ("base", "spine1", "spine2", "spine3", "spine4", "spine5") if m.get(k) in idx}
+        for side in "lr":
+            if m.get(f"{side}_shoulder") in idx:
+                j = int(skeleton.parents[idx[m[f"{side}_shoulder"]]])
+                while j >= 0 and j not in trunk:
+                    drop.add(j)
+                    j = int(skeleton.parents[j])
+                if j < 0:  # no torso joint above the arm: keep the tree as it was
+                    drop.clear()
+                    break
     else:  # every joint between the chest and the head
         head, chest = idx.get(m.get("skullbase")), idx.get(m.get("spine3") or m.get("base"))
         path, j = [], int(skeleton.parents[head]) if head is not None else -1

@@ -74,8 +74,9 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
     """Finger name -> chain joints (finger segments 1..4), and a note. Empty when unidentifiable."""
     starts = _finger_roots(view, roots, wrist_pos)
     chains = {r: _trim(view, view.main_chain(r, 6)) for r in starts}
-    chains = {r: c for r, c in chains.items() if c and not (len(c) == 1 and view.info[c[0]].flagged("end"))}
-    if sum(len(c) >= 2 for c in chains.values()) >= 4:  # a full hand: a lone joint beside it is a prop or helper
+    chains = {r: c for r, c in chains.items() if c and not (len(c) == 1 and view.info[c[0]].flagged("end"))
+              and not all(view.info[j].flagged("helper") for j in c)}  # a lone helper is no digit
+    if sum(len(c) >= 2 for c in chains.values()) >= 2:  # jointed digits: a lone joint beside them is a prop or helper
         chains = {r: c for r, c in chains.items() if len(c) >= 2}
     if len(chains) < 3:
         return _few_digits(view, chains, wrist_pos)

@@ -197,6 +197,7 @@ SLOT_ROLES: dict[str, frozenset[str]] = {
     "toe": frozenset({"toe", "toe_end"}),
     **{f: frozenset({f, "finger"}) for f in ("thumb", "index", "middle", "ring", "pinky")},
 }
+SETTLED = 0.85  # an entry the tree's structure settles: a chain too short for a segment, a leaf foot, one neck joint
 NAME_SILENT_CAP = 0.75   # confidence at most, when the joint's name names no body part
 NAME_CONTRARY_CAP = 0.6  # ... when it names another one: an entry to check
 
@@ -499,19 +500,19 @@ def _put_torso(result: _Result, torso: list[int], chest_why: str) -> None:
     if len(torso) >= 3:
         result.put("spine2", torso[1], 0.85, "second torso joint from the pelvis")
     else:
-        result.put("spine2", None, 0.7, f"{len(torso)} torso joint(s): no middle one")
+        result.put("spine2", None, SETTLED, f"{len(torso)} torso joint(s): no middle one")
 
 
 def _put_neck(result: _Result, neck: list[int]) -> None:
     if not neck:
-        result.put("spine4", None, 0.6, "no neck joint between the chest and the head")
-        result.put("spine5", None, 0.6, "no neck joint")
+        result.put("spine4", None, 0.75, "no neck joint between the chest and the head")
+        result.put("spine5", None, SETTLED, "no neck joint")
         return
     result.put("spine4", neck[0], 0.85, "lowest neck joint")
     if len(neck) >= 2:
         result.put("spine5", neck[-1], 0.8, "neck joint just below the head")
     else:
-        result.put("spine5", None, 0.7, "a single neck joint is spine4")
+        result.put("spine5", None, SETTLED, "a single neck joint is spine4")
 
 
 def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
@@ -667,20 +668,20 @@ def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> N
             forefoot = max(toes, key=lambda c: (round(view.limb_length(ankle, c) / step), view.info[c].has("toe"),
                                                 not view.info[c].roles & {"pinky", "ring", "middle", "index"}))
     if forefoot >= 0 and view.info[forefoot].flagged("end") and not view.children[forefoot]:
-        result.put(f"{s}_forefoot", None, 0.6, "the only joint past the ankle is the toe tip")
-        result.put(f"{s}_toe", forefoot, 0.6, "toe end: the tip of the foot")
+        result.put(f"{s}_forefoot", None, SETTLED, "the only joint past the ankle is the toe tip")
+        result.put(f"{s}_toe", forefoot, SETTLED, "toe end: the tip of the foot")
         return
     if forefoot >= 0:
         result.put(f"{s}_forefoot", forefoot, 0.8, "ball of the foot: the joint after the ankle")
         nxt = [c for c in view.children[forefoot] if not view.info[c].flagged("control", "prop")]
         if nxt:
             toe = max(nxt, key=lambda c: view.limb_length(forefoot, c))
-            result.put(f"{s}_toe", toe, 0.6, "toe end: the joint after the ball of the foot")
+            result.put(f"{s}_toe", toe, 0.8, "toe end: the joint after the ball of the foot")
         else:
-            result.put(f"{s}_toe", None, 0.7, "the ball of the foot is a leaf")
+            result.put(f"{s}_toe", None, SETTLED, "the ball of the foot is a leaf")
     else:
-        result.put(f"{s}_forefoot", None, 0.7, "the foot joint is a leaf")
-        result.put(f"{s}_toe", None, 0.7, "the foot joint is a leaf")
+        result.put(f"{s}_forefoot", None, SETTLED, "the foot joint is a leaf")
+        result.put(f"{s}_toe", None, SETTLED, "the foot joint is a leaf")
 
 
 def _big_toe(view, toes, base, up) -> int:
@@ -706,7 +707,7 @@ def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
             result.put(f"{s}_sternoclavicular", r.chain[i - 1], 0.6,
                        "sternal end of the clavicle: the joint before the acromioclavicular one")
     else:
-        result.put(f"{s}_acromioclavicular", None, _conf_from_margin(m.get("clavicle", 0)),
+        result.put(f"{s}_acromioclavicular", None, min(NAME_SILENT_CAP, _conf_from_margin(m.get("clavicle", 0))),
                    "no clavicle: the arm starts at the shoulder")
     result.put(f"{s}_shoulder", r.slots["shoulder"], min(side_conf, _conf_from_margin(m.get("shoulder", 0))),
                f"upper arm; {side_why}")
@@ -735,19 +736,26 @@ def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
     else:
         result.put(f"{s}_forearm", None, 0.75, "no twist joint between elbow and hand")
     if wrist_pos is None or not hand_roots:
+        for finger in ("thumb", "index", "middle", "ring", "pinky"):
+            for k in range(4):
+                result.put(f"{s}_{finger}{k + 1}", None, SETTLED, "no hand joint with digits: no fingers")
         return
     fingers, why = assign_fingers(view, hand_roots, wrist_pos)
     order = {"index": "next to the thumb", "middle": "second from the thumb", "ring": "third from the thumb",
              "pinky": "fourth from the thumb"}
+    # a thumb told by its name or number orders the fingers surely; one told by its angle alone may not be
+    sure = 0.9 if why.startswith(("named", "lowest-numbered", "fingers named", "a thumb and")) else 0.7
+    unmapped = (SETTLED if fingers or why.startswith("a thumb and a single finger")
+                else 0.4 if why.startswith("no thumb can be told") else 0.6)
     for finger in ("thumb", "index", "middle", "ring", "pinky"):
         chain = fingers.get(finger, [])
         for k in range(4):
             name = f"{s}_{finger}{k + 1}"
             if k < len(chain):
                 where = why if finger == "thumb" else f"the finger {order[finger]} across the palm"
-                result.put(name, chain[k], 0.75, f"{finger} segment {k + 1}: {where}")
+                result.put(name, chain[k], sure, f"{finger} segment {k + 1}: {where}")
             else:
-                result.put(name, None, 0.6, why if not fingers else f"the {finger} has {len(chain)} joint(s)")
+                result.put(name, None, unmapped, why if not fingers else f"the {finger} has {len(chain)} joint(s)")
 
 
 def _coincident_siblings(view: SkeletonView, j: int) -> list[int]:

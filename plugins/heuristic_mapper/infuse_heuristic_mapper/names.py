@@ -240,10 +240,13 @@ def _split_glued(token: str) -> tuple[str, ...]:
 @lru_cache(maxsize=8192)
 def analyse(name: str, prefix: str = "") -> NameInfo:
     """The :class:`NameInfo` of one joint name, with ``prefix`` (shared by the skeleton's names) removed."""
-    helper = name.startswith("_")  # "__LeftShoulder": an internal helper joint
-    text = strip_namespace(name).lstrip("_")
+    text = strip_namespace(name)
+    helper = text.startswith("_")  # "__LeftShoulder": an internal helper joint
+    text = text.lstrip("_")
     if prefix and text.startswith(prefix) and len(text) > len(prefix):
         text = text[len(prefix):]
+        helper = helper or text.startswith("_")  # "rig___LeftShoulder" behind a shared prefix
+        text = text.lstrip("_") or text
     low = text.lower()
     for rig in RIG_PREFIXES:
         if low.startswith(rig) and len(low) > len(rig):
