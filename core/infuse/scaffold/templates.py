@@ -501,6 +501,91 @@ def test_realized_the_head_moves_between_start_and_end():
     assert angle[: int(TIMING["end"] * FPS)].max() > 5.0 and angle[int((TIMING["end"] + 0.2) * FPS):].max() < 1e-3
 ''')
 
+GENERATOR = Template('''"""The $name BML generator: ``infuse:$name="true"`` on a ``<bml>`` block (namespace
+``urn:infuse:bml``) adds a nod at the end of each of its speeches, before the block is scheduled.
+
+Replace :func:`generate` with your generator: it gets the parsed block and an
+:class:`infuse.bml.GeneratorContext` (the character, the scene's characters and objects, a seed, what
+was said before, the ``infuse:`` settings it declares) and returns an :class:`infuse.bml.Generation`:
+the block with what it added, blocks for other characters, and the added BML as text (reported as
+``generatedBml`` feedback). :class:`infuse.bml.GenerationError` leaves the block as it was, with a warning.
+"""
+import math
+from dataclasses import replace
+from xml.sax.saxutils import quoteattr
+
+from infuse import hookimpl
+from infuse.bml import Generation, GenerationError, parse_bml
+from infuse.plugin_types import BMLGenerator
+
+BML_NS = "http://www.bml-initiative.org/bml/bml-1.0"
+#: The ``infuse:`` block setting it reads: how deep the nods are (0 to 1).
+AMOUNT = "$name-amount"
+
+
+def generate(block, context) -> Generation:
+    """``block`` with a nod whose stroke is on the end of each speech."""
+    text = context.settings.get(AMOUNT, "0.4")
+    try:
+        amount = float(text)
+    except ValueError:
+        amount = math.nan
+    if not 0.0 <= amount <= 1.0:
+        raise GenerationError(f"infuse:{AMOUNT}={text!r} is not a number from 0 to 1")
+    taken = {b.id for b in block.behaviours}
+    nods = []
+    for speech in (b for b in block.behaviours if b.element == "speech"):
+        behaviour_id = next(f"nod{k}" for k in range(1, len(taken) + 2) if f"nod{k}" not in taken)
+        taken.add(behaviour_id)
+        nods.append(f'<head id={quoteattr(behaviour_id)} lexeme="NOD" amount="{amount:g}" '
+                    f'stroke={quoteattr(speech.id + ":end")}/>')
+    if not nods:
+        return Generation(block)
+    document = f'<bml xmlns="{BML_NS}" id={quoteattr(block.id)}>{"".join(nods)}</bml>'
+    (added,) = parse_bml(document).blocks
+    return Generation(replace(block, behaviours=block.behaviours + added.behaviours), bml=document)
+
+
+@hookimpl
+def infuse_bml_generators():
+    return [BMLGenerator("$name", generate, "a nod at the end of each speech", frozenset({AMOUNT}))]
+''')
+
+GENERATOR_TEST = Template('''"""The $name BML generator: installed, off unless a block turns it on, a nod on each speech's end, a bad
+setting warned."""
+from infuse.bml import Scheduler
+from infuse.registry import table
+
+from $package.plugin import AMOUNT
+
+
+def _schedule(flags: str):
+    scheduler = Scheduler()
+    (record,) = scheduler.submit('<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" xmlns:infuse="urn:infuse:bml" '
+                                 f'id="b1" characterId="bob" {flags}><speech id="s1"><text>Hello there.</text></speech></bml>',
+                                 at=0.0)
+    return record, scheduler.feedback.log
+
+
+def test_installed():
+    assert "$name" in table("bml-generator")
+
+
+def test_a_nod_on_the_end_of_the_speech():
+    record, log = _schedule(f'infuse:$name="true" infuse:{AMOUNT}="0.6"')
+    (nod,) = [a for a in record.activations if a.controller == "head"]
+    assert abs(nod.time("stroke") - record.activation("s1").end) < 1e-9 and nod.parameters["amount"] == 0.6
+    assert [e.generator for e in log if e.kind == "generatedBml"] == ["$name"]
+
+
+def test_off_by_default_and_a_bad_amount_warns():
+    record, _ = _schedule("")
+    assert [a.controller for a in record.activations] == ["speech"]
+    record, log = _schedule(f'infuse:$name="true" infuse:{AMOUNT}="lots"')
+    assert [a.controller for a in record.activations] == ["speech"]
+    assert any("'lots' is not a number" in e.description for e in log if e.kind == "warningFeedback")
+''')
+
 COMMAND = Template('''"""The $name command: ``infuse $name FILE`` prints the joints of a file's skeleton and its clips.
 
 Replace :func:`run` with your command. ``add_arguments(parser)`` declares an ``argparse`` sub-command
@@ -581,6 +666,9 @@ KINDS: dict[str, KindTemplate] = {
                                CONTROLLER_TEST, "python -c \"from infuse.runtime import controller; print(controller('$name'))\""),
     "bml-behaviour": KindTemplate("infuse.bml_behaviours", "<x:$name> (namespace urn:infuse:$name) nods twice",
                                   {"plugin.py": BML}, BML_TEST, "infuse run scene.toml -o out/   # a scene whose BML uses <x:$name>"),
+    "bml-generator": KindTemplate("infuse.bml_generators", "infuse:$name=\"true\" on a <bml> block adds a nod at the end "
+                                   "of each speech", {"plugin.py": GENERATOR}, GENERATOR_TEST,
+                                   "infuse run scene.toml -o out/   # a scene whose blocks say infuse:$name=\"true\""),
     "command": KindTemplate("infuse.commands", "infuse $name FILE prints a file's joints and clips", {"plugin.py": COMMAND},
                             COMMAND_TEST, "infuse $name character.glb"),
 }
