@@ -31,9 +31,11 @@ def unwarp(keys: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.where(u < keys[1], 0.5 * (u - keys[0]) / (keys[1] - keys[0]), 0.5 + 0.5 * (u - keys[1]) / (keys[2] - keys[1]))
 
 
-#: How far (leg lengths) a foot point may sit above its height at a strike or toe off and count as
-#: on the ground: about 2.7 mm on an adult.
+#: How far (leg lengths) a heel may sit above its height at a strike and count as on the ground
+#: (about 2.7 mm on an adult), and a ball above its height at a toe off (about 9 mm: a ball pushing
+#: off rolls over the toes, rising a little while it still slides forward).
 GROUNDED = 0.003
+LIFTED = 0.01
 
 
 #: Share of a swing each of its ends may give to the stance next to it (:func:`grounded_frames`).
@@ -86,7 +88,7 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
     clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once.
     With the feet's heights (F, 2, 2) metres over the cycle (ankle, ball), a strike is where the heel
     reached the ground and a toe off where the ball left it (:func:`grounded_frames`, within
-    :data:`GROUNDED` leg lengths of ``leg_length`` metres)."""
+    :data:`GROUNDED` and :data:`LIFTED` leg lengths of ``leg_length`` metres)."""
     fps = clip.motion.fps
     gap = int(round(GAP_S * fps))
     contacts = np.stack([looped(clip.contacts[:, k], gap) for k in range(2)], axis=1)
@@ -101,11 +103,10 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
         times = np.array([mine[0][e] for e in EVENTS])
         if heights is not None:
             swinging = ~contacts[:, k]
-            tolerance = GROUNDED * leg_length
-            times[0] -= grounded_frames(heights[:, k, 0], swinging, int(round(times[0] * fps)), tolerance, -1) / fps
+            times[0] -= grounded_frames(heights[:, k, 0], swinging, int(round(times[0] * fps)), GROUNDED * leg_length, -1) / fps
             # The toe off's frame is the first of the swing (a contact's end is exclusive).
             off = int(round(times[3] * fps))
-            times[3] += grounded_frames(heights[:, k, 1], swinging, off - 1, tolerance, 1) / fps
+            times[3] += grounded_frames(heights[:, k, 1], swinging, off - 1, LIFTED * leg_length, 1) / fps
         # A contact flag holds for its frame's half-frame either side (frames are sampled nearest).
         ph = unwarp(clip.keys, times - 0.5 / fps)
         ph = np.where(ph > 1.0 - 1e-6, ph - 1.0, ph)  # a strike on a key rounded just below it
