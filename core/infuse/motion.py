@@ -8,6 +8,7 @@ the frame). Units are metres and seconds; quaternions are (x, y, z, w); axes are
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,7 +32,8 @@ class Motion:
     - ``name``: the clip name; ``sync_points``: named times in seconds (ready, stroke, relax...).
     - ``morph_names``: (M,) morph target or expression names the clip animates (a mesh target, a
       VRM expression...); ``morph_weights``: (F, M) their weights, usually 0..1, one column per
-      name. Targets not named keep the character's own weights. Empty (M = 0) by default.
+      name. Targets not named keep the character's own weights. Empty (M = 0) by default; an
+      empty array given with names means zero weights.
     - ``animated_joints``: optional (J,) bool mask of the joints the clip has data for (a SmartBody
       motion names only some joints of its skeleton; a clip of morph weights alone animates none).
       The others hold their rest pose in the arrays above; writers leave them out and a runtime
@@ -46,7 +48,7 @@ class Motion:
     name: str = ""
     sync_points: dict = field(default_factory=dict)
     morph_names: tuple[str, ...] = ()
-    morph_weights: np.ndarray | None = None
+    morph_weights: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     animated_joints: np.ndarray | None = None
 
     def __post_init__(self):
@@ -58,8 +60,10 @@ class Motion:
             object.__setattr__(self, "joint_translations", np.array(self.joint_translations, dtype=np.float64))
         object.__setattr__(self, "morph_names", tuple(str(n) for n in self.morph_names))
         frames = lr.shape[0] if lr.ndim else 0
-        weights = np.zeros((frames, len(self.morph_names))) if self.morph_weights is None else self.morph_weights
-        object.__setattr__(self, "morph_weights", np.array(weights, dtype=np.float64))
+        weights = np.array(self.morph_weights, dtype=np.float64)
+        if weights.size == 0:  # none given: zero weights of the names (M = 0 by default)
+            weights = np.zeros((frames, len(self.morph_names)))
+        object.__setattr__(self, "morph_weights", weights)
         if self.animated_joints is not None:
             object.__setattr__(self, "animated_joints", np.array(self.animated_joints, dtype=bool))
         for a in (lr, rt, self.joint_translations, self.morph_weights, self.animated_joints):
@@ -142,20 +146,14 @@ class Motion:
         Tracks that no longer fit are left out unless given: the morph weights when the number of
         frames changes, the joint mask when the skeleton's number of joints does.
         """
-        fields = dict(
-            skeleton=self.skeleton, fps=self.fps, local_rotations=self.local_rotations,
-            root_translations=self.root_translations, joint_translations=self.joint_translations,
-            name=self.name, sync_points=dict(self.sync_points), morph_names=self.morph_names,
-            morph_weights=self.morph_weights, animated_joints=self.animated_joints,
-        )
+        changes.setdefault("sync_points", dict(self.sync_points))
         frames = np.shape(changes.get("local_rotations", self.local_rotations))[0]
         if frames != self.num_frames and "morph_weights" not in changes:
-            fields.update(morph_names=(), morph_weights=None)
+            changes = {"morph_names": (), "morph_weights": np.zeros((0, 0)), **changes}
         joints = changes.get("skeleton", self.skeleton).num_joints
         if joints != self.skeleton.num_joints and "animated_joints" not in changes:
-            fields.update(animated_joints=None)
-        fields.update(changes)
-        return Motion(**fields)
+            changes["animated_joints"] = None
+        return dataclasses.replace(self, **changes)
 
     @classmethod
     def rest_pose(cls, skeleton: Skeleton, frames: int = 1, fps: float = 30.0, name: str = "rest") -> "Motion":

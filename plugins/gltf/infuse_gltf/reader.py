@@ -559,7 +559,7 @@ def _read_clip(clip, a, name, accessors: AccessorReader, posing: _Posing, skelet
         for k, tn in enumerate(names_):
             tracks.setdefault(tn, out[:, k])
     weight_names = tuple(tracks)
-    morph_weights = np.stack([tracks[n] for n in weight_names], axis=1) if tracks else None
+    morph_weights = np.stack([tracks[n] for n in weight_names], axis=1) if tracks else np.zeros((f, 0))
     animated = None if trs else np.zeros(skeleton.num_joints, dtype=bool)
     motion = Motion(skeleton, fps, quat.make_continuous(rot), trans[:, 0], trans if moving else None, name=name,
                     morph_names=weight_names, morph_weights=morph_weights, animated_joints=animated)

@@ -113,7 +113,7 @@ class PoseFace:
 
 
 def face_motion(skeleton: Skeleton, fps: float, K: int, rotations: dict[int, np.ndarray], translations: dict[int, np.ndarray] | None,
-                name: str, morph_names: tuple[str, ...] = (), morph_weights: np.ndarray | None = None) -> Motion:
+                name: str, morph_names: tuple[str, ...] = (), morph_weights: np.ndarray = np.zeros((0, 0))) -> Motion:
     """A clip of ``K`` frames of the whole skeleton at rest except the face joints, which are its animated
     joints: ``rotations`` joint index -> (K, 4) local rotations, ``translations`` joint index -> (K, 3)
     local translations (metres); ``morph_weights`` (K, M) of ``morph_names``."""

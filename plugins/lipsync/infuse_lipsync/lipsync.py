@@ -90,7 +90,7 @@ class LipSync:
         rot = {skeleton.index[j]: r for j, r in self.joint_rotations.items()}
         trans = {skeleton.index[j]: t for j, t in self.joint_translations.items()}
         names = tuple(self.morph_weights)
-        weights = np.stack([self.morph_weights[n] for n in names], axis=1) if names else None
+        weights = np.stack([self.morph_weights[n] for n in names], axis=1) if names else np.zeros((len(self.times), 0))
         return face_motion(skeleton, self.fps, len(self.times), rot, trans, name, names, weights)
 
 
