@@ -6,7 +6,7 @@ time and as this process's CPU time (numpy runs these stages on one thread, so o
 the two agree; on a shared machine the CPU figure is the one that does not count other jobs).
 
 - ``transfer``: source FK, rotations through the canonical frame, root scaling, the target Motion.
-- ``paper IK``: plus the paper's warped feet enforced by pseudo-inverse IK.
+- ``paper IK``: plus the paper's warped feet enforced by the two-bone leg IK.
 - ``contact IK``: plus contact detection and pinned feet (the default).
 - ``+ limb scaling``: the default plus arm IK by extension.
 

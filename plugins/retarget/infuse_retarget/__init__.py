@@ -1,8 +1,8 @@
 """infuse-anim-retarget: motion retargeting between any two humanoid skeletons through their canonical mappings.
 
 The paper's two steps, default-pose alignment with local-frame re-orientation, then constraint
-enforcement with Jacobian pseudo-inverse IK on the legs, plus contact-pinned feet and per-limb
-scaling. Quick use::
+enforcement on the legs, plus contact-pinned feet and per-limb scaling, through the core's foot
+component (``infuse.contacts``, ``infuse.footing``, ``infuse.runtime.limb_ik``). Quick use::
 
     from infuse_retarget import retarget
     out = retarget(walk, walk_mapping, character.skeleton, character_mapping)
