@@ -78,6 +78,11 @@ if want pointing; then  # bml.md
   cp "$WORK/pointing/preview.png" "$OUT/pointing.png"
 fi
 
+if want nonverbal; then  # nonverbal.md
+  INFUSE_CORPUS=$(cd "$CORPUS" && pwd) "$INFUSE" run examples/scenes/conversation.toml -o "$WORK/conversation" --strip 6 --quiet
+  cp "$WORK/conversation/preview.png" "$OUT/nonverbal.png"
+fi
+
 for png in "$OUT"/*.png; do
   size=$(stat -c %s "$png")
   [ "$size" -lt 307200 ] || { echo "make_images: $png is $size bytes, over 300 KB" >&2; exit 1; }
