@@ -57,7 +57,7 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.runtime.tracks": "keyed curves of joint rotations and morph weights",
     "infuse.runtime.clip": "clip sampling and loop tables",
     "infuse.runtime.limb_ik": "two-bone limb inverse kinematics",
-    "infuse.bml": "BML behaviour plans, timing models and errors",
+    "infuse.bml": "BML behaviour plans, timing models, generations (BML added before scheduling) and errors",
     "infuse.bml.model": "BML documents and the warningFeedback types",
     "infuse.stage": "Stage and Stagehand: what a scene offers the controller realizing a BML behaviour",
     "infuse.packs": "behaviour packs: load_pack, Pack",
