@@ -183,10 +183,10 @@ def test_a_walk_taken_over_before_it_arrives_is_reported(xbot):
 
 def test_feet_of_an_imported_pack_stay_planted(xbot, bandai_masculinity):
     """Straight walks over the forward range of recorded takes (Bandai masculinity) on Xbot: foot skate
-    at most 1.5 cm/m from the second-slowest speed up, at most 2.5 cm/m at the slowest walk (its heel
-    rises early and slowly, which the measure counts while the ankle is low); a planted foot does not
-    twist: the ankle-to-ball line turns less than 1.5 degrees a frame (95th percentile) while the ball
-    is down."""
+    at most 1.5 cm/m at every speed (the takes' heels land and their balls push off moving, a few
+    frames beyond their detected contacts: pinned from where they reach the ground to where they
+    leave it); a planted foot does not twist: the ankle-to-ball line turns less than 1.5 degrees a
+    frame (95th percentile) while the ball is down."""
     from dataclasses import replace
 
     from infuse.contacts import foot_contacts
@@ -216,5 +216,5 @@ def test_feet_of_an_imported_pack_stay_planted(xbot, bandai_masculinity):
             turn = np.abs(np.diff(np.degrees(np.unwrap(np.arctan2(lever[:, 0], lever[:, 2])))))
             down = found.flags[1:, 2 * k + 1] & found.flags[:-1, 2 * k + 1]
             twists.append(float(np.percentile(turn[down], 95)) if down.any() else 0.0)
-    assert skates[0] <= 2.5 and max(skates[1:]) <= 1.5, skates
+    assert max(skates) <= 1.5, skates
     assert max(twists) < 1.5, twists

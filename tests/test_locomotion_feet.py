@@ -1,0 +1,66 @@
+"""When a walk's feet are down: contact flags of a cycle made one loop, strikes where the heel reaches
+the ground and toe offs where the ball leaves it, and every stepping cycle of the imported packs
+giving its feet's events. Measured on the clips as infused onto Xbot."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+
+from corpus_data import corpus_file, require_corpus
+
+phase_keys = pytest.importorskip("infuse_locomotion.phase_keys")
+
+
+def flags(text: str) -> np.ndarray:
+    return np.array([c == "1" for c in text])
+
+
+def test_a_contact_on_the_seam_and_a_broken_contact_are_one_loop():
+    # The last frame repeats the first: a contact found only on the last frame starts on the seam.
+    assert "".join("1" if f else "0" for f in phase_keys.looped(flags("0111100000001"), 0)) == "1111100000001"
+    # A contact broken for two frames is one contact; a swing of six frames stays a swing.
+    assert "".join("1" if f else "0" for f in phase_keys.looped(flags("1110011000000001"), 3)) == "1111111000000001"
+    # Going round the seam: the break is at the cycle's end.
+    assert "".join("1" if f else "0" for f in phase_keys.looped(flags("1100000011111000"), 3)) == "1100000011111111"
+    assert not phase_keys.looped(flags("0000"), 3).any() and phase_keys.looped(flags("1111"), 3).all()
+
+
+def test_a_heel_reaches_the_ground_before_its_detected_strike():
+    # A heel coming down (mm), on the ground from frame 9, its contact detected from frame 12 (it slowed
+    # down there), lifting again after frame 18; frame 24 repeats frame 0.
+    heights = np.array([120, 150, 160, 150, 120, 90, 60, 30, 12, 2.0, 0.5, 0.2, 0.0, 0, 0, 0, 0, 0, 0, 9, 20, 40, 70, 100, 120]) / 1000.0
+    swinging = (np.arange(25) < 12) | (np.arange(25) > 18)
+    # Within 2.7 mm of its height at the strike from frame 9: three frames before the strike.
+    assert phase_keys.grounded_frames(heights, swinging, 12, 0.0027, -1) == 3
+    # At most a quarter of the swing (17 frames): 4 frames.
+    assert phase_keys.grounded_frames(heights, swinging, 12, 1.0, -1) == 4
+    # A ball leaving the ground after frame 18, its last frame down: 9 mm up one frame later.
+    assert phase_keys.grounded_frames(heights, swinging, 18, 0.0085, 1) == 0
+    assert phase_keys.grounded_frames(heights, swinging, 18, 0.0095, 1) == 1
+
+
+@pytest.fixture(scope="module")
+def xbot():
+    require_corpus()
+    return infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+
+
+@pytest.mark.parametrize("style", ["masculinity", "normal"])
+def test_every_stepping_cycle_of_an_imported_pack_has_its_feet_events(xbot, style, tmp_path):
+    """Every walking cycle of a Bandai dataset-1 style (recorded takes, cut at a left strike) gives each
+    foot's strike, foot flat, heel off and toe off in order, the strike within three frames before the
+    one its contact flags show."""
+    from infuse.packs import build_pack, import_bvh_folder, infuse_character
+
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path / style, pattern=f"dataset-1_walk*_{style}_*.bvh")).manifest.path.parent
+    space = next(iter(infuse_character(infuse.Character("x", xbot), [pack]).spaces.values()))
+    walks = [c for c in space.group("locomotion") if c.role != "idle"]
+    assert len(walks) >= 4
+    for clip in walks:
+        events = phase_keys.foot_events(clip)
+        assert events is not None, clip.name
+        spans = np.diff(events, axis=1)
+        assert (spans >= 0.0).all() and (events[:, 3] - events[:, 0] < 1.0).all(), (clip.name, events)
