@@ -166,3 +166,28 @@ def test_joints_a_clip_does_not_animate_keep_the_pose_below():
     assert quat.angle_between(played.local_rotations[:, sk.index["spine1"]], lean).max() < 1e-9
     assert quat.angle_between(played.local_rotations[:, sk.index["skullbase"]], turn).max() < 1e-9
     assert np.allclose(played.morph_weight("smile"), 0.7)
+
+
+def test_a_retargeted_clip_keeps_the_morph_weights_the_character_has(tmp_path):
+    """A speaking clip of one avatar retargeted onto another with the same morph target names keeps
+    its face; names the other character lacks are left out."""
+    from infuse.cli import main
+    from infuse.motion import carry_morph_weights
+
+    require_corpus()
+    rpm = infuse.load(corpus_file("talkinghead/avatars/brunette-t.glb"))
+    frames = 45
+    talk = infuse.Motion.rest_pose(rpm.skeleton, frames, name="talk").replace(
+        morph_names=["viseme_aa", "noSuchShape"], morph_weights=np.stack(
+            [0.5 + 0.5 * np.sin(np.linspace(0, 6, frames)), np.ones(frames)], axis=1))
+    carried = carry_morph_weights(talk.replace(morph_names=(), morph_weights=np.zeros((0, 0))), talk, rpm.morph_targets)
+    assert carried.morph_names == ("viseme_aa",) and np.allclose(carried.morph_weights[:, 0], talk.morph_weights[:, 0])
+    source = tmp_path / "talk.glb"
+    infuse.save(infuse.Asset(None, "test", rpm.skeleton, {"talk": talk.replace(morph_names=["viseme_aa"],
+                                                                               morph_weights=talk.morph_weights[:, :1])},
+                             morph_targets=list(rpm.morph_targets), mesh_loader=lambda: rpm.meshes), source)
+    out = tmp_path / "onto.glb"
+    assert main(["retarget", str(source), "--to", str(corpus_file("talkinghead/avatars/brunette-t.glb")),
+                 "-o", str(out)]) == 0
+    clip = infuse.load(out).motions["talk"]
+    np.testing.assert_allclose(clip.morph_weight("viseme_aa"), talk.morph_weights[:, 0], atol=1e-6)

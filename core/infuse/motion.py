@@ -161,3 +161,16 @@ class Motion:
         rots = np.broadcast_to(skeleton.rest_rotations, (frames,) + skeleton.rest_rotations.shape)
         root = np.broadcast_to(skeleton.rest_translations[0], (frames, 3))
         return cls(skeleton, fps, rots, root, name=name)
+
+
+def carry_morph_weights(motion: Motion, source: Motion, targets) -> Motion:
+    """``motion`` (a clip made from ``source``, e.g. retargeted onto another character) with the morph
+    weights of ``source`` whose names are among ``targets`` (that character's morph targets), sampled
+    at ``motion``'s frame times (linear, held at the ends). A retargeted clip keeps its face where the
+    character has morph targets of the same names; ``motion`` as it is when there are none."""
+    keep = [k for k, name in enumerate(source.morph_names) if name in set(targets)]
+    if not keep or motion.num_frames == 0:
+        return motion
+    times, source_times = motion.frame_times, source.frame_times
+    weights = np.stack([np.interp(times, source_times, source.morph_weights[:, k]) for k in keep], axis=1)
+    return motion.replace(morph_names=[source.morph_names[k] for k in keep], morph_weights=weights)

@@ -30,6 +30,7 @@ from infuse.contacts import feet
 from infuse.errors import InfuseError, InputError, MissingFeatureError, UnusableInputError
 from infuse.grounding import foot_height, grounded, sole_depth
 from infuse.mapping import Mapping, map_skeleton, sample_poses
+from infuse.motion import carry_morph_weights
 from infuse.plugin_types import normalized_extension
 
 from .jobs import CHARACTER_BLOCK, PackUnit, Settings, Source, Unit
@@ -249,7 +250,7 @@ def _write_clips(unit: Unit, k: int, m: int, loaded: _Loaded, asset: Asset, plan
         stem = source.name if len(asset.motions) == 1 else f"{source.name}/{_file_name(name)}"
         rel = f"{character.name}/{stem}.{fmt}"
         try:
-            motion = plan(clip).replace(name=name)
+            motion = carry_morph_weights(plan(clip).replace(name=name), clip, loaded.asset.morph_targets)
             fileio.save(_writable(loaded, name, motion), out / rel)
         except Exception as exc:
             result.failures.append(failure(source.path, exc, clip=name))

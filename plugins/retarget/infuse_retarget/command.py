@@ -18,6 +18,7 @@ from infuse.cli.map_command import add_mapping_options
 from infuse.errors import InputError, UnusableInputError, UsageError
 from infuse.grounding import foot_height, grounded
 from infuse.mapping import map_skeleton, sample_poses
+from infuse.motion import carry_morph_weights
 from infuse.plugin_types import normalized_extension
 
 from .retarget import IK_MODES, retarget_clip
@@ -82,7 +83,7 @@ def run(args) -> int:
                         target_motion=target_clip, source_file=motion_path, target_file=args.character)
     result = retarget_clip(plan, clip, ik=args.ik, limb_scaling=args.limb_scaling)
     name = args.name or clip.name or motion_path.stem
-    motion = result.motion.replace(name=name)
+    motion = carry_morph_weights(result.motion.replace(name=name), clip, character.morph_targets)
     kept = dict(character.motions) if args.keep_clips and ext != ".bvh" else {}
     while name in kept:
         name += "_retargeted"
