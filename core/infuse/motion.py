@@ -168,7 +168,8 @@ def carry_morph_weights(motion: Motion, source: Motion, targets) -> Motion:
     weights of ``source`` whose names are among ``targets`` (that character's morph targets), sampled
     at ``motion``'s frame times (linear, held at the ends). A retargeted clip keeps its face where the
     character has morph targets of the same names; ``motion`` as it is when there are none."""
-    keep = [k for k, name in enumerate(source.morph_names) if name in set(targets)]
+    available = set(targets)
+    keep = [k for k, name in enumerate(source.morph_names) if name in available]
     if not keep or motion.num_frames == 0:
         return motion
     times, source_times = motion.frame_times, source.frame_times
