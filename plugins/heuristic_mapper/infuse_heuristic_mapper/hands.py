@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .matching import best_matching
 from .view import SkeletonView, length, lengths
 
 FINGER_ORDER = ("index", "middle", "ring", "pinky")
@@ -157,18 +158,19 @@ def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
     return keys[int(np.argmin(nums))]
 
 
+#: Finger matching costs: per step between a chain's place across the palm and a digit's, and for a
+#: chain named as that digit (negative) or as another one.
+ACROSS_STEP = 0.5
+NAMED_DIGIT = -2.0
+NAMED_OTHER = 2.0
+
+
 def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos: np.ndarray,
                    axis: np.ndarray) -> list[tuple[str, int]]:
-    """(finger name, chain start) of the non-thumb fingers: by their names when each is named as a
-    different finger (a hand without a ring finger keeps its pinky), else in order from the thumb
-    side across the palm."""
-    by_name = {}
-    for r in others:
-        roles = view.info[r].roles & set(FINGER_ORDER)
-        if len(roles) == 1:
-            by_name[r] = next(iter(roles))
-    if len(by_name) == len(others) and len(set(by_name.values())) == len(others):
-        return [(by_name[r], r) for r in others]
+    """(finger name, chain start) of the non-thumb fingers: one least-cost matching of the chains to
+    the digits index..pinky, from each chain's place across the palm counted from the thumb side
+    and its name (a hand without a ring finger keeps its named pinky); chains past the fourth from
+    the thumb may stay unmatched."""
     axis = axis / max(length(axis), 1e-9)
     side = view.P[thumb] - wrist_pos
     side = side - np.dot(side, axis) * axis
@@ -176,8 +178,21 @@ def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos:
         side = view.P[view.far[thumb]] - wrist_pos
         side = side - np.dot(side, axis) * axis
     side /= max(length(side), 1e-9)
+
     # knuckle positions: a finger chain's start, past any metacarpal
     def across(r: int) -> float:
         chain = _drop_metacarpal(view, view.main_chain(r, 6), wrist_pos)
         return float(np.dot(view.P[chain[0]] - wrist_pos, side))
-    return list(zip(FINGER_ORDER, sorted(others, key=lambda r: -across(r))))
+    ordered = sorted(others, key=lambda r: -across(r))  # from the thumb side
+    digits = len(FINGER_ORDER)
+    columns = max(digits, len(ordered))  # columns past the pinky: no digit
+    cost = np.zeros((len(ordered), columns))
+    for rank, r in enumerate(ordered):
+        cost[rank, :digits] = ACROSS_STEP * np.abs(rank - np.arange(digits))
+        cost[rank, digits:] = ACROSS_STEP * max(0, digits - rank)
+        named = view.info[r].roles & set(FINGER_ORDER)
+        if len(named) == 1:
+            role = next(iter(named))
+            cost[rank, :digits] += [NAMED_DIGIT if f == role else NAMED_OTHER for f in FINGER_ORDER]
+    columns_of, _ = best_matching(cost)
+    return [(FINGER_ORDER[c], r) for r, c in zip(ordered, columns_of.tolist()) if c < digits]
