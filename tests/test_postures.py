@@ -268,6 +268,20 @@ def penetration_m(character, motion, frame: int) -> float:
     return float(np.max(depth[(depth > 0) & (distance < 0.05)], initial=0.0))
 
 
+ROUND = "".join(SHIFT.format(id=f"p{k}", start=0.5 + 2.5 * k, lexeme=lexeme) for k, lexeme in enumerate(
+    ("ARMS_CROSSED", "HANDS_ON_HIP", "HANDS_BEHIND_BACK", "HANDS_CLASPED", "ARMS_CROSSED", "NEUTRAL")))
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm"])
+def test_forearms_and_hands_stay_out_of_the_torso_through_transitions(key, pack_cache):
+    # Crossed, on the hips, behind the back, clasped in front, crossed, neutral: the arms pass by the sides
+    # and the hands come round the hips to and from the back.
+    _, motion = play(key, ROUND, pack_cache, seconds=15.0)
+    character = corpus_character(key)
+    depths = [penetration_m(character, motion, f) for f in range(0, motion.num_frames, 3)]
+    assert max(depths) < 0.025, (np.argmax(depths) * 3 / FPS, max(depths))
+
+
 @pytest.mark.parametrize("key", ["xbot", "rpm"])
 def test_forearms_and_hands_stay_out_of_the_torso(key):
     character = corpus_character(key)

@@ -7,8 +7,11 @@ pose below at the frame the posture begins (both ankles, where they are and how 
 clip turned to that pose's facing and moved so its own feet land there. Through the blend in and out,
 and on a character whose stance is wider or narrower than the pack's, two-joint leg IK holds the
 ankles on those footprints (the pelvis lowered where a leg could not reach). So a posture follows any
-other posture, or the idle below, with the feet planted. Layers above add as usual: breathing,
-gestures, gaze, head and face.
+other posture, or the idle below, with the feet planted. Through a blend the arms go by the pack's
+neutral posture, hanging a little away from the sides; a wrist that comes from or goes behind the back
+travels around the body (about the vertical through the pelvis: off the body, round it by its own side,
+onto it; arm IK). From hands behind the back to hands clasped in front, say, the hands come round the
+hips instead of through them. Layers above add as usual: breathing, gestures, gaze, head and face.
 
 A posture started while another plays takes its footprints from the pose that one makes (postures
 are evaluated in the order they started); a lasting posture ends the lasting ones before it once it
@@ -25,6 +28,7 @@ from infuse.errors import MissingJointsError, UsageError
 from infuse.kinematics import forward_kinematics
 from infuse.runtime import Controller, Layer, Mode, sample_motion, smoothstep
 from infuse.runtime.limb_ik import solve_limb
+from infuse.runtime.swing import local_offsets, swing
 
 #: Base-layer priority: above walks (which count up from 1) and the scene's idle clip.
 PRIORITY = 10_000
@@ -34,6 +38,17 @@ TRANSITION_S = 1.0
 LEG_REACH = 0.995
 #: The hips of the pose below this far (metres, horizontally) from where they stood: the character walks off.
 WALK_AWAY_M = 0.15
+#: The posture whose arms a blend passes by (hanging at the sides), and the shares of the blend over which
+#: the arms leave the pose below for it and go from it to the posture's.
+VIA = "neutral"
+VIA_SHARE = 0.6
+#: How far the arms are lifted out to the sides, beyond the neutral posture's, as they pass by it (radians).
+VIA_ABDUCTION = np.radians(20.0)
+#: How far a wrist going round the body bulges out on the way, metres, for a half turn or more about it.
+BULGE_M = 0.05
+#: How far round from the front (degrees about the body) a wrist must start or end for it to begin to take
+#: the way round the body, and to take it in full: hands behind the back.
+ROUND_DEG = (110.0, 140.0)
 _INFUSIONS: dict = {}
 
 
@@ -90,13 +105,16 @@ class Posture(Controller):
             raise MissingJointsError(rig.character.asset.path, f"posture {self.clip!r} plants the feet with "
                                                                f"{', '.join(missing)}, which the mapping lacks")
         legs = np.array([[rig.joint(f"{s}_{j}") for j in ("hip", "knee", "ankle")] for s in "lr"], dtype=np.int64)
+        via = space.clips[VIA].motion if VIA in space.clips and self.clip != VIA else None
         jt = None if motion.joint_translations is None else motion.joint_translations[:1]
         _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations[:1], motion.root_translations[:1], jt)
         rest = rig.skeleton.rest_global_positions
         lengths = np.linalg.norm(rest[legs[:, 1]] - rest[legs[:, 0]], axis=-1) + \
             np.linalg.norm(rest[legs[:, 2]] - rest[legs[:, 1]], axis=-1)
         return {"motion": motion, "legs": legs, "centre": g_pos[0, legs[:, 2]].mean(axis=0),
-                "yaw": facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]]), "reach": LEG_REACH * lengths}
+                "yaw": facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]]), "reach": LEG_REACH * lengths,
+                "via": via, "arms": _arms(rig), "abduction": _abduction(rig), "hands": _hands(rig),
+                "base": rig.joint("base")}
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
@@ -123,6 +141,11 @@ class Posture(Controller):
         root = state["centre"] + quat.rotate(turn, root - b["centre"])
         w = job.weight[:, None]
         rotations = quat.slerp(pose.local_rotations, target, np.broadcast_to(w, target.shape[:2]))
+        blending = live & (job.weight < 1.0)
+        if b["via"] is not None and b["arms"].size and blending.any():
+            rotations[blending] = self._by_the_sides(pose.local_rotations[blending], target[blending], rotations[blending],
+                                                     job.weight[blending], b, times[blending])
+        placed = root
         root = pose.root_translations + w * (root - pose.root_translations)
         jt = pose.joint_translations
         goals = np.broadcast_to(state["ankles"], (len(root), 2, 3))
@@ -130,9 +153,76 @@ class Posture(Controller):
         solve_limb(sk, rotations, root, jt, b["legs"], goals, weight=np.repeat((pin * live)[:, None], 2, axis=1),
                    pole=state["forward"], end_rotation=np.broadcast_to(state["ankle_rotations"], (len(root), 2, 4)),
                    distance=False)
+        if b["hands"] is not None and blending.any():
+            k = blending
+            rotations[k] = self._around_the_body(sk, b, state["yaw"], job.weight[k], rotations[k], root[k],
+                                                 (pose.local_rotations[k], pose.root_translations[k]),
+                                                 (target[k], placed[k]), None if jt is None else jt[k])
         on = live.astype(float)
         pose.set_rotations(np.arange(sk.num_joints), rotations, on)
         pose.set_root(root, on)
+
+    @staticmethod
+    def _around_the_body(sk, b, yaw: float, weight, rotations, root, below, target, jt) -> np.ndarray:
+        """``rotations`` (K, J, 4) of blending frames with each wrist that comes from or goes behind the back put
+        on its way around the body, from where the pose ``below`` has it to where the posture's ``target`` pose
+        does (both (rotations (K, J, 4), root (K, 3))), ``weight`` (K,) of the way along: about the vertical
+        through the pelvis, off the body by up to :data:`BULGE_M`, round it (its angle, distance and height
+        going from one end's to the other's), onto it (arm IK, the hands keeping their turn)."""
+        hands, base = b["hands"], b["base"]
+        face = _yaw(-yaw)
+
+        def around(pose):  # (K, 2) angle, distance, height of each wrist about the pelvis, in the body's frame
+            _, g_pos = forward_kinematics(sk, pose[0], pose[1], jt)
+            d = quat.rotate(face, g_pos[:, hands[:, 2]] - g_pos[:, base, None])
+            return np.arctan2(d[..., 0], d[..., 2]), np.hypot(d[..., 0], d[..., 2]), d[..., 1]
+
+        (a0, r0, y0), (a1, r1, y1) = around(below), around(target)
+        # Each hand goes round its own side (left +1, right -1): the shorter way, unless its middle lies well
+        # over on the other side and the longer way's on the hand's own (from behind the back to the front by
+        # the hip, not across the belly).
+        short = np.angle(np.exp(1j * (a1 - a0)))
+        long = short - np.sign(short) * 2.0 * np.pi
+        side = np.array([1.0, -1.0])
+        crossing = (side * np.sin(a0 + 0.5 * short) < -0.5) & (side * np.sin(a0 + 0.5 * long) > 0.5)
+        turn = np.where(crossing, long, short)
+        # Off the body first, round it, then onto it: the way round over the middle of the blend, the bulge
+        # out over its first quarter and back in over its last.
+        u = weight[:, None]
+        along = smoothstep((u - 0.2) / 0.6)
+        out = smoothstep(u / 0.25) * (1.0 - smoothstep((u - 0.75) / 0.25))
+        bulge = BULGE_M * np.clip(np.abs(turn) / (0.5 * np.pi), 0.0, 1.0)
+        angle = a0 + turn * along
+        distance = r0 + (r1 - r0) * along + bulge * out
+        height = y0 + (y1 - y0) * along
+        _, g_pos = forward_kinematics(sk, rotations, root, jt)
+        offset = np.stack((distance * np.sin(angle), height, distance * np.cos(angle)), axis=-1)
+        goals = g_pos[:, base, None] + quat.rotate(_yaw(yaw), offset)
+        # Only a hand coming from or going behind the back takes the way round (in full from ROUND_DEG[1] off
+        # the front); in front and at the sides the blend's own way, by the sides, clears the body.
+        behind = np.degrees(np.maximum(np.abs(a0), np.abs(a1)))
+        share = smoothstep((behind - ROUND_DEG[0]) / (ROUND_DEG[1] - ROUND_DEG[0]))
+        solved = np.ascontiguousarray(rotations)
+        if share.any():
+            solve_limb(sk, solved, root, jt, hands, goals, weight=np.broadcast_to(share, goals.shape[:2]), distance=False)
+        return solved
+
+    @staticmethod
+    def _by_the_sides(below, target, rotations, weight, b, times) -> np.ndarray:
+        """``rotations`` (K, J, 4) of blending frames with the arms' going from ``below`` to ``target`` (K, J, 4)
+        by the ``via`` posture's arms: toward them over the first :data:`VIA_SHARE` of the blend ``weight``
+        (K,), from them to the target's over the last."""
+        arms = b["arms"]
+        via, _, _, _ = sample_motion(b["via"], times, loop=True, joints=arms)
+        leave = smoothstep(weight / VIA_SHARE)[:, None]
+        arrive = smoothstep((weight - (1.0 - VIA_SHARE)) / VIA_SHARE)[:, None]
+        joints, offsets = b["abduction"]
+        columns = np.searchsorted(arms, joints)
+        via[:, columns] = quat.multiply(via[:, columns], offsets)
+        passing = quat.slerp(below[:, arms], via, np.broadcast_to(leave, via.shape[:2]))
+        out = rotations.copy()
+        out[:, arms] = quat.slerp(passing, target[:, arms], np.broadcast_to(arrive, via.shape[:2]))
+        return out
 
     def _leaving(self, job, block) -> np.ndarray:
         """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
@@ -176,6 +266,40 @@ class Posture(Controller):
         out = root.copy()
         out[:, 1] -= np.maximum(drop.max(axis=1), 0.0)
         return out
+
+
+def _arms(rig) -> np.ndarray:
+    """(K,) the joints of both arms: the shoulder girdles (or the shoulders) and every joint below them."""
+    roots = {j for j in (rig.joint(f"{s}_acromioclavicular") or rig.joint(f"{s}_shoulder") for s in "lr") if j is not None}
+    parents = rig.skeleton.parents
+    out = []
+    for j in range(rig.skeleton.num_joints):
+        k = j
+        while k >= 0 and k not in roots:
+            k = parents[k]
+        if k >= 0:
+            out.append(j)
+    return np.array(out, dtype=np.int64)
+
+
+def _hands(rig) -> np.ndarray | None:
+    """(2, 3) shoulder, elbow and wrist of each arm, or None when the mapping lacks one (no path round the body)."""
+    names = [[f"{s}_{j}" for j in ("shoulder", "elbow", "wrist")] for s in "lr"]
+    joints = [[rig.joint(n) for n in arm] for arm in names]
+    if rig.joint("base") is None or any(j is None for arm in joints for j in arm):
+        return None
+    return np.array(joints, dtype=np.int64)
+
+
+def _abduction(rig) -> tuple[np.ndarray, np.ndarray]:
+    """The shoulder joints (K,) and the local offsets (K, 4) that lift each arm out to its side by
+    :data:`VIA_ABDUCTION` (a roll about the body's forward axis, in the joints' aligned frames)."""
+    joints = [(rig.joint(f"{s}_shoulder"), sign) for s, sign in (("l", 1.0), ("r", -1.0)) if rig.joint(f"{s}_shoulder") is not None]
+    if not joints:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 4))
+    index = np.array([j for j, _ in joints], dtype=np.int64)
+    rolls = np.array([sign * VIA_ABDUCTION for _, sign in joints])
+    return index, local_offsets(rig.aligned[index], swing(np.zeros(len(index)), np.zeros(len(index)), rolls))
 
 
 def posture_from_bml(parameters: dict, runtime, character: str, activation=None) -> Posture | None:
