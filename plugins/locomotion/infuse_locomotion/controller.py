@@ -55,6 +55,8 @@ RELEASE_S = 0.3
 RISE_RELEASE_S = 0.1
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
 HOLD_S = 0.1
+#: Height of the arc a released foot travels back to the animation over, per metre it travels.
+STEP_ARC = 0.25
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
 #: Share of the slowest walk mixed into the moving clips' weights as the speed nears zero.
@@ -520,6 +522,9 @@ class Locomotion(Controller):
                         corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
                         hang = quat.rotate(quat.from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
                     goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
+                    # A foot far from where the animation has it steps there over an arc, not along the
+                    # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
+                    goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
                     held = np.nonzero(~up)[0]
                     if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
                         h = s + held
