@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+from itertools import permutations
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from infuse.mapping import Mapping, map_skeleton, read_map, restrict_to_animated
 from infuse.skeleton import Skeleton
 
 from corpus_data import labels
+from infuse_heuristic_mapper.matching import best_matching
 
 LABELLED_ORDER = ("base", "spine1", "spine2", "spine3", "spine4", "spine5", "skullbase", "eyeball_left",
                   "eyeball_right")
@@ -270,3 +272,18 @@ def test_cli_map_bad_joint_in_map_names_file_and_key(cli, canonical_bvh, tmp_pat
     code, out, err = cli("map", canonical_bvh, "--map", bad)
     assert code == 2
     assert "bad.json" in err and "mapping.l_wrist" in err
+
+
+def test_best_matching_is_the_least_cost_one_to_one_matching():
+    """The mapper's small matchings (finger chains to digits) are exact: the least total of every
+    one-to-one choice, with the margin to the second best."""
+    rng = np.random.default_rng(3)
+    for rows, cols in ((1, 1), (2, 4), (4, 4), (3, 5)):
+        cost = rng.normal(size=(rows, cols))
+        totals = sorted(sum(cost[i, c] for i, c in enumerate(p)) for p in permutations(range(cols), rows))
+        columns, margin = best_matching(cost)
+        assert len(set(columns.tolist())) == rows
+        assert cost[np.arange(rows), columns].sum() == pytest.approx(totals[0])
+        assert margin == (pytest.approx(totals[1] - totals[0]) if len(totals) > 1 else np.inf)
+    with pytest.raises(ValueError):
+        best_matching(np.zeros((3, 2)))

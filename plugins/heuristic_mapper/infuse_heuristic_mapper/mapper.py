@@ -1,24 +1,22 @@
 """The heuristic mapper: any humanoid skeleton -> canonical joint names, with confidences and reasons.
 
-Order of work (each step is its own module):
+How the decision is made (each part is its own module):
 
-1. :mod:`.body` finds the legs and arms as pairs of mirror-image limbs (every legs/arms
-   combination of the best candidates scored together) and the humanoid test checks the body
-   stands (legs point away from the head); a rest pose that is not a standing body (e.g. every
-   bone along one axis) is replaced by the caller's pose.
-2. :mod:`.limbs` places hip/knee/ankle and clavicle/shoulder/elbow/wrist on each limb's chain,
-   both limbs of a pair as one decision.
-3. The torso between the pelvis and the arms, the neck and the head come from the path between the
-   two limb pairs; :mod:`.hands` names the fingers.
-4. Left and right come from the body's own axes (up from pelvis to chest, forward from the toes,
-   knees or thumbs); names decide only when the body does not show its front, and the reasons say
-   when the geometry overrules them.
-5. Each entry's confidence is capped by what its joint's name says about the slot.
-
-A skeleton without two legs and two arms on a trunk (no or one pair of limbs, limbs named as wings
-or tails), whose legs do not point away from its head (a quadruped, a lying body), whose front
-limbs stand on the ground, or with more limbs as long as its legs beside them (an insect, a
-spider) raises :class:`~infuse.errors.NotHumanoidError` with the reason.
+1. :mod:`.body` ranks body plans: every combination of a legs pair and an arms pair among the
+   best mirror-image limb pairs, scored together (symmetry, lengths, names, how the pairs sit in
+   the tree and in space). A rest pose that is not a standing body is replaced by the caller's pose.
+2. :mod:`.humanoid` tests the best plan and its close rivals: two legs and two arms on a trunk,
+   the legs pointing away from the head; a skeleton none of them passes is refused with the best
+   plan's reason (:class:`~infuse.errors.NotHumanoidError`).
+3. Every plan that passes is assigned completely: :mod:`.limbs` places hip/knee/ankle and
+   clavicle/shoulder/elbow/wrist on each limb's chain (both limbs of a pair as one decision), the
+   torso, neck and head come from the path between the two limb pairs, :mod:`.hands` matches the
+   fingers to the digits, and left and right come from the body's own axes (names decide only
+   when the body does not show its front; the reasons say when the geometry overrules them).
+4. One cost over each complete assignment decides: the plan's score, the cost of placing every
+   limb joint, a missing head or torso, and what every mapped joint's name says about its slot.
+5. Confidence: each entry's own margin, capped by how the sides were decided, by what its joint's
+   name says, and by the cost margin to the runner-up assignment where that one differs.
 """
 from __future__ import annotations
 
