@@ -27,7 +27,7 @@ def _scene(idle: bool = True) -> Scene:
 
 
 class Frames:
-    """Every frame a live scene shows: index -> (wall time, {character: (rotations, morphs)})."""
+    """Every frame a live scene shows: index -> (wall time, {character: (rotations, morphs, root)})."""
 
     def __init__(self, live: LiveScene):
         self.shown: dict[int, tuple[float, dict]] = {}
@@ -36,7 +36,7 @@ class Frames:
 
     def _keep(self, frame):
         with self.event:
-            self.shown[frame.index] = (frame.wall_s, {n: (c.rotations, c.morphs) for n, c in frame.characters.items()})
+            self.shown[frame.index] = (frame.wall_s, {n: (c.rotations, c.morphs, c.root) for n, c in frame.characters.items()})
             self.event.notify_all()
 
     def wait(self, index: int, timeout_s: float = 5.0):
@@ -201,3 +201,38 @@ def test_point_grab_and_release_as_live_calls():
         grabbed = replies["grab"]["frame"]
         assert np.linalg.norm(cup[released - 1] - cup[grabbed]) > 0.1  # carried
         assert np.allclose(cup[released:released + 30], cup[released])  # left where the hand let it go
+
+
+def test_frames_stand_on_the_ground_as_exported_files_do():
+    """SmartBody's Brad has his hips at the origin (a metre below the ground in the runtime), Ann's soles
+    reach below her foot joints: the frames shown stand both on y = 0, soles included, at the height of
+    the scene's exported clip (forward kinematics on the shown frames)."""
+    from infuse.contacts import feet, lowest_points
+    from infuse.grounding import sole_depth
+    from infuse.kinematics import forward_kinematics, motion_fk
+
+    scene = Scene(fps=FPS, quiet=True)
+    scene.add_character(corpus_file("smartbody/mesh/brad/Brad.dae"), "brad", position=(-1, 0, 0))
+    scene.add_character(corpus_file("talkinghead/avatars/brunette-t.glb"), "ann", position=(1, 0, 0))
+    with LiveScene(scene) as live:
+        frames = Frames(live)
+        live.nod("brad")
+        frames.wait(60)
+    shown = sorted(frames.shown)
+    kept = {name: live.scene.runtime.last_poses(name, live.scene.runtime.frame) for name in scene.characters}
+    for name in scene.characters:
+        rig = scene.runtime.rig(name)
+        asset = rig.character.asset
+        rotations = np.array([frames.shown[i][1][name][0] for i in shown])
+        roots = np.array([frames.shown[i][1][name][2] for i in shown])
+        global_rotations, positions = forward_kinematics(rig.skeleton, rotations, roots)
+        pair = feet(rig.skeleton, rig.mapping)
+        sole = lowest_points(rig.skeleton, pair, global_rotations, positions).min(axis=-1) - sole_depth(asset, pair)
+        assert np.abs(sole.min()) < 1e-3, (name, sole.min())
+        exported = scene.runtime.export(name).motions["runtime"]
+        first = scene.runtime.frame - len(kept[name][0])
+        at = np.array(shown) - first
+        assert at.min() >= 0
+        offset = positions[:, 0] - motion_fk(exported)[1][at, 0]
+        assert np.abs(offset).max() < 1e-3, (name, np.abs(offset).max())
+    assert float(scene.runtime.last_poses("brad", 1)[1][0, 1]) < 0.2  # the runtime's own frames: a metre down

@@ -1,6 +1,7 @@
 """``infuse serve`` driven over a real WebSocket with real BML (speech, gaze at a moving target, nod, walk,
 reach, an interruption): feedback arrives in order, and the pose stream's frames are those of the same
-scene realized offline from the same blocks at the times the server started them."""
+scene realized offline from the same blocks at the times the server started them, stood on the ground
+by the feet at rest (soles included)."""
 from __future__ import annotations
 
 import json
@@ -134,6 +135,7 @@ def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
 OFFLINE = """
 import json, sys
 import numpy as np
+from infuse.grounding import foot_height, grounded
 from infuse.live import MovableTarget
 from infuse.scene.command import build_scene
 from infuse.scene.scenefile import read_scene_file
@@ -159,7 +161,8 @@ for first, count in job["blocks"]:
 assert not todo
 out = {}
 for name in scene.characters:
-    motion = scene.motion(name)
+    rig = scene.runtime.rig(name)  # stood on the ground by its feet at rest, soles included
+    motion = grounded(scene.motion(name), foot_height(rig.character.asset, rig.mapping))
     out[f"{name}_rotations"], out[f"{name}_roots"] = motion.local_rotations, motion.root_translations
     out[f"{name}_morphs"] = scene.runtime.morph_weights(name)
 np.savez(job["out"], **out)

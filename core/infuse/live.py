@@ -7,30 +7,35 @@
 
     scene = Scene(fps=60)
     scene.add_character("avatar.glb", name="ann", packs=["locomotion-female"])
-    with LiveScene(scene) as live:                  # a thread evaluates one frame every 1/60 s
-        live.on_frame(lambda frame: ...)             # each frame as it is evaluated (do not block)
+    with LiveScene(scene) as live:                  # threads evaluate and show a frame every 1/60 s
+        live.on_frame(lambda frame: ...)             # each frame as it is shown (do not block)
         live.on("blockProgress", print)              # BML feedback, as in a Scene
         live.say("ann", "Hello!")                    # the builder calls start on the next frame
         live.move_target("ball", (0.5, 1.2, 1.0))    # a named target; gaze follows it from the next frame
         live.bml("ann", '<bml ... composition="REPLACE">...</bml>')
 
-Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch + k / fps``. Commands
-(BML, builder calls, target moves) are applied on the loop thread between evaluations, so what a command
-starts "now" shows on the next frame evaluated; the loop spends at most :attr:`LiveScene.command_budget_s`
-per frame on them and the rest wait. Commands wait in a bounded queue: a full queue raises
-:class:`~infuse.errors.BusyError` at once.
+Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch + k / fps``. Two
+threads run it: the evaluator (the loop thread) applies commands (BML, builder calls, target moves) and evaluates blocks
+of frames; the presenter shows each frame when it is due (:meth:`LiveScene.on_frame` callbacks). Each
+block starts as late as it can and still be ready when its first frame is due (the lead: the 90th
+percentile of how long the last blocks took from their planned start, waking late included), so a
+command that arrives before then shows on that frame. The evaluator spends at most
+:attr:`LiveScene.command_budget_s` per block on commands once a block is due; the rest wait. Commands
+wait in a bounded queue: a full queue raises :class:`~infuse.errors.BusyError` at once.
 
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
-much the same for one frame as for eight). So the loop evaluates blocks of
-:attr:`LiveScene.block_frames` frames: one, just in time, while a frame costs under 60% of a frame's
-time; twice as many (up to ``max_block_frames``) when it costs more, evaluated ahead while the frames in
-hand are shown at their due times; half as many after two seconds of frames that cost under 20% (costs
-as a moving average over the last blocks).
-With blocks of B frames a command shows within 2B frames. Frames that are ready only after the next
-one is due are skipped and count as missed (:attr:`LiveStats.missed`).
+much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
+while a frame costs under 60% of a frame's time; twice as many (up to ``max_block_frames``) when it
+costs more; half as many after two seconds of frames that cost under 20% (costs as a moving average over
+the last blocks). With blocks of B frames a command shows within B frames plus the lead. A frame still
+waiting when the next one is due is skipped and counts as missed (:attr:`LiveStats.missed`). At most a
+block and the frames already due when it started wait to be shown.
+
+Frames stand on the ground as exported files do: each character is lowered by how low its feet reach at
+rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
 
 Speech is synthesized on the caller's thread before its block reaches the loop, so synthesis never
-stalls a frame. Old frames are forgotten (:meth:`~infuse.runtime.Runtime.forget`): memory stays bounded.
+stalls a frame. Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
 """
 from __future__ import annotations
 
@@ -45,12 +50,15 @@ from typing import Callable, Iterable
 import numpy as np
 
 from .bml import BmlDocument, Scheduler, builder, parse_bml
-from .errors import BusyError, UsageError
+from .errors import BusyError, UnusableInputError, UsageError
+from .grounding import foot_height
 from .runtime.targets import Target
 from .scene import Scene
 
 #: Seconds of evaluated frames kept (walks look back 0.5 s to see a character standing).
 KEEP_S = 2.0
+#: Seconds a block's frames are meant to be ready before the first is due (handing them to the presenter).
+LEAD_MARGIN_S = 0.001
 
 
 @dataclass(frozen=True)
@@ -157,6 +165,12 @@ class LiveScene:
         self._speech = _PreparedSpeech(scene.speech, self._voice_of)
         scene.scheduler.speech_timer = self._speech
         self._last: LiveFrame | None = None
+        self._pending: deque[tuple[int, dict]] = deque()  # frames evaluated, not shown yet
+        self._ready = threading.Condition()
+        self._presenter: threading.Thread | None = None
+        self._lead_s = 0.0  # how long before a block's first frame is due its evaluation starts
+        self._leads: deque[float] = deque(maxlen=30)
+        self._grounds: dict[str, float] = {}
         self._movable: dict[str, MovableTarget] = {}
         self._warm = False
         self._made_before = 0
@@ -183,22 +197,29 @@ class LiveScene:
             scratch.run(seconds)
 
     def start(self) -> "LiveScene":
-        """Start the loop thread (after :meth:`warm_up`): the scene's current time is now on the wall clock."""
+        """Start the loop (after :meth:`warm_up`): the scene's current time is now on the wall clock."""
         if self._thread is not None:
             raise UsageError("this live scene has already been started")
         if not self._warm:
             self.warm_up()
             self._warm = True
+        for name in self.scene.characters:
+            self._foot_height(name)  # meshes skinned here, not on the loop thread
         self.epoch = time.perf_counter() - self.scene.time
         self._thread = threading.Thread(target=self._run, name="infuse-live", daemon=True)
+        self._presenter = threading.Thread(target=self._present, name="infuse-live-frames", daemon=True)
         self._thread.start()
+        self._presenter.start()
         return self
 
     def stop(self, timeout_s: float = 5.0) -> None:
-        """Stop the loop (after the frame it is evaluating); commands still queued get :class:`UsageError`."""
+        """Stop the loop (after the block it is evaluating); commands still queued get :class:`UsageError`."""
         self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout_s)
+        with self._ready:
+            self._ready.notify_all()
+        for thread in (self._thread, self._presenter):
+            if thread is not None and thread is not threading.current_thread():
+                thread.join(timeout_s)
         while True:
             try:
                 future = self._commands.get_nowait()[0]
@@ -221,34 +242,65 @@ class LiveScene:
         return self.epoch + frame * self.period_s
 
     def _run(self) -> None:
+        """The evaluator: each block starts as late as it can and still be ready when its first frame is
+        due, so that commands arriving until then apply to that frame."""
         scene = self.scene
-        pending: deque[tuple[int, dict]] = deque()  # frames evaluated, not shown yet
         try:
             while not self._stop.is_set():
-                if len(pending) < self.block_frames:
-                    if self.block_frames == 1:  # just in time: what arrives before the frame is due shows on it
-                        self._apply_commands(self.due_s(scene.runtime.frame))
-                    else:  # ahead: the frames in hand are shown while the next block is evaluated
-                        self._apply_commands(time.perf_counter())
-                    if self._stop.is_set():
-                        break
-                    overdue = int((time.perf_counter() - self.due_s(scene.runtime.frame)) / self.period_s)
-                    pending.extend(self._evaluate(self.block_frames + max(overdue - len(pending), 0)))
-                index = pending[0][0]
-                self._apply_commands(self.due_s(index))
-                now = time.perf_counter()
-                while len(pending) > 1 and now >= self.due_s(pending[1][0]):  # too late to show: skipped
-                    pending.popleft()
-                    self.stats.missed += 1
-                self._show(*pending.popleft())
+                first = scene.runtime.frame
+                planned = self.due_s(first) - self._lead_s - LEAD_MARGIN_S
+                begun = max(planned, time.perf_counter())  # a block that is late already starts at once
+                self._apply_commands(planned)
+                if self._stop.is_set():
+                    break
+                overdue = int((time.perf_counter() - self.due_s(first)) / self.period_s)  # due already: shown no more
+                frames = self._evaluate(self.block_frames + max(overdue, 0))
+                # the lead: from the planned start to the frames in hand (waking late included), the 90th
+                # percentile of the last blocks: one late block (the machine busy elsewhere) does not move it
+                self._leads.append(time.perf_counter() - begun)
+                self._lead_s = min(float(np.percentile(self._leads, 90)), self.max_block_frames * self.period_s)
+                with self._ready:
+                    self._pending.extend(frames)
+                    self._ready.notify_all()
         except BaseException as exc:  # reported to callers, which get errors from then on
-            self.error = exc
-            self._stop.set()
+            self._fail(exc)
             raise
+
+    def _present(self) -> None:
+        """The presenter: shows each evaluated frame when it is due; a frame still waiting when the next
+        one is due is skipped and counted as missed."""
+        try:
+            while not self._stop.is_set():
+                with self._ready:
+                    while not self._pending and not self._stop.is_set():
+                        self._ready.wait(0.05)
+                    if self._stop.is_set():
+                        return
+                    index = self._pending[0][0]
+                wait = self.due_s(index) - time.perf_counter()
+                if wait > 0 and self._stop.wait(wait):
+                    return
+                with self._ready:
+                    now = time.perf_counter()
+                    while len(self._pending) > 1 and now >= self.due_s(self._pending[1][0]):
+                        self._pending.popleft()
+                        self.stats.missed += 1
+                    shown = self._pending.popleft()
+                self._show(*shown)
+        except BaseException as exc:
+            self._fail(exc)
+            raise
+
+    def _fail(self, exc: BaseException) -> None:
+        self.error = exc
+        self._stop.set()
+        with self._ready:
+            self._ready.notify_all()
 
     def _evaluate(self, count: int) -> list[tuple[int, dict]]:
         """Evaluate the next ``count`` frames as one block (at most the runtime's ``block_frames``); their
-        indices and poses. Adapts :attr:`block_frames` to what evaluation costs (see the module doc)."""
+        indices and poses, stood on the ground as exported files are. Adapts :attr:`block_frames` to what
+        evaluation costs (see the module doc)."""
         scene = self.scene
         count = min(count, scene.runtime.block_frames)
         first = scene.runtime.frame
@@ -270,12 +322,25 @@ class LiveScene:
         else:
             self._cheap = 0
         self.stats.block_frames = self.block_frames
-        poses = {name: scene.runtime.last_poses(name, count) for name in scene.characters}
+        poses = {}
+        for name in scene.characters:
+            rotations, root, morphs = scene.runtime.last_poses(name, count)
+            root[:, 1] -= self._foot_height(name)
+            poses[name] = rotations, root, morphs
         frames = [(first + k, {name: CharacterFrame(r[k], t[k], m[k]) for name, (r, t, m) in poses.items()})
                   for k in range(count)]
         if first // int(self.fps) != scene.runtime.frame // int(self.fps):
             self._forget()
         return frames
+
+    def _foot_height(self, name: str) -> float:
+        """How low (m) the character's feet reach, soles included, at rest: its frames are lowered by it, as
+        :meth:`~infuse.runtime.Runtime.export` grounds a clip (measured before the loop starts, or here)."""
+        height = self._grounds.get(name)
+        if height is None:
+            rig = self.scene.runtime.rig(name)
+            height = self._grounds[name] = _rest_foot_height(rig.character.asset, rig.mapping)
+        return height
 
     def _apply_commands(self, until: float) -> None:
         """Apply commands until the wall clock reaches ``until`` (waiting for them meanwhile); at most
@@ -348,13 +413,14 @@ class LiveScene:
         return self.submit(function, *args).result(timeout_s)
 
     def on_frame(self, callback: Callable[[LiveFrame], None]) -> Callable[[], None]:
-        """Call ``callback(frame)`` on the loop thread after each frame (it must return at once);
+        """Call ``callback(frame)`` on the presenter thread as each frame is shown (it must return at once);
         returns a function that unsubscribes."""
         self._frame_callbacks.append(callback)
         return lambda: self._frame_callbacks.remove(callback) if callback in self._frame_callbacks else None
 
     def on(self, kinds: str | Iterable[str] | None, callback: Callable) -> Callable[[], None]:
-        """Call ``callback(event)`` on the loop thread for BML feedback of ``kinds`` (see :meth:`Scene.on`)."""
+        """Call ``callback(event)`` on the evaluator thread for BML feedback of ``kinds`` (see :meth:`Scene.on`),
+        as frames are evaluated."""
         return self.scene.on(kinds, callback)
 
     @property
@@ -510,8 +576,14 @@ class LiveScene:
         packs = (packs,) if isinstance(packs, str) else tuple(packs)
         if packs and self.scene.pack_cache is not None:
             infuse_character(character, list(packs), mapping=character.mapping, cache=self.scene.pack_cache)
-        added = self.call(lambda: self.scene.add_character(character, name, position=position, facing=facing, packs=packs,
-                                                            voice=voice, idle=idle), timeout_s=120.0)
+        height = _rest_foot_height(character.asset, character.mapping)
+
+        def join() -> str:
+            added = self.scene.add_character(character, name, position=position, facing=facing, packs=packs,
+                                             voice=voice, idle=idle)
+            self._grounds[added] = height
+            return added
+        added = self.call(join, timeout_s=120.0)
         self._warm_up(added)
         return added
 
@@ -534,6 +606,15 @@ class LiveScene:
             self.scene.add_target(name, target)
         target.point = point
         return self.scene.time
+
+
+def _rest_foot_height(asset, mapping) -> float:
+    """The lowest point (m) of a character's feet at rest, soles included (:func:`~infuse.grounding.foot_height`);
+    0 for a character without both legs mapped (it is not grounded)."""
+    try:
+        return foot_height(asset, mapping)
+    except UnusableInputError:
+        return 0.0
 
 
 class MovableTarget(Target):
