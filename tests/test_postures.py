@@ -188,6 +188,24 @@ def test_the_frames_do_not_depend_on_the_block_size(pack_cache):
     assert np.abs(a - b).max() < 1e-6
 
 
+def test_a_posture_asked_for_during_a_walk_begins_once_the_character_stands(pack_cache):
+    body = '<locomotion id="w1" target="0 2.5" start="0.5"/>' + SHIFT.format(id="p1", start="w1:end", lexeme="ARMS_CROSSED")
+    scene, motion = play("xbot", body, pack_cache, seconds=8.0)
+    posture = scene.activities[("b1", "p1")]
+    assert posture.start_s >= posture.source.start - 1e-9 and posture.end_s is None  # it did not give way to the walk
+    rig = scene.runtime.rig("bob")
+    start = int(round(posture.start_s * FPS))
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations)
+    hips = g_pos[:, rig.joint("base"), :][:, [0, 2]]
+    assert np.linalg.norm(hips[start] - hips[0]) > 2.0  # it walked there
+    assert feet_travel_m(rig, motion, np.arange(start, motion.num_frames)) < 0.003
+    space = posture_space(rig, "postures")
+    authored = chest_frame(rig, space.clips["arms_crossed"].motion, "l_wrist")
+    f = motion.num_frames - 1
+    loop = (f - start) % (space.clips["arms_crossed"].motion.num_frames - 1)
+    assert np.linalg.norm(chest_frame(rig, motion, "l_wrist")[f] - authored[loop]) < 0.002
+
+
 def test_breathing_and_gaze_still_add_to_a_posture(pack_cache):
     body = SHIFT.format(id="p1", start=0.2, lexeme="ARMS_CROSSED") + '<gaze id="g1" target="cup" start="2" end="5"/>'
     plain, still = play("rpm", SHIFT.format(id="p1", start=0.2, lexeme="ARMS_CROSSED"), pack_cache, seconds=5.0)

@@ -15,7 +15,8 @@ hips instead of through them. Layers above add as usual: breathing, gestures, ga
 
 A posture started while another plays takes its footprints from the pose that one makes (postures
 are evaluated in the order they started); a lasting posture ends the lasting ones before it once it
-has blended in; a temporary one blends back out to what plays below it. When the pose below walks
+has blended in; a temporary one blends back out to what plays below it. One asked for while the
+character walks begins once it stands. When the pose below walks
 away (the hips more than :data:`WALK_AWAY_M` from where they stood), the posture gives way: it blends
 out, letting the feet go with it.
 """
@@ -38,6 +39,8 @@ TRANSITION_S = 1.0
 LEG_REACH = 0.995
 #: The hips of the pose below this far (metres, horizontally) from where they stood: the character walks off.
 WALK_AWAY_M = 0.15
+#: The pose below stands when its hips move slower than this, metres per second (an idle sways at a few cm/s).
+STILL_M_S = 0.15
 #: The posture whose arms a blend passes by (hanging at the sides), and the shares of the blend over which
 #: the arms leave the pose below for it and go from it to the posture's.
 VIA = "neutral"
@@ -90,6 +93,7 @@ class Posture(Controller):
         self.clip, self.pack = str(clip), pack
         self.phase_s = float(phase_s)
         self.blend_in_s = self.blend_out_s = float(transition_s)
+        self.replaces: list = []  # activities this posture ends once it is in (see posture_from_bml)
 
     def describe(self) -> str:
         return f"posture {self.clip}"
@@ -124,11 +128,11 @@ class Posture(Controller):
 
     def evaluate_one(self, job, block) -> None:
         b, pose, state = job.binding, job.pose, job.state
-        started = np.flatnonzero(job.local_times >= -1e-9)
         if "ankles" not in state:
-            if not started.size:
+            k = self._standing(job, block)
+            if k is None:
                 return
-            state.update(self._footprints(pose, b["legs"], int(started[0])))
+            state.update(self._footprints(pose, b["legs"], k))
         pin = self._leaving(job, block)
         live = job.weight > 0.0
         if not live.any():
@@ -223,6 +227,45 @@ class Posture(Controller):
         out = rotations.copy()
         out[:, arms] = quat.slerp(passing, target[:, arms], np.broadcast_to(arrive, via.shape[:2]))
         return out
+
+    def _standing(self, job, block) -> int | None:
+        """The first frame of the block, from the posture's start on, where the pose below stands (its hips
+        slower than :data:`STILL_M_S`), or None. A posture asked for while the character still walks (its
+        stop steps, a walk that lasts longer than planned) waits for it to stand: the activity is moved to
+        start there (its end with it) and the job's weights and times follow."""
+        started = job.local_times >= -1e-9
+        if not started.any():
+            return None
+        hips = job.pose.chain_pose(job.binding["legs"][:, 0])[1].mean(axis=1)  # (F, 3) in the world
+        previous = self._previous_hips(job)
+        before = np.concatenate(([hips[0] if previous is None else previous], hips[:-1]))
+        speed = np.linalg.norm((hips - before)[:, [0, 2]], axis=-1) * block.fps
+        still = np.flatnonzero(started & (speed < STILL_M_S))
+        if not still.size:
+            return None
+        k = int(still[0])
+        activity = job.activity
+        late = float(block.times[k]) - activity.start_s
+        if late > 1e-9:
+            activity.start_s += late
+            if activity.end_s is not None:
+                activity.end_s += late
+            for earlier in self.replaces:  # what it replaces plays on until it is in (unless it is over or walked off)
+                if earlier.end_s is not None and earlier.end_s > block.times[0] and "leave_s" not in earlier.state:
+                    earlier.end_s += late
+            job.weight = activity.weights(block.times)
+            job.local_times = block.times - activity.start_s
+        return k
+
+    @staticmethod
+    def _previous_hips(job) -> np.ndarray | None:
+        """The hips' centre (3,) in the world on the frame before the block, as the runtime wrote it, or None."""
+        runtime = job.activity.runtime
+        local, root, _ = runtime.last_poses(job.rig.name, 1)
+        if not len(local):
+            return None
+        _, g_pos = forward_kinematics(job.rig.skeleton, local, root)
+        return g_pos[0, job.binding["legs"][:, 0]].mean(axis=0)
 
     def _leaving(self, job, block) -> np.ndarray:
         """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
@@ -326,4 +369,5 @@ def posture_from_bml(parameters: dict, runtime, character: str, activation=None)
             lasting_posture = isinstance(a.controller, Posture) or getattr(a.source, "controller", None) == "posture"
             if a.rig.name == character and lasting_posture and a.end_s is None and a.start_s < start:
                 a.end_s, a.blend_out_s = start + posture.blend_in_s, 0.0
+                posture.replaces.append(a)
     return posture
