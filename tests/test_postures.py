@@ -1,11 +1,12 @@
 """The postures pack (tools/motion_authoring/postures.py) and the posture controller, measured by FK: every
 posture stands on the same footprints and loops; BML posture names map to the pack's postures (unknown ones
-warn at scheduling); on Xbot, the Ready Player Me avatar and SmartBody's utah skeleton the feet stay planted
+warn at scheduling); on Xbot, the Ready Player Me avatar, SmartBody's utah skeleton and Brad the feet stay planted
 through postures, transitions and returns, the arms reach the authored places, breathing and gaze still add,
 a walk ends a lasting posture, and the forearms and hands stay out of the torso's skin."""
 from __future__ import annotations
 
 import sys
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -13,13 +14,15 @@ import pytest
 from scipy.spatial import cKDTree
 
 import infuse
-from infuse import quaternions as quat
+from infuse import Character, quaternions as quat
 from infuse.bml import Scheduler
 from infuse.kinematics import forward_kinematics
+from infuse.mapping import map_skeleton
 from infuse.mesh import skinning_matrices
 from infuse.runtime import Runtime
 from infuse.scene import Scene
 
+from corpus_data import corpus_file
 from infuse_postures.controller import posture_space
 from runtime_characters import corpus_character
 
@@ -126,9 +129,18 @@ def test_unknown_names_and_other_stances_warn_at_scheduling_naming_the_postures(
 
 
 # -- on characters ------------------------------------------------------------------------------------------
+@lru_cache(maxsize=None)
+def character(key: str) -> Character:
+    """A corpus character of the runtime tests, or SmartBody's Brad with his mesh (``"brad"``)."""
+    if key != "brad":
+        return corpus_character(key)
+    asset = infuse.load(corpus_file("smartbody/mesh/brad/Brad.dae"))
+    return Character("brad", asset, mapping=map_skeleton(asset))
+
+
 def play(key: str, body: str, cache, idle: bool = False, seconds: float | None = None, block_frames: int = 150):
     scene = Scene(fps=FPS, tts=None, quiet=True, idle=idle, pack_cache=cache, block_frames=block_frames)
-    scene.add_character(corpus_character(key), "bob", packs=("locomotion-male",))
+    scene.add_character(character(key), "bob", packs=("locomotion-male",))
     scene.add_object("cup", (1.2, 1.6, 1.0))
     scene.bml("bob", BML.format(id="b1", body=body), at=0.0)
     scene.run(seconds if seconds is not None else scene.end_time + 1.0)
@@ -158,7 +170,7 @@ SEQUENCE = (SHIFT.format(id="p1", start=0.5, lexeme="ARMS_CROSSED")
             + SHIFT.format(id="p3", start=8, lexeme="LEANING_FORWARD"))
 
 
-@pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
+@pytest.mark.parametrize("key", ["xbot", "rpm", "utah", "brad"])
 def test_postures_follow_each_other_with_the_feet_planted(key, pack_cache):
     scene, motion = play(key, SEQUENCE, pack_cache, seconds=11.0)
     rig = scene.runtime.rig("bob")
