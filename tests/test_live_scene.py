@@ -119,6 +119,7 @@ def test_memory_stays_bounded_and_a_full_queue_says_so():
         assert live.scene.runtime.frame >= 2.5 * FPS
         assert live.scene.speech.utterances == [None]  # said, then let go
         assert len(live.scene.activities) == 0 and len(live.scene.runtime.activities) <= 2
+        assert len(live.scene.scheduler.blocks) == 0  # the block said, let go
         block = live.say("ann", "Hi.")  # said again: synthesized anew, lip-synced
         start = round(live.scene.scheduler.blocks[block].start_s * FPS)
         frames.wait(start + 20)
@@ -236,3 +237,32 @@ def test_frames_stand_on_the_ground_as_exported_files_do():
         offset = positions[:, 0] - motion_fk(exported)[1][at, 0]
         assert np.abs(offset).max() < 1e-3, (name, np.abs(offset).max())
     assert float(scene.runtime.last_poses("brad", 1)[1][0, 1]) < 0.2  # the runtime's own frames: a metre down
+
+
+def test_finished_blocks_are_let_go_and_the_kept_count_stays_bounded():
+    """A scene forgetting as a live one does (every second, two seconds kept) while a nod starts every
+    0.1 s for 60 s, every fourth one a REPLACE that cuts the one before: the blocks kept are those that may
+    still play or give feedback (a nod lasts about a second), however many ran; every block's progress is
+    delivered, start to end; a block let go is unknown to a later bmla:interrupt, which warns as for any
+    unknown name."""
+    scene = Scene(fps=30, quiet=True, idle=False)
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob")
+    ended, warnings, kept = set(), [], []
+    scene.on("blockProgress", lambda e: ended.add(e.block) if e.sync == "end" else None)
+    scene.on("warningFeedback", warnings.append)
+    for k in range(600):
+        composition = ' composition="REPLACE"' if k % 4 == 3 else ""
+        scene.bml("bob", f'<bml xmlns="{BML_NS}" id="nod{k}"{composition}><head id="h" lexeme="NOD"/></bml>')
+        scene.step(3)
+        if k % 10 == 9:
+            scene.forget(2.0)
+            kept.append(len(scene.scheduler.blocks))
+            assert all(min(r.end_s, r.interrupted_at or np.inf) >= scene.time - 3.0 for r in scene.scheduler.blocks.values())
+    assert max(kept) <= 45, kept
+    scene.step(90)
+    scene.forget(2.0)
+    assert len(scene.scheduler.blocks) == 0 and len(scene._interrupted) == 0
+    assert ended == {f"nod{k}" for k in range(600)}
+    scene.bml("bob", f'<bml xmlns="{BML_NS}" id="late" bmla:interrupt="nod599" '
+                     f'xmlns:bmla="http://www.asap-project.org/bmla"><head id="h" lexeme="NOD"/></bml>')
+    assert "bmla:interrupt names unknown block 'nod599'" in warnings[-1].description

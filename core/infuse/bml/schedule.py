@@ -99,6 +99,9 @@ class BlockSchedule:
         return {a.behaviour: {s: t - self.start_s for s, t in a.sync_times.items()} for a in self.activations}
 
 
+#: Speech texts a scheduler remembers for generators once it forgets (:meth:`Scheduler.forget`).
+SAID_KEPT = 100
+
 # Order of simultaneous progress events: a block starts before its sync points pass, and ends after them.
 _RANK_BLOCK_START, _RANK_SYNC, _RANK_BLOCK_END = 0, 1, 2
 
@@ -362,6 +365,20 @@ class Scheduler:
         """Deliver every pending progress event (the clock runs to the end of everything scheduled)."""
         end = max([self.now] + [p[0] for p in self._pending])
         return self.advance(end)
+
+    def forget(self, before_s: float, said: int = SAID_KEPT) -> None:
+        """Keep memory bounded in a scheduler that runs for hours (a live scene): let go of the blocks that
+        ended, were cut or failed before ``before_s`` seconds and have no feedback left to deliver, and of
+        all but the last ``said`` speech texts (what generators see as said before). A block let go is
+        unknown from then on: a later ``bmla:interrupt`` or ``appendAfter`` naming it warns, as for a
+        name never scheduled."""
+        waiting = {p[4] for p in self._pending}
+        gone = [block_id for block_id, record in self.blocks.items() if block_id not in waiting
+                and (record.failed or self._effective_end(record) < before_s)]
+        for block_id in gone:
+            del self.blocks[block_id]
+        if len(self._said) > said:
+            del self._said[:len(self._said) - said]
 
     # -- output ---------------------------------------------------------------------------------------------
     def activations(self, character: str | None = None) -> list[Activation]:

@@ -570,10 +570,13 @@ class Scene(BuilderCalls):
 
     def forget(self, keep_s: float) -> None:
         """Keep memory bounded in a scene that runs for hours (a live one): drop the frames evaluated more
-        than ``keep_s`` seconds ago (:meth:`motion` and :meth:`audio` then start later), the activities and
-        utterances that ended before then, and all but the last 1,000 feedback events of the log."""
+        than ``keep_s`` seconds ago (:meth:`motion` and :meth:`audio` then start later), the activities,
+        utterances and BML blocks that ended before then (:meth:`~infuse.bml.Scheduler.forget`), and all
+        but the last 1,000 feedback events of the log."""
         before = self.time - float(keep_s)
         self.runtime.forget(keep_s)
+        self.scheduler.forget(before)
+        self._interrupted = {key for key in self._interrupted if key[0] in self.scheduler.blocks}
         for key, activity in list(self.activities.items()):
             if activity.end_s is not None and activity.end_s < before:
                 del self.activities[key]
