@@ -47,7 +47,7 @@ VIA = "neutral"
 VIA_SHARE = 0.6
 #: How far the arms are lifted out to the sides, beyond the neutral posture's, as they pass by it (radians).
 VIA_ABDUCTION = np.radians(20.0)
-#: How far a wrist going round the body bulges out on the way, metres, for a half turn or more about it.
+#: How far a wrist going round the body bulges out on the way, metres, for a quarter turn or more about it.
 BULGE_M = 0.05
 #: How far round from the front (degrees about the body) a wrist must start or end for it to begin to take
 #: the way round the body, and to take it in full: hands behind the back.
@@ -75,6 +75,7 @@ def facing(left: np.ndarray) -> float:
 
 
 def _yaw(angle: float) -> np.ndarray:
+    """The rotation (4,) by ``angle`` radians about +Y."""
     return quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), np.array(angle))
 
 
