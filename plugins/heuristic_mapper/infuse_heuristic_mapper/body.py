@@ -4,7 +4,8 @@ A humanoid has two pairs of limbs. Each pair hangs from one joint (the two subtr
 images: the same path lengths along their main chains, about the same number of joints), the
 legs and the arms lie in different branches, both pairs are mirror images about one middle
 plane, and the legs point away from the head. Candidate pairs are scored on symmetry, length,
-names, hands at their ends and rest geometry, and the best legs/arms combination wins. Path
+names, hands at their ends and rest geometry, and the legs/arms combinations are ranked (the
+mapper assigns the best one and its close rivals completely and lets one cost decide). Path
 lengths do not depend on the pose, so this works on arbitrary rest poses; the geometry tests take
 the pose that makes a standing body.
 """
@@ -189,12 +190,6 @@ def _best_per_branch(pairs: list[LimbPair], score: dict, keep: int, per_branch: 
             if len(out) == keep:
                 break
     return out
-
-
-def choose_plan(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> BodyPlan | None:
-    """The best-scoring legs/arms combination, or ``None`` when there is no limb pair at all."""
-    plans = rank_plans(view, pairs, keep)
-    return plans[0] if plans else None
 
 
 def rank_plans(view: SkeletonView, pairs: list[LimbPair], keep: int = 8) -> list[BodyPlan]:
