@@ -1,0 +1,360 @@
+"""The whole pipeline on rigs of families the project was not developed on (``INFUSE_WILD``).
+
+For every humanoid rig of the wild folder:
+
+1. **Retargeting.** Three corpus clips (a Bandai BVH walk, a SmartBody walk, CMU 131_01 "start walk
+   stop") are put onto the rig as ``infuse retarget`` does (both skeletons mapped by the default
+   mapper, one :class:`~infuse_retarget.RetargetPlan`, contact-pinned feet, the clip stood on the
+   ground) and written to a ``.glb``; the written file is read back and measured with FK:
+
+   - foot skate, cm per metre walked (:func:`infuse.metrics.foot_skate` over the source's contacts),
+     source and output, and its target, source x 1.1 + 0.5;
+   - bone-direction error, degrees: the limbs and the hip and shoulder lines, output against source;
+   - penetration of the feet below the level they rest at, cm (mean and deepest), and the float of a
+     planted foot, cm;
+   - popping: the joint whose largest turn between two frames comes closest to (or goes furthest
+     past) 1.5 x the source's + 10 degrees, and its margin (negative: past the bound);
+   - the share of foot goals out of reach, the largest miss of a reachable one (mm);
+   - on the written file: every value finite, and the lowest foot point (soles included) over the
+     clip, cm (0: it stands on y = 0 as written).
+
+2. **Behaviour packs.** The rig is infused with ``locomotion-male``, ``gestures`` and ``postures`` in
+   a scene (a pack the rig cannot play, :class:`~infuse.MissingJointsError`, is counted with its
+   reason and the others go on); it walks to a point 4 m away at 90 degrees to its left, then plays a
+   beat gesture and an arms-crossed posture. Measured on the scene's output with FK: the pelvis's
+   miss of the target (m, its ground point over the last half second of the walk), foot skate over
+   the walk (cm per metre), how far the beat moved the right wrist and the posture the wrists
+   (cm, relative to the chest), every value finite, and the deepest a foot goes below the level
+   the feet rest at (cm, soles included).
+
+The worst cases of each table are named at the end. Run: ``python benchmarks/wild_pipeline.py``
+(``--quick``: 6 rigs and the Bandai walk only; ``--rigs TEXT``: rigs whose path contains TEXT).
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+import infuse
+from infuse import metrics
+from infuse import quaternions as quat
+from infuse.contacts import feet, foot_contacts, lowest_points
+from infuse.errors import MissingJointsError
+from infuse.grounding import foot_height, grounded, sole_depth
+from infuse.kinematics import motion_fk
+from infuse.mapping import map_skeleton
+from infuse.packs import infuse_character
+from infuse.scene import Scene
+from infuse_retarget import RetargetPlan, retarget_clip
+from infuse_retarget.command import source_mapping
+from infuse_retarget.quality import evaluate
+
+REPO = Path(__file__).resolve().parents[1]
+WILD = Path(os.environ.get("INFUSE_WILD", REPO.parent / "shared" / "wild")).resolve()
+CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")).resolve()
+SOURCES = {
+    "bandai walk": "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh",
+    "smartbody walk": "smartbody/behaviorsets/MaleLocomotion/motions/ChrUtah_Walk001.skm",
+    "cmu walk": "bvh11/resources/131_01.bvh",
+}
+PACKS = ("locomotion-male", "gestures", "postures")
+QUICK = ("mocapbank", "BrainStem", "Motive", "mannequiny", "Casual", "CandyRockStar")
+FPS = 30.0
+#: The walk's target: 4 m away at 90 degrees to the left of a character facing +Z (x, z), metres.
+TARGET = (4.0, 0.0)
+WALK_AT_S, WALK_S = 0.2, 8.0
+BML = '<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="{id}" characterId="bob">{body}</bml>'
+BEAT = '<gesture id="g1" lexeme="BEAT" mode="RIGHT_HAND"/>'
+POSTURE = '<posture id="p1" start="0"><stance type="STANDING"/><pose part="ARMS" lexeme="ARMS_CROSSED"/></posture>'
+
+
+def humanoid_rigs(contains: str | None = None) -> list[str]:
+    """Paths (relative to the wild root) of the humanoid rigs its labels list, sorted."""
+    docs = [json.loads(p.read_text()) for p in sorted((WILD / "labels").glob("*.json"))]
+    return [d["file"] for d in docs if d["humanoid"] and (contains is None or contains in d["file"])]
+
+
+def short(rel: str) -> str:
+    """A rig's file name without the source folders."""
+    return Path(rel).name
+
+
+@dataclass
+class RetargetRow:
+    """Figures of one clip on one rig (see the module docstring); lengths cm, angles degrees;
+    ``pop_frame`` the frame of the written clip where ``pop_joint`` turns most."""
+
+    rig: str
+    source: str
+    scale: float
+    skate_source: float
+    skate: float
+    skate_limit: float
+    bones: float
+    penetration: float
+    max_penetration: float
+    float_cm: float
+    pop_joint: str
+    pop_margin: float
+    pop_frame: int
+    unreachable: float
+    residual_mm: float
+    finite: bool
+    written_lowest_cm: float
+
+    @property
+    def ok(self) -> bool:
+        """Within the retargeting targets: finite, skate <= its limit, bones <= 5 degrees, no joint
+        past the popping bound, reachable goals met within 1 mm, standing on y = 0 as written."""
+        return (self.finite and self.skate <= self.skate_limit and self.bones <= 5.0 and self.pop_margin >= 0.0
+                and self.residual_mm <= 1.0 and abs(self.written_lowest_cm) < 0.1)
+
+
+class Sources:
+    """The source clips, each with its asset and mapping (as ``infuse retarget`` maps a motion file), loaded once."""
+
+    def __init__(self, names=tuple(SOURCES)):
+        self.clips = {}
+        for name in names:
+            asset = infuse.load(CORPUS / SOURCES[name])
+            self.clips[name] = (next(iter(asset.motions.values())), source_mapping(asset, None, None))
+
+
+def _ground_depth(asset: infuse.Asset, mapping, motion) -> tuple[np.ndarray, float]:
+    """(F, 2) lowest point of each foot over ``motion``'s frames, soles included, and the sole depth (m)."""
+    pair = feet(asset.skeleton, mapping)
+    g, p = motion_fk(motion)
+    depth = sole_depth(asset, pair)
+    return lowest_points(asset.skeleton, pair, g, p) - depth, depth
+
+
+def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Sources, out_dir: Path) -> RetargetRow:
+    """Retarget ``source`` onto ``character`` as ``infuse retarget`` does, write it, read it back, measure."""
+    clip, src_map = sources.clips[source]
+    tgt_map = map_skeleton(character)
+    plan = RetargetPlan(clip.skeleton, src_map, character.skeleton, tgt_map, source_motion=clip,
+                        target_motion=next(iter(character.motions.values()), None))
+    q = evaluate(plan, clip)
+    result = retarget_clip(plan, clip)
+    motion = result.motion.replace(name="retargeted")
+    motion = grounded(motion, foot_height(character, tgt_map, motion))
+    out = out_dir / f"{short(rel)}.{source.replace(' ', '_')}.glb"
+    infuse.save(dataclasses.replace(character, motions={"retargeted": motion}), out)
+    back = infuse.load(out)
+    written = next(iter(back.motions.values()))
+    back_map = map_skeleton(back)
+    g, p = motion_fk(written)
+    lowest, _ = _ground_depth(back, back_map, written)
+    planted = result.contacts.foot_flags()
+    level = float(np.median(lowest[planted])) if planted.any() else float(lowest.min())
+    ground = metrics.ground_contact(lowest, planted, level)
+    pop = q.popping_final
+    j = back_map.indices(back.skeleton).get(pop.worst)
+    frame = 0
+    if j is not None and len(g) > 1:
+        frame = int(np.argmax(quat.angle_between(g[:-1, j], g[1:, j]))) + 1
+    return RetargetRow(short(rel), source, q.scale, q.skate_source, q.skate_final, q.skate_limit(), q.bones_final,
+                       ground.penetration, ground.max_penetration, ground.float, pop.worst, -pop.excess, frame,
+                       100.0 * q.unreachable, q.residual_mm, bool(np.isfinite(g).all() and np.isfinite(p).all()),
+                       100.0 * float(lowest.min()))
+
+
+@dataclass
+class PackRow:
+    """What the packs do on one rig (see the module docstring): ``refused`` pack -> reason; the walk's
+    ``miss_m`` and ``skate`` (cm/m), NaN without locomotion; ``beat_cm`` / ``posture_cm`` how far the
+    wrists moved, NaN when not played; ``depth_cm`` the deepest a foot went below the level it
+    started at; ``pop_joint`` / ``pop_deg`` / ``pop_frame`` the joint turning most in one frame."""
+
+    rig: str
+    packs: tuple[str, ...]
+    refused: dict[str, str] = field(default_factory=dict)
+    miss_m: float = float("nan")
+    arrival_s: float = float("nan")
+    skate: float = float("nan")
+    beat_cm: float = float("nan")
+    posture_cm: float = float("nan")
+    finite: bool = True
+    depth_cm: float = float("nan")
+    pop_joint: str = ""
+    pop_deg: float = float("nan")
+    pop_frame: int = 0
+    seconds: float = 0.0
+    motion: object = None
+    mapping: object = None
+
+
+def _chest_wrists(rig, g: np.ndarray, p: np.ndarray, sides: str) -> np.ndarray:
+    """(F, S, 3) the wrists of ``sides`` in the frame of the joint the arm hangs from."""
+    out = []
+    for s in sides:
+        top = rig.joint(f"{s}_acromioclavicular") or rig.joint(f"{s}_shoulder")
+        chest = rig.skeleton.parents[top]
+        w = rig.joint(f"{s}_wrist")
+        out.append(quat.rotate(quat.conjugate(g[:, chest]), p[:, w] - p[:, chest]))
+    return np.stack(out, axis=1)
+
+
+def _moved_cm(wrists: np.ndarray, start: int, stop: int) -> float:
+    """How far (cm) (F, S, 3) wrists get from where they were at ``start``, before ``stop``."""
+    span = wrists[start:stop]
+    return 100.0 * float(np.linalg.norm(span - span[:1], axis=-1).max()) if len(span) else float("nan")
+
+
+def pack_row(rel: str, cache: Path) -> PackRow:
+    """Infuse the built-in packs onto one wild rig, walk, gesture and pose it in a scene, measure the output."""
+    start = time.perf_counter()
+    asset = infuse.load(WILD / rel)
+    mapping = map_skeleton(asset)
+    row = PackRow(short(rel), ())
+    for pack in PACKS:
+        try:
+            infuse_character(infuse.Character("bob", asset, mapping), [pack], mapping=mapping, cache=cache)
+        except MissingJointsError as exc:
+            row.refused[pack] = exc.problem
+    row.packs = tuple(p for p in PACKS if p not in row.refused)
+    if not row.packs:
+        return row
+    scene = Scene(fps=FPS, tts=None, quiet=True, idle=False, pack_cache=cache)
+    scene.add_character(infuse.Character("bob", asset, mapping), "bob", facing=0.0, packs=row.packs)
+    walking = "locomotion-male" in row.packs
+    if walking:
+        scene.walk_to("bob", TARGET, at=WALK_AT_S)
+    scene.run(WALK_S)
+    beat_at, posture_at = WALK_S + 0.2, WALK_S + 2.0
+    if "gestures" in row.packs:
+        scene.bml("bob", BML.format(id="beat", body=BEAT), at=beat_at)
+    if "postures" in row.packs:
+        scene.bml("bob", BML.format(id="pose", body=POSTURE), at=posture_at)
+    scene.run(scene.end_time + 0.5)
+    motion = scene.motion("bob")
+    rig = scene.runtime.rig("bob")
+    g, p = motion_fk(motion)
+    row.finite = bool(np.isfinite(g).all() and np.isfinite(p).all())
+    walk_end = int(WALK_S * FPS)
+    if walking:
+        ground = p[:, rig.joint("base")][:, [0, 2]]
+        row.miss_m = float(np.linalg.norm(ground[walk_end - int(FPS / 2):walk_end].mean(axis=0) - TARGET))
+        away = np.nonzero(np.linalg.norm(ground[:walk_end] - TARGET, axis=-1) > 0.1)[0]
+        row.arrival_s = (away[-1] + 1) / FPS if away.size and away[-1] + 1 < walk_end else float("nan")
+        walk = motion.replace(local_rotations=motion.local_rotations[:walk_end],
+                              root_translations=motion.root_translations[:walk_end],
+                              joint_translations=None if motion.joint_translations is None
+                              else motion.joint_translations[:walk_end])
+        found = foot_contacts(walk, mapping, fk=(g[:walk_end], p[:walk_end]))
+        row.skate = metrics.foot_skate(p[:walk_end], found, rig.joint("base")).per_metre
+    if "gestures" in row.packs:
+        a = int(beat_at * FPS)
+        row.beat_cm = _moved_cm(_chest_wrists(rig, g, p, "r"), a, a + int(1.5 * FPS))
+    if "postures" in row.packs:
+        a = int(posture_at * FPS)
+        row.posture_cm = _moved_cm(_chest_wrists(rig, g, p, "lr"), a, a + int(3.0 * FPS))
+    lowest, _ = _ground_depth(asset, mapping, motion)
+    row.depth_cm = 100.0 * float(max(lowest[0].min() - lowest.min(), 0.0))
+    index = mapping.indices(asset.skeleton)
+    names = [n for n in index if not n.startswith(("l_thumb", "l_index", "l_middle", "l_ring", "l_pinky",
+                                                     "r_thumb", "r_index", "r_middle", "r_ring", "r_pinky"))]
+    turns = np.degrees(quat.angle_between(g[:-1][:, [index[n] for n in names]], g[1:][:, [index[n] for n in names]]))
+    f, k = np.unravel_index(int(np.argmax(turns)), turns.shape)
+    row.pop_joint, row.pop_deg, row.pop_frame = names[k], float(turns[f, k]), int(f) + 1
+    row.seconds = time.perf_counter() - start
+    row.motion, row.mapping = motion, mapping
+    return row
+
+
+def _fmt(x: float, width: int = 6, digits: int = 2) -> str:
+    return f"{x:{width}.{digits}f}" if np.isfinite(x) else f"{'-':>{width}}"
+
+
+def print_retargeting(rows: list[RetargetRow]) -> None:
+    head = (f"{'rig':<38} {'source':<14} {'scale':>5} | {'skate src/out':>13} {'limit':>5} | {'bones':>5} | "
+            f"{'pen mean/max':>12} {'float':>5} | {'popping joint':<16} {'margin':>6} {'frame':>5} | "
+            f"{'out%':>4} {'IK mm':>5} | {'lowest':>6}")
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        print(f"{r.rig[:38]:<38} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
+              f"{r.bones:5.2f} | {r.penetration:5.2f} {r.max_penetration:6.2f} {r.float_cm:5.2f} | {r.pop_joint:<16} "
+              f"{r.pop_margin:6.1f} {r.pop_frame:5d} | {r.unreachable:4.0f} {r.residual_mm:5.2f} | {r.written_lowest_cm:6.2f}"
+              + ("" if r.finite else "  NON-FINITE") + ("" if r.ok else "  <- misses a target"))
+
+
+def print_packs(rows: list[PackRow]) -> None:
+    head = (f"{'rig':<38} {'packs':<5} | {'miss m':>6} {'arrive':>6} {'skate':>6} | {'beat':>5} {'post':>5} | "
+            f"{'depth':>5} | {'largest turn':<16} {'deg':>5} {'frame':>5} | {'s':>4}")
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        played = "".join(p[0].upper() if p in r.packs else "." for p in PACKS)
+        print(f"{r.rig[:38]:<38} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
+              f"{_fmt(r.beat_cm, 5, 1)} {_fmt(r.posture_cm, 5, 1)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
+              f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {r.seconds:4.1f}" + ("" if r.finite else "  NON-FINITE"))
+    for r in rows:
+        for pack, reason in r.refused.items():
+            print(f"  {r.rig} refuses {pack}: {reason}")
+
+
+def print_worst(retargeted: list[RetargetRow], packs: list[PackRow], n: int = 5) -> None:
+    def names(rows, key, fmt):
+        ranked = sorted((r for r in rows if np.isfinite(key(r))), key=key, reverse=True)[:n]
+        return ", ".join(fmt(r) for r in ranked)
+
+    print("\nworst cases")
+    print("  retargeting, skate over its limit (cm/m): "
+          + names(retargeted, lambda r: r.skate - r.skate_limit, lambda r: f"{r.rig} {r.source} {r.skate - r.skate_limit:+.2f}"))
+    print("  retargeting, bone directions (deg): "
+          + names(retargeted, lambda r: r.bones, lambda r: f"{r.rig} {r.source} {r.bones:.2f}"))
+    print("  retargeting, popping margin (deg): "
+          + names(retargeted, lambda r: -r.pop_margin, lambda r: f"{r.rig} {r.source} {r.pop_joint} {r.pop_margin:+.1f} at {r.pop_frame}"))
+    print("  retargeting, deepest foot below its planted level (cm): "
+          + names(retargeted, lambda r: r.max_penetration, lambda r: f"{r.rig} {r.source} {r.max_penetration:.2f}"))
+    print("  packs, walk miss (m): " + names(packs, lambda r: r.miss_m, lambda r: f"{r.rig} {r.miss_m:.3f}"))
+    print("  packs, walk skate (cm/m): " + names(packs, lambda r: r.skate, lambda r: f"{r.rig} {r.skate:.2f}"))
+    print("  packs, foot below its start level (cm): " + names(packs, lambda r: r.depth_cm, lambda r: f"{r.rig} {r.depth_cm:.1f}"))
+    failed = [r for r in retargeted if not r.ok]
+    refused = sum(len(r.refused) for r in packs)
+    print(f"\n{len(retargeted)} retargeted pairs, {len(failed)} miss a target; {len(packs)} rigs infused, "
+          f"{refused} pack refusal(s); non-finite: {sum(not r.finite for r in retargeted + packs)}")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="6 rigs and the Bandai walk only")
+    parser.add_argument("--rigs", metavar="TEXT", help="only rigs whose path contains TEXT")
+    args = parser.parse_args(argv)
+    for root, what in ((WILD, "INFUSE_WILD"), (CORPUS, "INFUSE_CORPUS")):
+        if not (root / "labels").is_dir():
+            print(f"{root} not found (set {what})", file=sys.stderr)
+            return 2
+    rigs = humanoid_rigs(args.rigs)
+    if args.quick:
+        rigs = [r for r in rigs if any(k in r for k in QUICK)]
+    started = time.perf_counter()
+    sources = Sources(("bandai walk",) if args.quick else tuple(SOURCES))
+    retargeted, infused = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for rel in rigs:
+            character = infuse.load(WILD / rel)
+            retargeted += [retarget_row(character, rel, s, sources, Path(tmp)) for s in sources.clips]
+            infused.append(pack_row(rel, Path(tmp) / "infusions"))
+    print(f"retargeting onto {len(rigs)} wild rigs (cm, degrees; lowest: cm, as written)\n")
+    print_retargeting(retargeted)
+    print(f"\nbehaviour packs (L locomotion-male, G gestures, P postures played): walk to {TARGET} m, a beat, "
+          "a posture; miss m, arrival s, skate cm/m, wrist travel cm, depth cm\n")
+    print_packs(infused)
+    print_worst(retargeted, infused)
+    print(f"\n{time.perf_counter() - started:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
