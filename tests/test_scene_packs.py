@@ -81,7 +81,7 @@ def test_reach_touches_the_object(reached):
 
 def test_picked_up_objects_follow_the_hand_and_are_put_down(reached):
     scene, rig, _, pick, put = reached
-    assert "ann" not in scene.stagehands["reach"].holding  # put down again
+    assert scene.stage.held("ann") == ()  # put down again
     target = scene.runtime.target("cup")
     assert np.allclose(target.positions(np.zeros(1), None)[0], (-0.3, 1.35, 0.25), atol=1e-6)  # on the shelf now
     warned = [e for e in scene.feedback.log if e.kind == "warningFeedback" and e.id.startswith(("pick", "put"))]

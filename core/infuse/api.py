@@ -59,7 +59,7 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.runtime.limb_ik": "two-bone limb inverse kinematics",
     "infuse.bml": "BML behaviour plans, timing models, generations (BML added before scheduling) and errors",
     "infuse.bml.model": "BML documents and the warningFeedback types",
-    "infuse.stage": "Stage and Stagehand: what a scene offers the controller realizing a BML behaviour",
+    "infuse.stage": "Stage, Stagehand and Held: what a scene offers the controller realizing a BML behaviour",
     "infuse.packs": "behaviour packs: load_pack, Pack",
     "infuse.packs.analysis": "what the pack builder measures in clips (steps, strokes)",
     "infuse.packs.manifest": "pack manifests",

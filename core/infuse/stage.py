@@ -8,6 +8,10 @@ controllers, asks where things are, starts activities and reports what it cannot
 the scene plays the controller the factory's ``from_bml`` builds from the activation's start to its end
 (:meth:`Stage.play`).
 
+What each hand of each character holds is the stage's to keep (:class:`Held`), so one plugin's grab can
+be put down by another's reach: the plugin that takes an object records it with :meth:`Stage.hold`,
+saying how its hand lets go; whichever lets go of it calls :meth:`Stage.let_go`.
+
 A plugin that needs to follow its behaviours across a whole scene (walks that go on from one another,
 an object a hand holds) keeps a :class:`Stagehand`: one object per scene, made on first use by
 :meth:`Stage.stagehand` and owned by the scene, which calls it before each evaluated block.
@@ -17,6 +21,7 @@ Times are global seconds; positions metres in the scene's frame (+Y up). The war
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Protocol, TypeVar
 
@@ -27,9 +32,23 @@ if TYPE_CHECKING:
     from .runtime import Activity, Controller, Runtime
     from .speech import Utterance
 
-__all__ = ["Stage", "Stagehand", "end_s", "until_s"]
+__all__ = ["Held", "Stage", "Stagehand", "end_s", "until_s"]
 
 T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Held:
+    """An object in a hand of a character: ``obj`` (its name as the scene spells it) in the ``hand``
+    ("left" or "right") of ``character`` from ``since_s`` (global seconds: when the hand closes on it).
+    ``let_go(at_s)`` opens that hand at ``at_s`` the way the plugin that took it knows (its fingers, the
+    object's track: it stays where the hand leaves it, unless whoever lets go puts it somewhere)."""
+
+    character: str
+    hand: str
+    obj: str
+    since_s: float
+    let_go: Callable[[float], None]
 
 
 class Stagehand(Protocol):
@@ -115,6 +134,18 @@ class Stage(Protocol):
 
     def note_object_move(self, name: str, at_s: float) -> None:
         """Object ``name`` is picked up or put down at ``at_s`` (its runtime target changed then)."""
+
+    def held(self, character: str) -> tuple[Held, ...]:
+        """What the character's hands hold once the behaviours realized so far have played, the latest
+        taken last."""
+
+    def hold(self, held: Held) -> None:
+        """Record that a hand takes an object (a grab, a pick-up), as :meth:`held` answers from now on."""
+
+    def let_go(self, character: str, at_s: float, obj: str | None = None, hand: str | None = None) -> Held | None:
+        """The character lets go at ``at_s`` (global seconds) of ``obj`` (None: what it took last; ``hand``:
+        only what that hand holds): the record goes and its :attr:`Held.let_go` is called. Returns it, or
+        None when the character holds no such thing."""
 
     def set_destination(self, character: str, x_m: float, z_m: float) -> None:
         """Where the character will stand once its walk ends: :meth:`locate` answers it from now on."""

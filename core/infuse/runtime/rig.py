@@ -122,6 +122,15 @@ class Rig:
             return rotations, positions
         return quat.multiply(self.rotation, rotations), quat.rotate(self.rotation, positions) + self.position
 
+    def side_of(self, world_point) -> str:
+        """"left" or "right": the side of the character, as it is placed (its reference body frame), that
+        ``world_point`` (3,) metres is on, from the pelvis."""
+        own = quat.rotate(quat.conjugate(self.rotation), np.asarray(world_point, dtype=np.float64) - self.position)
+        left = quat.rotate(self.body, np.array([1.0, 0.0, 0.0]))
+        base = self.joints.get("base")
+        centre = self.skeleton.rest_global_positions[base] if base is not None else np.zeros(3)
+        return "left" if float(np.dot(own - centre, left)) >= 0.0 else "right"
+
     @property
     def placed(self) -> bool:
         """Whether the character stands elsewhere than its file puts it."""

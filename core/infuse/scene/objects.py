@@ -5,9 +5,12 @@ hand's movement, a put-down one stays where it was left from the stroke on (the 
 swaps the object's runtime target when the stroke falls in the frames it evaluates). Two controllers that change no pose keep the
 record: :class:`ObjectsBefore` runs first in every block and notes each object's runtime target;
 :class:`ObjectRecorder` runs last, when every pose is final, and samples the targets over the block's
-frames, the old target before a swap and the new one from it (the scene says when: :meth:`switches`).
+frames, the old target before a swap and the new one from it (the scene says when: :meth:`switch`, and
+ends a block before each swap, :meth:`ObjectRecorder.frames_ahead`, so no block holds two).
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -51,6 +54,14 @@ class ObjectRecorder(Controller):
     def switch(self, name: str, at_s: float) -> None:
         """Object ``name``'s target is swapped at ``at_s`` seconds (picked up or put down)."""
         self.switches.setdefault(name, []).append(float(at_s))
+
+    def frames_ahead(self, frame: int, most: int) -> int:
+        """How many frames (1..``most``) the block starting at ``frame`` may hold: it ends before the next
+        swap after its first frame, so a block swaps each object's target at most once, on its first frame."""
+        fps = self.scene.fps
+        later = [f - frame for times in self.switches.values() for f in (math.ceil(t * fps - 1e-6) for t in times)
+                 if frame < f < frame + most]
+        return min(later, default=most)
 
     def evaluate_one(self, job, block) -> None:
         runtime = block.runtime

@@ -6,6 +6,8 @@ from dataclasses import replace
 
 from .. import registry
 from ..bml.model import BEHAVIOR_TYPE_NOT_SUPPORTED
+from ..errors import UsageError
+from ..stage import Held
 
 
 class SceneStage:
@@ -16,6 +18,7 @@ class SceneStage:
         self.runtime = scene.runtime
         self.fps = scene.fps
         self.stagehands: dict[str, object] = {}
+        self.holding: dict[str, list[Held]] = {}  # character -> what its hands hold, the latest taken last
 
     @property
     def time(self) -> float:
@@ -85,6 +88,24 @@ class SceneStage:
     def note_object_move(self, name: str, at_s: float) -> None:
         self.scene.note_object_move(name, at_s)
 
+    def held(self, character: str) -> tuple[Held, ...]:
+        return tuple(self.holding.get(character, ()))
+
+    def hold(self, held: Held) -> None:
+        if held.hand not in ("left", "right"):
+            raise UsageError(f"a hand is left or right, got {held.hand!r}")
+        self.holding.setdefault(held.character, []).append(held)
+
+    def let_go(self, character: str, at_s: float, obj: str | None = None, hand: str | None = None):
+        holding = self.holding.get(character, [])
+        for i in range(len(holding) - 1, -1, -1):
+            held = holding[i]
+            if (obj is None or held.obj.lower() == obj.lower()) and (hand is None or held.hand == hand):
+                del holding[i]
+                held.let_go(float(at_s))
+                return held
+        return None
+
     def set_destination(self, character: str, x_m: float, z_m: float) -> None:
         self.scene.character(character).destination = (float(x_m), float(z_m))
 
@@ -103,6 +124,8 @@ class SceneStage:
     def frames_ahead(self, most: int) -> int:
         """How many frames the next block may hold (1..``most``), as every stagehand allows."""
         n = int(most)
+        if self.scene._recorder is not None:  # an object's target is swapped at most once a block
+            n = self.scene._recorder.frames_ahead(self.runtime.frame, n)
         for hand in self.stagehands.values():
             if hasattr(hand, "frames_ahead"):
                 n = min(n, int(hand.frames_ahead(n)))

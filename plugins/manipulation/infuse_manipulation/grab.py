@@ -164,12 +164,3 @@ class Grab(Controller):
             job.report(f"the {self.hand} hand closed {self.held.missed_m * 100:.0f} cm from {self.obj or 'the object'} "
                        "(out of reach): it is not taken")
 
-
-def side_of(rig, world_point) -> str:
-    """"left" or "right": the side of the character (as it stands, its reference body frame) a world
-    point is on."""
-    own = quat.rotate(quat.conjugate(rig.rotation), np.asarray(world_point, dtype=np.float64) - rig.position)
-    left = quat.rotate(rig.body, np.array([1.0, 0.0, 0.0]))
-    base = rig.joint("base")
-    centre = rig.skeleton.rest_global_positions[base] if base is not None else np.zeros(3)
-    return "left" if float(np.dot(own - centre, left)) >= 0.0 else "right"

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from infuse.bml.model import BEHAVIOR_DEGRADED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from infuse.errors import InfuseError, UsageError
-from infuse.stage import end_s
+from infuse.stage import Held, end_s
 
 from .constraint import IKConstraint
-from .grab import GRASP_S, Grab, HeldObject, approach, side_of
+from .grab import GRASP_S, Grab, HeldObject, approach
 from .pointing import Pointing
 from .targets import check_point, resolve_target
 
@@ -108,13 +108,14 @@ def grab_from_bml(parameters: dict, runtime, character: str, activation):
 def realize_grab(activation, stage):
     p = activation.parameters
     character = activation.character
-    if (p.get("state") or "start").lower() in RELEASING:
+    if (p.get("state") or "start").lower() in RELEASING:  # whichever plugin's hand took it
         name = stage.resolve(p["target"]) if p.get("target") else None
-        if release(stage.runtime, character, name, activation.start) is None:
+        held = stage.let_go(character, activation.start, obj=name, hand=_hand(p))
+        if held is None:
             stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> release: the character holds "
                        + (f"no {name!r}" if name else "nothing"))
-        elif name is not None:
-            stage.note_object_move(name, activation.start)
+        else:
+            stage.note_object_move(held.obj, activation.start)
         return None
     name = stage.resolve(p.get("target") or "")
     if stage.what(name) != "object":
@@ -135,7 +136,10 @@ def realize_grab(activation, stage):
         stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot grab {name!r}: {exc}")
         return None
     stage.note_object_move(name, held.grab_s)
-    return stage.activate(activation, grab, None)
+    activity = stage.activate(activation, grab, None)
+    stage.hold(Held(character, grab.hand, name, held.grab_s,
+                    lambda at_s: grab.release(stage.runtime, activity, at_s)))
+    return activity
 
 
 def start_grab(runtime, character: str, activation, parameters: dict, pack, activate):
@@ -152,7 +156,7 @@ def start_grab(runtime, character: str, activation, parameters: dict, pack, acti
     start = activation.start
     ready = _time(activation, "ready", start + 1.0)
     stroke = _time(activation, "stroke", ready + GRASP_S)
-    hand = _hand(parameters) or side_of(rig, before.positions([start], None)[0])
+    hand = _hand(parameters) or rig.side_of(before.positions([start], None)[0])
     wrist = rig.joint(f"{hand[0]}_wrist")
     if wrist is None:
         raise UsageError(f"{character!r} has no mapped {hand} wrist")

@@ -6,8 +6,8 @@ left). Its barycentric weights in the hand's tessellation blend the examples, ea
 their strokes coincide; the blend drives the spine, the arm and the hand. The wrist is then carried
 to the exact target by two-joint arm IK, the correction growing from the start to the stroke.
 ``action``: ``"touch"`` (reach and return), ``"grab"`` (from the stroke the object named ``obj``
-follows the hand: the runtime target of that name becomes a :class:`HeldTarget`), ``"put"`` (the
-held object ``obj`` is left at the target at the stroke).
+follows the hand: the runtime target of that name becomes a :class:`HeldTarget`, until
+:meth:`Reach.release`), ``"put"`` (the held object ``obj`` is left at the target at the stroke).
 """
 from __future__ import annotations
 
@@ -55,20 +55,35 @@ def _mean_stroke(pack) -> float:
 
 class HeldTarget(Target):
     """A scene object held in a character's hand: its world position follows the wrist, at the offset
-    (in the wrist's frame) it had when grabbed."""
+    (in the wrist's frame) it had when grabbed; from ``release_s`` (global seconds, once set) it stays
+    where the hand let it go."""
 
-    def __init__(self, character: str, wrist: int, offset: np.ndarray, fallback: np.ndarray):
+    def __init__(self, character: str, wrist: int, offset: np.ndarray, fallback: np.ndarray,
+                 release_s: float | None = None):
         self.character, self.wrist = character, wrist
         self.offset = np.asarray(offset, dtype=np.float64)
         self.last = np.asarray(fallback, dtype=np.float64)
+        self.release_s = release_s
+        self.left_at: np.ndarray | None = None  # (3,) where it was let go, once that frame is evaluated
+        self.left_s: float | None = None  # the time of that frame
 
     def positions(self, times, block=None) -> np.ndarray:
+        times = np.asarray(times, dtype=np.float64)
+        gone = np.zeros(len(times), dtype=bool) if self.release_s is None else times >= self.release_s - 1e-9
         if block is not None and len(times) == len(block) and self.character in block.poses:
             rot, pos = block.pose(self.character).chain_pose([self.wrist])
             out = pos[:, 0] + quat.rotate(rot[:, 0], self.offset)
+            first = int(np.argmax(gone))
+            if gone.any() and (self.left_at is None or times[first] == self.left_s):  # the frame it is let go
+                self.left_at, self.left_s = out[first], float(times[first])  # (again once the pose is final)
+            if self.left_at is not None:
+                out[gone] = self.left_at
             self.last = out[-1]
             return out
-        return np.broadcast_to(self.last, (len(times), 3)).copy()
+        out = np.broadcast_to(self.last, (len(times), 3)).copy()
+        if self.left_at is not None:
+            out[gone] = self.left_at
+        return out
 
 
 class Reach(Controller):
@@ -94,12 +109,20 @@ class Reach(Controller):
             raise UsageError(f"a {action} names the object (obj=)")
         self.target, self.hand, self.pack, self.action, self.obj = target, hand, pack, action, obj
         self.hold_s = float(hold_s)
+        self.release_s: float | None = None
+        self.held: HeldTarget | None = None  # the object's target once taken
         # Stroke times are the pack's (retargeting keeps timing), so the natural length is known now.
         self.stroke_s = _mean_stroke(pack)
         self.duration_s = self.stroke_s + self.hold_s + self.blend_out_s  # the weight falls to 0 at the end
 
     def describe(self) -> str:
         return f"reach ({self.action})"
+
+    def release(self, at_s: float) -> None:
+        """Let go at ``at_s`` (global seconds) of the object a ``"grab"`` takes: it stays where the hand is then."""
+        self.release_s = float(at_s)
+        if self.held is not None:
+            self.held.release_s = self.release_s
 
     def bind(self, rig, report):
         space = space_for(rig, self.pack)
@@ -126,6 +149,8 @@ class Reach(Controller):
             return
         runtime = job.activity.runtime
         world = self._target_world(runtime, block.times, block)
+        if "taken_at" in st:  # the object is in the hand now: the goal stays where the hand took it
+            world = np.broadcast_to(st["taken_at"], world.shape).copy()
         own = quat.rotate(quat.conjugate(rig.rotation), world - rig.position)
         pose = job.pose
         sk = rig.skeleton
@@ -210,7 +235,9 @@ class Reach(Controller):
             rot, pos = job.pose.chain_pose([arm[2]])
             obj = runtime.target(self.obj).positions(block.times[f:f + 1], None)[0]
             offset = quat.rotate(quat.conjugate(rot[f, 0]), obj - pos[f, 0])
-            runtime.add_target(self.obj, HeldTarget(job.rig.name, arm[2], offset, obj))
+            st["taken_at"] = np.array(world[f])
+            self.held = HeldTarget(job.rig.name, arm[2], offset, obj, self.release_s)
+            runtime.add_target(self.obj, self.held)
         else:
             runtime.add_target(self.obj, PointTarget(tuple(float(v) for v in world[f])))
         st["done"] = True

@@ -1,29 +1,17 @@
 """BML ``<sbm:reach>`` realized in a scene through its :class:`~infuse.stage.Stage`: touch, pick up (the object
-then follows the hand) or put down (the object the character holds, at the target), with the character's
-reaching pack; ``finish`` ends its reaches. What each character holds is kept by the scene's
-:class:`Hands` stagehand.
+then follows the hand) or put down (the object the character holds, whoever's grab took it, at the
+target, with the hand that holds it), with the character's reaching pack; ``finish`` ends its reaches.
+What each hand holds is the stage's record (:class:`~infuse.stage.Held`).
 """
 from __future__ import annotations
 
 from infuse.bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
-from infuse.stage import until_s
+from infuse.stage import Held, until_s
 
 from .controller import Reach
 
 #: BML reach actions -> the reach controller's.
 REACH_ACTIONS = {"touch": "touch", "pick-up": "grab", "put-down": "put"}
-
-
-class Hands:
-    """What each character of one scene holds: character -> object name (absent: nothing)."""
-
-    def __init__(self, stage):
-        self.holding: dict[str, str] = {}
-
-
-def hands(stage) -> Hands:
-    """The scene's :class:`Hands`."""
-    return stage.stagehand("reach", Hands)
 
 
 def warm_up(stage, character: str) -> Reach | None:
@@ -58,27 +46,32 @@ def realize_reach(activation, stage):
         if stage.what(target) not in ("object", "target") and ":" not in target:
             stage.warn(activation, NO_SUCH_TARGET, f"<{activation.element}>: no object named {target!r}")
             return None
-    held = hands(stage).holding
     obj = None
+    hand = p.get("hand") or "auto"
     if action == "pick-up":
         if not isinstance(target, str) or stage.what(target) != "object":
             stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: only a scene object can be picked up")
             return None
         obj = target
+        if hand == "auto":  # the hand that will hold it is known now, for the stage's record
+            hand = stage.runtime.rig(name).side_of(stage.runtime.target(target).positions([activation.start], None)[0])
     elif action == "put-down":
-        obj = held.get(name)
-        if obj is None:
-            stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: the character holds nothing to put down")
+        holding = [h for h in stage.held(name) if hand == "auto" or h.hand == hand]
+        if not holding:
+            stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: the character holds nothing to put "
+                       "down" + ("" if hand == "auto" else f" in its {hand} hand"))
             return None
-    reach = Reach(target=target, hand=p.get("hand") or "auto", pack=space, action=REACH_ACTIONS[action], obj=obj)
+        obj, hand = holding[-1].obj, holding[-1].hand
+    reach = Reach(target=target, hand=hand, pack=space, action=REACH_ACTIONS[action], obj=obj)
     span = until_s(activation) - activation.start
     if span > reach.stroke_s + reach.blend_out_s:  # hold at the target until the behaviour's relax
         reach.hold_s = span - reach.stroke_s - reach.blend_out_s
     activity = stage.activate(activation, reach, activation.start + reach.stroke_s + reach.hold_s + reach.blend_out_s)
+    stroke = activation.start + reach.stroke_s
     if obj is not None:  # it follows the hand, or stays where it is put, from the stroke on
-        stage.note_object_move(obj, activation.start + reach.stroke_s)
+        stage.note_object_move(obj, stroke)
     if action == "pick-up":
-        held[name] = obj
+        stage.hold(Held(name, hand, obj, stroke, reach.release))
     elif action == "put-down":
-        held.pop(name, None)
+        stage.let_go(name, stroke, obj=obj)
     return activity
