@@ -6,8 +6,9 @@ Bandai Namco dataset-1 (feminine, masculinity, normal) and dataset-2 (feminine, 
 folders; with the built-in ``locomotion-male`` and ``locomotion-female``. Each is tried on Xbot and on
 SmartBody's Brad with :func:`infuse.packs.walk_test.trial_pack` (speeds over the pack's forward range,
 heading drift over 8 s straight, walks to targets 2, 4 and 6 m away at 0, 45, 90, 135, 180 and -90
-degrees, foot skate on the straight walks and on the walks to targets, with their starts, turns on the
-spot and stops): the table shows the worst figure of each measure; ``--full`` prints every trial.
+degrees, foot skate on the straight walks and on the walks to targets, all of each and apart in its
+parts: on the spot (standing, turning on the spot), start, stop and settling): the table shows the
+worst figure of each measure; ``--full`` prints every trial.
 
 Targets: speed within 5%, drift at most 3 degrees, miss at most 5 cm, path at most 1.15x the straight
 line, no loops, foot skate at most 1.5 cm/m.
@@ -63,16 +64,19 @@ def main() -> int:
         return 2
     characters = {n: infuse.load(CORPUS / f) for n, f in CHARACTERS.items()}
     print(f"{'pack':<18} {'character':<6} {'speed err':>9} {'drift':>6} {'miss':>7} {'path':>5} {'loops':>5} "
-          f"{'skate':>6} {'to tgt':>6} {'s':>5}")
-    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6} {'cm':>6}")
+          f"{'skate':>6} {'to tgt':>6} {'spot':>5} {'start':>5} {'stop':>5} {'settle':>6} {'s':>5}")
+    print(f"{'':<18} {'':<6} {'%':>9} {'deg':>6} {'m':>7} {'x':>5} {'':>5} {'cm/m':>6} {'cm':>6} {'cm':>5} {'cm':>5} {'cm':>5} "
+          f"{'cm':>6}")
     with tempfile.TemporaryDirectory() as tmp:
         for name, pack in packs(Path(tmp), args.only).items():
             for who, asset in characters.items():
                 start = time.perf_counter()
                 trial = trial_pack(infuse.Character(who, asset), pack)
                 w = trial.worst()
+                parts = w["part_skate_cm"]
                 print(f"{name:<18} {who:<6} {100 * w['speed_error']:9.1f} {w['drift_deg']:6.1f} {w['miss_m']:7.3f} "
                       f"{w['path_ratio']:5.2f} {w['loops']:5d} {w['skate_cm_m']:6.2f} {w['target_skate_cm']:6.1f} "
+                      f"{parts['on the spot']:5.1f} {parts['start']:5.1f} {parts['stop']:5.1f} {parts['settle']:6.1f} "
                       f"{time.perf_counter() - start:5.1f}",
                       flush=True)
                 if args.full:

@@ -120,11 +120,28 @@ def test_pack_test_prints_the_trials_and_draws_them(tmp_path, capsys):
     assert [float(r[0]) for r in rows] == [1.0, 2.0]
     assert all(abs(float(r[2]) / float(r[0]) - 1.0) < 0.05 for r in rows)  # realized within 5%
     assert "heading drift over 8 s" in printed and "walk to a target" in printed
+    (parts,) = [line for line in printed.splitlines() if "foot skate of the walks to a target by part" in line]
+    cm = {p.rsplit(" ", 1)[0].strip(): float(p.rsplit(" ", 1)[1]) for p in parts.split(": ", 1)[1].split(",")}
+    assert list(cm) == ["on the spot", "start", "walk", "stop", "settle"] and all(0.0 <= v < 10.0 for v in cm.values()), cm
     for name in ("male.png", "male-straight.png", "male-target.png"):
         from PIL import Image
 
         with Image.open(tmp_path / name) as image:
             assert image.size[0] >= 400 and len(np.unique(np.asarray(image.convert("L")))) > 10  # drawn, not blank
+
+
+def test_a_walk_to_a_target_is_split_into_its_parts():
+    """A pelvis path (30 fps) turning on the spot for 1 s, speeding up to 1.3 m/s over 1 s, walking 2 s,
+    slowing down over 1 s and standing 1 s: each part found where it is, give or take the 0.3 s window."""
+    from infuse.packs.walk_test import PARTS, walk_parts
+
+    t = np.arange(180) / 30.0
+    speed = np.interp(t, [0.0, 1.0, 2.0, 4.0, 5.0, 6.0], [0.0, 0.0, 1.3, 1.3, 0.0, 0.0])
+    ground = np.stack((np.zeros_like(t), np.cumsum(speed) / 30.0), axis=-1)
+    parts = np.array(PARTS)[walk_parts(ground)]
+    for part, (a, b) in {"on the spot": (0.0, 1.0), "start": (1.2, 1.8), "walk": (2.0, 4.0), "stop": (4.2, 4.8),
+                         "settle": (5.2, 6.0)}.items():
+        assert (parts[(t >= a) & (t < b)] == part).all(), (part, parts[(t >= a) & (t < b)])
 
 
 @pytest.mark.parametrize("argv, says", [

@@ -16,7 +16,8 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
   takes out the sway of the gait) over the straight line; turned = how much that path's direction
   of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
   more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
-  whole walk (its start, turn on the spot and stop), cm in all.
+  whole walk (its start, turn on the spot and stop), cm in all, and over each of its parts
+  (:func:`walk_parts`: on the spot, start, walk, stop, settle).
 
 Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
 """
@@ -47,6 +48,13 @@ ARRIVED_M = 0.05
 #: faster than :data:`MOVING_M_S`) makes a loop.
 LOOP_DEG = 270.0
 MOVING_M_S = 0.2
+#: The parts of a walk to a target whose foot skate is measured apart (:func:`walk_parts`).
+PARTS = ("on the spot", "start", "walk", "stop", "settle")
+#: Below this pelvis speed (m/s, over :data:`PART_WINDOW_S`) a walk stands or turns on the spot; from
+#: :data:`CRUISE` of its top speed on it walks.
+STILL_M_S = 0.15
+CRUISE = 0.9
+PART_WINDOW_S = 0.3
 
 
 @dataclass
@@ -70,6 +78,8 @@ class TargetTrial:
     turned_deg: float
     arrival_s: float | None
     skate_cm: float = float("nan")
+    #: Foot skate (cm) of each of :data:`PARTS`.
+    part_skate_cm: dict = field(default_factory=dict)
 
     @property
     def loops(self) -> bool:
@@ -103,7 +113,9 @@ class PackTrial:
                 "path_ratio": max((t.path_ratio for t in self.targets), default=float("nan")),
                 "loops": sum(t.loops for t in self.targets),
                 "skate_cm_m": max((s.skate_cm_m for s in self.speeds), default=float("nan")),
-                "target_skate_cm": max((t.skate_cm for t in self.targets), default=float("nan"))}
+                "target_skate_cm": max((t.skate_cm for t in self.targets), default=float("nan")),
+                "part_skate_cm": {part: max((t.part_skate_cm.get(part, 0.0) for t in self.targets), default=float("nan"))
+                                  for part in PARTS}}
 
 
 def forward_speeds(space) -> np.ndarray:
@@ -146,6 +158,24 @@ def _window_mean(x: np.ndarray, frames: int) -> np.ndarray:
     padded = np.concatenate((np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], frames - 1 - half, axis=0)))
     c = np.cumsum(np.concatenate((np.zeros((1,) + x.shape[1:]), padded)), axis=0)
     return (c[frames:] - c[:-frames]) / frames
+
+
+def walk_parts(ground: np.ndarray) -> np.ndarray:
+    """(F,) index into :data:`PARTS` of each frame of a walk to a target, from its pelvis ground path
+    (F, 2) metres: before it first moves at :data:`CRUISE` of its top speed, on the spot (slower than
+    :data:`STILL_M_S`: standing, or turning on the spot) or starting; after it last does, stopping or
+    settling (still again); walking between. Speeds over :data:`PART_WINDOW_S` windows."""
+    v = np.linalg.norm(np.gradient(_window_mean(ground, max(int(PART_WINDOW_S * FPS), 1)), axis=0), axis=-1) * FPS
+    out = np.full(len(v), PARTS.index("walk"))
+    if len(v) < 2 or v.max() <= STILL_M_S:
+        out[:] = PARTS.index("on the spot")
+        return out
+    fast = np.nonzero(v >= CRUISE * v.max())[0]
+    still = v < STILL_M_S
+    first, last = int(fast[0]), int(fast[-1]) + 1
+    out[:first] = np.where(still[:first], PARTS.index("on the spot"), PARTS.index("start"))
+    out[last:] = np.where(still[last:], PARTS.index("settle"), PARTS.index("stop"))
+    return out
 
 
 def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, angles=ANGLES) -> PackTrial:
@@ -209,8 +239,12 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
         tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
         turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
-        skate = foot_skate(g_pos, foot_contacts(m, mapping, fk=(g_rot, g_pos)), base).travel
-        trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival, 100.0 * skate))
+        found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
+        skate = foot_skate(g_pos, found, base).travel
+        parts = walk_parts(ground)
+        by_part = {part: 100.0 * foot_skate(g_pos, replace(found, flags=found.flags & (parts == k)[:, None]), base).travel
+                   for k, part in enumerate(PARTS)}
+        trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival, 100.0 * skate, by_part))
         trial.paths.append(smooth)
     return trial
 
@@ -229,6 +263,10 @@ def report(trial: PackTrial) -> str:
         flag = "  LOOP" if t.loops else ""
         lines.append(f"    {t.distance:3.0f} {t.angle_deg:+5.0f} -> {t.miss_m:6.3f}  {t.path_ratio:5.2f}  {t.turned_deg:6.0f}  {arrival}  "
                      f"{t.skate_cm:5.1f}{flag}")
+    if trial.targets:
+        worst = trial.worst()["part_skate_cm"]
+        lines.append("  foot skate of the walks to a target by part, worst walk (cm): "
+                     + ", ".join(f"{part} {cm:.1f}" for part, cm in worst.items()))
     for note in trial.notes:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
