@@ -105,7 +105,7 @@ def test_serve_streams_the_offline_scene_and_feedback_in_order(tmp_path):
     assert status["shown"] > 100, status
 
     # The same scene offline: the same commands at the same times, in the same order, evaluated in the same
-    # blocks (a walk differs by millimetres between partitions), in a fresh process as the server is
+    # blocks (other blocks give them to rounding), in a fresh process as the server is
     # (espeak-ng's timings can differ by milliseconds between syntheses in one process).
     assert status["blocks"][0][0] == 0  # every block so far
     offline = _offline(tmp_path, scene_path, applied, status["blocks"])

@@ -88,7 +88,7 @@ class LiveStats:
     applied, the current block size, and the evaluation time per frame of the last blocks, on the wall
     clock and in the loop thread's CPU time (milliseconds; they differ when the machine is loaded).
     ``blocks``: the last blocks evaluated, (first frame, frames) each: a session replayed offline with
-    the same blocks and commands gives the same frames (walks differ by millimetres between partitions)."""
+    the same blocks and commands gives the same frames (other blocks give them to rounding)."""
 
     def __init__(self, window: int = 3600):
         self.shown = 0
