@@ -64,3 +64,24 @@ def test_every_stepping_cycle_of_an_imported_pack_has_its_feet_events(xbot, styl
         assert events is not None, clip.name
         spans = np.diff(events, axis=1)
         assert (spans >= 0.0).all() and (events[:, 3] - events[:, 0] < 1.0).all(), (clip.name, events)
+
+
+def test_a_foot_whose_contact_was_not_found_steps_half_a_cycle_after_the_other():
+    """A running cycle (31 frames at 30 fps, left strike at 0 and 1 s) whose right foot was never found
+    down: its events are the left foot's half a cycle later; with neither foot found, none."""
+    from types import SimpleNamespace
+
+    left = np.zeros(31, dtype=bool)
+    left[:9] = True
+    left[30] = True
+    contacts = np.stack((left, np.zeros(31, dtype=bool)), axis=1)
+    clip = SimpleNamespace(contacts=contacts, phases=np.stack((contacts, contacts), axis=-1), keys=np.array([0.0, 0.5, 1.0]),
+                           motion=SimpleNamespace(fps=30.0))
+    events = phase_keys.foot_events(clip)
+    assert events is not None
+    # The left foot lands at its key (a flag holds its frame's half-frame either side) and leaves after 9 frames.
+    assert events[0] == pytest.approx([1.0 - 0.5 / 30.0, 1.0 - 0.5 / 30.0, 1.0 + 8.5 / 30.0, 1.0 + 8.5 / 30.0])
+    assert events[1] == pytest.approx(events[0] - 0.5)
+    clip.contacts = np.zeros_like(contacts)
+    clip.phases = np.zeros_like(clip.phases)
+    assert phase_keys.foot_events(clip) is None

@@ -85,9 +85,11 @@ def looped(flags: np.ndarray, gap: int) -> np.ndarray:
 
 def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0) -> np.ndarray | None:
     """(2, 4) phases of each foot's (left, right) strike, flat, heel off and toe off in a looping
-    clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once.
-    With the feet's heights (F, 2, 2) metres over the cycle (ankle, ball), a strike is where the heel
-    reached the ground and a toe off where the ball left it (:func:`grounded_frames`, within
+    clip's cycle, non-decreasing from the strike (in [0, 1)); None when a foot does not step once,
+    unless the other steps once and it not at all (a running take's foot that lands moving is not
+    found down): the feet of a gait cycle alternate, its events are then the other's half a cycle
+    later. With the feet's heights (F, 2, 2) metres over the cycle (ankle, ball), a strike is where
+    the heel reached the ground and a toe off where the ball left it (:func:`grounded_frames`, within
     :data:`GROUNDED` and :data:`LIFTED` leg lengths of ``leg_length`` metres)."""
     fps = clip.motion.fps
     gap = int(round(GAP_S * fps))
@@ -95,12 +97,15 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
     phases = None if clip.phases is None else \
         np.stack([np.stack([looped(clip.phases[:, k, n], gap) for n in range(2)], axis=-1) for k in range(2)], axis=1)
     found = steps(contacts, fps, True, phases)
+    mine = [[s for s in found if s["foot"] == foot] for foot in ("left", "right")]
+    counts = [len(m) for m in mine]
+    if counts != [1, 1] and sorted(counts) != [0, 1]:
+        return None
     out = np.zeros((2, 4))
-    for k, foot in enumerate(("left", "right")):
-        mine = [s for s in found if s["foot"] == foot]
-        if len(mine) != 1:
-            return None
-        times = np.array([mine[0][e] for e in EVENTS])
+    for k in range(2):
+        if not mine[k]:
+            continue
+        times = np.array([mine[k][0][e] for e in EVENTS])
         if heights is not None:
             swinging = ~contacts[:, k]
             times[0] -= grounded_frames(heights[:, k, 0], swinging, int(round(times[0] * fps)), GROUNDED * leg_length, -1) / fps
@@ -112,6 +117,9 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
         ph = np.where(ph > 1.0 - 1e-6, ph - 1.0, ph)  # a strike on a key rounded just below it
         ph[1:] += np.where(ph[1:] < ph[0], 1.0, 0.0)  # events past the cycle's end
         out[k] = np.maximum.accumulate(ph)
+    if 0 in counts:
+        k = counts.index(0)
+        out[k] = out[1 - k] + 0.5 - np.floor(out[1 - k, 0] + 0.5)
     return out
 
 
