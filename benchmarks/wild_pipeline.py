@@ -22,10 +22,11 @@ For every humanoid rig of the wild folder:
    a scene (a pack the rig cannot play, :class:`~infuse.MissingJointsError`, is counted with its
    reason and the others go on); it walks to a point 4 m away at 90 degrees to its left, then plays a
    beat gesture and an arms-crossed posture. Measured on the scene's output with FK: the pelvis's
-   miss of the target (m, its ground point over the last half second of the walk), foot skate over
-   the walk (cm per metre), how far the beat moved the right wrist and the posture the wrists
-   (cm, relative to the chest), every value finite, and the deepest a foot goes below the level
-   the feet rest at (cm, soles included).
+   miss of the target (m, its ground point over the last half second of the walk) and when it came
+   within 10 cm for good (s), foot skate over the walk (cm per metre), how far the beat moved the
+   right wrist and the posture the wrists (relative to the chest, % of the arm's length), every
+   value finite, the deepest a foot goes below the level it stood at in the first frame (cm, soles
+   included), and the joint (fingers aside) that turns most in one frame (degrees).
 
 The worst cases of each table are named at the end. Run: ``python benchmarks/wild_pipeline.py``
 (``--quick``: 6 rigs and the Bandai walk only; ``--rigs TEXT``: rigs whose path contains TEXT).
@@ -171,9 +172,10 @@ def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Source
 @dataclass
 class PackRow:
     """What the packs do on one rig (see the module docstring): ``refused`` pack -> reason; the walk's
-    ``miss_m`` and ``skate`` (cm/m), NaN without locomotion; ``beat_cm`` / ``posture_cm`` how far the
-    wrists moved, NaN when not played; ``depth_cm`` the deepest a foot went below the level it
-    started at; ``pop_joint`` / ``pop_deg`` / ``pop_frame`` the joint turning most in one frame."""
+    ``miss_m``, ``arrival_s`` and ``skate`` (cm/m), NaN without locomotion; ``beat_arm`` /
+    ``posture_arm`` how far the wrists moved, % of the arm's length, NaN when not played;
+    ``depth_cm`` the deepest a foot went below the level it started at; ``pop_joint`` / ``pop_deg`` /
+    ``pop_frame`` the joint turning most in one frame; ``motion`` the scene's output, ``mapping`` the rig's."""
 
     rig: str
     packs: tuple[str, ...]
@@ -181,8 +183,8 @@ class PackRow:
     miss_m: float = float("nan")
     arrival_s: float = float("nan")
     skate: float = float("nan")
-    beat_cm: float = float("nan")
-    posture_cm: float = float("nan")
+    beat_arm: float = float("nan")
+    posture_arm: float = float("nan")
     finite: bool = True
     depth_cm: float = float("nan")
     pop_joint: str = ""
@@ -204,10 +206,16 @@ def _chest_wrists(rig, g: np.ndarray, p: np.ndarray, sides: str) -> np.ndarray:
     return np.stack(out, axis=1)
 
 
-def _moved_cm(wrists: np.ndarray, start: int, stop: int) -> float:
-    """How far (cm) (F, S, 3) wrists get from where they were at ``start``, before ``stop``."""
+def _arm_length(rig, p: np.ndarray) -> float:
+    """The right arm's length (m): shoulder to elbow to wrist in the first frame of (F, J, 3) ``p``."""
+    a, b, c = (p[0, rig.joint(f"r_{n}")] for n in ("shoulder", "elbow", "wrist"))
+    return float(np.linalg.norm(b - a) + np.linalg.norm(c - b))
+
+
+def _moved(wrists: np.ndarray, start: int, stop: int, arm: float) -> float:
+    """How far (F, S, 3) wrists get from where they were at ``start``, before ``stop``, in % of ``arm``."""
     span = wrists[start:stop]
-    return 100.0 * float(np.linalg.norm(span - span[:1], axis=-1).max()) if len(span) else float("nan")
+    return 100.0 * float(np.linalg.norm(span - span[:1], axis=-1).max()) / arm if len(span) else float("nan")
 
 
 def pack_row(rel: str, cache: Path) -> PackRow:
@@ -254,10 +262,10 @@ def pack_row(rel: str, cache: Path) -> PackRow:
         row.skate = metrics.foot_skate(p[:walk_end], found, rig.joint("base")).per_metre
     if "gestures" in row.packs:
         a = int(beat_at * FPS)
-        row.beat_cm = _moved_cm(_chest_wrists(rig, g, p, "r"), a, a + int(1.5 * FPS))
+        row.beat_arm = _moved(_chest_wrists(rig, g, p, "r"), a, a + int(1.5 * FPS), _arm_length(rig, p))
     if "postures" in row.packs:
         a = int(posture_at * FPS)
-        row.posture_cm = _moved_cm(_chest_wrists(rig, g, p, "lr"), a, a + int(3.0 * FPS))
+        row.posture_arm = _moved(_chest_wrists(rig, g, p, "lr"), a, a + int(3.0 * FPS), _arm_length(rig, p))
     lowest, _ = _ground_depth(asset, mapping, motion)
     row.depth_cm = 100.0 * float(max(lowest[0].min() - lowest.min(), 0.0))
     index = mapping.indices(asset.skeleton)
@@ -296,7 +304,7 @@ def print_packs(rows: list[PackRow]) -> None:
     for r in rows:
         played = "".join(p[0].upper() if p in r.packs else "." for p in PACKS)
         print(f"{r.rig[:38]:<38} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
-              f"{_fmt(r.beat_cm, 5, 1)} {_fmt(r.posture_cm, 5, 1)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
+              f"{_fmt(r.beat_arm, 5, 0)} {_fmt(r.posture_arm, 5, 0)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
               f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {r.seconds:4.1f}" + ("" if r.finite else "  NON-FINITE"))
     for r in rows:
         for pack, reason in r.refused.items():
@@ -349,7 +357,7 @@ def main(argv=None) -> int:
     print(f"retargeting onto {len(rigs)} wild rigs (cm, degrees; lowest: cm, as written)\n")
     print_retargeting(retargeted)
     print(f"\nbehaviour packs (L locomotion-male, G gestures, P postures played): walk to {TARGET} m, a beat, "
-          "a posture; miss m, arrival s, skate cm/m, wrist travel cm, depth cm\n")
+          "a posture; miss m, arrival s, skate cm/m, wrist travel % of the arm, depth cm\n")
     print_packs(infused)
     print_worst(retargeted, infused)
     print(f"\n{time.perf_counter() - started:.0f} s")
