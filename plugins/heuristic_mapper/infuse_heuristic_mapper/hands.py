@@ -1,7 +1,8 @@
 """Fingers: which chains below a wrist are the thumb, index, middle, ring and pinky.
 
-The thumb is the chain that leaves the hand at an angle and starts near the wrist (or is named
-so); the other fingers are ordered across the palm starting next to the thumb. Metacarpal and
+The thumb is named or numbered first, else the chain that leaves the hand at an angle, whose
+knuckle lies off the row of the other knuckles and that starts near the wrist, when it clearly
+scores above the rest; the other fingers are matched to the digits across the palm from the thumb. Metacarpal and
 palm joints (a first bone that starts at the wrist) are not finger joints. A hand without an
 identifiable thumb and at least two other fingers (a mitten) keeps its fingers unmapped, and so does
 a stylized hand of fewer than five digits whose thumb is not named (which digit is missing cannot
@@ -81,7 +82,6 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
         chains = {r: c for r, c in chains.items() if len(c) >= 2}
     if len(chains) < 3:
         return _few_digits(view, chains, wrist_pos)
-    bases = np.array([view.P[r] for r in chains])
     tips = np.array([view.P[view.far[r]] for r in chains])
     dirs = tips - wrist_pos
     norms = np.linalg.norm(dirs, axis=1, keepdims=True)
@@ -98,17 +98,10 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
     elif len(keys) < 5:
         return {}, f"{len(keys)} digits and none named thumb: a stylized hand, digits left unmapped"
     else:
-        dev = np.zeros(len(keys))
-        for i in range(len(keys)):
-            others = np.delete(dirs, i, axis=0).mean(axis=0)
-            others /= max(length(others), 1e-9)
-            dev[i] = np.degrees(np.arccos(np.clip(np.dot(dirs[i], others), -1, 1)))
-        dist = lengths(bases - wrist_pos)
-        score = dev + 20.0 * (1.0 - dist / max(dist.max(), 1e-9))
+        score = _thumb_scores(view, [chains[r] for r in keys], dirs, wrist_pos)
         i = int(np.argmax(score))
-        second = np.partition(score, -2)[-2] if len(score) > 1 else 0.0
-        if dev[i] > 18.0 and score[i] - second > 8.0:
-            thumb, why = keys[i], "diverging digit next to the wrist (thumb)"
+        if score[i] - np.partition(score, -2)[-2] >= THUMB_MARGIN:
+            thumb, why = keys[i], "the digit that diverges, off the knuckles' row, next to the wrist (thumb)"
     if thumb is None:
         return {}, "no thumb can be told apart: digits left unmapped"
     others = [r for r in keys if r != thumb]
@@ -118,6 +111,34 @@ def assign_fingers(view: SkeletonView, roots: list[int], wrist_pos: np.ndarray) 
     for name, r in _order_fingers(view, thumb, others, wrist_pos, dirs.mean(axis=0)):
         out[name] = _drop_metacarpal(view, chains[r], wrist_pos)[:4]
     return out, why
+
+
+#: How much better the likeliest thumb must score than the next digit (see :func:`_thumb_scores`).
+THUMB_MARGIN = 0.25
+
+
+def _thumb_scores(view: SkeletonView, chains: list[list[int]], dirs: np.ndarray, wrist_pos: np.ndarray) -> np.ndarray:
+    """(D,) how much each of D >= 5 digit chains looks like the thumb, from three facts of a hand in
+    any pose: the thumb's direction from the wrist diverges from the others' (1 per 30 degrees),
+    its knuckle lies off the row the other knuckles make (1.5 per width of that row) and it starts
+    nearer the wrist (1 for the whole difference to the farthest knuckle). ``dirs``: (D, 3) unit
+    directions from the wrist to each digit's tip."""
+    knuckles = np.array([view.P[_drop_metacarpal(view, chain, wrist_pos)[0]] for chain in chains])
+    count = len(chains)
+    diverge = np.zeros(count)
+    off_row = np.zeros(count)
+    for i in range(count):
+        rest = np.delete(np.arange(count), i)
+        mean_dir = dirs[rest].mean(axis=0)
+        mean_dir /= max(length(mean_dir), 1e-9)
+        diverge[i] = np.degrees(np.arccos(np.clip(float(dirs[i] @ mean_dir), -1.0, 1.0)))
+        row = knuckles[rest] - knuckles[rest].mean(axis=0)
+        along = np.linalg.svd(row, full_matrices=False)[2][0]  # the knuckles' row direction
+        width = max(float(np.ptp(row @ along)), 1e-9)
+        offset = knuckles[i] - knuckles[rest].mean(axis=0)
+        off_row[i] = length(offset - (offset @ along) * along) / width
+    reach = lengths(knuckles - wrist_pos)
+    return diverge / 30.0 + 1.5 * off_row + (1.0 - reach / max(float(reach.max()), 1e-9))
 
 
 def _few_digits(view: SkeletonView, chains: dict[int, list[int]], wrist_pos: np.ndarray) -> tuple[dict[str, list[int]], str]:

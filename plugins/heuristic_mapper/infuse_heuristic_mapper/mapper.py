@@ -743,7 +743,7 @@ def _put_arm(view, result, s, r: LimbResult, side_why, side_conf) -> None:
              "pinky": "fourth from the thumb"}
     # a thumb told by its name or number orders the fingers surely; one told by its angle alone may not be
     sure = 0.9 if why.startswith(("named", "lowest-numbered", "fingers named", "a thumb and")) else 0.7
-    unmapped = (SETTLED if fingers or why.startswith("a thumb and a single finger")
+    unmapped = (min(SETTLED, sure) if fingers else SETTLED if why.startswith("a thumb and a single finger")
                 else 0.4 if why.startswith("no thumb can be told") else 0.6)
     for finger in ("thumb", "index", "middle", "ring", "pinky"):
         chain = fingers.get(finger, [])
