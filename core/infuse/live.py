@@ -26,8 +26,8 @@ wait in a bounded queue: a full queue raises :class:`~infuse.errors.BusyError` a
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
 much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
 while a frame costs under 60% of a frame's time; twice as many (up to ``max_block_frames``) when it
-costs more; half as many after two seconds of frames that cost under 20% (costs as a moving average over
-the last blocks). With blocks of B frames a command shows within B frames plus the lead. A frame still
+costs more; half as many after two seconds of frames that cost under 25% (costs as the median of the
+last blocks). With blocks of B frames a command shows within B frames plus the lead. A frame still
 waiting when the next one is due is skipped and counts as missed (:attr:`LiveStats.missed`). At most a
 block and the frames already due when it started wait to be shown.
 
@@ -153,8 +153,8 @@ class LiveScene:
         self.keep_s = float(keep_s)
         self.max_block_frames = max(1, int(max_block_frames))
         self.block_frames = 1
-        self._cheap = 0
-        self._cost_s: float | None = None  # moving average of a frame's evaluation time at this block size
+        self._cheap = 0  # frames evaluated since blocks of half the size became cheap enough
+        self._costs: deque[float] = deque(maxlen=12)  # a frame's evaluation time (s) in the last blocks of this size
         self.stats = LiveStats()
         self.epoch: float | None = None
         self.error: BaseException | None = None
@@ -311,16 +311,7 @@ class LiveScene:
         self.stats.evaluate_ms.append(spent * 1e3 / count)
         self.stats.evaluate_cpu_ms.append((time.thread_time() - started_cpu) * 1e3 / count)
         self.stats.blocks.append((first, count))
-        # a moving average, so that one late block (the machine busy elsewhere) does not resize blocks
-        per_frame = self._cost_s = spent / count if self._cost_s is None else 0.7 * self._cost_s + 0.3 * spent / count
-        if per_frame > 0.6 * self.period_s and self.block_frames < self.max_block_frames:
-            self.block_frames, self._cheap, self._cost_s = min(2 * self.block_frames, self.max_block_frames), 0, None
-        elif per_frame < 0.2 * self.period_s and self.block_frames > 1:
-            self._cheap += count
-            if self._cheap >= 2 * self.fps:  # two seconds of cheap frames: try smaller blocks
-                self.block_frames, self._cheap, self._cost_s = self.block_frames // 2, 0, None
-        else:
-            self._cheap = 0
+        self._resize(spent / count, count)
         self.stats.block_frames = self.block_frames
         poses = {}
         for name in scene.characters:
@@ -332,6 +323,25 @@ class LiveScene:
         if first // int(self.fps) != scene.runtime.frame // int(self.fps):
             self._forget()
         return frames
+
+    def _resize(self, per_frame_s: float, count: int) -> None:
+        """Adapt :attr:`block_frames` to what a frame costs (``per_frame_s`` in the block just evaluated, of
+        ``count`` frames), by the median of the last blocks of this size: one late block (the machine busy
+        elsewhere) resizes nothing. Blocks double when a frame costs over 60% of its time, and halve after two
+        seconds under 25%: a block costs much the same whatever its length, so the halved blocks' frames
+        cost at most twice as much, under 50%."""
+        self._costs.append(per_frame_s)
+        cost = float(np.median(self._costs))
+        if len(self._costs) >= 3 and cost > 0.6 * self.period_s and self.block_frames < self.max_block_frames:
+            self.block_frames, self._cheap = min(2 * self.block_frames, self.max_block_frames), 0
+            self._costs.clear()
+        elif cost < 0.25 * self.period_s and self.block_frames > 1:
+            self._cheap += count
+            if self._cheap >= 2 * self.fps:
+                self.block_frames, self._cheap = self.block_frames // 2, 0
+                self._costs.clear()
+        else:
+            self._cheap = 0
 
     def _foot_height(self, name: str) -> float:
         """How low (m) the character's feet reach, soles included, at rest: its frames are lowered by it, as
