@@ -93,3 +93,20 @@ def test_names_mapper_refuses_the_flying_head_with_exit_3(capsys):
     err = capsys.readouterr().err
     assert code == 3
     assert "not a humanoid" in err and "two legs and two arms" in err and len(err.strip().splitlines()) == 1
+
+
+def test_wild_cartoon_frog_with_its_arms_down():
+    """The wild cartoon frog (arms longer than its legs, feet driven by IK) with its arms hanging
+    85 degrees down: its fingertips reach below its feet, and it is still mapped as a biped with
+    every body joint right."""
+    require_wild()
+    labels = [label for label in wild_labels() if "Frog" in label["file"]]
+    assert labels
+    label = labels[0]
+    asset = infuse.load(wild_file(label["file"]))
+    v = skeleton_variants.arms_posed(asset.skeleton, None, label, -85.0, "arms_down")
+    pos = v.skeleton.rest_global_positions
+    fingertips = [v.skeleton.index[n] for n in v.skeleton.names if n.startswith(("Middle3", "Pinky3"))]
+    feet = [v.skeleton.index[label["mapping"][k]] for k in ("l_ankle", "r_ankle")]
+    assert pos[fingertips, 1].min() < pos[feet, 1].max()
+    assert _wrong(map_skeleton(v.skeleton).joints, v) == []
