@@ -9,6 +9,8 @@ morph weights linearly; the clip's morph weights drive the character's morph tar
 """
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from .. import quaternions as quat
@@ -145,27 +147,24 @@ class LoopTable:
         return rot, root, jt
 
 
-_TABLES: dict[int, tuple] = {}
+#: Each clip's interpolation table, for as long as the clip lives: a Motion is immutable and hashed by
+#: identity, so the table is the clip's own and goes with it.
+_TABLES: weakref.WeakKeyDictionary[Motion, tuple[np.ndarray, np.ndarray]] = weakref.WeakKeyDictionary()
 
 
 def continuous_rotations(motion: Motion) -> np.ndarray:
-    """The clip's local rotations (F, J, 4) made sign-continuous over frames (cached per clip)."""
+    """The clip's local rotations (F, J, 4) made sign-continuous over frames (kept with the clip)."""
     return _interpolation_table(motion)[0]
 
 
 def _interpolation_table(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
-    """The clip's rotations made sign-continuous over frames, and each frame's step to the next
-    (cached per clip: a crowd plays the same few clips)."""
-    key = id(motion)
-    cached = _TABLES.get(key)
-    if cached is None or cached[0] is not motion:
+    """The clip's rotations (F, J, 4) made sign-continuous over frames, and each frame's step to the
+    next (F - 1, J, 4); worked out once per clip (a crowd plays the same few clips)."""
+    table = _TABLES.get(motion)
+    if table is None:
         rotations = quat.make_continuous(motion.local_rotations, axis=0)
-        steps = np.diff(rotations, axis=0)
-        cached = (motion, rotations, steps)
-        if len(_TABLES) > 64:
-            _TABLES.clear()
-        _TABLES[key] = cached
-    return cached[1], cached[2]
+        table = _TABLES[motion] = (rotations, np.diff(rotations, axis=0))
+    return table
 
 
 class Clip(Controller):

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from ..skeleton import Skeleton
 _UP_JOINTS = ("skullbase", "spine5", "spine4", "spine3", "spine2")
 _SIDE_PAIRS = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"), ("l_acromioclavicular", "r_acromioclavicular"),
                ("eyeball_left", "eyeball_right"), ("l_knee", "r_knee"))
+State = TypeVar("State")
 
 
 def body_frame(positions: np.ndarray, joints: dict[str, int]) -> tuple[np.ndarray, str | None]:
@@ -86,8 +88,9 @@ class Rig:
     - ``body``: (4,) the body frame in the reference pose (see the module doc); ``reference``: which pose
       that is; ``reference_rotations``: (J, 4) its global rotations; ``aligned``: (J, 4) every joint's ``A_j``;
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
-    - ``notes``: what had to be assumed about the character; ``state``: what controllers that act once
-      per character (one look at a time) keep between blocks.
+    - ``notes``: what had to be assumed about the character; ``state``: what controllers keep per
+      character between blocks (one look at a time, the packs infused on it), by key: a controller's
+      own class of state (:meth:`state_of`). It lives as long as the rig, so it goes with its runtime.
     """
 
     name: str
@@ -100,7 +103,7 @@ class Rig:
     reference: str = field(init=False)
     reference_rotations: np.ndarray = field(init=False)
     notes: list[str] = field(default_factory=list)
-    state: dict = field(default_factory=dict)
+    state: dict[Any, Any] = field(default_factory=dict)
 
     def __post_init__(self):
         self.joints = self.mapping.indices(self.skeleton)
@@ -114,6 +117,14 @@ class Rig:
     @property
     def skeleton(self) -> Skeleton:
         return self.character.skeleton
+
+    def state_of(self, kind: type[State]) -> State:
+        """The character's state of class ``kind`` (made by ``kind()`` the first time it is asked for):
+        what one controller keeps for this character between blocks and activities."""
+        value = self.state.get(kind)
+        if value is None:
+            value = self.state[kind] = kind()
+        return value
 
     def place(self, rotations: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Global rotations (..., 4) and positions (..., 3) of the character's own frame moved to its

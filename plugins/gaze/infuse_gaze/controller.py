@@ -17,16 +17,14 @@ from typing import Mapping
 import numpy as np
 
 from infuse import quaternions as quat
-from infuse.errors import MissingJointsError, UsageError
+from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
-from infuse.runtime.pose import ancestors, chain_fk
+from infuse.runtime.pose import chain_fk
 from infuse.runtime.swing import swing
 from infuse.runtime.targets import JointTarget
 
-from .model import (
-    DEFAULT_INFLUENCE, EYES, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOT_GROUPS, SLOT_PARENTS, SLOTS,
-    group_name, smoothing_factor,
-)
+from .binding import GazeBinding, GazeState, bind_chain
+from .model import DEFAULT_INFLUENCE, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOTS, group_name, smoothing_factor
 from .solver import SolverInput, solve
 
 _FORWARD = np.array([0.0, 0.0, 1.0])  # an aligned frame's forward axis
@@ -107,55 +105,8 @@ class Gaze(Controller):
         return rates
 
     # -- binding -------------------------------------------------------------------------------------
-    def bind(self, rig, report):
-        slots = np.array([rig.joint(s) if rig.joint(s) is not None else -1 for s in SLOTS])
-        present = slots >= 0
-        has_eyes = bool(present[7] and present[8])
-        if present[7] != present[8]:
-            report("only one eye is mapped; gaze leaves the eyes still")
-            present[7:9] = False
-            slots[7:9] = -1
-        if not present[6] and not has_eyes:
-            if not present[4] and not present[5]:
-                raise MissingJointsError(rig.name, "cannot gaze: neither eyes nor a head or neck joint is mapped")
-            report("no head joint is mapped; gaze points the neck")
-        counts = np.array([sum(present[s] for s in range(len(SLOTS)) if SLOT_GROUPS[s] == g) for g in range(len(GROUPS))])
-        counts[EYES] = 1 if has_eyes else 0
-        available = {GROUP_NAMES[g] for g in range(len(GROUPS)) if counts[g] > 0}
-        moving = [g for g in self.moving if g in available]
-        if "eyes" in self.moving and not has_eyes:
-            report("has no eyes: gaze turns the head and spine instead")
-            if self.moving == ("eyes",):
-                moving = [g for g in INFLUENCES["HEAD"] if g in available]
-        if not moving:
-            raise MissingJointsError(rig.name, f"none of the gaze groups {', '.join(self.moving)} is mapped")
-        priority = GROUP_NAMES.index(self.priority_group)
-        ranks = [GROUP_NAMES.index(g) for g in moving]
-        if priority not in ranks:  # the nearest moving group below it, else the lowest above it
-            below = [r for r in ranks if r < priority]
-            priority = max(below) if below else min(ranks)
-        active = np.zeros(len(GROUPS), dtype=bool)
-        active[ranks] = True
-        fractions = np.ones(len(GROUPS))
-        p_rank = sum(1 for r in ranks if r < priority)
-        for r in ranks:
-            if r <= priority:
-                i_rank = sum(1 for q in ranks if q < r)
-                fractions[r] = 1.0 / (p_rank + 1 - i_rank)
-        # An absent slot repeats its parent slot, aligned frame included (the world's is the body frame).
-        chain_aligned = np.empty((len(SLOTS), 4))
-        for s, parent in enumerate(SLOT_PARENTS):
-            if present[s]:
-                chain_aligned[s] = rig.aligned[slots[s]]
-            else:
-                chain_aligned[s] = chain_aligned[parent] if parent >= 0 else rig.body
-        # Each slot's joint among the present ones (an absent slot takes its parent's; -1: the world).
-        source = np.full(len(SLOTS), -1)
-        for s, parent in enumerate(SLOT_PARENTS):
-            source[s] = np.count_nonzero(present[:s]) if present[s] else (source[parent] if parent >= 0 else -1)
-        return {"slots": slots, "present": present, "counts": counts, "active": active, "fractions": fractions,
-                "eyes_lead": bool(priority == EYES and has_eyes), "chain_aligned": chain_aligned,
-                "columns": np.array(ancestors(rig.skeleton, slots[present])), "slot_source": source}
+    def bind(self, rig, report) -> GazeBinding:
+        return bind_chain(rig, self.moving, self.priority_group, report)
 
     # -- evaluation ----------------------------------------------------------------------------------
     @classmethod
@@ -185,13 +136,13 @@ class Gaze(Controller):
             for job, these in spans[c]:
                 b, gaze = job.binding, job.controller
                 if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
-                    joints = b["slots"][b["present"]]
+                    joints = b.joints
                     rest = job.rig.skeleton.rest_rotations[joints]
                     leads = np.zeros(frames, dtype=bool)
                     leads[these] = True
                     job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * leads)
-                arrays["active"][c, these] = b["active"]
-                arrays["fractions"][c, these] = b["fractions"]
+                arrays["active"][c, these] = b.active
+                arrays["fractions"][c, these] = b.fractions
                 arrays["offsets"][c, these] = gaze.offset
                 arrays["limits"][c, these] = gaze.limits
                 arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
@@ -201,10 +152,10 @@ class Gaze(Controller):
         positions = chain["positions"]  # each slot's joint in the world
         # Where the priority joint points: the mean forward (+Z) axis of the eyes or the head.
         forward_axes = quat.rotate(chain["frames_world"], _FORWARD)
-        chain["forward"] = _weighted_slots(np.array([_lead_weights(span[0][0]) for span in spans]), forward_axes)
+        chain["forward"] = _weighted_slots(np.array([span[0][0].binding.lead_weights() for span in spans]), forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
             for job, these in spans[c][1:]:
-                chain["forward"][c, these] = _weighted_slots(_lead_weights(job)[None], forward_axes[c:c + 1, these])[0]
+                chain["forward"][c, these] = _weighted_slots(job.binding.lead_weights()[None], forward_axes[c:c + 1, these])[0]
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}
@@ -227,25 +178,24 @@ class Gaze(Controller):
                     job.report(f"gaze target {job.controller.target!r} cannot be found ({exc}); the gaze is skipped")
                     arrays["targets"][c, these] = 0.0
                     arrays["weights"][c, these] = 0.0
-        inp = SolverInput(present=np.stack([rows[n][0].binding["present"] for n in names]),
-                          counts=np.stack([rows[n][0].binding["counts"] for n in names]), refine=tuple(refine), **arrays, **chain)
-        # The smoothing's state, per character (whichever of its gazes leads): each group's and each
-        # eye's offsets, and the groups' offsets in the first pass of characters looking at each other.
-        states = [rows[n][0].rig.state.get("gaze", {}) for n in names]
-        groups_state = np.stack([st.get("groups", np.zeros((n_groups, 2))) for st in states])
-        eyes_state = np.stack([st.get("eyes", np.zeros((2, 2))) for st in states])
-        first_state = np.stack([st.get("first", groups_state[c]) for c, st in enumerate(states)])
+        inp = SolverInput(present=np.stack([rows[n][0].binding.present for n in names]),
+                          counts=np.stack([rows[n][0].binding.counts for n in names]), refine=tuple(refine), **arrays, **chain)
+        # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver
+        # and written back after it.
+        states = [rows[n][0].rig.state_of(GazeState) for n in names]
+        groups_state = np.stack([st.groups for st in states])
+        eyes_state = np.stack([st.eyes for st in states])
+        first_state = np.stack([st.first for st in states])
         offsets = solve(inp, groups_state, eyes_state, first_state)
         # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
         # character at once, then written per character.
-        aligned = np.stack([rows[n][0].binding["chain_aligned"] for n in names])  # (C, S, 4)
+        aligned = np.stack([rows[n][0].binding.chain_aligned for n in names])  # (C, S, 4)
         to_local = quat.left_matrix(aligned) @ quat.right_matrix(quat.conjugate(aligned))  # (C, S, 4, 4)
         turns = _apply_per_slot(to_local, swing(offsets[..., 0], offsets[..., 1]))
         for c, name in enumerate(names):
-            job = rows[name][0]
-            job.rig.state["gaze"] = {"groups": groups_state[c], "eyes": eyes_state[c], "first": first_state[c]}
-            b = job.binding
-            job.pose.add_offsets(b["slots"][b["present"]], turns[c][:, b["present"]])
+            job, state = rows[name][0], states[c]
+            state.groups, state.eyes, state.first = groups_state[c], eyes_state[c], first_state[c]
+            job.pose.add_offsets(job.binding.joints, turns[c][:, job.binding.present])
 
 
 def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
@@ -283,23 +233,23 @@ def _chain_frames(jobs):
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
     same_chain: dict[tuple, list[int]] = {}
     for c, job in enumerate(jobs):
-        same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding["slots"])), []).append(c)
+        same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
     for members in same_chain.values():
         rot[members], pos[members] = _slot_poses([jobs[c] for c in members])
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot, as one matrix product over the frames (F, 4) x (4, 4).
     placement = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
-    aligned = np.stack([job.binding["chain_aligned"] for job in jobs])  # (C, S, 4)
+    aligned = np.stack([job.binding.chain_aligned for job in jobs])  # (C, S, 4)
     to_world = quat.left_matrix(placement)[:, None] @ quat.right_matrix(aligned)  # (C, S, 4, 4)
     frames_w = _apply_per_slot(to_world, rot)
     turn = quat.unit_to_matrix(placement)  # (C, 3, 3)
     pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(turn, -1, -2)).reshape(pos.shape)
     pos += np.stack([job.rig.position for job in jobs])[:, None, None]
-    world = np.stack([job.binding["slot_source"] < 0 for job in jobs])[:, None, :, None]  # (C, 1, S, 1)
+    world = np.stack([job.binding.slot_source < 0 for job in jobs])[:, None, :, None]  # (C, 1, S, 1)
     if world.any():  # the world itself (no pelvis) stays put
         frames_w = np.where(world, aligned[:, None], frames_w)
         pos = np.where(world, 0.0, pos)
-    origin = _weighted_slots(np.array([_origin_weights(job.binding["present"]) for job in jobs]), pos)
+    origin = _weighted_slots(np.array([job.binding.origin_weights() for job in jobs]), pos)
     return frames_w, pos, origin
 
 
@@ -313,7 +263,7 @@ def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:
     frames, for characters on one skeleton with one chain (an absent slot repeats its parent's joint)."""
     b = jobs[0].binding
     skeleton = jobs[0].rig.skeleton
-    columns = b["columns"]
+    columns = b.columns
     local = np.stack([j.pose.local_rotations[:, columns] for j in jobs])
     root = np.stack([j.pose.root_translations for j in jobs])
     moved = [j.pose.joint_translations for j in jobs]
@@ -321,25 +271,9 @@ def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:
     if any(t is not None for t in moved):
         rest = skeleton.rest_translations[columns]
         translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, columns] for t in moved])
-    rot, pos = chain_fk(skeleton, local, root, translations, b["slots"][b["present"]], columns)
-    source = np.maximum(b["slot_source"], 0)  # the world's slots are set apart by the caller
+    rot, pos = chain_fk(skeleton, local, root, translations, b.joints, columns)
+    source = np.maximum(b.slot_source, 0)  # the world's slots are set apart by the caller
     return rot[..., source, :], pos[..., source, :]
-
-
-def _origin_weights(present) -> np.ndarray:
-    """(S,) weights of the slots whose mean is where the gaze starts: the eyes, else the head."""
-    weights = np.zeros(len(SLOTS))
-    weights[[7, 8] if present[7] and present[8] else [6]] = 1.0
-    return weights / weights.sum()
-
-
-def _lead_weights(job) -> np.ndarray:
-    """(S,) weights of the slots whose mean forward axis the gaze points: the eyes when they lead, else the head."""
-    if job.binding["eyes_lead"]:
-        return _origin_weights(job.binding["present"])
-    weights = np.zeros(len(SLOTS))
-    weights[6] = 1.0
-    return weights
 
 
 def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -350,5 +284,5 @@ def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
 def _slots_of(target: JointTarget, job, block) -> tuple[int, ...]:
     """The chain slots of gazing character ``job`` whose mean is ``target``, if they all are slots."""
     _, joints = target.resolve(block.runtime)
-    slots = list(job.binding["slots"])
+    slots = list(job.binding.slot_joints)
     return tuple(slots.index(j) for j in joints) if all(j in slots for j in joints) else ()

@@ -69,10 +69,15 @@ GROUP_ALIASES: dict[str, str] = {
     "OPTICAL": "eyes", "EYEBALL": "eyes",
 }
 
-#: Chain slots the solver works on, bottom to top; each slot's parent slot; each slot's group.
+#: Chain slots the solver works on, bottom to top (canonical joints); each slot's parent slot (-1: the
+#: world); each slot's group. The eyes are the last two slots, side by side on the head.
 SLOTS: tuple[str, ...] = ("base", "spine1", "spine2", "spine3", "spine4", "spine5", "skullbase", "eyeball_left", "eyeball_right")
 SLOT_PARENTS: tuple[int, ...] = (-1, 0, 1, 2, 3, 4, 5, 6, 6)
 SLOT_GROUPS: tuple[int, ...] = tuple(next(i for i, g in enumerate(GROUPS) if s in g.joints) for s in SLOTS)
+#: Slots by what they are: the head's, the eyes' (left, right) and the neck's.
+HEAD_SLOT = SLOTS.index("skullbase")
+EYE_SLOTS: tuple[int, int] = (SLOTS.index("eyeball_left"), SLOTS.index("eyeball_right"))
+NECK_SLOTS: tuple[int, ...] = tuple(s for s, g in enumerate(SLOT_GROUPS) if GROUP_NAMES[g] == "cervical")
 
 #: Offset directions (BML offsetDirection) as polar angles in degrees: 0 = the character's right, 90 = up.
 OFFSET_DIRECTIONS: dict[str, float] = {

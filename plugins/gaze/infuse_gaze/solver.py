@@ -37,10 +37,12 @@ import numpy as np
 
 from infuse import quaternions as quat
 
-from .model import EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
+from .model import EYE_SLOTS, EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
 
 _S = len(SLOTS)
-_EYE_SLOTS = (7, 8)
+_EYE_SLOTS = list(EYE_SLOTS)
+_BELOW_EYES = min(EYE_SLOTS)  # the slots before the eyes: the chain up to the head
+_EYE_PAIR = slice(min(EYE_SLOTS), max(EYE_SLOTS) + 1)  # the eyes, side by side, as a view
 _FIRST_SLOT = {g: SLOT_GROUPS.index(g) for g in set(SLOT_GROUPS)}
 _PARENT_SLOTS = np.maximum(SLOT_PARENTS, 0)  # the pelvis slot stands in for its own parent (the world)
 #: The slots a group's turn is worked out from (each group's first, the eyes' aside), and their rows in
@@ -355,7 +357,7 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
     share = unturn = None
     # With ``place``: the last slot's aligned frame (3, 3, C, F) in the world, and every slot's position.
     world, positions = None, block.positions.copy() if place else None
-    for s in range(_EYE_SLOTS[0]):
+    for s in range(_BELOW_EYES):
         g = SLOT_GROUPS[s]
         first = _FIRST_SLOT[g] == s
         if seen is None:
@@ -392,9 +394,9 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
         seen = np.einsum("ijcf,jcf->icf", turn, view)
         if place:
             world = np.einsum("ijcf,kjcf->ikcf", world, turn)
-    pair = slice(_EYE_SLOTS[0], _EYE_SLOTS[1] + 1)
+    pair = _EYE_PAIR
     if place and seen is not None:
-        positions[pair] = positions[SLOT_PARENTS[_EYE_SLOTS[0]]] + np.einsum("ijcf,ejcf->eicf", world, block.offset[pair])
+        positions[pair] = positions[SLOT_PARENTS[_BELOW_EYES]] + np.einsum("ijcf,ejcf->eicf", world, block.offset[pair])
     placed = positions.transpose(2, 3, 0, 1) if place else None
     if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
         return out, placed

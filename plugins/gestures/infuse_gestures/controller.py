@@ -24,21 +24,26 @@ from .timewarp import PHASES, phase_warp
 #: A gesture that starts less than this after the previous one ends follows on from its stroke, seconds.
 COARTICULATION_GAP_S = 0.5
 _LEGS = ("hip", "knee", "ankle", "forefoot", "toe")
-_INFUSIONS: dict = {}
+
+
+class GestureSpaces(dict):
+    """The gesture packs infused on one runtime character: pack name -> its
+    :class:`~infuse.packs.BlendSpace`. Kept in the character's rig (:meth:`~infuse.runtime.rig.Rig.state_of`),
+    so it goes with its runtime."""
 
 
 def gesture_space(rig, pack: str):
-    """The :class:`~infuse.packs.BlendSpace` of gesture pack ``pack`` on the rig's character (infused once)."""
+    """The :class:`~infuse.packs.BlendSpace` of gesture pack ``pack`` on the rig's character (infused once per
+    runtime character)."""
     from infuse.packs import BlendSpace, infuse_character
 
     if isinstance(pack, BlendSpace):
         return pack
-    # Keyed by the asset and mapping, which scenes share when they add the same Character (kept alive with it).
-    key = (id(rig.character.asset), id(rig.mapping), str(pack))
-    if key not in _INFUSIONS:
+    spaces = rig.state_of(GestureSpaces)
+    if str(pack) not in spaces:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        _INFUSIONS[key] = (rig.character.asset, rig.mapping, next(iter(infusion.spaces.values())))
-    return _INFUSIONS[key][2]
+        spaces[str(pack)] = next(iter(infusion.spaces.values()))
+    return spaces[str(pack)]
 
 
 @lru_cache(maxsize=256)

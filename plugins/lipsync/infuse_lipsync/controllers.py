@@ -13,6 +13,7 @@ over an activity), with the builders that realize BML ``<speech>``, ``<faceLexem
 """
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -98,13 +99,29 @@ def target_side(name: str) -> str | None:
     return "LEFT" if m.group(1) in ("left", "lf", "_l", ".l") else "RIGHT"
 
 
+class FaceChannelsByMap(dict):
+    """The face channels of one runtime character, detected once per map file: a key of the map file
+    (:func:`map_key`) -> its :class:`~.channels.FaceChannels`. Kept in the character's rig
+    (:meth:`~infuse.runtime.rig.Rig.state_of`), so it goes with its runtime."""
+
+
+def map_key(map_file) -> tuple[str, str] | None:
+    """What tells map files apart: a path as written, a parsed document by its content (two equal
+    documents declare the same channels), None for none."""
+    if map_file is None:
+        return None
+    if isinstance(map_file, dict):
+        return "document", json.dumps(map_file, sort_keys=True, default=str)
+    return "path", str(map_file)
+
+
 def face_channels(rig, map_file=None):
     """The :class:`~.channels.FaceChannels` of a runtime character, detected once per map file."""
-    cache = rig.state.setdefault("face_channels", {})
-    key = str(map_file) if map_file is not None and not isinstance(map_file, dict) else id(map_file)
-    if key not in cache:
-        cache[key] = detect_face(rig.character.asset, map_file)
-    return cache[key]
+    channels = rig.state_of(FaceChannelsByMap)
+    key = map_key(map_file)
+    if key not in channels:
+        channels[key] = detect_face(rig.character.asset, map_file)
+    return channels[key]
 
 
 class Speech(Tracks):

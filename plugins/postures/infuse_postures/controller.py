@@ -52,21 +52,26 @@ BULGE_M = 0.05
 #: How far round from the front (degrees about the body) a wrist must start or end for it to begin to take
 #: the way round the body, and to take it in full: hands behind the back.
 ROUND_DEG = (110.0, 140.0)
-_INFUSIONS: dict = {}
+
+
+class PostureSpaces(dict):
+    """The posture packs infused on one runtime character: pack name -> its
+    :class:`~infuse.packs.BlendSpace`. Kept in the character's rig (:meth:`~infuse.runtime.rig.Rig.state_of`),
+    so it goes with its runtime."""
 
 
 def posture_space(rig, pack):
-    """The :class:`~infuse.packs.BlendSpace` of posture pack ``pack`` on the rig's character (infused once)."""
+    """The :class:`~infuse.packs.BlendSpace` of posture pack ``pack`` on the rig's character (infused once per
+    runtime character)."""
     from infuse.packs import BlendSpace, infuse_character
 
     if isinstance(pack, BlendSpace):
         return pack
-    # Keyed by the asset and mapping, which scenes share when they add the same Character (kept alive with it).
-    key = (id(rig.character.asset), id(rig.mapping), str(pack))
-    if key not in _INFUSIONS:
+    spaces = rig.state_of(PostureSpaces)
+    if str(pack) not in spaces:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        _INFUSIONS[key] = (rig.character.asset, rig.mapping, next(iter(infusion.spaces.values())))
-    return _INFUSIONS[key][2]
+        spaces[str(pack)] = next(iter(infusion.spaces.values()))
+    return spaces[str(pack)]
 
 
 def facing(left: np.ndarray) -> float:
