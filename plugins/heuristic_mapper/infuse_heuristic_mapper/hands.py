@@ -182,6 +182,7 @@ def _numbered_thumb(view: SkeletonView, keys: list[int]) -> int | None:
 #: Finger matching costs: per step between a chain's place across the palm and a digit's, and for a
 #: chain named as that digit (negative) or as another one.
 ACROSS_STEP = 0.5
+MATCHED_CHAINS = 6  # chains matched at most (a hand with many digit-like chains: hair, straps, claws)
 NAMED_DIGIT = -2.0
 NAMED_OTHER = 2.0
 
@@ -205,6 +206,11 @@ def _order_fingers(view: SkeletonView, thumb: int, others: list[int], wrist_pos:
         chain = _drop_metacarpal(view, view.main_chain(r, 6), wrist_pos)
         return float(np.dot(view.P[chain[0]] - wrist_pos, side))
     ordered = sorted(others, key=lambda r: -across(r))  # from the thumb side
+    # only chains that could be index..pinky are matched: named ones, then the nearest the thumb
+    named_chains = [r for r in ordered if view.info[r].roles & set(FINGER_ORDER)]
+    keep = set(named_chains[:MATCHED_CHAINS])
+    keep.update([r for r in ordered if r not in keep][:MATCHED_CHAINS - len(keep)])
+    ordered = [r for r in ordered if r in keep]
     digits = len(FINGER_ORDER)
     columns = max(digits, len(ordered))  # columns past the pinky: no digit
     cost = np.zeros((len(ordered), columns))

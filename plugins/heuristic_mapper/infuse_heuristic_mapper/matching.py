@@ -12,6 +12,10 @@ from itertools import permutations
 import numpy as np
 
 
+#: Matrices this wide at most: every matching is enumerated (7 columns: 5,040 matchings).
+MAX_COLUMNS = 7
+
+
 @lru_cache(maxsize=32)
 def _injections(rows: int, cols: int) -> np.ndarray:
     """(N, rows) every way of giving each of ``rows`` items a different one of ``cols`` columns."""
@@ -23,8 +27,8 @@ def best_matching(cost: np.ndarray) -> tuple[np.ndarray, float]:
     column, no column twice), and the cost margin to the second-best matching (inf when there is
     only one)."""
     rows, cols = cost.shape
-    if rows > cols:
-        raise ValueError(f"a matching of {rows} rows into {cols} columns")
+    if rows > cols or cols > MAX_COLUMNS:
+        raise ValueError(f"a matching of {rows} rows into {cols} columns (at most {MAX_COLUMNS} columns)")
     options = _injections(rows, cols)
     totals = cost[np.arange(rows), options].sum(axis=1)
     order = np.argsort(totals, kind="stable")
