@@ -4,6 +4,7 @@ wild rigs (through the command and through the API it uses), the built-in packs 
 and posing them in a scene, and rigs the packs cannot drive refused with the reason."""
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -11,12 +12,15 @@ import numpy as np
 import pytest
 
 import infuse
+from infuse import quaternions as quat
 from infuse.cli import main
 from infuse.contacts import feet, lowest_points
 from infuse.grounding import sole_depth
+from infuse.kinematics import forward_kinematics, motion_fk
 from infuse.mapping import map_skeleton
+from infuse_retarget import RetargetPlan, retarget_clip
 
-from corpus_data import require_corpus
+from corpus_data import corpus_file, require_corpus
 from wild_data import require_wild, wild_file
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -98,3 +102,45 @@ def test_packs_a_wild_rig_cannot_play_are_refused_with_the_reason(key, pack, joi
     _, err = capsys.readouterr()
     assert code == 3
     assert pack in err and joints in err
+
+
+def shoulder_line_error(source_positions, source_index, motion, index) -> np.ndarray:
+    """(F,) degrees between the source's and ``motion``'s left-to-right shoulder lines."""
+    _, p = motion_fk(motion)
+    u = source_positions[:, source_index["l_shoulder"]] - source_positions[:, source_index["r_shoulder"]]
+    v = p[:, index["l_shoulder"]] - p[:, index["r_shoulder"]]
+    cos = np.sum(u * v, axis=-1) / (np.linalg.norm(u, axis=-1) * np.linalg.norm(v, axis=-1))
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def plain_transfer(bandai, skeleton, mapping):
+    clip, src_map = bandai.clips["bandai walk"]
+    plan = RetargetPlan(clip.skeleton, src_map, skeleton, mapping, source_motion=clip)
+    result = retarget_clip(plan, clip, ik="none")
+    return shoulder_line_error(result.source_positions, plan.source_joints, result.plain, plan.target.index)
+
+
+def test_a_rest_standing_in_a_combat_stance_walks_with_its_shoulders_square(bandai):
+    """The Quaternius cyberpunk character's rest turns its pelvis 28 degrees from its shoulders (feet
+    staggered): that twist is pose, and the walk's shoulder line follows the source's (30 degrees off
+    when the twist was held)."""
+    rig = infuse.load(wild_file(one_rig("cyberpunk_pack/Character.glb")))
+    error = plain_transfer(bandai, rig.skeleton, map_skeleton(rig))
+    assert error.max() < 3.0, error.max()
+
+
+def test_a_chest_twisted_at_rest_is_turned_square(bandai):
+    """X Bot with its rest chest twisted 30 degrees about the vertical walks as X Bot does."""
+    xbot = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    mapping = map_skeleton(xbot)
+    sk = xbot.skeleton
+    spine = sk.index[mapping.joints["spine1"]]
+    g, _ = forward_kinematics(sk, sk.rest_rotations[None], sk.rest_translations[None, 0])
+    parent = g[0, sk.parents[spine]]
+    twist = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), np.radians(30.0))
+    rest = sk.rest_rotations.copy()
+    rest[spine] = quat.multiply(quat.multiply(quat.conjugate(parent), twist), quat.multiply(parent, rest[spine]))
+    twisted = dataclasses.replace(sk, rest_rotations=rest)
+    straight, turned = plain_transfer(bandai, sk, mapping), plain_transfer(bandai, twisted, mapping)
+    assert np.abs(turned - straight).max() < 0.5, np.abs(turned - straight).max()
+    assert turned.mean() < 3.0

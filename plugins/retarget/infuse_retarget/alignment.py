@@ -18,7 +18,10 @@ an A-pose lowers them) and build (where the rig puts its joints). Only pose is t
   how the spine curves, how far the neck leans, where the two clavicle joints sit. Across the
   labelled rigs standing in T- and A-poses alike, the girdle's slope (its first joint to the
   shoulder) spreads over 17° (standard deviation) and does not follow the arms' (correlation 0.1).
-  These joints keep their parent's rotation: a motion moves them from the target's own build.
+  These joints keep their parent's rotation: a motion moves them from the target's own build,
+  except for a twist of the chest against the pelvis about the body's up, which is pose
+  (:func:`_trunk_twist`): the spine joints below the girdle share the turn that squares the
+  shoulder line to the hip line.
   Lining their short bones up one by one turns them from rest by as much as two builds differ:
   SmartBody's Brad, whose clavicle joints dip 36° and then rise 27° where Utah's rise 20° and then
   run flat, had his acromioclavicular turned by 71° and his shoulders raised 4 cm by a Utah walk.
@@ -128,12 +131,16 @@ def align(index: dict[str, int], positions: np.ndarray, *, at_rest: bool = False
     flat = set(flat_feet)
     kids = canonical_children(index)
     scale = max(float(np.ptp(positions[list(index.values())], axis=0).max()), 1e-9)
+    twist = _trunk_twist(index, positions, out["base"]) if at_rest else {}
     for name in index:
         if name == "base":
             continue
         parent = canonical_parent(name, index)
         carried = out[parent if parent is not None else "base"]
         toes_of_flat_foot = canonical_joint(name).group == "foot" and f"{name[0]}_ankle" in flat
+        if name in twist:
+            out[name] = quat.normalize(quat.multiply(twist[name], carried))
+            continue
         if (at_rest and name in HELD) or toes_of_flat_foot:
             out[name] = carried
             continue
@@ -150,6 +157,35 @@ def align(index: dict[str, int], positions: np.ndarray, *, at_rest: bool = False
         else:
             out[name] = _bone_alignment(carried, pose_dirs, canon_dirs)
     return out
+
+
+def _trunk_twist(index: dict[str, int], positions: np.ndarray, base: np.ndarray) -> dict[str, np.ndarray]:
+    """The turn about the body's up that each trunk joint below the shoulder girdle adds to its
+    parent's alignment so that the shoulder line of ``positions`` (J, 3) lies square to the hip line.
+
+    A rest twisting the chest against the pelvis about the vertical (a combat stance, feet staggered
+    and pelvis turned; a dance clip's mean posture) holds that twist as pose, not build: kept, it
+    turned a walk's chest 30 degrees off its source's under every frame. The twist is shared evenly
+    by the mapped spine joints from the pelvis up to the joint the arms hang from. ``base``: the
+    base's alignment. Empty when the hips or shoulders are not both mapped."""
+    if not all(n in index for n in ("l_hip", "r_hip", "l_shoulder", "r_shoulder")):
+        return {}
+    top = canonical_parent("l_shoulder", index)
+    while top is not None and canonical_joint(top).group != "torso":
+        top = canonical_parent(top, index)
+    chain = []
+    while top is not None and top != "base":
+        chain.append(top)
+        top = canonical_parent(top, index)
+    if not chain:
+        return {}
+    line = quat.rotate(base, positions[index["l_shoulder"]] - positions[index["r_shoulder"]]) * (1.0, 0.0, 1.0)
+    square = (canonical_position("l_shoulder") - canonical_position("r_shoulder")) * (1.0, 0.0, 1.0)
+    if np.linalg.norm(line) < 1e-9 or np.linalg.norm(square) < 1e-9:
+        return {}
+    angle = float(np.arctan2(np.cross(line, square)[1], np.dot(line, square)))
+    share = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), angle / len(chain))
+    return {name: share for name in chain}
 
 
 def _aims(children: list[str]) -> list[str]:
