@@ -8,13 +8,14 @@ channel state, one column per morph target. Controllers write through the method
 """
 from __future__ import annotations
 
-import functools
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import quaternions as quat
 from ..kinematics import forward_kinematics
+from ..skeleton import Skeleton
 from .layers import Mode
 
 
@@ -183,9 +184,23 @@ class ChainPlan:
     out: np.ndarray
 
 
-@functools.lru_cache(maxsize=256)
+#: Each skeleton's chain plans by joints and columns, for as long as the skeleton lives: a Skeleton is
+#: immutable and hashed by identity, so its plans are its own and go with it.
+_PLANS: weakref.WeakKeyDictionary[Skeleton, dict[tuple, ChainPlan]] = weakref.WeakKeyDictionary()
+
+
 def chain_plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None = None) -> ChainPlan:
     """The :class:`ChainPlan` of ``joints`` (made once per skeleton, joints and columns)."""
+    plans = _PLANS.get(skeleton)
+    if plans is None:
+        plans = _PLANS[skeleton] = {}
+    plan = plans.get((joints, columns))
+    if plan is None:
+        plan = plans[(joints, columns)] = _plan(skeleton, joints, columns)
+    return plan
+
+
+def _plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None) -> ChainPlan:
     chain = ancestors(skeleton, joints)
     place = {j: k for k, j in enumerate(chain)}
     column = {j: j for j in chain} if columns is None else {int(j): k for k, j in enumerate(columns)}

@@ -1,0 +1,113 @@
+"""What controllers keep for a character is owned by the runtime that plays it: the packs a gesture or a
+posture infuses, a gaze's turn, the face channels a face expression detects, and a clip's interpolation
+table (the clip's own). When the runtime goes, all of it goes, and no module of infuse holds more per
+character than before."""
+from __future__ import annotations
+
+import gc
+import sys
+import weakref
+
+import numpy as np
+
+from infuse import Motion, quaternions as quat
+from infuse.runtime import Clip, Runtime
+from infuse.runtime.clip import continuous_rotations
+from infuse_gaze import Gaze
+from infuse_gaze.binding import GazeState
+from infuse_gestures.controller import Gesture, GestureSpaces
+from infuse_lipsync.controllers import FaceChannelsByMap, FaceExpression, face_channels
+from infuse_postures.controller import Posture, PostureSpaces
+
+from runtime_characters import synthetic_character
+
+SMILE = ("mouthSmileLeft", "mouthSmileRight")
+#: A map document declaring the smile's channels (the synthetic character's names alone are too few).
+FACE_MAP = {"face": {"vocabularies": {"arkit": {name: name for name in SMILE}}}}
+SECONDS = 1.5
+
+
+def sway(skeleton, frames: int = 31, fps: float = 30.0) -> Motion:
+    """A clip of ``frames`` frames on ``skeleton``: every joint turning back and forth a little."""
+    phase = np.linspace(0.0, 2.0 * np.pi, frames)[:, None]
+    angles = 0.1 * np.sin(phase + np.arange(skeleton.num_joints)[None])  # (F, J) radians
+    rotations = quat.from_axis_angle(np.array([0.0, 0.0, 1.0]), angles)
+    return Motion(skeleton, fps, rotations, np.zeros((frames, 3)), name="sway")
+
+
+def play(names: tuple[str, ...]) -> Runtime:
+    """A runtime at 24 fps (the 30 fps clips are interpolated) whose characters sway in a clip of their
+    own, gesture, stand in a posture, look at a point and smile, for SECONDS."""
+    rt = Runtime(fps=24.0)
+    for k, name in enumerate(names):
+        character = synthetic_character(name, morphs=SMILE)
+        rt.add_character(character, position=(1.5 * k, 0.0, 0.0))
+        rt.activate(name, Clip(sway(character.skeleton), loop=True), 0.0)
+        rt.activate(name, Posture("hands_on_hips"), 0.0)
+        rt.activate(name, Gesture("beat_small_right"), 0.2)
+        rt.activate(name, Gaze((1.0, 1.6, 2.0)), 0.0)
+        rt.activate(name, FaceExpression("smile", map_file=dict(FACE_MAP)), 0.0, end_s=1.0)
+    rt.run(SECONDS)
+    return rt
+
+
+def test_a_runtime_s_caches_go_when_it_goes():
+    rt = play(("ann",))
+    assert rt.motion("ann").morph_weights.max() > 0.5  # it smiled
+    rig = rt.rig("ann")
+    states = [rig.state_of(kind) for kind in (GestureSpaces, PostureSpaces, GazeState, FaceChannelsByMap)]
+    assert all(len(s) for s in states[:2]) and len(states[3]) == 1  # filled while playing, not made here
+    assert np.any(states[2].groups != 0.0)
+    packs = [*states[0].values(), *states[1].values()]
+    clip = next(a.controller.motion for a in rt.activities if isinstance(a.controller, Clip))
+    table = continuous_rotations(clip)
+    refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[3].values(), clip, table)]
+    del rt, rig, states, packs, clip, table
+    gc.collect()
+    assert [r() for r in refs if r() is not None] == []
+
+
+def module_containers() -> dict[str, object]:
+    """The containers and caches at the top of every infuse module (core and plugins), by name."""
+    found = {}
+    for name, module in list(sys.modules.items()):
+        if not name.startswith("infuse") or module is None:
+            continue
+        for attr, value in list(vars(module).items()):
+            if isinstance(value, (dict, list, set, weakref.WeakKeyDictionary, weakref.WeakValueDictionary)) \
+                    or callable(getattr(value, "cache_info", None)):
+                found[f"{name}.{attr}"] = value
+    return found
+
+
+def sizes(containers: dict[str, object]) -> dict[str, int]:
+    return {k: v.cache_info().currsize if hasattr(v, "cache_info") else len(v) for k, v in containers.items()}
+
+
+def test_no_module_holds_more_per_character():
+    # As many characters as below first: what is read once for any character (pack documents, registry
+    # tables) and what depends on how many play together, not on which (a gaze smoothing filter).
+    play(("w1", "w2", "w3"))
+    gc.collect()
+    containers = module_containers()
+    before = sizes(containers)
+    rt = play(("ann", "bob", "cid"))
+    # While the characters play, only weakly keyed maps hold more: what lives (their clips' tables,
+    # their skeletons' chain plans).
+    grown = {k for k, n in sizes(module_containers()).items() if n != before.get(k)}
+    assert grown and all(isinstance(containers[k], weakref.WeakKeyDictionary) for k in grown), grown
+    del rt
+    gc.collect()
+    assert {k: (before.get(k), n) for k, n in sizes(module_containers()).items() if n != before.get(k)} == {}
+
+
+def test_face_channels_tell_map_documents_apart_by_their_content():
+    rt = Runtime(fps=30.0)
+    rt.add_character(synthetic_character("ann", morphs=SMILE))
+    rig = rt.rig("ann")
+    declared = face_channels(rig, {"face": {"vocabularies": {"arkit": {"mouthSmileLeft": "mouthSmileRight"}}}})
+    same = face_channels(rig, {"face": {"vocabularies": {"arkit": {"mouthSmileLeft": "mouthSmileRight"}}}})
+    plain = face_channels(rig, {})
+    assert same is declared and plain is not declared
+    assert declared.declared == ("arkit",) and plain.declared == ()
+    assert face_channels(rig) is face_channels(rig, None) and len(rig.state_of(FaceChannelsByMap)) == 3
