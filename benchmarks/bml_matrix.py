@@ -468,6 +468,8 @@ def main(argv=None) -> int:
     if args.write_docs:
         if rows != ROWS or cast != CAST:
             raise SystemExit("--write-docs needs the whole matrix")
+        if any(c.status == "fails" for c in cells):
+            raise SystemExit("docs/bml.md not written: some cells fail")
         write_docs(cells)
     return 0 if all(c.status != "fails" for c in cells) else 1
 

@@ -1,4 +1,5 @@
-"""``<faceLexeme>``, ``<faceFacs>`` and the older ``<face>`` (SmartBody ``type="facs"``, draft ``<lexeme>`` child).
+"""``<faceLexeme>``, ``<faceFacs>``, ``<faceShift>`` and the older ``<face>`` (SmartBody ``type="facs"``, draft
+``<lexeme>`` child).
 
 A lexeme is checked at scheduling against the installed controller that realizes face behaviours: one
 it does not know (its constructor refuses it with a :class:`~infuse.errors.UsageError`, naming the
@@ -16,6 +17,8 @@ from .common import Notes, number, word
 FACE_POINTS = {"start": 0.0, "attackPeak": 0.3, "relax": 1.3, "end": 1.6}
 # BML 1.0 gives face behaviours start, attackPeak, relax, end; other spellings of the same moments.
 _ALIASES = {"ready": "attackPeak", "strokeStart": "attackPeak", "stroke": "attackPeak", "strokeEnd": "relax"}
+#: A face shift's natural timing (seconds): the change of expression, which then lasts.
+SHIFT_POINTS = {"start": 0.0, "end": 0.5}
 SIDES = ("LEFT", "RIGHT", "BOTH")
 LEXEME_ATTRIBUTES = {"lexeme", "amount", "overshoot"}
 FACS_ATTRIBUTES = {"au", "side", "amount", "overshoot"}
@@ -53,6 +56,20 @@ def plan_lexeme(behaviour, context) -> BehaviourPlan:
     _check(lexeme)
     parameters = {"kind": "lexeme", "lexeme": lexeme, "amount": number(behaviour, "amount", 0.5, notes, -1.0, 1.0)}
     return BehaviourPlan(_timing(), "face", parameters, _persistent(behaviour, context), tuple(notes))
+
+
+def plan_shift(behaviour, context) -> BehaviourPlan:
+    """BML 1.0 ``<faceShift lexeme>``: the expression comes in from start to end and stays until the next
+    face shift (``shift``: the realizer ends the one before)."""
+    notes = Notes()
+    lexeme = word(behaviour, "lexeme")
+    if lexeme is None:
+        raise BehaviourError("it has no lexeme")
+    _check(lexeme)
+    parameters = {"kind": "lexeme", "lexeme": lexeme, "amount": number(behaviour, "amount", 0.5, notes, -1.0, 1.0),
+                  "shift": True}
+    timing = TimingModel.from_points(SHIFT_POINTS, aliases={"attackPeak": "end", "ready": "end", "stroke": "end"})
+    return BehaviourPlan(timing, "face", parameters, True, tuple(notes))
 
 
 def _action_unit(text: str, side: str | None, notes: Notes) -> tuple[int, str]:

@@ -21,6 +21,8 @@ def infuse_bml_behaviours():
                    "lasting change of head direction"),
         _component("head", head.plan, ["head"], head.ATTRIBUTES, "nod, shake, toss, tilt and other head movements"),
         _component("faceLexeme", face.plan_lexeme, ["faceLexeme"], face.LEXEME_ATTRIBUTES, "facial expression by name"),
+        _component("faceShift", face.plan_shift, ["faceShift"], face.LEXEME_ATTRIBUTES,
+                   "lasting change of facial expression"),
         _component("faceFacs", face.plan_facs, ["faceFacs"], face.FACS_ATTRIBUTES, "FACS action unit"),
         _component("face", face.plan_face, ["face"], face.FACE_ATTRIBUTES, "SmartBody and draft <face>"),
         _component("posture", posture.plan_posture, ["posture"], posture.POSTURE_ATTRIBUTES, "temporary posture"),

@@ -32,4 +32,10 @@ def realize_face(activation, stage):
     except (InfuseError, ValueError, KeyError) as exc:
         stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot be shown: {exc}")
         return None
+    if activation.parameters.get("shift"):  # a face shift lasts until the next, which blends it out as it comes in
+        for activity in stage.activities(activation.character):
+            source = getattr(activity.source, "parameters", None) or {}
+            if source.get("shift") and activity.start_s < activation.start \
+                    and (activity.end_s is None or activity.end_s > activation.start):
+                stage.runtime.stop(activity, activation.start, blend_out_s=face.blend_in_s)
     return stage.activate(activation, face, end_s(activation))
