@@ -254,10 +254,14 @@ class LiveScene:
                 if self._stop.is_set():
                     break
                 overdue = int((time.perf_counter() - self.due_s(first)) / self.period_s)  # due already: shown no more
-                frames = self._evaluate(self.block_frames + max(overdue, 0))
+                size = self.block_frames
+                frames = self._evaluate(size + max(overdue, 0))
                 # the lead: from the planned start to the frames in hand (waking late included), the 90th
-                # percentile of the last blocks: one late block (the machine busy elsewhere) does not move it
+                # percentile of the last blocks: one late block (the machine busy elsewhere) does not move it.
+                # Blocks grown longer may take as much longer: the lead grows with them until measured.
                 self._leads.append(time.perf_counter() - begun)
+                if self.block_frames > size:
+                    self._leads = deque((lead * self.block_frames / size for lead in self._leads), maxlen=self._leads.maxlen)
                 self._lead_s = min(float(np.percentile(self._leads, 90)), self.max_block_frames * self.period_s)
                 with self._ready:
                     self._pending.extend(frames)
