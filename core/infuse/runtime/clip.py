@@ -10,6 +10,7 @@ morph weights linearly; the clip's morph weights drive the character's morph tar
 from __future__ import annotations
 
 import weakref
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -167,6 +168,36 @@ def _interpolation_table(motion: Motion) -> tuple[np.ndarray, np.ndarray]:
     return table
 
 
+@dataclass(frozen=True, eq=False)
+class ClipBinding:
+    """A clip bound to one character.
+
+    - ``motion``: the clip, on a skeleton that shares joint names with the character's (retargeted
+      onto it when it did not);
+    - ``columns`` (K,): the clip's joints that drive the character, ``joints`` (K,): the character's
+      joints they drive; ``identity_columns``: ``columns`` is 0..K-1 (the sample needs no gather);
+    - ``step`` (3,) metres: how far one cycle carries the character along the ground;
+    - ``mover``: the clip joint that travels (0: the root; else the first joint whose position channels
+      move); ``drives_root``: the clip's root is the character's and animated;
+    - ``moved_columns`` (T,), ``moved_joints`` (T,): joints whose position channels leave the
+      character's rest offsets, in the clip and on the character;
+    - ``morph_sources`` (M,): the clip's morph weight columns the character has, ``morph_columns``
+      (M,): the character's morph targets they drive.
+    """
+
+    motion: Motion
+    columns: np.ndarray
+    joints: np.ndarray
+    identity_columns: bool
+    step: np.ndarray
+    mover: int
+    drives_root: bool
+    moved_columns: np.ndarray
+    moved_joints: np.ndarray
+    morph_sources: np.ndarray
+    morph_columns: np.ndarray
+
+
 class Clip(Controller):
     """Play ``motion`` from the activity's start.
 
@@ -200,7 +231,7 @@ class Clip(Controller):
     def describe(self) -> str:
         return f"clip {self.motion.name!r}"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> ClipBinding:
         motion = self.motion
         if motion.skeleton is not rig.skeleton and motion.skeleton.names != rig.skeleton.names:
             shared = [n for n in motion.skeleton.names if n in rig.skeleton.index]
@@ -230,7 +261,6 @@ class Clip(Controller):
                 mover, travel = int(moving[0]), motion.joint_translations[:, moving[0]]
         step = travel[-1] - travel[0]
         step[1] = 0.0  # a cycle carries the character along the ground, not up
-        mover_name = src.names[mover]
         moved = []
         if motion.joint_translations is not None:  # only joints whose channels leave the character's rest offset
             rest = rig.skeleton.rest_translations
@@ -241,14 +271,12 @@ class Clip(Controller):
             lacking = [n for n in self.motion.morph_names if n not in rig.morph_index]
             report(f"clip {motion.name!r}: the character has no morph target {', '.join(map(repr, lacking[:8]))}; "
                    "those weights are skipped")
-        return {"motion": motion, "columns": columns, "joints": targets, "step": step,
-                "morph_sources": np.array(morph_sources, dtype=np.int64),
-                "morph_columns": np.array([rig.morph_index[self.motion.morph_names[k]] for k in morph_sources], dtype=np.int64),
-                "identity_columns": bool(np.array_equal(columns, np.arange(len(columns)))),
-                "mover": mover, "mover_target": rig.skeleton.index.get(mover_name),
-                "drives_root": src.names[0] == rig.skeleton.names[0] and bool(animated[0]),
-                "moved_columns": np.array([m[0] for m in moved], dtype=np.int64),
-                "moved_joints": np.array([m[1] for m in moved], dtype=np.int64)}
+        return ClipBinding(
+            motion=motion, columns=columns, joints=targets, identity_columns=bool(np.array_equal(columns, np.arange(len(columns)))),
+            step=step, mover=mover, drives_root=src.names[0] == rig.skeleton.names[0] and bool(animated[0]),
+            moved_columns=np.array([m[0] for m in moved], dtype=np.int64), moved_joints=np.array([m[1] for m in moved], dtype=np.int64),
+            morph_sources=np.array(morph_sources, dtype=np.int64),
+            morph_columns=np.array([rig.morph_index[self.motion.morph_names[k]] for k in morph_sources], dtype=np.int64))
 
     def _retarget(self, rig) -> Motion:
         from .. import registry
@@ -261,30 +289,30 @@ class Clip(Controller):
         return retargeter.retarget(self.motion, self.source_mapping, rig.skeleton, rig.mapping)
 
     def evaluate_one(self, job: Job, block: Block) -> None:
-        b = job.binding
-        motion = b["motion"]
+        b: ClipBinding = job.binding
+        motion = b.motion
         local = self.offset_s + np.maximum(job.local_times, 0.0) * self.speed
         rot, root, moved, cycles = sample_motion(motion, local, self.loop)
-        if not (b["columns"].size == rot.shape[1] and b["identity_columns"]):
-            rot = rot[:, b["columns"]]
+        if not (b.columns.size == rot.shape[1] and b.identity_columns):
+            rot = rot[:, b.columns]
         additive = job.mode is Mode.ADDITIVE
         if additive:  # an additive clip adds its difference from its own rest pose
-            rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b["columns"]]), rot)
-        job.pose.set_rotations(b["joints"], rot, job.weight, job.mode)
+            rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b.columns]), rot)
+        job.pose.set_rotations(b.joints, rot, job.weight, job.mode)
         first_root = motion.root_translations[0]
-        first_moved = None if moved is None else motion.joint_translations[0]
-        if b["mover"] == 0:
-            root = root + cycles[:, None] * b["step"] if self.root_motion else np.broadcast_to(first_root, root.shape)
+        first_moved = None if motion.joint_translations is None else motion.joint_translations[0]  # None with ``moved``
+        if b.mover == 0:
+            root = root + cycles[:, None] * b.step if self.root_motion else np.broadcast_to(first_root, root.shape)
         elif moved is not None and first_moved is not None:
-            travel = moved[:, b["mover"]]
-            moved[:, b["mover"]] = travel + cycles[:, None] * b["step"] if self.root_motion else first_moved[b["mover"]]
-        if b["drives_root"]:
+            travel = moved[:, b.mover]
+            moved[:, b.mover] = travel + cycles[:, None] * b.step if self.root_motion else first_moved[b.mover]
+        if b.drives_root:
             job.pose.set_root(root - first_root if additive else root, job.weight, job.mode)
-        if moved is not None and first_moved is not None and b["moved_joints"].size:
-            values = moved[:, b["moved_columns"]]
+        if moved is not None and first_moved is not None and b.moved_joints.size:
+            values = moved[:, b.moved_columns]
             if additive:
-                values = values - first_moved[b["moved_columns"]]
-            job.pose.set_translations(b["moved_joints"], values, job.weight, job.mode)
-        if b["morph_columns"].size:  # from the clip as given: a retargeted copy keeps no morph weights
-            weights = sample_morph_weights(self.motion, local, self.loop)[:, b["morph_sources"]]
-            job.pose.set_morphs(b["morph_columns"], weights, job.weight, job.mode)
+                values = values - first_moved[b.moved_columns]
+            job.pose.set_translations(b.moved_joints, values, job.weight, job.mode)
+        if b.morph_columns.size:  # from the clip as given: a retargeted copy keeps no morph weights
+            weights = sample_morph_weights(self.motion, local, self.loop)[:, b.morph_sources]
+            job.pose.set_morphs(b.morph_columns, weights, job.weight, job.mode)

@@ -11,11 +11,12 @@ overlap freely.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from infuse import quaternions as quat
+from infuse import Motion, quaternions as quat
 from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, sample_motion
 
@@ -61,6 +62,16 @@ def authored_phases(pack, clip: str) -> tuple[dict, frozenset]:
     return {"start": 0.0, **info["sync"], "end": float(info["duration"])}, hands
 
 
+@dataclass(frozen=True, eq=False)
+class GestureBinding:
+    """A gesture bound to one character: ``motion``, its pack clip infused on the character; ``joints``
+    (K,): the arm joints it drives; ``ready`` (K, 4): their local rotations in the clip's ready pose."""
+
+    motion: Motion
+    joints: np.ndarray
+    ready: np.ndarray
+
+
 class Gesture(Controller):
     """Play gesture ``clip`` of ``pack``.
 
@@ -99,7 +110,7 @@ class Gesture(Controller):
     def describe(self) -> str:
         return f"gesture {self.clip}"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> GestureBinding:
         space = gesture_space(rig, self.pack)
         if self.clip not in space.clips:
             raise UsageError(f"pack {space.pack!r} has no gesture {self.clip!r}")
@@ -112,7 +123,7 @@ class Gesture(Controller):
             raise MissingJointsError(rig.name, f"no arm joints are mapped for gesture {self.clip!r}")
         joints = np.array(joints, dtype=np.int64)
         ready, _, _, _ = sample_motion(clip.motion, np.array([self.authored["ready"]]), loop=False, joints=joints)
-        return {"motion": clip.motion, "joints": joints, "ready": ready[0]}
+        return GestureBinding(clip.motion, joints, ready[0])
 
     def clip_times(self, local_times) -> np.ndarray:
         """Clip seconds (F,) at ``local_times`` (F,) seconds from the gesture's start."""
@@ -120,11 +131,11 @@ class Gesture(Controller):
                           self.leave_at_stroke_end)
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
-        rotations, _, _, _ = sample_motion(b["motion"], self.clip_times(job.local_times), loop=False, joints=b["joints"])
+        b: GestureBinding = job.binding
+        rotations, _, _, _ = sample_motion(b.motion, self.clip_times(job.local_times), loop=False, joints=b.joints)
         if self.amplitude != 1.0:
-            rotations = self._scaled(rotations, b["ready"], job.local_times)
-        job.pose.set_rotations(b["joints"], rotations, job.weight, job.mode)
+            rotations = self._scaled(rotations, b.ready, job.local_times)
+        job.pose.set_rotations(b.joints, rotations, job.weight, job.mode)
 
     def _scaled(self, rotations: np.ndarray, ready: np.ndarray, t: np.ndarray) -> np.ndarray:
         """(F, K, 4) rotations whose turn away from the ready pose (K, 4) is scaled by the amplitude, from

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -168,6 +169,20 @@ class Speech(Tracks):
             super().evaluate_one(job, block)
 
 
+@dataclass(frozen=True, eq=False)
+class FaceBinding:
+    """A face expression bound to one character: morph targets ``columns`` (M,) at weights ``values``
+    (M,); face joints ``joints`` (K,) turned by local offsets ``offsets`` (K, 4) from rest; joints
+    ``moved`` (T,) shifted by ``shifts`` (T, 3) metres from rest."""
+
+    columns: np.ndarray
+    values: np.ndarray
+    joints: np.ndarray
+    offsets: np.ndarray
+    moved: np.ndarray
+    shifts: np.ndarray
+
+
 class FaceExpression(Controller):
     """Hold ``expression`` (a lexeme, an action unit such as ``"AU12"`` or ``{AU: weight}``) at ``amount``
     (0..1) on ``side`` (``"LEFT"``, ``"RIGHT"`` or ``"BOTH"``; default both). ``lexeme`` names it the way
@@ -202,7 +217,7 @@ class FaceExpression(Controller):
     def describe(self) -> str:
         return f"face {self.expression!r}"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> FaceBinding | None:
         face = face_channels(rig, self.map_file)
         if self.amount < 0:
             report(f"face {self.expression!r}: a negative amount ({self.amount:g}) is not shown; its size is used")
@@ -221,10 +236,10 @@ class FaceExpression(Controller):
             return None
         joints = sorted(joint_offsets)
         moved = sorted(shifts)
-        return {"columns": np.array([c for c, _ in columns], dtype=np.int64), "values": np.array([w for _, w in columns]),
-                "joints": np.array(joints, dtype=np.int64),
-                "offsets": np.array([joint_offsets[j] for j in joints]).reshape(len(joints), 4),
-                "moved": np.array(moved, dtype=np.int64), "shifts": np.array([shifts[j] for j in moved]).reshape(len(moved), 3)}
+        return FaceBinding(columns=np.array([c for c, _ in columns], dtype=np.int64), values=np.array([w for _, w in columns]),
+                           joints=np.array(joints, dtype=np.int64),
+                           offsets=np.array([joint_offsets[j] for j in joints]).reshape(len(joints), 4),
+                           moved=np.array(moved, dtype=np.int64), shifts=np.array([shifts[j] for j in moved]).reshape(len(moved), 3))
 
     @staticmethod
     def _joint_offsets(rig, face, targets: dict, report) -> tuple[dict[int, np.ndarray], dict[int, np.ndarray]]:
@@ -256,18 +271,16 @@ class FaceExpression(Controller):
         return offsets, shifts
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
+        b: FaceBinding | None = job.binding
         if b is None:
             return
         n = len(job.local_times)
-        if b["columns"].size:
-            job.pose.set_morphs(b["columns"], np.broadcast_to(b["values"], (n, len(b["values"]))), job.weight, job.mode)
-        if b["joints"].size:
-            job.pose.set_rotations(b["joints"], np.broadcast_to(b["offsets"], (n,) + b["offsets"].shape), job.weight,
-                                   job.mode)
-        if b["moved"].size:
-            job.pose.set_translations(b["moved"], np.broadcast_to(b["shifts"], (n,) + b["shifts"].shape), job.weight,
-                                      job.mode)
+        if b.columns.size:
+            job.pose.set_morphs(b.columns, np.broadcast_to(b.values, (n, len(b.values))), job.weight, job.mode)
+        if b.joints.size:
+            job.pose.set_rotations(b.joints, np.broadcast_to(b.offsets, (n,) + b.offsets.shape), job.weight, job.mode)
+        if b.moved.size:
+            job.pose.set_translations(b.moved, np.broadcast_to(b.shifts, (n,) + b.shifts.shape), job.weight, job.mode)
 
 
 def speech_from_bml(parameters: dict, runtime, character: str, activation=None) -> Speech | None:

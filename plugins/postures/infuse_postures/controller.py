@@ -22,9 +22,11 @@ out, letting the feet go with it.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from infuse import quaternions as quat
+from infuse import Motion, quaternions as quat
 from infuse.errors import MissingJointsError, UsageError
 from infuse.kinematics import forward_kinematics
 from infuse.runtime import Controller, Layer, Mode, sample_motion, smoothstep
@@ -84,6 +86,33 @@ def _yaw(angle: float) -> np.ndarray:
     return quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), np.array(angle))
 
 
+@dataclass(frozen=True, eq=False)
+class PostureBinding:
+    """A posture bound to one character (positions in metres, in the posture clip's first frame).
+
+    - ``motion``: the posture's idle, infused on the character; ``via``: the posture whose arms a blend
+      passes by (:data:`VIA`), None for that posture itself or a pack without it;
+    - ``legs`` (2, 3): hip, knee and ankle of the left and right legs; ``reach`` (2,): how far each hip
+      may be from its planted ankle (:data:`LEG_REACH` of the leg's length);
+    - ``centre`` (3,): between the ankles; ``yaw``: the heading of the hips (radians, :func:`facing`);
+    - ``arms`` (A,): the joints of both arms; ``abduction``: the shoulder joints (K,) and the local
+      offsets (K, 4) lifting each arm out to its side;
+    - ``hands`` (2, 3): shoulder, elbow and wrist of each arm, None without a way round the body;
+      ``base``: the pelvis joint, or None.
+    """
+
+    motion: Motion
+    via: Motion | None
+    legs: np.ndarray
+    reach: np.ndarray
+    centre: np.ndarray
+    yaw: float
+    arms: np.ndarray
+    abduction: tuple[np.ndarray, np.ndarray]
+    hands: np.ndarray | None
+    base: int | None
+
+
 class Posture(Controller):
     """Stand in posture ``clip`` of ``pack`` (its idle looping), blending in and out over ``transition_s``
     seconds, the feet planted where they stand. ``phase_s``: where in its loop the idle starts."""
@@ -104,7 +133,7 @@ class Posture(Controller):
     def describe(self) -> str:
         return f"posture {self.clip}"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> PostureBinding:
         space = posture_space(rig, self.pack)
         if self.clip not in space.clips:
             raise UsageError(f"pack {space.pack!r} has no posture {self.clip!r} (its postures: {', '.join(space.clips)})")
@@ -121,10 +150,9 @@ class Posture(Controller):
         rest = rig.skeleton.rest_global_positions
         lengths = np.linalg.norm(rest[legs[:, 1]] - rest[legs[:, 0]], axis=-1) + \
             np.linalg.norm(rest[legs[:, 2]] - rest[legs[:, 1]], axis=-1)
-        return {"motion": motion, "legs": legs, "centre": g_pos[0, legs[:, 2]].mean(axis=0),
-                "yaw": facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]]), "reach": LEG_REACH * lengths,
-                "via": via, "arms": _arms(rig), "abduction": _abduction(rig), "hands": _hands(rig),
-                "base": rig.joint("base")}
+        return PostureBinding(motion=motion, via=via, legs=legs, reach=LEG_REACH * lengths,
+                              centre=g_pos[0, legs[:, 2]].mean(axis=0), yaw=facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]]),
+                              arms=_arms(rig), abduction=_abduction(rig), hands=_hands(rig), base=rig.joint("base"))
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
@@ -133,37 +161,38 @@ class Posture(Controller):
             job.controller.evaluate_one(job, block)
 
     def evaluate_one(self, job, block) -> None:
-        b, pose, state = job.binding, job.pose, job.state
+        b: PostureBinding = job.binding
+        pose, state = job.pose, job.state
         if "ankles" not in state:
             k = self._standing(job, block)
             if k is None:
                 return
-            state.update(self._footprints(pose, b["legs"], k))
+            state.update(self._footprints(pose, b.legs, k))
         pin = self._leaving(job, block)
         live = job.weight > 0.0
         if not live.any():
             return
         sk = pose.rig.skeleton
         times = self.phase_s + np.maximum(job.local_times, 0.0)
-        target, root, _, _ = sample_motion(b["motion"], times, loop=True)
-        turn = _yaw(state["yaw"] - b["yaw"])
+        target, root, _, _ = sample_motion(b.motion, times, loop=True)
+        turn = _yaw(state["yaw"] - b.yaw)
         target[:, 0] = quat.multiply(turn, target[:, 0])
-        root = state["centre"] + quat.rotate(turn, root - b["centre"])
+        root = state["centre"] + quat.rotate(turn, root - b.centre)
         w = job.weight[:, None]
         rotations = quat.slerp(pose.local_rotations, target, np.broadcast_to(w, target.shape[:2]))
         blending = live & (job.weight < 1.0)
-        if b["via"] is not None and b["arms"].size and blending.any():
+        if b.via is not None and b.arms.size and blending.any():
             rotations[blending] = self._by_the_sides(pose.local_rotations[blending], target[blending], rotations[blending],
                                                      job.weight[blending], b, times[blending])
         placed = root
         root = pose.root_translations + w * (root - pose.root_translations)
         jt = pose.joint_translations
         goals = np.broadcast_to(state["ankles"], (len(root), 2, 3))
-        root = self._lowered(sk, rotations, root, jt, b["legs"], goals, b["reach"])
-        solve_limb(sk, rotations, root, jt, b["legs"], goals, weight=np.repeat((pin * live)[:, None], 2, axis=1),
+        root = self._lowered(sk, rotations, root, jt, b.legs, goals, b.reach)
+        solve_limb(sk, rotations, root, jt, b.legs, goals, weight=np.repeat((pin * live)[:, None], 2, axis=1),
                    pole=state["forward"], end_rotation=np.broadcast_to(state["ankle_rotations"], (len(root), 2, 4)),
                    distance=False)
-        if b["hands"] is not None and blending.any():
+        if b.hands is not None and blending.any():
             k = blending
             rotations[k] = self._around_the_body(sk, b, state["yaw"], job.weight[k], rotations[k], root[k],
                                                  (pose.local_rotations[k], pose.root_translations[k]),
@@ -173,13 +202,13 @@ class Posture(Controller):
         pose.set_root(root, on)
 
     @staticmethod
-    def _around_the_body(sk, b, yaw: float, weight, rotations, root, below, target, jt) -> np.ndarray:
+    def _around_the_body(sk, b: PostureBinding, yaw: float, weight, rotations, root, below, target, jt) -> np.ndarray:
         """``rotations`` (K, J, 4) of blending frames with each wrist that comes from or goes behind the back put
         on its way around the body, from where the pose ``below`` has it to where the posture's ``target`` pose
         does (both (rotations (K, J, 4), root (K, 3))), ``weight`` (K,) of the way along: about the vertical
         through the pelvis, off the body by up to :data:`BULGE_M`, round it (its angle, distance and height
         going from one end's to the other's), onto it (arm IK, the hands keeping their turn)."""
-        hands, base = b["hands"], b["base"]
+        hands, base = b.hands, b.base
         face = _yaw(-yaw)
 
         def around(pose):  # (K, 2) angle, distance, height of each wrist about the pelvis, in the body's frame
@@ -218,15 +247,15 @@ class Posture(Controller):
         return solved
 
     @staticmethod
-    def _by_the_sides(below, target, rotations, weight, b, times) -> np.ndarray:
+    def _by_the_sides(below, target, rotations, weight, b: PostureBinding, times) -> np.ndarray:
         """``rotations`` (K, J, 4) of blending frames with the arms' going from ``below`` to ``target`` (K, J, 4)
         by the ``via`` posture's arms: toward them over the first :data:`VIA_SHARE` of the blend ``weight``
         (K,), from them to the target's over the last."""
-        arms = b["arms"]
-        via, _, _, _ = sample_motion(b["via"], times, loop=True, joints=arms)
+        arms = b.arms
+        via, _, _, _ = sample_motion(b.via, times, loop=True, joints=arms)
         leave = smoothstep(weight / VIA_SHARE)[:, None]
         arrive = smoothstep((weight - (1.0 - VIA_SHARE)) / VIA_SHARE)[:, None]
-        joints, offsets = b["abduction"]
+        joints, offsets = b.abduction
         columns = np.searchsorted(arms, joints)
         via[:, columns] = quat.multiply(via[:, columns], offsets)
         passing = quat.slerp(below[:, arms], via, np.broadcast_to(leave, via.shape[:2]))
@@ -242,7 +271,7 @@ class Posture(Controller):
         started = job.local_times >= -1e-9
         if not started.any():
             return None
-        hips = job.pose.chain_pose(job.binding["legs"][:, 0])[1].mean(axis=1)  # (F, 3) in the world
+        hips = job.pose.chain_pose(job.binding.legs[:, 0])[1].mean(axis=1)  # (F, 3) in the world
         previous = self._previous_hips(job)
         before = np.concatenate(([hips[0] if previous is None else previous], hips[:-1]))
         speed = np.linalg.norm((hips - before)[:, [0, 2]], axis=-1) * block.fps
@@ -271,14 +300,14 @@ class Posture(Controller):
         if not len(local):
             return None
         _, g_pos = forward_kinematics(job.rig.skeleton, local, root)
-        return g_pos[0, job.binding["legs"][:, 0]].mean(axis=0)
+        return g_pos[0, job.binding.legs[:, 0]].mean(axis=0)
 
     def _leaving(self, job, block) -> np.ndarray:
         """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
         (then the activity ends after its blend out, and ``job.weight`` fades with it)."""
         state = job.state
         if "leave_s" not in state:
-            hips = job.pose.chain_pose(job.binding["legs"][:, 0])[1].mean(axis=1)  # (F, 3) in the world
+            hips = job.pose.chain_pose(job.binding.legs[:, 0])[1].mean(axis=1)  # (F, 3) in the world
             away = (np.linalg.norm((hips - state["hips"])[:, [0, 2]], axis=-1) > WALK_AWAY_M) & (job.local_times >= 0.0)
             if not away.any():
                 return np.ones(len(block))
