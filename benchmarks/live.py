@@ -10,7 +10,7 @@ in a :class:`infuse.live.LiveScene` for ``--seconds`` (default 60), and the benc
   over the blocks evaluated, per frame), the loop thread's CPU milliseconds per frame (what a machine
   to itself would take), and the block size the loop settled on (1: frame by frame);
 - latency: from a BML message (a nod) to the wall-clock moment the frame whose time is the block's start
-  is ready, for 20 messages at random points of a frame (target: at most one frame plus 10 ms);
+  is shown, for 20 messages at random points of a frame (target: at most one frame plus 10 ms);
 - frames missed: frames evaluated too late to be shown on time (target: none up to 10 characters).
 
 Then ``infuse serve``'s servers run in process with 10 characters while one client sends 1,000 bad
