@@ -93,9 +93,10 @@ class Controller:
     layer: Layer = Layer.BASE  # per class, or per instance (keyed curves choose theirs)
     mode: ClassVar[Mode] = Mode.OVERRIDE
     priority: ClassVar[int] = 0
-    blend_in_s: ClassVar[float] = 0.3
-    blend_out_s: ClassVar[float] = 0.3
-    settle_s: ClassVar[float] = 0.0
+    # Per class, or per instance (a gesture's blends follow its phases, a gaze settles at its own speeds).
+    blend_in_s: float = 0.3
+    blend_out_s: float = 0.3
+    settle_s: float = 0.0
     speaks: bool = False  # per class, or per instance
     #: Natural length in seconds (a nod, a clip played once): an activity without an end lasts this long.
     duration_s: float | None = None
