@@ -266,3 +266,27 @@ def test_finished_blocks_are_let_go_and_the_kept_count_stays_bounded():
     scene.bml("bob", f'<bml xmlns="{BML_NS}" id="late" bmla:interrupt="nod599" '
                      f'xmlns:bmla="http://www.asap-project.org/bmla"><head id="h" lexeme="NOD"/></bml>')
     assert "bmla:interrupt names unknown block 'nod599'" in warnings[-1].description
+
+
+def test_a_failing_frame_callback_stops_the_scene_with_its_error():
+    """Frames are shown on their own thread: a callback that raises stops both threads, and callers get
+    the error from then on instead of waiting on a loop that is gone."""
+    live = LiveScene(_scene(idle=False))
+    with live:
+        shown = Frames(live)
+        shown.wait(5)
+
+        def broken(frame):
+            raise RuntimeError(f"no screen for frame {frame.index}")
+        live.on_frame(broken)
+        deadline = time.monotonic() + 5.0
+        while live.error is None and time.monotonic() < deadline:
+            try:
+                live.nod("bob")  # waits for the loop: refused once it stops, not left waiting
+            except UsageError as exc:
+                assert "no screen for frame" in str(exc)
+        assert isinstance(live.error, RuntimeError) and "no screen for frame" in str(live.error)
+        live._thread.join(2.0)
+        assert not live.running
+        with pytest.raises(UsageError, match="stopped: no screen for frame"):
+            live.nod("bob")

@@ -220,12 +220,16 @@ class LiveScene:
         for thread in (self._thread, self._presenter):
             if thread is not None and thread is not threading.current_thread():
                 thread.join(timeout_s)
+        self._refuse_waiting()
+
+    def _refuse_waiting(self) -> None:
+        """Commands still queued get :class:`UsageError` (the loop has stopped)."""
         while True:
             try:
                 future = self._commands.get_nowait()[0]
             except queue.Empty:
                 break
-            future.set_exception(UsageError("the live scene has stopped"))
+            future.set_exception(UsageError(f"the live scene has stopped{f': {self.error}' if self.error else ''}"))
 
     @property
     def running(self) -> bool:
@@ -266,9 +270,8 @@ class LiveScene:
                 with self._ready:
                     self._pending.extend(frames)
                     self._ready.notify_all()
-        except BaseException as exc:  # reported to callers, which get errors from then on
+        except BaseException as exc:  # kept (with its traceback) for callers, which get errors from then on
             self._fail(exc)
-            raise
 
     def _present(self) -> None:
         """The presenter: shows each evaluated frame when it is due; a frame still waiting when the next
@@ -291,15 +294,15 @@ class LiveScene:
                         self.stats.missed += 1
                     shown = self._pending.popleft()
                 self._show(*shown)
-        except BaseException as exc:
+        except BaseException as exc:  # a frame callback's error: kept, as the evaluator's
             self._fail(exc)
-            raise
 
     def _fail(self, exc: BaseException) -> None:
         self.error = exc
         self._stop.set()
         with self._ready:
             self._ready.notify_all()
+        self._refuse_waiting()
 
     def _evaluate(self, count: int) -> list[tuple[int, dict]]:
         """Evaluate the next ``count`` frames as one block (at most the runtime's ``block_frames``); their
@@ -418,6 +421,8 @@ class LiveScene:
             self._commands.put_nowait((future, function, args))
         except queue.Full:
             raise BusyError(f"{self._commands.maxsize} commands are waiting; try again later") from None
+        if self._stop.is_set():  # stopped meanwhile: nothing will take it
+            self._refuse_waiting()
         return future
 
     def call(self, function: Callable, *args, timeout_s: float = 10.0):
