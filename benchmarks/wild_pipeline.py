@@ -85,8 +85,8 @@ def humanoid_rigs(contains: str | None = None) -> list[str]:
 
 
 def short(rel: str) -> str:
-    """A rig's file name without the source folders."""
-    return Path(rel).name
+    """A rig's file name and the folder holding it (two rigs of one source share a file name)."""
+    return "/".join(Path(rel).parts[-2:])
 
 
 @dataclass
@@ -148,7 +148,7 @@ def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Source
     result = retarget_clip(plan, clip)
     motion = result.motion.replace(name="retargeted")
     motion = grounded(motion, foot_height(character, tgt_map, motion))
-    out = out_dir / f"{short(rel)}.{source.replace(' ', '_')}.glb"
+    out = out_dir / f"{short(rel).replace('/', '_')}.{source.replace(' ', '_')}.glb"
     infuse.save(dataclasses.replace(character, motions={"retargeted": motion}), out)
     back = infuse.load(out)
     written = next(iter(back.motions.values()))
@@ -290,7 +290,7 @@ def print_retargeting(rows: list[RetargetRow]) -> None:
     print(head)
     print("-" * len(head))
     for r in rows:
-        print(f"{r.rig[:38]:<38} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
+        print(f"{r.rig[-38:]:<38} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
               f"{r.bones:5.2f} | {r.penetration:5.2f} {r.max_penetration:6.2f} {r.float_cm:5.2f} | {r.pop_joint:<16} "
               f"{r.pop_margin:6.1f} {r.pop_frame:5d} | {r.unreachable:4.0f} {r.residual_mm:5.2f} | {r.written_lowest_cm:6.2f}"
               + ("" if r.finite else "  NON-FINITE") + ("" if r.ok else "  <- misses a target"))
@@ -303,7 +303,7 @@ def print_packs(rows: list[PackRow]) -> None:
     print("-" * len(head))
     for r in rows:
         played = "".join(p[0].upper() if p in r.packs else "." for p in PACKS)
-        print(f"{r.rig[:38]:<38} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
+        print(f"{r.rig[-38:]:<38} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
               f"{_fmt(r.beat_arm, 5, 0)} {_fmt(r.posture_arm, 5, 0)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
               f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {r.seconds:4.1f}" + ("" if r.finite else "  NON-FINITE"))
     for r in rows:
