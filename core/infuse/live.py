@@ -595,12 +595,15 @@ class LiveScene:
         packs = (packs,) if isinstance(packs, str) else tuple(packs)
         if packs and self.scene.pack_cache is not None:
             infuse_character(character, list(packs), mapping=character.mapping, cache=self.scene.pack_cache)
-        height = _rest_foot_height(character.asset, character.mapping)
+        # measured here (skinning its feet), not on the loop thread; a character mapped only as it joins is
+        # measured there
+        height = None if character.mapping is None else _rest_foot_height(character.asset, character.mapping)
 
         def join() -> str:
             added = self.scene.add_character(character, name, position=position, facing=facing, packs=packs,
                                              voice=voice, idle=idle)
-            self._grounds[added] = height
+            if height is not None:
+                self._grounds[added] = height
             return added
         added = self.call(join, timeout_s=120.0)
         self._warm_up(added)
