@@ -145,6 +145,29 @@ def locomotion_parameters(root: np.ndarray, heading: np.ndarray, cycle: tuple[in
             "heading_start": float(start)}
 
 
+#: Seconds at each end of a transition clip over which its facing and speed are measured.
+TRANSITION_END_S = 0.4
+
+
+def transition_parameters(root: np.ndarray, heading: np.ndarray, fps: float) -> dict:
+    """What a transition clip does, measured over the whole clip from its pelvis path ``root`` (F, 3)
+    and facing ``heading`` (F,) radians: ``facing_start``, ``facing_end`` (radians, each averaged over
+    :data:`TRANSITION_END_S` at its end), ``turn`` (their difference, radians, + left), ``travel_x``,
+    ``travel_z`` (metres: the pelvis's ground displacement in the starting facing's frame, +X left,
+    +Z ahead), ``speed_start``, ``speed_end`` (m/s, the pelvis's net ground speed over each end) and
+    ``duration`` (seconds)."""
+    frames = len(root)
+    span = int(min(max(round(TRANSITION_END_S * fps), 1), max(frames - 1, 1)))
+    first, last = float(np.mean(heading[:span + 1])), float(np.mean(heading[-span - 1:]))
+    d = (root[-1] - root[0])[[0, 2]]
+    ahead = np.array([np.sin(first), np.cos(first)])
+    left = np.array([np.cos(first), -np.sin(first)])
+    speed = lambda a, b: float(np.hypot(*(root[b] - root[a])[[0, 2]]) * fps / max(b - a, 1))  # noqa: E731
+    return {"facing_start": first, "facing_end": last, "turn": last - first, "travel_x": float(d @ left),
+            "travel_z": float(d @ ahead), "speed_start": speed(0, span), "speed_end": speed(frames - 1 - span, frames - 1),
+            "duration": (frames - 1) / fps}
+
+
 def stroke_frame(wrist: np.ndarray, fps: float) -> int:
     """The frame the wrist (F, 3) settles after its fastest movement (10% of peak speed), else the frame
     farthest from its start."""

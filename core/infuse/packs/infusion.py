@@ -26,18 +26,20 @@ import numpy as np
 from .. import __version__, fileio, registry
 from ..asset import Asset, Character
 from ..atomic import atomic_path
-from ..contacts import feet, lowest_points
+from ..contacts import contact_phases, feet, foot_contacts, lowest_points
 from ..errors import MissingFeatureError, MissingJointsError, UsageError
 from ..kinematics import forward_kinematics
 from ..mapping import Mapping, map_skeleton
 from ..motion import Motion
 from ..skeleton import Skeleton
-from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of
+from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of, transition_parameters
 from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
-CACHE_FORMAT = 2
+CACHE_FORMAT = 3
+#: Transitions a locomotion controller plays whole, with their own root motion.
+PLAYED_TRANSITIONS = ("start", "stop", "turn")
 #: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
 #: infusing needs only the transfer (rotations through the canonical frame, root scaled by leg length).
 RETARGET_OPTIONS = {"ik": "none"}
@@ -47,7 +49,8 @@ RETARGET_OPTIONS = {"ik": "none"}
 class BlendClip:
     """One example of a blend space on the character.
 
-    ``motion``: the clip's cycle (locomotion) or whole clip (reach), retargeted; ``keys``: (3,) seconds
+    ``motion``: the clip's cycle (locomotion), or the whole clip (a reach, or a locomotion
+    ``transition``: ``"start"``, ``"stop"`` or ``"turn"`` on the spot), retargeted; ``keys``: (3,) seconds
     from the motion's start of left strike, right strike and next left strike (may pass the end of a
     loop: they wrap); ``contacts``: (F, 2) planted flags, left and right; ``parameters``: measured on
     the character; ``stroke``: seconds (reach).
@@ -63,6 +66,7 @@ class BlendClip:
     parameters: dict
     stroke: float = 0.0
     phases: np.ndarray | None = None
+    transition: str | None = None
 
     def __post_init__(self):
         if self.phases is None:
@@ -191,7 +195,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
     out, bounds = retargeted
     sk = character.skeleton
     index = mapping.indices(sk)
-    _, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
+    g_rot, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
     heading = headings(g_pos, index)
     root = g_pos[:, index["base"]]
     pair = feet(sk, mapping)
@@ -206,7 +210,13 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
         if "heel_contacts" in info:
             phases = np.stack((np.asarray(info["heel_contacts"], dtype=bool).T, np.asarray(info["ball_contacts"], dtype=bool).T), axis=-1)
         fps = float(info["fps"])
-        if pack.kind == "locomotion":
+        transition = info.get("transition") if pack.kind == "locomotion" and info.get("transition") in PLAYED_TRANSITIONS else None
+        if transition is not None:  # played whole: measured whole
+            sl = slice(a, b)
+            params = transition_parameters(root[sl], heading[sl], fps)
+            keys = np.asarray(info["keys"], dtype=np.float64)
+            stroke = 0.0
+        elif pack.kind == "locomotion":
             c0, c1 = info["cycle"]
             sl = slice(a + c0, a + c1 + 1)
             params = locomotion_parameters(root[sl], heading[sl], (0, c1 - c0), fps)
@@ -228,10 +238,13 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             keys = np.array([0.0, stroke, info["duration"]])
         m = Motion(sk, fps, out.local_rotations[sl], out.root_translations[sl],
                    None if out.joint_translations is None else out.joint_translations[sl], name=info["name"])
+        if transition is not None:  # played as it is: its feet pinned where they are down on this character
+            found = foot_contacts(m, mapping, fk=(g_rot[sl], g_pos[sl]))
+            contacts, phases = found.foot_flags(), contact_phases(found, g_pos[sl])
         if pack.kind == "locomotion" and info.get("derived"):  # straight and aligned on this character too
             m, params = _restraightened(m, params, index)
         clips[info["name"]] = BlendClip(info["name"], info["role"], info.get("hand"), bool(info["loop"]), m, keys, contacts,
-                                        params, stroke, phases)
+                                        params, stroke, phases, transition)
     coords = coordinates_of(pack.kind)
     tess = {}
     for group, t in pack.tessellations().items():
@@ -333,7 +346,8 @@ def save_infusion(infusion: Infusion, key: str, cache) -> Path:
         spaces[name] = {
             "version": space.version, "kind": space.kind,
             "clips": [{"name": c.name, "role": c.role, "hand": c.hand, "loop": c.loop, "fps": c.motion.fps,
-                       "keys": c.keys.tolist(), "parameters": c.parameters, "stroke": c.stroke} for c in (space.clips[n] for n in names)],
+                       "keys": c.keys.tolist(), "parameters": c.parameters, "stroke": c.stroke,
+                       "transition": c.transition} for c in (space.clips[n] for n in names)],
             "tessellations": {g: t.to_dict() for g, t in space.tessellations.items()},
         }
     with atomic_path(npz) as tmp:
@@ -368,7 +382,8 @@ def load_infusion(character: Character, mapping: Mapping, key: str, cache) -> di
                 a, b = int(bounds[k]), int(bounds[k + 1])
                 m = Motion(sk, c["fps"], rot[a:b], roots[a:b], None if jt is None else jt[a:b], name=c["name"])
                 clips[c["name"]] = BlendClip(c["name"], c["role"], c["hand"], c["loop"], m, np.asarray(c["keys"]),
-                                             contacts[a:b], c["parameters"], c["stroke"], phases[a:b])
+                                             contacts[a:b], c["parameters"], c["stroke"], phases[a:b],
+                                             c.get("transition"))
             tess = {g: Tessellation.from_dict(t) for g, t in s["tessellations"].items()}
             spaces[name] = BlendSpace(name, s["version"], s["kind"], clips, tess)
     return spaces

@@ -38,12 +38,13 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
-from infuse.runtime.clip import LoopTable, continuous_rotations
+from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from .phase_keys import GROUNDED, foot_events, foot_phase, stance_of, warp
-from .steering import STAY as STAY_M, Steering
+from . import transitions
+from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
+from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering
 
 _INFUSIONS: dict = {}
 #: What :meth:`Locomotion.bind` prepared, by (blend space, skeleton, legs): walks of a character reuse it.
@@ -204,8 +205,18 @@ class Locomotion(Controller):
         if path is None:
             return None
         dt = 1.0 / float(fps)
-        last, frames = path[-1], 0
+        last, frames, decide = path[-1], 0, True
+        played = transitions.played(space, _standing_speed(space.group("locomotion"))) if top else []
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
+            if decide:  # a transition played whole from standing (as the walk will decide)
+                decide = False
+                pick = transitions.choose(played, st, path, fps, self.steering.max_decel, TURN_IN_PLACE, STAY_M) \
+                    if st["speed"] < 1e-9 else None
+                if pick is not None:
+                    frames += int(round(transitions.handover_s(pick, fps) * fps))
+                    st.update(transitions.end_state(pick, transitions.placement(pick, st["x"], st["z"], st["heading"]), fps))
+                    decide = pick.transition == "turn"
+                    continue
             self.steering.run(st, np.array([frames * dt]), dt, top=top)
             frames += 1
             if st["waypoint"] == len(path) - 1 and st["speed"] < 1e-6 and \
@@ -268,11 +279,113 @@ class Locomotion(Controller):
                       settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
         dt = 1.0 / block.fps
         times = job.local_times[active]
+        # The block in parts, in time order: transition clips played whole, and the steered blend.
+        parts, i = [], 0
+        while i < len(times):
+            if st.get("playing") is None and st.get("chooser") != id(self):
+                st["chooser"] = id(self)  # a walk decides once it begins (again after a turn on the spot)
+                if st["settled"] and st["speed"] < 1e-9 and len(b["legs"]) == 2:
+                    pick = transitions.choose(b["played"], st, self.steering.path, block.fps, self.steering.max_decel,
+                                              TURN_IN_PLACE, STAY_M)
+                    if pick is not None:
+                        st["playing"] = (pick.name, float(times[i]), transitions.placement(pick, st["x"], st["z"], st["heading"]))
+            start, part, handing = i, None, None
+            if st.get("playing") is None:
+                part, i = self._steered(b, st, times[i:], dt, job.report), len(times)
+            else:
+                name, began, place = st["playing"]
+                clip = b["space"].clips[name]
+                i += int(np.count_nonzero(times[i:] < began + transitions.handover_s(clip, block.fps) - 1e-9))
+                if i > start:
+                    part = self._played(b, st, clip, place, times[start:i] - began)
+                handing = (clip, began, place) if i < len(times) else None
+            if part is not None:
+                parts.append(self._faded(b, st, part, times[start:i], block.fps))
+            if handing is not None:
+                self._hand_over(b, st, handing[0], handing[2], block.fps)
+                st["fading"] = (handing[0].name, handing[1], handing[2])
+        rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*parts))
+        if self.pin_feet and len(b["legs"]) == 2:
+            self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
+        self._write(job, active, rot, root, jt)
+
+    def _played(self, b, st, clip, place, local):
+        """A transition ``clip`` placed by ``place`` (:func:`~.transitions.placement`) at its times
+        ``local`` (F,) seconds: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and ``heading``
+        follow it."""
+        rot, root, jt, _ = sample_motion(clip.motion, local, loop=False)
+        turn, root0, at = place
+        q = yaw(turn)
+        rot = np.array(rot)
+        rot[:, 0] = quat.multiply(q, rot[:, 0])
+        root = quat.rotate(q, root - np.array([root0[0], 0.0, root0[1]])) + np.array([at[0], 0.0, at[1]])
+        if b["table"].translations is None:
+            jt = None
+        elif jt is None:
+            jt = np.repeat(clip.motion.local_translations()[:1], len(local), axis=0)
+        frames = np.clip(np.rint(local * clip.motion.fps).astype(np.int64), 0, clip.motion.num_frames - 1)
+        contact = b["played_phases"][clip.name][frames].astype(np.float64)
+        facing = turn + b["played_facing"][clip.name][frames]
+        forward = np.stack((np.sin(facing), np.zeros_like(facing), np.cos(facing)), axis=-1)
+        ground = transitions.placed_root(clip, place, local[-1:])[0]
+        st.update(x=float(ground[0]), z=float(ground[1]), heading=float(facing[-1]))
+        return rot, root, jt, contact, forward, np.full(len(local), st.get("spun", 0.0))
+
+    def _hand_over(self, b, st, clip, place, fps: float) -> None:
+        """The steering takes over from transition ``clip`` (see :mod:`.transitions`): its state where the
+        clip hands over; after a start, the gait's phase from the clip's last strikes (left at 0, right
+        at 0.5), walking; after a turn on the spot, standing, to decide again."""
+        st.update(transitions.end_state(clip, place, fps), playing=None)
+        if clip.transition == "turn":
+            st.update(settled=True, stand=1.0, landings=-1, to_go=-1.0, chooser=None)
+            return
+        at = transitions.handover_s(clip, fps)
+        flags = clip.contacts.astype(np.int8)
+        strikes = sorted((f / clip.motion.fps, k) for k in range(2) for f in np.flatnonzero(np.diff(flags[:, k]) == 1) + 1
+                         if f / clip.motion.fps <= at + 1e-9)
+        phase = 0.0
+        if strikes:
+            last, foot = strikes[-1]
+            other = [t for t, k in strikes if k != foot]
+            half = last - other[-1] if other and last - other[-1] > 1e-3 else 0.5 * float(b["durations"][np.argmax(b["slowest"])])
+            phase = (0.5 * foot + 0.5 * (at - last) / half) % 1.0
+        st.update(settled=False, stand=0.0, landings=-1, to_go=-1.0, phase=float(phase))
+
+    def _faded(self, b, st, part, times, fps: float):
+        """``part`` (see :meth:`_steered`) at the activity's ``times`` (F,) with the transition that
+        handed over before it fading out over it (its last :data:`~.transitions.HANDOVER_S`), at ``fps``."""
+        if st.get("fading") is None:
+            return part
+        name, began, place = st["fading"]
+        clip = b["space"].clips[name]
+        local = times - began
+        mixing = np.nonzero(local < clip.duration)[0]
+        if mixing.size < len(local):
+            st["fading"] = None
+        if not mixing.size:
+            return part
+        rot, root, jt, contact, forward, spun = (None if a is None else np.array(a) for a in part)
+        was = self._played(b, dict(), clip, place, local[mixing])
+        on = transitions.handover_s(clip, fps)
+        w = _ease((local[mixing] - on) / max(clip.duration - on, 1e-9))
+        rot[mixing] = quat.slerp(was[0], rot[mixing], w[:, None])
+        root[mixing] = was[1] + (root[mixing] - was[1]) * w[:, None]
+        if jt is not None:
+            jt[mixing] = was[2] + (jt[mixing] - was[2]) * w[:, None, None]
+        contact[mixing] = was[3] + (contact[mixing] - was[3]) * w[:, None, None]
+        mixed = was[4] + (forward[mixing] - was[4]) * w[:, None]
+        forward[mixing] = mixed / np.maximum(np.linalg.norm(mixed, axis=-1, keepdims=True), 1e-9)
+        return rot, root, jt, contact, forward, spun
+
+    def _steered(self, b, st, times, dt, report):
+        """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
+        joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
+        and the turn spun at the root so far (F,) radians, before the feet are pinned."""
         x0, z0, h0 = st["x"], st["z"], st["heading"]
         req = self.steering.run(st, times, dt, top=b["limit"])
         if st.get("capped") and not st.get("warned"):
             asked, done, towards = st["capped"]
-            job.report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b['space'].pack!r} realizes at most {done:.2f} m/s "
+            report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b['space'].pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st["warned"] = True
         speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
@@ -329,9 +442,7 @@ class Locomotion(Controller):
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - jt[:, mover] * centre)
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
-        if self.pin_feet and len(b["legs"]) == 2:
-            self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
-        self._write(job, active, rot, root, jt)
+        return rot, root, jt, contact, forward, spun
 
     @staticmethod
     def _write(job, active, rot, root, jt) -> None:
@@ -606,13 +717,8 @@ def _prepare(space, clips, sk, legs) -> dict:
     p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
     idle = np.array([c.role == "idle" for c in clips])
     speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
-    # The slowest straight walk forward (not a strafe or a turn): what slow walks and stops play.
     slowest = np.full(len(clips), 0.0)
-    moving = np.nonzero(~idle)[0]
-    ahead = moving[(p("forward_speed")[moving] > 2.0 * np.abs(p("lateral_speed")[moving]))
-                   & (np.abs(p("turn_rate")[moving]) < math.radians(10.0))]
-    pool = ahead if ahead.size else moving
-    slowest[pool[np.argmin(speeds[pool])]] = 1.0
+    slowest[_slowest_walk(clips)] = 1.0
     motions = [m for m, _ in prepared]
     limbs = np.zeros(sk.num_joints, dtype=np.int64)  # 0 body, 1 left leg, 2 right leg
     for k, leg in enumerate(legs[:2] if len(legs) == 2 else []):
@@ -665,8 +771,19 @@ def _prepare(space, clips, sk, legs) -> dict:
                             None if m.joint_translations is None else m.joint_translations[frames],
                             [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
         stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
+    played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
+    played_facing, played_phases = {}, {}  # each played transition's facing (F,) radians, and contact phases (F, 2, 2)
+    for c in played:
+        m = c.motion
+        _, pos = chain_fk(sk, m.local_rotations, m.root_translations, m.joint_translations,
+                          [legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + [leg[2] if leg[3] is None else leg[3] for leg in legs])
+        left = pos[:, 0] - pos[:, 1]
+        h = np.unwrap(np.arctan2(-left[:, 2], left[:, 0]))
+        played_facing[c.name] = h + 2.0 * math.pi * round((c.parameters["facing_start"] - h[0]) / (2.0 * math.pi))
+        heights = pos[:, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
+        played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
     body = np.nonzero(limbs == 0)[0]
-    out = {"space": space, "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+    out = {"space": space, "played": played, "played_facing": played_facing, "played_phases": played_phases, "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
@@ -684,6 +801,22 @@ def _prepare(space, clips, sk, legs) -> dict:
                    pin_joints=[j for leg, ball in zip(legs, balls)
                                for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
     return out
+
+
+def _slowest_walk(clips) -> int:
+    """Index of the slowest straight walk forward among locomotion ``clips`` (not a strafe or a turn;
+    of any moving clip without one): what slow walks and stops play."""
+    v = np.array([[c.parameters[k] for k in ("forward_speed", "lateral_speed", "turn_rate")] for c in clips])
+    moving = np.nonzero([c.role != "idle" for c in clips])[0]
+    ahead = moving[(v[moving, 0] > 2.0 * np.abs(v[moving, 1])) & (np.abs(v[moving, 2]) < math.radians(10.0))]
+    pool = ahead if ahead.size else moving
+    return int(pool[np.argmin(np.hypot(v[pool, 0], v[pool, 1]))])
+
+
+def _standing_speed(clips) -> float:
+    """Below this speed (m/s) a character stands: :data:`STAND_FRACTION` of the slowest walk's."""
+    p = clips[_slowest_walk(clips)].parameters
+    return STAND_FRACTION * math.hypot(p["forward_speed"], p["lateral_speed"])
 
 
 #: A leg pinned by its ball reaches at most this share of its length; beyond it the heel rises further.

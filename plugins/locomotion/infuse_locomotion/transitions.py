@@ -1,0 +1,144 @@
+"""Transition clips played whole from standing: a pack's starts and turns on the spot.
+
+The pack builder recognizes what a clip does (:func:`infuse.packs.cycles.transition_kind`); an
+infused clip carries it (``BlendClip.transition``). A walk to a point that begins standing plays:
+
+- a **turn on the spot** when the point lies :data:`~.steering.TURN_IN_PLACE` or more off the
+  facing: the one whose turn is closest to the point's bearing (if that is closer than not turning),
+  the rest of the turn left to the steering; then it decides again, standing;
+- else a **start** (standing, then walking): of the starts after which the point lies within
+  :data:`START_BEARING` of the facing and at least :data:`START_ROOM_M` beyond where the start hands
+  over, the one leaving it nearest straight ahead;
+- else nothing: the steering starts the walk from the cycles as without transitions.
+
+A clip plays with its own root motion, turned and moved as a whole (``placement``) so that it starts
+where the character stands (its root over the point the steering stands at) and faces. The steering
+takes over :data:`HANDOVER_S` before the clip's end, from the clip's state then (where its root is,
+its facing at its end, its speed at its end; the gait phase from its last strikes), and the clip
+fades into what follows over those last frames. Turns on the spot are played only if they end standing
+(slower than :data:`~.controller.STAND_FRACTION` of the slowest walk).
+
+Core frame: metres, seconds, +Y up, +Z forward; angles radians about +Y, + turns left.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Seconds before a transition's end at which the steering takes over and the clip starts fading out.
+HANDOVER_S = 0.25
+#: A start is played when the point lies at most this far (radians) off its facing where it hands over...
+START_BEARING = math.radians(30.0)
+#: ...and at least this far (metres) beyond that, besides the braking distance at the start's end speed.
+START_ROOM_M = 0.6
+
+_CACHE: dict = {}
+
+
+def played(space, still_m_s: float) -> list:
+    """The transition clips of a :class:`~infuse.packs.BlendSpace` that a walk plays: its starts (they
+    begin standing), and its turns on the spot that end slower than ``still_m_s`` m/s (not walking off)."""
+    key = (id(space), still_m_s)
+    if key not in _CACHE or _CACHE[key][0] is not space:
+        out = [c for c in space.clips.values() if c.transition == "start"
+               or (c.transition == "turn" and c.parameters["speed_end"] < still_m_s)]
+        _CACHE[key] = (space, out)
+    return _CACHE[key][1]
+
+
+def handover_s(clip, fps: float) -> float:
+    """Seconds into ``clip`` at which the steering takes over (on a frame of ``fps``)."""
+    return math.floor(max(clip.duration - HANDOVER_S, 0.0) * fps + 1e-9) / fps
+
+
+def placement(clip, x: float, z: float, heading: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """How ``clip`` is placed to start at ground point (``x``, ``z``) facing ``heading``: the turn
+    (radians) about +Y, and the clip's root ground point (2,) (x, z) at its first frame that goes
+    to (``x``, ``z``) (2,)."""
+    root0 = clip.motion.root_translations[0, [0, 2]]
+    return heading - clip.parameters["facing_start"], np.array(root0), np.array([x, z])
+
+
+def placed_root(clip, place, t: np.ndarray) -> np.ndarray:
+    """(T, 2) ground points (x, z) of the placed clip's root at its times ``t`` (T,) seconds."""
+    turn, root0, at = place
+    m = clip.motion
+    f = np.clip(np.asarray(t, dtype=np.float64) * m.fps, 0.0, m.num_frames - 1)
+    i = np.minimum(np.floor(f).astype(np.int64), max(m.num_frames - 2, 0))
+    u = (f - i)[:, None]
+    j = np.minimum(i + 1, m.num_frames - 1)
+    r = m.root_translations[:, [0, 2]]
+    d = r[i] * (1.0 - u) + r[j] * u - root0
+    c, s = math.cos(turn), math.sin(turn)
+    return at + np.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]), axis=-1)
+
+
+def end_state(clip, place, fps: float) -> dict:
+    """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its root),
+    ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn)."""
+    x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]))[0]
+    speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0
+    return dict(x=float(x), z=float(z), heading=float(place[0] + clip.parameters["facing_end"]), speed=float(speed), turn=0.0)
+
+
+def _bearing(st: dict, point) -> tuple[float, float]:
+    """Bearing (radians off the facing, + left) and distance (m) of ``point`` (x, z) from state ``st``."""
+    dx, dz = point[0] - st["x"], point[1] - st["z"]
+    return (math.atan2(dx, dz) - st["heading"] + math.pi) % (2.0 * math.pi) - math.pi, math.hypot(dx, dz)
+
+
+def choose(clips: list, st: dict, path, fps: float, max_decel: float, turn_in_place: float, stay_m: float):
+    """The transition a walk standing in state ``st`` (``x``, ``z``, ``heading``) plays on its way along
+    ``path`` (K, 2) (see the module doc), or None. ``turn_in_place``: radians off the facing from which
+    the steering turns on the spot; ``stay_m``: a point this near is where the character stands."""
+    if not clips or path is None:
+        return None
+    k = int(st.get("waypoint", 0))
+    bearing, dist = _bearing(st, path[min(k, len(path) - 1)])
+    if dist < stay_m and k >= len(path) - 1:
+        return None
+    if abs(bearing) >= turn_in_place:
+        turns = [c for c in clips if c.transition == "turn"]
+        if turns:
+            best = min(turns, key=lambda c: abs(c.parameters["turn"] - bearing))
+            if abs(best.parameters["turn"] - bearing) < abs(bearing):
+                return best
+        return None
+    best, best_off = None, START_BEARING
+    for c in clips:
+        if c.transition != "start":
+            continue
+        end = end_state(c, placement(c, st["x"], st["z"], st["heading"]), fps)
+        off, room = _bearing(end, path[min(k, len(path) - 1)])
+        braking = end["speed"] ** 2 / (2.0 * max_decel)
+        if abs(off) <= best_off and room >= START_ROOM_M + braking:
+            best, best_off = c, abs(off)
+    return best
+
+
+def grounded(phases: np.ndarray, heights: np.ndarray, heel_m: float, ball_m: float, share: float) -> np.ndarray:
+    """A played clip's (F, 2, 2) heel and ball contact flags with each landing moved back to where the
+    heel reached the ground (within ``heel_m`` metres of its height at the detected landing) and each
+    push off on to where the ball leaves it (risen ``ball_m`` past its height there), at most
+    ``share`` of the swing next to it: a detector finds a landing once the foot has slowed down and
+    a push off once it has sped up, while a take's feet land and push off moving; pinned over these
+    frames too, they do not slide. ``heights`` (F, 2, 2) metres of each foot's ankle and ball."""
+    out = np.array(phases, dtype=bool)
+    frames = len(out)
+    for k in range(2):
+        down = out[:, k].any(axis=1).astype(np.int8)
+        edges = np.diff(np.concatenate(([0], down, [0])))
+        starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]  # contacts [start, end)
+        for n, (a, b) in enumerate(zip(starts, ends)):
+            if a > 0:  # a landing: back over the swing while the heel is as low as where it landed
+                gap = a - (ends[n - 1] if n else 0)
+                back = np.nonzero(heights[a - 1::-1, k, 0][:gap] > heights[a, k, 0] + heel_m)[0]
+                reach = min(int(back[0]) if back.size else gap, int(share * gap) if n else gap)
+                out[a - reach:a, k, 0] = True
+            if b < frames:  # a push off: on over the swing while the ball is as low as where it left
+                gap = (starts[n + 1] if n + 1 < len(starts) else frames) - b
+                on = np.nonzero(heights[b:b + gap, k, 1] > heights[b - 1, k, 1] + ball_m)[0]
+                reach = min(int(on[0]) if on.size else gap, int(share * gap) if n + 1 < len(starts) else gap)
+                out[b:b + reach, k, 1] = True
+    return out
