@@ -211,6 +211,14 @@ def test_off_by_default_on_by_flag_scene_key_or_scheduler(tmp_path):
         read_scene_file(scene_file)
 
 
+def test_a_smartbody_act_turns_it_on_without_declaring_the_prefix():
+    scheduler = Scheduler(names=lambda: CAST)
+    records = scheduler.submit('<act><bml characterId="ann" infuse:nonverbal="true"><speech id="s1">'
+                               "Yes, I think you are absolutely right about the old machine.</speech></bml></act>")
+    assert len(records) == 2 and any(a.behaviour.startswith("nv") for a in records[0].activations)
+    assert not [e for e in scheduler.feedback.log if e.kind == "warningFeedback"]
+
+
 def test_settings_name_the_listener_and_the_seed(tmp_path):
     rules = certain_rules(tmp_path)
     cast = {"ann": "character", "bob": "character", "cid": "character"}

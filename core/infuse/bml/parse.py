@@ -3,7 +3,8 @@
 The XML parser never resolves entities, never loads a DTD, never touches the network and refuses
 documents with a DOCTYPE or larger than ``max_bytes``. SmartBody documents use the ``sbm:`` prefix
 without declaring it: undeclared prefixes are bound before parsing (``sbm`` to SmartBody's own URI,
-others to a placeholder so their attributes can be reported as unknown rather than failing the file).
+``infuse`` to infuse's, others to a placeholder so their attributes can be reported as unknown rather
+than failing the file).
 """
 from __future__ import annotations
 
@@ -32,6 +33,8 @@ _PROLOG_ITEM = re.compile(rb"\s*(?:<\?.*?\?>|<!--.*?-->)", re.S)
 _ROOT_NAME = re.compile(rb"\s*<([^\s/>!?]+)")
 _ENCODING_DECL = re.compile(r"^(\s*<\?xml[^>]*?)\s+encoding\s*=\s*(['\"])[^'\"]*\2")
 _NS_ERROR = 201  # libxml2 XML_NS_ERR_UNDEFINED_NAMESPACE
+#: Prefixes a document may use without declaring them, and their namespaces.
+_IMPLIED = {"sbm": names.SBM_NS, "infuse": names.INFUSE_NS}
 _BLOCK_ATTRIBUTES = {"id", "characterId", "character", "composition", "bmla:appendAfter", "bmla:chunkAfter",
                      "bmla:interrupt", "sbm:character"}
 
@@ -113,7 +116,7 @@ def _declare_prefixes(data: bytes, prefixes) -> bytes | None:
     m = _ROOT_NAME.match(data, pos)
     if not m:
         return None
-    decls = "".join(f' xmlns:{p}="{names.SBM_NS if p == "sbm" else names.UNDECLARED_NS + p}"' for p in prefixes)
+    decls = "".join(f' xmlns:{p}="{_IMPLIED.get(p, names.UNDECLARED_NS + p)}"' for p in prefixes)
     return data[:m.end()] + decls.encode("ascii") + data[m.end():]
 
 
@@ -163,7 +166,7 @@ def _block(element, in_act: bool, declared: tuple, index: int) -> Block:
     if "id" not in attrs and not in_act and names.split_clark(element.tag)[0] == names.BML_NS:
         issues.append(Issue(block_id, PARSING_FAILURE, "<bml> has no id; it was named " + repr(block_id), line))
     for prefix in declared:
-        if prefix != "sbm":
+        if prefix not in _IMPLIED:
             issues.append(Issue(block_id, PARSING_FAILURE, f"namespace prefix {prefix!r} is used but not declared", line))
     composition_text = (attrs.get("composition") or "MERGE").strip().upper()
     composition = {"BLEND": "MERGE"}.get(composition_text, composition_text)
