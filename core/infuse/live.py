@@ -143,7 +143,7 @@ class LiveScene:
     """
 
     def __init__(self, scene: Scene, *, queue_size: int = 256, command_budget_s: float | None = None,
-                 keep_s: float = KEEP_S, max_block_frames: int = 16):
+                 keep_s: float = KEEP_S, max_block_frames: int = 32):
         if not isinstance(scene, Scene):
             raise UsageError(f"LiveScene takes an infuse.scene.Scene, not {type(scene).__name__}")
         self.scene = scene
