@@ -24,3 +24,16 @@ def test_the_public_api_module_is_strictly_typed():
                            "core/infuse/stage.py"],
                           cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+#: Plugin modules whose controller contracts are typed (bindings and per-character state as dataclasses):
+#: they pass mypy too (only their own findings: what they import is checked where it lives).
+TYPED_PLUGIN_MODULES = ["plugins/gaze/infuse_gaze", "plugins/gestures/infuse_gestures/controller.py",
+                        "plugins/postures/infuse_postures/controller.py", "plugins/lipsync/infuse_lipsync/controllers.py"]
+
+
+def test_the_typed_controllers_pass_mypy():
+    proc = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--no-error-summary",
+                           "--hide-error-context", *TYPED_PLUGIN_MODULES],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -159,13 +159,13 @@ class Gaze(Controller):
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}
-        refine = []
+        refine: list[tuple[int, int, tuple[int, ...], slice | np.ndarray]] = []
         for c, name in enumerate(names):
             for job, these in spans[c]:
                 target = job.controller.target
                 try:
                     target = block.runtime.target(target) if isinstance(target, str) else target
-                    slots = ()
+                    slots: tuple[int, ...] = ()
                     if isinstance(target, JointTarget) and target.character in index:
                         slots = _slots_of(target, rows[target.character][0], block)
                     if slots:  # on the frames this gaze leads, whether or not another leads the rest of the block

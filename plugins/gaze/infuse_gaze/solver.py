@@ -298,8 +298,8 @@ class _Block:
         self.aim_v = inp.offsets[..., 1] - forward_v
         self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
         self.present = inp.present[:, None, :, None]  # (C, 1, S, 1)
-        self.everyone = inp.present.all(axis=0).tolist()  # slots every character has
-        self.absent = (~inp.present.any(axis=0)).tolist()  # slots no character has: they repeat their parent
+        self.everyone: list[bool] = np.all(inp.present, axis=0).tolist()  # slots every character has
+        self.absent: list[bool] = (~np.any(inp.present, axis=0)).tolist()  # slots no character has: they repeat their parent
         self._groups: dict[int, _Group] = {}
         self._eyes = None
 
@@ -315,6 +315,39 @@ class _Block:
             self._eyes = (_Clamp(inp.limits[:, :, EYES]), self.gains[:, :, EYES] * inp.present[:, _EYE_SLOTS].T[:, :, None],
                           _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1))))
         return self._eyes
+
+
+class _Placement:
+    """The chain placed in the world as a solve turns it, bottom up (for characters looking at this one's
+    face): every slot's position (S, 3, C, F), as in the pose below until the solve passes it, and the
+    aligned frame (3, 3, C, F) in the world of the last slot passed."""
+
+    def __init__(self, block: _Block):
+        self.block = block
+        self.positions = block.positions.copy()
+        self.world: np.ndarray
+
+    def start(self, s: int) -> None:
+        """The first slot passed, ``s``: where the pose below has it."""
+        self.world = self.block.frames[s]
+
+    def repeat(self, s: int) -> None:
+        """Slot ``s``, absent on every character: its parent."""
+        self.positions[s] = self.positions[s - 1]
+
+    def step(self, s: int) -> None:
+        """Slot ``s`` on its parent as turned so far."""
+        self.positions[s] = self.positions[s - 1] + np.einsum("ijcf,jcf->icf", self.world, self.block.offset[s])
+        self.world = np.einsum("ijcf,kjcf->ikcf", self.world, self.block.to_slot[s])
+
+    def turn(self, turn: np.ndarray) -> None:
+        """The last slot passed turned by ``turn`` (3, 3, C, F)."""
+        self.world = np.einsum("ijcf,kjcf->ikcf", self.world, turn)
+
+    def place_eyes(self) -> None:
+        """The eyes on the head as turned."""
+        head = self.positions[SLOT_PARENTS[_BELOW_EYES]]
+        self.positions[_EYE_PAIR] = head + np.einsum("ijcf,ejcf->eicf", self.world, self.block.offset[_EYE_PAIR])
 
 
 def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, first_state: np.ndarray | None = None):
@@ -354,9 +387,9 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
     target = _contiguous(inp.targets, (2, 0, 1))  # (3, C, F)
     turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
     seen = None  # (3, C, F): the target seen from the last slot's aligned frame; None until a slot turns
-    share = unturn = None
-    # With ``place``: the last slot's aligned frame (3, 3, C, F) in the world, and every slot's position.
-    world, positions = None, block.positions.copy() if place else None
+    share = np.zeros((c_count, frames, 2))  # (C, F, 2): the current group's turn
+    unturn: np.ndarray | None = None  # its unswing matrices, when every character shares them
+    placement = _Placement(block) if place else None
     for s in range(_BELOW_EYES):
         g = SLOT_GROUPS[s]
         first = _FIRST_SLOT[g] == s
@@ -364,16 +397,16 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
             if not (turning[g] and first):
                 continue  # the chain stands as in the pose below
             view = np.einsum("jicf,jcf->icf", block.frames[s], target - block.positions[s])
-            world = block.frames[s] if place else None
+            if placement is not None:
+                placement.start(s)
         elif block.absent[s]:
             view = seen  # the slot is its parent
-            if place:
-                positions[s] = positions[s - 1]
+            if placement is not None:
+                placement.repeat(s)
         else:
             view = np.einsum("ijcf,jcf->icf", block.to_slot[s], seen - block.offset[s])
-            if place:
-                positions[s] = positions[s - 1] + np.einsum("ijcf,jcf->icf", world, block.offset[s])
-                world = np.einsum("ijcf,kjcf->ikcf", world, block.to_slot[s])
+            if placement is not None:
+                placement.step(s)
         if turning[g] and first:
             row = _AIM_ROW[s]
             heading, pitch = _angles(view - block.origin[row])
@@ -392,12 +425,14 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
             out[:, :, s] = hv
             turn = unswing_matrices(hv)
         seen = np.einsum("ijcf,jcf->icf", turn, view)
-        if place:
-            world = np.einsum("ijcf,kjcf->ikcf", world, turn)
+        if placement is not None:
+            placement.turn(turn)
     pair = _EYE_PAIR
-    if place and seen is not None:
-        positions[pair] = positions[SLOT_PARENTS[_BELOW_EYES]] + np.einsum("ijcf,ejcf->eicf", world, block.offset[pair])
-    placed = positions.transpose(2, 3, 0, 1) if place else None
+    placed = None
+    if placement is not None:
+        if seen is not None:
+            placement.place_eyes()
+        placed = placement.positions.transpose(2, 3, 0, 1)
     if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
         return out, placed
     # The eyes, side by side: each turns from its own position, all the way (within its limits).

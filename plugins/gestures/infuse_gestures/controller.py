@@ -117,11 +117,11 @@ class Gesture(Controller):
         clip = space.clips[self.clip]
         sides = tuple(hand[0] for hand in sorted(self.hands))
         canonical = rig.mapping.inverse()
-        joints = [j for j, name in enumerate(rig.skeleton.names) if j > 0 and canonical.get(name, "")[:2] in
-                  {f"{s}_" for s in sides} and canonical[name].split("_", 1)[1] not in _LEGS]
-        if not joints:
+        arm = [j for j, name in enumerate(rig.skeleton.names) if j > 0 and canonical.get(name, "")[:2] in
+               {f"{s}_" for s in sides} and canonical[name].split("_", 1)[1] not in _LEGS]
+        if not arm:
             raise MissingJointsError(rig.name, f"no arm joints are mapped for gesture {self.clip!r}")
-        joints = np.array(joints, dtype=np.int64)
+        joints = np.array(arm, dtype=np.int64)
         ready, _, _, _ = sample_motion(clip.motion, np.array([self.authored["ready"]]), loop=False, joints=joints)
         return GestureBinding(clip.motion, joints, ready[0])
 

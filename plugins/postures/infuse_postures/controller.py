@@ -183,7 +183,7 @@ class Posture(Controller):
         blending = live & (job.weight < 1.0)
         if b.via is not None and b.arms.size and blending.any():
             rotations[blending] = self._by_the_sides(pose.local_rotations[blending], target[blending], rotations[blending],
-                                                     job.weight[blending], b, times[blending])
+                                                     job.weight[blending], b, b.via, times[blending])
         placed = root
         root = pose.root_translations + w * (root - pose.root_translations)
         jt = pose.joint_translations
@@ -247,12 +247,12 @@ class Posture(Controller):
         return solved
 
     @staticmethod
-    def _by_the_sides(below, target, rotations, weight, b: PostureBinding, times) -> np.ndarray:
+    def _by_the_sides(below, target, rotations, weight, b: PostureBinding, via_motion: Motion, times) -> np.ndarray:
         """``rotations`` (K, J, 4) of blending frames with the arms' going from ``below`` to ``target`` (K, J, 4)
-        by the ``via`` posture's arms: toward them over the first :data:`VIA_SHARE` of the blend ``weight``
-        (K,), from them to the target's over the last."""
+        by the arms of the posture ``via_motion`` (the binding's ``via``): toward them over the first
+        :data:`VIA_SHARE` of the blend ``weight`` (K,), from them to the target's over the last."""
         arms = b.arms
-        via, _, _, _ = sample_motion(b.via, times, loop=True, joints=arms)
+        via, _, _, _ = sample_motion(via_motion, times, loop=True, joints=arms)
         leave = smoothstep(weight / VIA_SHARE)[:, None]
         arrive = smoothstep((weight - (1.0 - VIA_SHARE)) / VIA_SHARE)[:, None]
         joints, offsets = b.abduction
