@@ -11,6 +11,8 @@ in a :class:`infuse.live.LiveScene` for ``--seconds`` (default 60), and the benc
   to itself would take), and the block size the loop settled on (1: frame by frame);
 - latency: from a BML message (a nod) to the wall-clock moment the frame whose time is the block's start
   is shown, for 20 messages at random points of a frame (target: at most one frame plus 10 ms);
+- the same over a WebSocket: the servers of ``infuse serve`` run in process, and a client sends the nod's
+  BML and times it to the first binary frame at or after the frame the reply names;
 - frames missed: frames evaluated too late to be shown on time (target: none up to 10 characters).
 
 Then ``infuse serve``'s servers run in process with 10 characters while one client sends 1,000 bad
@@ -120,26 +122,62 @@ def latency(live: LiveScene, samples: int = 20) -> list[float]:
     return out
 
 
+async def ws_latency(port: int, character: str, samples: int = 20) -> list[float]:
+    """Seconds from sending a nod's BML over the WebSocket to receiving the first binary frame at or after
+    the frame its reply says it starts on, at random points of a frame."""
+    from websockets.asyncio.client import connect
+
+    out = []
+    async with connect(f"ws://127.0.0.1:{port}/", max_size=None) as ws:
+        await ws.send(json.dumps({"type": "subscribe", "frames": True, "format": "binary", "feedback": "none"}))
+        for k in range(samples):
+            await asyncio.sleep(random.uniform(0.05, 0.2))
+            sent = time.perf_counter()
+            await ws.send(json.dumps({"type": "bml", "character": character, "request": k, "bml":
+                                      f'<bml xmlns="{BML_NS}" id="wsprobe{k}"><head id="h" lexeme="NOD"/></bml>'}))
+            start = None
+            while True:
+                message = await ws.recv()
+                if isinstance(message, bytes):
+                    size = int.from_bytes(message[:4], "little")
+                    if start is not None and json.loads(message[4:4 + size])["frame"] >= start:
+                        out.append(time.perf_counter() - sent)
+                        break
+                elif json.loads(message).get("request") == k:
+                    start = json.loads(message)["frame"]
+    return out
+
+
 def run_count(count: int, seconds: float) -> dict:
+    from infuse_live.hub import Hub
+    from infuse_live.server import LiveServer
+
     started = time.perf_counter()
     scene = build(count)
     live = LiveScene(scene)
     live.warm_up()
     load_s = time.perf_counter() - started
     stop = threading.Event()
+    server = LiveServer(lambda loop: Hub(live, loop), port=0, http_port=None)
+    serving = threading.Thread(target=lambda: asyncio.run(server.run()), daemon=True)
+    serving.start()
+    server.ready.wait(30)
     with live:
         director = threading.Thread(target=direct, args=(live, count, stop), daemon=True)
         director.start()
-        time.sleep(max(seconds - 5.0, 1.0))
+        time.sleep(max(seconds - 9.0, 1.0))
         delays = latency(live)
+        ws_delays = asyncio.run(ws_latency(server.port, next(iter(scene.characters))))
         stop.set()
         director.join(10)
         summary = live.stats.summary()
+    server.shutdown()
+    serving.join(10)
     ms = np.asarray(live.stats.evaluate_ms)
     return {"count": count, "load_s": load_s, "shown": summary["shown"], "missed": summary["missed"],
             "block": summary["block_frames"], "cpu_ms": summary["cpu_mean_ms"],
             "mean_ms": float(ms.mean()), "p50_ms": float(np.median(ms)), "p99_ms": float(np.percentile(ms, 99)),
-            "max_ms": float(ms.max()), "latency_ms": np.array(delays) * 1e3}
+            "max_ms": float(ms.max()), "latency_ms": np.array(delays) * 1e3, "ws_latency_ms": np.array(ws_delays) * 1e3}
 
 
 def flood(seconds: float) -> dict:
@@ -200,13 +238,13 @@ def main() -> None:
     random.seed(0)
     print(f"live at {FPS:g} fps for {args.seconds:g} s per cast; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| characters | load + warm-up s | frame ms mean | p50 | p99 | max | CPU ms mean | block | frames shown | "
-          "missed | latency ms median | max |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "missed | latency ms median | max | over WebSocket median | max |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for count in (int(c) for c in args.counts.split(",")):
         r = run_count(count, args.seconds)
         print(f"| {count} | {r['load_s']:.1f} | {r['mean_ms']:.2f} | {r['p50_ms']:.2f} | {r['p99_ms']:.2f} | "
               f"{r['max_ms']:.2f} | {r['cpu_ms']:.2f} | {r['block']} | {r['shown']} | {r['missed']} | {np.median(r['latency_ms']):.1f} | "
-              f"{r['latency_ms'].max():.1f} |", flush=True)
+              f"{r['latency_ms'].max():.1f} | {np.median(r['ws_latency_ms']):.1f} | {r['ws_latency_ms'].max():.1f} |", flush=True)
     if not args.no_flood:
         f = flood(min(args.seconds, 10.0))
         print(f"flood: {f['sent']} bad messages in {f['seconds']:.1f} s, {f['replies']} error replies "
