@@ -139,7 +139,7 @@ ROWS = (
     Row("sbm:constraint", "SmartBody", '<sbm:constraint id="x" effector="r_wrist" target="cup" end="2"/>', ("arms",),
         smartbody=True),
     Row("saccade", "SmartBody", '<saccade id="x" mode="talk"/>', ("eyes",), smartbody=True, seconds=10.0),
-    Row("sbm:noise", "SmartBody", '<sbm:noise id="x" joints="skullbase" frequency="0.5" scale="0.2"/>', ("head",),
+    Row("sbm:noise", "SmartBody", '<sbm:noise id="x" joints="skullbase spine3" frequency="1" scale="0.1"/>', ("head",),
         smartbody=True),
     Row("infuse:nonverbal", "infuse", '<speech id="x"><text>I really think this is a good idea, and you will like it.'
                                       '</text></speech>', ("arms", "head"), whole_block=True, block_attributes='infuse:nonverbal="true"'),
