@@ -110,3 +110,89 @@ def test_wild_cartoon_frog_with_its_arms_down():
     feet = [v.skeleton.index[label["mapping"][k]] for k in ("l_ankle", "r_ankle")]
     assert pos[fingertips, 1].min() < pos[feet, 1].max()
     assert _wrong(map_skeleton(v.skeleton).joints, v) == []
+
+
+def _armless_with_girdle() -> skeleton_variants.Variant:
+    """The canonical body with both clavicle joints per side (the sternal end well off the chest joint,
+    as in rigs whose chest joint sits at the back) and its arms removed from the upper arm down: what
+    is left of each shoulder girdle is a two-joint chain as long as a short cartoon arm."""
+    sk = canonical_skeleton(extras=True)
+    pos = sk.rest_global_positions.copy()
+    chest = pos[sk.index["spine3"]]
+    for side, sign in (("l", 1.0), ("r", -1.0)):
+        pos[sk.index[f"{side}_sternoclavicular"]] = chest + [0.1 * sign, 0.06, 0.12]
+        pos[sk.index[f"{side}_acromioclavicular"]] = chest + [0.17 * sign, 0.1, 0.06]
+    sk = skeleton_variants._from_positions(sk.names, sk.parents, pos)
+    label = {"mapping": {n: n for n in CANONICAL_NAMES}, "alternatives": {}}
+    return skeleton_variants.removed(sk, None, label, "arms")
+
+
+@pytest.mark.parametrize("names", ["own", "meaningless"])
+def test_a_shoulder_girdle_without_arms_is_no_pair_of_arms(names):
+    """Two clavicle joints per side left without arms are refused as arms by their short reach
+    (geometry alone, with meaningless names) and the reason says so."""
+    v = _armless_with_girdle()
+    sk = v.skeleton
+    if names == "meaningless":
+        sk = skeleton_variants.meaningless(sk, None, {"mapping": {}, "alternatives": {}}).skeleton
+    stubs = [n for n in v.skeleton.names if n.endswith("clavicular")]
+    assert len(stubs) == 4
+    with pytest.raises(infuse.NotHumanoidError) as err:
+        map_skeleton(sk)
+    assert "shoulder girdle without arms" in err.value.reason
+
+
+def _with_chains(sk: infuse.Skeleton, parent: str, chains: dict[str, np.ndarray]) -> infuse.Skeleton:
+    """``sk`` with extra chains hanging from ``parent``: name -> (K, 3) joint positions."""
+    names, parents = list(sk.names), list(sk.parents)
+    pos = [p for p in sk.rest_global_positions]
+    for name, points in chains.items():
+        prev = sk.index[parent]
+        for k, point in enumerate(points):
+            names.append(f"{name}_{k:02d}")
+            parents.append(prev)
+            prev = len(names) - 1
+            pos.append(point)
+    return skeleton_variants._from_positions(names, parents, np.array(pos))
+
+
+@pytest.mark.parametrize("words", [("J_L_Mune", "J_R_Mune"), ("Ctrl_Arm_FK_L", "Ctrl_Arm_FK_R"),
+                                   ("L_Skirt", "R_Skirt")], ids=["breasts", "controls", "cloth"])
+def test_chains_named_as_no_arm_are_no_arms(words):
+    """An armless body whose chest carries a mirror-image pair of three-joint chains as long as short
+    arms, named as breasts (in Japanese written in Latin letters), arm controls or cloth: refused,
+    because the names never say upper arm, forearm or hand."""
+    sk, label = _canonical()
+    armless = skeleton_variants.removed(sk, None, label, "arms").skeleton
+    chest = armless.rest_global_positions[armless.index["spine3"]]
+    chains = {}
+    for word, side in zip(words, (1.0, -1.0)):
+        start = chest + np.array([0.09 * side, -0.05, 0.08])
+        chains[word] = start + np.outer(np.arange(3), [0.03 * side, -0.08, 0.1])
+    body = _with_chains(armless, "spine3", chains)
+    with pytest.raises(infuse.NotHumanoidError) as err:
+        map_skeleton(body)
+    assert "two legs and two arms" in err.value.reason
+
+
+def test_stubby_robot_arms_without_hands_are_arms():
+    """Short arms of an upper arm alone (no forearm or hand joint), 0.25 of the leg length: still a
+    biped, with its shoulders and elbows mapped."""
+    sk, label = _canonical()
+    v = skeleton_variants.removed(sk, None, label, "fingers")
+    keep = [n for n in v.skeleton.names if not n.endswith(("_wrist", "_forearm"))]
+    idx = v.skeleton.index
+    parents = []
+    for n in keep:
+        p = int(v.skeleton.parents[idx[n]])
+        while p >= 0 and v.skeleton.names[p] not in keep:
+            p = int(v.skeleton.parents[p])
+        parents.append(keep.index(v.skeleton.names[p]) if p >= 0 else -1)
+    pos = v.skeleton.rest_global_positions[[idx[n] for n in keep]]
+    robot = skeleton_variants._from_positions(keep, parents, pos)
+    legs = np.linalg.norm(pos[keep.index("l_hip")] - pos[keep.index("l_ankle")])
+    upper = np.linalg.norm(pos[keep.index("l_elbow")] - pos[keep.index("l_shoulder")])
+    assert upper / legs < 0.4
+    joints = map_skeleton(robot).joints
+    assert [joints.get(f"{s}_{j}") for s in "lr" for j in ("shoulder", "elbow")] == [
+        f"{s}_{j}" for s in "lr" for j in ("shoulder", "elbow")]

@@ -6,8 +6,11 @@ cloth, face parts, or the other kind of limb: the arms of a legless body taken a
 the legs and the arms are not joined by a trunk (the path between them runs through other limbs:
 the digits of two hands), when the legs do not point away from the head (a quadruped, a lying
 body), when the front limbs stand on the ground like legs under a trunk that is not upright, or
-when more limbs as long as the legs stand beside them (a spider, an insect). Every measure is
-taken in the body's own frame and relative to its own size.
+when more limbs as long as the legs stand beside them (a spider, an insect), or when the limbs
+taken as arms are no arms: what is left of a shoulder girdle (two clavicle joints, a clavicle and
+its landmark) reaches too short a way past its first joint, and chains whose names say shoulder
+girdle, control, landmark or cloth and never upper arm, forearm or hand are not arms either.
+Every measure is taken in the body's own frame and relative to its own size.
 """
 from __future__ import annotations
 
@@ -24,6 +27,12 @@ UPRIGHT_SHOULDERS = 1.35
 #: the path between the legs' and the arms' joints at most this many times as long as the longer
 #: limb (a person's trunk is shorter than a leg; the arms and shoulders between two hands are not)
 TRUNK_OVER_LIMB = 3.0
+#: an arm reaches at least this many leg lengths past its first joint (a person's upper arm and
+#: forearm about 0.6, a stubby robot arm without a forearm joint 0.19; what is left of a shoulder
+#: girdle when the arms are gone 0.06-0.13)
+ARM_REACH_OVER_LEG = 0.155
+#: flags that say a joint is no arm joint (a control, a landmark or helper, cloth or hair)
+NOT_ARM_FLAGS = ("control", "helper", "secondary", "prop")
 
 
 def refusal(view: SkeletonView, plan: BodyPlan | None, pairs: list[LimbPair], standing_cos: float) -> str | None:
@@ -41,6 +50,9 @@ def refusal(view: SkeletonView, plan: BodyPlan | None, pairs: list[LimbPair], st
         if named:
             return (f"the limbs taken as its {kind} are named as {what} ({', '.join(named)}): "
                     "not two legs and two arms on a trunk")
+    no_arm = _no_arms(view, plan)
+    if no_arm:
+        return no_arm
     trunk = _trunk_ratio(view, plan)
     if trunk > TRUNK_OVER_LIMB:
         return (f"the limbs taken as its legs and arms are joined by a path {trunk:.0f} times as long as they "
@@ -73,6 +85,36 @@ def _named_otherwise(view: SkeletonView, pair: LimbPair, own: frozenset[str]) ->
         return "", []
     other = [view.names[j] for j in joints if view.info[j].roles - own - {"hips"}]
     return ("other body parts", other[:4]) if len(other) >= 2 else ("", [])
+
+
+def _no_arms(view: SkeletonView, plan: BodyPlan) -> str | None:
+    """Why the limbs taken as arms are no arms, or ``None``. An arm reaches a hand-like end: either
+    a hand where digits branch, or a reach past its first joint of an upper arm at least (relative
+    to the legs: a shoulder girdle left without its arms reaches a few centimetres); and a chain
+    whose every joint is named as a clavicle, a control, a landmark or cloth is no arm."""
+    arms, legs = plan.arms, plan.legs
+    hands = _hands_at_ends(view, arms)
+    reach = min(view.reach[arms.a], view.reach[arms.b]) / max(legs.length, 1e-9)
+    if not hands and reach < ARM_REACH_OVER_LEG:
+        return (f"the limbs taken as its arms ({view.names[arms.a]}, {view.names[arms.b]}) reach only {reach:.2f} "
+                "of its leg length past their first joint, with no hand: a shoulder girdle without arms "
+                "(a humanoid has two legs and two arms on a trunk)")
+    for root in (arms.a, arms.b):
+        chain = [j for j in view.main_chain(root, 6) if not view.info[j].flagged("end")]
+        infos = [view.info[j] for j in chain]
+        # every joint named, none as a part of an arm past the shoulder girdle
+        if all(i.flagged(*NOT_ARM_FLAGS) or i.roles == frozenset({"clavicle"}) for i in infos):
+            named = ", ".join(view.names[j] for j in chain[:3])
+            return (f"the limb taken as an arm from {view.names[root]} is named as a shoulder girdle, a control, a "
+                    f"landmark or cloth all along and never as an upper arm, forearm or hand ({named}): no arm "
+                    "(a humanoid has two legs and two arms on a trunk)")
+    return None
+
+
+def _hands_at_ends(view: SkeletonView, arms: LimbPair) -> bool:
+    """Both limbs of the pair branch into three or more digits somewhere along their chains."""
+    kids, _ = view.digit_counts()
+    return all(any(kids[j] >= 3 for j in view.main_chain(root, 8)) for root in (arms.a, arms.b))
 
 
 def _trunk_ratio(view: SkeletonView, plan: BodyPlan) -> float:

@@ -56,6 +56,8 @@ ROLE_WORDS: dict[str, str] = {
     "coxa": "thigh", "pierna": "shin", "jambe": "shin", "unterschenkel": "shin", "canela": "shin", "pie": "foot",
     "pied": "foot", "fuss": "foot", "dedo": "finger", "doigt": "finger", "pulgar": "thumb",
     "pouce": "thumb", "daumen": "thumb", "polegar": "thumb", "indice": "index", "zeigefinger": "index",
+    # Japanese words written in Latin letters
+    "mune": "chest", "kubi": "neck", "atama": "head", "hiji": "forearm", "tekubi": "hand", "hiza": "shin",
 }
 
 #: Word -> flag for joints that are not (or not only) body joints.
@@ -78,6 +80,7 @@ FLAG_WORDS: dict[str, str] = {
     "cloth": "secondary", "cape": "secondary", "coat": "secondary", "tail": "secondary", "ribbon": "secondary",
     "wing": "secondary", "wings": "secondary", "hind": "secondary", "pectoral": "secondary", "fin": "secondary",
     "feather": "secondary", "antenna": "secondary",
+    "suso": "secondary", "kami": "secondary", "sode": "secondary", "shippo": "secondary",
     "hood": "secondary", "sleeve": "secondary", "tie": "secondary", "physics": "secondary", "dyn": "secondary",
     "jaw": "face", "chin": "face", "lip": "face", "lips": "face", "cheek": "face", "brow": "face", "eyebrow": "face",
     "lid": "face", "eyelid": "face", "tongue": "face", "nose": "face", "ear": "face", "teeth": "face",
