@@ -27,9 +27,10 @@ Evaluating frames one by one costs more per frame than in blocks (each controlle
 much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
 while a frame costs under 60% of a frame's time; twice as many (up to ``max_block_frames``) when it
 costs more; half as many after two seconds of frames that cost under 25% (costs as the median of the
-last blocks). With blocks of B frames a command shows within B frames plus the lead. A frame still
-waiting when the next one is due is skipped and counts as missed (:attr:`LiveStats.missed`). At most a
-block and the frames already due when it started wait to be shown.
+last blocks; the first frame, evaluated as the loop starts, sizes the first ones). With blocks of B
+frames a command shows within B frames plus the lead. A frame still waiting when the next one is due is
+skipped and counts as missed (:attr:`LiveStats.missed`). At most a block and the frames already due when
+it started wait to be shown.
 
 Frames stand on the ground as exported files do: each character is lowered by how low its feet reach at
 rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
@@ -39,6 +40,7 @@ stalls a frame. Old frames, ended activities and finished blocks are forgotten: 
 """
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -197,7 +199,8 @@ class LiveScene:
             scratch.run(seconds)
 
     def start(self) -> "LiveScene":
-        """Start the loop (after :meth:`warm_up`): the scene's current time is now on the wall clock."""
+        """Start the loop (after :meth:`warm_up`): the scene's current time is now on the wall clock (its
+        frame is evaluated here, and shown at once)."""
         if self._thread is not None:
             raise UsageError("this live scene has already been started")
         if not self._warm:
@@ -205,7 +208,15 @@ class LiveScene:
             self._warm = True
         for name in self.scene.characters:
             self._foot_height(name)  # meshes skinned here, not on the loop thread
-        self.epoch = time.perf_counter() - self.scene.time
+        # The first frame, evaluated here, tells what a block costs: blocks start as long as it takes to keep
+        # up (a block costs much the same whatever its length), so the first seconds miss no frames.
+        started = time.perf_counter()
+        self._pending.extend(self._evaluate(1))
+        needed = (time.perf_counter() - started) / (0.6 * self.period_s)
+        self.block_frames = min(1 << max(0, math.ceil(math.log2(max(needed, 1.0)))), self.max_block_frames)
+        self.stats.block_frames = self.block_frames
+        self._costs.clear()
+        self.epoch = time.perf_counter() - self._pending[0][0] * self.period_s
         self._thread = threading.Thread(target=self._run, name="infuse-live", daemon=True)
         self._presenter = threading.Thread(target=self._present, name="infuse-live-frames", daemon=True)
         self._thread.start()
