@@ -11,6 +11,8 @@ Names the character lacks are reported once and skipped.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import quaternions as quat
@@ -27,6 +29,18 @@ def _interpolation(sample_times: np.ndarray, times: np.ndarray) -> tuple[np.ndar
     i0 = np.clip(np.searchsorted(sample_times, t, side="right") - 1, 0, len(sample_times) - 2)
     frac = (t - sample_times[i0]) / (sample_times[i0 + 1] - sample_times[i0])
     return i0, frac
+
+
+@dataclass(frozen=True, eq=False)
+class TracksBinding:
+    """Tracks bound to one character: the joints ``joints`` (R,) their rotation tracks drive, with their
+    keys ``rotations`` (K, R, 4); the morph targets ``columns`` (M,) their weight tracks drive, with
+    their keys ``morphs`` (K, M)."""
+
+    joints: np.ndarray
+    rotations: np.ndarray
+    columns: np.ndarray
+    morphs: np.ndarray
 
 
 class Tracks(Controller):
@@ -62,7 +76,7 @@ class Tracks(Controller):
     def describe(self) -> str:
         return self.name
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> TracksBinding:
         joints, keys = [], []
         for key in self.rotations:
             index = rig.joint(key)
@@ -82,16 +96,16 @@ class Tracks(Controller):
             names.append(name)
         rot = np.stack([self.rotations[k] for k in keys], axis=1) if keys else np.zeros((len(self.times), 0, 4))
         morph = np.stack([self.morph_weights[n] for n in names], axis=1) if names else np.zeros((len(self.times), 0))
-        return {"joints": np.array(joints, dtype=np.int64), "rotations": rot,
-                "columns": np.array(columns, dtype=np.int64), "morphs": morph}
+        return TracksBinding(joints=np.array(joints, dtype=np.int64), rotations=rot, columns=np.array(columns, dtype=np.int64),
+                             morphs=morph)
 
     def evaluate_one(self, job: Job, block: Block) -> None:
-        b = job.binding
+        b: TracksBinding = job.binding
         i0, frac = _interpolation(self.times, job.local_times)
-        if b["joints"].size:
-            a, c = b["rotations"][i0], b["rotations"][np.minimum(i0 + 1, len(self.times) - 1)]
+        if b.joints.size:
+            a, c = b.rotations[i0], b.rotations[np.minimum(i0 + 1, len(self.times) - 1)]
             c = np.where(np.sum(a * c, axis=-1, keepdims=True) < 0.0, -c, c)
-            job.pose.set_rotations(b["joints"], quat.normalize(a + frac[:, None, None] * (c - a)), job.weight, job.mode)
-        if b["columns"].size:
-            a, c = b["morphs"][i0], b["morphs"][np.minimum(i0 + 1, len(self.times) - 1)]
-            job.pose.set_morphs(b["columns"], a + frac[:, None] * (c - a), job.weight, job.mode)
+            job.pose.set_rotations(b.joints, quat.normalize(a + frac[:, None, None] * (c - a)), job.weight, job.mode)
+        if b.columns.size:
+            a, c = b.morphs[i0], b.morphs[np.minimum(i0 + 1, len(self.times) - 1)]
+            job.pose.set_morphs(b.columns, a + frac[:, None] * (c - a), job.weight, job.mode)
