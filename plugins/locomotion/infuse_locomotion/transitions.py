@@ -29,7 +29,7 @@ import numpy as np
 #: Seconds before a transition's end at which the steering takes over and the clip starts fading out.
 HANDOVER_S = 0.25
 #: A start is played when the point lies at most this far (radians) off its facing where it hands over...
-START_BEARING = math.radians(30.0)
+START_BEARING = math.radians(15.0)
 #: ...and at least this far (metres) beyond that, besides the braking distance at the start's end speed.
 START_ROOM_M = 0.6
 

@@ -1,0 +1,141 @@
+"""Transition clips played whole: a pack's starts and turns on the spot, from standing, with their own root
+motion placed where the character stands and faces, handing over to the steering at their end. Measured on
+the output with FK (SmartBody's FemaleLocomotion set on Xbot)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse.packs import build_pack, import_smartbody, infuse_character
+from infuse.packs.analysis import TRANSITION_END_S, headings
+from infuse.runtime import Runtime, controller
+
+from corpus_data import corpus_file, require_corpus
+
+infuse_locomotion = pytest.importorskip("infuse_locomotion")
+transitions = infuse_locomotion.transitions
+Locomotion = infuse_locomotion.Locomotion
+FPS = 30
+
+
+@pytest.fixture(scope="module")
+def xbot():
+    require_corpus()
+    return infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+
+
+@pytest.fixture(scope="module")
+def space(xbot, tmp_path_factory):
+    """SmartBody's FemaleLocomotion set imported, built and infused onto Xbot (through a cache)."""
+    folder = import_smartbody(corpus_file("smartbody/behaviorsets/FemaleLocomotion"), tmp_path_factory.mktemp("packs") / "female",
+                              name="sb-female")
+    build_pack(folder)
+    cache = tmp_path_factory.mktemp("cache")
+    infuse_character(infuse.Character("x", xbot), [str(folder)], cache=cache)
+    again = infuse_character(infuse.Character("x", xbot), [str(folder)], cache=cache)
+    assert again.cached
+    return next(iter(again.spaces.values()))
+
+
+def walk(xbot, space, target, seconds):
+    """The output motion, root joint ground path (F, 2) and pelvis ground path (F, 2) of a walk to ``target``."""
+    rt = Runtime(fps=FPS)
+    name = rt.add_character(infuse.Character("x", xbot))
+    rt.activate(name, controller("locomotion", pack=space, speed=0.5, target=target), 0.0)
+    rt.run(seconds)
+    m = rt.motion(name)
+    rig = rt.rig(name)
+    _, pos = infuse.motion_fk(m)
+    return m, pos, rig
+
+
+def arrival_s(pelvis: np.ndarray, target) -> float:
+    """Seconds until the pelvis ground path (F, 2) is within 5 cm of ``target`` for good."""
+    away = np.nonzero(np.linalg.norm(pelvis - np.asarray(target), axis=-1) > 0.05)[0]
+    return (away[-1] + 1) / FPS if away.size else 0.0
+
+
+def test_infused_transitions_carry_their_kind_and_are_kept_whole(space):
+    clips = space.clips
+    assert clips["Idle01_ToWalk01"].transition == "start" and clips["Walk01_ToIdle01"].transition == "stop"
+    assert clips["Turn90Lf01"].transition == "turn" and clips["Turn180Rt01"].transition == "turn"
+    assert clips["Walk01"].transition is None and clips["Idle01_StepForwardLf01"].transition is None  # a step is not played
+    start = clips["Idle01_ToWalk01"]
+    assert start.motion.num_frames == 81  # the whole take (2.67 s), not a cycle of it
+    p = start.parameters
+    assert p["travel_z"] > 1.0 and abs(p["travel_x"]) < 0.2 and abs(math.degrees(p["turn"])) < 15.0
+    assert p["speed_start"] < p["speed_end"]
+    assert math.degrees(clips["Turn90Lf01"].parameters["turn"]) == pytest.approx(90.0, abs=15.0)
+    assert math.degrees(clips["Turn90Rt01"].parameters["turn"]) == pytest.approx(-90.0, abs=15.0)
+    assert math.hypot(clips["Turn90Lf01"].parameters["travel_x"], clips["Turn90Lf01"].parameters["travel_z"]) < 0.1
+    played = transitions.played(space, 0.1)
+    assert {c.transition for c in played} == {"start", "turn"}
+    # A turn that walks off at its end is not one that leaves the character standing.
+    assert "Idle01_ToWalk01_Turn360Rt01" not in {c.name for c in played}
+
+
+def test_a_walk_from_standing_plays_the_start_whole_then_steers(xbot, space):
+    target = (0.0, 5.0)
+    m, pos, rig = walk(xbot, space, target, 14.0)
+    clip = space.clips["Idle01_ToWalk01"]
+    hand = transitions.handover_s(clip, FPS)
+    frames = int(round(hand * FPS))
+    expected = transitions.placed_root(clip, transitions.placement(clip, 0.0, 0.0, 0.0), np.arange(frames) / FPS)
+    assert np.abs(m.root_translations[:frames, [0, 2]] - expected).max() < 1e-6  # its own root motion, placed at the origin
+    pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.05
+    length = np.linalg.norm(np.diff(pelvis, axis=0), axis=-1).sum()
+    assert length < 1.15 * 5.0
+    # The feet carry on through the handover: no foot moves more in a frame there than it does walking.
+    ankles = pos[:, [rig.joint("l_ankle"), rig.joint("r_ankle")]]
+    step = np.linalg.norm(np.diff(ankles, axis=0), axis=-1).max(axis=1)
+    around = step[frames - 5:frames + int(transitions.HANDOVER_S * FPS) + 5]
+    walking = step[frames + 30:frames + 90]
+    assert around.max() <= 1.1 * walking.max()
+
+
+@pytest.mark.parametrize("angle, name", [(180.0, "Turn180Rt01"), (-90.0, "Turn90Rt01")])
+def test_a_large_turn_from_standing_plays_the_nearest_turn_on_the_spot(xbot, space, angle, name):
+    target = (4.0 * math.sin(math.radians(angle)), 4.0 * math.cos(math.radians(angle)))
+    m, pos, rig = walk(xbot, space, target, 18.0)
+    clip = space.clips[name]
+    frames = int(round(transitions.handover_s(clip, FPS) * FPS))
+    turned = np.unwrap(headings(pos, {"l_hip": rig.joint("l_hip"), "r_hip": rig.joint("r_hip")}))
+    span = int(TRANSITION_END_S * FPS)
+    change = np.degrees(turned[frames - span:frames].mean() - turned[:span].mean())
+    assert change == pytest.approx(math.degrees(clip.parameters["turn"]), abs=10.0)
+    pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    assert np.linalg.norm(pelvis[:frames] - pelvis[0], axis=-1).max() < 0.3  # on the spot
+    assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.05
+    assert np.linalg.norm(np.diff(pelvis, axis=0), axis=-1).sum() < 1.15 * 4.0 + 0.3
+
+
+def test_the_plan_counts_the_transitions(xbot, space):
+    """The walk's planned arrival (what a scene's end time waits for) is when the output arrives."""
+    target = (0.0, -4.0)
+    plan = Locomotion(pack=space, speed=0.5, target=target).plan(FPS)
+    _, pos, rig = walk(xbot, space, target, 18.0)
+    measured = arrival_s(pos[:, rig.joint("base")][:, [0, 2]], target)
+    turn = space.clips["Turn180Rt01"]
+    assert plan.arrives_s > transitions.handover_s(turn, FPS) + 4.0 / 0.5  # the turn, then the walk
+    assert plan.arrives_s == pytest.approx(measured, abs=0.25)
+
+
+def test_landings_are_pinned_from_where_the_heel_reached_the_ground():
+    """A foot landing moving: its heel reached the ground frames before the contact was found."""
+    frames = 20
+    phases = np.zeros((frames, 2, 2), dtype=bool)
+    phases[10:, 0, :] = True  # the left foot lands at frame 10
+    phases[:, 1, :] = True  # the right foot stands throughout
+    heights = np.full((frames, 2, 2), 0.08)
+    heights[:, :, 0] = 0.10
+    heights[:10, 0, 0] = np.linspace(0.2, 0.10, 10)
+    heights[7:10, 0, 0] = 0.101  # on the ground three frames early
+    heights[:10, 0, 1] = np.linspace(0.2, 0.09, 10)
+    out = transitions.grounded(phases, heights, 0.003, 0.01, 0.25)
+    assert out[7:10, 0, 0].all() and not out[:7, 0, 0].any()
+    assert not out[:10, 0, 1].any()  # the ball is not down early
+    assert (out[:, 1] == phases[:, 1]).all()
