@@ -87,8 +87,9 @@ class LiveFrame:
 
 class LiveStats:
     """Frame timing of a live loop: frames shown, frames missed (evaluated too late to be shown), commands
-    applied, the current block size, and the evaluation time per frame of the last blocks, on the wall
-    clock and in the loop thread's CPU time (milliseconds; they differ when the machine is loaded).
+    applied, the current block size and lead (how long before its first frame is due a block starts,
+    milliseconds), and the evaluation time per frame of the last blocks, on the wall clock and in the loop
+    thread's CPU time (milliseconds; they differ when the machine is loaded).
     ``blocks``: the last blocks evaluated, (first frame, frames) each: a session replayed offline with
     the same blocks and commands gives the same frames (other blocks give them to rounding)."""
 
@@ -97,6 +98,7 @@ class LiveStats:
         self.missed = 0
         self.commands = 0
         self.block_frames = 1
+        self.lead_ms = 0.0
         self.evaluate_ms: deque[float] = deque(maxlen=window)
         self.evaluate_cpu_ms: deque[float] = deque(maxlen=window)
         self.blocks: deque[tuple[int, int]] = deque(maxlen=window)  # (first frame, frames) of each block
@@ -104,7 +106,8 @@ class LiveStats:
     def summary(self) -> dict:
         """Counts and evaluation-time percentiles (ms) over the window."""
         ms = np.asarray(self.evaluate_ms, dtype=np.float64)
-        figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands, "block_frames": self.block_frames}
+        figures = {"shown": self.shown, "missed": self.missed, "commands": self.commands, "block_frames": self.block_frames,
+                   "lead_ms": self.lead_ms}
         if len(ms):
             figures.update(mean_ms=float(ms.mean()), p50_ms=float(np.percentile(ms, 50)),
                            p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()),
@@ -278,6 +281,7 @@ class LiveScene:
                 if self.block_frames > size:
                     self._leads = deque((lead * self.block_frames / size for lead in self._leads), maxlen=self._leads.maxlen)
                 self._lead_s = min(float(np.percentile(self._leads, 90)), self.max_block_frames * self.period_s)
+                self.stats.lead_ms = self._lead_s * 1e3
                 with self._ready:
                     self._pending.extend(frames)
                     self._ready.notify_all()
