@@ -10,8 +10,9 @@ For every humanoid rig of the wild folder:
    - foot skate, cm per metre walked (:func:`infuse.metrics.foot_skate` over the source's contacts),
      source and output, and its target, source x 1.1 + 0.5;
    - bone-direction error, degrees: the limbs and the hip and shoulder lines, output against source;
-   - penetration of the feet below the level they rest at, cm (mean and deepest), and the float of a
-     planted foot, cm;
+   - penetration of the feet below the level they rest at while planted, cm (mean and deepest; the
+     source's deepest beside it: a mocap floor is not always level), and the float of a planted
+     foot, cm;
    - popping: the joint whose largest turn between two frames comes closest to (or goes furthest
      past) 1.5 x the source's + 10 degrees, and its margin (negative: past the bound);
    - the share of foot goals out of reach, the largest miss of a reachable one (mm);
@@ -29,7 +30,8 @@ For every humanoid rig of the wild folder:
    included), and the joint (fingers aside) that turns most in one frame (degrees).
 
 The worst cases of each table are named at the end. Run: ``python benchmarks/wild_pipeline.py``
-(``--quick``: 6 rigs and the Bandai walk only; ``--rigs TEXT``: rigs whose path contains TEXT).
+(``--quick``: 6 rigs and the Bandai walk only; ``--rigs TEXT``: rigs whose path contains TEXT;
+``--markdown``: a summary, one row per rig, as in ``docs/wild.md``).
 """
 from __future__ import annotations
 
@@ -103,6 +105,7 @@ class RetargetRow:
     bones: float
     penetration: float
     max_penetration: float
+    source_max_penetration: float
     float_cm: float
     pop_joint: str
     pop_margin: float
@@ -158,13 +161,15 @@ def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Source
     planted = result.contacts.foot_flags()
     level = float(np.median(lowest[planted])) if planted.any() else float(lowest.min())
     ground = metrics.ground_contact(lowest, planted, level)
+    source_level = float(np.median(result.contacts.lowest[planted])) if planted.any() else float(result.contacts.lowest.min())
+    source_ground = metrics.ground_contact(result.contacts.lowest, planted, source_level)
     pop = q.popping_final
     j = back_map.indices(back.skeleton).get(pop.worst)
     frame = 0
     if j is not None and len(g) > 1:
         frame = int(np.argmax(quat.angle_between(g[:-1, j], g[1:, j]))) + 1
     return RetargetRow(short(rel), source, q.scale, q.skate_source, q.skate_final, q.skate_limit(), q.bones_final,
-                       ground.penetration, ground.max_penetration, ground.float, pop.worst, -pop.excess, frame,
+                       ground.penetration, ground.max_penetration, source_ground.max_penetration, ground.float, pop.worst, -pop.excess, frame,
                        100.0 * q.unreachable, q.residual_mm, bool(np.isfinite(g).all() and np.isfinite(p).all()),
                        100.0 * float(lowest.min()))
 
@@ -284,26 +289,26 @@ def _fmt(x: float, width: int = 6, digits: int = 2) -> str:
 
 
 def print_retargeting(rows: list[RetargetRow]) -> None:
-    head = (f"{'rig':<38} {'source':<14} {'scale':>5} | {'skate src/out':>13} {'limit':>5} | {'bones':>5} | "
-            f"{'pen mean/max':>12} {'float':>5} | {'popping joint':<16} {'margin':>6} {'frame':>5} | "
+    head = (f"{'rig':<42} {'source':<14} {'scale':>5} | {'skate src/out':>13} {'limit':>5} | {'bones':>5} | "
+            f"{'pen mean/max (src)':>19} {'float':>5} | {'popping joint':<16} {'margin':>6} {'frame':>5} | "
             f"{'out%':>4} {'IK mm':>5} | {'lowest':>6}")
     print(head)
     print("-" * len(head))
     for r in rows:
-        print(f"{r.rig[-38:]:<38} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
-              f"{r.bones:5.2f} | {r.penetration:5.2f} {r.max_penetration:6.2f} {r.float_cm:5.2f} | {r.pop_joint:<16} "
+        print(f"{r.rig[-42:]:<42} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
+              f"{r.bones:5.2f} | {r.penetration:5.2f} {r.max_penetration:6.2f} {r.source_max_penetration:6.2f} {r.float_cm:5.2f} | {r.pop_joint:<16} "
               f"{r.pop_margin:6.1f} {r.pop_frame:5d} | {r.unreachable:4.0f} {r.residual_mm:5.2f} | {r.written_lowest_cm:6.2f}"
               + ("" if r.finite else "  NON-FINITE") + ("" if r.ok else "  <- misses a target"))
 
 
 def print_packs(rows: list[PackRow]) -> None:
-    head = (f"{'rig':<38} {'packs':<5} | {'miss m':>6} {'arrive':>6} {'skate':>6} | {'beat':>5} {'post':>5} | "
+    head = (f"{'rig':<42} {'packs':<5} | {'miss m':>6} {'arrive':>6} {'skate':>6} | {'beat':>5} {'post':>5} | "
             f"{'depth':>5} | {'largest turn':<16} {'deg':>5} {'frame':>5} | {'s':>4}")
     print(head)
     print("-" * len(head))
     for r in rows:
         played = "".join(p[0].upper() if p in r.packs else "." for p in PACKS)
-        print(f"{r.rig[-38:]:<38} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
+        print(f"{r.rig[-42:]:<42} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
               f"{_fmt(r.beat_arm, 5, 0)} {_fmt(r.posture_arm, 5, 0)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
               f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {r.seconds:4.1f}" + ("" if r.finite else "  NON-FINITE"))
     for r in rows:
@@ -334,10 +339,27 @@ def print_worst(retargeted: list[RetargetRow], packs: list[PackRow], n: int = 5)
           f"{refused} pack refusal(s); non-finite: {sum(not r.finite for r in retargeted + packs)}")
 
 
+def print_summary(retargeted: list[RetargetRow], packs: list[PackRow]) -> None:
+    """One Markdown row per rig: the worst figure of its retargeted clips and what the packs did."""
+    print("| rig | skate cm/m (limit) | bones deg | popping margin deg | deepest foot cm (source) | packs | "
+          "miss m | skate cm/m | beat / posture % arm | depth cm |")
+    print("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|")
+    for p in packs:
+        rows = [r for r in retargeted if r.rig == p.rig]
+        over = max(rows, key=lambda r: r.skate / r.skate_limit)
+        deep = max(rows, key=lambda r: r.max_penetration)
+        played = "".join(k[0].upper() if k in p.packs else "." for k in PACKS)
+        print(f"| {p.rig} | {over.skate:.2f} ({over.skate_limit:.2f}) | {max(r.bones for r in rows):.2f} | "
+              f"{min(r.pop_margin for r in rows):+.1f} | {deep.max_penetration:.1f} ({deep.source_max_penetration:.1f}) | "
+              f"{played} | {_fmt(p.miss_m, 0, 3)} | {_fmt(p.skate, 0, 2)} | {_fmt(p.beat_arm, 0, 0)} / "
+              f"{_fmt(p.posture_arm, 0, 0)} | {_fmt(p.depth_cm, 0, 1)} |")
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="6 rigs and the Bandai walk only")
     parser.add_argument("--rigs", metavar="TEXT", help="only rigs whose path contains TEXT")
+    parser.add_argument("--markdown", action="store_true", help="also a Markdown table, one row per rig")
     args = parser.parse_args(argv)
     for root, what in ((WILD, "INFUSE_WILD"), (CORPUS, "INFUSE_CORPUS")):
         if not (root / "labels").is_dir():
@@ -360,6 +382,9 @@ def main(argv=None) -> int:
           "a posture; miss m, arrival s, skate cm/m, wrist travel % of the arm, depth cm\n")
     print_packs(infused)
     print_worst(retargeted, infused)
+    if args.markdown:
+        print()
+        print_summary(retargeted, infused)
     print(f"\n{time.perf_counter() - started:.0f} s")
     return 0
 
