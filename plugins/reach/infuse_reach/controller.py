@@ -7,7 +7,8 @@ their strokes coincide; the blend drives the spine, the arm and the hand. The wr
 to the exact target by two-joint arm IK, the correction growing from the start to the stroke.
 ``action``: ``"touch"`` (reach and return), ``"grab"`` (from the stroke the object named ``obj``
 follows the hand: the runtime target of that name becomes a :class:`HeldTarget`, until
-:meth:`Reach.release`), ``"put"`` (the held object ``obj`` is left at the target at the stroke).
+:meth:`Reach.release`), ``"put"`` (the held object ``obj`` is left at the target at the stroke: the
+hand takes it there, wherever in the hand it is held).
 """
 from __future__ import annotations
 
@@ -22,6 +23,8 @@ from infuse.runtime.pose import chain_fk
 from infuse.runtime.targets import PointTarget, Target, as_target
 
 ACTIONS = ("touch", "grab", "put")
+#: Furthest an object may be from the wrist for the hand putting it down to be holding it, metres.
+HELD_WITHIN_M = 0.15
 _UPPER = ("spine1", "spine2", "spine3", "spine4", "spine5", "skullbase")
 
 
@@ -203,14 +206,34 @@ class Reach(Controller):
         arm = b["arms"][hand]
         rot = pose.local_rotations[active]
         jt = None if pose.joint_translations is None else pose.joint_translations[active]
-        _, wpos = chain_fk(sk, rot, pose.root_translations[active], jt, [arm[2]])
+        wrot, wpos = chain_fk(sk, rot, pose.root_translations[active], jt, [arm[2]])
         goal_pt = own[active]
+        if self.action == "put":  # the object, held off the wrist, goes to the target (IK keeps the wrist's turn)
+            goal_pt = goal_pt - self._carried(runtime, block, rig.name, active, arm[2], wrot[:, 0], st,
+                                              t >= stroke - 1e-9)
         ramp = smoothstep(t / max(stroke, 1e-6))[:, None]
         goal = wpos[:, 0] + ramp * (goal_pt - wpos[:, 0])
         solve_limb(sk, rot, pose.root_translations[active], jt, arm, goal, weight=job.weight[active])
         pose.local_rotations[active] = rot
         pose._fk = None
         self._act(job, st, block, t, active, arm, world)
+
+    def _carried(self, runtime, block, character, active, wrist, wrist_rotations, st, put) -> np.ndarray:
+        """(A, 3) where the object being put down is from the wrist on the active frames (metres, the
+        character's own frame; ``wrist_rotations`` (A, 4) the wrist's global turn there): where the hand
+        holds it before the stroke (``put`` false), as it was just before from the stroke on; nothing
+        where it is not in the hand (further than :data:`HELD_WITHIN_M`)."""
+        carry = np.zeros((len(active), 3))
+        before = ~put
+        if before.any():
+            held = runtime.target(self.obj).positions(block.times, block)[active[before]]
+            hand_rot, hand_pos = block.pose(character).chain_pose([wrist])  # the pose below, world
+            in_hand = quat.rotate(quat.conjugate(hand_rot[active[before], 0]), held - hand_pos[active[before], 0])
+            in_hand[np.linalg.norm(in_hand, axis=-1) > HELD_WITHIN_M] = 0.0
+            carry[before] = quat.rotate(wrist_rotations[before], in_hand)
+            st["carry"] = carry[before][-1]
+        carry[put] = st.get("carry", np.zeros(3))
+        return carry
 
     @staticmethod
     def _ground(rig, pose, frame: int) -> float:

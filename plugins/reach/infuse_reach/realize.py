@@ -5,6 +5,8 @@ What each hand holds is the stage's record (:class:`~infuse.stage.Held`).
 """
 from __future__ import annotations
 
+import math
+
 from infuse.bml.model import CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
 from infuse.stage import Held, until_s
 
@@ -12,6 +14,21 @@ from .controller import Reach
 
 #: BML reach actions -> the reach controller's.
 REACH_ACTIONS = {"touch": "touch", "pick-up": "grab", "put-down": "put"}
+
+
+class PutDowns:
+    """The starts of a scene's put-downs (global seconds). A block of frames begins at each, so that the
+    object is in the hand (a grab takes hold once the block its closing falls in is evaluated) when the
+    put-down first reads where the hand holds it."""
+
+    def __init__(self, stage):
+        self.stage = stage
+        self.starts: list[float] = []
+
+    def frames_ahead(self, most: int) -> int:
+        frame, fps = self.stage.runtime.frame, self.stage.fps
+        later = [f - frame for f in (math.ceil(t * fps - 1e-6) for t in self.starts) if frame < f < frame + most]
+        return min(later, default=most)
 
 
 def warm_up(stage, character: str) -> Reach | None:
@@ -74,4 +91,5 @@ def realize_reach(activation, stage):
         stage.hold(Held(name, hand, obj, stroke, reach.release))
     elif action == "put-down":
         stage.let_go(name, stroke, obj=obj)
+        stage.stagehand("reach", PutDowns).starts.append(activation.start)
     return activity
