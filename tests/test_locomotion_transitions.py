@@ -72,7 +72,7 @@ def test_infused_transitions_carry_their_kind_and_are_kept_whole(space):
     assert math.degrees(clips["Turn90Rt01"].parameters["turn"]) == pytest.approx(-90.0, abs=15.0)
     assert math.hypot(clips["Turn90Lf01"].parameters["travel_x"], clips["Turn90Lf01"].parameters["travel_z"]) < 0.1
     played = transitions.played(space, 0.1)
-    assert {c.transition for c in played} == {"start", "turn"}
+    assert {c.transition for c in played} == {"start", "turn", "stop"}
     # A turn that walks off at its end is not one that leaves the character standing.
     assert "Idle01_ToWalk01_Turn360Rt01" not in {c.name for c in played}
 
@@ -113,15 +113,38 @@ def test_a_large_turn_from_standing_plays_the_nearest_turn_on_the_spot(xbot, spa
     assert np.linalg.norm(np.diff(pelvis, axis=0), axis=-1).sum() < 1.15 * 4.0 + 0.3
 
 
+def test_a_walk_ends_with_the_stop_clip_on_its_target(xbot, space, monkeypatch):
+    placed = []
+    original = transitions.stop_placement
+
+    def record(clip, fps, x, z, target):
+        placed.append((clip.name, original(clip, fps, x, z, target)))
+        return placed[-1][1]
+
+    monkeypatch.setattr(transitions, "stop_placement", record)
+    target = (1.0, 5.0)
+    _, pos, rig = walk(xbot, space, target, 16.0)
+    (name, (_, _, _, scale)), = placed
+    assert name == "Walk01_ToIdle01" and 1.0 / transitions.STOP_SCALES < scale < transitions.STOP_SCALES
+    pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.01  # its travel scaled onto the target
+    assert np.ptp(pelvis[-60:], axis=0).max() < 0.01  # and standing there
+
+
 def test_the_plan_counts_the_transitions(xbot, space):
-    """The walk's planned arrival (what a scene's end time waits for) is when the output arrives."""
-    target = (0.0, -4.0)
-    plan = Locomotion(pack=space, speed=0.5, target=target).plan(FPS)
-    _, pos, rig = walk(xbot, space, target, 18.0)
-    measured = arrival_s(pos[:, rig.joint("base")][:, [0, 2]], target)
+    """The walk's planned arrival is the output's, within a stride (the walk begins its stop clip at the
+    clip's gait phase, the plan where it has as far to go), and its planned rest (what a scene's end time
+    waits for) comes after it."""
+    stride = max(c.keys[2] - c.keys[0] for c in space.group("locomotion") if c.role != "idle")
+    for target in ((0.0, -4.0), (-4.0, 0.0), (0.0, 5.0)):
+        plan = Locomotion(pack=space, speed=0.5, target=target).plan(FPS)
+        _, pos, rig = walk(xbot, space, target, 18.0)
+        measured = arrival_s(pos[:, rig.joint("base")][:, [0, 2]], target)
+        assert plan.arrives_s == pytest.approx(measured, abs=stride)
+        assert plan.rests_s > measured
     turn = space.clips["Turn180Rt01"]
+    plan = Locomotion(pack=space, speed=0.5, target=(0.0, -4.0)).plan(FPS)
     assert plan.arrives_s > transitions.handover_s(turn, FPS) + 4.0 / 0.5  # the turn, then the walk
-    assert plan.arrives_s == pytest.approx(measured, abs=0.25)
 
 
 def test_landings_are_pinned_from_where_the_heel_reached_the_ground():

@@ -145,7 +145,8 @@ class WalkPlan:
     """How a walk to a point goes (:meth:`Locomotion.plan`): seconds from its start until it stands
     there (``arrives_s``), until its stop's last steps and the fade into the idle are surely over
     (``rests_s``: one cycle of the slowest forward walk at the stop's cadence and :data:`SETTLE_S`
-    later), and the steering's state then (``x``, ``z``, ``heading``... in the character's frame)."""
+    later; with a stop clip, which begins at its gait phase, the longest cycle of its walks more), and the
+    steering's state then (``x``, ``z``, ``heading``... in the character's frame)."""
 
     arrives_s: float
     rests_s: float
@@ -205,8 +206,9 @@ class Locomotion(Controller):
         if path is None:
             return None
         dt = 1.0 / float(fps)
-        last, frames, decide = path[-1], 0, True
+        last, frames, decide, stopped = path[-1], 0, True, False
         played = transitions.played(space, _standing_speed(space.group("locomotion"))) if top else []
+        stops = transitions.stops(played)
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
             if decide:  # a transition played whole from standing (as the walk will decide)
                 decide = False
@@ -219,6 +221,14 @@ class Locomotion(Controller):
                     continue
             self.steering.run(st, np.array([frames * dt]), dt, top=top)
             frames += 1
+            stop = transitions.stop_due(stops, st, last, fps) if stops and st["waypoint"] == len(path) - 1 else None
+            if stop is not None:  # where it is as far from the point as a stop clip travels (the walk's own
+                # choice waits for the clip's gait phase, within a stride of here)
+                frames += int(round(transitions.handover_s(stop, fps) * fps))
+                st.update(x=float(last[0]), z=float(last[1]), speed=0.0, turn=0.0,
+                          heading=st["heading"] + stop.parameters["turn"])
+                stopped = True
+                break
             if st["waypoint"] == len(path) - 1 and st["speed"] < 1e-6 and \
                     math.hypot(st["x"] - last[0], st["z"] - last[1]) < STAY_M:
                 break
@@ -226,7 +236,9 @@ class Locomotion(Controller):
             return None
         walks = [c for c in space.group("locomotion") if c.role != "idle" and c.parameters["forward_speed"] > 0.0] if top else []
         slowest = min(walks, key=lambda c: c.parameters["forward_speed"]).keys if walks else (0.0, 0.0, 1.0)
-        return WalkPlan(frames * dt, frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S, st)
+        # A stop clip begins at its gait phase, within a stride of where the plan has it begin.
+        late = max(c.keys[2] - c.keys[0] for c in walks) if stopped else 0.0
+        return WalkPlan(frames * dt, frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S + late, st)
 
     def handover(self, state: dict) -> dict:
         """A walk following another goes on from its state (where it is, heading, speed, gait phase,
@@ -291,7 +303,18 @@ class Locomotion(Controller):
                         st["playing"] = (pick.name, float(times[i]), transitions.placement(pick, st["x"], st["z"], st["heading"]))
             start, part, handing = i, None, None
             if st.get("playing") is None:
-                part, i = self._steered(b, st, times[i:], dt, job.report), len(times)
+                before = copy.deepcopy(st) if b["stops"] and self.steering.path is not None else None
+                part = self._steered(b, st, times[i:], dt, job.report)
+                stop = None if before is None else self._stop_at(b, before, st, block.fps, dt)
+                if stop is not None:  # walk up to where the stop begins, then play it
+                    f, clip, place = stop
+                    st.clear()
+                    st.update(before)
+                    part = self._steered(b, st, times[i:i + f], dt, job.report) if f else None
+                    st["playing"] = (clip.name, float(times[i + f]), place)
+                    i += f
+                else:
+                    i = len(times)
             else:
                 name, began, place = st["playing"]
                 clip = b["space"].clips[name]
@@ -309,16 +332,50 @@ class Locomotion(Controller):
             self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
         self._write(job, active, rot, root, jt)
 
+    def _stop_at(self, b, before, st, fps: float, dt: float):
+        """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st["trace"]``)
+        would hand over to a stop clip: the first frame on the way to the path's last point, heading
+        for it within :data:`~.transitions.STOP_BEARING`, at about the clip's speed where it begins
+        (within :data:`~.transitions.STOP_SPEEDS`), at the clip's gait phase where it begins, and as
+        far from the point as the clip travels (its travel scaled within :data:`~.transitions.STOP_SCALES`,
+        and no more than a stride later would need). Returns (frame, clip, placement) or None."""
+        path = self.steering.path
+        x, z, heading, speed, phase = st.pop("trace")
+        if st["waypoint"] != len(path) - 1:
+            return None
+        last = path[-1]
+        dist = np.hypot(last[0] - x, last[1] - z)
+        off = np.abs((np.arctan2(last[0] - x, last[1] - z) - heading + np.pi) % (2.0 * np.pi) - np.pi)
+        prev = np.concatenate(([before["phase"]], phase[:-1]))
+        best = None
+        for clip in b["stops"]:
+            at = transitions.stop_phase(clip)
+            if at is None:
+                continue
+            travel = transitions.stop_travel(clip, fps)
+            ok = ((np.mod(phase - at, 1.0) < np.mod(phase - prev, 1.0) + 1e-9) & (np.mod(phase - prev, 1.0) < 0.5)
+                  & (off < transitions.STOP_BEARING) & (np.abs(np.log(np.maximum(speed, 1e-9) / clip.parameters["speed_start"])) < math.log(transitions.STOP_SPEEDS))
+                  & (np.abs(np.log(np.maximum(dist, 1e-9) / travel)) < math.log(transitions.STOP_SCALES)))
+            # A stride later it may have about as far to go as the clip travels: then it waits for that.
+            scale = np.log(np.maximum(dist, 1e-9) / travel)
+            stride = speed * dt / np.maximum(np.mod(phase - prev, 1.0), 1e-9)
+            later = np.log(np.maximum(dist - stride, 1e-9) / travel)
+            hits = np.flatnonzero(ok & (np.abs(scale) <= np.abs(later)))
+            if hits.size and (best is None or hits[0] < best[0]):
+                f = int(hits[0])
+                best = (f, clip, transitions.stop_placement(clip, fps, float(x[f]), float(z[f]), last))
+        return best
+
     def _played(self, b, st, clip, place, local):
         """A transition ``clip`` placed by ``place`` (:func:`~.transitions.placement`) at its times
         ``local`` (F,) seconds: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and ``heading``
         follow it."""
         rot, root, jt, _ = sample_motion(clip.motion, local, loop=False)
-        turn, root0, at = place
+        turn, root0, at, scale = place
         q = yaw(turn)
         rot = np.array(rot)
         rot[:, 0] = quat.multiply(q, rot[:, 0])
-        root = quat.rotate(q, root - np.array([root0[0], 0.0, root0[1]])) + np.array([at[0], 0.0, at[1]])
+        root = quat.rotate(q, (root - np.array([root0[0], 0.0, root0[1]])) * np.array([scale, 1.0, scale])) + np.array([at[0], 0.0, at[1]])
         if b["table"].translations is None:
             jt = None
         elif jt is None:
@@ -334,15 +391,13 @@ class Locomotion(Controller):
     def _hand_over(self, b, st, clip, place, fps: float) -> None:
         """The steering takes over from transition ``clip`` (see :mod:`.transitions`): its state where the
         clip hands over; after a start, the gait's phase from the clip's last strikes (left at 0, right
-        at 0.5), walking; after a turn on the spot, standing, to decide again."""
+        at 0.5), walking; after a turn on the spot, standing, to decide again; after a stop, standing there."""
         st.update(transitions.end_state(clip, place, fps), playing=None)
-        if clip.transition == "turn":
-            st.update(settled=True, stand=1.0, landings=-1, to_go=-1.0, chooser=None)
+        if clip.transition != "start":  # standing: after a turn it decides again, after a stop it is there
+            st.update(settled=True, stand=1.0, landings=-1, to_go=-1.0, chooser=None if clip.transition == "turn" else id(self))
             return
         at = transitions.handover_s(clip, fps)
-        flags = clip.contacts.astype(np.int8)
-        strikes = sorted((f / clip.motion.fps, k) for k in range(2) for f in np.flatnonzero(np.diff(flags[:, k]) == 1) + 1
-                         if f / clip.motion.fps <= at + 1e-9)
+        strikes = [(t, k) for t, k in transitions.strikes_of(clip) if t <= at + 1e-9]
         phase = 0.0
         if strikes:
             last, foot = strikes[-1]
@@ -417,6 +472,8 @@ class Locomotion(Controller):
         period = np.maximum(wm @ b["durations"], 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()),
                                                         _settle_phases(b, wm))
+        if b["stops"]:  # where it went, frame by frame: where a stop clip may take over
+            st["trace"] = (px, pz, heading, speed, phase)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -783,7 +840,8 @@ def _prepare(space, clips, sk, legs) -> dict:
         heights = pos[:, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
         played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
     body = np.nonzero(limbs == 0)[0]
-    out = {"space": space, "played": played, "played_facing": played_facing, "played_phases": played_phases, "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+    out = {"space": space, "played": played, "played_facing": played_facing, "played_phases": played_phases,
+           "stops": transitions.stops(played), "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)

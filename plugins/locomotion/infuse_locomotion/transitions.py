@@ -33,16 +33,23 @@ START_BEARING = math.radians(15.0)
 #: ...and at least this far (metres) beyond that, besides the braking distance at the start's end speed.
 START_ROOM_M = 0.6
 
+#: A stop is played from a frame heading for the path's last point within this (radians)...
+STOP_BEARING = math.radians(10.0)
+#: ...walking within this ratio of the stop's speed where it begins, and as far from the point as the
+#: stop travels to where the steering takes over within this ratio (its root's travel scaled to it).
+STOP_SPEEDS = 1.33
+STOP_SCALES = 1.25
+
 _CACHE: dict = {}
 
 
 def played(space, still_m_s: float) -> list:
     """The transition clips of a :class:`~infuse.packs.BlendSpace` that a walk plays: its starts (they
-    begin standing), and its turns on the spot that end slower than ``still_m_s`` m/s (not walking off)."""
+    begin standing), and its turns on the spot and stops that end slower than ``still_m_s`` m/s."""
     key = (id(space), still_m_s)
     if key not in _CACHE or _CACHE[key][0] is not space:
         out = [c for c in space.clips.values() if c.transition == "start"
-               or (c.transition == "turn" and c.parameters["speed_end"] < still_m_s)]
+               or (c.transition in ("turn", "stop") and c.parameters["speed_end"] < still_m_s)]
         _CACHE[key] = (space, out)
     return _CACHE[key][1]
 
@@ -52,33 +59,90 @@ def handover_s(clip, fps: float) -> float:
     return math.floor(max(clip.duration - HANDOVER_S, 0.0) * fps + 1e-9) / fps
 
 
-def placement(clip, x: float, z: float, heading: float) -> tuple[float, np.ndarray, np.ndarray]:
+def placement(clip, x: float, z: float, heading: float) -> tuple[float, np.ndarray, np.ndarray, float]:
     """How ``clip`` is placed to start at ground point (``x``, ``z``) facing ``heading``: the turn
-    (radians) about +Y, and the clip's root ground point (2,) (x, z) at its first frame that goes
-    to (``x``, ``z``) (2,)."""
+    (radians) about +Y, the clip's root ground point (2,) (x, z) at its first frame that goes to
+    (``x``, ``z``) (2,), and the scale of its root's ground travel (1)."""
     root0 = clip.motion.root_translations[0, [0, 2]]
-    return heading - clip.parameters["facing_start"], np.array(root0), np.array([x, z])
+    return heading - clip.parameters["facing_start"], np.array(root0), np.array([x, z]), 1.0
 
 
-def placed_root(clip, place, t: np.ndarray) -> np.ndarray:
-    """(T, 2) ground points (x, z) of the placed clip's root at its times ``t`` (T,) seconds."""
-    turn, root0, at = place
+def _root_at(clip, t: np.ndarray) -> np.ndarray:
+    """(T, 2) the clip's own root ground points (x, z) at its times ``t`` (T,) seconds, interpolated."""
     m = clip.motion
     f = np.clip(np.asarray(t, dtype=np.float64) * m.fps, 0.0, m.num_frames - 1)
     i = np.minimum(np.floor(f).astype(np.int64), max(m.num_frames - 2, 0))
     u = (f - i)[:, None]
-    j = np.minimum(i + 1, m.num_frames - 1)
     r = m.root_translations[:, [0, 2]]
-    d = r[i] * (1.0 - u) + r[j] * u - root0
+    return r[i] * (1.0 - u) + r[np.minimum(i + 1, m.num_frames - 1)] * u
+
+
+def _heading_of(v) -> float:
+    return math.atan2(float(v[0]), float(v[1]))
+
+
+def placed_root(clip, place, t: np.ndarray) -> np.ndarray:
+    """(T, 2) ground points (x, z) of the placed clip's root at its times ``t`` (T,) seconds."""
+    turn, root0, at, scale = place
+    d = (_root_at(clip, t) - root0) * scale
     c, s = math.cos(turn), math.sin(turn)
     return at + np.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]), axis=-1)
+
+
+def stop_phase(clip) -> float | None:
+    """The gait phase (left strike 0, right strike 0.5) at a stop clip's first frame, from its first two
+    strikes (one of each foot); None without them."""
+    strikes = strikes_of(clip)
+    if len(strikes) < 2 or strikes[0][1] == strikes[1][1] or strikes[1][0] - strikes[0][0] < 1e-3:
+        return None
+    (t1, foot), (t2, _) = strikes[0], strikes[1]
+    return float((0.5 * foot - 0.5 * t1 / (t2 - t1)) % 1.0)
+
+
+def strikes_of(clip) -> list[tuple[float, int]]:
+    """(seconds, foot: 0 left, 1 right) of each landing in ``clip``, in time order (its contact flags)."""
+    flags = clip.contacts.astype(np.int8)
+    return sorted((f / clip.motion.fps, k) for k in range(2) for f in np.flatnonzero(np.diff(flags[:, k]) == 1) + 1)
+
+
+def stops(clips: list) -> list:
+    """The stops among played ``clips`` whose gait phase at their start is known (:func:`stop_phase`)."""
+    return [c for c in clips if c.transition == "stop" and stop_phase(c) is not None]
+
+
+def stop_due(clips: list, st: dict, point, fps: float):
+    """The stop among ``clips`` that a walk in state ``st`` (``x``, ``z``, ``heading``, ``speed``) plays to
+    stand at ``point`` (x, z) when it goes no farther than the stop travels, heading for the point and
+    at about the stop's speed (see :data:`STOP_BEARING`, :data:`STOP_SPEEDS`); None while there is none."""
+    bearing, dist = _bearing(st, point)
+    if abs(bearing) >= STOP_BEARING:
+        return None
+    for c in clips:
+        if abs(math.log(max(st["speed"], 1e-9) / c.parameters["speed_start"])) < math.log(STOP_SPEEDS) and dist <= stop_travel(c, fps):
+            return c
+    return None
+
+
+def stop_travel(clip, fps: float) -> float:
+    """Metres the root of ``clip`` travels on the ground from its start to where the steering takes over."""
+    return float(np.hypot(*(_root_at(clip, np.array([handover_s(clip, fps)]))[0] - clip.motion.root_translations[0, [0, 2]])))
+
+
+def stop_placement(clip, fps: float, x: float, z: float, target) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """``clip`` (a stop) placed to start at (``x``, ``z``) with its root where the steering takes over
+    at ``target`` (x, z): turned so its travel points there, its ground travel scaled to reach it."""
+    root0 = clip.motion.root_translations[0, [0, 2]]
+    travel = _root_at(clip, np.array([handover_s(clip, fps)]))[0] - root0
+    want = np.asarray(target, dtype=np.float64) - (x, z)
+    scale = float(np.hypot(*want) / max(np.hypot(*travel), 1e-9))
+    return _heading_of(want) - _heading_of(travel), np.array(root0), np.array([x, z]), scale
 
 
 def end_state(clip, place, fps: float) -> dict:
     """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its root),
     ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn)."""
     x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]))[0]
-    speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0
+    speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0  # a turn or a stop ends standing
     return dict(x=float(x), z=float(z), heading=float(place[0] + clip.parameters["facing_end"]), speed=float(speed), turn=0.0)
 
 
