@@ -66,3 +66,21 @@ def test_missing_joints_are_said():
     said = {w.id: w.description for w in warnings}
     assert "nosuchjoint" in said["a:n"] and "the others move" in said["a:n"]
     assert "nosuchjoint" in said["b:n"] and ("b", "n") not in scene.activities
+
+
+def test_a_gestures_noise_moves_the_joints_it_names_over_its_span():
+    """SmartBody's ``<gesture sbm:joint-range sbm:frequency sbm:scale>``: the gesture as without noise, and
+    the named joints (here the left arm, which the right-handed gesture leaves alone) turn over its span."""
+    gesture = ('<act><bml id="g"><gesture id="x" lexeme="BEAT" mode="RIGHT_HAND"{extra}/></bml></act>')
+    noisy, warnings = _scene("xbot", [(0.5, gesture.format(extra=' sbm:joint-range="l_shoulder l_elbow" '
+                                                                 'sbm:frequency="1" sbm:scale="0.1"'))])
+    plain, _ = _scene("xbot", [(0.5, gesture.format(extra=""))])
+    assert not warnings, [w.description for w in warnings]
+    rig = noisy.runtime.rig("bob")
+    rot, below = noisy.motion("bob").local_rotations, plain.motion("bob").local_rotations
+    turn = np.degrees(quat.angle_between(rot[:, rig.joint("l_shoulder")], below[:, rig.joint("l_shoulder")]))
+    right = np.degrees(quat.angle_between(rot[:, rig.joint("r_shoulder")], below[:, rig.joint("r_shoulder")]))
+    activity = noisy.activities[("g", "x")]
+    start, end = int(round(activity.start_s * FPS)), int(round(activity.end_s * FPS))
+    assert turn[start:end].max() > 2.0 and turn[:start].max() < 1e-3 and turn[end + 1:].max() < 1e-3
+    assert right.max() < 1e-3  # the gesture's own arm as without noise (degrees)

@@ -58,13 +58,9 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         points = dict(zip(timing.sync_ids, timing.offsets_s))
         cut = points["strokeEnd"] if "strokeEnd" in points else points["end"]
         timing = TimingModel.from_points({s: t + (hold if t > cut else 0.0) for s, t in points.items()})
-    noise = {k: number(behaviour, with_sbm(k), 0.0, notes) for k in ("frequency", "scale")
-             if word(behaviour, with_sbm(k))}
     parameters = {"lexeme": lexeme, "clip": clip, "timing_source": source, "mode": mode,
                   "type": word(behaviour, "type"), "emotion": word(behaviour, "emotion"),
-                  "target": word(behaviour, "target"), "poststroke_hold_s": hold,
-                  "noise": ({"joints": (word(behaviour, with_sbm("joint-range")) or "").split(), **noise}
-                            if noise else None)}
+                  "target": word(behaviour, "target"), "poststroke_hold_s": hold, "noise": _noise(behaviour, notes)}
     return BehaviourPlan(timing, "gesture", parameters, notes=tuple(notes))
 
 
@@ -82,8 +78,16 @@ def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes) -> B
     points = {p: t / speed + (hold if p in ("relax", "end") else 0.0) for p, t in points.items()}
     parameters = {"lexeme": lexeme, "gesture": gesture, "clip": clip, "pack": gesture_lexicon.PACK,
                   "timing_source": "pack", "amplitude": amplitude, "speed": speed, "repeats": repeats,
-                  "poststroke_hold_s": hold}
+                  "poststroke_hold_s": hold, "noise": _noise(behaviour, notes)}
     return BehaviourPlan(TimingModel.from_points(points), "gesture", parameters, notes=tuple(notes))
+
+
+def _noise(behaviour, notes: Notes) -> dict | None:
+    """SmartBody's noise over a gesture: the joints of ``sbm:joint-range`` and its ``sbm:frequency`` and
+    ``sbm:scale``; None when it asks for none."""
+    noise = {k: number(behaviour, with_sbm(k), 0.0, notes) for k in ("frequency", "scale")
+             if word(behaviour, with_sbm(k))}
+    return {"joints": (word(behaviour, with_sbm("joint-range")) or "").split(), **noise} if noise else None
 
 
 def plan_animation(behaviour, context) -> BehaviourPlan:
