@@ -10,7 +10,7 @@ For every humanoid rig of the wild folder:
    - foot skate, cm per metre walked (:func:`infuse.metrics.foot_skate` over the source's contacts),
      source and output, and its target, source x 1.1 + 0.5;
    - bone-direction error, degrees: the limbs and the hip and shoulder lines, output against source;
-   - penetration of the feet below the level they rest at while planted, cm (mean and deepest; the
+   - penetration of each foot below the level it rests at while planted, cm (mean and deepest; the
      source's deepest beside it: a mocap floor is not always level), and the float of a planted
      foot, cm;
    - popping: the joint whose largest turn between two frames comes closest to (or goes furthest
@@ -141,6 +141,13 @@ def _ground_depth(asset: infuse.Asset, mapping, motion) -> tuple[np.ndarray, flo
     return lowest_points(asset.skeleton, pair, g, p) - depth, depth
 
 
+def _above_planted(lowest: np.ndarray, planted: np.ndarray) -> np.ndarray:
+    """(F, 2) each foot's lowest point over the level it is planted at (its median while planted, else
+    its lowest): a rig's legs may differ in length (an OpenNI capture's by 7 cm)."""
+    levels = [np.median(lowest[planted[:, k], k]) if planted[:, k].any() else lowest[:, k].min() for k in (0, 1)]
+    return lowest - np.array(levels)
+
+
 def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Sources, out_dir: Path) -> RetargetRow:
     """Retarget ``source`` onto ``character`` as ``infuse retarget`` does, write it, read it back, measure."""
     clip, src_map = sources.clips[source]
@@ -159,10 +166,8 @@ def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Source
     g, p = motion_fk(written)
     lowest, _ = _ground_depth(back, back_map, written)
     planted = result.contacts.foot_flags()
-    level = float(np.median(lowest[planted])) if planted.any() else float(lowest.min())
-    ground = metrics.ground_contact(lowest, planted, level)
-    source_level = float(np.median(result.contacts.lowest[planted])) if planted.any() else float(result.contacts.lowest.min())
-    source_ground = metrics.ground_contact(result.contacts.lowest, planted, source_level)
+    ground = metrics.ground_contact(_above_planted(lowest, planted), planted, 0.0)
+    source_ground = metrics.ground_contact(_above_planted(result.contacts.lowest, planted), planted, 0.0)
     pop = q.popping_final
     j = back_map.indices(back.skeleton).get(pop.worst)
     frame = 0
