@@ -113,3 +113,16 @@ def test_the_frames_do_not_depend_on_the_block_size():
     assert np.allclose(results[0][1][-1], SHELF, atol=1e-6)
     for rotations, cup in results[1:]:
         assert np.abs(rotations - results[0][0]).max() < 1e-9 and np.abs(cup - results[0][1]).max() < 1e-9
+
+
+def test_a_hand_that_holds_something_takes_nothing_else():
+    scene, warnings = _scene()
+    scene.add_object("pen", (CUP[0] - 0.05, CUP[1], CUP[2]), size=0.02)
+    scene.bml("bob", SBM.format(id="take", body='<sbm:grab id="g" target="cup"/>'), at=0.3)
+    scene.bml("bob", SBM.format(id="grab2", body='<sbm:grab id="g" target="pen"/>'), at=2.0)
+    scene.bml("bob", SBM.format(id="pick2", body='<sbm:reach id="r" target="pen" sbm:action="pick-up"/>'), at=2.0)
+    scene.bml("bob", SBM.format(id="left", body='<sbm:grab id="g" target="pen" sbm:reach-type="left"/>'), at=2.0)
+    got = {w.id: w.description for w in warnings}
+    assert "the right hand holds 'cup'" in got["grab2:g"] and "the right hand holds 'cup'" in got["pick2:r"]
+    assert "left:g" not in got  # the other hand is free
+    assert [(h.hand, h.obj) for h in scene.stage.held("bob")] == [("right", "cup"), ("left", "pen")]

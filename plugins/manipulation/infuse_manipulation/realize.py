@@ -124,12 +124,19 @@ def realize_grab(activation, stage):
                    f"<{activation.element}>: " + (f"no object named {p.get('target')!r}" if kind is None
                                                  else f"{name!r} is a {kind}, not an object a hand can take"))
         return None
+    hand = _hand(p) or stage.runtime.rig(character).side_of(stage.runtime.target(name).positions([activation.start],
+                                                                                                 None)[0])
+    busy = [h.obj for h in stage.held(character) if h.hand == hand]
+    if busy:
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot take {name!r}: the {hand} hand "
+                                                       f"holds {busy[-1]!r} (let it go first)")
+        return None
     space = stage.blend_space(character, "reach")
     if space is None:
         stage.warn(activation, BEHAVIOR_DEGRADED, f"<{activation.element}>: no reaching pack infused: "
                                                   "the arm reaches by IK alone")
     try:
-        grab, held = start_grab(stage.runtime, character, activation, {**p, "target": name}, space,
+        grab, held = start_grab(stage.runtime, character, activation, {**p, "target": name, "hand": hand}, space,
                                 lambda controller, end, **options: stage.activate(activation, controller, end,
                                                                                   **options))
     except InfuseError as exc:

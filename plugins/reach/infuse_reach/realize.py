@@ -72,6 +72,11 @@ def realize_reach(activation, stage):
         obj = target
         if hand == "auto":  # the hand that will hold it is known now, for the stage's record
             hand = stage.runtime.rig(name).side_of(stage.runtime.target(target).positions([activation.start], None)[0])
+        busy = [h.obj for h in stage.held(name) if h.hand == hand]
+        if busy:
+            stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot pick up {target!r}: the "
+                                                           f"{hand} hand holds {busy[-1]!r} (put it down first)")
+            return None
     elif action == "put-down":
         holding = [h for h in stage.held(name) if hand == "auto" or h.hand == hand]
         if not holding:
