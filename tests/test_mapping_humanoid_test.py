@@ -196,3 +196,42 @@ def test_stubby_robot_arms_without_hands_are_arms():
     joints = map_skeleton(robot).joints
     assert [joints.get(f"{s}_{j}") for s in "lr" for j in ("shoulder", "elbow")] == [
         f"{s}_{j}" for s in "lr" for j in ("shoulder", "elbow")]
+
+
+def _mixamo_body(unknown: str) -> skeleton_variants.Variant:
+    """The canonical body in Mixamo names, its ``unknown`` limbs ("arms" or "legs") renamed into words
+    no dictionary knows (``Brachium7``, ``Crus3``...)."""
+    sk, label = _canonical()
+    v = skeleton_variants.convention(sk, None, label, "mixamo")
+    parts = skeleton_variants.LIMB_PARTS[unknown]
+    rename = {n: n for n in v.skeleton.names}
+    for i, (k, joint) in enumerate(sorted(v.mapping.items())):
+        if k[:2] in ("l_", "r_") and skeleton_variants._part(k) in parts and joint is not None:
+            rename[joint] = f"Zq{k[0].upper()}{i}"
+    return skeleton_variants._renamed(v.skeleton, None, {"mapping": v.mapping, "alternatives": {}}, rename, "unknown")
+
+
+@pytest.mark.parametrize("unknown", ["arms", "legs"])
+def test_names_mapper_maps_what_it_reads_when_a_limb_is_named_in_an_unknown_convention(unknown):
+    """Mixamo names with the arms (or legs) named in words no dictionary knows: the hierarchy shows
+    the missing pair, so the body is accepted; the named joints are mapped, the unknown limbs are left
+    unmapped with a low confidence and a reason that points at the limbs."""
+    v = _mixamo_body(unknown)
+    mapping = map_skeleton(v.skeleton, mapper="names")
+    known = "legs" if unknown == "arms" else "arms"
+    first = "hip" if known == "legs" else "shoulder"
+    for k in (f"l_{first}", f"r_{first}", "base", "skullbase"):
+        assert mapping[k] == v.mapping[k]
+    gone = "shoulder" if unknown == "arms" else "hip"
+    assert mapping[f"l_{gone}"] is None and mapping.confidence[f"l_{gone}"] < 0.5
+    assert f"the hierarchy shows {unknown}" in mapping.reasons[f"l_{gone}"]
+
+
+def test_names_mapper_reads_names_behind_a_shared_prefix():
+    """Mixamo names behind a character prefix (``Character1_LeftUpLeg``) are read."""
+    sk, label = _canonical()
+    v = skeleton_variants.convention(sk, None, label, "mixamo")
+    rename = {n: f"Character1_{n}" for n in v.skeleton.names}
+    v = skeleton_variants._renamed(v.skeleton, None, {"mapping": v.mapping, "alternatives": {}}, rename, "prefixed")
+    joints = map_skeleton(v.skeleton, mapper="names").joints
+    assert _wrong(joints, v) == []

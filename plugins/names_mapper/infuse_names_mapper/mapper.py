@@ -5,7 +5,8 @@ the one that names the most canonical joints wins; its torso and neck joints are
 the labelling rule (chest = spine3, one neck joint = spine4...) using their order in the hierarchy.
 A VRM file's own humanoid map (``Asset.humanoid``, given as ``humanoid=``) is used first when present.
 The joints found must make two legs and two arms on a trunk, the legs pointing away from the head
-(:mod:`.body_check`); otherwise the skeleton is refused with the reason.
+(:mod:`.body_check`; where the names give no legs or no arms, the hierarchy and rest positions
+are asked for them); otherwise the skeleton is refused with the reason.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from infuse.canonical import ALL_NAMES
 from infuse.errors import NotHumanoidError
 from infuse.mapping import Mapping
 
-from .body_check import refusal
+from .body_check import LIMB_PARTS, limb_part, check_body
 from .conventions import CONVENTIONS, VRM, VRM0_THUMB
 
 NAME = "names"
@@ -99,6 +100,26 @@ def _assemble(hits: dict[str, list[str]], skeleton) -> dict[str, str]:
     return joints
 
 
+_PREFIX = re.compile(r"^([^_:.\- ]+[_:.\- ])(.+)$")
+_SIDE_WORDS = frozenset({"l", "r", "left", "right", "lf", "rt"})
+
+
+def name_index(names) -> dict[str, str]:
+    """Normalized name -> joint name; names also under their tail after a prefix that at least three
+    names share (``Character1_LeftUpLeg`` as ``leftupleg``), full names first."""
+    index: dict[str, str] = {}
+    for n in names:
+        index.setdefault(normalize(n), n)
+    split = [(m.group(1), m.group(2), n) for n in names if (m := _PREFIX.match(n))]
+    counts: dict[str, int] = {}
+    for prefix, _, _ in split:
+        counts[prefix] = counts.get(prefix, 0) + 1
+    for prefix, tail, n in split:
+        if counts[prefix] >= 3 and prefix[:-1].lower() not in _SIDE_WORDS:
+            index.setdefault(normalize(tail), n)
+    return index
+
+
 def _from_vrm_humanoid(humanoid, skeleton) -> dict[str, str]:
     """Canonical -> joint from a VRM humanoid map (VRM bone name -> node name)."""
     if not isinstance(humanoid, dict):
@@ -119,9 +140,7 @@ def _from_vrm_humanoid(humanoid, skeleton) -> dict[str, str]:
 
 def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, humanoid=None, **_options) -> Mapping:
     """Map ``skeleton`` by its joint names (see the module docstring)."""
-    index: dict[str, str] = {}
-    for n in skeleton.names:
-        index.setdefault(normalize(n), n)
+    index = name_index(skeleton.names)
     joints = _from_vrm_humanoid(humanoid, skeleton)
     source = "the file's VRM humanoid map" if joints else ""
     sources = {n: source for n in joints}
@@ -144,12 +163,21 @@ def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, humanoid=No
                     used.add(joint)
                     sources[key] = f"the {conv} naming convention"
         source = f"the {best_name} naming convention"
-    why = refusal(skeleton, joints, pose)
-    if why is not None:
-        raise NotHumanoidError(file, why)
+    body = check_body(skeleton, joints, pose)
+    if body.why is not None:
+        raise NotHumanoidError(file, body.why)
     conf = {n: (0.95 if n in joints else 0.7) for n in ALL_NAMES}
     reasons = {n: (f"{joints[n]!r} in {sources[n]}" if n in joints else f"no joint of that name in {source}")
                for n in ALL_NAMES}
+    # limbs the names do not give but the geometry shows stay unmapped: a name-based mapper does not
+    # guess which joint of an unnamed chain is which; it says where they are
+    for kind, limbs in body.from_geometry.items():
+        chains = f"{skeleton.names[limbs.a[0]]}, {skeleton.names[limbs.b[0]]}"
+        for n in ALL_NAMES:
+            if n not in joints and n[:2] in ("l_", "r_") and limb_part(n) in LIMB_PARTS[kind]:
+                conf[n] = 0.3
+                reasons[n] = (f"no joint of that name in {source}; the hierarchy shows {kind} from {chains} "
+                              "(try --mapper heuristic)")
     # Hand-set entries (``fixed``) are applied by infuse.mapping.complete after every mapper.
     return Mapping.build(skeleton, joints, conf, reasons, mapper=NAME,
                          overall_confidence=0.95 if len(joints) >= 20 else 0.6)
