@@ -1,4 +1,4 @@
-"""Transition clips played whole from standing: a pack's starts and turns on the spot.
+"""Transition clips played whole: a pack's starts and turns on the spot from standing, and its stops.
 
 The pack builder recognizes what a clip does (:func:`infuse.packs.cycles.transition_kind`); an
 infused clip carries it (``BlendClip.transition``). A walk to a point that begins standing plays:
@@ -11,12 +11,17 @@ infused clip carries it (``BlendClip.transition``). A walk to a point that begin
   over, the one leaving it nearest straight ahead;
 - else nothing: the steering starts the walk from the cycles as without transitions.
 
+On its way to its last point a walk ends with a **stop** where it heads for the point, walks at
+about the stop's speed, is at the stop's gait phase where it begins and has about as far to go as
+the stop travels (:data:`STOP_BEARING`, :data:`STOP_SPEEDS`, :data:`STOP_SCALES`): the stop's root
+travel is turned and scaled so it stands exactly on the point.
+
 A clip plays with its own root motion, turned and moved as a whole (``placement``) so that it starts
 where the character stands (its root over the point the steering stands at) and faces. The steering
 takes over :data:`HANDOVER_S` before the clip's end, from the clip's state then (where its root is,
 its facing at its end, its speed at its end; the gait phase from its last strikes), and the clip
-fades into what follows over those last frames. Turns on the spot are played only if they end standing
-(slower than :data:`~.controller.STAND_FRACTION` of the slowest walk).
+fades into what follows over those last frames. Turns on the spot and stops are played only if they
+end standing (slower than :data:`~.controller.STAND_FRACTION` of the slowest walk).
 
 Core frame: metres, seconds, +Y up, +Z forward; angles radians about +Y, + turns left.
 """
