@@ -1,7 +1,8 @@
-"""What controllers keep for a character is owned by the runtime that plays it: the packs a gesture or a
-posture infuses, a gaze's turn, the face channels a face expression detects, and a clip's interpolation
-table (the clip's own). When the runtime goes, all of it goes, and no module of infuse holds more per
-character than before."""
+"""What controllers keep for a character is owned by what it serves: a gaze's turn and the face channels
+a face expression detects by the runtime that plays the character, the packs a gesture or a posture
+infuses by the character's asset (every scene playing a character made of it shares them), a clip's
+interpolation table by the clip. When the runtime and the character go, all of it goes, and no module of
+infuse holds more than before."""
 from __future__ import annotations
 
 import gc
@@ -10,7 +11,7 @@ import weakref
 
 import numpy as np
 
-from infuse import Motion, quaternions as quat
+from infuse import Character, Motion, quaternions as quat
 from infuse.runtime import Clip, Runtime
 from infuse.runtime.clip import continuous_rotations
 from infuse_gaze import Gaze
@@ -35,12 +36,13 @@ def sway(skeleton, frames: int = 31, fps: float = 30.0) -> Motion:
     return Motion(skeleton, fps, rotations, np.zeros((frames, 3)), name="sway")
 
 
-def play(names: tuple[str, ...]) -> Runtime:
-    """A runtime at 24 fps (the 30 fps clips are interpolated) whose characters sway in a clip of their
-    own, gesture, stand in a posture, look at a point and smile, for SECONDS."""
+def play(names: tuple[str, ...], characters: dict | None = None) -> Runtime:
+    """A runtime at 24 fps (the 30 fps clips are interpolated) whose characters (new ones, or those of
+    ``characters`` by name) sway in a clip of their own, gesture, stand in a posture, look at a point
+    and smile, for SECONDS."""
     rt = Runtime(fps=24.0)
     for k, name in enumerate(names):
-        character = synthetic_character(name, morphs=SMILE)
+        character = (characters or {}).get(name) or synthetic_character(name, morphs=SMILE)
         rt.add_character(character, position=(1.5 * k, 0.0, 0.0))
         rt.activate(name, Clip(sway(character.skeleton), loop=True), 0.0)
         rt.activate(name, Posture("hands_on_hips"), 0.0)
@@ -55,10 +57,11 @@ def test_a_runtime_s_caches_go_when_it_goes():
     rt = play(("ann",))
     assert rt.motion("ann").morph_weights.max() > 0.5  # it smiled
     rig = rt.rig("ann")
-    states = [rig.state_of(kind) for kind in (GestureSpaces, PostureSpaces, GazeState, FaceChannelsByMap)]
+    states = [rig.asset_state_of(GestureSpaces), rig.asset_state_of(PostureSpaces), rig.state_of(GazeState),
+              rig.state_of(FaceChannelsByMap)]
     assert all(len(s) for s in states[:2]) and len(states[3]) == 1  # filled while playing, not made here
     assert np.any(states[2].groups != 0.0)
-    packs = [*states[0].values(), *states[1].values()]
+    packs = [space for _, space in (*states[0].values(), *states[1].values())]
     clip = next(a.controller.motion for a in rt.activities if isinstance(a.controller, Clip))
     table = continuous_rotations(clip)
     refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[3].values(), clip, table)]
@@ -89,16 +92,27 @@ def test_no_module_holds_more_per_character():
     # tables) and what depends on how many play together, not on which (a gaze smoothing filter).
     play(("w1", "w2", "w3"))
     gc.collect()
-    containers = module_containers()
-    before = sizes(containers)
+    before = sizes(module_containers())
     rt = play(("ann", "bob", "cid"))
-    # While the characters play, only weakly keyed maps hold more: what lives (their clips' tables,
-    # their skeletons' chain plans).
-    grown = {k for k, n in sizes(module_containers()).items() if n != before.get(k)}
-    assert grown and all(isinstance(containers[k], weakref.WeakKeyDictionary) for k in grown), grown
+    # While the characters play, what is kept for them (their clips' tables, their skeletons' chain
+    # plans, their infused packs) is held; once they and their runtime go, nothing is.
+    assert {k for k, n in sizes(module_containers()).items() if n != before.get(k)}
     del rt
     gc.collect()
     assert {k: (before.get(k), n) for k, n in sizes(module_containers()).items() if n != before.get(k)} == {}
+
+
+def test_runtimes_playing_characters_of_one_asset_share_its_infused_packs():
+    ann = synthetic_character("ann", morphs=SMILE)
+    again = Character("ann", ann.asset, mapping=ann.mapping)  # as a scene wraps the character it is given
+    first, second = play(("ann",), {"ann": ann}), play(("ann",), {"ann": again})
+    spaces = [rt.rig("ann").asset_state_of(GestureSpaces)["gestures"][1] for rt in (first, second)]
+    assert spaces[0] is spaces[1]
+    assert first.rig("ann").state_of(GazeState) is not second.rig("ann").state_of(GazeState)
+    kept = weakref.ref(spaces[0])
+    del first, second, spaces, ann, again
+    gc.collect()
+    assert kept() is None
 
 
 def test_face_channels_tell_map_documents_apart_by_their_content():

@@ -14,6 +14,7 @@ every bone along one axis at rest, and then the first frame of the character's f
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, TypeVar
@@ -30,6 +31,9 @@ _UP_JOINTS = ("skullbase", "spine5", "spine4", "spine3", "spine2")
 _SIDE_PAIRS = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"), ("l_acromioclavicular", "r_acromioclavicular"),
                ("eyeball_left", "eyeball_right"), ("l_knee", "r_knee"))
 State = TypeVar("State")
+#: What controllers keep for a character's Asset across runtimes, by the asset's id(): an entry goes
+#: when its asset is collected (a finalizer), before another object can take that id.
+_ASSET_STATES: dict[int, dict[type, Any]] = {}
 
 
 def body_frame(positions: np.ndarray, joints: dict[str, int]) -> tuple[np.ndarray, str | None]:
@@ -90,7 +94,8 @@ class Rig:
     - ``morph_targets``: the character's morph target names, the columns of its face channel state;
     - ``notes``: what had to be assumed about the character; ``state``: what controllers keep per
       character between blocks (one look at a time, the packs infused on it), by key: a controller's
-      own class of state (:meth:`state_of`). It lives as long as the rig, so it goes with its runtime.
+      own class of state (:meth:`state_of`). It lives as long as the rig, so it goes with its runtime;
+      what is shared by every runtime playing a character made of the same asset is :meth:`asset_state_of`'s.
     """
 
     name: str
@@ -124,6 +129,22 @@ class Rig:
         value = self.state.get(kind)
         if value is None:
             value = self.state[kind] = kind()
+        return value
+
+    def asset_state_of(self, kind: type[State]) -> State:
+        """The state of class ``kind`` kept for the character's :class:`~infuse.Asset` (its skeleton and
+        mesh), shared by every runtime and scene that plays a character made of it: what is worth working
+        out once per asset (a pack infused on it). Made by ``kind()`` the first time; it goes when the
+        asset goes. What it holds must not refer back to the asset, or it would keep it alive."""
+        asset = self.character.asset
+        key = id(asset)
+        states = _ASSET_STATES.get(key)
+        if states is None:
+            states = _ASSET_STATES[key] = {}
+            weakref.finalize(asset, _ASSET_STATES.pop, key, None)
+        value = states.get(kind)
+        if value is None:
+            value = states[kind] = kind()
         return value
 
     def place(self, rotations: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -28,23 +28,25 @@ _LEGS = ("hip", "knee", "ankle", "forefoot", "toe")
 
 
 class GestureSpaces(dict):
-    """The gesture packs infused on one runtime character: pack name -> its
-    :class:`~infuse.packs.BlendSpace`. Kept in the character's rig (:meth:`~infuse.runtime.rig.Rig.state_of`),
-    so it goes with its runtime."""
+    """The gesture packs infused on a character's asset: pack name -> the mapping it was infused through and its
+    :class:`~infuse.packs.BlendSpace`. Kept for the character's asset
+    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): scenes playing it share it, and it goes with it."""
 
 
 def gesture_space(rig, pack: str):
     """The :class:`~infuse.packs.BlendSpace` of gesture pack ``pack`` on the rig's character (infused once per
-    runtime character)."""
+    asset and mapping)."""
     from infuse.packs import BlendSpace, infuse_character
 
     if isinstance(pack, BlendSpace):
         return pack
-    spaces = rig.state_of(GestureSpaces)
-    if str(pack) not in spaces:
+    spaces = rig.asset_state_of(GestureSpaces)
+    mapping, space = spaces.get(str(pack), (None, None))
+    if space is None or mapping is not rig.mapping:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        spaces[str(pack)] = next(iter(infusion.spaces.values()))
-    return spaces[str(pack)]
+        space = next(iter(infusion.spaces.values()))
+        spaces[str(pack)] = (rig.mapping, space)
+    return space
 
 
 @lru_cache(maxsize=256)
