@@ -311,6 +311,7 @@ class Locomotion(Controller):
                     st.clear()
                     st.update(before)
                     part = self._steered(b, st, times[i:i + f], dt, job.report) if f else None
+                    st.pop("trace", None)
                     st["playing"] = (clip.name, float(times[i + f]), place)
                     i += f
                 else:
