@@ -49,6 +49,8 @@ CHEST_ANGLE_DEG = 0.5
 SHIFT_M = 0.002
 #: Smallest change of a morph weight counted as movement.
 WEIGHT = 0.05
+#: Smallest RMS (16-bit samples) of speech counted as heard.
+AUDIO_RMS = 100.0
 #: Seconds after a behaviour's end still counted as its timing (a blend out).
 AFTER_S = 0.6
 #: Seconds a scene runs past the end of its block.
@@ -84,7 +86,8 @@ class Row:
     measured one has id ``x``), the channels it should move, the SmartBody dialect or BML 1.0, and BML
     played before it (a grab before a put-down) at 0.3 s; the block starts at :attr:`at_s`, and the scene
     runs :attr:`seconds` from then at least (what persists shows over them). Its timing is the measured
-    behaviour's, or the whole block's (:attr:`whole_block`: what a generator adds around it).
+    behaviour's (:attr:`timed_by`: another behaviour of the block, which it delays), or the whole block's
+    (:attr:`whole_block`: what a generator adds around it).
     :attr:`block_attributes` go on the ``<bml>`` element (``infuse:`` ones)."""
 
     name: str
@@ -96,6 +99,7 @@ class Row:
     at_s: float = 0.5
     seconds: float = 5.0
     whole_block: bool = False
+    timed_by: str = "x"
     block_attributes: str = ""
 
 
@@ -115,7 +119,8 @@ ROWS = (
     Row("gesture", "BML 1.0", '<gesture id="x" lexeme="BEAT" mode="RIGHT_HAND"/>', ("arms",)),
     Row("pointing", "BML 1.0", '<pointing id="x" target="lamp"/>', ("arms",)),
     Row("locomotion", "BML 1.0", '<locomotion id="x" target="0 1.5" manner="walk"/>', ("path",)),
-    Row("wait", "BML 1.0", '<wait id="x" max-wait="1.0"/><head id="n" lexeme="NOD" start="x:end"/>', ("delay",)),
+    Row("wait", "BML 1.0", '<wait id="x" max-wait="1.0"/><head id="n" lexeme="NOD" start="x:end"/>', ("delay",),
+        timed_by="n"),
     Row("event", "BML 1.0", '<event id="x" message="hello" start="0.5"/>', ("feedback",)),
     Row("face (SmartBody)", "SmartBody", '<face id="x" type="facs" au="1" side="BOTH" amount="1" end="1.5"/>',
         ("face",), smartbody=True),
@@ -211,7 +216,7 @@ class Cell:
 
 
 def play(row: Row, key: str, cache: str):
-    """The scene of ``row`` on ``key`` evaluated to its end, and the warnings about the measured behaviour."""
+    """The scene of ``row`` on ``key``, evaluated to its end."""
     scene = scene_for(key, cache)
     if row.before:
         scene.bml("c", document(row, "before", row.before), at=0.3)
@@ -226,7 +231,7 @@ def measure(row: Row, key: str, cache: str, baselines: dict) -> Cell:
     warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback" and e.id in ("b:x", "b", "c")]
     warning = "; ".join(dict.fromkeys(w.description for w in warnings))
     record = scene.scheduler.blocks["b"]
-    activation = next((a for a in record.activations if a.behaviour == ("n" if row.name == "wait" else "x")), None)
+    activation = next((a for a in record.activations if a.behaviour == row.timed_by), None)
     if activation is None:
         return Cell(row.name, key, "warns" if warning else "fails", "" if warning else "not scheduled, no warning", warning)
     motion = scene.motion("c")
@@ -291,7 +296,7 @@ def channel_joints(key: str, channel: str) -> np.ndarray:
         return np.array([j for j, n in names.items() if n[:2] in ("l_", "r_") and n.split("_", 1)[1] not in _LEGS
                          ], dtype=np.int64)
     if channel == "chest":
-        return np.array([j for j, n in names.items() if n.startswith("spine") or n.endswith("clavicle")], dtype=np.int64)
+        return np.array([j for j, n in names.items() if n.startswith("spine") or "clavicular" in n], dtype=np.int64)
     return np.array([j for j, n in names.items() if n], dtype=np.int64)  # body: every mapped joint
 
 
@@ -301,10 +306,12 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _morphs(channel: str, names) -> np.ndarray:
-    """Columns of the morph weights ``channel`` watches (the eyelids: blink shapes; the mouth and face: all)."""
-    if channel == "eyelids":
-        return np.array([i for i, n in enumerate(names) if "blink" in n.lower()], dtype=np.int64)
-    if channel in ("face", "mouth", "eyes"):
+    """Columns of the morph weights ``channel`` watches (the eyelids: blink shapes; the eyes: look shapes;
+    the mouth and face: all)."""
+    if channel in ("eyelids", "eyes"):
+        word = "blink" if channel == "eyelids" else "look"
+        return np.array([i for i, n in enumerate(names) if word in n.lower()], dtype=np.int64)
+    if channel in ("face", "mouth"):
         return np.arange(len(names))
     return np.zeros(0, dtype=np.int64)
 
@@ -320,7 +327,7 @@ def _channel(channel, key, scene, motion, base, start, end, activation) -> tuple
         samples, rate = track
         span = samples[int(activation.start * rate):int(activation.end * rate)].astype(np.float64)
         rms = float(np.sqrt(np.mean(span ** 2))) if span.size else 0.0
-        return rms > 100.0, f"audio RMS {rms:.0f}"
+        return rms > AUDIO_RMS, f"audio RMS {rms:.0f}"
     if channel == "feedback":
         got = [e for e in scene.feedback.log if e.kind == "syncPointProgress" and (e.block, e.behaviour) == ("b", "x")]
         if not got:
@@ -333,7 +340,7 @@ def _channel(channel, key, scene, motion, base, start, end, activation) -> tuple
         over = np.nonzero(diff.max(axis=1) > ANGLE_DEG)[0]
         if not over.size:
             return False, ""
-        wait_end = scene.scheduler.blocks["b"].activations[0].end
+        wait_end = next(a.end for a in scene.scheduler.blocks["b"].activations if a.behaviour == "x")
         return over[0] >= int(round(wait_end * FPS)) - 1, f"the nod starts at {over[0] / FPS:.2f} s, the wait ends at {wait_end:.2f} s"
     if channel == "object":
         track = scene.object_track("cup")
