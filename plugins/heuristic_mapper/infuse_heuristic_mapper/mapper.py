@@ -160,7 +160,7 @@ def _assign(view: SkeletonView, plan, frames, used_pose: str) -> _Assignment:
     geometry of the limb pairs), the cost of placing every limb joint (proportions, bends,
     skipped joints, names) and what the names of all mapped joints say about their slots."""
     result = _Result(view)
-    limbs, trunk = _map_body(view, plan, result, frames, used_pose)
+    limbs, trunk, sides = _map_body(view, plan, result, frames, used_pose)
     names = 0.0
     for name, j in result.joint.items():
         expected = EXPECTED_ROLES.get(name)
@@ -168,7 +168,7 @@ def _assign(view: SkeletonView, plan, frames, used_pose: str) -> _Assignment:
         if expected is not None and roles:
             names += NAME_AGREES if roles & expected else NAME_CONTRARY
     return _Assignment(plan, result, {"plan": -PLAN_WEIGHT * plan.score, "limbs": LIMB_WEIGHT * limbs,
-                                      "trunk": trunk, "names": names})
+                                      "trunk": trunk, "names": names, "sides": sides})
 
 
 def _cap_by_rival(best: _Assignment, rival: _Assignment) -> None:
@@ -259,8 +259,9 @@ def _named_eyes(view: SkeletonView, candidates) -> dict[str, int]:
 
 
 # -- body ------------------------------------------------------------------------------------------------
-def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> tuple[float, float]:
-    """Fill ``result`` for ``plan``; returns the costs of placing the limb joints and the trunk."""
+def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str) -> tuple[float, float, float]:
+    """Fill ``result`` for ``plan``; returns the costs of placing the limb joints, the trunk and the
+    sides."""
     legs: LimbPair = plan.legs
     arms: LimbPair = plan.arms
     up_guess = None
@@ -301,7 +302,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
         result.put("skullbase", None, 0.5, "no head joint above the neck")
 
     # sides
-    side_of, side_why, side_conf, left = _sides(view, base, up, legs, arms, leg_res, arm_res, frames)
+    side_of, side_why, side_conf, left, side_cost = _sides(view, base, up, legs, arms, leg_res, arm_res, frames)
 
     for root, r in leg_res.items():
         s = side_of[root]
@@ -313,7 +314,7 @@ def _map_body(view: SkeletonView, plan, result: _Result, frames, used_pose: str)
     if head >= 0:
         _put_eyes(view, result, head, up, left)
     limbs = sum(r.cost for r in leg_res.values()) + sum(r.cost for r in arm_res.values())
-    return limbs, NO_HEAD * (head < 0) + NO_TORSO * (not torso)
+    return limbs, NO_HEAD * (head < 0) + NO_TORSO * (not torso), side_cost
 
 
 def _relocate_end(view: SkeletonView, r: LimbResult, end: str, middle: str, body_chain: set[int]) -> None:
@@ -513,8 +514,16 @@ def _put_neck(result: _Result, neck: list[int]) -> None:
         result.put("spine5", None, SETTLED, "a single neck joint is spine4")
 
 
+#: The side evidence in the assignment's cost: the sides given cost these weights times the votes
+#: against them (each -1..1). The geometry outweighs the names from a vote of 0.25 on (names written
+#: from the viewer's side are overruled), the names decide when the body does not show its front.
+GEO_SIDE = 4.0
+NAME_SIDE = 1.0
+
+
 def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
-    """Root of each limb -> "l"/"r", the reason and the confidence."""
+    """(root of each limb -> "l"/"r", the reason, the confidence, the body's left (3,), the side
+    cost): the sides that cost least given the geometry's and the names' votes."""
     P = view.P
     pairs = [legs, arms]
     lateral = np.zeros(3)
@@ -541,19 +550,24 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
         if abs(geo + thumbs) > abs(geo):
             geo, geo_why = float(np.clip(geo + thumbs, -1, 1)), "left = up x forward, forward from the thumbs"
     names = _name_votes(view, pairs, leg_res, arm_res, legs)
-    if abs(geo) >= 0.3:
-        a_left, why, conf = geo > 0, geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
-        if names and (names > 0) == a_left:
+    # the two ways to give the sides, each costed by the evidence against it; the cheaper one is part
+    # of the assignment, and its cost enters the assignment's cost
+    cost = {a_left: -(GEO_SIDE * geo + NAME_SIDE * names) * (1.0 if a_left else -1.0) for a_left in (True, False)}
+    a_left = cost[True] <= cost[False]
+    sign = 1.0 if a_left else -1.0
+    if geo * sign >= 0.3:
+        why, conf = geo_why, 0.75 + 0.2 * min(1.0, abs(geo))
+        if names * sign > 0:
             conf = min(0.99, conf + 0.05)
         elif names:
             why += "; the side names say the opposite (mirrored names): the geometry decides"
             conf = min(conf, 0.85)
-    elif names:
-        a_left, why, conf = names > 0, "left/right from the names (the feet do not show the front)", 0.7
-    elif abs(geo) > 0.05:
-        a_left, why, conf = geo > 0, geo_why + " (weak)", 0.55
+    elif names * sign > 0:
+        why, conf = "left/right from the names (the feet do not show the front)", 0.7
+    elif geo * sign > 0.05:
+        why, conf = geo_why + " (weak)", 0.55
     else:
-        a_left, why, conf = True, "left/right undecidable (no front, no side names): a guess", 0.3
+        why, conf = "left/right undecidable (no front, no side names): a guess", 0.3
     left = lateral if a_left else -lateral
     side_of = {}
     for p in pairs:
@@ -565,7 +579,7 @@ def _sides(view, base, up, legs, arms, leg_res, arm_res, frames):
             da = np.dot(P[res[p.a].slots[key]], left)
             db = np.dot(P[res[p.b].slots[key]], left)
             side_of[p.a], side_of[p.b] = ("l", "r") if da >= db else ("r", "l")
-    return side_of, why, conf, left
+    return side_of, why, conf, left, cost[a_left]
 
 
 def _thumb_votes(view: SkeletonView, forward: np.ndarray, arm_res: dict) -> float:
@@ -631,14 +645,17 @@ def _front_votes(view, forward, up, legs, leg_res, frames, base, top) -> tuple[f
 
 
 def _name_votes(view, pairs, leg_res, arm_res, legs) -> float:
-    """> 0 when the names put the "a" members on the left, < 0 right, 0 silent."""
-    total = 0
+    """-1..1: the share of the side names on the limbs' first joints that put the "a" members on the
+    left, less the share that put them on the right (0 when no name tells a side)."""
+    total = count = 0
     for p in pairs:
         res = leg_res if p is legs else arm_res
         for root, sign in ((p.a, 1), (p.b, -1)):
             for j in res[root].chain[:4]:
-                total += sign * view.info[j].side
-    return float(np.sign(total))
+                side = view.info[j].side
+                total += sign * side
+                count += side != 0
+    return total / count if count else 0.0
 
 
 def _put_leg(view, result, s, r: LimbResult, side_why, side_conf, up, base) -> None:
