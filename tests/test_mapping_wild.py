@@ -14,6 +14,7 @@ from infuse.canonical import BODY_NAMES, CANONICAL_NAMES
 from infuse.cli import main as cli_main
 from infuse.mapping import map_skeleton
 
+import skeleton_variants
 from wild_data import require_wild, wild_file, wild_labels
 
 
@@ -24,12 +25,17 @@ def _wrong(joints: dict, label: dict, names=CANONICAL_NAMES) -> list:
 
 
 @pytest.fixture(scope="module")
-def wild():
-    """(label, mapping or None, refusal or None) for every labelled wild rig."""
+def wild_assets():
+    """(label, asset) for every labelled wild rig, read once."""
     require_wild()
+    return [(label, infuse.load(wild_file(label["file"]))) for label in wild_labels()]
+
+
+@pytest.fixture(scope="module")
+def wild(wild_assets):
+    """(label, mapping or None, refusal or None) for every labelled wild rig."""
     out = []
-    for label in wild_labels():
-        asset = infuse.load(wild_file(label["file"]))
+    for label, asset in wild_assets:
         try:
             out.append((label, map_skeleton(asset), None))
         except infuse.NotHumanoidError as exc:
@@ -100,3 +106,27 @@ def test_cli_refuses_non_humanoids_with_exit_3(kind, capsys):
     err = capsys.readouterr().err
     assert code == 3
     assert "not a humanoid" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("mapper", ["heuristic", "names"])
+def test_wild_bodies_without_legs_or_arms_are_refused(mapper, wild_assets):
+    """Each wild humanoid without its legs, or without its arms from the upper arm down (what is left
+    of a shoulder girdle, breast, skirt, hair, control and landmark chains stay), is refused by both
+    mappers with a reason; the names mapper also maps the wild humanoids whose limbs its dictionaries
+    do not know when the hierarchy shows them."""
+    mapped = []
+    for label, asset in wild_assets:
+        if not label["humanoid"]:
+            continue
+        variants = skeleton_variants.non_humanoid_variants(asset.skeleton, None, label)
+        assert variants, label["file"]
+        for v in variants:
+            with pytest.raises(infuse.NotHumanoidError) as err:
+                map_skeleton(v.skeleton, mapper=mapper)
+            assert err.value.reason, (label["file"], v.name)
+        try:
+            map_skeleton(asset, mapper=mapper)
+            mapped.append(label["file"])
+        except infuse.NotHumanoidError:
+            pass
+    assert len(mapped) >= 22, mapped
