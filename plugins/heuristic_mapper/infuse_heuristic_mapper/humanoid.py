@@ -27,10 +27,11 @@ UPRIGHT_SHOULDERS = 1.35
 #: the path between the legs' and the arms' joints at most this many times as long as the longer
 #: limb (a person's trunk is shorter than a leg; the arms and shoulders between two hands are not)
 TRUNK_OVER_LIMB = 3.0
-#: an arm reaches at least this many leg lengths past its first joint (a person's upper arm and
-#: forearm about 0.6, a stubby robot arm without a forearm joint 0.19; what is left of a shoulder
-#: girdle when the arms are gone 0.06-0.13)
-ARM_REACH_OVER_LEG = 0.155
+#: an arm reaches at least this share of the body below the shoulders (the legs' length plus the
+#: trunk's path between the legs' and the arms' joints) past its first joint: a person's upper arm
+#: and forearm about 0.35, short cartoon arms 0.16, a stubby robot arm without a forearm joint 0.17;
+#: what is left of a shoulder girdle when the arms are gone 0.05-0.1
+ARM_REACH_OVER_BODY = 0.12
 #: flags that say a joint is no arm joint (a control, a landmark or helper, cloth or hair)
 NOT_ARM_FLAGS = ("control", "helper", "secondary", "prop")
 
@@ -90,15 +91,16 @@ def _named_otherwise(view: SkeletonView, pair: LimbPair, own: frozenset[str]) ->
 def _no_arms(view: SkeletonView, plan: BodyPlan) -> str | None:
     """Why the limbs taken as arms are no arms, or ``None``. An arm reaches a hand-like end: either
     a hand where digits branch, or a reach past its first joint of an upper arm at least (relative
-    to the legs: a shoulder girdle left without its arms reaches a few centimetres); and a chain
-    whose every joint is named as a clavicle, a control, a landmark or cloth is no arm."""
+    to the legs and the trunk: a shoulder girdle left without its arms reaches a few centimetres);
+    and a chain whose every joint is named as a clavicle, a control, a landmark or cloth is no arm."""
     arms, legs = plan.arms, plan.legs
     hands = _hands_at_ends(view, arms)
-    reach = min(view.reach[arms.a], view.reach[arms.b]) / max(legs.length, 1e-9)
-    if not hands and reach < ARM_REACH_OVER_LEG:
+    trunk = _trunk_ratio(view, plan) * max(legs.length, arms.length)
+    reach = min(view.reach[arms.a], view.reach[arms.b]) / max(legs.length + trunk, 1e-9)
+    if not hands and reach < ARM_REACH_OVER_BODY:
         return (f"the limbs taken as its arms ({view.names[arms.a]}, {view.names[arms.b]}) reach only {reach:.2f} "
-                "of its leg length past their first joint, with no hand: a shoulder girdle without arms "
-                "(a humanoid has two legs and two arms on a trunk)")
+                "of its legs' and trunk's length past their first joint, with no hand: a shoulder girdle "
+                "without arms (a humanoid has two legs and two arms on a trunk)")
     for root in (arms.a, arms.b):
         chain = [j for j in view.main_chain(root, 6) if not view.info[j].flagged("end")]
         infos = [view.info[j] for j in chain]

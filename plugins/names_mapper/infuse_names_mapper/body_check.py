@@ -30,9 +30,10 @@ LIMB_PARTS = {"legs": frozenset({"hip", "knee", "ankle", "forefoot", "toe"}),
                                  "thumb", "index", "middle", "ring", "pinky"})}
 #: legs the geometry finds are at least this share of the arms' length (a cartoon frog's 0.5)
 MIN_LEGS_OVER_ARMS = 0.3
-#: arms reach a hand or at least this share of the leg length past their first joint (a shoulder girdle
-#: left without arms reaches 0.06-0.13, a stubby robot arm 0.19)
-MIN_ARM_REACH_OVER_LEGS = 0.155
+#: arms reach a hand or at least this share of the body below the shoulders (legs and trunk) past their
+#: first joint (a person's arms about 0.35, a stubby robot arm 0.17, a shoulder girdle left without
+#: arms 0.05-0.1)
+MIN_ARM_REACH_OVER_BODY = 0.12
 #: the arms hang from at least this share of the leg length above the hips
 MIN_ARMS_ABOVE_HIPS = 0.25
 #: words that say a chain is no limb: controls, cloth, hair and breasts (also in Japanese written in Latin
@@ -150,8 +151,8 @@ def _from_geometry(skeleton, positions: np.ndarray, joints: dict, named: dict, m
 def _limbs_ok(tree: Tree, P: np.ndarray, legs, arms, arm_top: np.ndarray, arm_end: np.ndarray) -> bool:
     """Legs and arms (each a :class:`~.geometry.Limbs` or ([first joints], [last joints]) of named
     limbs) make a body: the legs point away from the arms' top, the arms hang from well above the
-    hips, outside the legs, and reach a hand or at least :data:`MIN_ARM_REACH_OVER_LEGS` of the leg
-    length past their first joint; the legs have three joints at least and are not much shorter
+    hips, outside the legs, and reach a hand or at least :data:`MIN_ARM_REACH_OVER_BODY` of the legs'
+    and trunk's length past their first joint; the legs have three joints at least and are not much shorter
     than the arms."""
     leg_tops, leg_ends = _ends(legs) if isinstance(legs, Limbs) else legs
     hips = P[leg_tops].mean(axis=0)
@@ -168,7 +169,7 @@ def _limbs_ok(tree: Tree, P: np.ndarray, legs, arms, arm_top: np.ndarray, arm_en
             return False
         hands = all(any(len(tree.children[j]) >= 3 for j in chain) for chain in (arms.a, arms.b))
         reach = min(tree.reach[arms.a[0]], tree.reach[arms.b[0]])
-        if not hands and reach < MIN_ARM_REACH_OVER_LEGS * leg_length:
+        if not hands and reach < MIN_ARM_REACH_OVER_BODY * (leg_length + float(np.linalg.norm(arm_top - hips))):
             return False
     return leg_length >= MIN_LEGS_OVER_ARMS * float(np.linalg.norm(arm_end - arm_top))
 
