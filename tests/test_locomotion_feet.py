@@ -85,3 +85,37 @@ def test_a_foot_whose_contact_was_not_found_steps_half_a_cycle_after_the_other()
     clip.contacts = np.zeros_like(contacts)
     clip.phases = np.zeros_like(clip.phases)
     assert phase_keys.foot_events(clip) is None
+
+
+def rooted_away(asset, offset) -> infuse.Asset:
+    """``asset`` with a joint ``Root`` added above its joint 0 at the origin, the old joint 0 placed
+    ``offset`` (3,) metres from it as its child (as an OptiTrack Motive export has its hips 0.85 m
+    from its root); no motions."""
+    import dataclasses
+
+    from infuse.skeleton import Skeleton
+
+    sk = asset.skeleton
+    translations = np.concatenate(([[0.0, 0.0, 0.0]], sk.rest_translations))
+    translations[1] += offset
+    skeleton = Skeleton(("Root",) + sk.names, np.concatenate(([-1], np.where(sk.parents < 0, 0, sk.parents + 1))),
+                        translations, np.concatenate(([[0.0, 0.0, 0.0, 1.0]], sk.rest_rotations)),
+                        sk.end_site_parents + 1, sk.end_site_offsets)
+    return dataclasses.replace(asset, skeleton=skeleton, motions={}, path=None)
+
+
+def test_a_walk_reaches_its_target_on_a_rig_whose_root_sits_away_from_the_hips(xbot, tmp_path):
+    """X Bot with a root joint 0.85 m beside its hips (Motive's offset) walks to a point 4 m away at 90
+    degrees to its left as X Bot does: the clips are turned and placed about the pelvis, not joint 0
+    (turned about joint 0, the hips swung by the offset turned with the walk: a 0.85 m miss)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from benchmarks.wild_pipeline import pack_row
+
+    variant = tmp_path / "xbot_rooted_away.bvh"  # a BVH keeps a joint no mesh is bound to
+    infuse.save(rooted_away(xbot, np.array([-0.45, -0.1, -0.72])), variant)
+    row = pack_row(str(variant), tmp_path / "infusions")
+    assert row.finite and "locomotion-male" in row.packs, row.refused
+    assert row.miss_m < 0.1, row.miss_m

@@ -114,10 +114,11 @@ def clip_path(params: dict, t: np.ndarray) -> np.ndarray:
     return np.stack((r * (math.cos(a) - np.cos(a + w * t)), 0 * t, r * (np.sin(a + w * t) - math.sin(a))), axis=-1)
 
 
-def canonical_clip(clip):
+def canonical_clip(clip, pelvis: int = 0):
     """The clip with its facing and its travel taken out: joint 0 turned by minus the clip's linear
     heading, the mover's translation made relative to the clip's path, in the clip's facing frame.
-    Returns (motion, mover joint)."""
+    The path is the ``pelvis`` joint's (as the clip's parameters are measured), so it starts on the
+    pelvis's ground point at the origin wherever joint 0 sits. Returns (motion, mover joint)."""
     m = clip.motion
     t = np.arange(m.num_frames) / m.fps
     p = clip.parameters
@@ -129,7 +130,9 @@ def canonical_clip(clip):
         if moving.size:
             mover, pos = int(moving[0]), m.joint_translations[:, moving[0]]
     path = clip_path(p, t)
-    start = pos[0] * np.array([1.0, 0.0, 1.0])
+    _, first = chain_fk(m.skeleton, m.local_rotations[:1], m.root_translations[:1],
+                        None if m.joint_translations is None else m.joint_translations[:1], [pelvis, mover])
+    start = (pos[0] + first[0, 0] - first[0, 1]) * np.array([1.0, 0.0, 1.0])  # the pelvis's ground point
     offset = quat.rotate(undo, pos - start - path)
     rot = np.array(m.local_rotations)
     rot[:, 0] = quat.multiply(undo, rot[:, 0])
@@ -268,12 +271,13 @@ class Locomotion(Controller):
             report("no mapped hips, knees and ankles: feet are not pinned")
         if not clips:
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
-        key = (id(space), id(rig.skeleton), tuple(legs))
+        pelvis = rig.joint("base") or 0
+        key = (id(space), id(rig.skeleton), tuple(legs), pelvis)
         cached = _BINDINGS.get(key)
         if cached is None or cached[0] is not space or cached[1] is not rig.skeleton:
             if len(_BINDINGS) > 32:
                 _BINDINGS.clear()
-            cached = _BINDINGS[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs))
+            cached = _BINDINGS[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
         return dict(cached[2])
 
     def evaluate_one(self, job, block) -> None:
@@ -485,19 +489,21 @@ class Locomotion(Controller):
             resting = rest > 0.0
             contact[resting] = (0.9, 1.0)  # heel and ball: each foot pinned by its ball, its heel coming down
             support = np.maximum(support, rest[:, None])
+        # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
+        # ahead, behind or aside of their path as their gait goes): its ground point (F, 3) in the
+        # facing frame, wherever joint 0 sits, is taken out by ``settle``.
+        _, pelvis = chain_fk(b["skeleton"], rot, root, jt, [b["pelvis"]])
+        centre = pelvis[:, 0] * np.array([1.0, 0.0, 1.0]) * settle[:, None]
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
         ground = np.stack((px, np.zeros_like(px), pz), axis=-1)
         mover = b["movers"][int(np.argmax(w.sum(axis=0)))]
-        # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
-        # ahead, behind or aside of their path as their gait goes).
-        centre = np.array([[1.0, 0.0, 1.0]]) * settle[:, None]
         if mover == 0:
-            root = ground + quat.rotate(turn_q, root - root * centre)
+            root = ground + quat.rotate(turn_q, root - centre)
         else:
-            jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - jt[:, mover] * centre)
+            jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - centre)
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
         return rot, root, jt, contact, forward, spun
@@ -767,11 +773,11 @@ class Locomotion(Controller):
                        end_rotation=feet_rot, chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
 
 
-def _prepare(space, clips, sk, legs) -> dict:
+def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
     """What walking needs of a pack's locomotion ``clips`` on skeleton ``sk`` with ``legs`` ((hip, knee,
-    ankle, ball) joints): the canonical clips, their mean poses, foot events and the legs' stances. The
-    same for every walk of a character with that pack, so :meth:`Locomotion.bind` keeps it."""
-    prepared = [canonical_clip(c) for c in clips]
+    ankle, ball) joints) and its ``pelvis`` joint: the canonical clips, their mean poses, foot events and
+    the legs' stances. The same for every walk of a character with that pack, so :meth:`Locomotion.bind` keeps it."""
+    prepared = [canonical_clip(c, pelvis) for c in clips]
     p = lambda k: np.array([c.parameters[k] for c in clips])  # noqa: E731
     idle = np.array([c.role == "idle" for c in clips])
     speeds = np.hypot(p("forward_speed"), p("lateral_speed"))
@@ -842,7 +848,7 @@ def _prepare(space, clips, sk, legs) -> dict:
         played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
     body = np.nonzero(limbs == 0)[0]
     out = {"space": space, "played": played, "played_facing": played_facing, "played_phases": played_phases,
-           "stops": transitions.stops(played), "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "skeleton": sk, "legs": legs,
+           "stops": transitions.stops(played), "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "pelvis": pelvis, "skeleton": sk, "legs": legs,
            "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
            "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
            "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
