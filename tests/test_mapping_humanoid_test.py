@@ -127,12 +127,19 @@ def _armless_with_girdle() -> skeleton_variants.Variant:
     return skeleton_variants.removed(sk, None, label, "arms")
 
 
-@pytest.mark.parametrize("names", ["own", "meaningless"])
+@pytest.mark.parametrize("names", ["own", "meaningless", "landmark_leaves"])
 def test_a_shoulder_girdle_without_arms_is_no_pair_of_arms(names):
     """Two clavicle joints per side left without arms are refused as arms by their short reach
-    (geometry alone, with meaningless names) and the reason says so."""
+    (geometry alone, with meaningless names; also when each carries four landmark leaves, which are
+    no digits) and the reason says so."""
     v = _armless_with_girdle()
     sk = v.skeleton
+    if names == "landmark_leaves":
+        for side, sign in (("l", 1.0), ("r", -1.0)):
+            end = sk.rest_global_positions[sk.index[f"{side}_acromioclavicular"]]
+            sk = _with_chains(sk, f"{side}_acromioclavicular",
+                              {f"{side}_mark{k}": (end + [0.02 * sign, 0.01 * k - 0.015, 0.0])[None] for k in range(4)})
+        sk = skeleton_variants.meaningless(sk, None, {"mapping": {}, "alternatives": {}}).skeleton
     if names == "meaningless":
         sk = skeleton_variants.meaningless(sk, None, {"mapping": {}, "alternatives": {}}).skeleton
     stubs = [n for n in v.skeleton.names if n.endswith("clavicular")]

@@ -114,9 +114,10 @@ def _no_arms(view: SkeletonView, plan: BodyPlan) -> str | None:
 
 
 def _hands_at_ends(view: SkeletonView, arms: LimbPair) -> bool:
-    """Both limbs of the pair branch into three or more digits somewhere along their chains."""
-    kids, _ = view.digit_counts()
-    return all(any(kids[j] >= 3 for j in view.main_chain(root, 8)) for root in (arms.a, arms.b))
+    """Both limbs of the pair branch into three or more jointed digits (chains, not the landmark or
+    sensor leaves a shoulder may carry) past their first joint."""
+    _, digits = view.digit_counts()
+    return all(any(digits[j] >= 3 for j in view.main_chain(root, 8)[1:]) for root in (arms.a, arms.b))
 
 
 def _trunk_ratio(view: SkeletonView, plan: BodyPlan) -> float:
