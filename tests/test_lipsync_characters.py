@@ -255,3 +255,29 @@ def test_lipsync_plays_in_the_controller_runtime(rpm, utterance):
     for target, weights in zip(played.morph_names, played.morph_weights.T):
         expected = np.interp(times[inside], result.times, result.morph_weights[target])
         np.testing.assert_allclose(weights[inside], expected, atol=1e-9)
+
+
+def test_one_speech_on_two_characters_drives_each_own_face(rpm, utterance):
+    """A speech controller bound to a character with visemes and to one without face channels: the first
+    speaks with its own lip sync (whatever is bound after it), the second without moving, reported."""
+    from infuse.runtime import Runtime
+    from infuse_lipsync.controllers import Speech
+
+    from runtime_characters import synthetic_character
+
+    rt = Runtime(fps=30.0, report=lambda character, message: reports.append((character, message)))
+    reports: list = []
+    rt.add_character(rpm, "ann")
+    rt.add_character(synthetic_character("mute"), "mute")  # no morph targets, no jaw
+    speech = Speech(utterance)
+    for name in ("ann", "mute"):
+        rt.activate(name, speech, 0.0)
+    rt.run(utterance.duration_s)
+    ann, mute = rt.motion("ann"), rt.motion("mute")
+    alone = lipsync(utterance, detect_face(rpm), skeleton=rpm.skeleton)
+    frames = np.arange(ann.num_frames) / 30.0
+    for name, weights in alone.morph_weights.items():
+        assert np.allclose(ann.morph_weight(name), np.interp(frames, alone.times, weights), atol=1e-9), name
+    assert mute.morph_weights.size == 0
+    assert np.allclose(mute.local_rotations, mute.skeleton.rest_rotations)
+    assert any(c == "mute" and "without moving its mouth" in m for c, m in reports)

@@ -33,10 +33,11 @@ def _interpolation(sample_times: np.ndarray, times: np.ndarray) -> tuple[np.ndar
 
 @dataclass(frozen=True, eq=False)
 class TracksBinding:
-    """Tracks bound to one character: the joints ``joints`` (R,) their rotation tracks drive, with their
-    keys ``rotations`` (K, R, 4); the morph targets ``columns`` (M,) their weight tracks drive, with
-    their keys ``morphs`` (K, M)."""
+    """Tracks bound to one character: their keys' ``times`` (K,) seconds; the joints ``joints`` (R,) their
+    rotation tracks drive, with their keys ``rotations`` (K, R, 4); the morph targets ``columns`` (M,)
+    their weight tracks drive, with their keys ``morphs`` (K, M)."""
 
+    times: np.ndarray
     joints: np.ndarray
     rotations: np.ndarray
     columns: np.ndarray
@@ -96,16 +97,17 @@ class Tracks(Controller):
             names.append(name)
         rot = np.stack([self.rotations[k] for k in keys], axis=1) if keys else np.zeros((len(self.times), 0, 4))
         morph = np.stack([self.morph_weights[n] for n in names], axis=1) if names else np.zeros((len(self.times), 0))
-        return TracksBinding(joints=np.array(joints, dtype=np.int64), rotations=rot, columns=np.array(columns, dtype=np.int64),
-                             morphs=morph)
+        return TracksBinding(times=self.times, joints=np.array(joints, dtype=np.int64), rotations=rot,
+                             columns=np.array(columns, dtype=np.int64), morphs=morph)
 
     def evaluate_one(self, job: Job, block: Block) -> None:
         b: TracksBinding = job.binding
-        i0, frac = _interpolation(self.times, job.local_times)
+        i0, frac = _interpolation(b.times, job.local_times)
+        last = len(b.times) - 1
         if b.joints.size:
-            a, c = b.rotations[i0], b.rotations[np.minimum(i0 + 1, len(self.times) - 1)]
+            a, c = b.rotations[i0], b.rotations[np.minimum(i0 + 1, last)]
             c = np.where(np.sum(a * c, axis=-1, keepdims=True) < 0.0, -c, c)
             job.pose.set_rotations(b.joints, quat.normalize(a + frac[:, None, None] * (c - a)), job.weight, job.mode)
         if b.columns.size:
-            a, c = b.morphs[i0], b.morphs[np.minimum(i0 + 1, len(self.times) - 1)]
+            a, c = b.morphs[i0], b.morphs[np.minimum(i0 + 1, last)]
             job.pose.set_morphs(b.columns, a + frac[:, None] * (c - a), job.weight, job.mode)

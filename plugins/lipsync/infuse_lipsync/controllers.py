@@ -22,7 +22,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import InfuseError, UnusableInputError, UsageError
 from infuse.runtime import Layer, Mode
-from infuse.runtime.tracks import Tracks
+from infuse.runtime.tracks import Tracks, TracksBinding
 from infuse.runtime.controller import Controller
 from infuse.speech import Utterance
 
@@ -147,26 +147,21 @@ class Speech(Tracks):
         self.settings = LipSyncSettings(fps=fps)
         self.map_file = map_file
         self.viseme_set = viseme_set
-        self.result = None
 
     def describe(self) -> str:
         return f"speech {self.utterance.text[:40]!r}"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> TracksBinding:
+        """The lip sync on this character's face channels, as keyed tracks (their own per character); none
+        when the face has no usable channels (it speaks without moving its mouth)."""
         try:
             face = face_channels(rig, self.map_file)
-            self.result = lipsync(self.utterance, face, self.viseme_set, self.settings, rig.skeleton)
+            result = lipsync(self.utterance, face, self.viseme_set, self.settings, rig.skeleton)
         except UnusableInputError as exc:
             report(f"{exc.problem}; it speaks without moving its mouth")
-            return None
-        Tracks.__init__(self, self.result.times, dict(self.result.joint_rotations), dict(self.result.morph_weights),
-                        speaks=True, name=self.name)
-        self.duration_s = float(self.utterance.duration_s)
-        return super().bind(rig, report)
-
-    def evaluate_one(self, job, block) -> None:
-        if job.binding is not None:
-            super().evaluate_one(job, block)
+            return super().bind(rig, report)  # no tracks: the speech's span alone
+        tracks = Tracks(result.times, dict(result.joint_rotations), dict(result.morph_weights), speaks=True, name=self.name)
+        return tracks.bind(rig, report)
 
 
 @dataclass(frozen=True, eq=False)
