@@ -167,7 +167,9 @@ def _limbs_ok(tree: Tree, P: np.ndarray, legs, arms, arm_top: np.ndarray, arm_en
     if isinstance(arms, Limbs):
         if any(tree.inside(arms.branch, t) for t in leg_tops):
             return False
-        hands = all(any(len(tree.children[j]) >= 3 for j in chain) for chain in (arms.a, arms.b))
+        # a hand: three jointed digits past the arm's first joint (not a shoulder's landmark leaves)
+        hands = all(any(sum(tree.next[c] >= 0 for c in tree.children[j]) >= 3 for j in chain[1:])
+                    for chain in (arms.a, arms.b))
         reach = min(tree.reach[arms.a[0]], tree.reach[arms.b[0]])
         if not hands and reach < MIN_ARM_REACH_OVER_BODY * (leg_length + float(np.linalg.norm(arm_top - hips))):
             return False
