@@ -84,8 +84,8 @@ def test_a_walk_from_standing_plays_the_start_whole_then_steers(xbot, space):
     hand = transitions.handover_s(clip, FPS)
     frames = int(round(hand * FPS))
     expected = transitions.placed_root(clip, transitions.placement(clip, 0.0, 0.0, 0.0), np.arange(frames) / FPS)
-    assert np.abs(m.root_translations[:frames, [0, 2]] - expected).max() < 1e-6  # its own root motion, placed at the origin
     pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    assert np.abs(pelvis[:frames] - expected).max() < 1e-6  # its own root motion, its pelvis placed at the origin
     assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.05
     length = np.linalg.norm(np.diff(pelvis, axis=0), axis=-1).sum()
     assert length < 1.15 * 5.0
@@ -129,6 +129,22 @@ def test_a_walk_ends_with_the_stop_clip_on_its_target(xbot, space, monkeypatch):
     pelvis = pos[:, rig.joint("base")][:, [0, 2]]
     assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.01  # its travel scaled onto the target
     assert np.ptp(pelvis[-60:], axis=0).max() < 0.01  # and standing there
+
+
+def test_transitions_are_placed_by_the_pelvis_on_a_rig_whose_root_sits_away_from_it(xbot, tmp_path):
+    """X Bot with a root joint 0.85 m from its hips: its turn, start and stop clips start where its
+    pelvis stands (placed about joint 0 they would jump by the offset) and it stands on its target."""
+    from test_locomotion_feet import rooted_away
+
+    folder = import_smartbody(corpus_file("smartbody/behaviorsets/FemaleLocomotion"), tmp_path / "female", name="sb-female")
+    build_pack(folder)
+    rooted = rooted_away(xbot, np.array([-0.45, -0.1, -0.72]))
+    space = next(iter(infuse_character(infuse.Character("r", rooted), [str(folder)]).spaces.values()))
+    target = (0.0, -4.0)
+    _, pos, rig = walk(rooted, space, target, 18.0)
+    pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    assert np.linalg.norm(np.diff(pelvis, axis=0), axis=-1).max() < 0.05  # no jump at any handover
+    assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.05
 
 
 def test_the_plan_counts_the_transitions(xbot, space):

@@ -37,7 +37,7 @@ from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
-CACHE_FORMAT = 3
+CACHE_FORMAT = 4
 #: Transitions a locomotion controller plays whole, with their own root motion.
 PLAYED_TRANSITIONS = ("start", "stop", "turn")
 #: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
@@ -67,6 +67,8 @@ class BlendClip:
     stroke: float = 0.0
     phases: np.ndarray | None = None
     transition: str | None = None
+    #: (F, 3) a transition's pelvis positions (metres, in the clip's frame): it is placed by its pelvis.
+    pelvis: np.ndarray | None = None
 
     def __post_init__(self):
         if self.phases is None:
@@ -238,13 +240,14 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
             keys = np.array([0.0, stroke, info["duration"]])
         m = Motion(sk, fps, out.local_rotations[sl], out.root_translations[sl],
                    None if out.joint_translations is None else out.joint_translations[sl], name=info["name"])
+        pelvis = None
         if transition is not None:  # played as it is: its feet pinned where they are down on this character
             found = foot_contacts(m, mapping, fk=(g_rot[sl], g_pos[sl]))
-            contacts, phases = found.foot_flags(), contact_phases(found, g_pos[sl])
+            contacts, phases, pelvis = found.foot_flags(), contact_phases(found, g_pos[sl]), root[sl]
         if pack.kind == "locomotion" and info.get("derived"):  # straight and aligned on this character too
             m, params = _restraightened(m, params, index)
         clips[info["name"]] = BlendClip(info["name"], info["role"], info.get("hand"), bool(info["loop"]), m, keys, contacts,
-                                        params, stroke, phases, transition)
+                                        params, stroke, phases, transition, pelvis)
     coords = coordinates_of(pack.kind)
     tess = {}
     for group, t in pack.tessellations().items():
@@ -343,6 +346,9 @@ def save_infusion(infusion: Infusion, key: str, cache) -> Path:
         arrays[f"{name}/bounds"] = np.cumsum([0] + [m.num_frames for m in ms])
         arrays[f"{name}/contacts"] = np.concatenate([space.clips[n].contacts for n in names]).astype(np.int8)
         arrays[f"{name}/phases"] = np.concatenate([space.clips[n].phases for n in names]).astype(np.int8)
+        for k, n in enumerate(names):
+            if space.clips[n].pelvis is not None:
+                arrays[f"{name}/pelvis{k}"] = space.clips[n].pelvis
         spaces[name] = {
             "version": space.version, "kind": space.kind,
             "clips": [{"name": c.name, "role": c.role, "hand": c.hand, "loop": c.loop, "fps": c.motion.fps,
@@ -381,9 +387,10 @@ def load_infusion(character: Character, mapping: Mapping, key: str, cache) -> di
             for k, c in enumerate(s["clips"]):
                 a, b = int(bounds[k]), int(bounds[k + 1])
                 m = Motion(sk, c["fps"], rot[a:b], roots[a:b], None if jt is None else jt[a:b], name=c["name"])
+                pelvis = z[f"{name}/pelvis{k}"] if f"{name}/pelvis{k}" in z.files else None
                 clips[c["name"]] = BlendClip(c["name"], c["role"], c["hand"], c["loop"], m, np.asarray(c["keys"]),
                                              contacts[a:b], c["parameters"], c["stroke"], phases[a:b],
-                                             c.get("transition"))
+                                             c.get("transition"), pelvis)
             tess = {g: Tessellation.from_dict(t) for g, t in s["tessellations"].items()}
             spaces[name] = BlendSpace(name, s["version"], s["kind"], clips, tess)
     return spaces

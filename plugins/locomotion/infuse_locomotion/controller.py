@@ -380,7 +380,11 @@ class Locomotion(Controller):
         q = yaw(turn)
         rot = np.array(rot)
         rot[:, 0] = quat.multiply(q, rot[:, 0])
-        root = quat.rotate(q, (root - np.array([root0[0], 0.0, root0[1]])) * np.array([scale, 1.0, scale])) + np.array([at[0], 0.0, at[1]])
+        # The pelvis's ground travel is scaled (a stop's), the root carried with the pelvis.
+        pelvis = transitions.pelvis_at(clip, local)
+        rel = root - np.array([root0[0], 0.0, root0[1]])
+        rel[:, [0, 2]] = root[:, [0, 2]] - pelvis + scale * (pelvis - root0)
+        root = quat.rotate(q, rel) + np.array([at[0], 0.0, at[1]])
         if b["table"].translations is None:
             jt = None
         elif jt is None:
@@ -428,10 +432,16 @@ class Locomotion(Controller):
         was = self._played(b, dict(), clip, place, local[mixing])
         on = transitions.handover_s(clip, fps)
         w = _ease((local[mixing] - on) / max(clip.duration - on, 1e-9))
+        # The pelvis goes straight from the clip's to what follows (joint 0 may sit away from it: mixed
+        # about joint 0, the pelvis would swing by the turn between the two).
+        _, before = chain_fk(b["skeleton"], was[0], was[1], was[2], [b["pelvis"]])
+        _, after = chain_fk(b["skeleton"], rot[mixing], root[mixing], None if jt is None else jt[mixing], [b["pelvis"]])
         rot[mixing] = quat.slerp(was[0], rot[mixing], w[:, None])
         root[mixing] = was[1] + (root[mixing] - was[1]) * w[:, None]
         if jt is not None:
             jt[mixing] = was[2] + (jt[mixing] - was[2]) * w[:, None, None]
+        _, mixed_pelvis = chain_fk(b["skeleton"], rot[mixing], root[mixing], None if jt is None else jt[mixing], [b["pelvis"]])
+        root[mixing] += before[:, 0] + (after[:, 0] - before[:, 0]) * w[:, None] - mixed_pelvis[:, 0]
         contact[mixing] = was[3] + (contact[mixing] - was[3]) * w[:, None, None]
         mixed = was[4] + (forward[mixing] - was[4]) * w[:, None]
         forward[mixing] = mixed / np.maximum(np.linalg.norm(mixed, axis=-1, keepdims=True), 1e-9)

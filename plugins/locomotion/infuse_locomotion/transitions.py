@@ -17,8 +17,8 @@ the stop travels (:data:`STOP_BEARING`, :data:`STOP_SPEEDS`, :data:`STOP_SCALES`
 travel is turned and scaled so it stands exactly on the point.
 
 A clip plays with its own root motion, turned and moved as a whole (``placement``) so that it starts
-where the character stands (its root over the point the steering stands at) and faces. The steering
-takes over :data:`HANDOVER_S` before the clip's end, from the clip's state then (where its root is,
+where the character stands (its pelvis over the point the steering stands at) and faces. The steering
+takes over :data:`HANDOVER_S` before the clip's end, from the clip's state then (where its pelvis is,
 its facing at its end, its speed at its end; the gait phase from its last strikes), and the clip
 fades into what follows over those last frames. Turns on the spot and stops are played only if they
 end standing (slower than :data:`~.controller.STAND_FRACTION` of the slowest walk).
@@ -41,7 +41,7 @@ START_ROOM_M = 0.6
 #: A stop is played from a frame heading for the path's last point within this (radians)...
 STOP_BEARING = math.radians(10.0)
 #: ...walking within this ratio of the stop's speed where it begins, and as far from the point as the
-#: stop travels to where the steering takes over within this ratio (its root's travel scaled to it).
+#: stop travels to where the steering takes over within this ratio (its ground travel scaled to it).
 STOP_SPEEDS = 1.33
 STOP_SCALES = 1.25
 
@@ -66,19 +66,19 @@ def handover_s(clip, fps: float) -> float:
 
 def placement(clip, x: float, z: float, heading: float) -> tuple[float, np.ndarray, np.ndarray, float]:
     """How ``clip`` is placed to start at ground point (``x``, ``z``) facing ``heading``: the turn
-    (radians) about +Y, the clip's root ground point (2,) (x, z) at its first frame that goes to
-    (``x``, ``z``) (2,), and the scale of its root's ground travel (1)."""
-    root0 = clip.motion.root_translations[0, [0, 2]]
-    return heading - clip.parameters["facing_start"], np.array(root0), np.array([x, z]), 1.0
+    (radians) about +Y, the clip's pelvis ground point (2,) (x, z) at its first frame that goes to
+    (``x``, ``z``) (2,), and the scale of its ground travel (1)."""
+    return heading - clip.parameters["facing_start"], pelvis_at(clip, np.zeros(1))[0], np.array([x, z]), 1.0
 
 
-def _root_at(clip, t: np.ndarray) -> np.ndarray:
-    """(T, 2) the clip's own root ground points (x, z) at its times ``t`` (T,) seconds, interpolated."""
+def pelvis_at(clip, t: np.ndarray) -> np.ndarray:
+    """(T, 2) the clip's own pelvis ground points (x, z) at its times ``t`` (T,) seconds, interpolated
+    (its root joint's where it carries no pelvis path)."""
     m = clip.motion
     f = np.clip(np.asarray(t, dtype=np.float64) * m.fps, 0.0, m.num_frames - 1)
     i = np.minimum(np.floor(f).astype(np.int64), max(m.num_frames - 2, 0))
     u = (f - i)[:, None]
-    r = m.root_translations[:, [0, 2]]
+    r = (m.root_translations if clip.pelvis is None else clip.pelvis)[:, [0, 2]]
     return r[i] * (1.0 - u) + r[np.minimum(i + 1, m.num_frames - 1)] * u
 
 
@@ -87,9 +87,9 @@ def _heading_of(v) -> float:
 
 
 def placed_root(clip, place, t: np.ndarray) -> np.ndarray:
-    """(T, 2) ground points (x, z) of the placed clip's root at its times ``t`` (T,) seconds."""
+    """(T, 2) ground points (x, z) of the placed clip's pelvis at its times ``t`` (T,) seconds."""
     turn, root0, at, scale = place
-    d = (_root_at(clip, t) - root0) * scale
+    d = (pelvis_at(clip, t) - root0) * scale
     c, s = math.cos(turn), math.sin(turn)
     return at + np.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]), axis=-1)
 
@@ -129,22 +129,22 @@ def stop_due(clips: list, st: dict, point, fps: float):
 
 
 def stop_travel(clip, fps: float) -> float:
-    """Metres the root of ``clip`` travels on the ground from its start to where the steering takes over."""
-    return float(np.hypot(*(_root_at(clip, np.array([handover_s(clip, fps)]))[0] - clip.motion.root_translations[0, [0, 2]])))
+    """Metres the pelvis of ``clip`` travels on the ground from its start to where the steering takes over."""
+    return float(np.hypot(*(pelvis_at(clip, np.array([handover_s(clip, fps)]))[0] - pelvis_at(clip, np.zeros(1))[0])))
 
 
 def stop_placement(clip, fps: float, x: float, z: float, target) -> tuple[float, np.ndarray, np.ndarray, float]:
-    """``clip`` (a stop) placed to start at (``x``, ``z``) with its root where the steering takes over
+    """``clip`` (a stop) placed to start at (``x``, ``z``) with its pelvis where the steering takes over
     at ``target`` (x, z): turned so its travel points there, its ground travel scaled to reach it."""
-    root0 = clip.motion.root_translations[0, [0, 2]]
-    travel = _root_at(clip, np.array([handover_s(clip, fps)]))[0] - root0
+    root0 = pelvis_at(clip, np.zeros(1))[0]
+    travel = pelvis_at(clip, np.array([handover_s(clip, fps)]))[0] - root0
     want = np.asarray(target, dtype=np.float64) - (x, z)
     scale = float(np.hypot(*want) / max(np.hypot(*travel), 1e-9))
     return _heading_of(want) - _heading_of(travel), np.array(root0), np.array([x, z]), scale
 
 
 def end_state(clip, place, fps: float) -> dict:
-    """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its root),
+    """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its pelvis),
     ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn)."""
     x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]))[0]
     speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0  # a turn or a stop ends standing
