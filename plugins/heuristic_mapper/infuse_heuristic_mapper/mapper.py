@@ -5,16 +5,18 @@ How the decision is made (each part is its own module):
 1. :mod:`.body` ranks body plans: every combination of a legs pair and an arms pair among the
    best mirror-image limb pairs, scored together (symmetry, lengths, names, how the pairs sit in
    the tree and in space). A rest pose that is not a standing body is replaced by the caller's pose.
-2. :mod:`.humanoid` tests the best plan and its close rivals: two legs and two arms on a trunk,
-   the legs pointing away from the head; a skeleton none of them passes is refused with the best
-   plan's reason (:class:`~infuse.errors.NotHumanoidError`).
+2. :mod:`.humanoid` tests the best plan and its close rivals: two legs and two arms (limbs that
+   reach a hand or an arm's length) on a trunk, the legs pointing away from the head; a skeleton
+   none of them passes is refused with the best plan's reason (:class:`~infuse.errors.NotHumanoidError`).
 3. Every plan that passes is assigned completely: :mod:`.limbs` places hip/knee/ankle and
    clavicle/shoulder/elbow/wrist on each limb's chain (both limbs of a pair as one decision), the
    torso, neck and head come from the path between the two limb pairs, :mod:`.hands` matches the
-   fingers to the digits, and left and right come from the body's own axes (names decide only
-   when the body does not show its front; the reasons say when the geometry overrules them).
+   fingers to the digits, and of the two ways of giving left and right the one the evidence
+   (the body's own axes, the side names) costs least (the reasons say when the geometry
+   overrules the names).
 4. One cost over each complete assignment decides: the plan's score, the cost of placing every
-   limb joint, a missing head or torso, and what every mapped joint's name says about its slot.
+   limb joint, a missing head or torso, what every mapped joint's name says about its slot, and
+   the cost of its sides.
 5. Confidence: each entry's own margin, capped by how the sides were decided, by what its joint's
    name says, and by the cost margin to the runner-up assignment where that one differs.
 """
