@@ -295,3 +295,24 @@ def test_a_lexeme_that_matches_nothing_falls_back_on_its_type():
     (record,) = scheduler.submit(parse_bml(BML.format(id="b1", body='<gesture id="g1" lexeme="DEICTIC" type="YOU" '
                                                                      'mode="LEFT_HAND" stroke="1"/>')))
     assert record.activations[0].parameters["clip"] == "offer_left" and not record.issues
+
+
+def test_a_gesture_from_the_characters_own_clip_keeps_its_smartbody_noise():
+    """``<gesture name=… sbm:joint-range sbm:frequency sbm:scale>`` naming a clip of the character (not the
+    gestures pack): the clip plays as without noise, and the named joints turn over its span."""
+    gesture = '<gesture id="g1" name="walk" start="0.5" end="2.5"{extra}/>'
+    noisy, motion = play("xbot", gesture.format(extra=' sbm:joint-range="l_shoulder l_elbow" sbm:frequency="1" '
+                                                      'sbm:scale="0.1"'))
+    plain, below = play("xbot", gesture.format(extra=""))
+    said = [e.description for e in noisy.feedback.log if e.kind == "warningFeedback" and e.id == "b1:g1"]
+    assert not said, said
+    activity = noisy.activities[("b1", "g1")]
+    assert activity.source.parameters.get("pack") is None  # the character's clip, not a pack gesture
+    rig = noisy.runtime.rig("bob")
+    turn = np.degrees(quat.angle_between(motion.local_rotations[:, rig.joint("l_shoulder")],
+                                         below.local_rotations[:, rig.joint("l_shoulder")]))
+    right = np.degrees(quat.angle_between(motion.local_rotations[:, rig.joint("r_shoulder")],
+                                          below.local_rotations[:, rig.joint("r_shoulder")]))
+    start, end = int(round(activity.start_s * FPS)), int(round(activity.end_s * FPS))
+    assert turn[start:end].max() > 2.0 and turn[:start].max() < 1e-3 and turn[end + 1:].max() < 1e-3
+    assert right.max() < 1e-3  # a joint the noise does not name plays the clip as without it (degrees)

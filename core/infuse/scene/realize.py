@@ -8,7 +8,7 @@ scene's :class:`~infuse.stage.Stage`. The scene itself keeps only the kinds no c
 |---|---|
 | ``wait``, ``event`` | nothing to show (their sync points still give feedback) |
 | ``speech`` | the scene synthesizes it and keeps its audio for the exported WAV; the controller realizing ``speech`` moves the mouth (without one the character speaks without lip sync, and saccades pause) |
-| ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback. A behaviour naming a behaviour pack (``pack``) goes to the controller realizing its kind |
+| ``gesture``, ``animation``, ``posture``, ``blend`` | a clip of the character (from its behaviour packs, or its own file) of that name, played on the base layer; without one, warningFeedback. A behaviour naming a behaviour pack (``pack``) or asking for SmartBody noise over it (``noise``) goes to the controller realizing its kind |
 | any other kind | the realizing controller's ``realize(activation, stage)``; without one, the controller its ``from_bml`` builds, from the activation's start to its end; targets name scene objects, characters or ``character:joint`` |
 
 A behaviour that cannot be realized, or only partly, gives warningFeedback; the rest of its block plays.
@@ -40,7 +40,8 @@ def realize(scene, activation: Activation):
     if kind == "speech":
         return _speech(scene, activation)
     descriptor = registry.realizer(kind)
-    if kind in CLIP_KINDS and (descriptor is None or not activation.parameters.get("pack")):
+    if kind in CLIP_KINDS and (descriptor is None or not (activation.parameters.get("pack")
+                                                          or activation.parameters.get("noise"))):
         return play_clip(scene, activation)
     if descriptor is None:
         scene.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,

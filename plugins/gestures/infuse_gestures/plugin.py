@@ -8,14 +8,14 @@ from .controller import Gesture, gesture_from_bml
 
 
 def _realize(activation, stage):
-    """The gesture the generic way (:func:`gesture_from_bml`), and over its span SmartBody's noise on the
-    joints its ``sbm:joint-range`` names (``sbm:frequency``, ``sbm:scale``) when a ``noise`` controller is
-    installed."""
+    """The gesture the generic way (:func:`gesture_from_bml`), or the character's own clip when it names no
+    pack, and over its span SmartBody's noise on the joints its ``sbm:joint-range`` names
+    (``sbm:frequency``, ``sbm:scale``) when a ``noise`` controller is installed."""
     from infuse.bml.model import BEHAVIOR_DEGRADED
     from infuse.errors import InfuseError
     from infuse.runtime import controller
 
-    activity = stage.play(activation)
+    activity = stage.play(activation) if activation.parameters.get("pack") else stage.play_clip(activation)
     noise = activation.parameters.get("noise") or {}
     if activity is None or not noise.get("joints"):
         return activity
