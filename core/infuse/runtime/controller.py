@@ -10,12 +10,14 @@ of the block: its character's pose so far, its weight per frame and its persiste
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Sequence
+from typing import Any, ClassVar, Sequence, TypeVar
 
 import numpy as np
 
 from .layers import Layer, Mode
 from .pose import PoseBlock
+
+State = TypeVar("State")
 
 
 @dataclass
@@ -65,6 +67,11 @@ class Job:
     @property
     def state(self) -> dict:
         return self.activity.state
+
+    def state_of(self, kind: type[State]) -> State:
+        """The activity's typed state of class ``kind`` (see :meth:`Activity.state_of
+        <infuse.runtime.runtime.Activity.state_of>`)."""
+        return self.activity.state_of(kind)
 
     @property
     def mode(self) -> Mode:

@@ -31,7 +31,7 @@ from ..motion import Motion
 from .controller import Block, Controller, Job
 from .layers import Layer, Mode, blend_weights
 from .pose import PoseBlock
-from .rig import Rig
+from .rig import Rig, State
 
 
 @dataclass(eq=False)
@@ -41,7 +41,8 @@ class Activity:
     ``start_s`` / ``end_s``: global seconds (``end_s`` None: until stopped); the weight ramps up over
     ``blend_in_s`` from the start and down over ``blend_out_s`` to 0 at the end. ``binding`` is
     what the controller prepared for the character; ``state`` persists between blocks.
-    ``source`` is what it was made from (a BML activation, if any).
+    ``source`` is what it was made from (a BML activation, if any). A controller keeps its own typed
+    state there through :meth:`state_of`.
     """
 
     id: int
@@ -61,6 +62,14 @@ class Activity:
     @property
     def character(self) -> str:
         return self.rig.name
+
+    def state_of(self, kind: type[State]) -> State:
+        """The activity's state of class ``kind`` (made by ``kind()`` the first time it is asked for, kept in
+        ``state`` under the class): what its controller carries from one block to the next."""
+        value = self.state.get(kind)
+        if value is None:
+            value = self.state[kind] = kind()
+        return value
 
     @property
     def layer(self) -> Layer:
