@@ -19,6 +19,7 @@ from infuse_gaze.binding import GazeState
 from infuse_gestures.controller import Gesture, GestureSpaces
 from infuse_lipsync.controllers import FaceChannelsByMap, FaceExpression, face_channels
 from infuse_postures.controller import Posture, PostureSpaces
+from infuse_reach.controller import Reach, ReachSpaces
 
 from runtime_characters import synthetic_character
 
@@ -111,6 +112,24 @@ def test_runtimes_playing_characters_of_one_asset_share_its_infused_packs():
     assert first.rig("ann").state_of(GazeState) is not second.rig("ann").state_of(GazeState)
     kept = weakref.ref(spaces[0])
     del first, second, spaces, ann, again
+    gc.collect()
+    assert kept() is None
+
+
+def test_a_reaching_pack_is_infused_once_for_the_asset():
+    ann = synthetic_character("ann")
+    again = Character("ann", ann.asset, mapping=ann.mapping)
+    runtimes = []
+    for character in (ann, again):
+        rt = Runtime(fps=30.0)
+        rt.add_character(character)
+        rt.activate("ann", Reach((-0.2, 1.2, 0.3), hand="right"), 0.0)
+        rt.run(0.5)
+        runtimes.append(rt)
+    spaces = [rt.rig("ann").asset_state_of(ReachSpaces) for rt in runtimes]
+    assert spaces[0] is spaces[1] and list(spaces[0]) == ["reaching"]
+    kept = weakref.ref(spaces[0]["reaching"][1])
+    del runtimes, spaces, ann, again, rt, character
     gc.collect()
     assert kept() is None
 

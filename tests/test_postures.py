@@ -23,7 +23,7 @@ from infuse.runtime import Runtime
 from infuse.scene import Scene
 
 from corpus_data import corpus_file
-from infuse_postures.controller import posture_space
+from infuse_postures.controller import PostureState, posture_space
 from runtime_characters import corpus_character
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -247,6 +247,9 @@ def test_a_walk_ends_a_lasting_posture(pack_cache):
                          + '<locomotion id="w1" target="0 3" start="3"/>', pack_cache)
     posture = scene.activities[("b1", "p1")]
     assert posture.end_s is not None and 3.0 < posture.end_s < 3.0 + 2.0
+    state = posture.state_of(PostureState)  # where it stood, and when the hips walked off from there
+    assert state.footprints is not None and state.leave_s is not None
+    assert 3.0 < state.leave_s and posture.end_s == state.leave_s + posture.blend_out_s
     rig = scene.runtime.rig("bob")
     _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
     assert np.linalg.norm(g_pos[-1, rig.joint("base"), [0, 2]] - g_pos[0, rig.joint("base"), [0, 2]]) > 2.0

@@ -115,6 +115,30 @@ class PostureBinding:
     base: int | None
 
 
+@dataclass(frozen=True, eq=False)
+class Footprints:
+    """Where the pose below a posture stands on the frame the posture begins, in the character's own frame:
+    ``ankles`` (2, 3) metres and ``ankle_rotations`` (2, 4) global, left then right; ``centre`` (3,) between
+    them; ``yaw`` the hips' heading (radians, :func:`facing`) and ``forward`` (3,) its unit vector; ``hips``
+    (3,) their centre in the world, metres."""
+
+    ankles: np.ndarray
+    ankle_rotations: np.ndarray
+    centre: np.ndarray
+    yaw: float
+    forward: np.ndarray
+    hips: np.ndarray
+
+
+@dataclass
+class PostureState:
+    """What a posture activity carries between blocks: its ``footprints`` (None until the pose below stands)
+    and ``leave_s``, when the pose below walked away (global seconds; None while it stays)."""
+
+    footprints: Footprints | None = None
+    leave_s: float | None = None
+
+
 class Posture(Controller):
     """Stand in posture ``clip`` of ``pack`` (its idle looping), blending in and out over ``transition_s``
     seconds, the feet planted where they stand. ``phase_s``: where in its loop the idle starts."""
@@ -164,22 +188,23 @@ class Posture(Controller):
 
     def evaluate_one(self, job, block) -> None:
         b: PostureBinding = job.binding
-        pose, state = job.pose, job.state
-        if "ankles" not in state:
+        pose, state = job.pose, job.state_of(PostureState)
+        if state.footprints is None:
             k = self._standing(job, block)
             if k is None:
                 return
-            state.update(self._footprints(pose, b.legs, k))
-        pin = self._leaving(job, block)
+            state.footprints = self._footprints(pose, b.legs, k)
+        feet = state.footprints
+        pin = self._leaving(job, block, state, feet)
         live = job.weight > 0.0
         if not live.any():
             return
         sk = pose.rig.skeleton
         times = self.phase_s + np.maximum(job.local_times, 0.0)
         target, root, _, _ = sample_motion(b.motion, times, loop=True)
-        turn = _yaw(state["yaw"] - b.yaw)
+        turn = _yaw(feet.yaw - b.yaw)
         target[:, 0] = quat.multiply(turn, target[:, 0])
-        root = state["centre"] + quat.rotate(turn, root - b.centre)
+        root = feet.centre + quat.rotate(turn, root - b.centre)
         w = job.weight[:, None]
         rotations = quat.slerp(pose.local_rotations, target, np.broadcast_to(w, target.shape[:2]))
         blending = live & (job.weight < 1.0)
@@ -189,14 +214,14 @@ class Posture(Controller):
         placed = root
         root = pose.root_translations + w * (root - pose.root_translations)
         jt = pose.joint_translations
-        goals = np.broadcast_to(state["ankles"], (len(root), 2, 3))
+        goals = np.broadcast_to(feet.ankles, (len(root), 2, 3))
         root = self._lowered(sk, rotations, root, jt, b.legs, goals, b.reach)
         solve_limb(sk, rotations, root, jt, b.legs, goals, weight=np.repeat((pin * live)[:, None], 2, axis=1),
-                   pole=state["forward"], end_rotation=np.broadcast_to(state["ankle_rotations"], (len(root), 2, 4)),
+                   pole=feet.forward, end_rotation=np.broadcast_to(feet.ankle_rotations, (len(root), 2, 4)),
                    distance=False)
         if b.hands is not None and blending.any():
             k = blending
-            rotations[k] = self._around_the_body(sk, b, state["yaw"], job.weight[k], rotations[k], root[k],
+            rotations[k] = self._around_the_body(sk, b, feet.yaw, job.weight[k], rotations[k], root[k],
                                                  (pose.local_rotations[k], pose.root_translations[k]),
                                                  (target[k], placed[k]), None if jt is None else jt[k])
         on = live.astype(float)
@@ -288,7 +313,8 @@ class Posture(Controller):
             if activity.end_s is not None:
                 activity.end_s += late
             for earlier in self.replaces:  # what it replaces plays on until it is in (unless it is over or walked off)
-                if earlier.end_s is not None and earlier.end_s > block.times[0] and "leave_s" not in earlier.state:
+                walked_off = earlier.state.get(PostureState, PostureState()).leave_s is not None
+                if earlier.end_s is not None and earlier.end_s > block.times[0] and not walked_off:
                     earlier.end_s += late
             job.weight = activity.weights(block.times)
             job.local_times = block.times - activity.start_s
@@ -304,36 +330,34 @@ class Posture(Controller):
         _, g_pos = forward_kinematics(job.rig.skeleton, local, root)
         return g_pos[0, job.binding.legs[:, 0]].mean(axis=0)
 
-    def _leaving(self, job, block) -> np.ndarray:
+    @staticmethod
+    def _leaving(job, block, state: PostureState, feet: Footprints) -> np.ndarray:
         """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
-        (then the activity ends after its blend out, and ``job.weight`` fades with it)."""
-        state = job.state
-        if "leave_s" not in state:
+        from ``feet`` (then the activity ends after its blend out, and ``job.weight`` fades with it)."""
+        if state.leave_s is None:
             hips = job.pose.chain_pose(job.binding.legs[:, 0])[1].mean(axis=1)  # (F, 3) in the world
-            away = (np.linalg.norm((hips - state["hips"])[:, [0, 2]], axis=-1) > WALK_AWAY_M) & (job.local_times >= 0.0)
+            away = (np.linalg.norm((hips - feet.hips)[:, [0, 2]], axis=-1) > WALK_AWAY_M) & (job.local_times >= 0.0)
             if not away.any():
                 return np.ones(len(block))
-            state["leave_s"] = float(block.times[int(np.argmax(away))])
+            state.leave_s = float(block.times[int(np.argmax(away))])
             activity = job.activity
-            end = state["leave_s"] + activity.blend_out_s
+            end = state.leave_s + activity.blend_out_s
             if activity.end_s is None or end < activity.end_s:
                 activity.end_s = end
                 # This block's weights were taken before the activity had that end: the blend out, as later blocks have it.
                 job.weight = activity.weights(block.times)
-        return 1.0 - smoothstep((block.times - state["leave_s"]) / max(job.activity.blend_out_s, 1e-9))
+        return 1.0 - smoothstep((block.times - state.leave_s) / max(job.activity.blend_out_s, 1e-9))
 
     @staticmethod
-    def _footprints(pose, legs: np.ndarray, k: int) -> dict:
-        """Where the pose below stands at frame ``k``: ankle positions (2, 3) and global rotations (2, 4),
-        their centre (3,), its facing (radians) and forward (3,), in the character's own frame; the hips'
-        centre (3,) in the world."""
+    def _footprints(pose, legs: np.ndarray, k: int) -> Footprints:
+        """Where the pose below stands at frame ``k`` of the block."""
         jt = None if pose.joint_translations is None else pose.joint_translations[k:k + 1]
         g_rot, g_pos = forward_kinematics(pose.rig.skeleton, pose.local_rotations[k:k + 1], pose.root_translations[k:k + 1], jt)
         ankles = g_pos[0, legs[:, 2]]
         yaw = facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]])
         hips = pose.chain_pose(legs[:, 0])[1][k].mean(axis=0)
-        return {"ankles": ankles, "ankle_rotations": g_rot[0, legs[:, 2]], "centre": ankles.mean(axis=0), "yaw": yaw,
-                "forward": np.array([np.sin(yaw), 0.0, np.cos(yaw)]), "hips": hips}
+        return Footprints(ankles=ankles, ankle_rotations=g_rot[0, legs[:, 2]], centre=ankles.mean(axis=0), yaw=yaw,
+                          forward=np.array([np.sin(yaw), 0.0, np.cos(yaw)]), hips=hips)
 
     @staticmethod
     def _lowered(sk, rotations, root, jt, legs, goals, reach) -> np.ndarray:

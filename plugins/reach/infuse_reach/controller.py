@@ -28,19 +28,26 @@ HELD_WITHIN_M = 0.15
 _UPPER = ("spine1", "spine2", "spine3", "spine4", "spine5", "skullbase")
 
 
+class ReachSpaces(dict):
+    """The reaching packs infused on a character's asset: pack name -> the mapping it was infused through and its
+    :class:`~infuse.packs.BlendSpace`. Kept for the character's asset
+    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): scenes playing it share it, and it goes with it."""
+
+
 def space_for(rig, pack):
     """The reaching blend space of ``pack`` (a BlendSpace, returned as is, or a pack's name or folder) on
-    the runtime character ``rig``: infused once per rig and pack, kept in the rig's state (it goes with
-    its runtime)."""
+    the runtime character ``rig``: infused once per asset, pack and mapping."""
     from infuse.packs import BlendSpace, infuse_character
 
     if isinstance(pack, BlendSpace):
         return pack
-    spaces = rig.state.setdefault("reach_spaces", {})
-    if str(pack) not in spaces:
+    spaces = rig.asset_state_of(ReachSpaces)
+    mapping, space = spaces.get(str(pack), (None, None))
+    if space is None or mapping is not rig.mapping:
         infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        spaces[str(pack)] = next(iter(infusion.spaces.values()))
-    return spaces[str(pack)]
+        space = next(iter(infusion.spaces.values()))
+        spaces[str(pack)] = (rig.mapping, space)
+    return space
 
 
 def _mean_stroke(pack) -> float:
