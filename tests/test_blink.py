@@ -38,7 +38,7 @@ def test_morph_targets_of_the_rpm_avatar_follow_the_curve():
     assert set(played.morph_names) == {"eyeBlinkLeft", "eyeBlinkRight"}
     left = played.morph_weight("eyeBlinkLeft")
     assert np.array_equal(left, played.morph_weight("eyeBlinkRight"))
-    starts = rt.activities[0].binding["schedule"].until(20.0)
+    starts = rt.activities[0].binding.schedule.until(20.0)
     expected = np.zeros_like(left)
     for s in starts[starts < 20.0]:
         expected = np.maximum(expected, closure(played.frame_times - s))

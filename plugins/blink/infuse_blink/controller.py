@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 import zlib
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -63,6 +64,27 @@ class BlinkSchedule:
         return self.starts
 
 
+@dataclass(frozen=True, eq=False)
+class EyelidJoints:
+    """Eyelid joints a blink pitches: ``joints`` (K,), their ``aligned`` frames (K, 4) and ``pitch`` (K,)
+    radians of each lid when fully closed (upper lids down, lower lids up)."""
+
+    joints: np.ndarray
+    aligned: np.ndarray
+    pitch: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class BlinkBinding:
+    """Blinks bound to one character: its own ``schedule`` of blinks, the eyelid ``morphs`` (morph columns,
+    left and right or one for both; empty when it has none) and its eyelid ``lids`` (None when morphs close
+    the eyes, or when it has neither)."""
+
+    schedule: BlinkSchedule
+    morphs: tuple[int, ...] = ()
+    lids: EyelidJoints | None = None
+
+
 class Blink(Controller):
     """Blink at a human rate: ``activity`` (rest, conversation, reading) or ``rate_per_min``;
     ``seed`` for the random intervals; ``amount`` (0..1) how far the lids close."""
@@ -90,40 +112,40 @@ class Blink(Controller):
     def describe(self) -> str:
         return f"blink ({self.rate_per_min:g}/min)"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> BlinkBinding:
         # Each character draws its own blinks from the seed, so a crowd does not blink in step.
         seed = None if self.seed is None else (int(self.seed), zlib.crc32(rig.name.encode("utf-8")))
         schedule = BlinkSchedule(60.0 / self.rate_per_min, self.blink_s + 0.1, seed)
         left, right = rig.morph_named(*_LEFT_TARGETS), rig.morph_named(*_RIGHT_TARGETS)
         if left and right:
-            return {"schedule": schedule, "morphs": [rig.morph_index[left], rig.morph_index[right]]}
+            return BlinkBinding(schedule, morphs=(rig.morph_index[left], rig.morph_index[right]))
         both = rig.morph_named(*_BOTH_TARGETS)
         if both:
-            return {"schedule": schedule, "morphs": [rig.morph_index[both]]}
+            return BlinkBinding(schedule, morphs=(rig.morph_index[both],))
         lids = _eyelid_joints(rig)
         if lids:
             joints = np.array([j for j, _ in lids])
             pitch = np.radians([self.eyelid_angle_deg * share for _, share in lids])
-            return {"schedule": schedule, "morphs": [], "joints": joints, "aligned": rig.aligned[joints], "pitch": pitch}
+            return BlinkBinding(schedule, lids=EyelidJoints(joints=joints, aligned=rig.aligned[joints], pitch=pitch))
         report("has no eyelid morph targets or joints: blinks are not shown")
-        return {"schedule": schedule, "morphs": []}
+        return BlinkBinding(schedule)
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
+        b: BlinkBinding = job.binding
         t = job.local_times
-        starts = b["schedule"].until(float(t[-1]))
+        starts = b.schedule.until(float(t[-1]))
         starts = starts[(starts <= t[-1]) & (starts + self.blink_s >= t[0])]
         level = np.zeros(len(t))
         for start in starts:  # at most a few blinks fall in a block
             level = np.maximum(level, closure(t - start, self.curve))
         level *= self.amount
-        if b["morphs"]:
-            values = np.repeat(level[:, None], len(b["morphs"]), axis=1)
-            job.pose.set_morphs(b["morphs"], values, job.weight, job.mode)
-        if "joints" in b:
-            angles = level[:, None] * b["pitch"][None]
+        if b.morphs:
+            values = np.repeat(level[:, None], len(b.morphs), axis=1)
+            job.pose.set_morphs(b.morphs, values, job.weight, job.mode)
+        if b.lids is not None:
+            angles = level[:, None] * b.lids.pitch[None]
             delta = swing(np.zeros_like(angles), angles)
-            job.pose.set_rotations(b["joints"], local_offsets(b["aligned"], delta), job.weight, job.mode)
+            job.pose.set_rotations(b.lids.joints, local_offsets(b.lids.aligned, delta), job.weight, job.mode)
 
 
 def _eyelid_joints(rig) -> list[tuple[int, float]]:

@@ -12,6 +12,8 @@ Depth scales all of these (default 0.5: a calm breath of about 1° of chest lift
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse.errors import MissingJointsError, UsageError
@@ -30,6 +32,17 @@ def breath_curve(t, rate_bpm: float, inhale_fraction: float = 0.4, phase: float 
     warped = np.where(cycle < inhale_fraction, 0.5 * cycle / inhale_fraction,
                       0.5 + 0.5 * (cycle - inhale_fraction) / (1.0 - inhale_fraction))
     return 0.5 - 0.5 * np.cos(2.0 * np.pi * warped)
+
+
+@dataclass(frozen=True, eq=False)
+class BreathingBinding:
+    """Breathing bound to one character: the ``joints`` (K,) a breath turns (spine, neck, clavicles), each
+    about one axis of its aligned frame given in its local frame, ``axes`` (K, 3), by ``angles`` (K,) radians
+    at a full breath of depth 1."""
+
+    joints: np.ndarray
+    axes: np.ndarray
+    angles: np.ndarray
 
 
 class Breathing(Controller):
@@ -54,7 +67,7 @@ class Breathing(Controller):
     def describe(self) -> str:
         return f"breathing ({self.rate_bpm:g}/min)"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> BreathingBinding:
         joints, heading, pitch, roll = [], [], [], []
         for name, degrees in SPINE_PITCH_DEG.items():
             if rig.joint(name) is not None:
@@ -79,13 +92,13 @@ class Breathing(Controller):
         # Each joint turns about one axis of its aligned frame (pitch or roll): a full breath's angle about it.
         angles = np.radians(np.stack((heading, pitch, roll), axis=1))  # (K, 3)
         axis = np.argmax(np.abs(angles), axis=1)
-        return {"joints": np.array(joints), "axes": local_axes(rig.aligned[joints], SWING_AXES[axis]),
-                "angles": angles[np.arange(len(joints)), axis]}
+        return BreathingBinding(joints=np.array(joints), axes=local_axes(rig.aligned[joints], SWING_AXES[axis]),
+                                angles=angles[np.arange(len(joints)), axis])
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
+        b: BreathingBinding = job.binding
         level = self.depth * breath_curve(job.local_times, self.rate_bpm, self.inhale_fraction, self.phase)
-        job.pose.set_rotations(b["joints"], local_turns(b["axes"], level[:, None] * b["angles"]), job.weight, job.mode)
+        job.pose.set_rotations(b.joints, local_turns(b.axes, level[:, None] * b.angles), job.weight, job.mode)
 
 
 def breathing_from_bml(parameters: dict, runtime, character: str, activation=None) -> Breathing:

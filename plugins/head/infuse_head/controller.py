@@ -14,6 +14,8 @@ does not end at zero; the last quarter period then fades it out.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse.errors import MissingJointsError, UsageError
@@ -48,6 +50,17 @@ def head_angle(t, lexeme: str, amount: float, repeats: float, velocity_hz: float
     return np.where(inside, angle, 0.0)
 
 
+@dataclass(frozen=True, eq=False)
+class HeadBinding:
+    """A head movement bound to one character: the neck ``joints`` (K,) it turns, their ``aligned`` frames
+    (K, 4), and the ``axes`` (K, 3) of the movement's angle in the joints' local frames (None for ORIENT, which
+    turns toward a direction in the aligned frames)."""
+
+    joints: np.ndarray
+    aligned: np.ndarray
+    axes: np.ndarray | None
+
+
 class HeadMovement(Controller):
     """A nod, shake, toss or tilt (see the module doc); lasts ``repeats / velocity_hz`` seconds."""
 
@@ -77,25 +90,25 @@ class HeadMovement(Controller):
         """Radians at ``t`` seconds from the start (see :func:`head_angle`)."""
         return head_angle(t, self.lexeme, self.amount, self.repeats, self.velocity_hz)
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> HeadBinding:
         joints = [rig.joint(n) for n in NECK_JOINTS if rig.joint(n) is not None]
         if not joints:
             raise MissingJointsError(rig.name, "no neck or head joint is mapped for a head movement")
         axis = AXES[self.lexeme]
         if axis != "direction":  # one axis of each joint's aligned frame
             axis = SWING_AXES[("heading", "pitch", "roll").index(axis)]
-        return {"joints": np.array(joints), "aligned": rig.aligned[joints],
-                "axes": None if isinstance(axis, str) else local_axes(rig.aligned[joints], axis)}
+        return HeadBinding(joints=np.array(joints), aligned=rig.aligned[joints],
+                           axes=None if isinstance(axis, str) else local_axes(rig.aligned[joints], axis))
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
-        share = (self.angle(job.local_times) / len(b["joints"]))[:, None]  # (F, 1), the same for each joint
-        if b["axes"] is not None:
-            offsets = local_turns(b["axes"], np.broadcast_to(share, (len(share), len(b["joints"]))))
+        b: HeadBinding = job.binding
+        share = (self.angle(job.local_times) / len(b.joints))[:, None]  # (F, 1), the same for each joint
+        if b.axes is not None:
+            offsets = local_turns(b.axes, np.broadcast_to(share, (len(share), len(b.joints))))
         else:
             delta = swing(share * self.direction[0], share * self.direction[1])
-            offsets = local_offsets(b["aligned"], np.broadcast_to(delta, (len(share), len(b["joints"]), 4)))
-        job.pose.set_rotations(b["joints"], offsets, job.weight, job.mode)
+            offsets = local_offsets(b.aligned, np.broadcast_to(delta, (len(share), len(b.joints), 4)))
+        job.pose.set_rotations(b.joints, offsets, job.weight, job.mode)
 
 
 def _direction(words) -> tuple[float, float]:

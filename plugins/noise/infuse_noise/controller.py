@@ -11,6 +11,8 @@ replaces its last (SmartBody keeps one set of noisy joints).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse import quaternions as quat
@@ -38,6 +40,16 @@ def gradient_noise(u: np.ndarray, gradients: np.ndarray) -> np.ndarray:
     return 2.0 * (g0 * f + fade * (g1 * (f - 1.0) - g0 * f))
 
 
+@dataclass(frozen=True, eq=False)
+class NoiseBinding:
+    """A noise bound to one character: the ``joints`` (K,) it turns, each component's random slopes
+    ``gradients`` (K, 3, :data:`TABLE_SIZE`) and where on its lattice each starts, ``offsets`` (K, 3) cells."""
+
+    joints: np.ndarray
+    gradients: np.ndarray
+    offsets: np.ndarray
+
+
 class Noise(Controller):
     """Turn ``joints`` (canonical names or the character's own, case ignored) by noise of size ``scale``
     (radians) changing about ``frequency_hz`` times a second; ``seed`` makes it repeatable."""
@@ -61,7 +73,7 @@ class Noise(Controller):
     def describe(self) -> str:
         return f"noise ({' '.join(self.joints)})"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> NoiseBinding:
         own = {n.lower(): i for i, n in enumerate(rig.skeleton.names)}
         found, missing = [], []
         for name in self.joints:
@@ -74,15 +86,15 @@ class Noise(Controller):
         if missing:
             report(f"noise: no joint {', '.join(missing)}; the others move")
         rng = np.random.default_rng(self.seed)
-        return {"joints": np.array(sorted(set(found)), dtype=np.int64),
-                "gradients": rng.uniform(-1.0, 1.0, (len(set(found)), 3, TABLE_SIZE)),
-                "offsets": rng.uniform(0.0, TABLE_SIZE, (len(set(found)), 3))}
+        return NoiseBinding(joints=np.array(sorted(set(found)), dtype=np.int64),
+                            gradients=rng.uniform(-1.0, 1.0, (len(set(found)), 3, TABLE_SIZE)),
+                            offsets=rng.uniform(0.0, TABLE_SIZE, (len(set(found)), 3)))
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
-        u = job.local_times[:, None, None] * self.frequency_hz + b["offsets"][None]  # (F, K, 3) lattice coordinates
-        rotvec = self.scale * gradient_noise(u, b["gradients"])  # (F, K, 3) radians
-        job.pose.set_rotations(b["joints"], quat.from_rotvec(rotvec), job.weight, job.mode)
+        b: NoiseBinding = job.binding
+        u = job.local_times[:, None, None] * self.frequency_hz + b.offsets[None]  # (F, K, 3) lattice coordinates
+        rotvec = self.scale * gradient_noise(u, b.gradients)  # (F, K, 3) radians
+        job.pose.set_rotations(b.joints, quat.from_rotvec(rotvec), job.weight, job.mode)
 
 
 def noise_from_bml(parameters: dict, runtime, character: str, activation=None) -> Noise:

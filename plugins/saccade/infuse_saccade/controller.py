@@ -8,6 +8,7 @@ makes no saccades: the eyes return to the gaze direction when speech starts.
 from __future__ import annotations
 
 import zlib
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -19,6 +20,18 @@ from infuse.runtime.swing import clamp_ellipse, swing, swing_angles
 from .model import MODES, SaccadeSchedule, ease_out, saccade_duration
 
 RESUME_S = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class SaccadeBinding:
+    """Saccades bound to one character: its ``eyes`` (2,) joints, left then right, its own ``schedule`` of
+    saccades, and per eye the (4, 4) matrices on (x, y, z, w) columns taking a local rotation to its turn from
+    rest in the eye's aligned frame, ``to_turn`` (2, 4, 4), and back, ``from_turn`` (2, 4, 4)."""
+
+    eyes: np.ndarray
+    schedule: SaccadeSchedule
+    to_turn: np.ndarray
+    from_turn: np.ndarray
 
 
 class Saccades(Controller):
@@ -53,7 +66,7 @@ class Saccades(Controller):
         seed = None if self.seed is None else (int(self.seed), zlib.crc32(character.encode("utf-8")))
         return SaccadeSchedule(MODES[self.saccade_mode], seed, self.max_magnitude_deg)
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> SaccadeBinding | None:
         eyes = [rig.joint("eyeball_left"), rig.joint("eyeball_right")]
         if None in eyes:
             report("has no eyes: saccades are not shown")
@@ -63,9 +76,9 @@ class Saccades(Controller):
         # linear in the quaternion's components: T = A⁻¹ rest⁻¹ L A and L = rest A T A⁻¹, (2, 4, 4)
         # matrices acting on (x, y, z, w) columns.
         placed = quat.multiply(rest, aligned)  # rest A
-        return {"eyes": np.array(eyes), "schedule": self.schedule(rig.name),
-                "to_turn": quat.left_matrix(quat.conjugate(placed)) @ quat.right_matrix(aligned),
-                "from_turn": quat.left_matrix(placed) @ quat.right_matrix(quat.conjugate(aligned))}
+        return SaccadeBinding(eyes=np.array(eyes), schedule=self.schedule(rig.name),
+                              to_turn=quat.left_matrix(quat.conjugate(placed)) @ quat.right_matrix(aligned),
+                              from_turn=quat.left_matrix(placed) @ quat.right_matrix(quat.conjugate(aligned)))
 
     def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
         """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
@@ -92,17 +105,17 @@ class Saccades(Controller):
         return np.where(started[:, None], before[k] + progress * (offsets[k] - before[k]), 0.0)
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
+        b: SaccadeBinding | None = job.binding
         if b is None:
             return
         start = job.activity.start_s
         pauses = [(s - start, e - start + self.resume_s) for s, e in block.runtime.speech_intervals(job.rig.name)]
-        offsets = np.radians(self.offsets(b["schedule"], job.local_times, pauses)) * job.weight[:, None]
+        offsets = np.radians(self.offsets(b.schedule, job.local_times, pauses)) * job.weight[:, None]
         # The eyes' current turn from rest (the gaze's), in their aligned frames, plus the saccade.
-        turn = _apply_per_eye(b["to_turn"], job.pose.local_rotations[:, b["eyes"]])
+        turn = _apply_per_eye(b.to_turn, job.pose.local_rotations[:, b.eyes])
         heading, pitch, roll = swing_angles(turn)
         heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
-        job.pose.set_rotations(b["eyes"], _apply_per_eye(b["from_turn"], swing(heading, pitch, roll)))
+        job.pose.set_rotations(b.eyes, _apply_per_eye(b.from_turn, swing(heading, pitch, roll)))
 
 
 def _apply_per_eye(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
