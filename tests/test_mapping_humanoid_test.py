@@ -242,3 +242,27 @@ def test_names_mapper_reads_names_behind_a_shared_prefix():
     v = skeleton_variants._renamed(v.skeleton, None, {"mapping": v.mapping, "alternatives": {}}, rename, "prefixed")
     joints = map_skeleton(v.skeleton, mapper="names").joints
     assert _wrong(joints, v) == []
+
+
+def test_stubby_legs_behind_forward_pelvis_helpers_stand():
+    """A blob-like cartoon body: each leg starts at a pelvis helper in front of and above the pelvis
+    joint, and the legs are a tenth of a person's and start above the pelvis joint, so that the feet
+    end barely below it; the legs still point away from the head (accepted) and its legs and arms are
+    found."""
+    sk, label = _canonical()
+    v = skeleton_variants.proportioned(sk, None, label, {"legs": 0.1}, "stubby")
+    names, parents = list(v.skeleton.names), list(v.skeleton.parents)
+    pos = list(v.skeleton.rest_global_positions)
+    base = pos[v.skeleton.index["base"]]
+    for side, sign in (("l", 1.0), ("r", -1.0)):
+        hip = v.skeleton.index[f"{side}_hip"]
+        for j in skeleton_variants._subtree(v.skeleton, hip):
+            pos[j] = pos[j] + np.array([0.0, 0.12, 0.0])
+        helper = skeleton_variants._insert(names, parents, pos, None, hip, 0.5, f"pelvis_helper_{side}")
+        pos[helper] = base + np.array([0.03 * sign, 0.04, 0.08])
+    names, parents, pos, _ = skeleton_variants._topological(names, parents, pos, None)
+    body = skeleton_variants._from_positions(names, parents, pos)
+    feet = pos[names.index("l_toe")][1]
+    assert base[1] - 0.06 < feet < base[1]
+    limbs = LEGS + tuple(f"{s}_{j}" for s in "lr" for j in ("shoulder", "elbow", "wrist"))
+    assert _wrong(map_skeleton(body).joints, v, limbs) == []

@@ -112,15 +112,17 @@ def legs_top(view: SkeletonView, legs: LimbPair) -> np.ndarray:
 
 
 def legs_down(view: SkeletonView, legs: LimbPair, up_from: int | None) -> float:
-    """Cosine between the legs' direction (from their top, :func:`legs_top`, or from the middle of
-    their first joints, whichever makes the straighter body: a pelvis joint may sit well in front of
-    the hips) and the body's up (from there to ``up_from``); about -1 for a standing body, about 0
+    """Cosine between the legs' direction (from their top, :func:`legs_top`, from the joint they hang
+    from or from the middle of their first joints, whichever makes the straighter body: a pelvis
+    joint may sit well in front of the hips, short legs may start at pelvis helpers in front of
+    it) and the body's up (from there to ``up_from``); about -1 for a standing body, about 0
     for a four-legged one."""
     if up_from is None:
         return -1.0
     P = view.P
     feet = 0.5 * (P[view.far[legs.a]] + P[view.far[legs.b]])
-    return min(_cos(P[up_from] - top, feet - top) for top in (legs_top(view, legs), 0.5 * (P[legs.a] + P[legs.b])))
+    tops = (legs_top(view, legs), P[legs.branch], 0.5 * (P[legs.a] + P[legs.b]))
+    return min(_cos(P[up_from] - top, feet - top) for top in tops)
 
 
 def _cos(u: np.ndarray, v: np.ndarray) -> float:
