@@ -13,6 +13,7 @@ from infuse import quaternions as quat
 from infuse.errors import BusyError, InputError, UsageError
 from infuse.live import LiveScene
 from infuse.scene import Scene
+from infuse_manipulation.pointing import PointingState
 
 from corpus_data import corpus_file
 from live_support import BML_NS
@@ -184,7 +185,7 @@ def test_point_grab_and_release_as_live_calls():
                     (replies[method],) = await hub.handle(None, json.dumps(message))
                     await asyncio.sleep(1.0)
                     if method == "point":  # while it points (ended activities are forgotten later)
-                        hands = live.call(lambda: [a.state["hands"] for (b, _), a in scene.activities.items()
+                        hands = live.call(lambda: [a.state_of(PointingState).hands for (b, _), a in scene.activities.items()
                                                    if b == replies["point"]["blocks"][0]])
                     await asyncio.sleep(1.5)
                 (wrong,) = await hub.handle(None, json.dumps({"type": "call", "method": "grab", "character": "bob",

@@ -11,6 +11,7 @@ import pytest
 import infuse
 from infuse.bml.model import NO_SUCH_TARGET
 from infuse.scene import Scene
+from infuse_manipulation.pointing import PointingState
 
 from corpus_data import require_corpus
 from runtime_characters import corpus_character, synthetic_character
@@ -85,15 +86,15 @@ def test_the_ray_passes_within_5_cm_of_the_target_at_the_stroke(pointed):
     for behaviour in POINTINGS:
         activity = _activity(p["scene"], behaviour)
         frame = int(round(activity.source.time("stroke") * FPS))
-        for side in activity.state["hands"]:
+        for side in activity.state_of(PointingState).hands:
             s = side[0]
             shoulder, tip = p["g_pos"][frame, p["ix"][f"{s}_shoulder"]], p["g_pos"][frame, p["ix"][f"{s}_index4"]]
             distances[f"{behaviour} {side}"] = _ray_distance(shoulder, tip, _target(p, behaviour, frame))
     print(p["key"], "ray-to-target distances at the stroke (cm):", {k: round(v * 100, 3) for k, v in distances.items()})
     assert max(distances.values()) < 0.05
-    assert _activity(p["scene"], "p2").state["hands"] == ("left",)
-    assert _activity(p["scene"], "p3").state["hands"] == ("right",)
-    assert _activity(p["scene"], "p6").state["hands"] == ("left", "right")
+    assert _activity(p["scene"], "p2").state_of(PointingState).hands == ("left",)
+    assert _activity(p["scene"], "p3").state_of(PointingState).hands == ("right",)
+    assert _activity(p["scene"], "p6").state_of(PointingState).hands == ("left", "right")
 
 
 def test_the_stroke_lands_on_its_sync_time(pointed):
@@ -102,7 +103,7 @@ def test_the_stroke_lands_on_its_sync_time(pointed):
     for behaviour, wanted in (("p1", 1.2), ("p2", 4.0), ("p3", 6.8), ("p4", 9.6)):
         activity = _activity(p["scene"], behaviour)
         assert activity.source.time("stroke") == pytest.approx(wanted, abs=1e-6)
-        s = activity.state["hands"][0][0]
+        s = activity.state_of(PointingState).hands[0][0]
         first, last = (int(round(activity.source.time(k) * FPS)) for k in ("ready", "relax"))
         reach = np.linalg.norm(p["g_pos"][first:last + 1, p["ix"][f"{s}_index4"]]
                                - p["g_pos"][first:last + 1, p["ix"][f"{s}_shoulder"]], axis=1)
@@ -114,7 +115,7 @@ def test_index_straight_other_fingers_curled(pointed):
     g = p["g_pos"]
     ix = p["ix"]
     frame = int(round(1.2 * FPS))
-    s = _activity(p["scene"], "p1").state["hands"][0][0]
+    s = _activity(p["scene"], "p1").state_of(PointingState).hands[0][0]
     rest = 0  # the first frame: before any pointing
     index = [g[frame, ix[f"{s}_index{k}"]] for k in (1, 2, 3, 4)]
     first, last = index[1] - index[0], index[3] - index[2]
@@ -202,7 +203,7 @@ def test_smartbody_point_at_document():
     frame = int(round(activity.source.time("stroke") * FPS))
     g = infuse.motion_fk(scene.motion("ChrBrad1"))[1]
     ix = scene.runtime.rig("ChrBrad1").mapping.indices(scene.runtime.rig("ChrBrad1").skeleton)
-    s = activity.state["hands"][0][0]
+    s = activity.state_of(PointingState).hands[0][0]
     assert _ray_distance(g[frame, ix[f"{s}_shoulder"]], g[frame, ix[f"{s}_index4"]], pawn) < 0.05
 
 
@@ -222,7 +223,7 @@ def test_a_bare_runtime_realizes_pointing_from_bml():
     g = infuse.motion_fk(rt.motion(bob))[1]
     ix = rt.rig(bob).mapping.indices(rt.rig(bob).skeleton)
     frame = int(round(1.5 * FPS))
-    assert activity.state["hands"] == ("right",)
+    assert activity.state_of(PointingState).hands == ("right",)
     assert _ray_distance(g[frame, ix["r_shoulder"]], g[frame, ix["r_index4"]], g[frame, ix["l_ankle"]]) < 0.05
 
 
@@ -234,7 +235,7 @@ def test_builder_point():
     block = scene.point("ann", (1.0, 1.0, 2.0), at=0.2, hand="left")
     scene.run(3.0)
     (activity,) = [a for (b, _), a in scene.activities.items() if b == block]
-    assert activity.state["hands"] == ("left",)
+    assert activity.state_of(PointingState).hands == ("left",)
     frame = int(round(activity.source.time("stroke") * FPS))
     g = infuse.motion_fk(scene.motion("ann"))[1]
     ix = scene.runtime.rig("ann").mapping.indices(scene.runtime.rig("ann").skeleton)

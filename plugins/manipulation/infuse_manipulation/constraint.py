@@ -13,6 +13,8 @@ the effector ends on its target.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse import quaternions as quat
@@ -32,6 +34,26 @@ CHAIN_JOINTS = 3
 CCD_PASSES = 8
 #: A goal further than this from where the effector ends is reported out of reach, metres.
 REACH_TOLERANCE_M = 0.02
+
+
+@dataclass(frozen=True, eq=False)
+class ConstraintBinding:
+    """An IK constraint bound to one character: its effector joint ``end``, and either the two-joint ``limb``
+    (upper, middle, end) it is carried by, with the end's ``straight`` local rotation (4,) in the reference
+    pose when it lies in line with the limb (None: it keeps the pose below's orientation), or the ``chain``
+    (K,) of joints above it that coordinate descent turns, top first."""
+
+    end: int
+    limb: tuple[int, int, int] | None = None
+    straight: np.ndarray | None = None
+    chain: np.ndarray | None = None
+
+
+@dataclass
+class ConstraintState:
+    """What a constraint activity keeps between blocks: whether it has ``reported`` its target out of reach."""
+
+    reported: bool = False
 
 
 class IKConstraint(Controller):
@@ -69,7 +91,7 @@ class IKConstraint(Controller):
     def describe(self) -> str:
         return f"ik constraint ({self.effector})"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> ConstraintBinding:
         end = _joint(rig, self.effector)
         if end is None:
             raise MissingJointsError(rig.character.asset.path, f"{rig.name} has no joint {self.effector!r} (canonical or own name) to constrain")
@@ -79,15 +101,16 @@ class IKConstraint(Controller):
             top = None if self.root is None else _joint(rig, self.root)
             # A root at or above the limb's top (a clavicle; or one the rig lacks) still moves only the limb.
             if None not in upper and (top is None or top in _ancestors(rig, upper[0])):
-                return {"limb": (upper[0], upper[1], end), "chain": None, "end": end,
-                        "straight": reference_locals(rig)[end] if self.straight_end else None}
+                return ConstraintBinding(end=end, limb=(upper[0], upper[1], end),
+                                         straight=reference_locals(rig)[end] if self.straight_end else None)
         chain = _chain(rig, end, self.root)
         if not chain:
             raise MissingJointsError(rig.character.asset.path, f"{rig.name}: joint {self.effector!r} has no joint above it to move")
-        return {"limb": None, "chain": np.array(chain, dtype=np.int64), "end": end}
+        return ConstraintBinding(end=end, chain=np.array(chain, dtype=np.int64))
 
     def evaluate_one(self, job, block) -> None:
-        b, rig = job.binding, job.rig
+        b: ConstraintBinding = job.binding
+        rig = job.rig
         active = np.nonzero((job.local_times >= -1e-9) & (job.weight > 0))[0]
         if not active.size:
             return
@@ -100,26 +123,27 @@ class IKConstraint(Controller):
         root = pose.root_translations[active]
         jt = None if pose.joint_translations is None else pose.joint_translations[active]
         weight = job.weight[active]
-        if b["limb"] is not None:
-            solve_limb(sk, rot, root, jt, b["limb"], goal, weight=weight, keep_end=b["straight"] is None,
+        if b.limb is not None:
+            solve_limb(sk, rot, root, jt, b.limb, goal, weight=weight, keep_end=b.straight is None,
                        distance=False)
-            joints = np.array(b["limb"], dtype=np.int64)
-            if b["straight"] is not None:
-                end = b["end"]
-                rot[:, end] = quat.slerp(rot[:, end], np.broadcast_to(b["straight"], rot[:, end].shape), weight)
-        else:
-            joints = b["chain"]
+            joints = np.array(b.limb, dtype=np.int64)
+            if b.straight is not None:
+                end = b.end
+                rot[:, end] = quat.slerp(rot[:, end], np.broadcast_to(b.straight, rot[:, end].shape), weight)
+        elif b.chain is not None:
+            joints = b.chain
             before = rot[:, joints].copy()
-            _ccd(sk, rot, root, jt, joints, b["end"], goal)
+            _ccd(sk, rot, root, jt, joints, b.end, goal)
             rot[:, joints] = quat.slerp(before, rot[:, joints], np.broadcast_to(weight[:, None], before.shape[:2]))
         full = pose.local_rotations[:, joints].copy()
         full[active] = rot[:, joints]
         pose.set_rotations(joints, full)
-        reached = chain_fk(sk, rot, root, jt, [b["end"]])[1][:, 0]
+        reached = chain_fk(sk, rot, root, jt, [b.end])[1][:, 0]
         held = weight >= 1.0 - 1e-9
         miss = np.linalg.norm(reached - goal, axis=1)[held]
-        if miss.size and miss.max() > REACH_TOLERANCE_M and not job.state.get("reported"):
-            job.state["reported"] = True
+        state = job.state_of(ConstraintState)
+        if miss.size and miss.max() > REACH_TOLERANCE_M and not state.reported:
+            state.reported = True
             job.report(f"{self.purpose}: the target is out of reach by up to {miss.max() * 100:.0f} cm")
 
 

@@ -17,6 +17,8 @@ the arm finally is.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse import quaternions as quat
@@ -25,7 +27,7 @@ from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.layers import smoothstep
 from infuse.runtime.targets import Target
 
-from .hands import GRIP_SHAPE, bind_hand, reference_globals, set_shape
+from .hands import GRIP_SHAPE, Hand, bind_hand, reference_globals, set_shape
 
 #: Closing (and opening) the hand, seconds.
 GRASP_S = 0.3
@@ -116,6 +118,13 @@ def approach(rig, hand: str, target: Target) -> Approach:
     return Approach(target, quat.rotate(rig.rotation, own) + rig.position, half_hand)
 
 
+@dataclass(frozen=True, eq=False)
+class GrabBinding:
+    """A grab bound to one character: the ``hand`` that closes (its fingers may be none)."""
+
+    hand: Hand
+
+
 class Grab(Controller):
     """Close ``hand`` ("left" or "right") on the object whose runtime target is ``held`` (a
     :class:`HeldObject`): the fingers close from ``ready_s`` to ``stroke_s`` (seconds from the start)
@@ -148,17 +157,18 @@ class Grab(Controller):
         self.held.release_s = float(at_s)
         runtime.stop(activity, at_s, blend_out_s=GRASP_S)
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> GrabBinding:
         hand = bind_hand(rig, self.hand)
         if hand is None:
             raise MissingJointsError(rig.character.asset.path, f"{rig.name} has no mapped {self.hand} wrist: it cannot hold anything")
         if not hand.has_fingers:
             report(f"no fingers are mapped on the {self.hand} hand: it holds without closing them")
-        return {"hand": hand}
+        return GrabBinding(hand)
 
     def evaluate_one(self, job, block) -> None:
         closing = smoothstep((job.local_times - self.ready_s) / max(self.stroke_s - self.ready_s, 1e-6))
-        set_shape(job.pose, job.binding["hand"], GRIP_SHAPE, closing * job.weight)
+        b: GrabBinding = job.binding
+        set_shape(job.pose, b.hand, GRIP_SHAPE, closing * job.weight)
         self.held.attach(block)
         if self.held.missed_m is not None:
             job.report(f"the {self.hand} hand closed {self.held.missed_m * 100:.0f} cm from {self.obj or 'the object'} "

@@ -20,6 +20,8 @@ its target.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse import quaternions as quat
@@ -30,7 +32,7 @@ from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 from infuse.runtime.swing import local_offsets, swing
 
-from .hands import POINTING_SHAPE, bind_hand, reference_locals, reference_tip, set_shape
+from .hands import POINTING_SHAPE, Hand, bind_hand, reference_locals, reference_tip, set_shape
 from .targets import own_positions, resolve_target
 
 HANDS = ("auto", "left", "right", "both")
@@ -45,6 +47,48 @@ EXTENSION_READY, EXTENSION_STROKE = 0.86, 0.94
 #: How far short of a near target the fingertip stops, metres.
 CLEARANCE_M = 0.08
 _SPINE = ("spine1", "spine2", "spine3")
+
+
+@dataclass(frozen=True, eq=False)
+class PointingArm:
+    """What aiming one arm needs, from the reference pose (the character's own frame, metres): its
+    ``chain`` (shoulder, elbow, wrist), its ``hand``, its ``length`` from the shoulder to the fingertip;
+    the pointing direction, the palm normal and their cross product as the columns of ``frame`` (3, 3);
+    the wrist's global rotation ``wrist_reference`` (4,), the fingertip in the wrist's frame ``tip_local``
+    (3,), and the character's ``body`` frame (4,)."""
+
+    chain: tuple[int, int, int]
+    hand: Hand
+    length: float
+    frame: np.ndarray
+    wrist_reference: np.ndarray
+    tip_local: np.ndarray
+    body: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class PointingBinding:
+    """Pointing bound to one character: its ``arms`` by side (those with a mapped shoulder, elbow and wrist);
+    the ``spine`` joints (K,) that turn the body and their ``spine_aligned`` frames (K, 4); the pelvis
+    ``base`` and its ``base_aligned`` frame (4,) (None without one); the ``legs`` (hip, knee, ankle) that
+    keep the feet down as the pelvis turns; the ``hips`` (left, right; None where unmapped); and the
+    ``chest`` joint the target's azimuth is measured about (the top spine joint, else the pelvis)."""
+
+    arms: dict[str, PointingArm]
+    spine: np.ndarray
+    spine_aligned: np.ndarray
+    base: int | None
+    base_aligned: np.ndarray | None
+    legs: list[tuple[int, int, int]]
+    hips: tuple[int | None, int | None]
+    chest: int | None
+
+
+@dataclass
+class PointingState:
+    """What a pointing activity keeps between blocks: the ``hands`` that point, chosen on its first frame."""
+
+    hands: tuple[str, ...] | None = None
 
 
 class Pointing(Controller):
@@ -81,7 +125,7 @@ class Pointing(Controller):
     def describe(self) -> str:
         return f"pointing ({self.hand} hand)"
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> PointingBinding:
         arms = {}
         for side in ("left", "right"):
             s = side[0]
@@ -98,12 +142,13 @@ class Pointing(Controller):
         legs = [tuple(rig.joint(f"{s}_{n}") for n in ("hip", "knee", "ankle")) for s in "lr"]
         legs = [leg for leg in legs if None not in leg]
         base = rig.joint("base")
-        return {"arms": arms, "spine": np.array(spine, dtype=np.int64), "spine_aligned": rig.aligned[spine],
-                "base": base, "base_aligned": None if base is None else rig.aligned[base], "legs": legs,
-                "hips": (rig.joint("l_hip"), rig.joint("r_hip")), "chest": spine[-1] if spine else base}
+        return PointingBinding(arms=arms, spine=np.array(spine, dtype=np.int64), spine_aligned=rig.aligned[spine],
+                               base=base, base_aligned=None if base is None else rig.aligned[base], legs=legs,
+                               hips=(rig.joint("l_hip"), rig.joint("r_hip")), chest=spine[-1] if spine else base)
 
     def evaluate_one(self, job, block) -> None:
-        b, st, rig = job.binding, job.state, job.rig
+        b: PointingBinding = job.binding
+        st, rig = job.state_of(PointingState), job.rig
         active = np.nonzero((job.local_times >= -1e-9) & (job.weight > 0))[0]
         if not active.size:
             return
@@ -117,20 +162,20 @@ class Pointing(Controller):
         rot = pose.local_rotations[active].copy()
         root = pose.root_translations[active]
         jt = None if pose.joint_translations is None else pose.joint_translations[active]
-        if "hands" not in st:
-            st["hands"] = self._hands(b, sk, rot[:1], root[:1], None if jt is None else jt[:1], goal[:1])
-            close = self._too_close(b, sk, rot[:1], root[:1], jt, goal[:1], st["hands"])
+        if st.hands is None:
+            st.hands = self._hands(b, sk, rot[:1], root[:1], None if jt is None else jt[:1], goal[:1])
+            close = self._too_close(b, sk, rot[:1], root[:1], jt, goal[:1], st.hands)
             if close:
                 job.report(close)
-        hands = st["hands"]
-        changed = set()
-        if self.turn and b["chest"] is not None and None not in b["hips"]:
+        hands = st.hands
+        changed: set[int] = set()
+        if self.turn and b.chest is not None and None not in b.hips:
             changed |= self._turn(b, sk, rot, root, jt, goal, weight, hands)
         extension = self._extension(t)
         for side in hands:
-            arm = b["arms"][side]
+            arm = b.arms[side]
             self._aim(arm, sk, rot, root, jt, goal, weight, extension)
-            changed |= set(arm["chain"])
+            changed |= set(arm.chain)
         joints = np.array(sorted(changed), dtype=np.int64)
         full = pose.local_rotations[:, joints].copy()
         full[active] = rot[:, joints]
@@ -138,19 +183,19 @@ class Pointing(Controller):
         for side in hands:
             w = np.zeros(len(job.weight))
             w[active] = weight
-            set_shape(pose, b["arms"][side]["hand"], POINTING_SHAPE, w)
+            set_shape(pose, b.arms[side].hand, POINTING_SHAPE, w)
 
     # -- the parts ---------------------------------------------------------------------------------
-    def _hands(self, b, sk, rot, root, jt, goal) -> tuple[str, ...]:
+    def _hands(self, b: PointingBinding, sk, rot, root, jt, goal) -> tuple[str, ...]:
         """The pointing hands: as asked, or the side of the target (the body's frame at the first frame)."""
-        arms = b["arms"]
+        arms = b.arms
         if self.hand == "both":
             return tuple(s for s in ("left", "right") if s in arms)
         if self.hand in arms:
             return (self.hand,)
         if self.hand != "auto" or len(arms) == 1:
             return (next(iter(arms)),)
-        l_hip, r_hip = b["hips"]
+        l_hip, r_hip = b.hips
         if l_hip is None or r_hip is None:
             return ("right",)
         _, pos = chain_fk(sk, rot, root, jt, [l_hip, r_hip])
@@ -158,9 +203,9 @@ class Pointing(Controller):
         middle = 0.5 * (pos[0, 0] + pos[0, 1])
         return ("left",) if np.dot(goal[0] - middle, left) >= 0.0 else ("right",)
 
-    def _too_close(self, b, sk, rot, root, jt, goal, hands) -> str | None:
-        arm = b["arms"][hands[0]]
-        _, pos = chain_fk(sk, rot, root, None if jt is None else jt[:1], [arm["chain"][0]])
+    def _too_close(self, b: PointingBinding, sk, rot, root, jt, goal, hands) -> str | None:
+        arm = b.arms[hands[0]]
+        _, pos = chain_fk(sk, rot, root, None if jt is None else jt[:1], [arm.chain[0]])
         distance = float(np.linalg.norm(goal[0] - pos[0, 0]))
         if distance < 2.0 * CLEARANCE_M:
             return f"the pointing target is {distance * 100:.0f} cm from the shoulder: too close to point at"
@@ -174,11 +219,11 @@ class Pointing(Controller):
         bump = np.where(t < self.ready_s, 0.0, bump)
         return self.extension * (EXTENSION_READY + (EXTENSION_STROKE - EXTENSION_READY) * bump)
 
-    def _turn(self, b, sk, rot, root, jt, goal, weight, hands) -> set:
+    def _turn(self, b: PointingBinding, sk, rot, root, jt, goal, weight, hands) -> set[int]:
         """Turn the spine and pelvis (in ``rot``, in place) toward a target outside the arm's range;
         returns the joints changed."""
-        l_hip, r_hip = b["hips"]
-        _, pos = chain_fk(sk, rot, root, jt, [l_hip, r_hip, b["chest"]])
+        l_hip, r_hip = b.hips
+        _, pos = chain_fk(sk, rot, root, jt, [l_hip, r_hip, b.chest])
         left = pos[:, 0] - pos[:, 1]
         left[:, 1] = 0.0
         left /= np.maximum(np.linalg.norm(left, axis=1, keepdims=True), 1e-9)
@@ -197,21 +242,21 @@ class Pointing(Controller):
         turn = np.clip(excess, -MAX_TURN, MAX_TURN) * weight  # (F,) radians, positive: to the left
         if not np.any(np.abs(turn) > 1e-6):
             return set()
-        changed = set()
-        pelvis = PELVIS_SHARE if b["base"] is not None and len(b["legs"]) == 2 else 0.0
-        spine = b["spine"]
+        changed: set[int] = set()
+        pelvis = PELVIS_SHARE if b.base is not None and len(b.legs) == 2 else 0.0
+        spine = b.spine
         if spine.size:
             each = (1.0 - pelvis) * turn / spine.size
-            offsets = local_offsets(b["spine_aligned"], swing(each[:, None], 0.0))
+            offsets = local_offsets(b.spine_aligned, swing(each[:, None], 0.0))
             rot[:, spine] = quat.multiply(rot[:, spine], offsets)
             changed |= set(spine.tolist())
         else:
             pelvis = 1.0
-        if pelvis and b["base"] is not None:
-            legs = np.array(b["legs"], dtype=np.int64)
+        if pelvis and b.base is not None:
+            legs = np.array(b.legs, dtype=np.int64)
             feet_rot, feet_pos = chain_fk(sk, rot, root, jt, legs[:, 2])
-            base = b["base"]
-            offset = local_offsets(b["base_aligned"], swing(pelvis * turn, 0.0))
+            base = b.base
+            offset = local_offsets(b.base_aligned, swing(pelvis * turn, 0.0))
             rot[:, base] = quat.multiply(rot[:, base], offset)
             if len(legs) == 2:
                 solve_limb(sk, rot, root, jt, legs, feet_pos, end_rotation=feet_rot, distance=False)
@@ -219,31 +264,31 @@ class Pointing(Controller):
             changed.add(base)
         return changed
 
-    def _aim(self, arm, sk, rot, root, jt, goal, weight, extension) -> None:
+    def _aim(self, arm: PointingArm, sk, rot, root, jt, goal, weight, extension) -> None:
         """Arm IK (in ``rot``, in place): the fingertip on the shoulder-target ray, the hand along it."""
-        shoulder, elbow, wrist = arm["chain"]
+        shoulder, elbow, wrist = arm.chain
         g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist])
         s = g_pos[:, 0]
         to_goal = goal - s
         distance = np.linalg.norm(to_goal, axis=1)
         u = to_goal / np.maximum(distance, 1e-9)[:, None]
-        reach = np.minimum(extension * arm["length"], np.maximum(distance - CLEARANCE_M, 0.35 * arm["length"]))
+        reach = np.minimum(extension * arm.length, np.maximum(distance - CLEARANCE_M, 0.35 * arm.length))
         tip = s + reach[:, None] * u
-        side = np.array([1.0 if arm["hand"].side == "left" else -1.0, 0.0, 0.0])
-        hint = np.array([0.0, -1.0, 0.0]) - 0.3 * quat.rotate(arm["body"], side)  # palm down, a little inward
+        side = np.array([1.0 if arm.hand.side == "left" else -1.0, 0.0, 0.0])
+        hint = np.array([0.0, -1.0, 0.0]) - 0.3 * quat.rotate(arm.body, side)  # palm down, a little inward
         palm = hint - np.sum(hint * u, axis=1, keepdims=True) * u
         palm /= np.maximum(np.linalg.norm(palm, axis=1, keepdims=True), 1e-9)
         target_frame = np.stack((u, palm, np.cross(u, palm)), axis=2)  # (F, 3, 3) columns
-        turn = quat.from_matrix(target_frame @ arm["frame"].T)
-        wanted = quat.multiply(turn, arm["wrist_reference"])  # (F, 4) the wrist's global rotation
-        wrist_goal = tip - quat.rotate(wanted, arm["tip_local"])
+        turn = quat.from_matrix(target_frame @ arm.frame.T)
+        wanted = quat.multiply(turn, arm.wrist_reference)  # (F, 4) the wrist's global rotation
+        wrist_goal = tip - quat.rotate(wanted, arm.tip_local)
         end = quat.slerp(g_rot[:, 1], wanted, weight)
         solve_limb(sk, rot, root, jt, (shoulder, elbow, wrist), wrist_goal, weight=weight, end_rotation=end,
                    distance=False)
 
 
-def _arm(rig, hand, chain) -> dict:
-    """What aiming one arm needs, from the reference pose (the character's own frame, metres)."""
+def _arm(rig, hand: Hand, chain) -> PointingArm:
+    """What aiming one arm needs (see :class:`PointingArm`)."""
     from infuse.kinematics import forward_kinematics
 
     sk = rig.skeleton
@@ -260,7 +305,7 @@ def _arm(rig, hand, chain) -> dict:
     palm /= max(np.linalg.norm(palm), 1e-9)
     length = (np.linalg.norm(g_pos[elbow] - g_pos[shoulder]) + np.linalg.norm(g_pos[wrist] - g_pos[elbow])
               + np.linalg.norm(tip - g_pos[wrist]))
-    return {"chain": (shoulder, elbow, wrist), "hand": hand, "length": float(length),
-            "frame": np.stack((f, palm, np.cross(f, palm)), axis=1), "wrist_reference": g_rot[wrist],
-            "tip_local": quat.rotate(quat.conjugate(g_rot[wrist]), tip - g_pos[wrist]), "body": rig.body}
+    return PointingArm(chain=(shoulder, elbow, wrist), hand=hand, length=float(length),
+                       frame=np.stack((f, palm, np.cross(f, palm)), axis=1), wrist_reference=g_rot[wrist],
+                       tip_local=quat.rotate(quat.conjugate(g_rot[wrist]), tip - g_pos[wrist]), body=rig.body)
 
