@@ -329,8 +329,11 @@ over ``duration_s`` seconds, on top of whatever the character is doing.
 
 Replace :meth:`evaluate_one` with your behaviour. A controller binds once per character through
 canonical joint names (``rig.joint``) and computes whole blocks of frames with numpy; angles in the
-joints' aligned frames (:mod:`infuse.runtime.swing`) mean the same on every skeleton.
+joints' aligned frames (:mod:`infuse.runtime.swing`) mean the same on every skeleton. What ``bind``
+works out per character is a frozen dataclass, its fields named and their shapes stated.
 """
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse import hookimpl
@@ -344,6 +347,14 @@ def tip_curve(t, duration_s: float) -> np.ndarray:
     """(F,) tip in [0, 1] at ``t`` seconds from the start: 0 -> 1 -> 0 over ``duration_s``, 0 outside."""
     x = np.asarray(t, dtype=np.float64) / duration_s
     return np.where((x >= 0.0) & (x <= 1.0), 0.5 - 0.5 * np.cos(2.0 * np.pi * np.clip(x, 0.0, 1.0)), 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class ${ident}Binding:
+    """The $name controller bound to one character: the head ``joints`` (1,) and their ``aligned`` frames (1, 4)."""
+
+    joints: np.ndarray
+    aligned: np.ndarray
 
 
 class $ident(Controller):
@@ -362,18 +373,19 @@ class $ident(Controller):
             raise UsageError(f"$name duration must be over 0.05 s, got {duration_s}")
         self.angle_deg, self.duration_s = float(angle_deg), float(duration_s)
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> ${ident}Binding:
         """Per character: the head joint and its aligned frame."""
         head = rig.joint("skullbase")
         if head is None:
             raise MissingJointsError(rig.name, "no head ('skullbase') is mapped")
-        return {"joints": np.array([head]), "aligned": rig.aligned[[head]]}
+        return ${ident}Binding(joints=np.array([head]), aligned=rig.aligned[[head]])
 
     def evaluate_one(self, job, block) -> None:
         """Vectorized over the block's frames: one pitch per frame."""
+        b: ${ident}Binding = job.binding
         pitch = -np.radians(self.angle_deg) * tip_curve(job.local_times, self.duration_s)  # (F,) negative: down
-        offsets = local_offsets(job.binding["aligned"], swing(0.0, pitch[:, None], 0.0))
-        job.pose.set_rotations(job.binding["joints"], offsets, job.weight, job.mode)
+        offsets = local_offsets(b.aligned, swing(0.0, pitch[:, None], 0.0))
+        job.pose.set_rotations(b.joints, offsets, job.weight, job.mode)
 
 
 @hookimpl

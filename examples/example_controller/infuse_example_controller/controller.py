@@ -9,6 +9,8 @@ arms keep hanging while the shoulders rise. Angles are given in the joints' alig
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from infuse.errors import MissingJointsError, UsageError
@@ -25,6 +27,16 @@ def shrug_curve(t, duration_s: float, rise_fraction: float = 0.25, fall_fraction
     rise = 0.5 - 0.5 * np.cos(np.pi * np.clip(x / rise_fraction, 0.0, 1.0))
     fall = 0.5 - 0.5 * np.cos(np.pi * np.clip((1.0 - x) / fall_fraction, 0.0, 1.0))
     return np.where((x >= 0.0) & (x <= 1.0), np.minimum(rise, fall), 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class ShrugBinding:
+    """A shrug bound to one character: the clavicle and upper-arm ``joints`` (K,) it rolls, their ``aligned``
+    frames (K, 4), and each one's ``rolls`` (K,) radians at the top of a shrug of amount 1 (+ lifts the left)."""
+
+    joints: np.ndarray
+    aligned: np.ndarray
+    rolls: np.ndarray
 
 
 class Shrug(Controller):
@@ -52,8 +64,8 @@ class Shrug(Controller):
     def describe(self) -> str:
         return f"shrug ({self.amount:g})"
 
-    def bind(self, rig, report):
-        """Per character: the clavicle and upper-arm joints, and the roll sign of each (+ lifts the left)."""
+    def bind(self, rig, report) -> ShrugBinding:
+        """Per character: the clavicle and upper-arm joints, and the roll of each."""
         joints, rolls = [], []
         for side, sign in (("l", 1.0), ("r", -1.0)):
             clavicle = rig.joint(f"{side}_sternoclavicular")
@@ -70,15 +82,16 @@ class Shrug(Controller):
             raise MissingJointsError(rig.name, "no clavicle is mapped; it cannot shrug")
         if len(joints) < 4:
             report("a clavicle or an upper arm is not mapped; the shrug is partial")
-        return {"joints": np.array(joints), "aligned": rig.aligned[joints], "rolls": np.radians(LIFT_DEG) * np.array(rolls)}
+        return ShrugBinding(joints=np.array(joints), aligned=rig.aligned[joints],
+                            rolls=np.radians(LIFT_DEG) * np.array(rolls))
 
     def evaluate_one(self, job, block) -> None:
         """Vectorized over the block's frames: one roll per joint per frame."""
-        b = job.binding
+        b: ShrugBinding = job.binding
         lift = self.amount * shrug_curve(job.local_times, self.duration_s, self.rise_fraction, self.fall_fraction)
-        roll = lift[:, None] * b["rolls"][None, :]  # (F, K)
-        offsets = local_offsets(b["aligned"], swing(0.0, 0.0, roll))
-        job.pose.set_rotations(b["joints"], offsets, job.weight, job.mode)
+        roll = lift[:, None] * b.rolls[None, :]  # (F, K)
+        offsets = local_offsets(b.aligned, swing(0.0, 0.0, roll))
+        job.pose.set_rotations(b.joints, offsets, job.weight, job.mode)
 
 
 def shrug_from_bml(parameters: dict, runtime, character: str, activation=None) -> Shrug:
