@@ -119,3 +119,59 @@ def test_a_walk_reaches_its_target_on_a_rig_whose_root_sits_away_from_the_hips(x
     row = pack_row(str(variant), tmp_path / "infusions")
     assert row.finite and "locomotion-male" in row.packs, row.refused
     assert row.miss_m < 0.1, row.miss_m
+
+
+FEET = ("l_ankle", "r_ankle", "l_forefoot", "r_forefoot", "l_toe", "r_toe")
+
+
+def played_source_turns(row, asset, cache) -> np.ndarray:
+    """(K,) the largest turn in one frame (degrees) of each foot joint of ``row`` (its mapped ones of
+    :data:`FEET`) in the pack cycles its walk can blend: those no faster than the first cycle at least
+    as fast as the walk went (its pelvis's ground speed, averaged over each second)."""
+    from infuse import metrics
+    from infuse.packs import infuse_character
+
+    index = row.mapping.indices(row.motion.skeleton)
+    joints = [index[n] for n in FEET if n in index]
+    infusion = infuse_character(infuse.Character("bob", asset, row.mapping), ["locomotion-male"], mapping=row.mapping, cache=cache)
+    cycles = [c for c in next(iter(infusion.spaces.values())).group("locomotion") if c.role != "idle"]
+    _, p = infuse.motion_fk(row.motion)
+    fps = row.motion.fps
+    ground = p[:, index["base"], [0, 2]]
+    second = int(round(fps))
+    walked = float((np.linalg.norm(ground[second:] - ground[:-second], axis=-1)).max())  # metres in one second
+    speeds = np.array([np.hypot(c.parameters["forward_speed"], c.parameters["lateral_speed"]) for c in cycles])
+    top = speeds[speeds >= walked].min(initial=speeds.max())
+    return np.max([metrics.largest_turns(infuse.motion_fk(c.motion)[0][:, joints])
+                   for c, v in zip(cycles, speeds) if v <= top + 1e-9], axis=0)
+
+
+@pytest.mark.parametrize("rig", ["xbot", "mannequiny.glb", "dab.bvh"])
+def test_feet_do_not_pop_when_a_walk_arrives(xbot, rig, tmp_path):
+    """A walk to a point 4 m away at 90 degrees to the left, on X Bot and on two wild rigs: no foot joint
+    turns more in one frame than the pack cycles the walk blends turn theirs, plus 10 degrees. (The
+    stop's quicker last steps let a foot laid flat take the animation's toe off within a frame: 39
+    degrees on X Bot's left ball at arrival.)"""
+    import sys
+    from pathlib import Path
+
+    from infuse import metrics
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from benchmarks.wild_pipeline import humanoid_rigs, pack_row
+
+    if rig == "xbot":
+        path, asset = str(corpus_file("runxaway-models/Xbot.glb")), xbot
+    else:
+        from wild_data import require_wild, wild_file
+
+        require_wild()
+        (rel,) = humanoid_rigs(rig)
+        path, asset = str(wild_file(rel)), infuse.load(wild_file(rel))
+    row = pack_row(path, tmp_path / "infusions")
+    assert row.finite and row.miss_m < 0.1, row
+    index = row.mapping.indices(row.motion.skeleton)
+    joints = [index[n] for n in FEET if n in index]
+    turns = metrics.largest_turns(infuse.motion_fk(row.motion)[0][:, joints])
+    source = played_source_turns(row, asset, tmp_path / "infusions")
+    assert (turns <= source + metrics.POP_MARGIN_DEG).all(), (turns, source)

@@ -54,6 +54,9 @@ _BINDINGS: dict = {}
 #: heel rise (a leg that could not reach its pinned ball) in the early swing.
 RELEASE_S = 0.3
 RISE_RELEASE_S = 0.1
+#: Seconds over which a foot laid flat in a stop's last steps is let go at least (its turn back to
+#: the animation's toe off).
+LAY_RELEASE_S = 0.3
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
 HOLD_S = 0.1
 #: Height of the arc a released foot travels back to the animation over, per metre it travels.
@@ -514,8 +517,14 @@ class Locomotion(Controller):
             root = ground + quat.rotate(turn_q, root - centre)
         else:
             jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - centre)
+        # Laying the feet down follows their stance share, but is let go no faster than over
+        # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
+        # off, and the foot would turn from lying flat to the animation's toe off at once.
+        down = settle[:, None] * support
+        laid = _slow_fall(down, st.get("laid", np.zeros(2)), dt / LAY_RELEASE_S)
+        st["laid"] = laid[-1].copy()
         if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, support)
+            self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
         return rot, root, jt, contact, forward, spun
 
     @staticmethod
@@ -602,23 +611,23 @@ class Locomotion(Controller):
         frame = np.rint((t % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64)
         return clip.phases[np.minimum(frame, len(clip.phases) - 1)]
 
-    def _shorten(self, b, w, stride, rot, root, jt, turn_q, forward, settle, support) -> None:
+    def _shorten(self, b, w, stride, rot, root, jt, turn_q, forward, settle, down, laid) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
         stopping, ``settle`` (F,) in [0, 1] moves that mean toward the idle's stance (the last steps
         land where the feet stand) and lays the feet down: each foot turns toward lying as in the
         idle, its ankle toward its lowest height, fully in the middle of a stance and not in the
-        swing (a foot that stepped low and slow would shuffle along the ground), by its stance
-        share ``support`` (F, 2), so nothing jumps at strike or toe off.
+        swing (a foot that stepped low and slow would shuffle along the ground): its height by
+        ``down`` (F, 2) (how far into the stop times its stance share), its orientation by ``laid``
+        (F, 2) (the same, let go slower), so nothing jumps at strike or toe off.
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
         stance_feet = b["stance_feet"]
         feet_rot, pos = chain_fk(b["skeleton"], rot, root, jt, b["shorten_joints"])  # hips, ankles[, balls]
-        down = settle[:, None] * support  # (F, 2)
         feet = feet_rot[:, 2:4, None]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
             flat = quat.multiply(turn_q[:, None, None], stance_feet)
-            feet = quat.slerp(feet_rot[:, 2:].reshape(-1, 2, 2, 4).swapaxes(1, 2), flat, down[:, :, None])
+            feet = quat.slerp(feet_rot[:, 2:].reshape(-1, 2, 2, 4).swapaxes(1, 2), flat, laid[:, :, None])
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
         body = b["body"]
         mean = quat.normalize((w @ b["body_means"]).reshape(len(w), -1, 4))
@@ -904,7 +913,8 @@ _RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
 def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
     """Ankle goals (F, 3) for a foot pinned at ``ball_goal`` (F, 3) with its ankle at ``goal``: where
     the hip cannot reach the ankle, the smallest further heel rise about the ball (1 degree steps)
-    that brings it within :data:`REACH` of the leg's length; and that rise as rotation vectors (F, 3)
+    that brings it within :data:`REACH` of the leg's length (where none does, the one that brings it
+    nearest: the largest would turn the foot by tens of degrees in a frame); and that rise as rotation vectors (F, 3)
     in the foot's frame. ``ankle_rot`` (F, 4) is the ankle's global rotation, ``leg_pos`` (F, 3, 3)
     the hip, knee and ankle positions."""
     reach = REACH * (np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1))
@@ -921,7 +931,7 @@ def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
     far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
     ok = np.sqrt(far) <= reach[short, None]
-    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
+    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), np.argmin(far, axis=1))  # else the nearest it comes
     out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
     rise[short] = quat.rotate(quat.conjugate(ankle_rot[short]), axis * _RISES[pick][:, None])
     return out, rise
@@ -1119,6 +1129,14 @@ def _scatter(before: np.ndarray, active: np.ndarray, values: np.ndarray, frames:
     out = np.array(np.broadcast_to(before, (frames,) + values.shape[1:]))
     out[active] = values
     return out
+
+
+def _slow_fall(x: np.ndarray, before: np.ndarray, step: float) -> np.ndarray:
+    """(F, K) ``x`` (F, K) falling by at most ``step`` a frame, from ``before`` (K,) a frame before the
+    first; rising as ``x`` does. Each frame's value is the largest of ``x`` at it and of every earlier
+    value less ``step`` a frame since."""
+    k = np.arange(len(x))[:, None]
+    return np.maximum(np.maximum.accumulate(x + step * k, axis=0) - step * k, before[None] - step * (k + 1))
 
 
 def _ease(x) -> np.ndarray:
