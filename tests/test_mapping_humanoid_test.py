@@ -266,3 +266,19 @@ def test_stubby_legs_behind_forward_pelvis_helpers_stand():
     assert base[1] - 0.06 < feet < base[1]
     limbs = LEGS + tuple(f"{s}_{j}" for s in "lr" for j in ("shoulder", "elbow", "wrist"))
     assert _wrong(map_skeleton(body).joints, v, limbs) == []
+
+
+@pytest.mark.parametrize("convention", ["own", "mixamo"])
+def test_names_mapper_follows_the_body_when_side_names_are_mirrored(convention):
+    """Side names written from the viewer's side (left and right swapped): the names mapper gives
+    left and right by the body (its toes and knees show its front) and says so in the reasons."""
+    sk, label = _canonical()
+    if convention == "mixamo":
+        v = skeleton_variants.convention(sk, None, label, "mixamo")
+        sk, label = v.skeleton, {"mapping": v.mapping, "alternatives": v.alternatives}
+    v = skeleton_variants.mirrored_names(sk, None, label)
+    mapping = map_skeleton(v.skeleton, mapper="names")
+    assert _wrong(mapping.joints, v) == []
+    assert "the body decides" in mapping.reasons["l_hip"]
+    plain = map_skeleton(sk, mapper="names")
+    assert "the body decides" not in plain.reasons["l_hip"]

@@ -48,11 +48,14 @@ NOT_LIMB_WORDS = frozenset({
 
 @dataclass
 class BodyCheck:
-    """The verdict: ``why`` the body is refused (``None``: accepted) and the limb pairs the
-    geometry found where the names gave none (``"legs"`` / ``"arms"`` -> :class:`~.geometry.Limbs`)."""
+    """The verdict: ``why`` the body is refused (``None``: accepted), the limb pairs the geometry
+    found where the names gave none (``"legs"`` / ``"arms"`` -> :class:`~.geometry.Limbs`), and for
+    an accepted body the pose it stands in (J, 3) and its up (3,)."""
 
     why: str | None
     from_geometry: dict[str, Limbs] = field(default_factory=dict)
+    positions: np.ndarray | None = None
+    up: np.ndarray | None = None
 
 
 def check_body(skeleton, joints: dict[str, str], pose=None) -> BodyCheck:
@@ -76,6 +79,7 @@ def check_body(skeleton, joints: dict[str, str], pose=None) -> BodyCheck:
     legs = named["legs"] or _ends(found["legs"])
     arms = named["arms"] or _ends(found["arms"])
     upper = [index[joints[n]] for n in UPPER if n in joints][:1] or list(arms[0])
+    standing = rest
     cos = _standing_cos(rest, legs, upper)
     if cos > STANDING_COS:
         frames = resolve_pose(pose)
@@ -83,12 +87,15 @@ def check_body(skeleton, joints: dict[str, str], pose=None) -> BodyCheck:
             frames = np.asarray(frames, dtype=np.float64)
             first_frame = frames[0] if frames.ndim == 3 else frames
             if first_frame.shape == (skeleton.num_joints, 3) and np.all(np.isfinite(first_frame)):
-                cos = min(cos, _standing_cos(first_frame, legs, upper))
+                cos_frame = _standing_cos(first_frame, legs, upper)
+                if cos_frame < cos:
+                    cos, standing = cos_frame, first_frame
     if cos > STANDING_COS:
         angle = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
         return BodyCheck(f"its legs do not point away from its head (they are {angle:.0f} degrees from the "
                          "spine's direction instead of about 180): a four-legged or lying body", found)
-    return BodyCheck(None, found)
+    up = standing[upper].mean(axis=0) - standing[legs[0]].mean(axis=0)
+    return BodyCheck(None, found, standing, up / max(float(np.linalg.norm(up)), 1e-12))
 
 
 def refusal(skeleton, joints: dict[str, str], pose=None) -> str | None:

@@ -6,7 +6,8 @@ the labelling rule (chest = spine3, one neck joint = spine4...) using their orde
 A VRM file's own humanoid map (``Asset.humanoid``, given as ``humanoid=``) is used first when present.
 The joints found must make two legs and two arms on a trunk, the legs pointing away from the head
 (:mod:`.body_check`; where the names give no legs or no arms, the hierarchy and rest positions
-are asked for them); otherwise the skeleton is refused with the reason.
+are asked for them); otherwise the skeleton is refused with the reason. Side names that say the
+opposite of the body's own left (:mod:`.sides`) are swapped.
 """
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from infuse.mapping import Mapping
 
 from .body_check import LIMB_PARTS, limb_part, check_body
 from .conventions import CONVENTIONS, VRM, VRM0_THUMB
+from .sides import MIRRORED_VOTE, mirrored_vote, swapped
 
 NAME = "names"
 _SIDES = {
@@ -166,9 +168,18 @@ def names_map(skeleton, pose=None, meta=None, fixed=None, file=None, humanoid=No
     body = check_body(skeleton, joints, pose)
     if body.why is not None:
         raise NotHumanoidError(file, body.why)
+    mirrored = mirrored_vote(body.positions, skeleton, joints, body.up) >= MIRRORED_VOTE
+    if mirrored:  # names written from the viewer's side: the body's own left decides
+        joints, sources = swapped(joints), swapped(sources)
     conf = {n: (0.95 if n in joints else 0.7) for n in ALL_NAMES}
     reasons = {n: (f"{joints[n]!r} in {sources[n]}" if n in joints else f"no joint of that name in {source}")
                for n in ALL_NAMES}
+    if mirrored:
+        for n in joints:
+            if swapped({n: ""}).keys() != {n}:
+                conf[n] = 0.85
+                reasons[n] += ("; the side names say the opposite of the body (left = up x forward, forward "
+                               "where the toes point and the knees bend): the body decides")
     # limbs the names do not give but the geometry shows stay unmapped: a name-based mapper does not
     # guess which joint of an unnamed chain is which; it says where they are
     for kind, limbs in body.from_geometry.items():
