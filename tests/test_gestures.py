@@ -170,6 +170,38 @@ def test_repeated_strokes():
     assert abs((a + 1 + minima[0]) / FPS - 1.0) <= 1.0 / FPS
 
 
+def straight_fingers(rig, motion, side: str, frames: np.ndarray) -> np.ndarray:
+    """(len(frames), 4) whether index, middle, ring and pinky are held straight: the knuckle-to-last-joint
+    chord over the two bones' lengths above 0.9 (a curled finger's is about 0.75)."""
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations[frames], motion.root_translations[frames],
+                                  None if motion.joint_translations is None else motion.joint_translations[frames])
+    out = []
+    for finger in ("index", "middle", "ring", "pinky"):
+        p1, p2, p3 = (g_pos[:, rig.joint(f"{side}_{finger}{k}")] for k in (1, 2, 3))
+        bones = np.linalg.norm(p2 - p1, axis=-1) + np.linalg.norm(p3 - p2, axis=-1)
+        out.append(np.linalg.norm(p3 - p1, axis=-1) / bones > 0.9)
+    return np.stack(out, axis=-1)
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm"])
+def test_a_count_shows_one_more_finger_with_each_repeated_stroke(key):
+    from infuse_gestures.timewarp import stroke_times
+
+    scene, motion = play(key, '<gesture id="g1" lexeme="COUNT" repeats="4" stroke="1.0"/>')
+    rig = scene.runtime.rig("bob")
+    activity = scene.activities[("b1", "g1")]
+    gesture = activity.controller
+    strokes = activity.start_s + stroke_times(gesture.phases, gesture.authored, 4)
+    assert strokes[0] == pytest.approx(1.0)
+    shown = straight_fingers(rig, motion, "r", np.round(strokes * FPS).astype(int))
+    # One finger, then two, three, four: index first, each stroke straightening the next.
+    assert shown.tolist() == [[k < n for k in range(4)] for n in (1, 2, 3, 4)], shown
+    # The hand changes between strokes without a jump: no finger joint turns more than 20 degrees a frame.
+    fingers = [rig.joint(f"r_{f}{k}") for f in ("index", "middle", "ring", "pinky") for k in (1, 2)]
+    q = motion.local_rotations[:, fingers]
+    assert np.degrees(quat.angle_between(q[1:], q[:-1])).max() < 20.0
+
+
 def test_amplitude_scales_the_stroke():
     def travel(amplitude: float) -> float:
         scene, motion = play("xbot", f'<gesture id="g1" lexeme="CONTRAST" amplitude="{amplitude}" stroke="1.2"/>')
@@ -230,7 +262,7 @@ def test_the_pack_has_every_gesture_for_each_hand_with_its_phases():
     doc = load_pack("gestures").require_built()
     clips = {c["name"]: c for c in doc["clips"]}
     for gesture in ("beat_small", "beat_medium", "beat_large", "offer", "reject", "shrug", "count", "wave", "this_big",
-                    "cycle", "contrast", "self_point", "chin_touch", "thumbs_up"):
+                    "cycle", "contrast", "self_point", "chin_touch", "thumbs_up", "past", "future", "here", "tiny", "belly"):
         for hand in ("left", "right"):
             c = clips[f"{gesture}_{hand}"]
             times = [0.0] + [c["sync"][p] for p in ("ready", "strokeStart", "stroke", "strokeEnd", "relax")] + [c["duration"]]

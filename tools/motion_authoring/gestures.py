@@ -10,7 +10,7 @@ hand's twist about the forearm. Specs are written for the left hand; the right h
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -32,6 +32,10 @@ PALMS = {
     "self": ((-1.0, 0.0, -0.6), (0.0, -1.0, 0.0)),   # fingers toward one's own chest
     "chin": ((-0.25, 1.0, 0.1), (0.0, 0.0, -1.0)),   # knuckles up, palm toward the body
     "fist": ((-1.0, 0.0, 0.35), (0.0, 0.0, -1.0)),   # fingers across the body, thumb up
+    "back": ((0.15, 0.45, -1.0), (-1.0, 0.0, 0.0)),  # fingers back over the shoulder, palm toward the head
+    "ahead": ((0.0, -0.1, 1.0), (0.0, -1.0, -0.1)),  # fingers forward, palm down
+    "floor": ((-0.1, -0.8, 0.6), (0.0, -0.6, -0.8)),  # fingers down and forward, palm toward the body
+    "belly": ((-1.0, -0.1, 0.15), (0.0, 0.0, -1.0)),  # fingers across the belly, palm on it
 }
 #: Finger shapes: curl (radians per joint) of index, middle, ring, pinky, and the thumb's bend.
 SHAPES = {
@@ -41,6 +45,11 @@ SHAPES = {
     "fist": (1.35, 1.45, 1.45, 1.4, 0.7),
     "thumb": (1.35, 1.45, 1.45, 1.4, -0.35),
     "think": (0.8, 1.25, 1.35, 1.35, 0.3),
+    "two": (0.05, 0.05, 1.45, 1.4, 0.7),
+    "three": (0.05, 0.05, 0.08, 1.4, 0.7),
+    "four": (0.05, 0.05, 0.08, 0.1, 0.7),
+    "five": (0.05, 0.05, 0.08, 0.1, -0.2),
+    "pinch": (0.6, 1.3, 1.4, 1.4, 0.3),
 }
 
 
@@ -60,8 +69,9 @@ class GestureSpec:
     """A gesture: ``times`` of its phases and ``end`` (seconds), ``keys`` per phase (``relax`` defaults to
     ``stroke_end``), optional ``extra`` keys (seconds, Key) between them, an ``oscillation`` over
     [stroke_start, stroke_end] ((3,) amplitude metres, Hz, (3,) second axis at a quarter period or None),
-    the BML ``lexemes`` it realizes, its ``hands`` and, for two hands that differ, the right hand's
-    keys (``right``, in the right hand's own mirrored coordinates)."""
+    the BML ``lexemes`` it realizes, its ``hands``, for two hands that differ, the right hand's keys
+    (``right``, in the right hand's own mirrored coordinates), and ``strokes``: the finger shapes of the
+    second, third… repeated stroke when they differ from the first (a count), each a clip of its own."""
 
     name: str
     times: dict
@@ -72,6 +82,7 @@ class GestureSpec:
     oscillation: tuple | None = None
     hands: tuple = ("left", "right", "both")
     right: dict = field(default_factory=dict)
+    strokes: tuple = ()
 
 
 def _beat(name: str, size: float, lexemes: tuple) -> GestureSpec:
@@ -106,7 +117,7 @@ SPECS = (
     GestureSpec("count", {"ready": 0.38, "stroke_start": 0.44, "stroke": 0.58, "stroke_end": 0.85, "relax": 1.0}, 1.5,
                 {"ready": Key((-0.02, -0.26, 0.24), "in", "point"), "stroke_start": Key((-0.03, -0.2, 0.26), "out", "point"),
                  "stroke": Key((-0.04, -0.12, 0.3), "out", "point"), "stroke_end": Key((-0.04, -0.13, 0.3), "out", "point")},
-                ("COUNT", "ONE", "ENUMERATE", "FIRST", "LIST", "INDEX")),
+                ("COUNT", "ONE", "ENUMERATE", "FIRST", "LIST", "INDEX"), strokes=("two", "three", "four", "five")),
     GestureSpec("wave", {"ready": 0.45, "stroke_start": 0.55, "stroke": 0.65, "stroke_end": 1.55, "relax": 1.65}, 2.2,
                 {"ready": Key((0.08, -0.05, 0.16), "out", "open"), "stroke_start": Key((0.1, 0.02, 0.16), "out", "open"),
                  "stroke": Key((0.1, 0.02, 0.16), "out", "open"), "stroke_end": Key((0.1, 0.02, 0.16), "out", "open")},
@@ -140,6 +151,27 @@ SPECS = (
                 {"ready": Key((-0.02, -0.3, 0.24), "fist", "fist"), "stroke_start": Key((-0.03, -0.24, 0.27), "fist", "thumb"),
                  "stroke": Key((-0.04, -0.18, 0.3), "fist", "thumb"), "stroke_end": Key((-0.04, -0.18, 0.3), "fist", "thumb")},
                 ("THUMBS_UP", "THUMBSUP", "OK", "GOOD", "APPROVE", "YES_GESTURE", "LIKE")),
+    # Time on a line from behind (the past) to ahead (the future), the speaker at now.
+    GestureSpec("past", {"ready": 0.4, "stroke_start": 0.48, "stroke": 0.72, "stroke_end": 0.95, "relax": 1.1}, 1.65,
+                {"ready": Key((0.0, -0.28, 0.2), "in"), "stroke_start": Key((0.04, -0.2, 0.2), "in", "open"),
+                 "stroke": Key((0.1, -0.05, 0.02), "back", "open"), "stroke_end": Key((0.1, -0.06, 0.03), "back", "open")},
+                ("PAST", "BEFORE", "AGO", "EARLIER", "PREVIOUS", "YESTERDAY", "FORMERLY")),
+    GestureSpec("future", {"ready": 0.4, "stroke_start": 0.46, "stroke": 0.7, "stroke_end": 0.95, "relax": 1.1}, 1.65,
+                {"ready": Key((-0.02, -0.3, 0.22), "in"), "stroke_start": Key((-0.02, -0.29, 0.26), "ahead", "open"),
+                 "stroke": Key((0.02, -0.2, 0.44), "ahead", "open"), "stroke_end": Key((0.02, -0.2, 0.43), "ahead", "open")},
+                ("FUTURE", "LATER", "AHEAD", "TOMORROW", "SOON", "AFTERWARDS", "NEXT")),
+    GestureSpec("here", {"ready": 0.38, "stroke_start": 0.44, "stroke": 0.6, "stroke_end": 0.85, "relax": 1.0}, 1.5,
+                {"ready": Key((-0.02, -0.3, 0.24), "in", "point"), "stroke_start": Key((-0.03, -0.22, 0.3), "floor", "point"),
+                 "stroke": Key((-0.03, -0.33, 0.33), "floor", "point"), "stroke_end": Key((-0.03, -0.32, 0.33), "floor", "point")},
+                ("HERE", "NOW", "RIGHT_HERE", "THIS_PLACE", "TODAY", "DEICTIC_HERE")),
+    GestureSpec("tiny", {"ready": 0.38, "stroke_start": 0.46, "stroke": 0.62, "stroke_end": 0.95, "relax": 1.1}, 1.6,
+                {"ready": Key((-0.03, -0.28, 0.24), "in"), "stroke_start": Key((-0.05, -0.2, 0.28), "in", "pinch"),
+                 "stroke": Key((-0.06, -0.16, 0.3), "in", "pinch"), "stroke_end": Key((-0.06, -0.16, 0.3), "in", "pinch")},
+                ("TINY", "LITTLE", "A_LITTLE", "A_BIT", "PINCH", "PRECISE", "FEW", "MINOR")),
+    GestureSpec("belly", {"ready": 0.42, "stroke_start": 0.55, "stroke": 0.7, "stroke_end": 1.3, "relax": 1.45}, 2.0,
+                {"ready": Key((-0.03, -0.36, 0.2), "in"), "stroke_start": Key((-0.07, -0.39, 0.2), "belly", "open"),
+                 "stroke": Key((-0.08, -0.4, 0.17), "belly", "open"), "stroke_end": Key((-0.08, -0.4, 0.17), "belly", "open")},
+                ("BELLY", "STOMACH", "GUT", "TUMMY", "GUT_FEELING"), hands=("left", "right")),
 )
 
 
@@ -264,11 +296,24 @@ def gesture_motion(body: Body, stand: Motion, spec: GestureSpec, hand: str, name
     return Motion(sk, FPS, quat.normalize(local), root, name=name, sync_points=sync)
 
 
+def stroke_variants(spec: GestureSpec) -> list[GestureSpec]:
+    """The gesture of each repeated stroke after the first that :attr:`GestureSpec.strokes` gives: the same
+    movement with every key's fingers in that stroke's shape."""
+    def shaped(keys: dict, shape: str) -> dict:
+        return {p: replace(k, shape=shape) for p, k in keys.items()}
+    return [replace(spec, keys=shaped(spec.keys, shape), right=shaped(spec.right, shape), strokes=())
+            for shape in spec.strokes]
+
+
 def gesture_clips(body: Body, stand: Motion) -> list[tuple[GestureSpec, str, Motion]]:
-    """Every gesture for every hand it is made for: (spec, hand, motion named ``<gesture>_<hand>``)."""
+    """Every gesture for every hand it is made for: (spec, hand, motion named ``<gesture>_<hand>``), each
+    followed by its stroke variants (:func:`stroke_variants`), named ``<gesture>_<hand>@<stroke>`` from
+    stroke 2 on: what the ``gesture`` controller plays for that repeated stroke."""
     out = []
     for spec in SPECS:
         for hand in spec.hands:
             name = f"{spec.name}_{hand}"
             out.append((spec, hand, gesture_motion(body, stand, spec, hand, name)))
+            for n, variant in enumerate(stroke_variants(spec), start=2):
+                out.append((variant, hand, gesture_motion(body, stand, variant, hand, f"{name}@{n}")))
     return out

@@ -125,19 +125,21 @@ def make_reaching(body: Body) -> Path:
 
 def make_gestures(body: Body) -> Path:
     """The gestures pack: each gesture for the hands it is made for, its phases as sync times and the BML
-    lexemes it realizes as tags."""
+    lexemes it realizes as tags (none on a repeated stroke's variant, which no lexeme names)."""
     folder = pack_folder("gestures")
     stand, _ = gait_motion(body, locomotion_clips("male")["idle"][0], "stand")
     entries = []
     for spec, hand, motion in gesture_clips(body, stand):
         write_clip(body, motion, folder / "clips" / f"{motion.name}.bvh")
         entries.append({"name": motion.name, "file": f"clips/{motion.name}.bvh", "role": "gesture",
-                        "tags": [spec.name, *(lexeme.lower() for lexeme in spec.lexemes)], "loop": False,
+                        "tags": [] if "@" in motion.name else [spec.name, *(lexeme.lower() for lexeme in spec.lexemes)],
+                        "loop": False,
                         "hand": hand, "sync": {k: round(v, 4) for k, v in motion.sync_points.items()}})
     write_clip(body, infuse.Motion.rest_pose(body.skeleton, name="rest"), folder / "skeleton.bvh")
     pack = {"name": "gestures", "version": "1.0.0", "kind": "gesture", "skeleton": "skeleton.bvh", "analysis": "analysis.json",
             "description": "conversational gestures for each hand and both: beats, offer, reject, shrug, count, wave, "
-                           "this big, cycle, contrast, self-point, chin touch, thumbs-up (procedural)"}
+                           "this big, cycle, contrast, self-point, chin touch, thumbs-up, past, future, here, tiny, "
+                           "hand on belly (procedural)"}
     return write_manifest(folder / "manifest.toml", pack, entries)
 
 

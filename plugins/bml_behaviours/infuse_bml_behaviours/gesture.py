@@ -1,8 +1,8 @@
 """``<gesture>``, SmartBody's ``<animation>`` and ``<blend>``: clips from behaviour packs when
 their timing is known, otherwise typical gesture phase durations.
 
-A ``<gesture lexeme>`` the character has no clip of that name for is looked up in the installed
-``gestures`` pack (:mod:`.gesture_lexicon`; then its ``type``) and timed by that gesture's phases; ``amplitude`` (1: as
+A ``<gesture lexeme>`` (or ``name``) the character has no clip of that name for is looked up in the
+installed ``gestures`` pack (:mod:`.gesture_lexicon`; then its ``type``) and timed by that gesture's phases; ``amplitude`` (1: as
 authored), ``speed`` (1: as authored) and ``repeats`` (strokes) shape it. A lexeme the pack does not
 know warns here, naming it."""
 from __future__ import annotations
@@ -41,17 +41,19 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         raise BehaviourError("it has neither a lexeme nor a name")
     mode = _mode(behaviour, notes)
     hold = number(behaviour, "poststroke_hold", 0.0, notes, minimum=0.0)
-    if lexeme and not context.clip_timing(clip) and gesture_lexicon.known():
+    if not context.clip_timing(clip) and gesture_lexicon.known():
         # SmartBody's gesture maps name a variant in ``type`` (DEICTIC YOU, DEICTIC ME): tried when the lexeme fails.
+        # A SmartBody animation name the character has no clip of is read like a lexeme (…_BeatMidRt01 is a beat).
         kind = word(behaviour, "type")
-        found = gesture_lexicon.lookup(lexeme, mode) or (gesture_lexicon.lookup(kind, mode) if kind else None)
+        found = gesture_lexicon.lookup(lexeme or clip, mode) or (gesture_lexicon.lookup(kind, mode) if kind else None)
         if found is not None:
-            return _pack_gesture(behaviour, lexeme, found, hold, notes)
-        posture = posture_lexicon.lookup(lexeme, words=False)
+            return _pack_gesture(behaviour, lexeme or clip, found, hold, notes)
+        posture = posture_lexicon.lookup(lexeme, words=False) if lexeme else None
         if posture is not None:  # a posture given as a gesture (Greta's ArmsCrossed): held over the gesture's span
             return held_posture(posture, GESTURE_POINTS, notes)
-        notes.append(f"lexeme {lexeme!r} names no gesture of the gestures pack (its gestures: "
-                     f"{', '.join(gesture_lexicon.gestures())})")
+        if lexeme:
+            notes.append(f"lexeme {lexeme!r} names no gesture of the gestures pack (its gestures: "
+                         f"{', '.join(gesture_lexicon.gestures())})")
     default = BEAT_POINTS if "beat" in (lexeme or clip).lower() else GESTURE_POINTS
     timing, source = clip_model(context, clip, default)
     if hold:

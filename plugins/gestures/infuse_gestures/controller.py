@@ -7,7 +7,9 @@ scales each joint's movement away from the clip's ready pose (1: as authored). A
 before the previous one of the same character with a hand in common has retracted co-articulates: the
 previous one stays at its stroke's end and the new one blends from there to its own ready pose, never
 passing through rest (an arm the new one leaves free retracts meanwhile). Gestures of different hands
-overlap freely.
+overlap freely. A gesture whose repeated strokes differ (a count: one finger, two, three…) has a clip
+per stroke from the second on, named ``<clip>@<stroke>``: each stroke plays its own, the hand changing
+from one to the next over the return between them.
 """
 from __future__ import annotations
 
@@ -20,7 +22,7 @@ from infuse import Motion, quaternions as quat
 from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, sample_motion
 
-from .timewarp import PHASES, phase_warp
+from .timewarp import PHASES, phase_warp, stroke_times
 
 #: A gesture that starts less than this after the previous one ends follows on from its stroke, seconds.
 COARTICULATION_GAP_S = 0.5
@@ -67,11 +69,14 @@ def authored_phases(pack, clip: str) -> tuple[dict, frozenset]:
 @dataclass(frozen=True, eq=False)
 class GestureBinding:
     """A gesture bound to one character: ``motion``, its pack clip infused on the character; ``joints``
-    (K,): the arm joints it drives; ``ready`` (K, 4): their local rotations in the clip's ready pose."""
+    (K,): the arm joints it drives; ``ready`` (K, 4): their local rotations in the clip's ready pose;
+    ``strokes``: the clips of its repeated strokes from the second on (``<clip>@2``, ``@3``… as far as the
+    pack has them; a later stroke plays the last)."""
 
     motion: Motion
     joints: np.ndarray
     ready: np.ndarray
+    strokes: tuple = ()
 
 
 class Gesture(Controller):
@@ -125,7 +130,10 @@ class Gesture(Controller):
             raise MissingJointsError(rig.name, f"no arm joints are mapped for gesture {self.clip!r}")
         joints = np.array(arm, dtype=np.int64)
         ready, _, _, _ = sample_motion(clip.motion, np.array([self.authored["ready"]]), loop=False, joints=joints)
-        return GestureBinding(clip.motion, joints, ready[0])
+        strokes: list[Motion] = []
+        while len(strokes) < self.repeats - 1 and f"{self.clip}@{len(strokes) + 2}" in space.clips:
+            strokes.append(space.clips[f"{self.clip}@{len(strokes) + 2}"].motion)
+        return GestureBinding(clip.motion, joints, ready[0], tuple(strokes))
 
     def clip_times(self, local_times) -> np.ndarray:
         """Clip seconds (F,) at ``local_times`` (F,) seconds from the gesture's start."""
@@ -134,10 +142,27 @@ class Gesture(Controller):
 
     def evaluate_one(self, job, block) -> None:
         b: GestureBinding = job.binding
-        rotations, _, _, _ = sample_motion(b.motion, self.clip_times(job.local_times), loop=False, joints=b.joints)
+        times = self.clip_times(job.local_times)
+        rotations, _, _, _ = sample_motion(b.motion, times, loop=False, joints=b.joints)
+        if b.strokes:
+            rotations = self._stroke_by_stroke(b, rotations, times, job.local_times)
         if self.amplitude != 1.0:
             rotations = self._scaled(rotations, b.ready, job.local_times)
         job.pose.set_rotations(b.joints, rotations, job.weight, job.mode)
+
+    def _stroke_by_stroke(self, b: GestureBinding, first: np.ndarray, clip_times: np.ndarray,
+                          local_times: np.ndarray) -> np.ndarray:
+        """(F, K, 4) rotations with each repeated stroke from its own clip: ``first`` (F, K, 4) the first
+        stroke's clip at ``clip_times`` (F,); between two strokes the hand turns from one's to the next's
+        over the return (slerp by the time between them, ``local_times`` (F,) seconds)."""
+        sampled = np.stack([first] + [sample_motion(m, clip_times, loop=False, joints=b.joints)[0] for m in b.strokes])
+        at = np.interp(local_times, stroke_times(self.phases, self.authored, self.repeats), np.arange(self.repeats))
+        lower = np.floor(at).astype(np.int64)
+        upper = np.minimum(lower + 1, self.repeats - 1)
+        frames = np.arange(len(local_times))
+        last = len(sampled) - 1
+        return quat.slerp(sampled[np.minimum(lower, last), frames], sampled[np.minimum(upper, last), frames],
+                          np.broadcast_to((at - lower)[:, None], first.shape[:2]))
 
     def _scaled(self, rotations: np.ndarray, ready: np.ndarray, t: np.ndarray) -> np.ndarray:
         """(F, K, 4) rotations whose turn away from the ready pose (K, 4) is scaled by the amplitude, from

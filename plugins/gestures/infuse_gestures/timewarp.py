@@ -29,18 +29,31 @@ def _breakpoints(wanted: dict, authored: dict, repeats: int) -> tuple[np.ndarray
     add(w[2], a[2])
     add(w[3], a[3])
     if repeats > 1:  # (s -> ss -> s) again for each repeat, then s -> se; evenly scaled into the wanted span
-        back = a[3] - a[2]
-        total = (a[4] - a[3]) + 2.0 * back * (repeats - 1)
-        k = (w[4] - w[3]) / total if total > 1e-9 else 0.0
+        leg = _return_leg(wanted, authored, repeats)
         for _ in range(repeats - 1):
-            add(xs[-1] + k * back, a[2])
-            add(xs[-1] + k * back, a[3])
+            add(xs[-1] + leg, a[2])
+            add(xs[-1] + leg, a[3])
         add(w[4], a[4])
     else:
         _held(add, w[3], w[4], a[3], a[4])
     _held(add, w[4], w[5], a[4], a[5])
     add(w[6], a[6])
     return np.array(xs), np.array(ys)
+
+
+def _return_leg(wanted: dict, authored: dict, repeats: int) -> float:
+    """Wanted seconds of one way between a repeated stroke and strokeStart: the repeats and the last
+    post-stroke movement share the wanted span from stroke to strokeEnd in the clip's proportions."""
+    back = float(authored["stroke"]) - float(authored["strokeStart"])
+    total = float(authored["strokeEnd"]) - float(authored["stroke"]) + 2.0 * back * (repeats - 1)
+    return back * (float(wanted["strokeEnd"]) - float(wanted["stroke"])) / total if total > 1e-9 else 0.0
+
+
+def stroke_times(wanted: dict, authored: dict, repeats: int = 1) -> np.ndarray:
+    """Wanted seconds (R,) of each of the ``repeats`` strokes, the first on ``stroke``."""
+    repeats = max(int(repeats), 1)
+    leg = _return_leg(wanted, authored, repeats) if repeats > 1 else 0.0
+    return float(wanted["stroke"]) + 2.0 * leg * np.arange(repeats)
 
 
 def _held(add, w0: float, w1: float, a0: float, a1: float) -> None:
