@@ -76,6 +76,28 @@ def test_beat_strokes_land_within_a_frame_of_their_sync_reference(key):
 
 
 @pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
+def test_strokes_land_within_a_frame_after_coarticulation_and_at_other_speeds(key):
+    """An offer, a large beat entered from the offer's stroke (co-articulated) at speed 1.5, then a slow
+    beat (speed 0.7) on the other hand: each stroke is the frame its wrist passes the authored stroke pose."""
+    body = ('<gesture id="g1" lexeme="OFFER" stroke="1.0"/>'
+            '<gesture id="g2" lexeme="BEAT_LARGE" speed="1.5" stroke="g1:stroke + 0.9"/>'
+            '<gesture id="g3" lexeme="BEAT" mode="LEFT_HAND" speed="0.7" stroke="2.73"/>')
+    scene, motion = play(key, body)
+    rig = scene.runtime.rig("bob")
+    assert scene.activities[("b1", "g2")].controller.enter_ready  # it follows on from the offer's stroke
+    for name, side, wanted in (("g1", "r", 1.0), ("g2", "r", 1.9), ("g3", "l", 2.73)):
+        activation = scene.activities[("b1", name)].source
+        assert activation.time("stroke") == pytest.approx(wanted, abs=1e-9)
+        wrist = chest_wrist(rig, motion, side)
+        target, _ = authored_stroke(rig, activation.parameters["clip"], side)
+        window = np.arange(int(activation.time("strokeStart") * FPS), int(np.ceil(activation.time("strokeEnd") * FPS)) + 1)
+        distance = np.linalg.norm(wrist[window] - target, axis=-1)
+        closest = window[np.argmin(distance)]
+        assert abs(closest / FPS - wanted) <= 1.0 / FPS + 1e-9, (name, closest / FPS, wanted)
+        assert distance.min() < 0.005, (name, distance.min())  # metres: the authored stroke pose itself
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
 @pytest.mark.parametrize("lexeme,mode", [("OFFER", "RIGHT_HAND"), ("REJECT", "LEFT_HAND"), ("THUMBS_UP", "RIGHT_HAND"),
                                          ("THINK", "LEFT_HAND"), ("SHRUG", "BOTH_HANDS")])
 def test_wrist_reaches_the_authored_stroke_pose_at_the_stroke(key, lexeme, mode):

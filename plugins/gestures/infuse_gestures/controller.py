@@ -107,7 +107,7 @@ class Gesture(Controller):
         if any(b < a - 1e-9 for a, b in zip(times, times[1:])):
             raise UsageError(f"gesture {clip!r}: phases out of order: {dict(zip(PHASES, times))}")
         self.phases = dict(zip(PHASES, times))
-        self.repeats, self.amplitude = int(repeats), float(amplitude)
+        self.repeats, self.amplitude, self.speed = int(repeats), float(amplitude), float(speed)
         self.enter_ready = False        # set when it follows on from another gesture's stroke
         self.leave_at_stroke_end = False  # set when another gesture follows on from its stroke
         self.duration_s = self.phases["end"]
@@ -138,7 +138,7 @@ class Gesture(Controller):
     def clip_times(self, local_times) -> np.ndarray:
         """Clip seconds (F,) at ``local_times`` (F,) seconds from the gesture's start."""
         return phase_warp(local_times, self.phases, self.authored, self.repeats, self.enter_ready,
-                          self.leave_at_stroke_end)
+                          self.leave_at_stroke_end, self.speed)
 
     def evaluate_one(self, job, block) -> None:
         b: GestureBinding = job.binding

@@ -4,7 +4,8 @@ Phases, in order: ``start``, ``ready``, ``strokeStart``, ``stroke``, ``strokeEnd
 (seconds from the gesture's start). Each phase of the clip lands exactly on its wanted time. Between
 two phases the clip is stretched or squeezed evenly, except after the stroke: a stroke phase or a
 post-stroke phase given more time than the clip's holds the pose it starts from (the stroke, then the
-stroke's end) and plays its own movement at the clip's speed at the end of the phase. Repeated strokes
+stroke's end) and plays its own movement at the gesture's speed (the clip's times ``speed`` times) at the
+end of the phase. Repeated strokes
 go back from the stroke to strokeStart (the clip played backward) and strike again, the first stroke on
 ``stroke``, the post-stroke movement after the last one ending on ``strokeEnd``.
 """
@@ -15,7 +16,7 @@ import numpy as np
 PHASES = ("start", "ready", "strokeStart", "stroke", "strokeEnd", "relax", "end")
 
 
-def _breakpoints(wanted: dict, authored: dict, repeats: int) -> tuple[np.ndarray, np.ndarray]:
+def _breakpoints(wanted: dict, authored: dict, repeats: int, speed: float) -> tuple[np.ndarray, np.ndarray]:
     """(wanted seconds (K,), clip seconds (K,)) of the warp's corners; wanted not decreasing."""
     w = [float(wanted[p]) for p in PHASES]
     a = [float(authored[p]) for p in PHASES]
@@ -35,8 +36,8 @@ def _breakpoints(wanted: dict, authored: dict, repeats: int) -> tuple[np.ndarray
             add(xs[-1] + leg, a[3])
         add(w[4], a[4])
     else:
-        _held(add, w[3], w[4], a[3], a[4])
-    _held(add, w[4], w[5], a[4], a[5])
+        _held(add, w[3], w[4], a[3], a[4], speed)
+    _held(add, w[4], w[5], a[4], a[5], speed)
     add(w[6], a[6])
     return np.array(xs), np.array(ys)
 
@@ -56,23 +57,26 @@ def stroke_times(wanted: dict, authored: dict, repeats: int = 1) -> np.ndarray:
     return float(wanted["stroke"]) + 2.0 * leg * np.arange(repeats)
 
 
-def _held(add, w0: float, w1: float, a0: float, a1: float) -> None:
-    """A phase from (w0, a0) to (w1, a1): extra wanted time is a hold at ``a0`` before the movement."""
-    if w1 - w0 > a1 - a0 + 1e-9:
-        add(w1 - (a1 - a0), a0)
+def _held(add, w0: float, w1: float, a0: float, a1: float, speed: float) -> None:
+    """A phase from (w0, a0) to (w1, a1): wanted time beyond the movement's at ``speed`` is a hold at ``a0``
+    before it."""
+    moving = (a1 - a0) / speed
+    if w1 - w0 > moving + 1e-9:
+        add(w1 - moving, a0)
     add(w1, a1)
 
 
 def phase_warp(times, wanted: dict, authored: dict, repeats: int = 1, enter_ready: bool = False,
-               leave_at_stroke_end: bool = False) -> np.ndarray:
+               leave_at_stroke_end: bool = False, speed: float = 1.0) -> np.ndarray:
     """Clip seconds (F,) for ``times`` (F,) seconds from the gesture's start.
 
     ``wanted`` / ``authored``: seconds of every phase of :data:`PHASES`; ``repeats``: strokes (>= 1);
     ``enter_ready``: the clip waits at its ready pose until the ready phase (the gesture is entered from
     another's stroke, not from rest); ``leave_at_stroke_end``: it stays at its stroke's end from then on
-    (the next gesture takes over without a retraction).
+    (the next gesture takes over without a retraction); ``speed``: > 0, how much faster than authored
+    the movement after a hold plays.
     """
-    xs, ys = _breakpoints(wanted, authored, max(int(repeats), 1))
+    xs, ys = _breakpoints(wanted, authored, max(int(repeats), 1), float(speed))
     t = np.asarray(times, dtype=np.float64)
     # np.interp needs increasing corners: a zero-length step keeps its later value.
     keep = np.append(np.diff(xs) > 1e-12, True)
