@@ -105,7 +105,7 @@ def _no_arms(view: SkeletonView, plan: BodyPlan) -> str | None:
         chain = [j for j in view.main_chain(root, 6) if not view.info[j].flagged("end")]
         infos = [view.info[j] for j in chain]
         # every joint named, none as a part of an arm past the shoulder girdle
-        if all(i.flagged(*NOT_ARM_FLAGS) or i.roles == frozenset({"clavicle"}) for i in infos):
+        if infos and all(i.flagged(*NOT_ARM_FLAGS) or i.roles == frozenset({"clavicle"}) for i in infos):
             named = ", ".join(view.names[j] for j in chain[:3])
             return (f"the limb taken as an arm from {view.names[root]} is named as a shoulder girdle, a control, a "
                     f"landmark or cloth all along and never as an upper arm, forearm or hand ({named}): no arm "
