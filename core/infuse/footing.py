@@ -145,7 +145,9 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     in the foot's frame (zero where the hip reaches).
 
     Where the hip cannot reach the ankle (farther than :data:`REACH` of the leg's length), the heel
-    rises about the ball by the smallest whole degree that brings the ankle within reach.
+    rises about the ball by the smallest whole degree that brings the ankle within reach, or where
+    none does by the one that brings it nearest (the largest would turn the foot by tens of degrees
+    in a frame).
     ``ankle_rotation`` (F, 4) is the ankle's global rotation (x, y, z, w), ``leg`` (F, 3, 3) the hip,
     knee and ankle positions.
     """
@@ -163,7 +165,7 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
     ok = np.sqrt(far) <= reach[short, None]
-    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), len(_RISES) - 1)
+    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), np.argmin(far, axis=1))
     out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
     rise[short] = quat.rotate(quat.conjugate(ankle_rotation[short]), axis * _RISES[pick][:, None])
     return out, rise

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from infuse import quaternions as quat
+from infuse import footing, quaternions as quat
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
@@ -80,8 +80,6 @@ SPIN_STEP = 0.15
 SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
 HANDOVER = 0.5
-#: Anchor of a foot in a frame: none (swinging), the ankle (heel down), the ball (heel off).
-FREE, ANKLE, BALL = 0, 1, 2
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -434,7 +432,7 @@ class Locomotion(Controller):
         rot, root, jt, contact, forward, spun = (None if a is None else np.array(a) for a in part)
         was = self._played(b, dict(), clip, place, local[mixing])
         on = transitions.handover_s(clip, fps)
-        w = _ease((local[mixing] - on) / max(clip.duration - on, 1e-9))
+        w = footing.smoothstep((local[mixing] - on) / max(clip.duration - on, 1e-9))
         # The pelvis goes straight from the clip's to what follows (joint 0 may sit away from it: mixed
         # about joint 0, the pelvis would swing by the turn between the two).
         _, before = chain_fk(b["skeleton"], was[0], was[1], was[2], [b["pelvis"]])
@@ -667,10 +665,10 @@ class Locomotion(Controller):
         feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
         ankle_pos = g_pos[:, :, 2]
         heel_w, ball_w = contact[..., 0], contact[..., 1]
-        anchors = np.where(np.maximum(heel_w, ball_w) > 0.5, np.where((ball_w > heel_w) & b["has_ball"], BALL, ANKLE), FREE)
+        anchors = footing.anchors(heel_w, ball_w, b["has_ball"])
         # The feet one frame earlier (from the last block at the first frame).
         before = np.concatenate((st["last"][None], feet_pos[:-1]))
-        on_ball = (anchors == BALL)[..., None]
+        on_ball = (anchors == footing.BALL)[..., None]
         points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
         points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
         goals = ankle_pos.copy()
@@ -690,8 +688,8 @@ class Locomotion(Controller):
             bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
                 kind = int(anchors[s, k])
-                if kind == FREE:
-                    if prev != FREE:
+                if kind == footing.FREE:
+                    if prev != footing.FREE:
                         released, free_s = 0.0, 0.0
                     # The ball stays where it was let go until it leaves the ground (a take's ball may push
                     # off moving along it), at most HOLD_S, and the release's clock runs from then on.
@@ -704,14 +702,14 @@ class Locomotion(Controller):
                     else:
                         ball_offset = np.broadcast_to(ball_offset, (e - s, 3))
                     age = released + dt * np.cumsum(up)
-                    fade = 1.0 - _ease(age / RELEASE_S)
+                    fade = 1.0 - footing.smoothstep(age / RELEASE_S)
                     # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
                     # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
                     # ground last, and the fading turn would swing it along the ground).
                     turn[s:e] = quat.slerp(_IDENTITY, left, fade)
                     hang = quat.rotate(turn[s:e], lever[s:e])
                     if lifted.any():
-                        rise[s:e] = lifted * (1.0 - _ease(age / RISE_RELEASE_S))[:, None]
+                        rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
                         # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
                         corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
                         hang = quat.rotate(quat.from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
@@ -722,7 +720,7 @@ class Locomotion(Controller):
                     held = np.nonzero(~up)[0]
                     if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
                         h = s + held
-                        goal[h], more = _heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
+                        goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
                         rise[h] += more
                         if held[-1] == e - s - 1:  # the rise the release fades from
                             lifted = rise[e - 1].copy()
@@ -732,12 +730,12 @@ class Locomotion(Controller):
                     if fade[-1] <= 0.0:
                         offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
                 else:
-                    if kind != prev and prev == FREE:
+                    if kind != prev and prev == footing.FREE:
                         # The anchor lands: it stays where the corrected foot puts it now.
-                        fade = 1.0 - _ease(released / RELEASE_S)
+                        fade = 1.0 - footing.smoothstep(released / RELEASE_S)
                         left = quat.slerp(_IDENTITY, left, fade)
                         pin = feet_pos[s, k, 1] + ball_offset * fade
-                        if kind == ANKLE:
+                        if kind == footing.ANKLE:
                             pin = pin - quat.rotate(left, lever[s])
                         pin[1] = 0.0
                     elif kind != prev:
@@ -745,7 +743,7 @@ class Locomotion(Controller):
                         # where the corrected foot had it a frame ago (the ball's correction is the
                         # ankle's and the foot's turn about it), so the foot does not move on with the
                         # blend's drift at the switch, nor jump by the turn.
-                        pin = points_before[s, k] + (ball_offset if kind == BALL else offset)
+                        pin = points_before[s, k] + (ball_offset if kind == footing.BALL else offset)
                         pin[1] = 0.0
                     if kind != prev:
                         # The foot's orientation now (corrected as a frame ago), and the axis across it.
@@ -758,7 +756,7 @@ class Locomotion(Controller):
                     # but the turn spun at the root, on its ball only its pitch (the twist about the
                     # axis across the foot).
                     since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
-                    if kind == ANKLE:
+                    if kind == footing.ANKLE:
                         kept = quat.multiply(yaw(landed_spun - spun[s:e]), since)
                     else:
                         kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
@@ -768,9 +766,9 @@ class Locomotion(Controller):
                     goal[s:e, 1] = ankle[s:e, 1]
                     weight[s:e] = 1.0
                     ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
-                    if kind == BALL:
+                    if kind == footing.BALL:
                         balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
-                        goal[s:e], rise[s:e] = _heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
+                        goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
                         ball_goal = balls[-1]
                     offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
                     let_go = ball_goal.copy()
@@ -903,38 +901,6 @@ def _standing_speed(clips) -> float:
     return STAND_FRACTION * math.hypot(p["forward_speed"], p["lateral_speed"])
 
 
-#: A leg pinned by its ball reaches at most this share of its length; beyond it the heel rises further.
-REACH = 0.99
-#: Extra heel rises tried about the ball, radians.
-_RISES = np.radians(np.arange(0.0, 61.0, 1.0))
-_RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
-
-
-def _heel_rise(ankle_rot, leg_pos, goal, ball_goal):
-    """Ankle goals (F, 3) for a foot pinned at ``ball_goal`` (F, 3) with its ankle at ``goal``: where
-    the hip cannot reach the ankle, the smallest further heel rise about the ball (1 degree steps)
-    that brings it within :data:`REACH` of the leg's length (where none does, the one that brings it
-    nearest: the largest would turn the foot by tens of degrees in a frame); and that rise as rotation vectors (F, 3)
-    in the foot's frame. ``ankle_rot`` (F, 4) is the ankle's global rotation, ``leg_pos`` (F, 3, 3)
-    the hip, knee and ankle positions."""
-    reach = REACH * (np.linalg.norm(leg_pos[:, 1] - leg_pos[:, 0], axis=-1) + np.linalg.norm(leg_pos[:, 2] - leg_pos[:, 1], axis=-1))
-    v = goal - ball_goal
-    out, rise = ball_goal + v, np.zeros_like(goal)  # no further rise where the hip reaches the ankle
-    short = np.nonzero(np.linalg.norm(out - leg_pos[:, 0], axis=-1) > reach)[0]
-    if not short.size:
-        return out, rise
-    v, ball, hip = v[short], ball_goal[short], leg_pos[short, 0]
-    axis = np.stack((-v[:, 2], np.zeros(len(v)), v[:, 0]), axis=-1)  # v x +Y: the horizontal axis across v
-    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
-    up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
-    # Each rise's ankle, coordinate by coordinate (F, K), and its squared distance from the hip.
-    far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
-              for k in range(3))
-    ok = np.sqrt(far) <= reach[short, None]
-    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), np.argmin(far, axis=1))  # else the nearest it comes
-    out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
-    rise[short] = quat.rotate(quat.conjugate(ankle_rot[short]), axis * _RISES[pick][:, None])
-    return out, rise
 
 
 def _turn_feet(b, rot, rise) -> np.ndarray:
@@ -1098,7 +1064,7 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
         ramp = st["stand"] + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
         level[a:e] = np.clip(ramp, 0.0, 1.0)
         st["stand"] = float(level[e - 1])
-    rest = _ease(level)
+    rest = footing.smoothstep(level)
     return phase % 1.0, advance, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
 
 
@@ -1138,8 +1104,3 @@ def _slow_fall(x: np.ndarray, before: np.ndarray, step: float) -> np.ndarray:
     k = np.arange(len(x))[:, None]
     return np.maximum(np.maximum.accumulate(x + step * k, axis=0) - step * k, before[None] - step * (k + 1))
 
-
-def _ease(x) -> np.ndarray:
-    """Smoothstep 3x² - 2x³ of ``x`` clipped to [0, 1]."""
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
