@@ -10,6 +10,7 @@ from infuse.runtime import Runtime
 from corpus_data import corpus_file, require_corpus
 
 infuse_reach = pytest.importorskip("infuse_reach")
+ReachState = infuse_reach.controller.ReachState
 Locomotion = pytest.importorskip("infuse_locomotion").Locomotion
 
 
@@ -54,9 +55,9 @@ def test_reach_error_inside_the_hull(xbot):
     ix = rig.mapping.indices(m.skeleton)
     errors = []
     for act, hand, p in jobs:
-        f = int(round((act.start_s + act.binding["stroke"]) * 30))
+        f = int(round((act.start_s + act.binding.stroke) * 30))
         errors.append(np.linalg.norm(g[f, ix[f"{hand[0]}_wrist"]] - p))
-        assert "outside" not in act.state  # in the reach's own body frame, the target is inside the examples' hull
+        assert not act.state_of(ReachState).outside  # in the reach's own body frame, the target is inside the examples' hull
     print("reach errors (cm):", np.round(np.array(errors) * 100, 4))
     assert max(errors) <= 0.01
 
@@ -76,7 +77,7 @@ def test_grab_carries_the_object_and_put_leaves_it(xbot):
     m = rt.motion(c)
     g = infuse.motion_fk(m)[1]
     wrist = g[:, rig.mapping.indices(m.skeleton)["r_wrist"]]
-    f = int(round((put.start_s + put.binding["stroke"]) * 30))
+    f = int(round((put.start_s + put.binding.stroke) * 30))
     assert np.linalg.norm(wrist[f] - place) < 0.01  # the hand brought the cup to the place
     with pytest.raises(infuse.UsageError):
         infuse_reach.Reach((0, 1, 0.4), action="grab")

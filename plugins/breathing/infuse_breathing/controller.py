@@ -68,29 +68,28 @@ class Breathing(Controller):
         return f"breathing ({self.rate_bpm:g}/min)"
 
     def bind(self, rig, report) -> BreathingBinding:
-        joints, heading, pitch, roll = [], [], [], []
+        turns: list[tuple[int, float, float, float]] = []  # joint, heading, pitch, roll (degrees)
         for name, degrees in SPINE_PITCH_DEG.items():
-            if rig.joint(name) is not None:
-                joints.append(rig.joint(name))
-                heading.append(0.0), pitch.append(degrees), roll.append(0.0)
-        if not joints:
+            spine = rig.joint(name)
+            if spine is not None:
+                turns.append((spine, 0.0, degrees, 0.0))
+        if not turns:
             raise MissingJointsError(rig.name, "no spine joint is mapped to breathe with")
         neck = rig.joint("spine4") if rig.joint("spine4") is not None else rig.joint("skullbase")
         if neck is not None:  # keep the head level
-            joints.append(neck)
-            heading.append(0.0), pitch.append(-sum(pitch)), roll.append(0.0)
+            turns.append((neck, 0.0, -sum(pitch for _, _, pitch, _ in turns), 0.0))
         clavicles = 0
         for side, sign in (("l", 1.0), ("r", -1.0)):
             joint = rig.joint(f"{side}_sternoclavicular")
             joint = rig.joint(f"{side}_acromioclavicular") if joint is None else joint
             if joint is not None:
-                joints.append(joint)
-                heading.append(0.0), pitch.append(0.0), roll.append(sign * CLAVICLE_ROLL_DEG)
+                turns.append((joint, 0.0, 0.0, sign * CLAVICLE_ROLL_DEG))
                 clavicles += 1
         if clavicles < 2:
             report("clavicles are not mapped; breathing moves the spine only")
         # Each joint turns about one axis of its aligned frame (pitch or roll): a full breath's angle about it.
-        angles = np.radians(np.stack((heading, pitch, roll), axis=1))  # (K, 3)
+        joints = [joint for joint, *_ in turns]
+        angles = np.radians(np.array([angles for _, *angles in turns]))  # (K, 3)
         axis = np.argmax(np.abs(angles), axis=1)
         return BreathingBinding(joints=np.array(joints), axes=local_axes(rig.aligned[joints], SWING_AXES[axis]),
                                 angles=angles[np.arange(len(joints)), axis])

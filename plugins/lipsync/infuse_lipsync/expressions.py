@@ -56,10 +56,10 @@ def expression_targets(expression, face: FaceChannels, intensity: float = 1.0, d
     table = expressions_table()
     channels: dict[tuple[str, str], float] = {}
     lexeme = table["lexemes"].get(str(expression).lower()) if not isinstance(expression, dict) else None
-    direct = [v for v in AU_VOCABULARY_ORDER if direct and lexeme and v in lexeme and _offers(face, v, lexeme[v])]
-    if direct:
-        for c, w in lexeme[direct[0]].items():
-            channels[(direct[0], c)] = channels.get((direct[0], c), 0.0) + w
+    own = [v for v in AU_VOCABULARY_ORDER if v in lexeme and _offers(face, v, lexeme[v])] if direct and lexeme else []
+    if lexeme and own:
+        for c, w in lexeme[own[0]].items():
+            channels[(own[0], c)] = channels.get((own[0], c), 0.0) + w
     else:
         for au, level in action_units(expression).items():
             spec = table["action_units"][au]
@@ -70,7 +70,10 @@ def expression_targets(expression, face: FaceChannels, intensity: float = 1.0, d
                 channels[(vocab, c)] = channels.get((vocab, c), 0.0) + w * level
     targets: dict[str, float] = {}
     for (vocab, c), w in channels.items():
-        binds = [(face.jaw, 1.0)] if vocab == "jaw" else face.vocabularies[vocab].get(c, [])
+        if vocab == "jaw":
+            binds = [] if face.jaw is None else [(face.jaw, 1.0)]
+        else:
+            binds = face.vocabularies[vocab].get(c, [])
         for target, bw in binds:
             targets[target] = min(1.0, targets.get(target, 0.0) + w * bw * intensity)
     return targets

@@ -236,7 +236,7 @@ def lipsync(utterance: Utterance, face: FaceChannels | None = None, viseme_set: 
     pose_extra = {t: w for t, w in extra.items() if t in face.poses}
     jaw_extra = extra.get(face.jaw) if face.jaw else None
     morph_extra = {t: w for t, w in extra.items() if t not in face.poses and t != face.jaw}
-    if set_name == "jaw":
+    if set_name == "jaw" and face.jaw is not None:  # a face offers the jaw set when it has a jaw joint
         if skeleton is None:
             raise UsageError("a jaw face needs the character's skeleton")
         rig = JawRig.from_skeleton(skeleton, face.jaw)
@@ -259,7 +259,8 @@ def lipsync(utterance: Utterance, face: FaceChannels | None = None, viseme_set: 
             column = weights[:, vs.channels.index(c)]
             for target, w in binds:
                 result.morph_weights[target] = result.morph_weights.get(target, 0.0) + w * column
-    for target, w in morph_extra.items():
-        result.morph_weights[target] = result.morph_weights.get(target, 0.0) + w
+    for target, track in morph_extra.items():
+        below = result.morph_weights.get(target)
+        result.morph_weights[target] = track if below is None else below + track
     result.morph_weights = {t: np.clip(np.broadcast_to(w, times.shape), 0.0, 1.0) for t, w in result.morph_weights.items()}
     return result

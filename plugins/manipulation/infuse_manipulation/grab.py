@@ -42,7 +42,8 @@ class HeldObject(Target):
 
     def __init__(self, before: Target, character: str, wrist: int, grab_s: float):
         self.before, self.character, self.wrist = before, character, int(wrist)
-        self.grab_s, self.release_s = float(grab_s), None
+        self.grab_s = float(grab_s)
+        self.release_s: float | None = None  # global seconds, once the hand lets go
         self.offset: np.ndarray | None = None  # (3,) in the wrist's frame, once attached
         self.missed_m: float | None = None  # how far the hand closed from it, when it could not take it
         self.left_at: np.ndarray | None = None  # (3,) where it was let go
@@ -66,7 +67,7 @@ class HeldObject(Target):
                     self.missed_m = distance
                     return
                 self.offset = quat.rotate(quat.conjugate(rot[f, 0]), where - pos[f, 0])
-            if self.left_at is None and released.size:
+            if self.offset is not None and self.left_at is None and released.size:
                 f = released[0]
                 self.left_at = pos[f, 0] + quat.rotate(rot[f, 0], self.offset)
 
@@ -86,7 +87,7 @@ class HeldObject(Target):
                 self.last = hand[held][-1]
             elif self.last is not None:
                 out[held] = self.last
-        if self.left_at is not None:
+        if self.left_at is not None and self.release_s is not None:
             out[times >= self.release_s - 1e-9] = self.left_at
         return out
 

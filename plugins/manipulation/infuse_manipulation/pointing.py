@@ -130,9 +130,9 @@ class Pointing(Controller):
         for side in ("left", "right"):
             s = side[0]
             chain = [rig.joint(f"{s}_{n}") for n in ("shoulder", "elbow", "wrist")]
-            if None in chain:
-                continue
             hand = bind_hand(rig, side)
+            if None in chain or hand is None:
+                continue
             if not hand.has_fingers:
                 report(f"no fingers are mapped on the {side} hand: the wrist points")
             arms[side] = _arm(rig, hand, chain)

@@ -170,8 +170,8 @@ def start_grab(runtime, character: str, activation, parameters: dict, pack, acti
     reach_s = max(ready - start, MIN_REACH_S)
     back = start + reach_s + (stroke - ready) + GRAB_HOLD_S + GRAB_RETURN_S
     if pack is not None:
-        arm = build("reach", target=approach(rig, hand, before), hand=hand, pack=pack, action="touch", hold_s=GRAB_HOLD_S)
-        arm.stroke_s = reach_s  # the wrist arrives at ready
+        arm = build("reach", target=approach(rig, hand, before), hand=hand, pack=pack, action="touch", hold_s=GRAB_HOLD_S,
+                    stroke_s=reach_s)  # the wrist arrives at ready
         activate(arm, back, blend_out_s=GRAB_RETURN_S)
     else:
         arm = IKConstraint(f"{hand[0]}_wrist", approach(rig, hand, before), blend_in_s=reach_s, blend_out_s=GRAB_RETURN_S,

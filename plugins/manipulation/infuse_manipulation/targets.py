@@ -32,4 +32,5 @@ def check_point(value, what: str) -> tuple[float, float, float]:
     point = np.asarray(value, dtype=np.float64)
     if point.shape != (3,) or not np.all(np.isfinite(point)):
         raise UsageError(f"{what} must be three finite numbers (metres), got {value!r}")
-    return tuple(float(v) for v in point)
+    x, y, z = (float(v) for v in point)
+    return x, y, z

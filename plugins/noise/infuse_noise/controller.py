@@ -75,11 +75,15 @@ class Noise(Controller):
 
     def bind(self, rig, report) -> NoiseBinding:
         own = {n.lower(): i for i, n in enumerate(rig.skeleton.names)}
-        found, missing = [], []
+        found: list[int] = []
+        missing: list[str] = []
         for name in self.joints:
             j = rig.joint(name)
             j = own.get(name.lower()) if j is None else j
-            (missing if j is None else found).append(name if j is None else j)
+            if j is None:
+                missing.append(name)
+            else:
+                found.append(j)
         if not found:
             raise MissingJointsError(rig.name, f"noise: none of the joints {', '.join(self.joints)} is in the skeleton "
                                                "or mapped")
