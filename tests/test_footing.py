@@ -105,29 +105,38 @@ def test_anchors_follow_the_more_planted_point():
 
 
 def test_heel_rises_about_the_ball_only_as_far_as_the_leg_needs():
-    frames = 30
+    frames = 40
     hip = np.tile([0.0, 0.8, 0.0], (frames, 1))
     knee = hip + [0.0, -0.42, 0.02]
     ankle = knee + [0.0, -0.42, -0.02]
     leg = np.stack((hip, knee, ankle), axis=1)
-    ball_goal = np.stack((np.zeros(frames), np.zeros(frames), np.linspace(0.42, 0.56, frames)), axis=-1)
+    ball_goal = np.stack((np.zeros(frames), np.zeros(frames), np.linspace(0.42, 0.7, frames)), axis=-1)
     ankle_goal = ball_goal + [0.0, 0.06, -0.13]
     rotation = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 1))
     out, rise = footing.heel_rise(rotation, leg, ankle_goal, ball_goal)
     length = footing.REACH * 2.0 * np.hypot(0.42, 0.02)
-    reach = np.linalg.norm(out - hip, axis=-1)
     near = np.linalg.norm(ankle_goal - hip, axis=-1) <= length
     assert np.allclose(out[near], ankle_goal[near]) and not rise[near].any()
-    # Farther, the ankle turns about the ball (its distance kept) to within reach, and no more than a degree past.
-    far = ~near & (np.linalg.norm(rise, axis=-1) < np.radians(59.5))  # within the largest rise
-    assert far.sum() > 3
+    # Farther, the ankle turns about the ball (its distance from it kept) by whole degrees.
     assert np.allclose(np.linalg.norm(out - ball_goal, axis=-1), np.linalg.norm(ankle_goal - ball_goal, axis=-1))
-    assert (reach[far] <= length + 1e-9).all()
-    angle = np.linalg.norm(rise[far], axis=-1)
-    back = quat.rotate(quat.from_rotvec(-rise[far]), out[far] - ball_goal[far])
-    assert np.allclose(back, (ankle_goal - ball_goal)[far], atol=1e-9)
-    assert np.all(np.linalg.norm(ball_goal[far] + quat.rotate(quat.from_rotvec(rise[far] * (1.0 - np.radians(1.0) / angle)[:, None]),
-                                                                (ankle_goal - ball_goal)[far]) - hip[far], axis=-1) > length)
+    back = quat.rotate(quat.from_rotvec(-rise), out - ball_goal)
+    assert np.allclose(back, ankle_goal - ball_goal, atol=1e-9)
+    degrees = np.degrees(np.linalg.norm(rise, axis=-1))
+    assert np.allclose(degrees, np.round(degrees)) and (degrees[~near] >= 1.0).all()
+
+    def distance(turn_deg: np.ndarray) -> np.ndarray:
+        """Each frame's ankle distance from the hip with the heel risen ``turn_deg`` about the ball."""
+        turn = rise / np.maximum(np.linalg.norm(rise, axis=-1, keepdims=True), 1e-12) * np.radians(turn_deg)[:, None]
+        return np.linalg.norm(ball_goal + quat.rotate(quat.from_rotvec(turn), ankle_goal - ball_goal) - hip, axis=-1)
+
+    reach = distance(degrees)
+    within = ~near & (reach <= length + 1e-9)
+    beyond = ~near & ~within
+    assert within.sum() > 3 and beyond.sum() > 3
+    # Within reach by the smallest rise that gets there; beyond it by the rise that comes nearest.
+    assert (distance(degrees - 1.0)[within] > length).all()
+    assert (distance(degrees - 1.0)[beyond] >= reach[beyond]).all()
+    assert (distance(np.minimum(degrees + 1.0, 60.0))[beyond] >= reach[beyond] - 1e-12).all()
 
 
 def _limb(frames: int, bend: float = 0.4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
