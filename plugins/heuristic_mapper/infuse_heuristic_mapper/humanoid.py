@@ -8,8 +8,8 @@ the digits of two hands), when the legs do not point away from the head (a quadr
 body), when the front limbs stand on the ground like legs under a trunk that is not upright, or
 when more limbs as long as the legs stand beside them (a spider, an insect), or when the limbs
 taken as arms are no arms: what is left of a shoulder girdle (two clavicle joints, a clavicle and
-its landmark) reaches too short a way past its first joint, and chains whose names say shoulder
-girdle, control, landmark or cloth and never upper arm, forearm or hand are not arms either.
+its landmark) reaches too short a way past its first joint, and a chain whose every joint is
+named as a clavicle, a control, a landmark or cloth is no arm either.
 Every measure is taken in the body's own frame and relative to its own size.
 """
 from __future__ import annotations
@@ -51,13 +51,13 @@ def refusal(view: SkeletonView, plan: BodyPlan | None, pairs: list[LimbPair], st
         if named:
             return (f"the limbs taken as its {kind} are named as {what} ({', '.join(named)}): "
                     "not two legs and two arms on a trunk")
-    no_arm = _no_arms(view, plan)
-    if no_arm:
-        return no_arm
     trunk = _trunk_ratio(view, plan)
     if trunk > TRUNK_OVER_LIMB:
         return (f"the limbs taken as its legs and arms are joined by a path {trunk:.0f} times as long as they "
                 "are, through other limbs: no trunk with two legs and two arms")
+    no_arm = _no_arms(view, plan)
+    if no_arm:
+        return no_arm
     if standing_cos > STANDING_COS:
         angle = np.degrees(np.arccos(np.clip(standing_cos, -1, 1)))
         return (f"its legs do not point away from its head (they are {angle:.0f} degrees from the spine's "
