@@ -29,7 +29,10 @@ def test_the_public_api_module_is_strictly_typed():
 #: Plugin modules whose controller contracts are typed (bindings and per-character state as dataclasses):
 #: they pass mypy too (only their own findings: what they import is checked where it lives).
 TYPED_PLUGIN_MODULES = ["plugins/gaze/infuse_gaze", "plugins/gestures/infuse_gestures/controller.py",
-                        "plugins/postures/infuse_postures/controller.py", "plugins/lipsync/infuse_lipsync/controllers.py"]
+                        "plugins/postures/infuse_postures", "plugins/lipsync/infuse_lipsync", "plugins/head/infuse_head",
+                        "plugins/blink/infuse_blink", "plugins/breathing/infuse_breathing",
+                        "plugins/saccade/infuse_saccade", "plugins/noise/infuse_noise",
+                        "plugins/manipulation/infuse_manipulation", "plugins/reach/infuse_reach"]
 
 
 def test_the_typed_controllers_pass_mypy():
