@@ -110,7 +110,7 @@ class EspeakEngine:
         if not speech.plain.strip():
             raise InputError(None, "speech text", "empty text: only marks, nothing to say")
         ssml = speech.ssml is not None
-        espeak_text = speech.ssml if ssml else speech.plain
+        espeak_text = speech.ssml if speech.ssml is not None else speech.plain
         volume = int(round(self.volume * 100))
         with _as_infuse_errors():
             espeak = espeak_library.espeak(self.library)  # also tells early, here, when espeak-ng is missing

@@ -29,6 +29,7 @@ def start(text: str, voice: str, rate: int, volume: int, ssml: bool, library: st
     if library:
         cmd += ["--library", str(library)]
     proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdin is not None  # piped
     try:
         proc.stdin.write(text.encode("utf-8"))
         proc.stdin.close()

@@ -111,6 +111,7 @@ def start(text: str, out: Path, voice: str, rate: int, volume: float, timeout_s:
         [sys.executable, "-m", "infuse_tts_espeak.pyttsx3_writer", str(out), "--voice", voice, "--rate", str(int(rate)),
          "--volume", repr(float(volume)), "--timeout", repr(float(timeout_s))],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdin is not None  # piped
     try:
         proc.stdin.write(text.encode("utf-8"))
         proc.stdin.close()

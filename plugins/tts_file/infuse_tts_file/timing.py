@@ -176,21 +176,16 @@ def _from_json(text: str, path: Path) -> dict:
     phones_doc = doc.get("phonemes", doc.get("phones"))
     if phones_doc is None:
         raise InputError(path, "phonemes", 'no "phonemes" list (or MFA "tiers") in the document')
-    out = {
-        "phones": _json_entries(phones_doc, path, "phonemes", "interval"),
-        "words": _json_entries(doc.get("words") or [], path, "words", "interval"),
-        "marks": [],
-        "alphabet": doc.get("alphabet"),
-    }
-    marks = doc.get("marks") or {}
-    if isinstance(marks, dict):
-        for name, t in marks.items():
-            out["marks"].append((_number(t, path, f"marks.{name}"), str(name), f"marks.{name}"))
-    elif isinstance(marks, list):
-        out["marks"] = [(s, label, place) for s, _, label, place in _json_entries(marks, path, "marks", "point")]
+    phones = _json_entries(phones_doc, path, "phonemes", "interval")
+    words = _json_entries(doc.get("words") or [], path, "words", "interval")
+    marks_doc = doc.get("marks") or {}
+    if isinstance(marks_doc, dict):
+        marks = [(_number(t, path, f"marks.{name}"), str(name), f"marks.{name}") for name, t in marks_doc.items()]
+    elif isinstance(marks_doc, list):
+        marks = [(s, label, place) for s, _, label, place in _json_entries(marks_doc, path, "marks", "point")]
     else:
         raise InputError(path, "marks", "expected an object {name: time} or a list")
-    return out
+    return {"phones": phones, "words": words, "marks": marks, "alphabet": doc.get("alphabet")}
 
 
 _LABEL_KEYS = ("phoneme", "phone", "label", "text", "word", "name", "mark")
