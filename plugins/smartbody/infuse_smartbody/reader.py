@@ -79,7 +79,7 @@ def read_sk(path: Path, units: str | None = None, up_axis: str | None = None) ->
     rest_t, rest_r = Rig.from_sk(sk, _scale(unit)).rest()
     axis, up = _up_rotation(up_axis)
     skeleton = _skeleton(path, sk.names, sk.parents, rest_t, rest_r).transformed(1.0, up)
-    meta = {
+    meta: dict[str, object] = {
         "name": sk.name,
         "units_rule": rule,
         "channels": _channel_meta(sk),

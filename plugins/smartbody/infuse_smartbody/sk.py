@@ -347,7 +347,7 @@ def parse_sk(path: Path, text: str) -> SkFile:
             ts.expect("root")
             _read_joint(ts, -1, joints, names)
         elif kw == "set_collision_free_pairs":
-            while not ts.finished and ts.peek().text not in ("skeleton", "end", "set_name", "set_scale"):
+            while ts.upcoming() not in (None, "skeleton", "end", "set_name", "set_scale"):
                 pairs.append(ts.word("a joint name"))
         elif kw == "end":
             break

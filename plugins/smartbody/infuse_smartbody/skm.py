@@ -89,7 +89,7 @@ def _parse_header(path: Path, header: str) -> tuple[str, list[Channel], float | 
     if sig.text not in _SIGNATURES:
         raise ts.error(f"expected 'SkMotion' at the start, found {sig.text!r}", sig.line)
     name = path.stem
-    if ts.peek() is not None and ts.peek().text == "name":
+    if ts.upcoming() == "name":
         ts.pos += 1
         name = ts.word("the motion name")
     ts.expect("channels")
@@ -112,11 +112,11 @@ def _parse_header(path: Path, header: str) -> tuple[str, list[Channel], float | 
         seen.add(key)
         channels.append(Channel(joint.text, kind.text, joint.line))
     start_kt = None
-    if ts.peek() is not None and ts.peek().text == "start_kt":
+    if ts.upcoming() == "start_kt":
         ts.pos += 1
         start_kt = ts.number("start_kt")
-    if not ts.finished:
-        tok = ts.peek()
+    tok = ts.peek()
+    if tok is not None:
         raise ts.error(f"expected 'frames' after the {count} channels, found {tok.text!r} "
                        f"(is the channel count right?)", tok.line)
     return name, channels, start_kt
@@ -216,9 +216,10 @@ def _parse_metadata(path: Path, text: str, start: int) -> tuple[dict, dict]:
         tagged = _TAGGED.match(line)
         if _TIMING_PREFIX.match(line) and not m:
             raise InputError(path, where, f"expected 'NAME time: SECONDS', found {line[:40]!r}")
-        if not (m or tagged):
+        hit = m or tagged
+        if hit is None:
             raise InputError(path, where, f"expected metadata 'NAME time: SECONDS' or 'NAME VALUE', found {line[:40]!r}")
-        name, value = (m or tagged).group(1), (m or tagged).group(2)
+        name, value = hit.group(1), hit.group(2)
         try:
             seconds = float(value)
         except ValueError:

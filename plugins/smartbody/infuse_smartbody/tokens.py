@@ -64,6 +64,11 @@ class TokenStream:
     def peek(self) -> Token | None:
         return None if self.finished else self.tokens[self.pos]
 
+    def upcoming(self) -> str | None:
+        """The next token's text (not taken), or None at the end."""
+        tok = self.peek()
+        return None if tok is None else tok.text
+
     def next(self, what: str) -> Token:
         if self.finished:
             raise self.error(f"unexpected end of file, expected {what}")
