@@ -126,7 +126,9 @@ def _bones(r: _Reader, root) -> Bones:
     elements = root.findall("bones/bone")
     if not elements:
         raise r.error(root, "no <bones>: the skeleton has no bones")
-    names, ids, pos, rot, scl = [], [], [], [], []
+    names: list[str] = []
+    ids: list[float] = []
+    pos, rot, scl = [], [], []  # (3,) position, raw rotation and (3,) scale of each bone
     for el in elements:
         name = el.get("name")
         if not name:
@@ -154,11 +156,11 @@ def _bones(r: _Reader, root) -> Bones:
         if index[bone] in parent_of:
             raise r.error(bp, f"bone {bone!r} has two parents")
         parent_of[index[bone]] = index[parent]
-    rot = r.rotations(np.array(rot), elements)
+    rotations = r.rotations(np.array(rot), elements)
     order = _topological(r, names, ids, parent_of)
     new = {old: k for k, old in enumerate(order)}
     parents = np.array([new[parent_of[i]] if i in parent_of else -1 for i in order], dtype=np.int64)
-    return Bones([names[i] for i in order], parents, np.array(pos)[order], rot[order], np.array(scl)[order])
+    return Bones([names[i] for i in order], parents, np.array(pos)[order], rotations[order], np.array(scl)[order])
 
 
 def _topological(r: _Reader, names, ids, parent_of: dict[int, int]) -> list[int]:
@@ -225,6 +227,7 @@ def _columns(track, k: int):
     parts += [column("rotate", "angle", 0.0)]
     parts += [column("rotate/axis", a, 1.0 if a == "x" else 0.0) for a in "xyz"]
     parts += [column("scale", a, 1.0) for a in "xyz"]
-    if any(p is None or not np.all(np.isfinite(p)) for p in parts):
+    read = [p for p in parts if p is not None and np.all(np.isfinite(p))]
+    if len(read) < len(parts):
         return None
-    return parts[0], np.stack(parts[1:4], axis=1), np.stack([np.zeros(k)] + parts[4:8], axis=1), np.stack(parts[8:11], axis=1)
+    return read[0], np.stack(read[1:4], axis=1), np.stack([np.zeros(k), *read[4:8]], axis=1), np.stack(read[8:11], axis=1)
