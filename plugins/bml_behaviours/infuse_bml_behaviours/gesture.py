@@ -18,6 +18,8 @@ BEAT_POINTS = {"start": 0.0, "ready": 0.25, "strokeStart": 0.3, "stroke": 0.4, "
 GESTURE_POINTS = {"start": 0.0, "ready": 0.45, "strokeStart": 0.5, "stroke": 0.65, "strokeEnd": 0.85, "relax": 1.3, "end": 1.8}
 ANIMATION_DEFAULT_S = 2.0
 MODES = ("LEFT_HAND", "RIGHT_HAND", "BOTH_HANDS")
+#: Words of a lexeme that, with a target, make a gesture point at it.
+DEICTIC_WORDS = frozenset({"deictic", "point", "pointing"})
 GESTURE_ATTRIBUTES = {"lexeme", "mode", "type", "name", "emotion", "target", "poststroke_hold", "amount", "amplitude",
                       "speed", "repeats"} | with_sbm(
     "joint-range", "frequency", "scale", "additive", "priority")
@@ -41,13 +43,17 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         raise BehaviourError("it has neither a lexeme nor a name")
     mode = _mode(behaviour, notes)
     hold = number(behaviour, "poststroke_hold", 0.0, notes, minimum=0.0)
+    target = word(behaviour, "target")
+    if target and lexeme and DEICTIC_WORDS & set(gesture_lexicon.words(lexeme)):
+        return _deictic(behaviour, lexeme, target, mode, hold, notes)
     if not context.clip_timing(clip) and gesture_lexicon.known():
         # SmartBody's gesture maps name a variant in ``type`` (DEICTIC YOU, DEICTIC ME): tried when the lexeme fails.
         # A SmartBody animation name the character has no clip of is read like a lexeme (…_BeatMidRt01 is a beat).
         kind = word(behaviour, "type")
         found = gesture_lexicon.lookup(lexeme or clip, mode) or (gesture_lexicon.lookup(kind, mode) if kind else None)
         if found is not None:
-            return _pack_gesture(behaviour, lexeme or clip, found, hold, notes)
+            return _pack_gesture(behaviour, lexeme or clip, found, hold, notes, target,
+                                 mode is None and gesture_lexicon.named_hand(lexeme or clip) is None)
         posture = posture_lexicon.lookup(lexeme, words=False) if lexeme else None
         if posture is not None:  # a posture given as a gesture (Greta's ArmsCrossed): held over the gesture's span
             return held_posture(posture, GESTURE_POINTS, notes)
@@ -66,9 +72,23 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
     return BehaviourPlan(timing, "gesture", parameters, notes=tuple(notes))
 
 
-def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes) -> BehaviourPlan:
+def _deictic(behaviour, lexeme: str, target: str, mode: str | None, hold: float, notes: Notes) -> BehaviourPlan:
+    """A deictic gesture at a target (``<gesture lexeme="DEICTIC" target=…>``): pointing at it, with a
+    gesture's typical phases divided by ``speed``; the hand of ``mode``, else the one on the target's side."""
+    speed = number(behaviour, "speed", 1.0, notes, minimum=0.05, maximum=20.0)
+    points = {p: t / speed + (hold if p in ("relax", "end") else 0.0) for p, t in GESTURE_POINTS.items()}
+    hand = gesture_lexicon.MODE_HANDS.get(mode or "") or gesture_lexicon.named_hand(lexeme) or "auto"
+    parameters = {"lexeme": lexeme, "deictic": True, "target": target, "hand": hand, "pack": gesture_lexicon.PACK,
+                  "timing_source": "typical", "speed": speed, "poststroke_hold_s": hold,
+                  "noise": _noise(behaviour, notes)}
+    return BehaviourPlan(TimingModel.from_points(points), "gesture", parameters, notes=tuple(notes))
+
+
+def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes, target: str | None = None,
+                  free_hand: bool = False) -> BehaviourPlan:
     """The plan of a gesture of the gestures pack: its phases, divided by ``speed``, the stroke phase
-    repeated ``repeats`` times, ``poststroke_hold`` seconds held after the stroke's end."""
+    repeated ``repeats`` times, ``poststroke_hold`` seconds held after the stroke's end; aimed at
+    ``target`` when given, by the hand on its side when the hand is ``free_hand`` (``hand_clips``)."""
     gesture, clip, phases, note = found
     if note:
         notes.append(note)
@@ -80,7 +100,9 @@ def _pack_gesture(behaviour, lexeme: str, found, hold: float, notes: Notes) -> B
     points = {p: t / speed + (hold if p in ("relax", "end") else 0.0) for p, t in points.items()}
     parameters = {"lexeme": lexeme, "gesture": gesture, "clip": clip, "pack": gesture_lexicon.PACK,
                   "timing_source": "pack", "amplitude": amplitude, "speed": speed, "repeats": repeats,
-                  "poststroke_hold_s": hold, "noise": _noise(behaviour, notes)}
+                  "poststroke_hold_s": hold, "noise": _noise(behaviour, notes), "target": target}
+    if target and free_hand:
+        parameters["hand_clips"] = gesture_lexicon.hand_clips(gesture)
     return BehaviourPlan(TimingModel.from_points(points), "gesture", parameters, notes=tuple(notes))
 
 

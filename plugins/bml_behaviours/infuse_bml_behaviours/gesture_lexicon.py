@@ -41,7 +41,8 @@ def _lexicon() -> tuple[dict, dict] | None:
     return tags, clips
 
 
-def _words(lexeme: str) -> list[str]:
+def words(lexeme: str) -> list[str]:
+    """The lexeme's words, lower case (see the module doc)."""
     spaced = re.sub(r"([a-z])([A-Z])", r"\1 \2", lexeme)
     return [w.rstrip("0123456789").lower() for w in re.split(r"[_\-\s]+", spaced) if w.rstrip("0123456789")]
 
@@ -58,11 +59,10 @@ def lookup(lexeme: str, mode: str | None) -> tuple[str, str, dict, str | None] |
     if lexicon is None:
         return None
     tags, clips = lexicon
-    words = _words(lexeme)
-    gesture = tags.get(lexeme.lower()) or next((tags[w] for w in words if w in tags), None)
+    gesture = tags.get(lexeme.lower()) or next((tags[w] for w in words(lexeme) if w in tags), None)
     if gesture is None:
         return None
-    hand = MODE_HANDS.get(mode or "") or (HAND_WORDS.get(words[-1]) if len(words) > 1 else None) or "right"
+    hand = MODE_HANDS.get(mode or "") or named_hand(lexeme) or "right"
     hands = clips[gesture]
     note = None
     if hand not in hands:
@@ -71,6 +71,19 @@ def lookup(lexeme: str, mode: str | None) -> tuple[str, str, dict, str | None] |
         hand = chosen
     name, phases = hands[hand]
     return gesture, name, dict(phases), note
+
+
+def named_hand(lexeme: str) -> str | None:
+    """The hand ("left", "right", "both") a lexeme's last word names, or None."""
+    found = words(lexeme)
+    return HAND_WORDS.get(found[-1]) if len(found) > 1 else None
+
+
+def hand_clips(gesture: str) -> dict[str, str]:
+    """Clip name of ``gesture`` per single hand ("left", "right") the pack has it for."""
+    lexicon = _lexicon()
+    clips = lexicon[1].get(gesture, {}) if lexicon else {}
+    return {hand: clips[hand][0] for hand in ("left", "right") if hand in clips}
 
 
 def gestures() -> list[str]:

@@ -22,6 +22,7 @@ from infuse import Motion, quaternions as quat
 from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, sample_motion
 
+from .aim import AimedArm, aim_arms, aim_weight, bind_arm
 from .timewarp import PHASES, phase_warp, stroke_times
 
 #: A gesture that starts less than this after the previous one ends follows on from its stroke, seconds.
@@ -77,13 +78,15 @@ class GestureBinding:
     joints: np.ndarray
     ready: np.ndarray
     strokes: tuple = ()
+    aimed: tuple[AimedArm, ...] = ()
 
 
 class Gesture(Controller):
     """Play gesture ``clip`` of ``pack``.
 
     ``phases``: seconds from the start each phase of :data:`PHASES` is wanted at (default: as authored,
-    divided by ``speed``); ``repeats``: strokes; ``amplitude``: > 0, 1 as authored.
+    divided by ``speed``); ``repeats``: strokes; ``amplitude``: > 0, 1 as authored; ``target``: what the
+    stroke is aimed at (a runtime target's name, ``"character:joint"`` or a point; :mod:`.aim`), or None.
     """
 
     kind = "gesture"
@@ -91,7 +94,7 @@ class Gesture(Controller):
     mode = Mode.OVERRIDE
 
     def __init__(self, clip: str, pack: str = "gestures", phases: dict | None = None, repeats: int = 1,
-                 amplitude: float = 1.0, speed: float = 1.0):
+                 amplitude: float = 1.0, speed: float = 1.0, target=None):
         if not (np.isfinite(amplitude) and amplitude > 0) or not (np.isfinite(speed) and speed > 0):
             raise UsageError(f"gesture {clip!r}: amplitude and speed must be positive numbers")
         if int(repeats) < 1:
@@ -108,6 +111,7 @@ class Gesture(Controller):
             raise UsageError(f"gesture {clip!r}: phases out of order: {dict(zip(PHASES, times))}")
         self.phases = dict(zip(PHASES, times))
         self.repeats, self.amplitude, self.speed = int(repeats), float(amplitude), float(speed)
+        self.target = target
         self.enter_ready = False        # set when it follows on from another gesture's stroke
         self.leave_at_stroke_end = False  # set when another gesture follows on from its stroke
         self.duration_s = self.phases["end"]
@@ -133,7 +137,9 @@ class Gesture(Controller):
         strokes: list[Motion] = []
         while len(strokes) < self.repeats - 1 and f"{self.clip}@{len(strokes) + 2}" in space.clips:
             strokes.append(space.clips[f"{self.clip}@{len(strokes) + 2}"].motion)
-        return GestureBinding(clip.motion, joints, ready[0], tuple(strokes))
+        aimed = () if self.target is None else tuple(
+            arm for arm in (bind_arm(rig, s, clip.motion, self.authored["stroke"]) for s in sides) if arm is not None)
+        return GestureBinding(clip.motion, joints, ready[0], tuple(strokes), aimed)
 
     def clip_times(self, local_times) -> np.ndarray:
         """Clip seconds (F,) at ``local_times`` (F,) seconds from the gesture's start."""
@@ -149,6 +155,9 @@ class Gesture(Controller):
         if self.amplitude != 1.0:
             rotations = self._scaled(rotations, b.ready, job.local_times)
         job.pose.set_rotations(b.joints, rotations, job.weight, job.mode)
+        if b.aimed:
+            aim_arms(job, block, b.aimed, self.target,
+                     job.weight * aim_weight(job.local_times, self.phases, self.leave_at_stroke_end))
 
     def _stroke_by_stroke(self, b: GestureBinding, first: np.ndarray, clip_times: np.ndarray,
                           local_times: np.ndarray) -> np.ndarray:
@@ -194,7 +203,7 @@ def gesture_from_bml(parameters: dict, runtime, character: str, activation=None)
         phases.update(start=0.0, end=activation.end - start)
     gesture = Gesture(parameters["clip"], parameters.get("pack") or "gestures", phases,
                       int(parameters.get("repeats") or 1), float(parameters.get("amplitude") or 1.0),
-                      float(parameters.get("speed") or 1.0))
+                      float(parameters.get("speed") or 1.0), parameters.get("target"))
     previous = _previous(runtime, character, start, gesture.hands)
     if previous is not None:
         ready_s = start + gesture.phases["ready"]
