@@ -57,6 +57,8 @@ RISE_RELEASE_S = 0.1
 #: Seconds over which a foot laid flat in a stop's last steps is let go at least (its turn back to
 #: the animation's toe off).
 LAY_RELEASE_S = 0.3
+#: Degrees per second at which toes bent to keep their tip off the ground unbend at most.
+TOE_RELEASE_DEG_S = 150.0
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
 HOLD_S = 0.1
 #: Height of the arc a released foot travels back to the animation over, per metre it travels.
@@ -336,6 +338,8 @@ class Locomotion(Controller):
         rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*parts))
         if self.pin_feet and len(b["legs"]) == 2:
             self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
+        if b.get("floors") is not None:
+            _keep_feet_up(b["skeleton"], b["floors"], rot, root, jt, st, dt)
         self._write(job, active, rot, root, jt)
 
     def _stop_at(self, b, before, st, fps: float, dt: float):
@@ -838,9 +842,10 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
         events = [foot_events(c) if c.role != "idle" else None for c in clips]
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
-    stance_feet = None
+    # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
+    stance_feet = floors = None
     walking = [i for i in np.argsort(np.where(idle, np.inf, speeds)) if events[i] is not None and not idle[i]]
-    if len(legs) == 2 and all(leg[3] is not None for leg in legs) and (idle.any() or walking):
+    if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
             m, frames = motions[int(np.argmax(idle))], np.zeros(2, dtype=np.int64)
         else:
@@ -848,10 +853,12 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
             m = motions[i]
             flat = np.mod(0.5 * (events[i][:, 1] + events[i][:, 2]), 1.0)
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
-        g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
-                            None if m.joint_translations is None else m.joint_translations[frames],
-                            [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
-        stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
+        floors = _floors(sk, legs, m, frames)
+        if all(leg[3] is not None for leg in legs):
+            g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
+                                None if m.joint_translations is None else m.joint_translations[frames],
+                                [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+            stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
     played_facing, played_phases = {}, {}  # each played transition's facing (F,) radians, and contact phases (F, 2, 2)
     for c in played:
@@ -873,7 +880,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
            "slowest": slowest, "limbs": limbs, "body": body, "grounded_m": grounded_m,
            # The clips' sign-aligned mean rotations of the joints outside the legs (N, B * 4).
            "body_means": (np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
-           "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet}
+           "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "floors": floors}
     if len(legs) == 2:  # the joints the stride and the pinning work on, both legs at once
         balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
         out.update(leg_limbs=[leg[:3] for leg in legs], balls=balls, has_ball=np.array([leg[3] is not None for leg in legs]),
@@ -883,6 +890,100 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
                    pin_joints=[j for leg, ball in zip(legs, balls)
                                for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
     return out
+
+
+def _tip(sk, joint: int) -> np.ndarray | None:
+    """(3,) the offset of ``joint``'s farthest child joint or end site in its frame (at rest), or None."""
+    offsets = [sk.rest_translations[c] for c in np.flatnonzero(sk.parents == joint)]
+    offsets += [o for j, o in zip(sk.end_site_parents, sk.end_site_offsets) if j == joint]
+    if not offsets:
+        return None
+    far = max(offsets, key=lambda o: float(np.linalg.norm(o)))
+    return np.array(far) if np.linalg.norm(far) > 1e-6 else None
+
+
+def _floors(sk, legs, motion, frames) -> dict | None:
+    """What :func:`_keep_feet_up` needs of two ``legs`` on skeleton ``sk``, standing in ``motion``'s
+    ``frames`` (2,) (one per foot): each foot's ankle, its "ball" (the ball joint, else the ankle), the
+    tip of a foot without a ball joint (its farthest child or end site; an offset (3,) in the ankle's
+    frame), the toes' tip (offset in the ball's frame; only with a ball joint), the joints they hang
+    from, and the heights (m) the two tips stand at; None where neither foot has a tip."""
+    ankles = np.array([leg[2] for leg in legs])
+    balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
+    point = np.zeros((2, 3))
+    tip = np.zeros((2, 3))
+    kept = np.zeros(2, dtype=bool)
+    toes = np.zeros(2, dtype=bool)
+    for k, leg in enumerate(legs):
+        end = _tip(sk, int(balls[k]))
+        if leg[3] is None:
+            kept[k] = end is not None
+            point[k] = 0.0 if end is None else end
+        else:
+            toes[k] = end is not None
+            tip[k] = 0.0 if end is None else end
+    if not (kept | toes).any():
+        return None
+    out = {"ankles": ankles, "balls": balls, "point": point, "tip": tip, "kept": kept, "toes": toes,
+           "ankle_parents": np.array([max(int(sk.parents[a]), 0) for a in ankles]),
+           "ball_parents": np.array([max(int(sk.parents[b]), 0) for b in balls])}
+    joints = np.stack((out["ankle_parents"], ankles, out["ball_parents"], balls), axis=1)  # (2, 4)
+    g_rot, g_pos = chain_fk(sk, motion.local_rotations[frames], motion.root_translations[frames],
+                            None if motion.joint_translations is None else motion.joint_translations[frames], joints.ravel())
+    g_rot, g_pos = g_rot.reshape(2, 2, 4, 4)[[0, 1], [0, 1]], g_pos.reshape(2, 2, 4, 3)[[0, 1], [0, 1]]
+    out["joints"] = joints.ravel()
+    out["point_floor"] = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], point))[:, 1]
+    out["tip_floor"] = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], tip))[:, 1]
+    return out
+
+
+def _lift(v: np.ndarray, height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The horizontal axes (..., 3) across offsets ``v`` (..., 3) (``v`` x +Y) and the smallest turns
+    (...) radians about them that give ``v`` vertical component ``height`` (...) (as near as it
+    reaches); zero where it already reaches that high."""
+    axis = np.stack((-v[..., 2], np.zeros(v.shape[:-1]), v[..., 0]), axis=-1)  # v x +Y
+    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
+    c, s = v[..., 1], np.cross(axis, v)[..., 1]  # the height after a turn t about the axis is c cos t + s sin t
+    r = np.maximum(np.hypot(c, s), 1e-12)
+    phi = np.arctan2(s, c)
+    swing = np.arccos(np.clip(height / r, -1.0, 1.0))
+    turns = np.stack((phi - swing, phi + swing), axis=-1)
+    turns = (turns + np.pi) % (2.0 * np.pi) - np.pi
+    angle = np.take_along_axis(turns, np.argmin(np.abs(turns), axis=-1)[..., None], axis=-1)[..., 0]
+    return axis, np.where(c < height, angle, 0.0)
+
+
+def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
+    """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
+    ball joint would go below the height it stands at, the foot pitches about its ankle until it does
+    not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
+    no faster than :data:`TOE_RELEASE_DEG_S` (``st["toe_bend"]`` carries the bends, radians, from block
+    to block). A foot rolling over its ball at toe off pitches as the pack's does: a longer foot, or
+    toes the pack's clips do not bend, would dig into the ground. Both turns are about the horizontal
+    axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None."""
+    g_rot, g_pos = chain_fk(sk, rot, root, jt, floors["joints"])
+    g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
+    ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
+    point = ball + quat.rotate(g_rot[:, :, 3], floors["point"]) - ankle
+    axis, angle = _lift(point, floors["point_floor"] - ankle[..., 1])
+    pitch = quat.from_rotvec(axis * (angle * floors["kept"])[..., None])
+    ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
+    rot[:, floors["ankles"]] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
+    if not floors["toes"].any():
+        return
+    # Below the ankle everything turned by the pitch: the ball, its parent and the tip.
+    ball = ankle + quat.rotate(pitch, ball - ankle)
+    ball_rot = quat.multiply(pitch, g_rot[:, :, 3])
+    ball_parent = np.where((floors["ball_parents"] == floors["ankles"])[None, :, None], ankle_rot,
+                           quat.multiply(pitch, g_rot[:, :, 2]))
+    tip = quat.rotate(ball_rot, floors["tip"])
+    axis, angle = _lift(tip, floors["tip_floor"] - ball[..., 1])
+    up = _slow_fall(np.maximum(angle, 0.0), st.get("toe_bend", np.zeros(2)), math.radians(TOE_RELEASE_DEG_S) * dt)
+    st["toe_bend"] = up[-1].copy()
+    bend = quat.from_rotvec(axis * (np.where(angle < 0.0, angle, up) * floors["toes"])[..., None])
+    rot[:, floors["balls"]] = np.where(floors["toes"][None, :, None],
+                                       quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
+                                       rot[:, floors["balls"]])
 
 
 def _slowest_walk(clips) -> int:
