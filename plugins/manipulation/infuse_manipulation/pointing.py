@@ -1,14 +1,19 @@
 """The ``pointing`` controller: a hand points at a target, the body turning when the target is behind.
 
 Aim: the ray from the pointing arm's shoulder joint (the head of the upper arm) through the index
-fingertip passes through the target. The fingertip is put on that ray by two-joint arm IK, at a
-fraction of the arm's length from the shoulder (``extension``; a near target stops it 8 cm short), the
-hand turned so that the wrist-to-fingertip line lies along the ray with the palm down, the index
-finger straight and the other fingers curled (:mod:`.hands`; a rig without fingers points its wrist).
+fingertip passes through the target. The fingertip is put on that ray by two-joint arm IK, the hand
+turned so that the wrist-to-fingertip line lies along the ray with the palm down, the index finger
+straight and the other fingers curled (:mod:`.hands`; a rig without fingers points its wrist).
+
+Reach: how far along the ray follows from how far the target is, as people point. At the stroke the
+elbow opens to 168° for a target 1.5 arm lengths (shoulder to fingertip) or more away, the arm nearly
+straight, and to 140° for one within an arm's length, interpolated between; at ready it is 20° more
+bent. A target within reach keeps the fingertip 8 cm short of it. The arm is then turned about the
+shoulder-wrist line so that the elbow hangs below it and a little to the arm's own side.
 
 Phases (seconds from the activity's start): the arm rises from the pose below until ``ready``
-(the blend-in), reaches out furthest at ``stroke`` (the extension peaks there), holds until ``relax``
-and returns by the end (the blend-out). Targets move with the frames they are sampled at.
+(the blend-in), reaches out furthest at ``stroke``, holds until ``relax`` and returns by the end (the
+blend-out). Targets move with the frames they are sampled at.
 
 Body turn: a target more than 100° to the pointing hand's side, or more than 35° across the body (its
 azimuth about the chest, measured from the pelvis's forward), is brought within that range by turning
@@ -42,8 +47,14 @@ RIGHT_RANGE = (np.radians(-100.0), np.radians(35.0))
 #: Most the body turns, radians, and the pelvis's share of the turn.
 MAX_TURN = np.radians(80.0)
 PELVIS_SHARE = 0.3
-#: Extension (fraction of the arm's length from the shoulder to the fingertip) at ready and at the stroke.
-EXTENSION_READY, EXTENSION_STROKE = 0.86, 0.94
+#: Elbow angle (between upper arm and forearm: 180° straight), radians, at the stroke for a target at or
+#: beyond FAR arm lengths from the shoulder, and for one at or within NEAR; in between, interpolated.
+ELBOW_FAR, ELBOW_NEAR = np.radians(168.0), np.radians(140.0)
+FAR, NEAR = 1.5, 1.0
+#: How much more the elbow is bent at ready than at the stroke, radians.
+ELBOW_READY_BEND = np.radians(20.0)
+#: Where the elbow goes about the shoulder-wrist line: down, and this much toward the arm's own side.
+ELBOW_OUTWARD = 0.5
 #: How far short of a near target the fingertip stops, metres.
 CLEARANCE_M = 0.08
 _SPINE = ("spine1", "spine2", "spine3")
@@ -52,13 +63,15 @@ _SPINE = ("spine1", "spine2", "spine3")
 @dataclass(frozen=True, eq=False)
 class PointingArm:
     """What aiming one arm needs, from the reference pose (the character's own frame, metres): its
-    ``chain`` (shoulder, elbow, wrist), its ``hand``, its ``length`` from the shoulder to the fingertip;
+    ``chain`` (shoulder, elbow, wrist), its ``hand``, the lengths of its ``segments`` (upper arm, forearm,
+    wrist to fingertip; metres) and their sum ``length``;
     the pointing direction, the palm normal and their cross product as the columns of ``frame`` (3, 3);
     the wrist's global rotation ``wrist_reference`` (4,), the fingertip in the wrist's frame ``tip_local``
     (3,), and the character's ``body`` frame (4,)."""
 
     chain: tuple[int, int, int]
     hand: Hand
+    segments: tuple[float, float, float]
     length: float
     frame: np.ndarray
     wrist_reference: np.ndarray
@@ -171,10 +184,10 @@ class Pointing(Controller):
         changed: set[int] = set()
         if self.turn and b.chest is not None and None not in b.hips:
             changed |= self._turn(b, sk, rot, root, jt, goal, weight, hands)
-        extension = self._extension(t)
+        stroke = self._stroke_share(t)
         for side in hands:
             arm = b.arms[side]
-            self._aim(arm, sk, rot, root, jt, goal, weight, extension)
+            self._aim(arm, sk, rot, root, jt, goal, weight, stroke)
             changed |= set(arm.chain)
         joints = np.array(sorted(changed), dtype=np.int64)
         full = pose.local_rotations[:, joints].copy()
@@ -211,13 +224,24 @@ class Pointing(Controller):
             return f"the pointing target is {distance * 100:.0f} cm from the shoulder: too close to point at"
         return None
 
-    def _extension(self, t: np.ndarray) -> np.ndarray:
-        """(F,) fraction of the arm's length: rising from ready to the stroke, back down by relax."""
+    def _stroke_share(self, t: np.ndarray) -> np.ndarray:
+        """(F,) in [0, 1]: 0 until ready, rising to 1 at the stroke, back to 0 by relax."""
         rise = smoothstep((t - self.ready_s) / max(self.stroke_s - self.ready_s, 1e-6))
         fall = smoothstep((self.relax_s - t) / max(self.relax_s - self.stroke_s, 1e-6))
         bump = np.where(t <= self.stroke_s, rise, fall)
-        bump = np.where(t < self.ready_s, 0.0, bump)
-        return self.extension * (EXTENSION_READY + (EXTENSION_STROKE - EXTENSION_READY) * bump)
+        return np.where(t < self.ready_s, 0.0, bump)
+
+    def _reach(self, arm: PointingArm, distance: np.ndarray, stroke: np.ndarray) -> np.ndarray:
+        """(F,) metres from the shoulder to the fingertip along the ray, for a target ``distance`` (F,)
+        metres away at ``stroke`` (F,) (see :meth:`_stroke_share`): the elbow's angle follows from how far
+        the target is (nearly straight for a far one), the hand lies along the ray, and a target within
+        reach keeps the fingertip short of it."""
+        upper, fore, hand = arm.segments
+        far = np.clip((distance / arm.length - NEAR) / (FAR - NEAR), 0.0, 1.0)
+        elbow = ELBOW_NEAR + (ELBOW_FAR - ELBOW_NEAR) * far - ELBOW_READY_BEND * (1.0 - stroke)
+        wrist = np.sqrt(upper * upper + fore * fore - 2.0 * upper * fore * np.cos(elbow))  # law of cosines
+        reach = self.extension * (wrist + hand)
+        return np.minimum(reach, np.maximum(distance - CLEARANCE_M, 0.35 * arm.length))
 
     def _turn(self, b: PointingBinding, sk, rot, root, jt, goal, weight, hands) -> set[int]:
         """Turn the spine and pelvis (in ``rot``, in place) toward a target outside the arm's range;
@@ -264,7 +288,7 @@ class Pointing(Controller):
             changed.add(base)
         return changed
 
-    def _aim(self, arm: PointingArm, sk, rot, root, jt, goal, weight, extension) -> None:
+    def _aim(self, arm: PointingArm, sk, rot, root, jt, goal, weight, stroke) -> None:
         """Arm IK (in ``rot``, in place): the fingertip on the shoulder-target ray, the hand along it."""
         shoulder, elbow, wrist = arm.chain
         g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist])
@@ -272,7 +296,7 @@ class Pointing(Controller):
         to_goal = goal - s
         distance = np.linalg.norm(to_goal, axis=1)
         u = to_goal / np.maximum(distance, 1e-9)[:, None]
-        reach = np.minimum(extension * arm.length, np.maximum(distance - CLEARANCE_M, 0.35 * arm.length))
+        reach = self._reach(arm, distance, stroke)
         tip = s + reach[:, None] * u
         side = np.array([1.0 if arm.hand.side == "left" else -1.0, 0.0, 0.0])
         hint = np.array([0.0, -1.0, 0.0]) - 0.3 * quat.rotate(arm.body, side)  # palm down, a little inward
@@ -285,6 +309,28 @@ class Pointing(Controller):
         end = quat.slerp(g_rot[:, 1], wanted, weight)
         solve_limb(sk, rot, root, jt, (shoulder, elbow, wrist), wrist_goal, weight=weight, end_rotation=end,
                    distance=False)
+        outward = quat.rotate(arm.body, side)
+        self._swivel(arm, sk, rot, root, jt, np.array([0.0, -1.0, 0.0]) + ELBOW_OUTWARD * outward, weight)
+
+    @staticmethod
+    def _swivel(arm: PointingArm, sk, rot, root, jt, toward: np.ndarray, weight: np.ndarray) -> None:
+        """Turn the arm (in ``rot``, in place) about the line from the shoulder to the wrist so that the
+        elbow lies on the side of that line toward ``toward`` (3,), by ``weight`` (F,); the wrist keeps its
+        place and global rotation."""
+        shoulder, elbow, wrist = arm.chain
+        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, elbow, wrist, int(sk.parents[wrist])])
+        line = g_pos[:, 2] - g_pos[:, 0]
+        line /= np.maximum(np.linalg.norm(line, axis=1, keepdims=True), 1e-9)
+        now = g_pos[:, 1] - g_pos[:, 0]
+        now -= np.sum(now * line, axis=1, keepdims=True) * line
+        wanted = toward - np.sum(toward * line, axis=1, keepdims=True) * line
+        angle = np.arctan2(np.sum(line * np.cross(now, wanted), axis=1), np.sum(now * wanted, axis=1))
+        # A straight arm has no elbow side to turn.
+        angle = np.where(np.linalg.norm(now, axis=1) > 1e-4 * arm.length, angle, 0.0) * weight
+        turn = quat.from_axis_angle(line, angle)  # (F, 4) global
+        s_rot, w_rot, parent_rot = g_rot[:, 0], g_rot[:, 2], g_rot[:, 3]
+        rot[:, shoulder] = quat.multiply(rot[:, shoulder], quat.multiply(quat.conjugate(s_rot), quat.multiply(turn, s_rot)))
+        rot[:, wrist] = quat.multiply(quat.conjugate(quat.multiply(turn, parent_rot)), w_rot)
 
 
 def _arm(rig, hand: Hand, chain) -> PointingArm:
@@ -303,9 +349,9 @@ def _arm(rig, hand: Hand, chain) -> PointingArm:
     f = along / np.linalg.norm(along)
     palm = hand.palm - np.dot(hand.palm, f) * f
     palm /= max(np.linalg.norm(palm), 1e-9)
-    length = (np.linalg.norm(g_pos[elbow] - g_pos[shoulder]) + np.linalg.norm(g_pos[wrist] - g_pos[elbow])
-              + np.linalg.norm(tip - g_pos[wrist]))
-    return PointingArm(chain=(shoulder, elbow, wrist), hand=hand, length=float(length),
+    segments = tuple(float(np.linalg.norm(b - a)) for a, b in
+                     ((g_pos[shoulder], g_pos[elbow]), (g_pos[elbow], g_pos[wrist]), (g_pos[wrist], tip)))
+    return PointingArm(chain=(shoulder, elbow, wrist), hand=hand, segments=segments, length=sum(segments),
                        frame=np.stack((f, palm, np.cross(f, palm)), axis=1), wrist_reference=g_rot[wrist],
                        tip_local=quat.rotate(quat.conjugate(g_rot[wrist]), tip - g_pos[wrist]), body=rig.body)
 
