@@ -240,3 +240,53 @@ def test_builder_point():
     g = infuse.motion_fk(scene.motion("ann"))[1]
     ix = scene.runtime.rig("ann").mapping.indices(scene.runtime.rig("ann").skeleton)
     assert _ray_distance(g[frame, ix["l_shoulder"]], g[frame, ix["l_index4"]], np.array([1.0, 1.0, 2.0])) < 0.05
+
+
+#: Targets around a character at the origin facing +Z (metres): name -> point. "near" is within reach.
+AROUND = {"high": (0.8, 2.6, 1.5), "high-side": (1.5, 2.3, 0.8), "low": (0.4, 0.1, 1.8), "side": (-2.5, 1.4, 0.2),
+          "front": (-0.2, 1.3, 3.0), "behind": (-0.8, 1.2, -2.5), "near": (0.3, 1.25, 0.35)}
+
+
+@pytest.fixture(scope="module", params=["xbot", "rpm", "utah"])
+def around(request):
+    require_corpus()
+    scene = Scene(fps=FPS, idle=True, quiet=True)
+    scene.add_character(corpus_character(request.param), name="bob")
+    pointings = "".join(f'<pointing id="{name.replace("-", "_")}" target="{name}" stroke="{1.2 + 2.8 * k:.1f}"/>'
+                        for k, name in enumerate(AROUND))
+    for name, where in AROUND.items():
+        scene.add_object(name, where)
+    scene.bml("bob", f'<bml xmlns="http://www.bml-initiative.org/bml/bml-1.0" id="b1">{pointings}</bml>', at=0.0)
+    scene.run(2.8 * len(AROUND) + 0.5)
+    motion = scene.motion("bob")
+    return request.param, scene, infuse.motion_fk(motion)[1], scene.runtime.rig("bob").mapping.indices(motion.skeleton)
+
+
+def test_a_far_target_is_pointed_at_with_the_arm_nearly_straight(around):
+    """At the stroke, FK on the written motion: the elbow opens to 150° or more for a target farther than
+    1.5 arm lengths (shoulder to index fingertip) from the shoulder, the elbow hangs below the
+    shoulder-wrist line, the ray passes within 5 cm; a target within reach keeps the fingertip short of it."""
+    key, scene, g, ix = around
+    found = {}
+    for name, where in AROUND.items():
+        activity = scene.activities[("b1", name.replace("-", "_"))]
+        frame = int(round(activity.source.time("stroke") * FPS))
+        (side,) = activity.state_of(PointingState).hands
+        shoulder, elbow, wrist, tip = (g[frame, ix[f"{side[0]}_{j}"]] for j in ("shoulder", "elbow", "wrist", "index4"))
+        length = sum(np.linalg.norm(b - a) for a, b in ((shoulder, elbow), (elbow, wrist), (wrist, tip)))
+        upper, fore = shoulder - elbow, wrist - elbow
+        angle = np.degrees(np.arccos(upper @ fore / np.linalg.norm(upper) / np.linalg.norm(fore)))
+        line = (wrist - shoulder) / np.linalg.norm(wrist - shoulder)
+        off_line = (elbow - shoulder) - ((elbow - shoulder) @ line) * line  # the elbow off the shoulder-wrist line
+        target = np.array(where)
+        found[name] = (np.linalg.norm(target - shoulder) / length, angle, off_line[1], _ray_distance(shoulder, tip, target),
+                       np.linalg.norm(target - shoulder) - np.linalg.norm(tip - shoulder))
+    print(key, "name: (target distance / arm length, elbow deg, elbow height off the line m, ray cm, tip short of target m)",
+          {k: tuple(round(float(x), 3) for x in v) for k, v in found.items()})
+    for name, (distance, angle, elbow_up, ray, short) in found.items():
+        assert ray < 0.05, name
+        assert elbow_up < 0.005, name
+        if distance > 1.5:
+            assert angle >= 150.0, name
+    distance, angle, _, _, short = found["near"]
+    assert distance < 1.0 and short > 0.05 and angle < 150.0
