@@ -13,7 +13,9 @@
   at in the plain transfer, with the correction gliding between contacts; the ball of the foot
   rides on the ankle, heading square to the foot's side-to-side axis and lifting off as the
   source's ball does, and is left where the transferred foot carries it once the source's ball is
-  well off the ground.
+  well off the ground. A target foot without a ball joint has a tip all the same (the joint or end
+  site below its ankle farthest from it); where the tip would go below the level the foot is
+  planted at, the foot pitches up about its ankle (:func:`tip_above`).
 
 ``limb_scaling`` adds per-limb scaling by extension for the arms: a straightening source arm
 brings the target's wrist to the source's reach scaled by the arm-length ratio.
@@ -24,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from infuse import contacts as contact_detection, footing
+from infuse import contacts as contact_detection, footing, quaternions as quat
 from infuse.errors import UsageError
 from infuse.kinematics import forward_kinematics
 from infuse.motion import Motion
@@ -45,6 +47,9 @@ LATERAL = np.array([1.0, 0.0, 0.0])
 GROUND_LIFT = (0.06, 0.3)
 #: Seconds over which a ball contact's hold on the ankle goal fades in and out.
 BLEND_SECONDS = 0.12
+#: Degrees per second at which a foot without a ball joint, pitched up about its ankle to keep
+#: its tip off the ground, pitches back (:func:`tip_above`).
+TIP_PITCH_SPEED = 150.0
 #: The hinge of a limb never straightens past this (radians): no hyperextended knees.
 MIN_FLEXION = np.radians(1.0)
 
@@ -157,9 +162,13 @@ class _Solver:
         else:
             ankle_goal, ball_goal = self._pinned_goals(k, pos, ankle_s, ball_s, ball_t)
         foot = [f"{side}_ankle", f"{side}_forefoot", f"{side}_toe"]
+        tip_t = self._tip(k) if ball_t is None and mode != "paper" else None
         shin_turn, ankle = self.limb(f"{side}_hip", f"{side}_knee", f"{side}_ankle", ankle_goal, [f"{side}_hip"],
                                      [f"{side}_knee"] + foot)
         if ball_t is None:
+            if tip_t is not None:
+                tip = ankle + cq.rotate(shin_turn, tip_t - ankle_t)
+                self.turn(foot, tip_above(ankle, tip, self._lateral(k), self._planted_level(k), self.state.fps))
             return
         ball_now = ankle + cq.rotate(shin_turn, pos[ball_t] - ankle_t)
         length = self._foot_length(pos, ankle_t, ball_t)
@@ -195,6 +204,32 @@ class _Solver:
         height = ball_h + s * (ball_s[1] - footing.planted_height(ball_s[1], ball_flags))
         ball_w = self._ball_on_foot(ankle_w, height, self._lateral(k), length)
         return footing.pinned(ankle_w, ankle_flags, ankle_h, ball_w, ball_flags, ball_h, length, BLEND_SECONDS * self.state.fps)
+
+    def _planted_level(self, k: int) -> float:
+        """The height (m) of the lowest point of target foot ``k`` while it is planted, as the legs now
+        stand (the leg IK turns the foot with the shin, so this is not the plain transfer's)."""
+        lowest = target_lowest_points(self.plan, self.state)[:, k]
+        return footing.planted_height(lowest, self.result.contacts.foot_flags()[:, k])
+
+    def _tip(self, k: int) -> np.ndarray | None:
+        """(3, F) where the tip of target foot ``k`` is in the current state: of the joints and end
+        sites below its ankle, the one farthest from the ankle in the reference pose; ``None`` for a
+        foot with nothing below its ankle."""
+        rig, foot = self.plan.target.rig, self.plan.target.feet[k]
+        sk = rig.skeleton
+        joints = [j for j in foot.joints if j != foot.ankle]
+        parents = [int(sk.end_site_parents[e]) for e in foot.end_sites]
+        offsets = [np.asarray(sk.end_site_offsets[e], dtype=np.float64) for e in foot.end_sites]
+        reference = [rig.positions[j] for j in joints]
+        reference += [rig.positions[p] + quat.rotate(rig.rotations[p], o) for p, o in zip(parents, offsets)]
+        if not reference:
+            return None
+        pick = int(np.argmax(np.linalg.norm(np.array(reference) - rig.positions[foot.ankle], axis=1)))
+        pos = self.plan.positions(self.state, joints + parents)
+        if pick < len(joints):
+            return pos[joints[pick]]
+        e = pick - len(joints)
+        return pos[parents[e]] + cq.rotate(self.state.rotations[parents[e]], offsets[e][:, None])
 
     def _lateral(self, k: int) -> np.ndarray:
         """(3, F) the side-to-side axis of foot ``k`` as transferred (the canonical +X the ankle carries)."""
@@ -260,6 +295,34 @@ class _Solver:
             pos = plan.positions(state, t_j)
             goal, _ = goals.reach(pos[t_j[0]], ps[s_j[0]], ps[s_j[2]], pos[t_j[2]], arm_t / arm_s, arm_s)
             self.limb(names[0], names[1], names[2], goal, [names[0]], [names[1], f"{side}_forearm"])
+
+
+def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: float, fps: float) -> np.ndarray:
+    """(4, F) world turn of a foot about its ``ankle`` (3, F) that keeps its ``tip`` (3, F) on or
+    above ``level`` (m), over a clip at ``fps`` frames per second; ``lateral`` (3, F) is the foot's
+    side-to-side axis (the canonical +X it carries; the foot points along ``lateral`` x +Y).
+
+    The foot pitches about the horizontal of its side-to-side axis, by the difference between the
+    tip's elevation seen from the ankle and the elevation that puts it on ``level``: a rigid foot,
+    with no ball joint to bend, rolls up about its ankle rather than digging its tip in. (At toe
+    off such a foot may point straight down, where the axis square to the ankle-to-tip line turns
+    about from frame to frame; its side-to-side axis does not.) The pitch eases out at most
+    :data:`TIP_PITCH_SPEED`, since a tip leaving the ground at toe off would otherwise drop the foot
+    by tens of degrees in a frame; easing out late only lifts the tip higher.
+    """
+    axis = np.stack((-lateral[0], np.zeros_like(lateral[0]), -lateral[2]))
+    axis /= np.maximum(cq.norm(axis), 1e-12)
+    forward = np.stack((axis[2], np.zeros_like(axis[0]), -axis[0]))  # +Y x axis: turning about axis raises it
+    r = tip - ankle
+    ahead, up = cq.dot(r, forward), r[1]
+    span = np.maximum(np.hypot(ahead, up), 1e-9)  # the tip's distance from the axis
+    have = np.arctan2(up, ahead)
+    want = np.arcsin(np.clip((level - ankle[1]) / span, -1.0, 1.0))
+    need = np.where(tip[1] < level, np.maximum(want - have, 0.0), 0.0)
+    # max over frames s <= t of need[s] - speed * (t - s): a running maximum.
+    step = np.radians(TIP_PITCH_SPEED) / max(fps, 1e-9) * np.arange(len(need))
+    lift = np.maximum.accumulate(need + step) - step
+    return cq.exp(axis * lift)
 
 
 def _chain_length(positions: np.ndarray, joints) -> float:
