@@ -21,6 +21,7 @@ the alternatives). Variants:
 - ``named_helpers``: zero-length roll joints after each upper arm, forearm, thigh and shin
   (MotionBuilder style, named ``<joint>Roll``), a named IK target and pole per hand and foot;
 - ``no_fingers`` / ``no_clavicles`` / ``no_neck``: those joints removed (children re-parented);
+- ``no_toes``: the toe joints removed, each foot ending in an end site where its toes' tip was;
 - ``mirrored_names``: every left joint takes the name of its right counterpart and vice versa
   (geometry must decide the sides);
 - ``cartoon`` / ``cartoon_arms_down``: cartoon proportions (arms 1.35 times as long, legs 0.65
@@ -455,6 +456,40 @@ def removed(skeleton: Skeleton, poses, label: dict, kind: str) -> Variant:
     mapping, alts = _translate(expected, _identity(kept_names))
     rename = {n: n for n in kept_names}
     return Variant(f"no_{kind}", sk, new_poses, mapping, alts, rename, humanoid=kind not in LIMB_PARTS)
+
+
+def toeless(skeleton: Skeleton, poses, label: dict) -> Variant:
+    """The toes removed (each foot's forefoot or toe joint with everything below it), each foot
+    ending instead in an end site at the removed point farthest from its ankle: a rigid foot, as
+    rigs without toe joints have."""
+    m = label["mapping"]
+    idx = skeleton.index
+    drop: set[int] = set()
+    tips: list[tuple[int, np.ndarray]] = []
+    ends = skeleton.rest_end_site_positions
+    pos = skeleton.rest_global_positions
+    for side in "lr":
+        ankle = idx.get(m.get(f"{side}_ankle"))
+        toe = idx.get(m.get(f"{side}_forefoot") or m.get(f"{side}_toe"))
+        if ankle is None or toe is None:
+            continue
+        gone = _subtree(skeleton, toe)
+        drop.update(gone)
+        points = np.concatenate((pos[gone], ends[np.isin(skeleton.end_site_parents, gone)]))
+        tips.append((ankle, points[np.argmax(np.linalg.norm(points - pos[ankle], axis=1))]))
+    keep = [j for j in range(skeleton.num_joints) if j not in drop]
+    new_index = {old: i for i, old in enumerate(keep)}
+    parents = [new_index[int(skeleton.parents[j])] if skeleton.parents[j] >= 0 else -1 for j in keep]
+    kept = [(int(e), q) for e, q in zip(skeleton.end_site_parents, ends) if e in new_index] + tips
+    sk = _from_positions([skeleton.names[j] for j in keep], parents, pos[keep], [new_index[e] for e, _ in kept],
+                         np.array([q for _, q in kept]) if kept else None)
+    gone_names = {skeleton.names[j] for j in drop}
+    expected = {"mapping": {k: (None if v in gone_names else v) for k, v in m.items()},
+                "alternatives": {k: [a for a in vals if a not in gone_names]
+                                 for k, vals in (label.get("alternatives") or {}).items()}}
+    mapping, alts = _translate(expected, _identity(sk.names))
+    new_poses = None if poses is None else np.asarray(poses)[..., keep, :]
+    return Variant("no_toes", sk, new_poses, mapping, alts, {n: n for n in sk.names})
 
 
 #: The canonical parts (after the side) of each limb, from its first long bone down.

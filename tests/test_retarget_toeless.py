@@ -1,0 +1,71 @@
+"""Retargeting onto feet without a ball joint: the foot's tip (the joint or end site below its ankle
+farthest from it) stays on or above the level the foot is planted at, measured with forward
+kinematics on the written clip against the source's own feet, on a corpus rig with its toe joints
+removed and on a wild rig built without them."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse import metrics
+from infuse.contacts import feet, joint_index, lowest_points
+from infuse.kinematics import motion_fk
+from infuse.mapping import map_skeleton
+from infuse_retarget import RetargetPlan, retarget_clip
+
+import skeleton_variants
+from corpus_data import corpus_file, labels, require_corpus
+
+WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"
+XBOT = "runxaway-models/Xbot.glb"
+MOCAPBANK = "20tab-bvh-python/tests/test_mocapbank.bvh"
+
+
+def _label(rel: str) -> dict:
+    for doc in labels():
+        if doc["file"] == rel:
+            return doc
+    pytest.fail(f"no label for {rel}")
+
+
+def deepest(motion: infuse.Motion, mapping, planted: np.ndarray) -> float:
+    """cm: how far the lowest point of either foot (its joints and end sites) goes below the level it
+    is planted at (its median over the frames ``planted`` (F, 2) marks for that foot)."""
+    g, p = motion_fk(motion)
+    low = lowest_points(motion.skeleton, feet(motion.skeleton, mapping), g, p)
+    levels = np.array([np.median(low[planted[:, k], k]) for k in (0, 1)])
+    return float(100.0 * max(0.0, -(low - levels).min()))
+
+
+def check(target: infuse.Skeleton, mapping: dict) -> None:
+    require_corpus()
+    source = infuse.load(corpus_file(WALK))
+    clip = next(iter(source.motions.values()))
+    s_map = {k: v for k, v in _label(WALK)["mapping"].items() if v is not None}
+    assert all(f.ball is None for f in feet(target, mapping)), "the target's feet should have no ball joint"
+    plan = RetargetPlan(clip.skeleton, s_map, target, mapping, source_motion=clip)
+    result = retarget_clip(plan, clip)
+    planted = result.contacts.foot_flags()
+    src, plain, out = (deepest(m, k, planted) for m, k in ((clip, s_map), (result.plain, mapping), (result.motion, mapping)))
+    print(f"deepest foot below its planted level: source {src:.2f} cm, plain transfer {plain:.2f}, retargeted {out:.2f}")
+    assert out <= src + 1.0, (src, plain, out)
+    assert plain > out + 2.0, (src, plain, out)  # the rigid foot digs in without the pitch
+    g_src, _ = motion_fk(clip)
+    g_out, _ = motion_fk(result.motion)
+    pop = metrics.popping(g_src, joint_index(clip.skeleton, s_map), g_out, joint_index(target, mapping))
+    assert pop.ok, pop
+
+
+def test_corpus_rig_without_toes():
+    require_corpus()
+    label = _label(XBOT)
+    variant = skeleton_variants.toeless(infuse.load(corpus_file(XBOT)).skeleton, None, label)
+    check(variant.skeleton, {k: v for k, v in variant.mapping.items() if v is not None})
+
+
+def test_wild_rig_without_toes():
+    from wild_data import wild_file
+
+    asset = infuse.load(wild_file(MOCAPBANK))
+    check(asset.skeleton, map_skeleton(asset))
