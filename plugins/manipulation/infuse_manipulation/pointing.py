@@ -291,15 +291,15 @@ class Pointing(Controller):
     def _aim(self, arm: PointingArm, sk, rot, root, jt, goal, weight, stroke) -> None:
         """Arm IK (in ``rot``, in place): the fingertip on the shoulder-target ray, the hand along it."""
         shoulder, elbow, wrist = arm.chain
-        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist])
+        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist, max(int(sk.parents[shoulder]), 0)])
         s = g_pos[:, 0]
+        outward = self._outward(arm, g_pos[:, 0] - g_pos[:, 2])
         to_goal = goal - s
         distance = np.linalg.norm(to_goal, axis=1)
         u = to_goal / np.maximum(distance, 1e-9)[:, None]
         reach = self._reach(arm, distance, stroke)
         tip = s + reach[:, None] * u
-        side = np.array([1.0 if arm.hand.side == "left" else -1.0, 0.0, 0.0])
-        hint = np.array([0.0, -1.0, 0.0]) - 0.3 * quat.rotate(arm.body, side)  # palm down, a little inward
+        hint = np.array([0.0, -1.0, 0.0]) - 0.3 * outward  # palm down, a little inward
         palm = hint - np.sum(hint * u, axis=1, keepdims=True) * u
         palm /= np.maximum(np.linalg.norm(palm, axis=1, keepdims=True), 1e-9)
         target_frame = np.stack((u, palm, np.cross(u, palm)), axis=2)  # (F, 3, 3) columns
@@ -309,8 +309,16 @@ class Pointing(Controller):
         end = quat.slerp(g_rot[:, 1], wanted, weight)
         solve_limb(sk, rot, root, jt, (shoulder, elbow, wrist), wrist_goal, weight=weight, end_rotation=end,
                    distance=False)
-        outward = quat.rotate(arm.body, side)
         self._swivel(arm, sk, rot, root, jt, np.array([0.0, -1.0, 0.0]) + ELBOW_OUTWARD * outward, weight)
+
+    @staticmethod
+    def _outward(arm: PointingArm, from_parent: np.ndarray) -> np.ndarray:
+        """(F, 3) unit horizontal direction toward the arm's side, as the body stands now: the shoulder
+        away from its parent joint (``from_parent`` (F, 3)), else the reference body frame's side."""
+        side = quat.rotate(arm.body, np.array([1.0 if arm.hand.side == "left" else -1.0, 0.0, 0.0]))
+        flat = from_parent * np.array([1.0, 0.0, 1.0])
+        norm = np.linalg.norm(flat, axis=1, keepdims=True)
+        return np.where(norm > 1e-6, flat / np.maximum(norm, 1e-9), side)
 
     @staticmethod
     def _swivel(arm: PointingArm, sk, rot, root, jt, toward: np.ndarray, weight: np.ndarray) -> None:
