@@ -291,7 +291,9 @@ class Pointing(Controller):
     def _aim(self, arm: PointingArm, sk, rot, root, jt, goal, weight, stroke) -> None:
         """Arm IK (in ``rot``, in place): the fingertip on the shoulder-target ray, the hand along it."""
         shoulder, elbow, wrist = arm.chain
-        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist, max(int(sk.parents[shoulder]), 0)])
+        parent = int(sk.parents[shoulder])
+        parent = parent if parent >= 0 else shoulder  # a root shoulder: no offset, the body frame's side
+        g_rot, g_pos = chain_fk(sk, rot, root, jt, [shoulder, wrist, parent])
         s = g_pos[:, 0]
         outward = self._outward(arm, g_pos[:, 0] - g_pos[:, 2])
         to_goal = goal - s
@@ -357,8 +359,9 @@ def _arm(rig, hand: Hand, chain) -> PointingArm:
     f = along / np.linalg.norm(along)
     palm = hand.palm - np.dot(hand.palm, f) * f
     palm /= max(np.linalg.norm(palm), 1e-9)
-    segments = tuple(float(np.linalg.norm(b - a)) for a, b in
-                     ((g_pos[shoulder], g_pos[elbow]), (g_pos[elbow], g_pos[wrist]), (g_pos[wrist], tip)))
+    upper, fore, hand_m = (float(np.linalg.norm(b - a)) for a, b in
+                           ((g_pos[shoulder], g_pos[elbow]), (g_pos[elbow], g_pos[wrist]), (g_pos[wrist], tip)))
+    segments = (upper, fore, hand_m)
     return PointingArm(chain=(shoulder, elbow, wrist), hand=hand, segments=segments, length=sum(segments),
                        frame=np.stack((f, palm, np.cross(f, palm)), axis=1), wrist_reference=g_rot[wrist],
                        tip_local=quat.rotate(quat.conjugate(g_rot[wrist]), tip - g_pos[wrist]), body=rig.body)
