@@ -57,6 +57,8 @@ RISE_RELEASE_S = 0.1
 #: Seconds over which a foot laid flat in a stop's last steps is let go at least (its turn back to
 #: the animation's toe off).
 LAY_RELEASE_S = 0.3
+#: The largest turn (degrees) that lifts a foot or toes off the ground (their tip may not reach higher).
+LIFT_MAX_DEG = 90.0
 #: Degrees per second at which toes bent to keep their tip off the ground unbend at most.
 TOE_RELEASE_DEG_S = 150.0
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
@@ -937,20 +939,21 @@ def _floors(sk, legs, motion, frames) -> dict | None:
     return out
 
 
-def _lift(v: np.ndarray, height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The horizontal axes (..., 3) across offsets ``v`` (..., 3) (``v`` x +Y) and the smallest turns
-    (...) radians about them that give ``v`` vertical component ``height`` (...) (as near as it
-    reaches); zero where it already reaches that high."""
-    axis = np.stack((-v[..., 2], np.zeros(v.shape[:-1]), v[..., 0]), axis=-1)  # v x +Y
+def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The horizontal axes (..., 3) across directions ``along`` (..., 3) (``along`` x +Y) and the
+    turns (...) radians about them that give offsets ``v`` (..., 3) vertical component ``height``
+    (...), turning ``v``'s end up in front (toes bending up, a foot's heel coming down); zero where
+    ``v`` already reaches that high. A turn is at most :data:`LIFT_MAX_DEG`, less as ``v`` comes to
+    point straight down or back (none then: which way is up in front is lost)."""
+    axis = np.stack((-along[..., 2], np.zeros(along.shape[:-1]), along[..., 0]), axis=-1)
     axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
-    c, s = v[..., 1], np.cross(axis, v)[..., 1]  # the height after a turn t about the axis is c cos t + s sin t
+    # The height after a turn t about the axis is c cos t + s sin t (the axis is horizontal); with
+    # s > 0 it rises from t = 0 to its top at t = atan2(s, c), in (0, pi).
+    c, s = v[..., 1], np.cross(axis, v)[..., 1]
     r = np.maximum(np.hypot(c, s), 1e-12)
-    phi = np.arctan2(s, c)
-    swing = np.arccos(np.clip(height / r, -1.0, 1.0))
-    turns = np.stack((phi - swing, phi + swing), axis=-1)
-    turns = (turns + np.pi) % (2.0 * np.pi) - np.pi
-    angle = np.take_along_axis(turns, np.argmin(np.abs(turns), axis=-1)[..., None], axis=-1)[..., 0]
-    return axis, np.where(c < height, angle, 0.0)
+    angle = np.maximum(np.arctan2(s, c) - np.arccos(np.clip(height / r, -1.0, 1.0)), 0.0)
+    most = math.radians(LIFT_MAX_DEG) * np.clip(4.0 * s / r, 0.0, 1.0)  # 15 degrees or more off straight down
+    return axis, np.where(c < height, np.minimum(angle, most), 0.0)
 
 
 def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
@@ -965,7 +968,7 @@ def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
     g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
     ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
     point = ball + quat.rotate(g_rot[:, :, 3], floors["point"]) - ankle
-    axis, angle = _lift(point, floors["point_floor"] - ankle[..., 1])
+    axis, angle = _lift(point, floors["point_floor"] - ankle[..., 1], point)
     pitch = quat.from_rotvec(axis * (angle * floors["kept"])[..., None])
     ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
     rot[:, floors["ankles"]] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
@@ -977,10 +980,10 @@ def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
     ball_parent = np.where((floors["ball_parents"] == floors["ankles"])[None, :, None], ankle_rot,
                            quat.multiply(pitch, g_rot[:, :, 2]))
     tip = quat.rotate(ball_rot, floors["tip"])
-    axis, angle = _lift(tip, floors["tip_floor"] - ball[..., 1])
-    up = _slow_fall(np.maximum(angle, 0.0), st.get("toe_bend", np.zeros(2)), math.radians(TOE_RELEASE_DEG_S) * dt)
+    axis, angle = _lift(tip, floors["tip_floor"] - ball[..., 1], ball + tip - ankle)  # across the whole foot
+    up = _slow_fall(angle, st.get("toe_bend", np.zeros(2)), math.radians(TOE_RELEASE_DEG_S) * dt)
     st["toe_bend"] = up[-1].copy()
-    bend = quat.from_rotvec(axis * (np.where(angle < 0.0, angle, up) * floors["toes"])[..., None])
+    bend = quat.from_rotvec(axis * (up * floors["toes"])[..., None])
     rot[:, floors["balls"]] = np.where(floors["toes"][None, :, None],
                                        quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
                                        rot[:, floors["balls"]])
