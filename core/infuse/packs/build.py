@@ -86,9 +86,13 @@ def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: li
         derived.update(straightened_deg_s=float(np.degrees(turn)), aligned_deg=float(np.degrees(align)))
     motion, gap = close_loop(motion, cycle, p["turn_rate"] - turn)
     derived["closed_deg"] = gap
-    motions[entry.name] = motion
     fks[i] = batch_fk([motion])[0]
     again = analyse_clip(motion, entry, "locomotion", index, mapping, fks[i], cycle=(cycle, info["keys"]))
+    if align:  # closing turned the root back by part of its gap: align the closed cycle with its travel again
+        motion = straighten(motion, again["parameters"], cycle, 0.0, alignment(again["parameters"]["direction"]))
+        fks[i] = batch_fk([motion])[0]
+        again = analyse_clip(motion, entry, "locomotion", index, mapping, fks[i], cycle=(cycle, info["keys"]))
+    motions[entry.name] = motion
     again["notes"] = info["notes"] + again["notes"]
     again["derived"] = derived
     clips[i] = again
