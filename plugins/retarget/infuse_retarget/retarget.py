@@ -50,6 +50,8 @@ BLEND_SECONDS = 0.12
 #: Degrees per second at which a foot without a ball joint, pitched up about its ankle to keep
 #: its tip off the ground, pitches back (:func:`tip_above`).
 TIP_PITCH_SPEED = 150.0
+#: Share of the leg's length (thigh + shin) below which a point under the ankle is no foot tip.
+MIN_TIP = 0.1
 #: The hinge of a limb never straightens past this (radians): no hyperextended knees.
 MIN_FLEXION = np.radians(1.0)
 
@@ -214,7 +216,8 @@ class _Solver:
     def _tip(self, k: int) -> np.ndarray | None:
         """(3, F) where the tip of target foot ``k`` is in the current state: of the joints and end
         sites below its ankle, the one farthest from the ankle in the reference pose; ``None`` for a
-        foot with nothing below its ankle."""
+        foot with nothing below its ankle farther than :data:`MIN_TIP` of the leg's length (an end
+        site on the ankle itself, as OpenNI captures have, is no tip)."""
         rig, foot = self.plan.target.rig, self.plan.target.feet[k]
         sk = rig.skeleton
         joints = [j for j in foot.joints if j != foot.ankle]
@@ -222,9 +225,11 @@ class _Solver:
         offsets = [np.asarray(sk.end_site_offsets[e], dtype=np.float64) for e in foot.end_sites]
         reference = [rig.positions[j] for j in joints]
         reference += [rig.positions[p] + quat.rotate(rig.rotations[p], o) for p, o in zip(parents, offsets)]
-        if not reference:
+        leg = _chain_length(rig.positions, [foot.hip, foot.knee, foot.ankle])
+        far = np.linalg.norm(np.reshape(reference, (-1, 3)) - rig.positions[foot.ankle], axis=1)
+        if not len(far) or far.max() <= MIN_TIP * leg:
             return None
-        pick = int(np.argmax(np.linalg.norm(np.array(reference) - rig.positions[foot.ankle], axis=1)))
+        pick = int(np.argmax(far))
         pos = self.plan.positions(self.state, joints + parents)
         if pick < len(joints):
             return pos[joints[pick]]
