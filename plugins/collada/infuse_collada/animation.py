@@ -46,7 +46,7 @@ def channels(doc: Document, nodes: list[SceneNode]) -> tuple[list[Channel], int]
         for ch in animation.findall("channel"):
             match = _TARGET.match(ch.get("target") or "")
             targets = by_id.get(match["node"]) if match else None
-            if not targets:
+            if match is None or not targets:
                 skipped += 1
                 continue
             node = nodes[targets[0]]
@@ -102,7 +102,7 @@ def _curve(doc: Document, sampler) -> Curve:
         interp = np.array([str(v).upper() for v in interp])
     else:
         interp = np.full(len(times), "LINEAR")
-    tangents = []
+    tangents: list[np.ndarray | None] = []
     for semantic in ("IN_TANGENT", "OUT_TANGENT"):
         if semantic in inputs:
             tan = doc.source(inputs[semantic].get("source"), inputs[semantic])
@@ -111,9 +111,10 @@ def _curve(doc: Document, sampler) -> Curve:
             tangents.append(tan.reshape(len(times), -1))
         else:
             tangents.append(None)
-    if (tangents[0] is None) != (tangents[1] is None) or (tangents[0] is not None and tangents[0].shape != tangents[1].shape):
-        tangents = [None, None]
-    return Curve(times, values, interp, tangents[0], tangents[1])
+    into, out = tangents
+    if (into is None) != (out is None) or (into is not None and out is not None and into.shape != out.shape):
+        into = out = None
+    return Curve(times, values, interp, into, out)
 
 
 def frame_rate(chs: list[Channel]) -> float:

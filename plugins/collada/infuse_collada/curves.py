@@ -37,8 +37,8 @@ def sample_all(curves: list[Curve], t: np.ndarray) -> list[np.ndarray]:
             problems.append((out, problem))
     if problems:
         # One bisection for every 2D-Bezier segment of every curve.
-        flat = [np.concatenate([p[k].ravel() for _, p in problems]) for k in range(5)]
-        s_all = _solve_parameter(*flat)
+        a, b, c, d, x = (np.concatenate([p[k].ravel() for _, p in problems]) for k in range(5))
+        s_all = _solve_parameter(a, b, c, d, x)
         start = 0
         for out, p in problems:
             size = p[0].size

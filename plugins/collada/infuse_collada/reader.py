@@ -123,7 +123,7 @@ def _up_axis(doc: Document, override: str | None) -> str:
 
 def _clips(doc: Document, chs: list[animation.Channel]):
     """(name, start s, end s, channels) for each ``<animation_clip>``, or one clip spanning every key."""
-    clips = []
+    clips: list[tuple[str, float, float, list[animation.Channel]]] = []
     for clip in doc.root.iterfind("library_animation_clips/animation_clip"):
         ids = {(inst.get("url") or "").lstrip("#") for inst in clip.findall("instance_animation")}
         clip_chs = [c for c in chs if c.animations & ids]

@@ -8,6 +8,7 @@ are kept so their transforms can be folded into the joints below them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -66,7 +67,7 @@ def flatten(doc: Document, scene) -> tuple[list[SceneNode], list]:
     """
     nodes: list[SceneNode] = []
     elements: list = []
-    stack = [(el, -1, ()) for el in reversed(scene.findall("node"))]
+    stack: list[tuple[Any, int, tuple[Any, ...]]] = [(el, -1, ()) for el in reversed(scene.findall("node"))]
     while stack:
         el, parent, ancestry = stack.pop()
         if any(el is a for a in ancestry):
@@ -187,8 +188,9 @@ def unique_names(nodes: list[SceneNode], joints: list[int]) -> list[str]:
     seen: set[str] = set()
     out = []
     for n, name in zip(joints, names):
-        if counts[name] > 1 and nodes[n].id and nodes[n].id not in counts:
-            name = nodes[n].id
+        node_id = nodes[n].id
+        if counts[name] > 1 and node_id and node_id not in counts:
+            name = node_id
         base, k = name, 1
         while name in seen:
             k += 1
