@@ -94,7 +94,7 @@ def parse_amc(path: Path, text: str) -> AmcFile:
     names, first_row, which = np.unique(first[bone_rows], return_index=True, return_inverse=True)
     order = np.argsort(which, kind="stable")
     groups = np.split(order, np.cumsum(np.bincount(which, minlength=len(names)))[:-1])
-    lines: dict[str, np.ndarray] = {}
+    bone_numbers: dict[str, np.ndarray] = {}
     values: dict[str, list[str]] = {}
     problems: list[InputError] = []
     for k in np.argsort(first_row, kind="stable"):
@@ -107,9 +107,9 @@ def parse_amc(path: Path, text: str) -> AmcFile:
         elif counts.min() == 0:
             f = int(np.argmin(counts))
             problems.append(InputError(path, f"frame {frame_numbers[f]}", f"bone {name!r} is missing (file truncated?)"))
-        lines[name] = numbers[bone_rows[rows]]
+        bone_numbers[name] = numbers[bone_rows[rows]]
         values[name] = [v.decode("utf-8", "replace") for v in rest[bone_rows[rows]].tolist()]
-    return AmcFile(path, angle_unit, int(frame_numbers[0]), frames, lines, values, problems)
+    return AmcFile(path, angle_unit, int(frame_numbers[0]), frames, bone_numbers, values, problems)
 
 
 def bone_values(amc: AmcFile, name: str, count: int) -> np.ndarray:

@@ -47,9 +47,9 @@ def axis_rotation(order: str, angles: np.ndarray) -> np.ndarray:
 class Bone:
     name: str
     line: int
-    direction: np.ndarray | None = None
-    length: float | None = None
-    axis: np.ndarray | None = None  # angles in the file's angle unit, in ``axis_order``
+    direction: np.ndarray
+    length: float
+    axis: np.ndarray  # angles in the file's angle unit, in ``axis_order``
     axis_order: str = "XYZ"
     dof: list[str] = field(default_factory=list)
     limits: list[tuple[float, float]] = field(default_factory=list)
@@ -125,7 +125,14 @@ def _order(lines: _Lines, line: int, word: str, what: str) -> str:
 
 
 def _read_bone(lines: _Lines, start: int) -> Bone:
-    bone = Bone("", start)
+    name = ""
+    direction: np.ndarray | None = None
+    length: float | None = None
+    axis: np.ndarray | None = None
+    axis_order = "XYZ"
+    dof: list[str] = []
+    limits: list[tuple[float, float]] = []
+    extra: dict = {}
     while True:
         line, text = lines.next(f"'end' of the bone that begins on line {start}")
         key, *words = text.split()
@@ -135,49 +142,54 @@ def _read_bone(lines: _Lines, start: int) -> Bone:
         if key == "begin":
             raise lines.error(line, f"'begin' before the 'end' of the bone that begins on line {start}")
         if key == "id":
-            bone.extra["id"] = " ".join(words)
+            extra["id"] = " ".join(words)
         elif key == "name":
             if len(words) != 1:
                 raise lines.error(line, "a bone name is one word")
-            bone.name = words[0]
+            name = words[0]
         elif key == "direction":
-            bone.direction = _numbers(lines, line, words, 3, "direction")
+            direction = _numbers(lines, line, words, 3, "direction")
         elif key == "length":
-            bone.length = float(_numbers(lines, line, words, 1, "length")[0])
-            if bone.length < 0:
-                raise lines.error(line, f"negative bone length {bone.length}")
+            length = float(_numbers(lines, line, words, 1, "length")[0])
+            if length < 0:
+                raise lines.error(line, f"negative bone length {length}")
         elif key == "axis":
-            bone.axis = _numbers(lines, line, words, 3, "axis")
-            bone.axis_order = _order(lines, line, words[3] if len(words) > 3 else "", "the axis order")
+            axis = _numbers(lines, line, words, 3, "axis")
+            axis_order = _order(lines, line, words[3] if len(words) > 3 else "", "the axis order")
         elif key == "dof":
-            bone.dof = [w.lower() for w in words]
-            bad = [w for w in bone.dof if w not in ROTATION_DOFS + ("tx", "ty", "tz", "l")]
-            if bad or len(set(bone.dof)) != len(bone.dof):
+            dof = [w.lower() for w in words]
+            bad = [w for w in dof if w not in ROTATION_DOFS + ("tx", "ty", "tz", "l")]
+            if bad or len(set(dof)) != len(dof):
                 raise lines.error(line, f"bad dof list {' '.join(words)!r} (rx ry rz tx ty tz l, each once)")
         elif key == "limits":
             rest = " ".join(words)
             found = len(_LIMIT.findall(rest))  # counted line by line: re-reading the whole text each time was quadratic
-            while found < len(bone.dof) and lines.peek() and lines.peek()[1].startswith("("):
+            while found < len(dof) and lines.peek() and lines.peek()[1].startswith("("):
                 more = lines.next("a limit")[1]
                 rest += " " + more
                 found += len(_LIMIT.findall(more))
             pairs = _LIMIT.findall(rest)
-            if len(pairs) != len(bone.dof):
-                raise lines.error(line, f"{len(pairs)} limits for {len(bone.dof)} dofs")
+            if len(pairs) != len(dof):
+                raise lines.error(line, f"{len(pairs)} limits for {len(dof)} dofs")
             try:
-                bone.limits = [(float(a), float(b)) for a, b in pairs]
+                limits = [(float(a), float(b)) for a, b in pairs]
             except ValueError:
                 raise lines.error(line, f"limits {rest!r} are not numbers") from None
-            if any(math.isnan(a) or math.isnan(b) or a > b for a, b in bone.limits):  # +-inf: no limit that way
+            if any(math.isnan(a) or math.isnan(b) or a > b for a, b in limits):  # +-inf: no limit that way
                 raise lines.error(line, f"limits {rest!r} are not ordered pairs of numbers")
         elif key in ("bodymass", "cofmass"):
-            bone.extra[key] = float(_numbers(lines, line, words, 1, key)[0])
+            extra[key] = float(_numbers(lines, line, words, 1, key)[0])
         else:
             raise lines.error(line, f"unexpected {key!r} in a bone")
-    for need in ("name", "direction", "length", "axis"):
-        if getattr(bone, need) is None or (need == "name" and not bone.name):
-            raise lines.error(start, f"bone without {need}")
-    return bone
+    if not name:
+        raise lines.error(start, "bone without name")
+    if direction is None:
+        raise lines.error(start, "bone without direction")
+    if length is None:
+        raise lines.error(start, "bone without length")
+    if axis is None:
+        raise lines.error(start, "bone without axis")
+    return Bone(name, start, direction, length, axis, axis_order, dof, limits, extra)
 
 
 def _read_hierarchy(lines: _Lines, bones: dict[str, Bone]) -> dict[str, str]:

@@ -56,7 +56,7 @@ def load_asf(path: Path) -> AsfFile:
 
 def _skeleton(asf: AsfFile, metres: float) -> Skeleton:
     """Joints at the start of each bone, world-aligned rest frames; leaf bones end in end sites."""
-    names = ["root"] + asf.order
+    names = ("root", *asf.order)
     index = {n: i for i, n in enumerate(names)}
     parents = np.array([-1] + [index[asf.parent[b]] for b in asf.order])
     offsets = np.zeros((len(names), 3))
@@ -135,7 +135,9 @@ def _matching_asf(amc_path: Path, amc: AmcFile) -> tuple[AsfFile, dict]:
     candidates = sorted(p for p in amc_path.absolute().parent.glob("*.asf") if p.is_file())
     if not candidates:
         raise UnusableInputError(amc_path, "no .asf skeleton beside it; pass skeleton=PATH")
-    fitting, partial, unreadable = [], [], {}
+    fitting: list[tuple[int, AsfFile]] = []
+    partial: list[tuple[int, AsfFile]] = []
+    unreadable: dict[str, str] = {}
     for candidate in candidates:
         try:
             asf = load_asf(candidate)
@@ -152,7 +154,7 @@ def _matching_asf(amc_path: Path, amc: AmcFile) -> tuple[AsfFile, dict]:
     stem = amc_path.stem.split("_")[0]
     fitting.sort(key=lambda c: (c[1].path.stem != stem, not amc_path.stem.startswith(c[1].path.stem), c[1].path.name))
     chosen = fitting[0][1]
-    record = {"skeleton_file": str(chosen.path), "skeleton_candidates": [str(c) for c in candidates]}
+    record: dict[str, object] = {"skeleton_file": str(chosen.path), "skeleton_candidates": [str(c) for c in candidates]}
     if len(fitting) > 1 and chosen.path.stem != stem:
         record["skeleton_note"] = f"{len(fitting)} .asf files fit; chose the first by name"
     if unreadable:
