@@ -6,9 +6,13 @@ and in ``out/demo/scene/`` the scene of ``examples/scenes/demo.toml`` (the same 
 examples/scenes/demo.toml -o out/demo/scene``): Bob (the Mixamo Xbot) walks up to Ann (a Ready Player
 Me avatar), they look at each other, Bob nods, Ann says a sentence with lip sync and reaches for a cup.
 Each character is exported as a glb with its animation (Ann's with morph-weight tracks and her WAV
-beside it), with the BML feedback log and preview renders. The corpus is found through env
-``INFUSE_CORPUS``, else ``../shared/corpus`` beside the repository. Run it with ``make demo`` (or
-``.venv/bin/python examples/demo.py``).
+beside it), with the BML feedback log and preview renders. Then, in ``out/demo/conversation/``, the
+conversation of ``examples/scenes/conversation.toml``: Ann explains how a lamp works with the gestures,
+pointing, nods, brow raises and gaze the ``nonverbal`` generator adds to her speech, and points at the
+lamp; Bob listens with his arms crossed (the ``postures`` pack), nods at the ends of her phrases and
+answers; both exported as glb, the feedback (with the generated BML) and a preview. The corpus is found
+through env ``INFUSE_CORPUS``, else ``../shared/corpus`` beside the repository. Run it with ``make demo``
+(or ``.venv/bin/python examples/demo.py``).
 """
 from __future__ import annotations
 
@@ -19,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 import infuse
+from infuse.bml import parse_bml
 from infuse.errors import InfuseError
 from infuse.render import Camera, Figure, render
 from infuse.scene.command import build_scene, write_feedback
@@ -27,6 +32,7 @@ from infuse.scene.scenefile import read_scene_file
 REPO = Path(__file__).resolve().parents[1]
 OUT = REPO / "out" / "demo"
 SCENE = REPO / "examples" / "scenes" / "demo.toml"
+CONVERSATION = REPO / "examples" / "scenes" / "conversation.toml"
 
 # Tried in order; the first one an installed reader can load is used.
 CHARACTERS = (
@@ -95,7 +101,7 @@ def main() -> int:
     strip = render([figure], OUT / "walk_strip.png", strip=6, title=f"{walk_path.name}: 6 frames")
     print(f"animation: {gif}")
     print(f"strip:     {strip}")
-    return scene_demo()
+    return scene_demo() or conversation_demo()
 
 
 def scene_demo() -> int:
@@ -131,6 +137,59 @@ def report(scene) -> None:
     samples, rate = scene.audio("ann")
     print(f"  ann said {talk.parameters['text']!r} from {talk.start:.2f} s to {talk.end:.2f} s; "
           f"her WAV lasts {len(samples) / rate:.2f} s, her clip {scene.runtime.frame / scene.fps:.2f} s")
+    warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
+    print(f"  {len(scene.feedback.log)} feedback events, {len(warnings)} warnings"
+          + "".join(f"\n    {e.id}: {e.description}" for e in warnings))
+
+
+def conversation_demo() -> int:
+    """Realize the conversation scene file; export both characters, the feedback (with the generated BML)
+    and a preview."""
+    out = OUT / "conversation"
+    print(f"\nconversation: {CONVERSATION}")
+    spec = read_scene_file(CONVERSATION)
+    scene = build_scene(spec)
+    scene.run(spec.duration)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in scene.characters:
+        written += scene.export(name, out / f"{name}.glb")
+    written += write_feedback(scene, out)
+    written.append(scene.render(out / "preview.png", strip=8))
+    conversation_report(scene)
+    for path in written:
+        print(f"wrote      {path}")
+    return 0
+
+
+def conversation_report(scene) -> None:
+    """What the generator added, and on the output (FK): where Ann's index finger aims at her pointing's
+    stroke, and Bob's right wrist against his left elbow while he listens and once he answers."""
+    for event in (e for e in scene.feedback.log if e.kind == "generatedBml"):
+        for block in parse_bml(event.bml).blocks:
+            added = ", ".join(f"{b.element} {b.attributes.get('lexeme') or b.attributes.get('target') or ''}".strip()
+                              for b in block.behaviours if b.element != "speech")
+            print(f"  generated for {block.character_id} ({block.id}): {added}")
+    pointing = next(a for a in scene.scheduler.activations("ann") if a.element == "pointing"
+                    and a.parameters.get("target") in scene.objects)
+    rig = scene.runtime.rig("ann")
+    _, positions = infuse.motion_fk(scene.motion("ann"))
+    at = positions[int(round(pointing.time("stroke") * scene.fps))]
+    target = np.asarray(scene.objects[pointing.parameters["target"]].position)
+    misses = []
+    for side in ("l", "r"):
+        wrist, tip = at[rig.joint(f"{side}_wrist")], at[rig.joint(f"{side}_index3")]
+        ray = (tip - wrist) / np.linalg.norm(tip - wrist)
+        misses.append(np.linalg.norm((target - wrist) - ray * max(np.dot(target - wrist, ray), 0.0)))
+    print(f"  ann points at the {pointing.parameters['target']} at {pointing.time('stroke'):.2f} s: her index "
+          f"finger's ray passes {100 * min(misses):.1f} cm from it")
+    rig = scene.runtime.rig("bob")
+    _, positions = infuse.motion_fk(scene.motion("bob"))
+    gap = np.linalg.norm(positions[:, rig.joint("r_wrist")] - positions[:, rig.joint("l_elbow")], axis=1)
+    answer = scene.scheduler.blocks["bob_answer"]
+    listening = gap[int(2.0 * scene.fps):int(answer.start_s * scene.fps)]
+    print(f"  bob listens with his arms crossed (2.0-{answer.start_s:.1f} s): right wrist {100 * listening.mean():.0f} cm "
+          f"from the left elbow; {100 * gap[-1]:.0f} cm once he has answered")
     warnings = [e for e in scene.feedback.log if e.kind == "warningFeedback"]
     print(f"  {len(scene.feedback.log)} feedback events, {len(warnings)} warnings"
           + "".join(f"\n    {e.id}: {e.description}" for e in warnings))
