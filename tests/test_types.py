@@ -34,7 +34,8 @@ TYPED_PLUGIN_MODULES = ["plugins/gaze/infuse_gaze", "plugins/gestures/infuse_ges
                         "plugins/blink/infuse_blink", "plugins/breathing/infuse_breathing",
                         "plugins/saccade/infuse_saccade", "plugins/noise/infuse_noise",
                         "plugins/manipulation/infuse_manipulation", "plugins/reach/infuse_reach",
-                        "plugins/ogre/infuse_ogre", "plugins/tts_espeak/infuse_tts_espeak", "plugins/tts_file/infuse_tts_file"]
+                        "plugins/ogre/infuse_ogre", "plugins/acclaim/infuse_acclaim", "plugins/tts_espeak/infuse_tts_espeak",
+                        "plugins/tts_file/infuse_tts_file"]
 
 
 def test_the_typed_plugins_pass_mypy():
