@@ -4,6 +4,8 @@ kinematics on the written clip against the source's own feet, on a corpus rig wi
 removed and on a wild rig built without them."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -38,11 +40,20 @@ def deepest(motion: infuse.Motion, mapping, planted: np.ndarray) -> float:
     return float(100.0 * max(0.0, -(low - levels).min()))
 
 
-def check(target: infuse.Skeleton, mapping: dict) -> None:
+def walk() -> tuple[infuse.Motion, dict]:
     require_corpus()
     source = infuse.load(corpus_file(WALK))
-    clip = next(iter(source.motions.values()))
-    s_map = {k: v for k, v in _label(WALK)["mapping"].items() if v is not None}
+    return next(iter(source.motions.values())), {k: v for k, v in _label(WALK)["mapping"].items() if v is not None}
+
+
+def toeless_xbot() -> tuple[infuse.Skeleton, dict]:
+    require_corpus()
+    variant = skeleton_variants.toeless(infuse.load(corpus_file(XBOT)).skeleton, None, _label(XBOT))
+    return variant.skeleton, {k: v for k, v in variant.mapping.items() if v is not None}
+
+
+def check(target: infuse.Skeleton, mapping: dict) -> None:
+    clip, s_map = walk()
     assert all(f.ball is None for f in feet(target, mapping)), "the target's feet should have no ball joint"
     plan = RetargetPlan(clip.skeleton, s_map, target, mapping, source_motion=clip)
     result = retarget_clip(plan, clip)
@@ -58,10 +69,22 @@ def check(target: infuse.Skeleton, mapping: dict) -> None:
 
 
 def test_corpus_rig_without_toes():
-    require_corpus()
-    label = _label(XBOT)
-    variant = skeleton_variants.toeless(infuse.load(corpus_file(XBOT)).skeleton, None, label)
-    check(variant.skeleton, {k: v for k, v in variant.mapping.items() if v is not None})
+    check(*toeless_xbot())
+
+
+def test_end_site_on_the_ankle_is_no_tip():
+    """A foot whose only end site sits on the ankle (OpenNI captures) has no tip to pitch: it is
+    retargeted as a foot with nothing below the ankle."""
+    clip, s_map = walk()
+    target, mapping = toeless_xbot()
+    ankles = [f.ankle for f in feet(target, mapping)]
+    on_ankle = np.isin(target.end_site_parents, ankles)
+    offsets = np.where(on_ankle[:, None], 0.0, target.end_site_offsets)
+    bare = replace(target, end_site_parents=target.end_site_parents[~on_ankle],
+                   end_site_offsets=target.end_site_offsets[~on_ankle])
+    out = [retarget_clip(RetargetPlan(clip.skeleton, s_map, sk, mapping, source_motion=clip), clip).motion
+           for sk in (replace(target, end_site_offsets=offsets), bare)]
+    np.testing.assert_allclose(motion_fk(out[0])[0][:, ankles], motion_fk(out[1])[0][:, ankles], atol=1e-9)
 
 
 def test_wild_rig_without_toes():
