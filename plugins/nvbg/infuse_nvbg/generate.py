@@ -87,7 +87,7 @@ def generate(block, context, rules: Rules | None = None) -> Generation:
     behaviours = tuple(replace(b, marks=marked[b.id].marks) if b.id in marked else b for b in block.behaviours)
     added = tuple(b for b in parsed.behaviours if b.element != "speech")
     out = replace(block, behaviours=behaviours + added)
-    if not listener_xml:
+    if not listener_xml or listener is None:  # backchannels are made only for a listener
         return Generation(out, (), speaker_doc, tuple(notes))
     listener_id = f"{block.id}_{listener}_nv"
     listener_doc = (f'<bml xmlns="{BML_NS}" id={quoteattr(listener_id)} characterId={quoteattr(listener)}>'

@@ -11,6 +11,7 @@ import tomllib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import NoReturn
 
 from infuse.bml import parse_bml
 from infuse.errors import InfuseError, InputError
@@ -87,7 +88,7 @@ class _Checker:
     def __init__(self, path: Path):
         self.path = path
 
-    def fail(self, place: str, problem: str):
+    def fail(self, place: str, problem: str) -> NoReturn:
         raise InputError(self.path, place, problem)
 
     def table(self, doc: dict, key: str) -> dict:
@@ -118,9 +119,9 @@ class _Checker:
             self.fail(place, "expected a list of words")
         return frozenset(w.strip().lower() for w in value)
 
-    def element(self, template: str, place: str) -> str:
-        """``template`` checked: one BML element, known placeholders, no sync point of its own."""
-        template = self.text(template, place)
+    def element(self, value: object, place: str) -> str:
+        """``value`` checked as a template: one BML element, known placeholders, no sync point of its own."""
+        template = self.text(value, place)
         unknown = sorted(set(_PLACEHOLDER.findall(template)) - set(PLACEHOLDERS))
         if unknown:
             self.fail(place, f"unknown placeholder {{{unknown[0]}}}; known: {', '.join(PLACEHOLDERS)}")
@@ -199,10 +200,10 @@ def _load(path: Path) -> Rules:
                      c.element(g.get("aversion"), "gaze.aversion"), tuple(directions),
                      c.element(g.get("look_back"), "gaze.look_back"))
     li = c.table(doc, "listener")
-    on = li.get("on")
-    if not isinstance(on, list) or not on or any(t not in LISTENER_TRIGGERS for t in on):
+    triggers = li.get("on")
+    if not isinstance(triggers, list) or not triggers or any(t not in LISTENER_TRIGGERS for t in triggers):
         c.fail("listener.on", f"expected a list of {', '.join(LISTENER_TRIGGERS)}")
-    listener = ListenerRules(tuple(on), int(c.number(li.get("min_words"), "listener.min_words", 1, 1000)),
+    listener = ListenerRules(tuple(triggers), int(c.number(li.get("min_words"), "listener.min_words", 1, 1000)),
                              c.number(li.get("probability"), "listener.probability", 0.0, 1.0),
                              c.number(li.get("gap_s"), "listener.gap_s", 0.0, 60.0),
                              c.element(li.get("bml"), "listener.bml"), c.text(li.get("sync"), "listener.sync"))
