@@ -27,15 +27,15 @@ def test_the_public_api_module_is_strictly_typed():
 
 
 #: Plugin packages and modules that pass mypy: the controllers whose contracts are typed (bindings and
-#: per-character and per-activity state as dataclasses), and the readers and speech engines whose findings
-#: are fixed (only their own findings: what they import is checked where it lives).
+#: per-character and per-activity state as dataclasses), and the readers, speech engines and the nonverbal
+#: generator whose findings are fixed (only their own findings: what they import is checked where it lives).
 TYPED_PLUGIN_MODULES = ["plugins/gaze/infuse_gaze", "plugins/gestures/infuse_gestures/controller.py",
                         "plugins/postures/infuse_postures", "plugins/lipsync/infuse_lipsync", "plugins/head/infuse_head",
                         "plugins/blink/infuse_blink", "plugins/breathing/infuse_breathing",
                         "plugins/saccade/infuse_saccade", "plugins/noise/infuse_noise",
                         "plugins/manipulation/infuse_manipulation", "plugins/reach/infuse_reach",
                         "plugins/ogre/infuse_ogre", "plugins/acclaim/infuse_acclaim", "plugins/tts_espeak/infuse_tts_espeak",
-                        "plugins/tts_file/infuse_tts_file"]
+                        "plugins/tts_file/infuse_tts_file", "plugins/nvbg/infuse_nvbg"]
 
 
 def test_the_typed_plugins_pass_mypy():
