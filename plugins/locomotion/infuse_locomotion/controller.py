@@ -855,7 +855,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
             m = motions[i]
             flat = np.mod(0.5 * (events[i][:, 1] + events[i][:, 2]), 1.0)
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
-        floors = _floors(sk, legs, m, frames)
+        floors = _floors(sk, legs, m, frames, leg_length)
         if all(leg[3] is not None for leg in legs):
             g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
                                 None if m.joint_translations is None else m.joint_translations[frames],
@@ -904,11 +904,11 @@ def _tip(sk, joint: int) -> np.ndarray | None:
     return np.array(far) if np.linalg.norm(far) > 1e-6 else None
 
 
-def _floors(sk, legs, motion, frames) -> dict | None:
+def _floors(sk, legs, motion, frames, leg_length: float) -> dict | None:
     """What :func:`_keep_feet_up` needs of two ``legs`` on skeleton ``sk``, standing in ``motion``'s
     ``frames`` (2,) (one per foot): each foot's ankle, its "ball" (the ball joint, else the ankle), the
-    tip of a foot without a ball joint (its farthest child or end site; an offset (3,) in the ankle's
-    frame), the toes' tip (offset in the ball's frame; only with a ball joint), the joints they hang
+    tip of a foot without a ball joint (its farthest child or end site, a tenth of the leg's length
+    ``leg_length`` (m) or more from the ankle; an offset (3,) in the ankle's frame), the toes' tip (offset in the ball's frame; only with a ball joint), the joints they hang
     from, and the heights (m) the two tips stand at; None where neither foot has a tip."""
     ankles = np.array([leg[2] for leg in legs])
     balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
@@ -918,7 +918,8 @@ def _floors(sk, legs, motion, frames) -> dict | None:
     toes = np.zeros(2, dtype=bool)
     for k, leg in enumerate(legs):
         end = _tip(sk, int(balls[k]))
-        if leg[3] is None:
+        if leg[3] is None:  # a tip on the ankle itself (a capture's end site) is no foot's tip
+            end = end if end is not None and np.linalg.norm(end) >= 0.1 * leg_length else None
             kept[k] = end is not None
             point[k] = 0.0 if end is None else end
         else:
