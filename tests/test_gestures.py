@@ -11,7 +11,7 @@ from infuse.bml import Scheduler, parse_bml
 from infuse.kinematics import forward_kinematics
 from infuse.scene import Scene
 
-from infuse_gestures.controller import gesture_space
+from infuse.packs import space_on
 from runtime_characters import corpus_character
 
 FPS = 30.0
@@ -48,7 +48,7 @@ def chest_wrist(rig, motion, side: str) -> np.ndarray:
 def authored_stroke(rig, clip: str, side: str) -> tuple[np.ndarray, float]:
     """The wrist at the authored stroke of ``clip`` retargeted onto the character (chest frame), and the
     authored stroke time."""
-    space = gesture_space(rig, "gestures")
+    space = space_on(rig, "gestures")
     c = space.clips[clip]
     frame = int(round(c.stroke * c.motion.fps))
     one = c.motion.replace(local_rotations=c.motion.local_rotations[frame:frame + 1],

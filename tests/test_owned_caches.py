@@ -12,14 +12,15 @@ import weakref
 import numpy as np
 
 from infuse import Character, Motion, quaternions as quat
+from infuse.packs import InfusedSpaces
 from infuse.runtime import Clip, Runtime
 from infuse.runtime.clip import continuous_rotations
 from infuse_gaze import Gaze
 from infuse_gaze.binding import GazeState
-from infuse_gestures.controller import Gesture, GestureSpaces
+from infuse_gestures.controller import Gesture
 from infuse_lipsync.controllers import FaceChannelsByMap, FaceExpression, face_channels
-from infuse_postures.controller import Posture, PostureSpaces
-from infuse_reach.controller import Reach, ReachSpaces
+from infuse_postures.controller import Posture
+from infuse_reach.controller import Reach
 
 from runtime_characters import synthetic_character
 
@@ -58,14 +59,13 @@ def test_a_runtime_s_caches_go_when_it_goes():
     rt = play(("ann",))
     assert rt.motion("ann").morph_weights.max() > 0.5  # it smiled
     rig = rt.rig("ann")
-    states = [rig.asset_state_of(GestureSpaces), rig.asset_state_of(PostureSpaces), rig.state_of(GazeState),
-              rig.state_of(FaceChannelsByMap)]
-    assert all(len(s) for s in states[:2]) and len(states[3]) == 1  # filled while playing, not made here
-    assert np.any(states[2].groups != 0.0)
-    packs = [space for _, space in (*states[0].values(), *states[1].values())]
+    states = [rig.asset_state_of(InfusedSpaces), rig.state_of(GazeState), rig.state_of(FaceChannelsByMap)]
+    assert sorted(states[0]) == ["gestures", "postures"] and len(states[2]) == 1  # filled while playing, not made here
+    assert np.any(states[1].groups != 0.0)
+    packs = [space for _, space in states[0].values()]
     clip = next(a.controller.motion for a in rt.activities if isinstance(a.controller, Clip))
     table = continuous_rotations(clip)
-    refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[3].values(), clip, table)]
+    refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[2].values(), clip, table)]
     del rt, rig, states, packs, clip, table
     gc.collect()
     assert [r() for r in refs if r() is not None] == []
@@ -107,7 +107,7 @@ def test_runtimes_playing_characters_of_one_asset_share_its_infused_packs():
     ann = synthetic_character("ann", morphs=SMILE)
     again = Character("ann", ann.asset, mapping=ann.mapping)  # as a scene wraps the character it is given
     first, second = play(("ann",), {"ann": ann}), play(("ann",), {"ann": again})
-    spaces = [rt.rig("ann").asset_state_of(GestureSpaces)["gestures"][1] for rt in (first, second)]
+    spaces = [rt.rig("ann").asset_state_of(InfusedSpaces)["gestures"][1] for rt in (first, second)]
     assert spaces[0] is spaces[1]
     assert first.rig("ann").state_of(GazeState) is not second.rig("ann").state_of(GazeState)
     kept = weakref.ref(spaces[0])
@@ -126,7 +126,7 @@ def test_a_reaching_pack_is_infused_once_for_the_asset():
         rt.activate("ann", Reach((-0.2, 1.2, 0.3), hand="right"), 0.0)
         rt.run(0.5)
         runtimes.append(rt)
-    spaces = [rt.rig("ann").asset_state_of(ReachSpaces) for rt in runtimes]
+    spaces = [rt.rig("ann").asset_state_of(InfusedSpaces) for rt in runtimes]
     assert spaces[0] is spaces[1] and list(spaces[0]) == ["reaching"]
     kept = weakref.ref(spaces[0]["reaching"][1])
     del runtimes, spaces, ann, again, rt, character

@@ -23,7 +23,8 @@ from infuse.runtime import Runtime
 from infuse.scene import Scene
 
 from corpus_data import corpus_file
-from infuse_postures.controller import PostureState, posture_space
+from infuse.packs import space_on
+from infuse_postures.controller import PostureState
 from runtime_characters import corpus_character
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -175,7 +176,7 @@ def test_postures_follow_each_other_with_the_feet_planted(key, pack_cache):
     scene, motion = play(key, SEQUENCE, pack_cache, seconds=11.0)
     rig = scene.runtime.rig("bob")
     assert feet_travel_m(rig, motion, np.arange(motion.num_frames)) < 0.003  # through three transitions and a return
-    space = posture_space(rig, "postures")
+    space = space_on(rig, "postures")
     for side in "lr":
         wrist = chest_frame(rig, motion, f"{side}_wrist")
         for t, clip, start in ((2.5, "arms_crossed", 0.5), (5.0, "hands_on_hips", 3.0), (7.5, "arms_crossed", 0.5)):
@@ -211,7 +212,7 @@ def test_a_posture_asked_for_during_a_walk_begins_once_the_character_stands(pack
     hips = g_pos[:, rig.joint("base"), :][:, [0, 2]]
     assert np.linalg.norm(hips[start] - hips[0]) > 2.0  # it walked there
     assert feet_travel_m(rig, motion, np.arange(start, motion.num_frames)) < 0.003
-    space = posture_space(rig, "postures")
+    space = space_on(rig, "postures")
     authored = chest_frame(rig, space.clips["arms_crossed"].motion, "l_wrist")
     f = motion.num_frames - 1
     loop = (f - start) % (space.clips["arms_crossed"].motion.num_frames - 1)
@@ -320,7 +321,7 @@ def test_forearms_and_hands_stay_out_of_the_torso(key):
     character = corpus_character(key)
     rt = Runtime(fps=FPS)
     rt.add_character(character, "bob")
-    space = posture_space(rt.rig("bob"), "postures")
+    space = space_on(rt.rig("bob"), "postures")
     for name, clip in space.clips.items():
         deepest = max(penetration_m(character, clip.motion, f) for f in range(0, clip.motion.num_frames, 40))
         assert deepest < 0.025, (name, deepest)  # skin against skin at most: hands on the hips, clasped, crossed arms

@@ -23,9 +23,9 @@ def xbot():
 def inside_targets(rig, hand, count, seed):
     """Points inside the hand's examples' hull (convex combinations of the examples' body-frame wrist
     points, pulled 10% toward their centre), used as world points: the character stands near the origin."""
-    from infuse_reach.controller import space_for
+    from infuse.packs import space_on
 
-    space = space_for(rig, "reaching")
+    space = space_on(rig, "reaching")
     pts = space.tessellations[hand].points
     rng = np.random.default_rng(seed)
     out = []

@@ -60,7 +60,7 @@ PUBLIC_MODULES: dict[str, str] = {
     "infuse.bml": "BML behaviour plans, timing models, generations (BML added before scheduling) and errors",
     "infuse.bml.model": "BML documents and the warningFeedback types",
     "infuse.stage": "Stage, Stagehand and Held: what a scene offers the controller realizing a BML behaviour",
-    "infuse.packs": "behaviour packs: load_pack, Pack",
+    "infuse.packs": "behaviour packs: load_pack, Pack, space_on (a pack infused on a runtime character)",
     "infuse.packs.analysis": "what the pack builder measures in clips (steps, strokes)",
     "infuse.packs.manifest": "pack manifests",
     "infuse.scene": "scenes: characters, objects and timed BML",

@@ -30,28 +30,6 @@ COARTICULATION_GAP_S = 0.5
 _LEGS = ("hip", "knee", "ankle", "forefoot", "toe")
 
 
-class GestureSpaces(dict):
-    """The gesture packs infused on a character's asset: pack name -> the mapping it was infused through and its
-    :class:`~infuse.packs.BlendSpace`. Kept for the character's asset
-    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): scenes playing it share it, and it goes with it."""
-
-
-def gesture_space(rig, pack: str):
-    """The :class:`~infuse.packs.BlendSpace` of gesture pack ``pack`` on the rig's character (infused once per
-    asset and mapping)."""
-    from infuse.packs import BlendSpace, infuse_character
-
-    if isinstance(pack, BlendSpace):
-        return pack
-    spaces = rig.asset_state_of(GestureSpaces)
-    mapping, space = spaces.get(str(pack), (None, None))
-    if space is None or mapping is not rig.mapping:
-        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        space = next(iter(infusion.spaces.values()))
-        spaces[str(pack)] = (rig.mapping, space)
-    return space
-
-
 @lru_cache(maxsize=256)
 def authored_phases(pack, clip: str) -> tuple[dict, frozenset]:
     """Seconds of every phase of :data:`PHASES` of ``clip`` as the pack authored it, and its hands
@@ -122,7 +100,9 @@ class Gesture(Controller):
         return f"gesture {self.clip}"
 
     def bind(self, rig, report) -> GestureBinding:
-        space = gesture_space(rig, self.pack)
+        from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
+
+        space = space_on(rig, self.pack)
         if self.clip not in space.clips:
             raise UsageError(f"pack {space.pack!r} has no gesture {self.clip!r}")
         clip = space.clips[self.clip]

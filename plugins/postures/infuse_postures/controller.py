@@ -56,28 +56,6 @@ BULGE_M = 0.05
 ROUND_DEG = (110.0, 140.0)
 
 
-class PostureSpaces(dict):
-    """The posture packs infused on a character's asset: pack name -> the mapping it was infused through and its
-    :class:`~infuse.packs.BlendSpace`. Kept for the character's asset
-    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): scenes playing it share it, and it goes with it."""
-
-
-def posture_space(rig, pack):
-    """The :class:`~infuse.packs.BlendSpace` of posture pack ``pack`` on the rig's character (infused once per
-    asset and mapping)."""
-    from infuse.packs import BlendSpace, infuse_character
-
-    if isinstance(pack, BlendSpace):
-        return pack
-    spaces = rig.asset_state_of(PostureSpaces)
-    mapping, space = spaces.get(str(pack), (None, None))
-    if space is None or mapping is not rig.mapping:
-        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        space = next(iter(infusion.spaces.values()))
-        spaces[str(pack)] = (rig.mapping, space)
-    return space
-
-
 def facing(left: np.ndarray) -> float:
     """Heading (radians about +Y, + turning the front toward +X) of a body whose left is ``left`` (3,)."""
     return float(np.arctan2(-left[2], left[0]))
@@ -160,7 +138,9 @@ class Posture(Controller):
         return f"posture {self.clip}"
 
     def bind(self, rig, report) -> PostureBinding:
-        space = posture_space(rig, self.pack)
+        from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
+
+        space = space_on(rig, self.pack)
         if self.clip not in space.clips:
             raise UsageError(f"pack {space.pack!r} has no posture {self.clip!r} (its postures: {', '.join(space.clips)})")
         motion = space.clips[self.clip].motion

@@ -31,28 +31,6 @@ HELD_WITHIN_M = 0.15
 _UPPER = ("spine1", "spine2", "spine3", "spine4", "spine5", "skullbase")
 
 
-class ReachSpaces(dict):
-    """The reaching packs infused on a character's asset: pack name -> the mapping it was infused through and its
-    :class:`~infuse.packs.BlendSpace`. Kept for the character's asset
-    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): scenes playing it share it, and it goes with it."""
-
-
-def space_for(rig, pack):
-    """The reaching blend space of ``pack`` (a BlendSpace, returned as is, or a pack's name or folder) on
-    the runtime character ``rig``: infused once per asset, pack and mapping."""
-    from infuse.packs import BlendSpace, infuse_character
-
-    if isinstance(pack, BlendSpace):
-        return pack
-    spaces = rig.asset_state_of(ReachSpaces)
-    mapping, space = spaces.get(str(pack), (None, None))
-    if space is None or mapping is not rig.mapping:
-        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping)
-        space = next(iter(infusion.spaces.values()))
-        spaces[str(pack)] = (rig.mapping, space)
-    return space
-
-
 def _mean_stroke(pack) -> float:
     """Mean stroke time (seconds) of a reaching pack's reach examples."""
     from infuse.packs import BlendSpace, load_pack
@@ -177,7 +155,9 @@ class Reach(Controller):
             self.held.release_s = self.release_s
 
     def bind(self, rig, report) -> ReachBinding:
-        space = space_for(rig, self.pack)
+        from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
+
+        space = space_on(rig, self.pack)
         if space.kind != "reach":
             raise UsageError(f"pack {space.pack!r} is not a reaching pack")
         hands = {}
