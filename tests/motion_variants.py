@@ -10,7 +10,7 @@ folder of BVH files, which ``infuse pack import bvh`` then reads as a new user's
 - ``metres`` / ``z_up``: written in another unit (metres, or centimetres for a set in metres) or with
   +Z up (the figure lying along Z in the file, as 3ds Max and MotionBuilder write it);
 - ``renamed``: joints renamed into the Mixamo convention, namespace prefix included (``mixamorig:Hips``);
-  joints the mapping leaves out behind the same prefix;
+  joints the mapping leaves out, or the convention does not name, behind the same prefix;
 - ``a_pose``: the rest pose's arms turned about the shoulders in the frontal plane to 45 degrees below
   the horizontal; the motion re-expressed so that every joint moves as before (only the file's offsets
   and channel values change);
@@ -133,8 +133,13 @@ def renamed(motion_set: MotionSet) -> MotionSet:
     """Mapped joints named as Mixamo names them; the others behind Mixamo's namespace."""
     sk = motion_set.skeleton
     canonical = {j: k for k, j in _mapping(motion_set).items()}
-    names = tuple(_convention_name(CONVENTIONS["mixamo"], canonical[j]) if j in canonical else f"mixamorig:{n}"
-                  for j, n in enumerate(sk.names))
+
+    def name(j: int, original: str) -> str:
+        try:
+            return _convention_name(CONVENTIONS["mixamo"], canonical[j])
+        except KeyError:  # unmapped, or a joint the convention has no name for (an eyelid)
+            return f"mixamorig:{original}"
+    names = tuple(name(j, n) for j, n in enumerate(sk.names))
     skeleton = Skeleton(names, sk.parents, sk.rest_translations, sk.rest_rotations, sk.end_site_parents, sk.end_site_offsets)
     return replace(motion_set, name="renamed", skeleton=skeleton,
                    takes={k: m.replace(skeleton=skeleton) for k, m in motion_set.takes.items()})
