@@ -35,11 +35,11 @@ def walk(asset, pack, seconds=5.0, **settings):
 
 @pytest.mark.parametrize("pack", ["locomotion-male", "locomotion-female"])
 def test_realized_speed_matches_request_over_the_range(xbot, pack):
-    from infuse_locomotion.controller import infusion_for
+    from infuse.packs import space_on
 
     rt = Runtime(fps=30)
     rig = rt.rig(rt.add_character(infuse.Character("x", xbot)))
-    lo, hi = infusion_for(rig, pack).range("forward_speed")
+    lo, hi = space_on(rig, pack).range("forward_speed")
     for v in np.linspace(max(lo, 0.3), hi, 5):
         mapping, m, _, g = walk(xbot, pack, 4.0, speed=float(v), max_accel=50.0)
         base = g[:, mapping.indices(m.skeleton)["base"]]
@@ -83,10 +83,10 @@ def test_foot_skate_in_blended_walks(xbot, pack):
     default detector counting every planted frame fully, which also counts the ankle rising about the
     ball at heel off; that stricter reading holds from 1.2 m/s, where the heel rises fast enough to
     leave the detector's speed limit within a few millimetres."""
-    from infuse_locomotion.controller import infusion_for
+    from infuse.packs import space_on
 
     rt = Runtime(fps=30)
-    top = infusion_for(rt.rig(rt.add_character(infuse.Character("x", xbot))), pack).range("forward_speed")[1]
+    top = space_on(rt.rig(rt.add_character(infuse.Character("x", xbot))), pack).range("forward_speed")[1]
     readings = {"skate": {}, "grounded": {}, "unweighted": {}}
     for v in (0.5, 0.8, 1.2, 1.7, 2.0, 2.5, 3.0, round(top, 2)):
         run = walk(xbot, pack, 5.0, speed=v, max_accel=50.0)

@@ -7,6 +7,6 @@
 """
 from __future__ import annotations
 
-from .controller import Locomotion, infusion_for
+from .controller import Locomotion
 
-__all__ = ["Locomotion", "infusion_for"]
+__all__ = ["Locomotion"]

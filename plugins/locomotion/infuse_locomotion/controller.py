@@ -46,9 +46,6 @@ from . import transitions
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering
 
-_INFUSIONS: dict = {}
-#: What :meth:`Locomotion.bind` prepared, by (blend space, skeleton, legs): walks of a character reuse it.
-_BINDINGS: dict = {}
 
 #: Seconds over which a released foot's pin correction fades back to the animation, and its extra
 #: heel rise (a leg that could not reach its pinned ball) in the early swing.
@@ -88,15 +85,11 @@ _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 
-def infusion_for(rig, pack: str, cache=None):
-    """The :class:`~infuse.packs.BlendSpace` of ``pack`` on a runtime character (infused once per process)."""
-    from infuse.packs import infuse_character
-
-    key = (id(rig.character), id(rig.mapping), str(pack))
-    if key not in _INFUSIONS:
-        infusion = infuse_character(rig.character, [pack], mapping=rig.mapping, cache=cache)
-        _INFUSIONS[key] = (rig.character, next(iter(infusion.spaces.values())))
-    return _INFUSIONS[key][1]
+class PreparedWalks(dict):
+    """What :meth:`Locomotion.bind` prepared (:func:`_prepare`) for a character's asset, by (pack name,
+    legs, pelvis): the blend space it was prepared from, the skeleton, and the binding. Kept for the asset
+    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): every walk of a character made of it reuses it, one
+    per pack (a space infused again, by another scene, takes its place), and it goes with the asset."""
 
 
 def yaw(angle) -> np.ndarray:
@@ -181,7 +174,7 @@ class Locomotion(Controller):
 
     def __init__(self, pack="locomotion-male", speed=1.3, turn_rate_deg_s=0.0, direction_deg=0.0, path=None, target=None,
                  max_accel: float = 1.5, max_decel: float = 2.5, max_turn_rate_deg_s: float = 90.0,
-                 max_turn_accel_deg_s2: float = 240.0, pin_feet: bool = True, cache=None):
+                 max_turn_accel_deg_s2: float = 240.0, pin_feet: bool = True):
         if path is not None and target is not None:
             raise UsageError("give a path or a target, not both")
         if target is not None:
@@ -195,7 +188,6 @@ class Locomotion(Controller):
             raise UsageError(str(exc)) from None
         self.pack = pack
         self.pin_feet = bool(pin_feet)
-        self.cache = cache
 
     def describe(self) -> str:
         return f"locomotion ({getattr(self.pack, 'pack', self.pack)})"
@@ -259,9 +251,9 @@ class Locomotion(Controller):
         return bool(state.get("settled", True)) and float(state.get("stand", 1.0)) >= 1.0 - 1e-9
 
     def bind(self, rig, report):
-        from infuse.packs import BlendSpace
+        from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
 
-        space = self.pack if isinstance(self.pack, BlendSpace) else infusion_for(rig, self.pack, self.cache)
+        space = space_on(rig, self.pack)
         if space.kind != "locomotion" or "locomotion" not in space.tessellations:
             raise UsageError(f"pack {space.pack!r} is not a locomotion pack")
         clips = space.group("locomotion")
@@ -277,12 +269,11 @@ class Locomotion(Controller):
         if not clips:
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
         pelvis = rig.joint("base") or 0
-        key = (id(space), id(rig.skeleton), tuple(legs), pelvis)
-        cached = _BINDINGS.get(key)
+        prepared = rig.asset_state_of(PreparedWalks)
+        key = (space.pack, tuple(legs), pelvis)
+        cached = prepared.get(key)
         if cached is None or cached[0] is not space or cached[1] is not rig.skeleton:
-            if len(_BINDINGS) > 32:
-                _BINDINGS.clear()
-            cached = _BINDINGS[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
+            cached = prepared[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
         return dict(cached[2])
 
     def evaluate_one(self, job, block) -> None:

@@ -45,18 +45,12 @@ STOP_BEARING = math.radians(10.0)
 STOP_SPEEDS = 1.33
 STOP_SCALES = 1.25
 
-_CACHE: dict = {}
-
 
 def played(space, still_m_s: float) -> list:
     """The transition clips of a :class:`~infuse.packs.BlendSpace` that a walk plays: its starts (they
     begin standing), and its turns on the spot and stops that end slower than ``still_m_s`` m/s."""
-    key = (id(space), still_m_s)
-    if key not in _CACHE or _CACHE[key][0] is not space:
-        out = [c for c in space.clips.values() if c.transition == "start"
-               or (c.transition in ("turn", "stop") and c.parameters["speed_end"] < still_m_s)]
-        _CACHE[key] = (space, out)
-    return _CACHE[key][1]
+    return [c for c in space.clips.values() if c.transition == "start"
+            or (c.transition in ("turn", "stop") and c.parameters["speed_end"] < still_m_s)]
 
 
 def handover_s(clip, fps: float) -> float:
