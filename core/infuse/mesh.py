@@ -214,3 +214,38 @@ def merge(meshes: Sequence[SkinnedMesh], name: str = "merged", morph_names: Sequ
         np.array(bone_joints, dtype=np.int64), np.array(bone_matrices).reshape(-1, 4, 4),
         base_color=np.ones(4), colors=np.concatenate([m.vertex_colors() for m in meshes]),
         double_sided=any(m.double_sided for m in meshes), morph_names=morph_names, morph_positions=morph_positions)
+
+
+def sole_points(meshes: Sequence[SkinnedMesh], global_rotations: np.ndarray, global_positions: np.ndarray,
+                joints: Sequence[int], frame_joint: int, forward: np.ndarray) -> np.ndarray | None:
+    """(2, 3) the heel and the tip of the surface carried by ``joints`` (a foot: its ankle and what
+    hangs below), as offsets in the frame of ``frame_joint`` (metres, like an end site's); ``None``
+    when no vertex of ``meshes`` is carried by them.
+
+    A vertex is carried by ``joints`` when they hold at least half of its weight. The surface is
+    posed by the skeleton's global ``global_rotations`` (J, 4) and ``global_positions`` (J, 3), a
+    standing pose, and boxed along ``forward`` (3,), the foot's horizontal heading: the sole is the
+    lowest vertex, the tip the box's front at the sole's height, the heel its back, both midway
+    across the foot.
+    """
+    rot = np.asarray(global_rotations, dtype=np.float64)
+    pos = np.asarray(global_positions, dtype=np.float64)
+    carrying = np.zeros(len(rot), dtype=bool)
+    carrying[list(joints)] = True
+    posed = []
+    for mesh in meshes:
+        share = np.sum(np.where(carrying[mesh.bind_joints[mesh.joints]], mesh.weights, 0.0), axis=1)
+        vertices = np.nonzero(share >= 0.5)[0]
+        if len(vertices):
+            posed.append(mesh.skin(rot[None], pos[None], vertices=vertices)[0][0].astype(np.float64))
+    if not posed:
+        return None
+    points = np.concatenate(posed)
+    ahead = np.array([forward[0], 0.0, forward[2]], dtype=np.float64)
+    ahead /= max(float(np.linalg.norm(ahead)), 1e-12)
+    across = np.cross(np.array([0.0, 1.0, 0.0]), ahead)
+    along, side = points @ ahead, points @ across
+    middle = 0.5 * (side.min() + side.max()) * across
+    sole = points[:, 1].min() * np.array([0.0, 1.0, 0.0])
+    ends = np.stack([along.min() * ahead, along.max() * ahead]) + middle + sole
+    return quat.rotate(quat.conjugate(rot[frame_joint])[None], ends - pos[frame_joint])

@@ -80,7 +80,8 @@ def run(args) -> int:
     tgt_map = map_skeleton(character, mapper=mapper, saved_map=args.target_map)
     target_clip = next(iter(character.motions.values()), None)
     plan = RetargetPlan(clip.skeleton, src_map, character.skeleton, tgt_map, source_motion=clip,
-                        target_motion=target_clip, source_file=motion_path, target_file=args.character)
+                        target_motion=target_clip, source_file=motion_path, target_file=args.character,
+                        target_meshes=character.meshes)
     result = retarget_clip(plan, clip, ik=args.ik, limb_scaling=args.limb_scaling)
     name = args.name or clip.name or motion_path.stem
     motion = carry_morph_weights(result.motion.replace(name=name), clip, character.morph_targets)

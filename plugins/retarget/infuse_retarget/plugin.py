@@ -15,7 +15,8 @@ from .transfer import RetargetPlan
 def prepare(source_skeleton, source_mapping, target_skeleton, target_mapping, *, ik: str = "contacts",
             limb_scaling: bool = False, **plan_options):
     """One :class:`RetargetPlan` for many clips on ``source_skeleton``: returns ``(motion) -> Motion``.
-    ``plan_options``: ``source_motion``, ``target_motion``, ``source_file``, ``target_file``."""
+    ``plan_options``: ``source_motion``, ``target_motion``, ``source_file``, ``target_file``,
+    ``target_meshes``."""
     plan = RetargetPlan(source_skeleton, source_mapping, target_skeleton, target_mapping, **plan_options)
     return partial(_retargeted, plan, ik=ik, limb_scaling=limb_scaling)
 

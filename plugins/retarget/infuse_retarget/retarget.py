@@ -86,11 +86,23 @@ class RetargetResult:
     hard: dict[str, np.ndarray] = field(default_factory=dict)
 
 
+def sole_sites(plan: RetargetPlan, state: Transferred, k: int) -> np.ndarray | None:
+    """(2, 3, F) where the heel and the tip of target foot ``k`` taken from its mesh
+    (:attr:`RetargetPlan.sole_points`) are in a transferred state; ``None`` without them."""
+    points = plan.sole_points[k]
+    if points is None:
+        return None
+    ankle = plan.target.feet[k].ankle
+    at = plan.positions(state, [ankle])[ankle]
+    return np.stack([at + cq.rotate(state.rotations[ankle], p[:, None]) for p in points])
+
+
 def target_lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
-    """(F, 2) height of each target foot's lowest joint or end site, from a transferred state."""
+    """(F, 2) height of each target foot's lowest joint, end site or mesh heel or tip, from a
+    transferred state."""
     sk = plan.target.skeleton
     out = []
-    for foot in plan.target.feet:
+    for k, foot in enumerate(plan.target.feet):
         pos = plan.positions(state, foot.joints)
         low = np.min(np.stack([pos[j][1] for j in foot.joints]), axis=0)
         if foot.end_sites:
@@ -98,6 +110,9 @@ def target_lowest_points(plan: RetargetPlan, state: Transferred) -> np.ndarray:
                 p = int(sk.end_site_parents[e])
                 site = pos[p] + cq.rotate(state.rotations[p], sk.end_site_offsets[e][:, None])
                 low = np.minimum(low, site[1])
+        sites = sole_sites(plan, state, k)
+        if sites is not None:
+            low = np.minimum(low, sites[:, 1].min(axis=0))
         out.append(np.broadcast_to(low, (state.rotations.shape[-1],)))
     return np.stack(out, axis=1)
 
@@ -214,10 +229,14 @@ class _Solver:
         return footing.planted_height(lowest, self.result.contacts.foot_flags()[:, k])
 
     def _tip(self, k: int) -> np.ndarray | None:
-        """(3, F) where the tip of target foot ``k`` is in the current state: of the joints and end
-        sites below its ankle, the one farthest from the ankle in the reference pose; ``None`` for a
-        foot with nothing below its ankle farther than :data:`MIN_TIP` of the leg's length (an end
-        site on the ankle itself, as OpenNI captures have, is no tip)."""
+        """(3, F) where the tip of target foot ``k`` is in the current state: the tip its mesh gives
+        (:func:`sole_sites`), else of the joints and end sites below its ankle, the one farthest from
+        the ankle in the reference pose; ``None`` for a foot with nothing below its ankle farther
+        than :data:`MIN_TIP` of the leg's length (an end site on the ankle itself, as OpenNI
+        captures have, is no tip)."""
+        sites = sole_sites(self.plan, self.state, k)
+        if sites is not None:
+            return sites[1]
         rig, foot = self.plan.target.rig, self.plan.target.feet[k]
         sk = rig.skeleton
         joints = [j for j in foot.joints if j != foot.ankle]
@@ -366,12 +385,15 @@ def retarget_clip(plan: RetargetPlan, motion: Motion, ik: str = "contacts", limb
 
 def retarget(motion: Motion, source_mapping, target_skeleton: Skeleton, target_mapping, *, ik: str = "contacts",
              limb_scaling: bool = False, target_motion: Motion | None = None, source_file=None, target_file=None,
-             contact_options: dict | None = None) -> Motion:
+             contact_options: dict | None = None, target_meshes=()) -> Motion:
     """Retarget ``motion`` onto ``target_skeleton`` (mappings: :class:`~infuse.mapping.Mapping` or dicts).
 
     See the module docstring for ``ik`` and ``limb_scaling``; ``target_motion`` is a clip on the
-    target whose most upright frame is its default pose when its rest is not a standing pose.
+    target whose most upright frame is its default pose when its rest is not a standing pose;
+    ``target_meshes`` the target's skinned meshes (a foot without a ball joint takes its heel and
+    tip from them).
     """
     plan = RetargetPlan(motion.skeleton, source_mapping, target_skeleton, target_mapping, source_motion=motion,
-                        target_motion=target_motion, source_file=source_file, target_file=target_file)
+                        target_motion=target_motion, source_file=source_file, target_file=target_file,
+                        target_meshes=target_meshes)
     return retarget_clip(plan, motion, ik=ik, limb_scaling=limb_scaling, contact_options=contact_options).motion

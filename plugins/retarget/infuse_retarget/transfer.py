@@ -25,6 +25,7 @@ about the ground. The target base goes where that puts the target's own hip join
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from infuse import quaternions as quat
 from infuse.canonical import ALL_NAMES, canonical_joint
 from infuse.errors import InputError, UnusableInputError, UsageError
 from infuse.kinematics import forward_kinematics
+from infuse.mesh import SkinnedMesh, sole_points
 from infuse.motion import Motion
 from infuse.skeleton import Skeleton
 
@@ -114,12 +116,14 @@ class RetargetPlan:
     Build it once and :meth:`transfer` many clips. ``*_mapping``: a
     :class:`~infuse.mapping.Mapping` or {canonical: joint name or index}. ``*_motion``: a clip on
     that skeleton whose most upright frame is the default pose when the rest is not a standing
-    pose (Bandai's). ``*_file`` names the input in errors.
+    pose (Bandai's). ``*_file`` names the input in errors. ``target_meshes``: the target
+    character's skinned meshes (:attr:`infuse.Asset.meshes`), which give a foot without a ball joint
+    its heel and tip (:attr:`sole_points`).
     """
 
     def __init__(self, source_skeleton: Skeleton, source_mapping, target_skeleton: Skeleton, target_mapping, *,
                  source_motion: Motion | None = None, target_motion: Motion | None = None,
-                 source_file=None, target_file=None):
+                 source_file=None, target_file=None, target_meshes: Sequence[SkinnedMesh] = ()):
         s_idx = contacts.joint_index(source_skeleton, source_mapping)
         t_idx = contacts.joint_index(target_skeleton, target_mapping)
         s_idx = infer_sternoclavicular(source_skeleton, s_idx)
@@ -139,7 +143,21 @@ class RetargetPlan:
         self.source_joints = {t: self.source.index[s] for t, s in self.pairs.items()}
         #: Leg-length ratio, target over source.
         self.scale = self.target.leg_height / self.source.leg_height
+        #: Per target foot, (2, 3) its heel and tip in its ankle's frame, from the mesh it carries
+        #: (:func:`infuse.mesh.sole_points`), for a foot without a ball joint; else ``None``.
+        self.sole_points = tuple(self._sole_points(foot, target_meshes) for foot in self.target.feet)
         self._build()
+
+    def _sole_points(self, foot: contacts.Foot, meshes: Sequence[SkinnedMesh]) -> np.ndarray | None:
+        """The heel and tip of a target foot from its mesh, posed as the reference pose; the foot
+        heads square to the side-to-side axis its ankle carries (the canonical +X)."""
+        if foot.ball is not None or not meshes:
+            return None
+        rig, tgt = self.target.rig, self.target
+        lateral = quat.rotate(quat.multiply(rig.rotations[foot.ankle], quat.conjugate(tgt.frame[foot.ankle])),
+                              np.array([1.0, 0.0, 0.0]))
+        forward = np.cross(lateral, np.array([0.0, 1.0, 0.0]))
+        return sole_points(meshes, rig.rotations, rig.positions, foot.joints, foot.ankle, forward)
 
     # -- structure ---------------------------------------------------------------------------------
     def _build(self) -> None:
