@@ -22,6 +22,10 @@ from .contacts import contact_runs
 FREE, ANKLE, BALL = 0, 1, 2
 #: Share of the leg's full length (thigh + shin) a pinned ankle may lie from the hip (:func:`heel_rise`).
 REACH = 0.99
+#: The heel rises further about the ball (:func:`heel_rise`) only while each step of its rise brings the
+#: ankle toward the hip by at least this share of how far the ankle moves: near the closest the ankle's arc
+#: about the ball comes to the hip, a hip a millimetre farther would take tens of degrees more rise.
+RISE_GAIN = 0.3
 #: The heel rises about the ball in 1 degree steps, up to 60 degrees (:func:`heel_rise`).
 _RISES = np.radians(np.arange(0.0, 61.0))
 _RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
@@ -145,9 +149,12 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     in the foot's frame (zero where the hip reaches).
 
     Where the hip cannot reach the ankle (farther than :data:`REACH` of the leg's length), the heel
-    rises about the ball by the smallest whole degree that brings the ankle within reach, or where
-    none does by the one that brings it nearest (the largest would turn the foot by tens of degrees
-    in a frame).
+    rises about the ball by the whole degree that minimizes how far the ankle stays beyond reach plus
+    :data:`RISE_GAIN` times the length of its arc: the smallest rise that brings it within reach, but
+    no more than the rise past which a further degree brings the ankle toward the hip by less than
+    :data:`RISE_GAIN` of the arc it travels. The rise so follows the hip continuously, by at most
+    1 / (:data:`RISE_GAIN` × ankle-to-ball distance) radians per metre the hip moves, where the nearest
+    reach would jump by tens of degrees between two frames as the hip passes the arc's closest point.
     ``ankle_rotation`` (F, 4) is the ankle's global rotation (x, y, z, w), ``leg`` (F, 3, 3) the hip,
     knee and ankle positions.
     """
@@ -164,8 +171,9 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     # Each rise's ankle, coordinate by coordinate (F, R), and its squared distance from the hip.
     far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
-    ok = np.sqrt(far) <= reach[short, None]
-    pick = np.where(ok.any(axis=1), np.argmax(ok, axis=1), np.argmin(far, axis=1))
+    beyond = np.maximum(np.sqrt(far) - reach[short, None], 0.0)
+    arc = RISE_GAIN * np.linalg.norm(v, axis=-1)[:, None] * _RISES
+    pick = np.argmin(beyond + arc, axis=1)
     out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
     rise[short] = quat.rotate(quat.conjugate(ankle_rotation[short]), axis * _RISES[pick][:, None])
     return out, rise
