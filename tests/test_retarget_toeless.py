@@ -1,7 +1,8 @@
 """Retargeting onto feet without a ball joint: the foot's tip (the joint or end site below its ankle
 farthest from it) stays on or above the level the foot is planted at, measured with forward
 kinematics on the written clip against the source's own feet, on a corpus rig with its toe joints
-removed and on a wild rig built without them."""
+removed and on a wild rig built without them; a foot with nothing below its ankle takes its heel and
+tip from the mesh it carries, and both stay on or above that level."""
 from __future__ import annotations
 
 from dataclasses import replace
@@ -10,7 +11,8 @@ import numpy as np
 import pytest
 
 import infuse
-from infuse import metrics
+from infuse import metrics, quaternions as quat
+from infuse.cli import main
 from infuse.contacts import feet, joint_index, lowest_points
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
@@ -22,6 +24,7 @@ from corpus_data import corpus_file, labels, require_corpus
 WALK = "bandai/Bandai-Namco-Research-Motiondataset-1/data/dataset-1_walk_normal_001.bvh"
 XBOT = "runxaway-models/Xbot.glb"
 MOCAPBANK = "20tab-bvh-python/tests/test_mocapbank.bvh"
+WITCH = "trebeljahr-quaternius-showcase/public/glb/modular_women/Witch.glb"
 
 
 def _label(rel: str) -> dict:
@@ -92,3 +95,48 @@ def test_wild_rig_without_toes():
 
     asset = infuse.load(wild_file(MOCAPBANK))
     check(asset.skeleton, map_skeleton(asset))
+
+
+def sole_depths(motion: infuse.Motion, plan: RetargetPlan, planted: np.ndarray) -> np.ndarray:
+    """(2,) cm: how far the heel and the tip (the plan's mesh points, carried by the ankles) go below
+    the level their foot is planted at (the median over the frames ``planted`` (F, 2) marks of the
+    lowest of its ankle, heel and tip)."""
+    g, p = motion_fk(motion)
+    ankles = [f.ankle for f in plan.target.feet]
+    points = np.stack(plan.sole_points)  # (2 feet, heel and tip, 3)
+    sites = p[:, ankles, None] + quat.rotate(g[:, ankles, None], points[None])  # (F, 2, 2, 3)
+    low = np.minimum(sites[..., 1].min(axis=2), p[:, ankles, 1])
+    levels = np.array([np.median(low[planted[:, k], k]) for k in (0, 1)])
+    return 100.0 * np.maximum(0.0, -(sites[..., 1] - levels[None, :, None]).min(axis=(0, 1)))
+
+
+def test_mesh_gives_heel_and_tip(tmp_path):
+    """The Witch's feet end at the ankle joint; her shoes give each foot a heel behind the ankle
+    and a tip ahead of it. Retargeted by ``infuse retarget`` and read back, neither goes deeper
+    below the planted level than the source's feet do; without the mesh the tip digs in."""
+    from wild_data import wild_file
+
+    clip, s_map = walk()
+    path = wild_file(WITCH)
+    asset = infuse.load(path)
+    mapping = map_skeleton(asset)
+    assert all(f.joints == (f.ankle,) and not len(f.end_sites) for f in feet(asset.skeleton, mapping))
+    plans = [RetargetPlan(clip.skeleton, s_map, asset.skeleton, mapping, source_motion=clip, target_meshes=meshes)
+             for meshes in ((), asset.meshes)]
+    assert plans[0].sole_points == (None, None)
+    heel, tip = plans[1].sole_points[0]
+    assert np.linalg.norm(tip - heel) > 0.15, (heel, tip)  # a shoe's length, metres
+    out = tmp_path / "witch.glb"
+    assert main(["retarget", str(corpus_file(WALK)), "--to", str(path), "-o", str(out)]) == 0
+    written = next(iter(infuse.load(out).motions.values()))
+    plain = retarget_clip(plans[0], clip)
+    planted = plain.contacts.foot_flags()
+    src = deepest(clip, s_map, planted)
+    before, after = (sole_depths(m, plans[1], planted) for m in (plain.motion, written))
+    print(f"heel / tip below the planted level: source {src:.2f} cm, without the mesh {before}, with it {after}")
+    assert after.max() <= src + 1.0, (src, before, after)
+    assert before[1] > after[1] + 2.0, (before, after)
+    g_src, _ = motion_fk(clip)
+    g_out, _ = motion_fk(written)
+    pop = metrics.popping(g_src, joint_index(clip.skeleton, s_map), g_out, joint_index(asset.skeleton, mapping))
+    assert pop.ok, pop

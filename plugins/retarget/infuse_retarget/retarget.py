@@ -185,7 +185,9 @@ class _Solver:
         if ball_t is None:
             if tip_t is not None:
                 tip = ankle + cq.rotate(shin_turn, tip_t - ankle_t)
-                self.turn(foot, tip_above(ankle, tip, self._lateral(k), self._planted_level(k), self.state.fps))
+                sites = sole_sites(self.plan, self.state, k)
+                heel = None if sites is None else ankle + cq.rotate(shin_turn, sites[0] - ankle_t)
+                self.turn(foot, tip_above(ankle, tip, self._lateral(k), self._planted_level(k), self.state.fps, heel))
             return
         ball_now = ankle + cq.rotate(shin_turn, pos[ball_t] - ankle_t)
         length = self._foot_length(pos, ankle_t, ball_t)
@@ -321,10 +323,12 @@ class _Solver:
             self.limb(names[0], names[1], names[2], goal, [names[0]], [names[1], f"{side}_forearm"])
 
 
-def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: float, fps: float) -> np.ndarray:
-    """(4, F) world turn of a foot about its ``ankle`` (3, F) that keeps its ``tip`` (3, F) on or
-    above ``level`` (m), over a clip at ``fps`` frames per second; ``lateral`` (3, F) is the foot's
-    side-to-side axis (the canonical +X it carries; the foot points along ``lateral`` x +Y).
+def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: float, fps: float,
+              heel: np.ndarray | None = None) -> np.ndarray:
+    """(4, F) world turn of a foot about its ``ankle`` (3, F) that keeps its ``tip`` (3, F), and its
+    ``heel`` (3, F) when given, on or above ``level`` (m), over a clip at ``fps`` frames per second;
+    ``lateral`` (3, F) is the foot's side-to-side axis (the canonical +X it carries; the foot
+    points along ``lateral`` x +Y).
 
     The foot pitches about the horizontal of its side-to-side axis, by the difference between the
     tip's elevation seen from the ankle and the elevation that puts it on ``level``: a rigid foot,
@@ -332,7 +336,8 @@ def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: fl
     off such a foot may point straight down, where the axis square to the ankle-to-tip line turns
     about from frame to frame; its side-to-side axis does not.) The pitch eases out at most
     :data:`TIP_PITCH_SPEED`, since a tip leaving the ground at toe off would otherwise drop the foot
-    by tens of degrees in a frame; easing out late only lifts the tip higher.
+    by tens of degrees in a frame; easing out late only lifts the tip higher. A heel below
+    ``level`` pitches the foot down as far as the tip stays on or above it, easing out alike.
     """
     axis = np.stack((-lateral[0], np.zeros_like(lateral[0]), -lateral[2]))
     axis /= np.maximum(cq.norm(axis), 1e-12)
@@ -343,10 +348,23 @@ def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: fl
     have = np.arctan2(up, ahead)
     want = np.arcsin(np.clip((level - ankle[1]) / span, -1.0, 1.0))
     need = np.where(tip[1] < level, np.maximum(want - have, 0.0), 0.0)
-    # max over frames s <= t of need[s] - speed * (t - s): a running maximum.
     step = np.radians(TIP_PITCH_SPEED) / max(fps, 1e-9) * np.arange(len(need))
-    lift = np.maximum.accumulate(need + step) - step
+    lift = _eased(need, step)
+    if heel is not None:
+        back = heel - ankle
+        behind, up = -cq.dot(back, forward), back[1]
+        span = np.maximum(np.hypot(behind, up), 1e-9)
+        # Pitching up by lift lowers a point behind the ankle by as much.
+        sunk = np.arcsin(np.clip((level - ankle[1]) / span, -1.0, 1.0)) - (np.arctan2(up, behind) - lift)
+        room = np.maximum(have + lift - want, 0.0)  # how far the tip can pitch down and stay above
+        lift = lift - np.minimum(_eased(np.maximum(sunk, 0.0), step), room)
     return cq.exp(axis * lift)
+
+
+def _eased(need: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(F,) at least ``need`` (F,) radians, falling at most ``step`` (F,) (the fall per frame times
+    the frame number): the maximum over frames s <= t of need[s] - (step[t] - step[s])."""
+    return np.maximum.accumulate(need + step) - step
 
 
 def _chain_length(positions: np.ndarray, joints) -> float:
