@@ -60,7 +60,7 @@ def test_a_speed_beyond_the_pack_is_reported_once_and_walked_at_the_top_speed(xb
     c = rt.add_character(infuse.Character("x", xbot))
     rt.activate(c, Locomotion("locomotion-female", speed=6.0, max_accel=50.0), 0.0)
     rt.run(4.0)
-    top = rt.activities[0].binding["limit"](0.0)
+    top = rt.activities[0].binding.limit(0.0)
     assert 3.0 < top < 3.5
     (note,) = notes
     assert "asked 6.00 m/s forward" in note and f"at most {top:.2f} m/s" in note and f"walking at {top:.2f} m/s" in note

@@ -43,6 +43,7 @@ from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
 from . import transitions
+from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering
 
@@ -250,7 +251,7 @@ class Locomotion(Controller):
         faded in; a walk not evaluated yet (empty ``state``) counts as at rest."""
         return bool(state.get("settled", True)) and float(state.get("stand", 1.0)) >= 1.0 - 1e-9
 
-    def bind(self, rig, report):
+    def bind(self, rig, report) -> LocomotionBinding:
         from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
 
         space = space_on(rig, self.pack)
@@ -274,7 +275,7 @@ class Locomotion(Controller):
         cached = prepared.get(key)
         if cached is None or cached[0] is not space or cached[1] is not rig.skeleton:
             cached = prepared[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
-        return dict(cached[2])
+        return cached[2]
 
     def evaluate_one(self, job, block) -> None:
         b = job.binding
@@ -296,14 +297,14 @@ class Locomotion(Controller):
         while i < len(times):
             if st.get("playing") is None and st.get("chooser") != id(self):
                 st["chooser"] = id(self)  # a walk decides once it begins (again after a turn on the spot)
-                if st["settled"] and st["speed"] < 1e-9 and len(b["legs"]) == 2:
-                    pick = transitions.choose(b["played"], st, self.steering.path, block.fps, self.steering.max_decel,
+                if st["settled"] and st["speed"] < 1e-9 and len(b.legs) == 2:
+                    pick = transitions.choose(b.played, st, self.steering.path, block.fps, self.steering.max_decel,
                                               TURN_IN_PLACE, STAY_M)
                     if pick is not None:
                         st["playing"] = (pick.name, float(times[i]), transitions.placement(pick, st["x"], st["z"], st["heading"]))
             start, part, handing = i, None, None
             if st.get("playing") is None:
-                before = copy.deepcopy(st) if b["stops"] and self.steering.path is not None else None
+                before = copy.deepcopy(st) if b.stops and self.steering.path is not None else None
                 part = self._steered(b, st, times[i:], dt, job.report)
                 stop = None if before is None else self._stop_at(b, before, st, block.fps, dt)
                 if stop is not None:  # walk up to where the stop begins, then play it
@@ -318,7 +319,7 @@ class Locomotion(Controller):
                     i = len(times)
             else:
                 name, began, place = st["playing"]
-                clip = b["space"].clips[name]
+                clip = b.space.clips[name]
                 i += int(np.count_nonzero(times[i:] < began + transitions.handover_s(clip, block.fps) - 1e-9))
                 if i > start:
                     part = self._played(b, st, clip, place, times[start:i] - began)
@@ -329,10 +330,10 @@ class Locomotion(Controller):
                 self._hand_over(b, st, handing[0], handing[2], block.fps)
                 st["fading"] = (handing[0].name, handing[1], handing[2])
         rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*parts))
-        if self.pin_feet and len(b["legs"]) == 2:
+        if self.pin_feet and len(b.legs) == 2:
             self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
-        if b.get("floors") is not None:
-            _keep_feet_up(b["skeleton"], b["floors"], rot, root, jt, st, dt)
+        if b.floors is not None:
+            _keep_feet_up(b.skeleton, b.floors, rot, root, jt, st, dt)
         self._write(job, active, rot, root, jt)
 
     def _stop_at(self, b, before, st, fps: float, dt: float):
@@ -351,7 +352,7 @@ class Locomotion(Controller):
         off = np.abs((np.arctan2(last[0] - x, last[1] - z) - heading + np.pi) % (2.0 * np.pi) - np.pi)
         prev = np.concatenate(([before["phase"]], phase[:-1]))
         best = None
-        for clip in b["stops"]:
+        for clip in b.stops:
             at = transitions.stop_phase(clip)
             if at is None:
                 continue
@@ -383,13 +384,13 @@ class Locomotion(Controller):
         rel = root - np.array([root0[0], 0.0, root0[1]])
         rel[:, [0, 2]] = root[:, [0, 2]] - pelvis + scale * (pelvis - root0)
         root = quat.rotate(q, rel) + np.array([at[0], 0.0, at[1]])
-        if b["table"].translations is None:
+        if b.table.translations is None:
             jt = None
         elif jt is None:
             jt = np.repeat(clip.motion.local_translations()[:1], len(local), axis=0)
         frames = np.clip(np.rint(local * clip.motion.fps).astype(np.int64), 0, clip.motion.num_frames - 1)
-        contact = b["played_phases"][clip.name][frames].astype(np.float64)
-        facing = turn + b["played_facing"][clip.name][frames]
+        contact = b.played_phases[clip.name][frames].astype(np.float64)
+        facing = turn + b.played_facing[clip.name][frames]
         forward = np.stack((np.sin(facing), np.zeros_like(facing), np.cos(facing)), axis=-1)
         ground = transitions.placed_root(clip, place, local[-1:])[0]
         st.update(x=float(ground[0]), z=float(ground[1]), heading=float(facing[-1]))
@@ -409,7 +410,7 @@ class Locomotion(Controller):
         if strikes:
             last, foot = strikes[-1]
             other = [t for t, k in strikes if k != foot]
-            half = last - other[-1] if other and last - other[-1] > 1e-3 else 0.5 * float(b["durations"][np.argmax(b["slowest"])])
+            half = last - other[-1] if other and last - other[-1] > 1e-3 else 0.5 * float(b.durations[np.argmax(b.slowest)])
             phase = (0.5 * foot + 0.5 * (at - last) / half) % 1.0
         st.update(settled=False, stand=0.0, landings=-1, to_go=-1.0, phase=float(phase))
 
@@ -419,7 +420,7 @@ class Locomotion(Controller):
         if st.get("fading") is None:
             return part
         name, began, place = st["fading"]
-        clip = b["space"].clips[name]
+        clip = b.space.clips[name]
         local = times - began
         mixing = np.nonzero(local < clip.duration)[0]
         if mixing.size < len(local):
@@ -432,13 +433,13 @@ class Locomotion(Controller):
         w = footing.smoothstep((local[mixing] - on) / max(clip.duration - on, 1e-9))
         # The pelvis goes straight from the clip's to what follows (joint 0 may sit away from it: mixed
         # about joint 0, the pelvis would swing by the turn between the two).
-        _, before = chain_fk(b["skeleton"], was[0], was[1], was[2], [b["pelvis"]])
-        _, after = chain_fk(b["skeleton"], rot[mixing], root[mixing], None if jt is None else jt[mixing], [b["pelvis"]])
+        _, before = chain_fk(b.skeleton, was[0], was[1], was[2], [b.pelvis])
+        _, after = chain_fk(b.skeleton, rot[mixing], root[mixing], None if jt is None else jt[mixing], [b.pelvis])
         rot[mixing] = quat.slerp(was[0], rot[mixing], w[:, None])
         root[mixing] = was[1] + (root[mixing] - was[1]) * w[:, None]
         if jt is not None:
             jt[mixing] = was[2] + (jt[mixing] - was[2]) * w[:, None, None]
-        _, mixed_pelvis = chain_fk(b["skeleton"], rot[mixing], root[mixing], None if jt is None else jt[mixing], [b["pelvis"]])
+        _, mixed_pelvis = chain_fk(b.skeleton, rot[mixing], root[mixing], None if jt is None else jt[mixing], [b.pelvis])
         root[mixing] += before[:, 0] + (after[:, 0] - before[:, 0]) * w[:, None] - mixed_pelvis[:, 0]
         contact[mixing] = was[3] + (contact[mixing] - was[3]) * w[:, None, None]
         mixed = was[4] + (forward[mixing] - was[4]) * w[:, None]
@@ -450,10 +451,10 @@ class Locomotion(Controller):
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned."""
         x0, z0, h0 = st["x"], st["z"], st["heading"]
-        req = self.steering.run(st, times, dt, top=b["limit"])
+        req = self.steering.run(st, times, dt, top=b.limit)
         if st.get("capped") and not st.get("warned"):
             asked, done, towards = st["capped"]
-            report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b['space'].pack!r} realizes at most {done:.2f} m/s "
+            report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st["warned"] = True
         speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
@@ -461,7 +462,7 @@ class Locomotion(Controller):
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
         vf, vl = speed * np.cos(direction), speed * np.sin(direction)
-        vt = (w @ b["velocities"][:, 2]) * (1.0 if b["idle"].any() else slow)
+        vt = (w @ b.velocities[:, 2]) * (1.0 if b.idle.any() else slow)
         # Root motion: integrate the blend's own velocities from where the last block ended; the heading
         # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
         # turning examples) spun at the root.
@@ -480,18 +481,18 @@ class Locomotion(Controller):
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
-        wm = np.where(b["idle"][None], 0.0, w)
-        wm = (wm + SLOW_EPS * b["slowest"][None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
-        period = np.maximum(wm @ b["durations"], 1e-3)
-        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b["idle"].any()),
+        wm = np.where(b.idle[None], 0.0, w)
+        wm = (wm + SLOW_EPS * b.slowest[None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
+        period = np.maximum(wm @ b.durations, 1e-3)
+        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
                                                         _settle_phases(b, wm))
-        if b["stops"]:  # where it went, frame by frame: where a stop clip may take over
+        if b.stops:  # where it went, frame by frame: where a stop clip may take over
             st["trace"] = (px, pz, heading, speed, phase)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
         rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times, 0.5 * advance)
-        if not b["idle"].any() and rest.any():
+        if not b.idle.any() and rest.any():
             # Come to rest without an idle: both feet stay down where they are, laid flat about their
             # balls over the rest's fade (the held phase of a walk may have a foot in the air).
             resting = rest > 0.0
@@ -500,14 +501,14 @@ class Locomotion(Controller):
         # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
         # ahead, behind or aside of their path as their gait goes): its ground point (F, 3) in the
         # facing frame, wherever joint 0 sits, is taken out by ``settle``.
-        _, pelvis = chain_fk(b["skeleton"], rot, root, jt, [b["pelvis"]])
+        _, pelvis = chain_fk(b.skeleton, rot, root, jt, [b.pelvis])
         centre = pelvis[:, 0] * np.array([1.0, 0.0, 1.0]) * settle[:, None]
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
         ground = np.stack((px, np.zeros_like(px), pz), axis=-1)
-        mover = b["movers"][int(np.argmax(w.sum(axis=0)))]
+        mover = b.movers[int(np.argmax(w.sum(axis=0)))]
         if mover == 0:
             root = ground + quat.rotate(turn_q, root - centre)
         else:
@@ -518,7 +519,7 @@ class Locomotion(Controller):
         down = settle[:, None] * support
         laid = _slow_fall(down, st.get("laid", np.zeros(2)), dt / LAY_RELEASE_S)
         st["laid"] = laid[-1].copy()
-        if np.any(stride < 1.0 - 1e-6) and len(b["legs"]) == 2:
+        if np.any(stride < 1.0 - 1e-6) and len(b.legs) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
         return rot, root, jt, contact, forward, spun
 
@@ -548,23 +549,23 @@ class Locomotion(Controller):
         ``half_frame`` (F,): half a frame's advance of the phase."""
         used = np.nonzero(w.max(axis=0) > 1e-6)[0]
         order = used[np.argsort(-w[:, used].sum(axis=0))]
-        stepping = used[b["stepping"][used]]
+        stepping = used[b.stepping[used]]
         if stepping.size:
             ws = w[:, stepping]
-            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b["events"][stepping].reshape(-1, 8)).reshape(-1, 2, 4)
+            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b.events[stepping].reshape(-1, 8)).reshape(-1, 2, 4)
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
         phases = np.empty((order.size, 3, len(phase)))
         phases[:] = phase
-        feet = b["stepping"][order]
+        feet = b.stepping[order]
         if feet.any():
-            phases[feet, 1:] = np.swapaxes(foot_phase(b["events"][order[feet]], events, phase), 1, 2)
-        clock = warp(b["keys"][order, None, None], phases)
-        fade = np.nonzero(b["idle"])[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
+            phases[feet, 1:] = np.swapaxes(foot_phase(b.events[order[feet]], events, phase), 1, 2)
+        clock = warp(b.keys[order, None, None], phases)
+        fade = np.nonzero(b.idle)[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
         if fade.size:  # the idle clips, played at the activity's times
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
-        rot, root, jt = b["table"].sample(np.concatenate((order, fade)), clock, b["limbs"])
+        rot, root, jt = b.table.sample(np.concatenate((order, fade)), clock, b.limbs)
         acc = None
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
@@ -601,7 +602,7 @@ class Locomotion(Controller):
     @staticmethod
     def _phases(b, i, t) -> np.ndarray:
         """(F, 2, 2) heel and ball contact flags of clip ``i`` at its times ``t`` (seconds, looping)."""
-        clip = b["clips"][i]
+        clip = b.clips[i]
         motion = clip.motion
         frame = np.rint((t % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64)
         return clip.phases[np.minimum(frame, len(clip.phases) - 1)]
@@ -617,32 +618,32 @@ class Locomotion(Controller):
         ``down`` (F, 2) (how far into the stop times its stance share), its orientation by ``laid``
         (F, 2) (the same, let go slower), so nothing jumps at strike or toe off.
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
-        stance_feet = b["stance_feet"]
-        feet_rot, pos = chain_fk(b["skeleton"], rot, root, jt, b["shorten_joints"])  # hips, ankles[, balls]
+        stance_feet = b.stance_feet
+        feet_rot, pos = chain_fk(b.skeleton, rot, root, jt, b.shorten_joints)  # hips, ankles[, balls]
         feet = feet_rot[:, 2:4, None]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
             flat = quat.multiply(turn_q[:, None, None], stance_feet)
             feet = quat.slerp(feet_rot[:, 2:].reshape(-1, 2, 2, 4).swapaxes(1, 2), flat, laid[:, :, None])
         hips = 0.5 * (pos[:, 0] + pos[:, 1])
-        body = b["body"]
-        mean = quat.normalize((w @ b["body_means"]).reshape(len(w), -1, 4))
+        body = b.body
+        mean = quat.normalize((w @ b.body_means).reshape(len(w), -1, 4))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
         rot[:, body] = quat.slerp(mean, np.take(rot, body, 1), stride[:, None])
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
-        centre = (w @ b["ankle_means"].reshape(len(b["ankle_means"]), 6)).reshape(-1, 2, 3)
-        if b["idle"].any():
-            centre = centre + settle[:, None, None] * (b["ankle_means"][np.argmax(b["idle"])] - centre)
+        centre = (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3)
+        if b.idle.any():
+            centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
         goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, 2:4] - hips[:, None] - centre)
-        low = w @ b["ankle_low"]
+        low = w @ b.ankle_low
         goal[..., 1] = low + (pos[:, 2:4, 1] - low) * (1.0 - down)
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
-        solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goal, weight=(stride < 1.0 - 1e-6).astype(float),
+        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=(stride < 1.0 - 1e-6).astype(float),
                    pole=forward, end_rotation=feet[:, :, 0], distance=False)
-        if stance_feet is not None and b["balls_on_ankles"].size:
-            k = b["balls_on_ankles"]
-            rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
+        if stance_feet is not None and b.balls_on_ankles.size:
+            k = b.balls_on_ankles
+            rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     def _pin(self, b, st, rot, root, jt, contact, forward, dt, spun) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
@@ -656,13 +657,13 @@ class Locomotion(Controller):
         (F,) the turn spun at the root so far (radians)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
-        g_rot, g_pos = chain_fk(b["skeleton"], rot, root, jt, b["pin_joints"])
+        g_rot, g_pos = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
         frames = len(rot)
         g_rot, g_pos = g_rot.reshape(frames, 2, 5, 4), g_pos.reshape(frames, 2, 5, 3)
         feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
         ankle_pos = g_pos[:, :, 2]
         heel_w, ball_w = contact[..., 0], contact[..., 1]
-        anchors = footing.anchors(heel_w, ball_w, b["has_ball"])
+        anchors = footing.anchors(heel_w, ball_w, b.has_ball)
         # The feet one frame earlier (from the last block at the first frame).
         before = np.concatenate((st["last"][None], feet_pos[:-1]))
         on_ball = (anchors == footing.BALL)[..., None]
@@ -691,7 +692,7 @@ class Locomotion(Controller):
                     # The ball stays where it was let go until it leaves the ground (a take's ball may push
                     # off moving along it), at most HOLD_S, and the release's clock runs from then on.
                     since = free_s + dt * np.arange(1, e - s + 1)
-                    up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b["grounded_m"]) | (since > HOLD_S)
+                    up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
                     free_s = float(since[-1])
                     down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
                     if down[-1] >= 0:
@@ -780,14 +781,14 @@ class Locomotion(Controller):
         solving = [k for k in range(2) if weights[:, k].any()]
         if len(solving) == 1:
             k = solving[0]
-            solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"][k], goals[:, k], weight=weights[:, k], pole=forward,
+            solve_limb(b.skeleton, rot, root, jt, b.leg_limbs[k], goals[:, k], weight=weights[:, k], pole=forward,
                        end_rotation=feet_rot[:, k], chains=(g_rot[:, k, :4], g_pos[:, k, :4]), distance=False)
         elif solving:  # the legs are apart: both in one solve
-            solve_limb(b["skeleton"], rot, root, jt, b["leg_limbs"], goals, weight=weights, pole=forward,
+            solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
                        end_rotation=feet_rot, chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
 
 
-def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
+def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     """What walking needs of a pack's locomotion ``clips`` on skeleton ``sk`` with ``legs`` ((hip, knee,
     ankle, ball) joints) and its ``pelvis`` joint: the canonical clips, their mean poses, foot events and
     the legs' stances. The same for every walk of a character with that pack, so :meth:`Locomotion.bind` keeps it."""
@@ -864,25 +865,26 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> dict:
         heights = pos[:, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
         played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
     body = np.nonzero(limbs == 0)[0]
-    out = {"space": space, "played": played, "played_facing": played_facing, "played_phases": played_phases,
-           "stops": transitions.stops(played), "limit": space.speed_limit(), "clips": clips, "movers": [mv for _, mv in prepared], "pelvis": pelvis, "skeleton": sk, "legs": legs,
-           "velocities": np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),  # (N, 3)
-           "durations": np.array([(c.keys[2] - c.keys[0]) for c in clips]), "keys": np.array([c.keys for c in clips]),
-           "events": np.array([np.zeros((2, 4)) if e is None else e for e in events]),  # (N, 2, 4)
-           "stepping": np.array([e is not None for e in events]), "table": LoopTable(motions), "idle": idle,
-           "slowest": slowest, "limbs": limbs, "body": body, "grounded_m": grounded_m,
-           # The clips' sign-aligned mean rotations of the joints outside the legs (N, B * 4).
-           "body_means": (np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
-           "ankle_means": ankle_means, "ankle_low": ankle_low, "stance_feet": stance_feet, "floors": floors}
-    if len(legs) == 2:  # the joints the stride and the pinning work on, both legs at once
-        balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
-        out.update(leg_limbs=[leg[:3] for leg in legs], balls=balls, has_ball=np.array([leg[3] is not None for leg in legs]),
-                   balls_on_ankles=np.array([k for k, leg in enumerate(legs)
-                                             if leg[3] is not None and int(sk.parents[leg[3]]) == leg[2]], dtype=np.int64),
-                   shorten_joints=[legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + (list(balls) if stance_feet is not None else []),
-                   pin_joints=[j for leg, ball in zip(legs, balls)
-                               for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
-    return out
+    two = len(legs) == 2  # the joints the stride and the pinning work on, both legs at once
+    balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs] if two else [], dtype=np.int64)
+    return LocomotionBinding(
+        space=space, clips=clips, limit=space.speed_limit(), table=LoopTable(motions), movers=[mv for _, mv in prepared],
+        velocities=np.stack((p("forward_speed"), p("lateral_speed"), p("turn_rate")), axis=1),
+        durations=np.array([(c.keys[2] - c.keys[0]) for c in clips]), keys=np.array([c.keys for c in clips]),
+        events=np.array([np.zeros((2, 4)) if e is None else e for e in events]),
+        stepping=np.array([e is not None for e in events]), idle=idle, slowest=slowest,
+        body_means=(np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
+        ankle_means=ankle_means, ankle_low=ankle_low, played=played, stops=transitions.stops(played),
+        played_facing=played_facing, played_phases=played_phases, skeleton=sk, pelvis=pelvis, legs=legs, limbs=limbs,
+        body=body, grounded_m=grounded_m, stance_feet=stance_feet, floors=floors,
+        leg_limbs=[(leg[0], leg[1], leg[2]) for leg in legs] if two else [], balls=balls,
+        has_ball=np.array([leg[3] is not None for leg in legs] if two else [], dtype=bool),
+        balls_on_ankles=np.array([k for k, leg in enumerate(legs) if two and leg[3] is not None
+                                  and int(sk.parents[leg[3]]) == leg[2]], dtype=np.int64),
+        shorten_joints=[legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + (balls.tolist() if stance_feet is not None else [])
+        if two else [],
+        pin_joints=[j for leg, ball in zip(legs, balls.tolist())
+                    for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
@@ -895,7 +897,7 @@ def _tip(sk, joint: int) -> np.ndarray | None:
     return np.array(far) if np.linalg.norm(far) > 1e-6 else None
 
 
-def _floors(sk, legs, motion, frames, leg_length: float) -> dict | None:
+def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
     """What :func:`_keep_feet_up` needs of two ``legs`` on skeleton ``sk``, standing in ``motion``'s
     ``frames`` (2,) (one per foot): each foot's ankle, its "ball" (the ball joint, else the ankle), the
     tip of a foot without a ball joint (its farthest child or end site, a tenth of the leg's length
@@ -918,17 +920,16 @@ def _floors(sk, legs, motion, frames, leg_length: float) -> dict | None:
             tip[k] = 0.0 if end is None else end
     if not (kept | toes).any():
         return None
-    out = {"ankles": ankles, "balls": balls, "point": point, "tip": tip, "kept": kept, "toes": toes,
-           "ankle_parents": np.array([max(int(sk.parents[a]), 0) for a in ankles]),
-           "ball_parents": np.array([max(int(sk.parents[b]), 0) for b in balls])}
-    joints = np.stack((out["ankle_parents"], ankles, out["ball_parents"], balls), axis=1)  # (2, 4)
+    ankle_parents = np.array([max(int(sk.parents[a]), 0) for a in ankles])
+    ball_parents = np.array([max(int(sk.parents[b]), 0) for b in balls])
+    joints = np.stack((ankle_parents, ankles, ball_parents, balls), axis=1)  # (2, 4)
     g_rot, g_pos = chain_fk(sk, motion.local_rotations[frames], motion.root_translations[frames],
                             None if motion.joint_translations is None else motion.joint_translations[frames], joints.ravel())
     g_rot, g_pos = g_rot.reshape(2, 2, 4, 4)[[0, 1], [0, 1]], g_pos.reshape(2, 2, 4, 3)[[0, 1], [0, 1]]
-    out["joints"] = joints.ravel()
-    out["point_floor"] = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], point))[:, 1]
-    out["tip_floor"] = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], tip))[:, 1]
-    return out
+    return FootFloors(ankles=ankles, balls=balls, ankle_parents=ankle_parents, ball_parents=ball_parents,
+                      joints=joints.ravel(), point=point, kept=kept, tip=tip, toes=toes,
+                      point_floor=(g_pos[:, 3] + quat.rotate(g_rot[:, 3], point))[:, 1],
+                      tip_floor=(g_pos[:, 3] + quat.rotate(g_rot[:, 3], tip))[:, 1])
 
 
 def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -956,29 +957,29 @@ def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
     to block). A foot rolling over its ball at toe off pitches as the pack's does: a longer foot, or
     toes the pack's clips do not bend, would dig into the ground. Both turns are about the horizontal
     axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None."""
-    g_rot, g_pos = chain_fk(sk, rot, root, jt, floors["joints"])
+    g_rot, g_pos = chain_fk(sk, rot, root, jt, floors.joints)
     g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
     ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
-    point = ball + quat.rotate(g_rot[:, :, 3], floors["point"]) - ankle
-    axis, angle = _lift(point, floors["point_floor"] - ankle[..., 1], point)
-    pitch = quat.from_rotvec(axis * (angle * floors["kept"])[..., None])
+    point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
+    axis, angle = _lift(point, floors.point_floor - ankle[..., 1], point)
+    pitch = quat.from_rotvec(axis * (angle * floors.kept)[..., None])
     ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
-    rot[:, floors["ankles"]] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
-    if not floors["toes"].any():
+    rot[:, floors.ankles] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
+    if not floors.toes.any():
         return
     # Below the ankle everything turned by the pitch: the ball, its parent and the tip.
     ball = ankle + quat.rotate(pitch, ball - ankle)
     ball_rot = quat.multiply(pitch, g_rot[:, :, 3])
-    ball_parent = np.where((floors["ball_parents"] == floors["ankles"])[None, :, None], ankle_rot,
+    ball_parent = np.where((floors.ball_parents == floors.ankles)[None, :, None], ankle_rot,
                            quat.multiply(pitch, g_rot[:, :, 2]))
-    tip = quat.rotate(ball_rot, floors["tip"])
-    axis, angle = _lift(tip, floors["tip_floor"] - ball[..., 1], ball + tip - ankle)  # across the whole foot
+    tip = quat.rotate(ball_rot, floors.tip)
+    axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ball + tip - ankle)  # across the whole foot
     up = _slow_fall(angle, st.get("toe_bend", np.zeros(2)), math.radians(TOE_RELEASE_DEG_S) * dt)
     st["toe_bend"] = up[-1].copy()
-    bend = quat.from_rotvec(axis * (up * floors["toes"])[..., None])
-    rot[:, floors["balls"]] = np.where(floors["toes"][None, :, None],
+    bend = quat.from_rotvec(axis * (up * floors.toes)[..., None])
+    rot[:, floors.balls] = np.where(floors.toes[None, :, None],
                                        quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
-                                       rot[:, floors["balls"]])
+                                       rot[:, floors.balls])
 
 
 def _slowest_walk(clips) -> int:
@@ -1003,11 +1004,11 @@ def _turn_feet(b, rot, rise) -> np.ndarray:
     """Turn both feet by ``rise`` (F, 2, 3) rotation vectors in their own frames, in place, the toes
     keeping their orientation where the ball joint hangs from the ankle; returns the turns (F, 2, 4)."""
     delta = quat.from_rotvec(rise)
-    ankles = [leg[2] for leg in b["legs"]]
+    ankles = [leg[2] for leg in b.legs]
     rot[:, ankles] = quat.multiply(rot[:, ankles], delta)
-    k = b["balls_on_ankles"]
+    k = b.balls_on_ankles
     if k.size:
-        rot[:, b["balls"][k]] = quat.multiply(quat.conjugate(delta[:, k]), rot[:, b["balls"][k]])
+        rot[:, b.balls[k]] = quat.multiply(quat.conjugate(delta[:, k]), rot[:, b.balls[k]])
     return delta
 
 
@@ -1032,8 +1033,8 @@ def _slowest_towards(b, direction) -> np.ndarray:
     """(F,) speed (m/s) of the slowest moving example travelling within 45 degrees of each ``direction``
     (F,) radians (of any moving example where none does): a pack without an idle walks slower than
     that by slowing it. (A blend of walks forward and back may stand still, but it steps on the spot.)"""
-    v = b["velocities"]
-    moving = ~b["idle"] & (np.hypot(v[:, 0], v[:, 1]) > 1e-3)
+    v = b.velocities
+    moving = ~b.idle & (np.hypot(v[:, 0], v[:, 1]) > 1e-3)
     speeds = np.where(moving, np.hypot(v[:, 0], v[:, 1]), np.inf)
     off = np.abs((direction[:, None] - np.arctan2(v[:, 1], v[:, 0])[None] + np.pi) % (2.0 * np.pi) - np.pi)
     near = np.where(off < np.pi / 4, speeds[None], np.inf).min(axis=1)
@@ -1046,9 +1047,9 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
     at that example's speed and the share is the ratio of the speeds."""
-    space = b["space"]
+    space = b.space
     slow = np.ones(len(speed))
-    if not b["idle"].any():
+    if not b.idle.any():
         floor = _slowest_towards(b, direction)
         slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
         speed = np.maximum(speed, floor)
@@ -1056,13 +1057,13 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     w, inside = space.weights("locomotion", query)
     out = np.nonzero(~inside)[0]
     if out.size:  # the turn rate nearest the request's that the tessellation holds at that velocity
-        turns, ok = b["limit"].hull.nearest_turns(query[out, :2], query[out, 2])
+        turns, ok = b.limit.hull.nearest_turns(query[out, :2], query[out, 2])
         cut = np.nonzero(ok)[0]  # the others keep the weights of the full request's nearest point
         if cut.size:
             query[out[cut], 2] = turns[cut]
             w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
-    if b["idle"].any():
-        slow = np.clip(1.0 - w[:, b["idle"]].sum(axis=1), 0.0, 1.0)
+    if b.idle.any():
+        slow = np.clip(1.0 - w[:, b.idle].sum(axis=1), 0.0, 1.0)
     return w, slow
 
 
@@ -1072,11 +1073,11 @@ def _settle_phases(b, w) -> np.ndarray:
     to fall before it (its toe off less the stance ramp), so the stop's last frame does not move the
     trailing foot (its stance share lays the feet down). ``w`` (F, N): the moving clips' weights."""
     out = np.full((len(w), 2), SETTLE_PHASE)
-    stepping = np.nonzero(b["stepping"])[0]
+    stepping = np.nonzero(b.stepping)[0]
     if not stepping.size:
         return out
     ws = w[:, stepping]
-    events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b["events"][stepping].reshape(-1, 8)).reshape(-1, 2, 4)
+    events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b.events[stepping].reshape(-1, 8)).reshape(-1, 2, 4)
     # Toe off of the trailing foot after each landing: the right foot's after the left strike (0), the left's after 0.5.
     trailing = np.stack((np.mod(events[:, 1, 3], 1.0), np.mod(events[:, 0, 3] - 0.5, 1.0)), axis=1)
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)

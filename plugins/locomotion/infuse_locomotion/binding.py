@@ -1,0 +1,111 @@
+"""What a walk needs of a locomotion pack on one character: a :class:`LocomotionBinding`, made by the
+controller's ``bind`` and shared, read only, by every walk of characters made of one asset.
+
+N is the pack's locomotion clips, J the skeleton's joints, B the joints outside the legs; a leg is
+(hip, knee, ankle, ball) joint indices, the ball None where the foot has no ball joint; feet and legs
+are ordered left, right. Positions are metres, in the facing frame of the clips (+Y up, +Z forward).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+
+from infuse.runtime.clip import LoopTable
+from infuse.skeleton import Skeleton
+
+if TYPE_CHECKING:
+    from infuse.packs import BlendClip, BlendSpace
+
+Leg = tuple[int, int, int, int | None]
+
+
+def _no_joints() -> np.ndarray:
+    return np.zeros(0, dtype=np.int64)
+
+
+@dataclass(frozen=True, eq=False)
+class FootFloors:
+    """How low each foot may go (:func:`~.controller._keep_feet_up`), from the pose the feet stand in.
+
+    - ``ankles``, ``balls`` (2,): joints (a foot without a ball joint: its ankle as its ball);
+      ``ankle_parents``, ``ball_parents`` (2,) the joints they hang from; ``joints`` (8,) the four of
+      each foot (ankle's parent, ankle, ball's parent, ball), for one FK;
+    - ``point`` (2, 3): the tip of a foot without a ball joint, offset in its ankle's frame; ``kept``
+      (2,) bool: the feet that have one;
+    - ``tip`` (2, 3): the toes' tip, offset in the ball's frame; ``toes`` (2,) bool: the feet that have one;
+    - ``point_floor``, ``tip_floor`` (2,): the heights (m) the two tips stand at.
+    """
+
+    ankles: np.ndarray
+    balls: np.ndarray
+    ankle_parents: np.ndarray
+    ball_parents: np.ndarray
+    joints: np.ndarray
+    point: np.ndarray
+    kept: np.ndarray
+    tip: np.ndarray
+    toes: np.ndarray
+    point_floor: np.ndarray
+    tip_floor: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class LocomotionBinding:
+    """A locomotion pack prepared for one skeleton (see the module doc for N, J, B and legs).
+
+    The pack: ``space`` (its :class:`~infuse.packs.BlendSpace`), ``clips`` (N) its locomotion clips,
+    ``limit`` the top speed (m/s) by travel direction (radians), ``table`` the canonical clips'
+    :class:`~infuse.runtime.clip.LoopTable`, ``movers`` (N) the joint each clip travels on.
+    Per clip (N, ...): ``velocities`` (N, 3) forward and lateral speed (m/s) and turn rate (rad/s),
+    ``durations`` (N,) cycle seconds, ``keys`` (N, 3) its phase keys (s), ``events`` (N, 2, 4) each
+    foot's contact events (phases), ``stepping`` (N,) whether it has them, ``idle`` (N,) bool,
+    ``slowest`` (N,) one at the slowest straight walk, ``body_means`` (N, B * 4) the sign-aligned mean
+    rotations of the joints outside the legs, ``ankle_means`` (N, 2, 3) each ankle's mean offset from the
+    hips' midpoint, ``ankle_low`` (N, 2) its lowest height (m).
+    The transitions played whole (:mod:`.transitions`): ``played``, ``stops`` among them, and each one's
+    ``played_facing`` (F,) radians and ``played_phases`` (F, 2, 2) heel and ball contacts, by name.
+    The skeleton: ``skeleton``, ``pelvis``, ``legs`` (0 or 2), ``limbs`` (J,) 0 body, 1 left leg, 2
+    right leg, ``body`` (B,) the joints outside the legs, ``grounded_m`` how near the ground a foot
+    counts as on it (m), ``stance_feet`` (2, 2, 4) or None each foot's ankle and ball global rotations
+    standing, ``floors`` or None (:class:`FootFloors`).
+    With two legs: ``leg_limbs`` (hip, knee, ankle) each, ``balls`` (2,) (the ankle without a ball
+    joint), ``has_ball`` (2,) bool, ``balls_on_ankles`` the feet whose ball hangs from the ankle, and the
+    joints one FK gives the stride (``shorten_joints``) and the pinning (``pin_joints``: hip, knee,
+    ankle, the hip's parent and the ball of each leg).
+    """
+
+    space: BlendSpace
+    clips: list[BlendClip]
+    limit: Callable[..., float]
+    table: LoopTable
+    movers: list[int]
+    velocities: np.ndarray
+    durations: np.ndarray
+    keys: np.ndarray
+    events: np.ndarray
+    stepping: np.ndarray
+    idle: np.ndarray
+    slowest: np.ndarray
+    body_means: np.ndarray
+    ankle_means: np.ndarray
+    ankle_low: np.ndarray
+    played: list[BlendClip]
+    stops: list[BlendClip]
+    played_facing: dict[str, np.ndarray]
+    played_phases: dict[str, np.ndarray]
+    skeleton: Skeleton
+    pelvis: int
+    legs: list[Leg]
+    limbs: np.ndarray
+    body: np.ndarray
+    grounded_m: float
+    stance_feet: np.ndarray | None
+    floors: FootFloors | None
+    leg_limbs: list[tuple[int, int, int]] = field(default_factory=list)
+    balls: np.ndarray = field(default_factory=_no_joints)
+    has_ball: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    balls_on_ankles: np.ndarray = field(default_factory=_no_joints)
+    shorten_joints: list[int] = field(default_factory=list)
+    pin_joints: list[int] = field(default_factory=list)
