@@ -17,7 +17,11 @@ For every humanoid rig of the wild folder:
      past) 1.5 x the source's + 10 degrees, and its margin (negative: past the bound);
    - the share of foot goals out of reach, the largest miss of a reachable one (mm);
    - on the written file: every value finite, and the lowest foot point (soles included) over the
-     clip, cm (0: it stands on y = 0 as written).
+     clip, cm (0: it stands on y = 0 as written);
+   - on a rig whose feet end at the ankle and carry a mesh, the deepest the heel or tip the mesh
+     gives them (:attr:`~infuse_retarget.RetargetPlan.sole_points`, carried by the ankle) goes below
+     the level its foot is planted at, cm (one sole depth per rig, as above, cannot see a foot
+     pitching its tip into the ground).
 
 2. **Behaviour packs.** The rig is infused with ``locomotion-male``, ``gestures`` and ``postures`` in
    a scene (a pack the rig cannot play, :class:`~infuse.MissingJointsError`, is counted with its
@@ -114,6 +118,7 @@ class RetargetRow:
     residual_mm: float
     finite: bool
     written_lowest_cm: float
+    sole_cm: float = float("nan")
 
     @property
     def ok(self) -> bool:
@@ -148,12 +153,26 @@ def _above_planted(lowest: np.ndarray, planted: np.ndarray) -> np.ndarray:
     return lowest - np.array(levels)
 
 
+def _sole_below_planted(plan: RetargetPlan, motion, planted: np.ndarray) -> float:
+    """cm: the deepest the mesh heel or tip of a foot (``plan.sole_points``, (2, 3) in its ankle's
+    frame) goes below the level the foot is planted at (the median over ``planted`` (F, 2) of the
+    lowest of its ankle, heel and tip); NaN for a rig whose feet have none."""
+    if any(points is None for points in plan.sole_points):
+        return float("nan")
+    g, p = motion_fk(motion)
+    ankles = [f.ankle for f in plan.target.feet]
+    sites = p[:, ankles, None] + quat.rotate(g[:, ankles, None], np.stack(plan.sole_points)[None])  # (F, 2, 2, 3)
+    low = np.minimum(sites[..., 1].min(axis=2), p[:, ankles, 1])
+    levels = [np.median(low[planted[:, k], k]) if planted[:, k].any() else low[:, k].min() for k in (0, 1)]
+    return 100.0 * float(max(0.0, -(sites[..., 1] - np.array(levels)[None, :, None]).min()))
+
+
 def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Sources, out_dir: Path) -> RetargetRow:
     """Retarget ``source`` onto ``character`` as ``infuse retarget`` does, write it, read it back, measure."""
     clip, src_map = sources.clips[source]
     tgt_map = map_skeleton(character)
     plan = RetargetPlan(clip.skeleton, src_map, character.skeleton, tgt_map, source_motion=clip,
-                        target_motion=next(iter(character.motions.values()), None))
+                        target_motion=next(iter(character.motions.values()), None), target_meshes=character.meshes)
     q = evaluate(plan, clip)
     result = retarget_clip(plan, clip)
     motion = result.motion.replace(name="retargeted")
@@ -176,7 +195,7 @@ def retarget_row(character: infuse.Asset, rel: str, source: str, sources: Source
     return RetargetRow(short(rel), source, q.scale, q.skate_source, q.skate_final, q.skate_limit(), q.bones_final,
                        ground.penetration, ground.max_penetration, source_ground.max_penetration, ground.float, pop.worst, -pop.excess, frame,
                        100.0 * q.unreachable, q.residual_mm, bool(np.isfinite(g).all() and np.isfinite(p).all()),
-                       100.0 * float(lowest.min()))
+                       100.0 * float(lowest.min()), _sole_below_planted(plan, written, planted))
 
 
 @dataclass
@@ -296,13 +315,13 @@ def _fmt(x: float, width: int = 6, digits: int = 2) -> str:
 def print_retargeting(rows: list[RetargetRow]) -> None:
     head = (f"{'rig':<42} {'source':<14} {'scale':>5} | {'skate src/out':>13} {'limit':>5} | {'bones':>5} | "
             f"{'pen mean/max (src)':>19} {'float':>5} | {'popping joint':<16} {'margin':>6} {'frame':>5} | "
-            f"{'out%':>4} {'IK mm':>5} | {'lowest':>6}")
+            f"{'out%':>4} {'IK mm':>5} | {'lowest':>6} {'sole':>5}")
     print(head)
     print("-" * len(head))
     for r in rows:
         print(f"{r.rig[-42:]:<42} {r.source:<14} {r.scale:5.2f} | {r.skate_source:6.2f} {r.skate:6.2f} {r.skate_limit:5.2f} | "
               f"{r.bones:5.2f} | {r.penetration:5.2f} {r.max_penetration:6.2f} {r.source_max_penetration:6.2f} {r.float_cm:5.2f} | {r.pop_joint:<16} "
-              f"{r.pop_margin:6.1f} {r.pop_frame:5d} | {r.unreachable:4.0f} {r.residual_mm:5.2f} | {r.written_lowest_cm:6.2f}"
+              f"{r.pop_margin:6.1f} {r.pop_frame:5d} | {r.unreachable:4.0f} {r.residual_mm:5.2f} | {r.written_lowest_cm:6.2f} {_fmt(r.sole_cm, 5)}"
               + ("" if r.finite else "  NON-FINITE") + ("" if r.ok else "  <- misses a target"))
 
 
@@ -335,6 +354,8 @@ def print_worst(retargeted: list[RetargetRow], packs: list[PackRow], n: int = 5)
           + names(retargeted, lambda r: -r.pop_margin, lambda r: f"{r.rig} {r.source} {r.pop_joint} {r.pop_margin:+.1f} at {r.pop_frame}"))
     print("  retargeting, deepest foot below its planted level (cm): "
           + names(retargeted, lambda r: r.max_penetration, lambda r: f"{r.rig} {r.source} {r.max_penetration:.2f}"))
+    print("  retargeting, mesh heel or tip below its planted level (cm): "
+          + names(retargeted, lambda r: r.sole_cm, lambda r: f"{r.rig} {r.source} {r.sole_cm:.2f} (source {r.source_max_penetration:.2f})"))
     print("  packs, walk miss (m): " + names(packs, lambda r: r.miss_m, lambda r: f"{r.rig} {r.miss_m:.3f}"))
     print("  packs, walk skate (cm/m): " + names(packs, lambda r: r.skate, lambda r: f"{r.rig} {r.skate:.2f}"))
     print("  packs, foot below its start level (cm): " + names(packs, lambda r: r.depth_cm, lambda r: f"{r.rig} {r.depth_cm:.1f}"))
