@@ -235,7 +235,10 @@ def no_runs(motion_set: MotionSet) -> MotionSet:
 
 
 def mirrored(motion_set: MotionSet) -> MotionSet:
-    """Left and right swapped through the plane x = 0 of the core frame (rest rotations must be identity)."""
+    """Left and right swapped through the plane x = 0 of the core frame (rest rotations must be identity,
+    as a set read from BVH or SmartBody has them)."""
+    if not np.allclose(np.abs(motion_set.skeleton.rest_rotations[:, 3]), 1.0):
+        raise ValueError(f"{motion_set.name}: mirroring needs identity rest rotations")
     m = _mapping(motion_set)
     partner = np.arange(motion_set.skeleton.num_joints)
     for k, j in m.items():
