@@ -354,8 +354,11 @@ def tip_above(ankle: np.ndarray, tip: np.ndarray, lateral: np.ndarray, level: fl
         back = heel - ankle
         behind, up = -cq.dot(back, forward), back[1]
         span = np.maximum(np.hypot(behind, up), 1e-9)
-        # Pitching up by lift lowers a point behind the ankle by as much.
-        sunk = np.arcsin(np.clip((level - ankle[1]) / span, -1.0, 1.0)) - (np.arctan2(up, behind) - lift)
+        # Pitching up by lift lowers a point behind the ankle by as much; a heel pitched forward of
+        # straight below the ankle is not raised by pitching the foot down.
+        elevation = np.arctan2(up, behind) - lift
+        sunk = np.arcsin(np.clip((level - ankle[1]) / span, -1.0, 1.0)) - elevation
+        sunk = np.where((ankle[1] + span * np.sin(elevation) < level) & (np.cos(elevation) > 0.0), sunk, 0.0)
         room = np.maximum(have + lift - want, 0.0)  # how far the tip can pitch down and stay above
         lift = lift - np.minimum(_eased(np.maximum(sunk, 0.0), step), room)
     return cq.exp(axis * lift)
