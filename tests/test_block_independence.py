@@ -128,7 +128,7 @@ def test_the_walks_walk_and_stop(walk_runs):
     assert travel[-15:].max() < 0.01, f"{label}: bob still moves at the end ({travel[-15:].max() * FPS:.2f} m/s)"
     walks = scene.stagehands["locomotion"].walks["bob"]
     assert walks[-1].settled is not None, f"{label}: the last walk never handed over to the idle"
-    heading = np.degrees(np.ptp([w.final["heading"] for w in walks] + [0.0]))
+    heading = np.degrees(np.ptp([w.final.heading for w in walks] + [0.0]))
     assert heading > 30.0, f"{label}: the walks turned only {heading:.1f} degrees"
 
 

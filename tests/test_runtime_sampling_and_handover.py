@@ -51,11 +51,13 @@ def test_controllers_start_afresh_after_another_unless_they_say_otherwise(motion
 
 def test_a_walk_takes_over_the_whole_state_of_the_walk_before_but_its_path(motion):
     from infuse.runtime import controller
+    from infuse_locomotion.state import LocomotionState
 
     walk = controller("locomotion", target=(0.0, 1.0))
-    before = {"x": 1.5, "heading": 0.3, "waypoint": 2, "pins": np.ones((2, 3))}
-    state = walk.handover(before)
-    assert state["waypoint"] == 0 and before["waypoint"] == 2
-    assert state["x"] == 1.5 and state["heading"] == 0.3
-    state["pins"][0, 0] = 9.0  # a copy: the old walk's feet stay where they are
-    assert before["pins"][0, 0] == 1.0
+    old = LocomotionState(x=1.5, heading=0.3, waypoint=2, pins=np.ones((2, 3)))
+    state = walk.handover({LocomotionState: old})[LocomotionState]
+    assert state.waypoint == 0 and old.waypoint == 2
+    assert state.x == 1.5 and state.heading == 0.3
+    state.pins[0, 0] = 9.0  # a copy: the old walk's feet stay where they are
+    assert old.pins[0, 0] == 1.0
+    assert walk.handover({}) == {}  # a walk not evaluated yet hands nothing on

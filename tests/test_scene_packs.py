@@ -3,6 +3,8 @@ spot in world coordinates, the character stays there and the next walk goes on f
 the object; picked-up objects follow the hand and are put down where asked."""
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -139,7 +141,7 @@ def test_a_walk_settles_into_the_idle_only_once_its_stop_is_over(monkeypatch):
     settle = walks.Walks._settle
 
     def looked(self, name, walk, after):
-        state = dict(walk.activity.state)
+        state = copy.deepcopy(walk.activity.state)  # as it is now: the walk goes on changing its own
         settle(self, name, walk, after)
         checks.append((state, walk.settled is not None))
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -45,7 +45,8 @@ from infuse.runtime.pose import chain_fk
 from . import transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
-from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering
+from .state import LocomotionState
+from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState
 
 
 #: Seconds over which a released foot's pin correction fades back to the animation, and its extra
@@ -148,11 +149,11 @@ class WalkPlan:
     there (``arrives_s``), until its stop's last steps and the fade into the idle are surely over
     (``rests_s``: one cycle of the slowest forward walk at the stop's cadence and :data:`SETTLE_S`
     later; with a stop clip, which begins at its gait phase, the longest cycle of its walks more), and the
-    steering's state then (``x``, ``z``, ``heading``... in the character's frame)."""
+    steering's state then."""
 
     arrives_s: float
     rests_s: float
-    state: dict
+    state: SteeringState
 
 
 class Locomotion(Controller):
@@ -193,14 +194,14 @@ class Locomotion(Controller):
     def describe(self) -> str:
         return f"locomotion ({getattr(self.pack, 'pack', self.pack)})"
 
-    def plan(self, fps: float, state: dict | None = None, most_s: float = 600.0) -> WalkPlan | None:
+    def plan(self, fps: float, state: SteeringState | None = None, most_s: float = 600.0) -> WalkPlan | None:
         """How a walk along a path (``path=`` or ``target=``) with a :class:`~infuse.packs.BlendSpace`
         pack goes at ``fps``, from the steering at the speeds the pack realizes (faster ones kept to
         its top speed): a :class:`WalkPlan`, or None if it does not stand at its last point within
         ``most_s``. ``state``: where it starts (default: the origin, standing, facing +Z)."""
-        st = dict(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0)
-        st.update({k: v for k, v in (state or {}).items() if k in st})
-        st["waypoint"] = 0
+        st = SteeringState()
+        if state is not None:
+            st.go_on_from(state)
         space = self.pack
         top = space.speed_limit() if hasattr(space, "speed_limit") else None
         path = self.steering.path
@@ -214,24 +215,24 @@ class Locomotion(Controller):
             if decide:  # a transition played whole from standing (as the walk will decide)
                 decide = False
                 pick = transitions.choose(played, st, path, fps, self.steering.max_decel, TURN_IN_PLACE, STAY_M) \
-                    if st["speed"] < 1e-9 else None
+                    if st.speed < 1e-9 else None
                 if pick is not None:
                     frames += int(round(transitions.handover_s(pick, fps) * fps))
-                    st.update(transitions.end_state(pick, transitions.placement(pick, st["x"], st["z"], st["heading"]), fps))
+                    st.go_on_from(transitions.end_state(pick, transitions.placement(pick, st.x, st.z, st.heading), fps))
                     decide = pick.transition == "turn"
                     continue
             self.steering.run(st, np.array([frames * dt]), dt, top=top)
             frames += 1
-            stop = transitions.stop_due(stops, st, last, fps) if stops and st["waypoint"] == len(path) - 1 else None
+            stop = transitions.stop_due(stops, st, last, fps) if stops and st.waypoint == len(path) - 1 else None
             if stop is not None:  # where it is as far from the point as a stop clip travels (the walk's own
                 # choice waits for the clip's gait phase, within a stride of here)
                 frames += int(round(transitions.handover_s(stop, fps) * fps))
-                st.update(x=float(last[0]), z=float(last[1]), speed=0.0, turn=0.0,
-                          heading=st["heading"] + stop.parameters["turn"])
+                st.x, st.z, st.speed, st.turn = float(last[0]), float(last[1]), 0.0, 0.0
+                st.heading += stop.parameters["turn"]
                 stopped = True
                 break
-            if st["waypoint"] == len(path) - 1 and st["speed"] < 1e-6 and \
-                    math.hypot(st["x"] - last[0], st["z"] - last[1]) < STAY_M:
+            if st.waypoint == len(path) - 1 and st.speed < 1e-6 and \
+                    math.hypot(st.x - last[0], st.z - last[1]) < STAY_M:
                 break
         else:
             return None
@@ -242,14 +243,16 @@ class Locomotion(Controller):
         return WalkPlan(frames * dt, frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S + late, st)
 
     def handover(self, state: dict) -> dict:
-        """A walk following another goes on from its state (where it is, heading, speed, gait phase,
-        planted feet); only its path starts afresh, at its first point."""
-        return dict(copy.deepcopy(state), waypoint=0)
+        """A walk following another goes on from its :class:`~.state.LocomotionState` (where it is, heading,
+        speed, gait phase, planted feet), a copy; only its path starts afresh, at its first point."""
+        walk = state.get(LocomotionState)
+        return {} if walk is None else {LocomotionState: replace(copy.deepcopy(walk), waypoint=0)}
 
     def at_rest(self, state: dict) -> bool:
         """At rest once the stop steps are over (both feet landed under the body) and the idle has fully
-        faded in; a walk not evaluated yet (empty ``state``) counts as at rest."""
-        return bool(state.get("settled", True)) and float(state.get("stand", 1.0)) >= 1.0 - 1e-9
+        faded in; a walk not evaluated yet (no :class:`~.state.LocomotionState`) counts as at rest."""
+        walk = state.get(LocomotionState)
+        return walk is None or (walk.settled and walk.stand >= 1.0 - 1e-9)
 
     def bind(self, rig, report) -> LocomotionBinding:
         from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
@@ -282,43 +285,35 @@ class Locomotion(Controller):
         active = np.nonzero(job.local_times >= -1e-9)[0]
         if not active.size:
             return
-        st = job.state
-        if not st:
-            st.update(x=0.0, z=0.0, heading=0.0, speed=0.0, turn=0.0, waypoint=0, phase=0.0,
-                      anchor=np.zeros(2, np.int64), pins=np.zeros((2, 3)), offset=np.zeros((2, 3)), released=np.full(2, 1e9),
-                      last=np.zeros((2, 2, 3)), rise=np.zeros((2, 3)), landed=np.tile(_IDENTITY, (2, 1)),
-                      landed_as=np.tile(_IDENTITY, (2, 1)), across=np.zeros((2, 3)), landed_spun=np.zeros(2),
-                      ball_offset=np.zeros((2, 3)), foot_turn=np.tile(_IDENTITY, (2, 1)), let_go=np.full((2, 3), -np.inf), free_s=np.full(2, 1e9),
-                      settled=True, landings=-1, to_go=-1.0, floor=0.0, stop_age=0.0, stand=1.0)
+        st = job.state_of(LocomotionState)
         dt = 1.0 / block.fps
         times = job.local_times[active]
         # The block in parts, in time order: transition clips played whole, and the steered blend.
         parts, i = [], 0
         while i < len(times):
-            if st.get("playing") is None and st.get("chooser") != id(self):
-                st["chooser"] = id(self)  # a walk decides once it begins (again after a turn on the spot)
-                if st["settled"] and st["speed"] < 1e-9 and len(b.legs) == 2:
+            if st.playing is None and st.chooser != id(self):
+                st.chooser = id(self)  # a walk decides once it begins (again after a turn on the spot)
+                if st.settled and st.speed < 1e-9 and len(b.legs) == 2:
                     pick = transitions.choose(b.played, st, self.steering.path, block.fps, self.steering.max_decel,
                                               TURN_IN_PLACE, STAY_M)
                     if pick is not None:
-                        st["playing"] = (pick.name, float(times[i]), transitions.placement(pick, st["x"], st["z"], st["heading"]))
+                        st.playing = (pick.name, float(times[i]), transitions.placement(pick, st.x, st.z, st.heading))
             start, part, handing = i, None, None
-            if st.get("playing") is None:
+            if st.playing is None:
                 before = copy.deepcopy(st) if b.stops and self.steering.path is not None else None
                 part = self._steered(b, st, times[i:], dt, job.report)
                 stop = None if before is None else self._stop_at(b, before, st, block.fps, dt)
                 if stop is not None:  # walk up to where the stop begins, then play it
                     f, clip, place = stop
-                    st.clear()
-                    st.update(before)
+                    st.restore(before)
                     part = self._steered(b, st, times[i:i + f], dt, job.report) if f else None
-                    st.pop("trace", None)
-                    st["playing"] = (clip.name, float(times[i + f]), place)
+                    st.trace = None
+                    st.playing = (clip.name, float(times[i + f]), place)
                     i += f
                 else:
                     i = len(times)
             else:
-                name, began, place = st["playing"]
+                name, began, place = st.playing
                 clip = b.space.clips[name]
                 i += int(np.count_nonzero(times[i:] < began + transitions.handover_s(clip, block.fps) - 1e-9))
                 if i > start:
@@ -328,7 +323,7 @@ class Locomotion(Controller):
                 parts.append(self._faded(b, st, part, times[start:i], block.fps))
             if handing is not None:
                 self._hand_over(b, st, handing[0], handing[2], block.fps)
-                st["fading"] = (handing[0].name, handing[1], handing[2])
+                st.fading = (handing[0].name, handing[1], handing[2])
         rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*parts))
         if self.pin_feet and len(b.legs) == 2:
             self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
@@ -337,20 +332,21 @@ class Locomotion(Controller):
         self._write(job, active, rot, root, jt)
 
     def _stop_at(self, b, before, st, fps: float, dt: float):
-        """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st["trace"]``)
+        """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st.trace``)
         would hand over to a stop clip: the first frame on the way to the path's last point, heading
         for it within :data:`~.transitions.STOP_BEARING`, at about the clip's speed where it begins
         (within :data:`~.transitions.STOP_SPEEDS`), at the clip's gait phase where it begins, and as
         far from the point as the clip travels (its travel scaled within :data:`~.transitions.STOP_SCALES`,
         and no more than a stride later would need). Returns (frame, clip, placement) or None."""
         path = self.steering.path
-        x, z, heading, speed, phase = st.pop("trace")
-        if st["waypoint"] != len(path) - 1:
+        trace, st.trace = st.trace, None
+        if trace is None or st.waypoint != len(path) - 1:
             return None
+        x, z, heading, speed, phase = trace
         last = path[-1]
         dist = np.hypot(last[0] - x, last[1] - z)
         off = np.abs((np.arctan2(last[0] - x, last[1] - z) - heading + np.pi) % (2.0 * np.pi) - np.pi)
-        prev = np.concatenate(([before["phase"]], phase[:-1]))
+        prev = np.concatenate(([before.phase], phase[:-1]))
         best = None
         for clip in b.stops:
             at = transitions.stop_phase(clip)
@@ -393,16 +389,18 @@ class Locomotion(Controller):
         facing = turn + b.played_facing[clip.name][frames]
         forward = np.stack((np.sin(facing), np.zeros_like(facing), np.cos(facing)), axis=-1)
         ground = transitions.placed_root(clip, place, local[-1:])[0]
-        st.update(x=float(ground[0]), z=float(ground[1]), heading=float(facing[-1]))
-        return rot, root, jt, contact, forward, np.full(len(local), st.get("spun", 0.0))
+        st.x, st.z, st.heading = float(ground[0]), float(ground[1]), float(facing[-1])
+        return rot, root, jt, contact, forward, np.full(len(local), st.spun)
 
     def _hand_over(self, b, st, clip, place, fps: float) -> None:
         """The steering takes over from transition ``clip`` (see :mod:`.transitions`): its state where the
         clip hands over; after a start, the gait's phase from the clip's last strikes (left at 0, right
         at 0.5), walking; after a turn on the spot, standing, to decide again; after a stop, standing there."""
-        st.update(transitions.end_state(clip, place, fps), playing=None)
+        st.go_on_from(transitions.end_state(clip, place, fps))
+        st.playing = None
         if clip.transition != "start":  # standing: after a turn it decides again, after a stop it is there
-            st.update(settled=True, stand=1.0, landings=-1, to_go=-1.0, chooser=None if clip.transition == "turn" else id(self))
+            st.settled, st.stand, st.landings, st.to_go = True, 1.0, -1, -1.0
+            st.chooser = None if clip.transition == "turn" else id(self)
             return
         at = transitions.handover_s(clip, fps)
         strikes = [(t, k) for t, k in transitions.strikes_of(clip) if t <= at + 1e-9]
@@ -412,23 +410,23 @@ class Locomotion(Controller):
             other = [t for t, k in strikes if k != foot]
             half = last - other[-1] if other and last - other[-1] > 1e-3 else 0.5 * float(b.durations[np.argmax(b.slowest)])
             phase = (0.5 * foot + 0.5 * (at - last) / half) % 1.0
-        st.update(settled=False, stand=0.0, landings=-1, to_go=-1.0, phase=float(phase))
+        st.settled, st.stand, st.landings, st.to_go, st.phase = False, 0.0, -1, -1.0, float(phase)
 
     def _faded(self, b, st, part, times, fps: float):
         """``part`` (see :meth:`_steered`) at the activity's ``times`` (F,) with the transition that
         handed over before it fading out over it (its last :data:`~.transitions.HANDOVER_S`), at ``fps``."""
-        if st.get("fading") is None:
+        if st.fading is None:
             return part
-        name, began, place = st["fading"]
+        name, began, place = st.fading
         clip = b.space.clips[name]
         local = times - began
         mixing = np.nonzero(local < clip.duration)[0]
         if mixing.size < len(local):
-            st["fading"] = None
+            st.fading = None
         if not mixing.size:
             return part
         rot, root, jt, contact, forward, spun = (None if a is None else np.array(a) for a in part)
-        was = self._played(b, dict(), clip, place, local[mixing])
+        was = self._played(b, LocomotionState(), clip, place, local[mixing])
         on = transitions.handover_s(clip, fps)
         w = footing.smoothstep((local[mixing] - on) / max(clip.duration - on, 1e-9))
         # The pelvis goes straight from the clip's to what follows (joint 0 may sit away from it: mixed
@@ -450,13 +448,13 @@ class Locomotion(Controller):
         """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned."""
-        x0, z0, h0 = st["x"], st["z"], st["heading"]
+        x0, z0, h0 = st.x, st.z, st.heading
         req = self.steering.run(st, times, dt, top=b.limit)
-        if st.get("capped") and not st.get("warned"):
-            asked, done, towards = st["capped"]
+        if st.capped is not None and not st.warned:
+            asked, done, towards = st.capped
             report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
-            st["warned"] = True
+            st.warned = True
         speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
         w, slow = _weights(b, speed, direction, turn)
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
@@ -473,11 +471,11 @@ class Locomotion(Controller):
         step_z = (vf * cos_ahead - vl * sin_ahead) * dt
         px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
-        st.update(x=float(px[-1] + step_x[-1]), z=float(pz[-1] + step_z[-1]), heading=float(heading[-1] + turn[-1] * dt))
+        st.x, st.z, st.heading = float(px[-1] + step_x[-1]), float(pz[-1] + step_z[-1]), float(heading[-1] + turn[-1] * dt)
         spinning = np.abs(turn - vt) > SPIN_STEP
         # The heading's turn the blend does not show, spun at the root (radians, from the walk's start).
-        spun = st.get("spun", 0.0) + np.concatenate(([0.0], np.cumsum((turn - vt)[:-1] * dt)))
-        st["spun"] = float(spun[-1] + (turn[-1] - vt[-1]) * dt)
+        spun = st.spun + np.concatenate(([0.0], np.cumsum((turn - vt)[:-1] * dt)))
+        st.spun = float(spun[-1] + (turn[-1] - vt[-1]) * dt)
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
@@ -487,7 +485,7 @@ class Locomotion(Controller):
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
                                                         _settle_phases(b, wm))
         if b.stops:  # where it went, frame by frame: where a stop clip may take over
-            st["trace"] = (px, pz, heading, speed, phase)
+            st.trace = (px, pz, heading, speed, phase)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -517,8 +515,8 @@ class Locomotion(Controller):
         # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
         # off, and the foot would turn from lying flat to the animation's toe off at once.
         down = settle[:, None] * support
-        laid = _slow_fall(down, st.get("laid", np.zeros(2)), dt / LAY_RELEASE_S)
-        st["laid"] = laid[-1].copy()
+        laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
+        st.laid = laid[-1].copy()
         if np.any(stride < 1.0 - 1e-6) and len(b.legs) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
         return rot, root, jt, contact, forward, spun
@@ -665,7 +663,7 @@ class Locomotion(Controller):
         heel_w, ball_w = contact[..., 0], contact[..., 1]
         anchors = footing.anchors(heel_w, ball_w, b.has_ball)
         # The feet one frame earlier (from the last block at the first frame).
-        before = np.concatenate((st["last"][None], feet_pos[:-1]))
+        before = np.concatenate((st.last[None], feet_pos[:-1]))
         on_ball = (anchors == footing.BALL)[..., None]
         points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
         points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
@@ -674,14 +672,14 @@ class Locomotion(Controller):
         rises = np.zeros(ankle_pos.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
         turns = np.zeros(anchors.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
-        changes = np.diff(np.concatenate((st["anchor"][None], anchors)), axis=0) != 0
+        changes = np.diff(np.concatenate((st.anchor[None], anchors)), axis=0) != 0
         for k in range(2):
             goal, weight, rise, point, ankle, turn = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k], turns[:, k]
-            prev = int(st["anchor"][k])
-            offset, pin, released, lifted = st["offset"][k].copy(), st["pins"][k].copy(), float(st["released"][k]), st["rise"][k].copy()
-            landed, landed_as, across, left = st["landed"][k].copy(), st["landed_as"][k].copy(), st["across"][k].copy(), st["foot_turn"][k].copy()
-            landed_spun, ball_offset = float(st["landed_spun"][k]), st["ball_offset"][k].copy()
-            let_go, free_s = st["let_go"][k].copy(), float(st["free_s"][k])
+            prev = int(st.anchor[k])
+            offset, pin, released, lifted = st.offset[k].copy(), st.pins[k].copy(), float(st.released[k]), st.rise[k].copy()
+            landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
+            landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
+            let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
             lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
             bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
             for s, e in zip(bounds[:-1], bounds[1:]):
@@ -771,10 +769,10 @@ class Locomotion(Controller):
                     offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
                     let_go = ball_goal.copy()
                 prev = kind
-            st["anchor"][k], st["pins"][k], st["offset"][k], st["released"][k], st["rise"][k] = prev, pin, offset, released, lifted
-            st["landed"][k], st["landed_as"][k], st["across"][k], st["foot_turn"][k] = landed, landed_as, across, left
-            st["landed_spun"][k], st["ball_offset"][k], st["let_go"][k], st["free_s"][k] = landed_spun, ball_offset, let_go, free_s
-        st["last"] = feet_pos[-1].copy()
+            st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
+            st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
+            st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
+        st.last = feet_pos[-1].copy()
         if rises.any():
             g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
@@ -953,7 +951,7 @@ def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
     """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
     ball joint would go below the height it stands at, the foot pitches about its ankle until it does
     not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
-    no faster than :data:`TOE_RELEASE_DEG_S` (``st["toe_bend"]`` carries the bends, radians, from block
+    no faster than :data:`TOE_RELEASE_DEG_S` (``st.toe_bend`` carries the bends, radians, from block
     to block). A foot rolling over its ball at toe off pitches as the pack's does: a longer foot, or
     toes the pack's clips do not bend, would dig into the ground. Both turns are about the horizontal
     axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None."""
@@ -974,8 +972,8 @@ def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
                            quat.multiply(pitch, g_rot[:, :, 2]))
     tip = quat.rotate(ball_rot, floors.tip)
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ball + tip - ankle)  # across the whole foot
-    up = _slow_fall(angle, st.get("toe_bend", np.zeros(2)), math.radians(TOE_RELEASE_DEG_S) * dt)
-    st["toe_bend"] = up[-1].copy()
+    up = _slow_fall(angle, st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)
+    st.toe_bend = up[-1].copy()
     bend = quat.from_rotvec(axis * (up * floors.toes)[..., None])
     rot[:, floors.balls] = np.where(floors.toes[None, :, None],
                                        quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
@@ -1106,36 +1104,36 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
     settled = np.zeros(f, dtype=bool)
     key = stop.astype(np.int8) * 2 + spinning.astype(np.int8)
     bounds = np.concatenate(([0], np.nonzero(np.diff(key))[0] + 1, [f]))
-    done = st["phase"]  # the (unwrapped) phase at the start of each run
+    done = st.phase  # the (unwrapped) phase at the start of each run
     for a, e in zip(bounds[:-1], bounds[1:]):
         if not stop[a]:
             advance[a:e] = dt * rate[a:e] / period[a:e]
-            st.update(settled=False, landings=-1, to_go=-1.0)
-        elif st["settled"] and not spinning[a]:
+            st.settled, st.landings, st.to_go = False, -1, -1.0
+        elif st.settled and not spinning[a]:
             rate[a:e] = 0.0
             stride[a:e] = slow[a:e] / STOP_CADENCE
             settled[a:e] = True
         else:
-            if st["landings"] < 0:  # the stop (or the turn on the spot) begins
-                st.update(landings=0, floor=float(rate[a]) if not st["settled"] else 0.0, stop_age=0.0)
+            if st.landings < 0:  # the stop (or the turn on the spot) begins
+                st.landings, st.floor, st.stop_age = 0, float(rate[a]) if not st.settled else 0.0, 0.0
             if spinning[a]:
-                st.update(settled=False, landings=0, to_go=-1.0)
-            age = st["stop_age"] + dt * np.arange(e - a)
-            r = np.maximum(rate[a:e], np.minimum(STOP_CADENCE, st["floor"] + CADENCE_RAMP * age))
+                st.settled, st.landings, st.to_go = False, 0, -1.0
+            age = st.stop_age + dt * np.arange(e - a)
+            r = np.maximum(rate[a:e], np.minimum(STOP_CADENCE, st.floor + CADENCE_RAMP * age))
             step = dt * r / period[a:e]
             ph = done + np.cumsum(step)  # after each frame's step
             before = ph - step
-            goal = done + st["to_go"] if st["to_go"] >= 0.0 else None
+            goal = done + st.to_go if st.to_go >= 0.0 else None
             if goal is None and not spinning[a]:
                 # Strikes (phases 0 and 0.5) with the character nearly still: the foot lands by the body.
                 landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[a:e] < STAND_FRACTION)
-                count = st["landings"] + np.cumsum(landed)
+                count = st.landings + np.cumsum(landed)
                 ready = landed & (count >= 2)
                 if ready.any():
                     j = int(np.argmax(ready))
                     strike = np.floor(2.0 * ph[j]) / 2.0  # the landing's phase: a left (whole) or right (half) strike
                     goal = strike + settle_at[a + j, int(round(2.0 * strike)) % 2]
-                st["landings"] = int(count[-1])
+                st.landings = int(count[-1])
             stride[a:e] = slow[a:e] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
             if goal is not None:
                 over = ph >= goal
@@ -1145,22 +1143,22 @@ def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> t
                     step[j + 1:] = 0.0
                     r[j + 1:] = 0.0
                     settled[a + j + 1:e] = True
-                    st.update(settled=True, to_go=-1.0)
+                    st.settled, st.to_go = True, -1.0
                 else:
-                    st["to_go"] = float(goal - ph[-1])
-            st["stop_age"] = float(age[-1] + dt)
+                    st.to_go = float(goal - ph[-1])
+            st.stop_age = float(age[-1] + dt)
             rate[a:e] = r
             advance[a:e] = step
         done += float(advance[a:e].sum())
-    phase = st["phase"] + np.concatenate(([0.0], np.cumsum(advance[:-1])))
-    st["phase"] = float((phase[-1] + advance[-1]) % 1.0)
+    phase = st.phase + np.concatenate(([0.0], np.cumsum(advance[:-1])))
+    st.phase = float((phase[-1] + advance[-1]) % 1.0)
     # The idle's share follows the settled flag at 1 / SETTLE_S per second.
     level = np.empty(f)
     edges = np.concatenate(([0], np.nonzero(np.diff(settled.astype(np.int8)))[0] + 1, [f]))
     for a, e in zip(edges[:-1], edges[1:]):
-        ramp = st["stand"] + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
+        ramp = st.stand + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
         level[a:e] = np.clip(ramp, 0.0, 1.0)
-        st["stand"] = float(level[e - 1])
+        st.stand = float(level[e - 1])
     rest = footing.smoothstep(level)
     return phase % 1.0, advance, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
 

@@ -40,6 +40,26 @@ def _of_time(v):
 
 
 @dataclass
+class SteeringState:
+    """Where the steering has the character: ``x``, ``z`` (m, its own frame), ``heading`` (radians about
+    +Y from +Z, + left), ``speed`` (m/s), ``turn`` (rad/s), ``waypoint`` (the path's point it heads for),
+    and ``capped`` (asked m/s, realized m/s, direction radians) once a speed was kept to what the pack
+    realizes (None before)."""
+
+    x: float = 0.0
+    z: float = 0.0
+    heading: float = 0.0
+    speed: float = 0.0
+    turn: float = 0.0
+    waypoint: int = 0
+    capped: tuple[float, float, float] | None = None
+
+    def go_on_from(self, where: SteeringState) -> None:
+        """Stand where ``where`` is, heading, moving and turning as it does (its waypoint left aside)."""
+        self.x, self.z, self.heading, self.speed, self.turn = where.x, where.z, where.heading, where.speed, where.turn
+
+
+@dataclass
 class Steering:
     """Steering settings (see the module doc). Angles in radians, speeds m/s, times s."""
 
@@ -65,18 +85,17 @@ class Steering:
                 raise ValueError("a path is (K, 2) ground points (x, z) or (K, 3) points, metres")
             self.path = p
 
-    def run(self, state: dict, times: np.ndarray, dt: float, top=None) -> np.ndarray:
+    def run(self, state: SteeringState, times: np.ndarray, dt: float, top=None) -> np.ndarray:
         """(F, 4) requests (speed, turn rate, direction, stopping) for ``times``; updates ``state``
         (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
         requests themselves. ``stopping`` is 1 on the way into a path's last point: braking for it,
         or there. ``top(direction)``: the fastest speed (m/s) realizable in a travel direction
-        (radians); a faster speed asked is kept to it and ``state["capped"]`` is set to (asked m/s,
-        realized m/s, direction) the first time."""
+        (radians); a faster speed asked is kept to it and ``state.capped`` is set the first time."""
         # Plain floats in the loop: it runs once per frame, and numpy scalars cost more than the maths.
         rows = []
-        x, z, h = float(state["x"]), float(state["z"]), float(state["heading"])
-        v, w = float(state["speed"]), float(state["turn"])
-        k = state.get("waypoint", 0)
+        x, z, h = float(state.x), float(state.z), float(state.heading)
+        v, w = float(state.speed), float(state.turn)
+        k = state.waypoint
         path = None if self.path is None else self.path.tolist()
         last_k = -1 if path is None else len(path) - 1
         accel, decel = self.max_accel * dt, self.max_decel * dt
@@ -88,8 +107,8 @@ class Steering:
             asked = speed_at(t)
             if top is not None:
                 limit = top(direction)
-                if asked > limit + 1e-3 and "capped" not in state:
-                    state["capped"] = (asked, limit, direction)
+                if asked > limit + 1e-3 and state.capped is None:
+                    state.capped = (asked, limit, direction)
                 asked = min(asked, limit)
             if self.path is None:
                 v_goal, w_goal = asked, turn_rate_at(t)
@@ -122,5 +141,5 @@ class Steering:
             h += w * dt
             x += v * math.sin(h + direction) * dt
             z += v * math.cos(h + direction) * dt
-        state.update(x=x, z=z, heading=h, speed=v, turn=w, waypoint=k)
+        state.x, state.z, state.heading, state.speed, state.turn, state.waypoint = x, z, h, v, w, k
         return np.array(rows, dtype=np.float64).reshape(len(rows), 4)

@@ -31,6 +31,8 @@ import math
 
 import numpy as np
 
+from .steering import SteeringState
+
 #: Seconds before a transition's end at which the steering takes over and the clip starts fading out.
 HANDOVER_S = 0.25
 #: A start is played when the point lies at most this far (radians) off its facing where it hands over...
@@ -109,7 +111,7 @@ def stops(clips: list) -> list:
     return [c for c in clips if c.transition == "stop" and stop_phase(c) is not None]
 
 
-def stop_due(clips: list, st: dict, point, fps: float):
+def stop_due(clips: list, st: SteeringState, point, fps: float):
     """The stop among ``clips`` that a walk in state ``st`` (``x``, ``z``, ``heading``, ``speed``) plays to
     stand at ``point`` (x, z) when it goes no farther than the stop travels, heading for the point and
     at about the stop's speed (see :data:`STOP_BEARING`, :data:`STOP_SPEEDS`); None while there is none."""
@@ -117,7 +119,7 @@ def stop_due(clips: list, st: dict, point, fps: float):
     if abs(bearing) >= STOP_BEARING:
         return None
     for c in clips:
-        if abs(math.log(max(st["speed"], 1e-9) / c.parameters["speed_start"])) < math.log(STOP_SPEEDS) and dist <= stop_travel(c, fps):
+        if abs(math.log(max(st.speed, 1e-9) / c.parameters["speed_start"])) < math.log(STOP_SPEEDS) and dist <= stop_travel(c, fps):
             return c
     return None
 
@@ -137,27 +139,27 @@ def stop_placement(clip, fps: float, x: float, z: float, target) -> tuple[float,
     return _heading_of(want) - _heading_of(travel), np.array(root0), np.array([x, z]), scale
 
 
-def end_state(clip, place, fps: float) -> dict:
+def end_state(clip, place, fps: float) -> SteeringState:
     """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its pelvis),
-    ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn)."""
+    ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn or a stop)."""
     x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]))[0]
     speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0  # a turn or a stop ends standing
-    return dict(x=float(x), z=float(z), heading=float(place[0] + clip.parameters["facing_end"]), speed=float(speed), turn=0.0)
+    return SteeringState(x=float(x), z=float(z), heading=float(place[0] + clip.parameters["facing_end"]), speed=float(speed))
 
 
-def _bearing(st: dict, point) -> tuple[float, float]:
+def _bearing(st: SteeringState, point) -> tuple[float, float]:
     """Bearing (radians off the facing, + left) and distance (m) of ``point`` (x, z) from state ``st``."""
-    dx, dz = point[0] - st["x"], point[1] - st["z"]
-    return (math.atan2(dx, dz) - st["heading"] + math.pi) % (2.0 * math.pi) - math.pi, math.hypot(dx, dz)
+    dx, dz = point[0] - st.x, point[1] - st.z
+    return (math.atan2(dx, dz) - st.heading + math.pi) % (2.0 * math.pi) - math.pi, math.hypot(dx, dz)
 
 
-def choose(clips: list, st: dict, path, fps: float, max_decel: float, turn_in_place: float, stay_m: float):
+def choose(clips: list, st: SteeringState, path, fps: float, max_decel: float, turn_in_place: float, stay_m: float):
     """The transition a walk standing in state ``st`` (``x``, ``z``, ``heading``) plays on its way along
     ``path`` (K, 2) (see the module doc), or None. ``turn_in_place``: radians off the facing from which
     the steering turns on the spot; ``stay_m``: a point this near is where the character stands."""
     if not clips or path is None:
         return None
-    k = int(st.get("waypoint", 0))
+    k = st.waypoint
     bearing, dist = _bearing(st, path[min(k, len(path) - 1)])
     if dist < stay_m and k >= len(path) - 1:
         return None
@@ -172,9 +174,9 @@ def choose(clips: list, st: dict, path, fps: float, max_decel: float, turn_in_pl
     for c in clips:
         if c.transition != "start":
             continue
-        end = end_state(c, placement(c, st["x"], st["z"], st["heading"]), fps)
+        end = end_state(c, placement(c, st.x, st.z, st.heading), fps)
         off, room = _bearing(end, path[min(k, len(path) - 1)])
-        braking = end["speed"] ** 2 / (2.0 * max_decel)
+        braking = end.speed ** 2 / (2.0 * max_decel)
         if abs(off) <= best_off and room >= START_ROOM_M + braking:
             best, best_off = c, abs(off)
     return best

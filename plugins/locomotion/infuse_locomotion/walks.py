@@ -16,12 +16,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from infuse import quaternions as quat
 from infuse.bml.model import BEHAVIOR_DEGRADED
 from infuse.runtime import Clip
+
+from .state import LocomotionState
+from .steering import SteeringState
 
 #: Crossfade from a walk that has arrived to the idle clip, seconds.
 SETTLE_BLEND_S = 0.5
@@ -38,13 +42,13 @@ SHORT_M = 0.15
 class Walk:
     """One walk of a character: the activity, when it stands at its last point (seconds, as planned),
     the frame at which to see whether it stands still, the idle that took over, and the steering's
-    state planned for its end (``x``, ``z``, ``heading`` in the character's own frame)."""
+    state planned for its end (in the character's own frame)."""
 
-    activity: object
+    activity: Any
     end_s: float
     check_frame: int
-    settled: object = None
-    final: dict | None = None
+    settled: Any = None
+    final: SteeringState | None = None
 
 
 class Walks:
@@ -63,7 +67,7 @@ class Walks:
         """The base-layer priority of the character's next walk."""
         return 2 * len(self.walks.get(name, ())) + 2
 
-    def expected_state(self, name: str) -> dict | None:
+    def expected_state(self, name: str) -> SteeringState | None:
         """Where the character's last walk is planned to leave it (its steering state), or None."""
         walks = self.walks.get(name)
         return walks[-1].final if walks else None
@@ -75,7 +79,8 @@ class Walks:
                 for walks in self.walks.values() for w in walks]
         return max(ends, default=0.0)
 
-    def start(self, name: str, activity, end_s: float, final: dict | None = None, arrives_s: float | None = None) -> None:
+    def start(self, name: str, activity, end_s: float, final: SteeringState | None = None,
+              arrives_s: float | None = None) -> None:
         """``activity`` (a locomotion, at :meth:`priority`) becomes the character's walk from its start;
         it is planned to arrive at its last point at ``arrives_s`` (default ``end_s``) and to be at rest
         there by ``end_s``, its steering then in state ``final``; the scene looks whether it stands
@@ -130,7 +135,8 @@ class Walks:
         path = getattr(getattr(activity.controller, "steering", None), "path", None)
         if path is None or activity.source is None:
             return
-        short = math.hypot(activity.state["x"] - path[-1][0], activity.state["z"] - path[-1][1])
+        walked = activity.state_of(LocomotionState)
+        short = math.hypot(walked.x - path[-1][0], walked.z - path[-1][1])
         if short > SHORT_M:
             self.stage.warn(activity.source, BEHAVIOR_DEGRADED, f"<{activity.source.element}>: {short:.2f} m short of its "
                                                                 f"target when the next walk took over at {self.stage.time:.2f} s")

@@ -1,0 +1,85 @@
+"""What a walk carries from one block of frames to the next: a :class:`LocomotionState`, the activity's
+(``job.state_of(LocomotionState)``), handed on whole to a walk that follows it.
+
+Feet are ordered left, right; positions are metres in the character's own frame (+Y up), angles radians
+about +Y (+ turns left), rotations (x, y, z, w) quaternions, times seconds.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from .steering import SteeringState
+
+#: How a transition clip is placed (:func:`~.transitions.placement`): its turn (radians), its pelvis's
+#: first ground point (2,), where that goes (2,) and the scale of its ground travel.
+Placement = tuple[float, np.ndarray, np.ndarray, float]
+
+
+def _feet(*shape: int, value: float = 0.0) -> np.ndarray:
+    return np.full((2, *shape), value)
+
+
+def _unturned() -> np.ndarray:
+    return np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (2, 1))
+
+
+@dataclass
+class LocomotionState(SteeringState):
+    """The steering's state (:class:`~.steering.SteeringState`), and:
+
+    - the gait: ``phase`` in [0, 1) (left strike 0, right strike 0.5); stopping (:func:`~.controller._clock`):
+      ``settled`` (standing, its stop steps over), ``landings`` since the stop began (-1: not stopping),
+      ``to_go`` phase left to where it holds (-1: not known yet), ``floor`` the cadence factor it began
+      at, ``stop_age`` seconds since, ``stand`` the idle's share (0 to 1); ``spun`` the heading's turn
+      spun at the root so far; ``laid`` (2,) how far each foot is laid down; ``toe_bend`` (2,) the toes'
+      bend up (radians);
+    - the transitions played whole (:mod:`.transitions`): ``playing`` and ``fading`` (the clip's name, its
+      start in the activity's time, its :data:`Placement`) or None, ``chooser`` the walk that decided
+      (its controller's id), ``trace`` the steered stretch's ground points, headings, speeds and phases
+      (F,) each, where a stop may take over;
+    - each planted foot (:meth:`~.controller.Locomotion._pin`): ``anchor`` (2,) what holds it (free, ankle,
+      ball), ``pins`` (2, 3) where, ``offset`` (2, 3) and ``ball_offset`` (2, 3) the ankle's and ball's
+      corrections, ``released`` (2,) seconds since let go, ``free_s`` (2,) seconds in the air, ``let_go``
+      (2, 3) where the ball was let go, ``last`` (2, 2, 3) the ankle and ball a frame earlier, ``rise``
+      (2, 3) the heel's extra rise (rotation vector), ``landed`` and ``landed_as`` (2, 4) the foot's
+      rotation as it landed, animated and corrected, ``landed_spun`` (2,) the turn spun at the root then,
+      ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction;
+    - ``warned``: a speed the pack cannot realize has been reported.
+    """
+
+    phase: float = 0.0
+    settled: bool = True
+    landings: int = -1
+    to_go: float = -1.0
+    floor: float = 0.0
+    stop_age: float = 0.0
+    stand: float = 1.0
+    spun: float = 0.0
+    laid: np.ndarray = field(default_factory=lambda: _feet())
+    toe_bend: np.ndarray = field(default_factory=lambda: _feet())
+    playing: tuple[str, float, Placement] | None = None
+    fading: tuple[str, float, Placement] | None = None
+    chooser: int | None = None
+    trace: tuple[np.ndarray, ...] | None = None
+    anchor: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
+    pins: np.ndarray = field(default_factory=lambda: _feet(3))
+    offset: np.ndarray = field(default_factory=lambda: _feet(3))
+    ball_offset: np.ndarray = field(default_factory=lambda: _feet(3))
+    released: np.ndarray = field(default_factory=lambda: _feet(value=1e9))
+    free_s: np.ndarray = field(default_factory=lambda: _feet(value=1e9))
+    let_go: np.ndarray = field(default_factory=lambda: _feet(3, value=-np.inf))
+    last: np.ndarray = field(default_factory=lambda: _feet(2, 3))
+    rise: np.ndarray = field(default_factory=lambda: _feet(3))
+    landed: np.ndarray = field(default_factory=_unturned)
+    landed_as: np.ndarray = field(default_factory=_unturned)
+    landed_spun: np.ndarray = field(default_factory=lambda: _feet())
+    across: np.ndarray = field(default_factory=lambda: _feet(3))
+    foot_turn: np.ndarray = field(default_factory=_unturned)
+    warned: bool = False
+
+    def restore(self, saved: LocomotionState) -> None:
+        """Become ``saved`` (a copy taken earlier) again, in place."""
+        for f in fields(self):
+            setattr(self, f.name, getattr(saved, f.name))
