@@ -35,7 +35,7 @@ TYPED_PLUGIN_MODULES = ["plugins/gaze/infuse_gaze", "plugins/gestures/infuse_ges
                         "plugins/saccade/infuse_saccade", "plugins/noise/infuse_noise",
                         "plugins/manipulation/infuse_manipulation", "plugins/reach/infuse_reach",
                         "plugins/ogre/infuse_ogre", "plugins/acclaim/infuse_acclaim", "plugins/tts_espeak/infuse_tts_espeak",
-                        "plugins/tts_file/infuse_tts_file", "plugins/nvbg/infuse_nvbg"]
+                        "plugins/tts_file/infuse_tts_file", "plugins/nvbg/infuse_nvbg", "plugins/locomotion/infuse_locomotion"]
 
 
 def test_the_typed_plugins_pass_mypy():

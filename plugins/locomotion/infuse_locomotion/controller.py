@@ -66,8 +66,10 @@ HOLD_S = 0.1
 STEP_ARC = 0.25
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
-#: Share of the slowest walk mixed into the moving clips' weights as the speed nears zero.
-SLOW_EPS = 1e-3
+#: Share of the moving clips (one minus the idle's) below which their blend turns smoothly into the
+#: slowest walk as the speed nears zero: renormalized alone, the blend would jump from the slowest walk
+#: to whichever clip the request first gives weight to (a turning walk's pose at the start of a turn).
+SLOW_RAMP = 0.2
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
 STOP_CADENCE = 1.2
@@ -340,7 +342,7 @@ class Locomotion(Controller):
         and no more than a stride later would need). Returns (frame, clip, placement) or None."""
         path = self.steering.path
         trace, st.trace = st.trace, None
-        if trace is None or st.waypoint != len(path) - 1:
+        if path is None or trace is None or st.waypoint != len(path) - 1:
             return None
         x, z, heading, speed, phase = trace
         last = path[-1]
@@ -425,7 +427,9 @@ class Locomotion(Controller):
             st.fading = None
         if not mixing.size:
             return part
-        rot, root, jt, contact, forward, spun = (None if a is None else np.array(a) for a in part)
+        rot, root, jt, contact, forward, spun = part
+        rot, root, contact, forward = np.array(rot), np.array(root), np.array(contact), np.array(forward)
+        jt = None if jt is None else np.array(jt)
         was = self._played(b, LocomotionState(), clip, place, local[mixing])
         on = transitions.handover_s(clip, fps)
         w = footing.smoothstep((local[mixing] - on) / max(clip.duration - on, 1e-9))
@@ -480,7 +484,9 @@ class Locomotion(Controller):
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
         wm = np.where(b.idle[None], 0.0, w)
-        wm = (wm + SLOW_EPS * b.slowest[None]) / (wm.sum(axis=1) + SLOW_EPS)[:, None]  # the slowest walk when standing
+        moving = wm.sum(axis=1)
+        near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
+        wm = near * wm / np.maximum(moving, 1e-12)[:, None] + (1.0 - near) * b.slowest[None]
         period = np.maximum(wm @ b.durations, 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
                                                         _settle_phases(b, wm))
@@ -836,14 +842,14 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
     stance_feet = floors = None
-    walking = [i for i in np.argsort(np.where(idle, np.inf, speeds)) if events[i] is not None and not idle[i]]
+    walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
             m, frames = motions[int(np.argmax(idle))], np.zeros(2, dtype=np.int64)
         else:
-            i = int(walking[0])
+            i, slowest_events = walking[0]
             m = motions[i]
-            flat = np.mod(0.5 * (events[i][:, 1] + events[i][:, 2]), 1.0)
+            flat = np.mod(0.5 * (slowest_events[:, 1] + slowest_events[:, 2]), 1.0)
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
         floors = _floors(sk, legs, m, frames, leg_length)
         if all(leg[3] is not None for leg in legs):

@@ -138,7 +138,7 @@ def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.nd
     flat_x = x.reshape(-1, 5)
     x0, x1 = flat_x[rows, seg], flat_x[rows, seg + 1]
     y = y.reshape(y.shape[:y.ndim - theirs.ndim + 1] + (-1, 5))  # ([U,] feet, 5), one foot's row when alone
-    foot = rows % y.shape[-2]
+    foot = rows % y.shape[y.ndim - 2]
     y0, y1 = y[..., foot, seg], y[..., foot, seg + 1]
     frac = np.clip((p - x0) / np.maximum(x1 - x0, 1e-9), 0.0, 1.0)
     return np.mod(y0 + frac * (y1 - y0), 1.0)

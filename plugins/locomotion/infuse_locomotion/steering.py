@@ -110,7 +110,7 @@ class Steering:
                 if asked > limit + 1e-3 and state.capped is None:
                     state.capped = (asked, limit, direction)
                 asked = min(asked, limit)
-            if self.path is None:
+            if path is None:
                 v_goal, w_goal = asked, turn_rate_at(t)
             else:
                 # Advance along the path while the next point is within the look-ahead distance.

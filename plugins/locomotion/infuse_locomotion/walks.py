@@ -16,13 +16,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from infuse import quaternions as quat
 from infuse.bml.model import BEHAVIOR_DEGRADED
-from infuse.runtime import Clip
+from infuse.runtime import Activity, Clip
 
 from .state import LocomotionState
 from .steering import SteeringState
@@ -44,10 +43,10 @@ class Walk:
     the frame at which to see whether it stands still, the idle that took over, and the steering's
     state planned for its end (in the character's own frame)."""
 
-    activity: Any
+    activity: Activity
     end_s: float
     check_frame: int
-    settled: Any = None
+    settled: Activity | None = None
     final: SteeringState | None = None
 
 
@@ -61,7 +60,7 @@ class Walks:
     def __init__(self, stage):
         self.stage = stage
         self.walks: dict[str, list[Walk]] = {}
-        self._handovers: list[tuple[int, object, object]] = []
+        self._handovers: list[tuple[int, Activity, Activity | None]] = []
 
     def priority(self, name: str) -> int:
         """The base-layer priority of the character's next walk."""
