@@ -1,6 +1,7 @@
 """What controllers keep for a character is owned by what it serves: a gaze's turn and the face channels
-a face expression detects by the runtime that plays the character, the packs a gesture or a posture
-infuses by the character's asset (every scene playing a character made of it shares them), a clip's
+a face expression detects by the runtime that plays the character, the packs a gesture, a posture or a
+walk infuses and what a walk prepares of its pack by the character's asset (every scene playing a
+character made of it shares them), a clip's
 interpolation table by the clip. When the runtime and the character go, all of it goes, and no module of
 infuse holds more than before."""
 from __future__ import annotations
@@ -19,6 +20,8 @@ from infuse_gaze import Gaze
 from infuse_gaze.binding import GazeState
 from infuse_gestures.controller import Gesture
 from infuse_lipsync.controllers import FaceChannelsByMap, FaceExpression, face_channels
+from infuse_locomotion import Locomotion
+from infuse_locomotion.controller import PreparedWalks
 from infuse_postures.controller import Posture
 from infuse_reach.controller import Reach
 
@@ -40,13 +43,14 @@ def sway(skeleton, frames: int = 31, fps: float = 30.0) -> Motion:
 
 def play(names: tuple[str, ...], characters: dict | None = None) -> Runtime:
     """A runtime at 24 fps (the 30 fps clips are interpolated) whose characters (new ones, or those of
-    ``characters`` by name) sway in a clip of their own, gesture, stand in a posture, look at a point
-    and smile, for SECONDS."""
+    ``characters`` by name) sway in a clip of their own, walk half a metre, gesture, stand in a posture,
+    look at a point and smile, for SECONDS."""
     rt = Runtime(fps=24.0)
     for k, name in enumerate(names):
         character = (characters or {}).get(name) or synthetic_character(name, morphs=SMILE)
         rt.add_character(character, position=(1.5 * k, 0.0, 0.0))
         rt.activate(name, Clip(sway(character.skeleton), loop=True), 0.0)
+        rt.activate(name, Locomotion("locomotion-male", target=(0.0, 0.5)), 0.0, priority=1)
         rt.activate(name, Posture("hands_on_hips"), 0.0)
         rt.activate(name, Gesture("beat_small_right"), 0.2)
         rt.activate(name, Gaze((1.0, 1.6, 2.0)), 0.0)
@@ -59,14 +63,18 @@ def test_a_runtime_s_caches_go_when_it_goes():
     rt = play(("ann",))
     assert rt.motion("ann").morph_weights.max() > 0.5  # it smiled
     rig = rt.rig("ann")
-    states = [rig.asset_state_of(InfusedSpaces), rig.state_of(GazeState), rig.state_of(FaceChannelsByMap)]
-    assert sorted(states[0]) == ["gestures", "postures"] and len(states[2]) == 1  # filled while playing, not made here
+    states = [rig.asset_state_of(InfusedSpaces), rig.state_of(GazeState), rig.state_of(FaceChannelsByMap),
+              rig.asset_state_of(PreparedWalks)]
+    # Filled while playing, not made here.
+    assert sorted(states[0]) == ["gestures", "locomotion-male", "postures"] and len(states[2]) == 1 and len(states[3]) == 1
     assert np.any(states[1].groups != 0.0)
     packs = [space for _, space in states[0].values()]
+    (walk,) = [a for a in rt.activities if isinstance(a.controller, Locomotion)]
+    assert walk.binding is next(iter(states[3].values()))[2]  # the walk played what the asset keeps
     clip = next(a.controller.motion for a in rt.activities if isinstance(a.controller, Clip))
     table = continuous_rotations(clip)
-    refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[2].values(), clip, table)]
-    del rt, rig, states, packs, clip, table
+    refs = [weakref.ref(x) for x in (rt, rig, *states, *packs, *states[2].values(), walk.binding, clip, table)]
+    del rt, rig, states, packs, walk, clip, table
     gc.collect()
     assert [r() for r in refs if r() is not None] == []
 
@@ -109,11 +117,14 @@ def test_runtimes_playing_characters_of_one_asset_share_its_infused_packs():
     first, second = play(("ann",), {"ann": ann}), play(("ann",), {"ann": again})
     spaces = [rt.rig("ann").asset_state_of(InfusedSpaces)["gestures"][1] for rt in (first, second)]
     assert spaces[0] is spaces[1]
+    walks = [next(a.binding for a in rt.activities if isinstance(a.controller, Locomotion)) for rt in (first, second)]
+    assert walks[0] is walks[1]  # the walk prepared once for the asset
     assert first.rig("ann").state_of(GazeState) is not second.rig("ann").state_of(GazeState)
     kept = weakref.ref(spaces[0])
-    del first, second, spaces, ann, again
+    prepared = weakref.ref(walks[0])
+    del first, second, spaces, walks, ann, again
     gc.collect()
-    assert kept() is None
+    assert kept() is None and prepared() is None
 
 
 def test_a_reaching_pack_is_infused_once_for_the_asset():
