@@ -140,3 +140,25 @@ def test_mesh_gives_heel_and_tip(tmp_path):
     g_out, _ = motion_fk(written)
     pop = metrics.popping(g_src, joint_index(clip.skeleton, s_map), g_out, joint_index(asset.skeleton, mapping))
     assert pop.ok, pop
+
+
+def test_sole_points_of_a_shoe():
+    """A box-shaped shoe on a turned ankle: the heel and tip are the box's back and front at its
+    bottom, midway across, in the ankle's frame; a vertex the foot holds under half of is not the
+    shoe's."""
+    from infuse.mesh import SkinnedMesh, rigid_matrices, sole_points
+
+    corners = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (0.0, 0.1) for z in (-0.05, 0.2)])
+    stray = np.array([[0.0, -0.3, 0.5]])  # held 0.4 by the foot, 0.6 by the shin
+    positions = np.concatenate([corners, stray]).astype(np.float32)
+    rotations = np.array([[0.0, 0.0, 0.0, 1.0], quat.from_axis_angle(np.array([1.0, 0.0, 0.0]), np.pi / 2)])
+    joint_positions = np.array([[0.0, 0.5, 0.0], [0.01, 0.08, 0.0]])  # shin, ankle; the mesh bound as posed
+    binds = np.stack([np.linalg.inv(m) for m in rigid_matrices(rotations, joint_positions)])
+    mesh = SkinnedMesh("shoe", positions, np.tile([0.0, 1.0, 0.0], (9, 1)).astype(np.float32),
+                       np.array([[0, 1, 2]], dtype=np.int32), np.tile([1, 0], (9, 1)).astype(np.int32),
+                       np.array([[1.0, 0.0]] * 8 + [[0.4, 0.6]], dtype=np.float32), np.array([0, 1]), binds)
+    points = sole_points([mesh], rotations, joint_positions, [1], 1, np.array([0.0, 0.3, 2.0]))
+    expected = quat.rotate(quat.conjugate(rotations[1]), np.array([[0.0, 0.0, -0.05], [0.0, 0.0, 0.2]]) - joint_positions[1])
+    np.testing.assert_allclose(points, expected, atol=1e-6)
+    assert sole_points([mesh], rotations, joint_positions, [0], 1, np.array([0.0, 0.0, 1.0])) is not None  # the stray
+    assert sole_points([], rotations, joint_positions, [1], 1, np.array([0.0, 0.0, 1.0])) is None
