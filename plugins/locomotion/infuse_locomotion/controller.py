@@ -69,7 +69,7 @@ STAND_FRACTION = 0.2
 #: Share of the moving clips (one minus the idle's) below which their blend turns smoothly into the
 #: slowest walk as the speed nears zero: renormalized alone, the blend would jump from the slowest walk
 #: to whichever clip the request first gives weight to (a turning walk's pose at the start of a turn).
-SLOW_RAMP = 0.2
+SLOW_RAMP = 0.1
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
 STOP_CADENCE = 1.2
