@@ -12,8 +12,10 @@ import pytest
 
 import infuse
 from infuse import metrics, quaternions as quat
+from infuse.canonical import canonical_skeleton
 from infuse.cli import main
 from infuse.contacts import feet, joint_index, lowest_points
+from infuse.errors import MissingFeatureError
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse_retarget import RetargetPlan, retarget_clip
@@ -162,3 +164,14 @@ def test_sole_points_of_a_shoe():
     np.testing.assert_allclose(points, expected, atol=1e-6)
     assert sole_points([mesh], rotations, joint_positions, [0], 1, np.array([0.0, 0.0, 1.0])) is not None  # the stray
     assert sole_points([], rotations, joint_positions, [1], 1, np.array([0.0, 0.0, 1.0])) is None
+
+
+@pytest.mark.parametrize("failure", [ValueError("bad accessor"), MissingFeatureError("x.glb", "Draco-compressed")])
+def test_a_character_whose_meshes_cannot_be_decoded_still_retargets_without_soles(failure):
+    from infuse_retarget.command import _meshes_if_readable
+
+    def broken():
+        raise failure
+
+    asset = infuse.Asset(None, "synthetic", canonical_skeleton(), mesh_loader=broken)
+    assert _meshes_if_readable(asset) == ()

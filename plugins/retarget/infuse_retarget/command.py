@@ -44,6 +44,15 @@ def add_arguments(p) -> None:
     add_read_options(p)
 
 
+def _meshes_if_readable(character) -> tuple:
+    """The character's meshes (soles of feet without a ball joint), or none when they cannot be decoded: a
+    skeleton-only output (``.bvh``) never needed them, and a ``.glb`` output reports them when it writes."""
+    try:
+        return character.meshes
+    except (InputError, UnusableInputError):  # malformed, or compressed with a codec not installed
+        return ()
+
+
 def _clip(asset, name, path):
     if not asset.motions:
         raise UnusableInputError(path, "has no motion clip to retarget")
@@ -81,7 +90,7 @@ def run(args) -> int:
     target_clip = next(iter(character.motions.values()), None)
     plan = RetargetPlan(clip.skeleton, src_map, character.skeleton, tgt_map, source_motion=clip,
                         target_motion=target_clip, source_file=motion_path, target_file=args.character,
-                        target_meshes=character.meshes)
+                        target_meshes=_meshes_if_readable(character))
     result = retarget_clip(plan, clip, ik=args.ik, limb_scaling=args.limb_scaling)
     name = args.name or clip.name or motion_path.stem
     motion = carry_morph_weights(result.motion.replace(name=name), clip, character.morph_targets)
