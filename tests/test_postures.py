@@ -24,7 +24,7 @@ from infuse.scene import Scene
 
 from corpus_data import corpus_file
 from infuse.packs import space_on
-from infuse_postures.controller import PostureState
+from infuse_postures.controller import Posture, PostureState
 from runtime_characters import corpus_character
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -60,8 +60,27 @@ def test_each_posture_stands_on_the_shared_footprints_and_loops(body, spec):
         assert reach.max() <= LEG_REACH * body.leg + 1e-6  # the knee never locks
     assert np.abs(motion.local_rotations[0] - motion.local_rotations[-1]).max() < 1e-9  # a seamless loop
     assert np.abs(motion.root_translations[0] - motion.root_translations[-1]).max() < 1e-9
-    sway = np.ptp(motion.root_translations[:, [0, 2]], axis=0)
-    assert 0.005 < sway.max() < 0.04  # the idle shifts the weight, a little
+    # The idle shifts the weight, a little; seated, the pelvis stays on the seat and the chest sways.
+    swaying = g_pos[:, body.i("spine3")] if spec.seated else motion.root_translations
+    sway = np.ptp(swaying[:, [0, 2]], axis=0)
+    assert 0.005 < sway.max() < 0.04
+
+
+@pytest.mark.parametrize("spec", [s for s in SPECS if s.seated], ids=lambda s: s.name)
+def test_seated_postures_sit_on_a_seat_of_knee_height_with_the_hands_on_the_thighs(body, spec):
+    motion = posture_motion(body, spec)
+    _, g_pos = forward_kinematics(body.skeleton, motion.local_rotations, motion.root_translations)
+    for side in "lr":
+        hip, knee, ankle = (g_pos[:, body.i(f"{side}_{j}")] for j in ("hip", "knee", "ankle"))
+        assert np.abs(hip[:, 1] - knee[:, 1]).max() < 0.01  # the thigh level on the seat
+        shin = knee - ankle
+        assert np.degrees(np.arctan2(np.linalg.norm(shin[:, [0, 2]], axis=-1), shin[:, 1])).max() < 8.0  # upright
+        # The wrist over the thigh (from the hip to a little past the knee), 9.5-15 cm above its bone: on it, not in it.
+        along = knee - hip
+        u = np.sum((g_pos[:, body.i(f"{side}_wrist")] - hip) * along, axis=-1) / np.sum(along * along, axis=-1)
+        off = g_pos[:, body.i(f"{side}_wrist")] - (hip + u[:, None] * along)
+        assert np.all((0.0 < u) & (u < 1.25)), (side, u.min(), u.max())
+        assert np.all((0.095 < off[:, 1]) & (off[:, 1] < 0.15) & (np.linalg.norm(off[:, [0, 2]], axis=-1) < 0.06)), side
 
 
 @pytest.mark.parametrize("spec", [s for s in SPECS if s.arms], ids=lambda s: s.name)
@@ -69,9 +88,18 @@ def test_placed_hands_are_where_the_posture_puts_them(body, spec):
     motion = posture_motion(body, spec)
     g_rot, g_pos = forward_kinematics(body.skeleton, motion.local_rotations, motion.root_translations)
     for side, place in spec.arms.items():
-        frame = body.i("spine3" if place.frame == "chest" else "base")
-        wrist = quat.rotate(quat.conjugate(g_rot[:, frame]), g_pos[:, body.i(f"{side}_wrist")] - g_pos[:, frame])
         wanted = np.asarray(place.wrist) * np.array([1.0 if side == "l" else -1.0, 1.0, 1.0])
+        if place.frame == "thigh":  # +Z from the hip to the knee, +X across, +Y up off the thigh
+            hip, knee = g_pos[:, body.i(f"{side}_hip")], g_pos[:, body.i(f"{side}_knee")]
+            z = (knee - hip) / np.linalg.norm(knee - hip, axis=-1, keepdims=True)
+            x = quat.rotate(g_rot[:, body.i("base")], np.array([1.0, 0.0, 0.0]))
+            x = x - np.sum(x * z, axis=-1, keepdims=True) * z
+            x /= np.linalg.norm(x, axis=-1, keepdims=True)
+            d = g_pos[:, body.i(f"{side}_wrist")] - hip
+            wrist = np.stack([np.sum(d * a, axis=-1) for a in (x, np.cross(z, x), z)], axis=-1)
+        else:
+            frame = body.i("spine3" if place.frame == "chest" else "base")
+            wrist = quat.rotate(quat.conjugate(g_rot[:, frame]), g_pos[:, body.i(f"{side}_wrist")] - g_pos[:, frame])
         assert np.linalg.norm(wrist - wanted, axis=-1).max() < 0.002, side
 
 
@@ -109,6 +137,14 @@ def schedule(body: str):
     ('<torso id="t" lexeme="BodyRecline"/>', "leaning_back"),
     ('<gesture id="g" lexeme="ArmsCrossed" start="0" end="4"/>', "arms_crossed"),  # postures given as gestures
     ('<gesture id="g" lexeme="HandsTogether"/>', "hands_clasped"),
+    ('<postureShift id="p"><stance type="SITTING"/></postureShift>', "sitting"),
+    ('<posture id="p"><stance type="SITTING"/><pose part="ARMS" lexeme="HANDS_ON_LAP"/></posture>', "sitting_hands_on_lap"),
+    ('<postureShift id="p"><stance type="SITTING"/><pose part="WHOLEBODY" lexeme="FOREARMS_ON_THIGHS"/></postureShift>',
+     "sitting_leaning_forward"),
+    ('<postureShift id="p"><stance type="SITTING"/><pose part="WHOLEBODY" lexeme="LEANING_FORWARD"/></postureShift>',
+     "sitting_leaning_forward"),  # with a stance, only that stance's postures
+    ('<gesture id="g" lexeme="rest=Lap" start="0" end="2"/>', "sitting_hands_on_lap"),  # Greta's rest positions
+    ('<gesture id="g" lexeme="UnderTable"/>', "sitting_hands_on_lap"),
 ])
 def test_bml_names_map_to_the_packs_postures(body, posture):
     (activation,), warnings = schedule(body)
@@ -119,14 +155,22 @@ def test_bml_names_map_to_the_packs_postures(body, posture):
 
 def test_unknown_names_and_other_stances_warn_at_scheduling_naming_the_postures():
     activations, warnings = schedule('<postureShift id="p1"><stance type="STANDING"/><pose part="ARMS" lexeme="JUGGLING"/>'
-                                     '</postureShift><postureShift id="p2" start="2"><stance type="SITTING"/></postureShift>'
-                                     '<torso id="t1" start="4" lexeme="Twisted_Sideways"/>')
+                                     '</postureShift><postureShift id="p2" start="2"><stance type="CROUCHING"/></postureShift>'
+                                     '<torso id="t1" start="4" lexeme="Twisted_Sideways"/>'
+                                     '<postureShift id="p3" start="6"><stance type="SITTING"/><pose part="ARMS" '
+                                     'lexeme="ARMS_AKIMBO"/></postureShift><gesture id="g1" start="8" lexeme="allright_Pos_B"/>')
     by_id = {w.id: w.description for w in warnings}
     assert "JUGGLING" in by_id["b1:p1"] and "arms_crossed (ARMS_CROSSED" in by_id["b1:p1"]
-    assert "SITTING" in by_id["b1:p2"] and "stands" in by_id["b1:p2"]
+    assert "CROUCHING" in by_id["b1:p2"] and "STANDING and SITTING" in by_id["b1:p2"]
     assert "Twisted_Sideways" in by_id["b1:t1"] and "hands_on_hips" in by_id["b1:t1"]
+    # A standing pose with a sitting stance: the sitting postures are listed, and it sits upright.
+    assert "no sitting posture" in by_id["b1:p3"] and "sitting_hands_on_lap (" in by_id["b1:p3"]
+    assert "hands_on_hips" not in by_id["b1:p3"]
+    # Greta's rest position whose name is no posture: the neutral rest, said so.
+    assert "allright_Pos_B" in by_id["b1:g1"] and "neutral" in by_id["b1:g1"]
     postures = {a.behaviour: a.parameters.get("posture") for a in activations}
-    assert postures == {"p1": "neutral", "p2": None, "t1": None}  # standing, the pose unknown: the neutral stance
+    # The pose unknown: the stance's plain posture.
+    assert postures == {"p1": "neutral", "p2": None, "t1": None, "p3": "sitting", "g1": "neutral"}
 
 
 # -- on characters ------------------------------------------------------------------------------------------
@@ -321,7 +365,8 @@ def test_forearms_and_hands_stay_out_of_the_torso(key):
     character = corpus_character(key)
     rt = Runtime(fps=FPS)
     rt.add_character(character, "bob")
-    space = space_on(rt.rig("bob"), "postures")
-    for name, clip in space.clips.items():
-        deepest = max(penetration_m(character, clip.motion, f) for f in range(0, clip.motion.num_frames, 40))
+    rig = rt.rig("bob")
+    for name in space_on(rig, "postures").clips:
+        motion = Posture(name).bind(rig, None).motion  # as it plays: a hand resting on a thigh put there
+        deepest = max(penetration_m(character, motion, f) for f in range(0, motion.num_frames, 40))
         assert deepest < 0.025, (name, deepest)  # skin against skin at most: hands on the hips, clasped, crossed arms

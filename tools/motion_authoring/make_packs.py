@@ -144,7 +144,7 @@ def make_gestures(body: Body) -> Path:
 
 
 def make_postures(body: Body) -> Path:
-    """The postures pack: each standing posture's looping idle, the BML lexemes it realizes as tags."""
+    """The postures pack: each standing or seated posture's looping idle, the BML lexemes it realizes as tags."""
     folder = pack_folder("postures")
     entries = []
     for spec, motion in posture_clips(body):
@@ -153,8 +153,9 @@ def make_postures(body: Body) -> Path:
                         "tags": list(dict.fromkeys([spec.name, *(lexeme.lower() for lexeme in spec.lexemes)])), "loop": True})
     write_clip(body, infuse.Motion.rest_pose(body.skeleton, name="rest"), folder / "skeleton.bvh")
     pack = {"name": "postures", "version": "1.0.0", "kind": "posture", "skeleton": "skeleton.bvh", "analysis": "analysis.json",
-            "description": "standing postures with their idles: neutral, weight on the left or right leg, arms crossed, "
-                           "hands on hips, behind the back or clasped, leaning forward or back (procedural)"}
+            "description": "standing and seated postures with their idles: neutral, weight on the left or right leg, arms "
+                           "crossed, hands on hips, behind the back or clasped, leaning forward or back; sitting upright, "
+                           "hands on the lap, leaning forward with the forearms on the thighs (procedural)"}
     return write_manifest(folder / "manifest.toml", pack, entries)
 
 

@@ -1,18 +1,22 @@
-"""Procedural standing postures on the canonical skeleton, each a looping idle.
+"""Procedural standing and seated postures on the canonical skeleton, each a looping idle.
 
 A posture is a stance of the whole body: the pelvis over the feet (the weight on both legs or on
 one, the free side's hip lower and its knee bent), the trunk upright or leaning (the hips going back
 as the trunk leans forward, the head keeping the gaze ahead), and the arms hanging or placed:
-crossed on the chest, hands on the hips, behind the back or clasped in front. Every posture stands
-on the same footprints, so any two blend with the feet planted.
+crossed on the chest, hands on the hips, behind the back or clasped in front. A seated posture sits
+on a seat of the body's own knee height: the hip joints at the knees' height, the thighs level on the
+seat, the shins upright and the feet flat; its hands rest on the thighs or the lap. Every posture,
+standing or seated, has its feet on the same footprints, so any two blend with the feet planted (from
+standing to seated the hips go down and back).
 
 Its idle, over one loop of :data:`LOOP_S` seconds: a slow weight shift from side to side, a smaller
 sway forward and back and a slight turn of the pelvis, the trunk and head following a little. No
 breathing: the breathing controller adds it on top. Legs by two-bone IK onto the footprints; placed
 arms by two-bone IK onto wrist places given in the chest's or the pelvis's frame (so they follow the
-trunk), the hand turned to a finger direction and palm normal, the forearm taking the hand's twist
-about itself. Arm places are written for the left arm (+X out to the hand's side, +Y up, +Z forward);
-the right arm mirrors them unless given its own.
+trunk) or in the thigh's (so a hand lies on it), the hand turned to a finger direction and palm normal,
+the forearm taking the hand's twist about itself. Arm places are written for the left arm (+X out to
+the hand's side, +Y up, +Z forward; in a thigh's frame +Z runs from the hip to the knee and +Y is up
+off the thigh); the right arm mirrors them unless given its own.
 """
 from __future__ import annotations
 
@@ -42,12 +46,20 @@ SWAY_FORWARD_M = 0.005
 SWAY_TURN = np.radians(1.2)
 #: The longest a standing leg may be, leg lengths (the knee never locks fully straight).
 LEG_REACH = 0.985
+#: A seated pelvis's tilt back (radians) and its idle turn's share of a standing one's.
+SEATED_TILT = np.radians(-10.0)
+SEATED_TURN = 0.3
+#: A seated trunk's idle sway from side to side (radians; half as much forward and back): the pelvis stays on the seat.
+SEATED_SWAY = np.radians(4.5)
+#: The lexeme every seated posture carries (the first seated posture is BML 1.0's ``SITTING`` stance alone).
+SEATED = "SEATED"
 
 
 @dataclass(frozen=True)
 class ArmPlace:
     """Where one hand rests: ``wrist`` (3,) metres from the ``frame`` joint (``"chest"``: spine3,
-    ``"pelvis"``: base), in that joint's frame and left-arm coordinates; the hand's ``fingers``
+    ``"pelvis"``: base, ``"thigh"``: the arm's side's hip joint, +Z toward its knee), in that frame and
+    left-arm coordinates; the hand's ``fingers``
     direction and ``palm`` normal in the same frame; ``elbow`` the direction the elbow bends toward;
     ``shape`` a finger shape of :data:`~.gestures.SHAPES`."""
 
@@ -63,7 +75,7 @@ class ArmPlace:
 class PostureSpec:
     """A posture: ``weight`` on the legs (-1 all on the right, +1 all on the left), the trunk's ``lean``
     (radians, + forward), the ``arms`` (side ``"l"``/``"r"`` -> :class:`ArmPlace`; a side left out
-    hangs), the ``sway`` scale of its idle and the BML ``lexemes`` it realizes."""
+    hangs), the ``sway`` scale of its idle, whether it is ``seated`` and the BML ``lexemes`` it realizes."""
 
     name: str
     lexemes: tuple
@@ -71,6 +83,7 @@ class PostureSpec:
     lean: float = 0.0
     arms: dict = field(default_factory=dict)
     sway: float = 1.0
+    seated: bool = False
 
 
 def _both(place: ArmPlace) -> dict:
@@ -104,6 +117,19 @@ SPECS = (
                                     "INTERESTED"), lean=np.radians(14.0), sway=0.7),
     PostureSpec("leaning_back", ("LEANING_BACKWARD", "LEANING_BACK", "LEAN_BACK", "LEAN_BACKWARD", "BACKWARD", "RECLINE",
                                  "BODYRECLINE", "RECLINED"), lean=np.radians(-9.0), sway=0.7),
+    # Seated: a standing posture's lexeme names the seated posture like it when the stance is SITTING.
+    PostureSpec("sitting", ("SITTING", SEATED, "SIT", "SITTING_UPRIGHT", "SIT_UPRIGHT", "SEATED_UPRIGHT", "HANDS_ON_THIGHS",
+                            "HANDS_ON_KNEES", "NEUTRAL", "ARMS_NEUTRAL", "REST", "IDLE", "DEFAULT"), sway=0.5, seated=True,
+                arms=_both(ArmPlace("thigh", (0.005, 0.12, 0.2), (-0.1, 0.0, 1.0), (0.0, -1.0, 0.0), (0.6, -0.3, -1.0), "open"))),
+    PostureSpec("sitting_hands_on_lap", ("HANDS_ON_LAP", "HANDS_IN_LAP", SEATED, "LAP", "REST_LAP", "UNDERTABLE",
+                                         "UNDER_TABLE", "HANDS_UNDER_TABLE", "HANDS_CLASPED", "HANDS_TOGETHER", "HANDS_FOLDED",
+                                         "HANDS_IN_FRONT"), sway=0.5, seated=True,
+                arms=_both(ArmPlace("thigh", (-0.035, 0.1, 0.22), (-0.45, -0.05, 0.9), (0.0, -1.0, 0.0), (0.7, -0.3, -1.0), "open"))),
+    PostureSpec("sitting_leaning_forward", ("SITTING_LEANING_FORWARD", SEATED, "SIT_LEANING_FORWARD", "SEATED_LEANING_FORWARD",
+                                            "FOREARMS_ON_THIGHS", "ELBOWS_ON_KNEES", "SITTING_FORWARD", "LEANING_FORWARD",
+                                            "LEAN_FORWARD", "LEANING_IN", "LEAN_IN", "FORWARD", "INTERESTED"),
+                lean=np.radians(68.0), sway=0.6, seated=True,
+                arms=_both(ArmPlace("thigh", (-0.03, 0.14, 0.5), (-0.45, -0.55, 0.7), (0.2, -1.0, 0.0), (0.6, -0.6, -1.2)))),
 )
 
 
@@ -133,6 +159,19 @@ def _pelvis(spec: PostureSpec, t: np.ndarray, height: float) -> tuple[np.ndarray
     return pos, quat.multiply(quat.multiply(rot(Y, turn), rot(Z, roll)), rot(X, np.full_like(t, tilt)))
 
 
+def _seated_pelvis(body: Body, spec: PostureSpec, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A seated pelvis's positions (F, 3) and global rotations (F, 4) at times ``t`` (seconds): the hip joints
+    at the knees' height (the shins upright over the footprints, the thighs level on the seat), tilted back
+    by :data:`SEATED_TILT` and forward with the trunk's lean, turning a little with the idle."""
+    w = 2.0 * np.pi * t / LOOP_S
+    ankle = footprints(body)["l"][0]
+    hips = np.array([0.0, ankle[1] + body.shin, ankle[2] - body.thigh])
+    turn = SEATED_TURN * spec.sway * SWAY_TURN * np.sin(w + 2.1)
+    base_rot = quat.multiply(rot(Y, turn), rot(X, np.full_like(t, SEATED_TILT + 0.35 * spec.lean)))
+    rest_hips = 0.5 * (body.rest("l_hip") + body.rest("r_hip")) - body.rest("base")
+    return hips - quat.rotate(base_rot, rest_hips), base_rot
+
+
 def _legs(body: Body, base_pos: np.ndarray, base_rot: np.ndarray, globals_: dict) -> float:
     """Leg global rotations onto the footprints, written into ``globals_``; returns the longest hip-to-ankle
     distance over the leg's length."""
@@ -150,11 +189,16 @@ def _legs(body: Body, base_pos: np.ndarray, base_rot: np.ndarray, globals_: dict
 
 def _trunk(spec: PostureSpec, t: np.ndarray, base_rot: np.ndarray, globals_: dict) -> None:
     """Spine, neck and head global rotations into ``globals_``: the thorax leans by ``spec.lean``, counters
-    the pelvis's roll and sways a little; the head turns back most of the lean to look ahead."""
+    the pelvis's roll and sways a little (seated, by :data:`SEATED_SWAY`); the head turns back most of the
+    lean to look ahead."""
     w = 2.0 * np.pi * t / LOOP_S
     roll = -0.7 * spec.weight * WEIGHT_ROLL + spec.sway * np.radians(0.6) * np.sin(3.0 * w + 0.4)
     twist = -0.5 * spec.sway * SWAY_TURN * np.sin(w + 2.1)
-    thorax = quat.multiply(quat.multiply(rot(Y, twist), rot(Z, roll)), rot(X, np.full_like(t, spec.lean)))
+    pitch = np.full_like(t, spec.lean)
+    if spec.seated:
+        roll = roll + spec.sway * SEATED_SWAY * np.sin(w)
+        pitch = pitch + 0.5 * spec.sway * SEATED_SWAY * np.sin(2.0 * w + 0.9)
+    thorax = quat.multiply(quat.multiply(rot(Y, twist), rot(Z, roll)), rot(X, pitch))
     part = power(quat.multiply(quat.conjugate(base_rot), thorax), 1.0 / 3.0)
     g1 = quat.multiply(base_rot, part)
     g2 = quat.multiply(g1, part)
@@ -170,9 +214,18 @@ def _place_arm(body: Body, local: np.ndarray, root: np.ndarray, side: str, place
     hand turned as given, the forearm taking the hand's twist about it, the fingers shaped."""
     sk = body.skeleton
     g_rot, g_pos = forward_kinematics(sk, local, root)
-    frame = body.i("spine3" if place.frame == "chest" else "base")
-    r_frame = g_rot[:, frame]
-    wrist = g_pos[:, frame] + quat.rotate(r_frame, _mirror(place.wrist, side))
+    if place.frame == "thigh":
+        hip, knee = g_pos[:, body.i(f"{side}_hip")], g_pos[:, body.i(f"{side}_knee")]
+        along = (knee - hip) / np.linalg.norm(knee - hip, axis=-1, keepdims=True)
+        across = quat.rotate(g_rot[:, body.i("base")], X)
+        across = across - np.sum(across * along, axis=-1, keepdims=True) * along
+        across /= np.linalg.norm(across, axis=-1, keepdims=True)
+        origin = hip
+        r_frame = quat.from_matrix(np.stack((across, np.cross(along, across), along), axis=-1))
+    else:
+        frame = body.i("spine3" if place.frame == "chest" else "base")
+        origin, r_frame = g_pos[:, frame], g_rot[:, frame]
+    wrist = origin + quat.rotate(r_frame, _mirror(place.wrist, side))
     pole = quat.rotate(r_frame, _mirror(place.elbow, side))
     s_i, e_i, f_i, w_i = (body.i(f"{side}_{j}") for j in ("shoulder", "elbow", "forearm", "wrist"))
     rest_upper = body.offset(f"{side}_elbow")
@@ -197,7 +250,7 @@ def posture_motion(body: Body, spec: PostureSpec, name: str | None = None) -> Mo
     t = np.arange(n + 1) / FPS
     height = body.rest("base")[1] - 0.012
     for _ in range(60):  # lower the pelvis until both legs reach their footprints with the knees unlocked
-        base_pos, base_rot = _pelvis(spec, t, height)
+        base_pos, base_rot = _seated_pelvis(body, spec, t) if spec.seated else _pelvis(spec, t, height)
         globals_ = {"base": base_rot}
         if _legs(body, base_pos, base_rot, globals_) <= LEG_REACH:
             break

@@ -3,9 +3,13 @@ their timing is known, otherwise typical gesture phase durations.
 
 A ``<gesture lexeme>`` (or ``name``) the character has no clip of that name for is looked up in the
 installed ``gestures`` pack (:mod:`.gesture_lexicon`; then its ``type``) and timed by that gesture's phases; ``amplitude`` (1: as
-authored), ``speed`` (1: as authored) and ``repeats`` (strokes) shape it. A lexeme the pack does not
-know warns here, naming it."""
+authored), ``speed`` (1: as authored) and ``repeats`` (strokes) shape it. A lexeme naming a posture of the
+``postures`` pack holds it over the gesture's span, and so does one naming a position the hands rest in
+(Greta's ``rest=Lap``, ``allright_Pos_B``): the pack's posture of that name, else the neutral rest. A
+lexeme the pack does not know warns here, naming it."""
 from __future__ import annotations
+
+import re
 
 from infuse.bml import BehaviourError, BehaviourPlan, TimingModel
 
@@ -24,6 +28,8 @@ GESTURE_ATTRIBUTES = {"lexeme", "mode", "type", "name", "emotion", "target", "po
                       "speed", "repeats"} | with_sbm(
     "joint-range", "frequency", "scale", "additive", "priority")
 ANIMATION_ATTRIBUTES = {"name", "speed"} | with_sbm("speed", "additive", "joint-range", "priority")
+#: Greta's lexemes of a position the hands rest in, not a stroke: ``rest=NAME`` and ``NAME_Pos_VARIANT``.
+REST_POSITION = re.compile(r"^rest=(?P<rest>.+)$|^(?P<position>.+)_Pos_[A-Za-z0-9]+$", re.IGNORECASE)
 BLEND_ATTRIBUTES = {"name", "x", "y", "z"} | with_sbm("wrap-mode", "schedule-mode", "blend-mode", "partial-joint")
 
 
@@ -54,7 +60,7 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
         if found is not None:
             return _pack_gesture(behaviour, lexeme or clip, found, hold, notes, target,
                                  mode is None and gesture_lexicon.named_hand(lexeme or clip) is None)
-        posture = posture_lexicon.lookup(lexeme, words=False) if lexeme else None
+        posture = (posture_lexicon.lookup(lexeme, words=False) or _rest_position(lexeme, notes)) if lexeme else None
         if posture is not None:  # a posture given as a gesture (Greta's ArmsCrossed): held over the gesture's span
             return held_posture(posture, GESTURE_POINTS, notes)
         if lexeme:
@@ -70,6 +76,20 @@ def plan_gesture(behaviour, context) -> BehaviourPlan:
                   "type": word(behaviour, "type"), "emotion": word(behaviour, "emotion"),
                   "target": word(behaviour, "target"), "poststroke_hold_s": hold, "noise": _noise(behaviour, notes)}
     return BehaviourPlan(timing, "gesture", parameters, notes=tuple(notes))
+
+
+def _rest_position(lexeme: str, notes: Notes) -> str | None:
+    """The posture a rest-position lexeme (:data:`REST_POSITION`) holds: the pack's posture its name names, else
+    the neutral rest (noted); None for any other lexeme."""
+    match = REST_POSITION.match(lexeme.strip())
+    if match is None:
+        return None
+    name = match["rest"] or match["position"]
+    found = posture_lexicon.lookup(name, words=False)
+    if found is None:
+        found = posture_lexicon.plain("STANDING")
+        notes.append(f"rest position {lexeme!r}: {name!r} names no posture of the postures pack; the hands rest in {found}")
+    return found
 
 
 def _deictic(behaviour, lexeme: str, target: str, mode: str | None, hold: float, notes: Notes) -> BehaviourPlan:

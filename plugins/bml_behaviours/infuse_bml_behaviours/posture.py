@@ -1,11 +1,12 @@
 """``<posture>``, ``<postureShift>``, SmartBody's ``<body posture=...>`` and Greta's ``<torso>``.
 
-A standing stance and its pose lexemes (BML 1.0 ``<stance type="STANDING"/><pose part="ARMS"
-lexeme="ARMS_CROSSED"/>``), a SmartBody posture name or a torso lexeme name a posture of the installed
-``postures`` pack (:mod:`.posture_lexicon`); the plan then carries it as ``posture`` (and ``pack``) for
-the posture controller. ``STANDING`` alone is the neutral posture. A SmartBody posture the character has a
-clip of keeps that clip. A name the pack does not know, or a stance other than standing, warns here,
-naming what the pack knows. ``<posture>`` is temporary (into it by ``ready``, back out from ``relax``);
+A stance and its pose lexemes (BML 1.0 ``<stance type="STANDING"/><pose part="ARMS"
+lexeme="ARMS_CROSSED"/>``, ``<stance type="SITTING"/><pose part="ARMS" lexeme="HANDS_ON_LAP"/>``), a
+SmartBody posture name or a torso lexeme name a posture of the installed ``postures`` pack
+(:mod:`.posture_lexicon`; with a stance, one of that stance); the plan then carries it as ``posture``
+(and ``pack``) for the posture controller. A stance alone is its plain posture (``STANDING``: neutral,
+``SITTING``: sitting upright). A SmartBody posture the character has a clip of keeps that clip. A name the
+pack does not know, or a stance the pack has no posture of, warns here, naming what the pack knows. ``<posture>`` is temporary (into it by ``ready``, back out from ``relax``);
 ``<postureShift>`` and ``<body>`` last until the next one.
 """
 from __future__ import annotations
@@ -20,14 +21,16 @@ POSTURE_POINTS = {"start": 0.0, "ready": 1.0, "relax": 3.0, "end": 4.0}
 SHIFT_DURATION_S = 1.0
 #: SmartBody blends into a new idle posture over this long and keeps it.
 BODY_TRANSITION_S = 0.5
+#: BML 1.0's stances.
 STANCES = ("SITTING", "CROUCHING", "STANDING", "LYING")
 POSTURE_ATTRIBUTES = {"priority", "convanim:amount"}
 BODY_ATTRIBUTES = {"posture"} | with_sbm("posture", "blend", "duration")
 TORSO_ATTRIBUTES = {"lexeme"}
 
 
-def _unknown(what: str) -> str:
-    return f"{what} names no posture of the postures pack (its postures: {posture_lexicon.described()})"
+def _unknown(what: str, stance: str | None = None) -> str:
+    return f"{what} names no{' ' + stance.lower() if stance else ''} posture of the postures pack " \
+           f"(its postures: {posture_lexicon.described(stance)})"
 
 
 def _stance_and_poses(behaviour, notes: Notes) -> dict:
@@ -43,17 +46,19 @@ def _stance_and_poses(behaviour, notes: Notes) -> dict:
     parameters = {"stance": stance.upper() if stance else None, "poses": poses}
     if not posture_lexicon.known():
         return parameters
-    if parameters["stance"] not in (None, "STANDING"):
-        notes.append(f"stance {parameters['stance']} is not realized: every posture of the postures pack stands")
+    stance = parameters["stance"]
+    if stance not in (None, *posture_lexicon.STANCES):
+        notes.append(f"stance {stance} is not realized: the postures pack has {' and '.join(posture_lexicon.STANCES)} "
+                     f"postures only")
         return parameters
     found = None
     for pose in poses:
-        found = posture_lexicon.lookup(pose["lexeme"])
+        found = posture_lexicon.lookup(pose["lexeme"], stance=stance)
         if found is not None:
             break
-        notes.append(_unknown(f"pose {pose['part']}={pose['lexeme']}"))
-    if found is None and parameters["stance"] == "STANDING":
-        found = posture_lexicon.NEUTRAL  # standing, the pose unnamed or unknown: the neutral stance
+        notes.append(_unknown(f"pose {pose['part']}={pose['lexeme']}", stance))
+    if found is None and stance is not None:
+        found = posture_lexicon.plain(stance)  # the stance, its pose unnamed or unknown: its plain posture
     if found is not None:
         parameters.update(posture=found, pack=posture_lexicon.PACK)
     return parameters

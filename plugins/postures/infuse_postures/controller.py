@@ -13,12 +13,18 @@ travels around the body (about the vertical through the pelvis: off the body, ro
 onto it; arm IK). From hands behind the back to hands clasped in front, say, the hands come round the
 hips instead of through them. Layers above add as usual: breathing, gestures, gaze, head and face.
 
+A hand the posture rests on a thigh (seated: its wrist, in the pack's own clip, over the thigh and within
+:data:`ON_THIGH` thigh lengths of its bone) is put where that clip has it in the thigh's frame, scaled by
+the character's thigh length (arm IK, once per character): retargeting by joint rotations alone would
+leave it in the thigh of a character whose arms are longer for its legs than the pack's, or above it.
+
 A posture started while another plays takes its footprints from the pose that one makes (postures
 are evaluated in the order they started); a lasting posture ends the lasting ones before it once it
 has blended in; a temporary one blends back out to what plays below it. One asked for while the
 character walks begins once it stands. When the pose below walks
-away (the hips more than :data:`WALK_AWAY_M` from where they stood), the posture gives way: it blends
-out, letting the feet go with it.
+away (a foot more than :data:`WALK_AWAY_M` from where it stood), the posture gives way: it blends
+out, letting the feet go with it. The feet, not the hips, tell: a seated posture's hips are far from
+where the standing pose below has them, while the feet of every posture stay on the same footprints.
 """
 from __future__ import annotations
 
@@ -39,7 +45,7 @@ PRIORITY = 10_000
 TRANSITION_S = 1.0
 #: A standing leg reaches at most this share of its length (the knee never locks).
 LEG_REACH = 0.995
-#: The hips of the pose below this far (metres, horizontally) from where they stood: the character walks off.
+#: A foot of the pose below this far (metres, horizontally) from where it stood: the character walks off.
 WALK_AWAY_M = 0.15
 #: The pose below stands when its hips move slower than this, metres per second (an idle sways at a few cm/s).
 STILL_M_S = 0.15
@@ -51,6 +57,9 @@ VIA_SHARE = 0.6
 VIA_ABDUCTION = np.radians(20.0)
 #: How far a wrist going round the body bulges out on the way, metres, for a quarter turn or more about it.
 BULGE_M = 0.05
+#: A wrist of a posture's own clip this close to its thigh's bone, in thigh lengths, and over it (from hip to
+#: knee, or up to this share past the knee), rests on the thigh.
+ON_THIGH = 0.35
 #: How far round from the front (degrees about the body) a wrist must start or end for it to begin to take
 #: the way round the body, and to take it in full: hands behind the back.
 ROUND_DEG = (110.0, 140.0)
@@ -97,15 +106,15 @@ class PostureBinding:
 class Footprints:
     """Where the pose below a posture stands on the frame the posture begins, in the character's own frame:
     ``ankles`` (2, 3) metres and ``ankle_rotations`` (2, 4) global, left then right; ``centre`` (3,) between
-    them; ``yaw`` the hips' heading (radians, :func:`facing`) and ``forward`` (3,) its unit vector; ``hips``
-    (3,) their centre in the world, metres."""
+    them; ``yaw`` the hips' heading (radians, :func:`facing`) and ``forward`` (3,) its unit vector;
+    ``ankles_world`` (2, 3) the ankles in the world, metres."""
 
     ankles: np.ndarray
     ankle_rotations: np.ndarray
     centre: np.ndarray
     yaw: float
     forward: np.ndarray
-    hips: np.ndarray
+    ankles_world: np.ndarray
 
 
 @dataclass
@@ -150,6 +159,9 @@ class Posture(Controller):
             raise MissingJointsError(rig.character.asset.path, f"posture {self.clip!r} plants the feet with "
                                                                f"{', '.join(missing)}, which the mapping lacks")
         legs = np.array([[rig.joint(f"{s}_{j}") for j in ("hip", "knee", "ankle")] for s in "lr"], dtype=np.int64)
+        hands = _hands(rig)
+        if hands is not None:
+            motion = _on_thighs(rig.skeleton, motion, legs, hands, _own_clip(space.pack, self.clip))
         via = space.clips[VIA].motion if VIA in space.clips and self.clip != VIA else None
         jt = None if motion.joint_translations is None else motion.joint_translations[:1]
         _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations[:1], motion.root_translations[:1], jt)
@@ -158,7 +170,7 @@ class Posture(Controller):
             np.linalg.norm(rest[legs[:, 2]] - rest[legs[:, 1]], axis=-1)
         return PostureBinding(motion=motion, via=via, legs=legs, reach=LEG_REACH * lengths,
                               centre=g_pos[0, legs[:, 2]].mean(axis=0), yaw=facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]]),
-                              arms=_arms(rig), abduction=_abduction(rig), hands=_hands(rig), base=rig.joint("base"))
+                              arms=_arms(rig), abduction=_abduction(rig), hands=hands, base=rig.joint("base"))
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
@@ -315,8 +327,9 @@ class Posture(Controller):
         """(F,) how firmly the feet stay planted: 1, fading with the posture once the pose below walks away
         from ``feet`` (then the activity ends after its blend out, and ``job.weight`` fades with it)."""
         if state.leave_s is None:
-            hips = job.pose.chain_pose(job.binding.legs[:, 0])[1].mean(axis=1)  # (F, 3) in the world
-            away = (np.linalg.norm((hips - feet.hips)[:, [0, 2]], axis=-1) > WALK_AWAY_M) & (job.local_times >= 0.0)
+            ankles = job.pose.chain_pose(job.binding.legs[:, 2])[1]  # (F, 2, 3) in the world
+            moved = np.linalg.norm((ankles - feet.ankles_world)[..., [0, 2]], axis=-1).max(axis=1)
+            away = (moved > WALK_AWAY_M) & (job.local_times >= 0.0)
             if not away.any():
                 return np.ones(len(block))
             state.leave_s = float(block.times[int(np.argmax(away))])
@@ -335,9 +348,8 @@ class Posture(Controller):
         g_rot, g_pos = forward_kinematics(pose.rig.skeleton, pose.local_rotations[k:k + 1], pose.root_translations[k:k + 1], jt)
         ankles = g_pos[0, legs[:, 2]]
         yaw = facing(g_pos[0, legs[0, 0]] - g_pos[0, legs[1, 0]])
-        hips = pose.chain_pose(legs[:, 0])[1][k].mean(axis=0)
         return Footprints(ankles=ankles, ankle_rotations=g_rot[0, legs[:, 2]], centre=ankles.mean(axis=0), yaw=yaw,
-                          forward=np.array([np.sin(yaw), 0.0, np.cos(yaw)]), hips=hips)
+                          forward=np.array([np.sin(yaw), 0.0, np.cos(yaw)]), ankles_world=pose.chain_pose(legs[:, 2])[1][k])
 
     @staticmethod
     def _lowered(sk, rotations, root, jt, legs, goals, reach) -> np.ndarray:
@@ -350,6 +362,60 @@ class Posture(Controller):
         out = root.copy()
         out[:, 1] -= np.maximum(drop.max(axis=1), 0.0)
         return out
+
+
+def _own_clip(pack: str, clip: str) -> Motion | None:
+    """The posture's clip as the pack has it, on the pack's own skeleton, or None when that is not readable."""
+    import infuse
+    from infuse.errors import InfuseError
+    from infuse.packs import load_pack
+
+    try:
+        return next(iter(infuse.load(load_pack(pack).manifest.clip(clip).file).motions.values()), None)
+    except (InfuseError, KeyError, OSError):
+        return None
+
+
+def _thigh_frames(sk, motion: Motion, legs: np.ndarray, wrists: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each wrist (``wrists`` (2,) joints) in its thigh's frame, per frame: coordinates (F, 2, 3) in thigh lengths
+    (+Z from the hip to the knee, +X from the right hip to the left, +Y up off the thigh), the frames (F, 2, 3, 3)
+    (rows: the axes) and the thighs' lengths (F, 2, 1), metres."""
+    jt = motion.joint_translations
+    _, g_pos = forward_kinematics(sk, motion.local_rotations, motion.root_translations, jt)
+    hip, knee = g_pos[:, legs[:, 0]], g_pos[:, legs[:, 1]]  # (F, 2, 3)
+    length = np.linalg.norm(knee - hip, axis=-1, keepdims=True)
+    z = (knee - hip) / length
+    x = np.broadcast_to((hip[:, 0] - hip[:, 1])[:, None], z.shape)
+    x = x - np.sum(x * z, axis=-1, keepdims=True) * z
+    x = x / np.linalg.norm(x, axis=-1, keepdims=True)
+    axes = np.stack((x, np.cross(z, x), z), axis=-2)
+    return np.einsum("fkij,fkj->fki", axes, g_pos[:, wrists] - hip) / length, axes, length
+
+
+def _on_thighs(sk, motion: Motion, legs: np.ndarray, hands: np.ndarray, own: Motion | None) -> Motion:
+    """``motion`` (the posture infused on the character) with each hand that ``own`` (the pack's clip) rests on a
+    thigh put where ``own`` has it in the thigh's frame, scaled by the character's thigh (arm IK); as is when
+    no hand rests on a thigh or ``own`` lacks the canonical leg and arm joints."""
+    names = [[f"{s}_{j}" for j in ("hip", "knee")] for s in "lr"]
+    if own is None or any(n not in own.skeleton.index for side in names for n in side) or \
+            any(f"{s}_wrist" not in own.skeleton.index for s in "lr"):
+        return motion
+    index = own.skeleton.index
+    own_legs = np.array([[index[n] for n in side] for side in names], dtype=np.int64)
+    wanted, _, _ = _thigh_frames(own.skeleton, own, own_legs, np.array([index["l_wrist"], index["r_wrist"]]))
+    frames = np.minimum(np.round(np.arange(motion.num_frames) / motion.fps * own.fps).astype(np.int64), own.num_frames - 1)
+    wanted = wanted[frames]  # (F, 2, 3) thigh lengths
+    off = np.linalg.norm(wanted[..., :2], axis=-1)
+    resting = (off < ON_THIGH) & (wanted[..., 2] > 0.0) & (wanted[..., 2] < 1.0 + ON_THIGH) & (wanted[..., 1] > 0.0)
+    if not resting.any():
+        return motion
+    _, axes, length = _thigh_frames(sk, motion, legs, hands[:, 2])
+    _, g_pos = forward_kinematics(sk, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    goals = g_pos[:, legs[:, 0]] + np.einsum("fkji,fkj->fki", axes, wanted * length)
+    local = np.array(motion.local_rotations)
+    solve_limb(sk, local, motion.root_translations, motion.joint_translations, hands, goals,
+               weight=resting.astype(float), distance=False)
+    return motion.replace(local_rotations=local)
 
 
 def _arms(rig) -> np.ndarray:
