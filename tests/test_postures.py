@@ -2,7 +2,9 @@
 posture stands on the same footprints and loops; BML posture names map to the pack's postures (unknown ones
 warn at scheduling); on Xbot, the Ready Player Me avatar, SmartBody's utah skeleton and Brad the feet stay planted
 through postures, transitions and returns, the arms reach the authored places, breathing and gaze still add,
-a walk ends a lasting posture, and the forearms and hands stay out of the torso's skin."""
+a walk ends a lasting posture, and the forearms and hands stay out of the torso's skin; seated postures sit on
+a seat of knee height, sitting down and standing up keep the feet planted, and hands rest on the thighs, not
+in them."""
 from __future__ import annotations
 
 import sys
@@ -325,14 +327,18 @@ def _skinned(mesh, g_rot, g_pos) -> tuple[np.ndarray, np.ndarray]:
     return v, n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-9)
 
 
-def penetration_m(character, motion, frame: int) -> float:
-    """How deep (metres) any forearm or hand vertex lies inside the torso's skin at ``frame``: beneath the
-    nearest torso vertex (within 5 cm) along that vertex's normal."""
+TORSO = ("base", "spine1", "spine2", "spine3", "spine4")
+THIGHS = ("l_hip", "r_hip", "l_knee", "r_knee")
+
+
+def penetration_m(character, motion, frame: int, body=TORSO) -> float:
+    """How deep (metres) any forearm or hand vertex lies inside the skin of the ``body`` joints (the torso) at
+    ``frame``: beneath the nearest such vertex (within 5 cm) along that vertex's normal."""
     sk = character.skeleton
     index = character.mapping.indices(sk)
     g_rot, g_pos = forward_kinematics(sk, motion.local_rotations[frame:frame + 1], motion.root_translations[frame:frame + 1])
     arms = _descendants(sk.parents, [index["l_elbow"], index["r_elbow"]])
-    torso = [index[n] for n in ("base", "spine1", "spine2", "spine3", "spine4") if n in index]
+    torso = [index[n] for n in body if n in index]
     torso_v, torso_n, arm_v = [], [], []
     for mesh in character.asset.meshes:
         owner = mesh.bind_joints[mesh.joints[np.arange(len(mesh.joints)), np.argmax(mesh.weights, axis=1)]]
@@ -370,3 +376,30 @@ def test_forearms_and_hands_stay_out_of_the_torso(key):
         motion = Posture(name).bind(rig, None).motion  # as it plays: a hand resting on a thigh put there
         deepest = max(penetration_m(character, motion, f) for f in range(0, motion.num_frames, 40))
         assert deepest < 0.025, (name, deepest)  # skin against skin at most: hands on the hips, clasped, crossed arms
+        if name.startswith("sitting"):  # hands and forearms on the thighs, not through them
+            deepest = max(penetration_m(character, motion, f, THIGHS) for f in range(0, motion.num_frames, 40))
+            assert deepest < 0.025, (name, deepest)
+
+
+SIT = ('<postureShift id="p1" start="0.5"><stance type="SITTING"/></postureShift>'
+       '<postureShift id="p2" start="4"><stance type="SITTING"/><pose part="ARMS" lexeme="HANDS_ON_LAP"/></postureShift>'
+       '<postureShift id="p3" start="6.5"><stance type="SITTING"/><pose part="ARMS" lexeme="FOREARMS_ON_THIGHS"/>'
+       '</postureShift><postureShift id="p4" start="9.5"><stance type="STANDING"/></postureShift>')
+
+
+@pytest.mark.parametrize("key", ["xbot", "rpm", "utah"])
+def test_sitting_down_shifting_and_standing_up_with_the_feet_planted(key, pack_cache):
+    scene, motion = play(key, SIT, pack_cache, seconds=12.0)
+    rig = scene.runtime.rig("bob")
+    assert feet_travel_m(rig, motion, np.arange(motion.num_frames)) < 0.003
+    _, g_pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    hips, knees = g_pos[:, [rig.joint("l_hip"), rig.joint("r_hip")]], g_pos[:, [rig.joint("l_knee"), rig.joint("r_knee")]]
+    ankles = g_pos[:, [rig.joint("l_ankle"), rig.joint("r_ankle")]]
+    assert np.ptp(ankles[:, :, 1], axis=0).max() < 0.003  # the feet stay on the ground
+    for t in (3.0, 5.5, 8.5):  # seated: the thighs level on a seat of knee height
+        assert np.abs(hips[int(t * FPS), :, 1] - knees[int(t * FPS), :, 1]).max() < 0.02, t
+    height = hips[:, :, 1].mean(axis=1)
+    down, up = np.diff(height[int(0.5 * FPS):int(1.5 * FPS) + 1]), np.diff(height[int(9.5 * FPS):int(10.5 * FPS) + 1])
+    assert height[0] - height[int(3 * FPS)] > 0.3 and abs(height[-1] - height[0]) < 0.01  # down a seat's depth, back up
+    assert down.max() < 1e-3 and up.min() > -1e-3  # the hips go down, then up, without a jolt back
+    assert np.abs(np.diff(height)).max() < 0.03 and np.abs(np.diff(height, 2)).max() < 0.005  # smoothly (m per frame)
