@@ -160,7 +160,7 @@ class Reach(Controller):
         space = space_on(rig, self.pack)
         if space.kind != "reach":
             raise UsageError(f"pack {space.pack!r} is not a reaching pack")
-        hands = {}
+        hands: dict[str, tuple[int, int, int]] = {}
         for hand in ("left", "right"):
             shoulder, elbow, wrist = (rig.joint(f"{hand[0]}_{n}") for n in ("shoulder", "elbow", "wrist"))
             if hand in space.tessellations and shoulder is not None and elbow is not None and wrist is not None:
