@@ -6,7 +6,7 @@ scene per document, every frame evaluated to the end of its blocks) and the beha
 runtime activities, and of the ``<gesture>`` behaviours how many are played; the time taken; and how many of the expected timings stated in the OpenBMLParser
 documents' header comments the scheduler reproduces. Then the scheduled behaviours played on the
 character: those that became activities, those with nothing to show (a wait, an event), and every one not
-played with the warning that says why, those naming an object or character the scene does not have apart.
+played with the warning that says why, those naming an object, character or clip the scene does not have apart.
 
     python benchmarks/bml_corpus.py [--verbose] [--no-realize] [--fps 30] [--nonverbal]
 
@@ -35,9 +35,9 @@ CORPUS = Path(os.environ.get("INFUSE_CORPUS", REPO.parent / "shared" / "corpus")
 CHARACTER = "talkinghead/avatars/brunette-t.glb"
 #: Longest stretch of a document evaluated, seconds.
 MAX_SECONDS = 60.0
-#: Words of a realization warning that names an object or character absent from the scene.
+#: Words of a realization warning that names an object, character or clip absent from the scene.
 ABSENT = ("no character or object named", "no object named", "no target or character named", "has no joint",
-          "no character, object or target named", "no character '")
+          "no character, object or target named", "no character '", "no clip named")
 #: The behaviour packs the character is infused with, those installed: walks, reaches and postures.
 PACKS = ("locomotion-female", "reaching", "postures")
 
@@ -186,7 +186,7 @@ def run(corpus: Path, verbose: bool = False, realize_fps: float | None = 30.0, g
         absent = [m for m in missed if m[4]]
         print(f"behaviours played on the character: {scheduled - len(missed)} of {scheduled} "
               f"({sum(t['activities'] for t in counts.values())} as activities, {silent} with nothing to show); "
-              f"not played: {len(missed)}, of which {len(absent)} name an object or character the scene does not have")
+              f"not played: {len(missed)}, of which {len(absent)} name an object, character or clip the scene does not have")
         for where, behaviour, element, why, is_absent in sorted(missed, key=lambda m: (not m[4], m[0], m[1])):
             print(f"  {'absent' if is_absent else 'not played'}  {where} {behaviour} <{element}>: {why}")
         if generators:

@@ -116,6 +116,8 @@ ROWS = (
                               '</posture>', ("body",)),
     Row("postureShift", "BML 1.0", '<postureShift id="x"><stance type="STANDING"/>'
                                    '<pose part="ARMS" lexeme="ARMS_CROSSED"/></postureShift>', ("body",)),
+    Row("postureShift (sitting)", "BML 1.0", '<postureShift id="x"><stance type="SITTING"/>'
+                                             '<pose part="ARMS" lexeme="HANDS_ON_LAP"/></postureShift>', ("body",)),
     Row("gesture", "BML 1.0", '<gesture id="x" lexeme="BEAT" mode="RIGHT_HAND"/>', ("arms",)),
     Row("pointing", "BML 1.0", '<pointing id="x" target="lamp"/>', ("arms",)),
     Row("locomotion", "BML 1.0", '<locomotion id="x" target="0 1.5" manner="walk"/>', ("path",)),

@@ -95,7 +95,8 @@ def play_clip(scene, activation: Activation):
     motion = scene.find_clip(activation.character, name) if name else None
     if motion is None:
         scene.warn(activation, CANNOT_CREATE_BEHAVIOR,
-                   f"<{activation.element}> {name!r}: no behaviour pack of the character provides that clip")
+                   f"<{activation.element}> {name!r}: no clip named {name!r} in the scene (neither the character's "
+                   f"own nor one of its behaviour packs')")
         return None
     end = _end(activation)
     persistent = activation.persistent
