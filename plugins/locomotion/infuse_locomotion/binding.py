@@ -8,7 +8,7 @@ are ordered left, right. Positions are metres, in the facing frame of the clips 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -56,7 +56,8 @@ class LocomotionBinding:
     """A locomotion pack prepared for one skeleton (see the module doc for N, J, B and legs).
 
     The pack: ``space`` (its :class:`~infuse.packs.BlendSpace`), ``clips`` (N) its locomotion clips,
-    ``limit`` the top speed (m/s) by travel direction (radians), ``table`` the canonical clips'
+    ``limit`` its speed limit (called with a travel direction, radians: the top speed, m/s; its ``hull``
+    gives the turn rates the pack holds), ``table`` the canonical clips'
     :class:`~infuse.runtime.clip.LoopTable`, ``movers`` (N) the joint each clip travels on.
     Per clip (N, ...): ``velocities`` (N, 3) forward and lateral speed (m/s) and turn rate (rad/s),
     ``durations`` (N,) cycle seconds, ``keys`` (N, 3) its phase keys (s), ``events`` (N, 2, 4) each
@@ -78,7 +79,7 @@ class LocomotionBinding:
 
     space: BlendSpace
     clips: list[BlendClip]
-    limit: Callable[..., float]
+    limit: Any  # infuse.packs.coverage.SpeedLimit, which the public API does not name
     table: LoopTable
     movers: list[int]
     velocities: np.ndarray

@@ -283,7 +283,7 @@ class Locomotion(Controller):
         return cached[2]
 
     def evaluate_one(self, job, block) -> None:
-        b = job.binding
+        b: LocomotionBinding = job.binding
         active = np.nonzero(job.local_times >= -1e-9)[0]
         if not active.size:
             return
@@ -333,7 +333,7 @@ class Locomotion(Controller):
             _keep_feet_up(b.skeleton, b.floors, rot, root, jt, st, dt)
         self._write(job, active, rot, root, jt)
 
-    def _stop_at(self, b, before, st, fps: float, dt: float):
+    def _stop_at(self, b: LocomotionBinding, before: LocomotionState, st: LocomotionState, fps: float, dt: float):
         """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st.trace``)
         would hand over to a stop clip: the first frame on the way to the path's last point, heading
         for it within :data:`~.transitions.STOP_BEARING`, at about the clip's speed where it begins
@@ -368,7 +368,7 @@ class Locomotion(Controller):
                 best = (f, clip, transitions.stop_placement(clip, fps, float(x[f]), float(z[f]), last))
         return best
 
-    def _played(self, b, st, clip, place, local):
+    def _played(self, b: LocomotionBinding, st: LocomotionState, clip, place, local):
         """A transition ``clip`` placed by ``place`` (:func:`~.transitions.placement`) at its times
         ``local`` (F,) seconds: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and ``heading``
         follow it."""
@@ -394,7 +394,7 @@ class Locomotion(Controller):
         st.x, st.z, st.heading = float(ground[0]), float(ground[1]), float(facing[-1])
         return rot, root, jt, contact, forward, np.full(len(local), st.spun)
 
-    def _hand_over(self, b, st, clip, place, fps: float) -> None:
+    def _hand_over(self, b: LocomotionBinding, st: LocomotionState, clip, place, fps: float) -> None:
         """The steering takes over from transition ``clip`` (see :mod:`.transitions`): its state where the
         clip hands over; after a start, the gait's phase from the clip's last strikes (left at 0, right
         at 0.5), walking; after a turn on the spot, standing, to decide again; after a stop, standing there."""
@@ -414,7 +414,7 @@ class Locomotion(Controller):
             phase = (0.5 * foot + 0.5 * (at - last) / half) % 1.0
         st.settled, st.stand, st.landings, st.to_go, st.phase = False, 0.0, -1, -1.0, float(phase)
 
-    def _faded(self, b, st, part, times, fps: float):
+    def _faded(self, b: LocomotionBinding, st: LocomotionState, part, times, fps: float):
         """``part`` (see :meth:`_steered`) at the activity's ``times`` (F,) with the transition that
         handed over before it fading out over it (its last :data:`~.transitions.HANDOVER_S`), at ``fps``."""
         if st.fading is None:
@@ -448,7 +448,7 @@ class Locomotion(Controller):
         forward[mixing] = mixed / np.maximum(np.linalg.norm(mixed, axis=-1, keepdims=True), 1e-9)
         return rot, root, jt, contact, forward, spun
 
-    def _steered(self, b, st, times, dt, report):
+    def _steered(self, b: LocomotionBinding, st: LocomotionState, times, dt, report):
         """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned."""
@@ -545,7 +545,7 @@ class Locomotion(Controller):
         if jt is not None:
             pose.set_translations(np.arange(1, jt.shape[1]), jt[:, 1:], weight, job.mode)
 
-    def _blend(self, b, w, phase, standing, times, half_frame):
+    def _blend(self, b: LocomotionBinding, w, phase, standing, times, half_frame):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
         (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.stance_of`) of the moving clips
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
@@ -570,12 +570,12 @@ class Locomotion(Controller):
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
         rot, root, jt = b.table.sample(np.concatenate((order, fade)), clock, b.limbs)
-        acc = None
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
-        for u, i in enumerate(order):
+        acc = _accumulate(None, rot[:, 0], root[:, 0], None if jt is None else jt[:, 0], w[:, order[0]])
+        for u, i in enumerate(order[1:], start=1):
             acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], w[:, i])
-        for u in np.nonzero(~feet)[0]:  # a clip without foot events: its own contact flags
+        for u in np.nonzero(~feet)[0].tolist():  # a clip without foot events: its own contact flags
             contact_w = w[:, order[u]]
             flags = self._phases(b, order[u], clock[u, 0])
             contact += flags * contact_w[:, None, None]
@@ -590,7 +590,8 @@ class Locomotion(Controller):
             support += share * ws.sum(axis=1)[:, None]
         if fade.size:
             share = standing / fade.size
-            acc = tuple(None if a is None else a * (1.0 - standing).reshape((-1,) + (1,) * (a.ndim - 2)) for a in acc)
+            kept = 1.0 - standing
+            acc = (acc[0] * kept[:, None], acc[1] * kept, None if acc[2] is None else acc[2] * kept[:, None])
             contact *= (1.0 - standing)[:, None, None]
             support *= (1.0 - standing)[:, None]
             for u, i in enumerate(fade, start=order.size):
@@ -611,7 +612,7 @@ class Locomotion(Controller):
         frame = np.rint((t % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64)
         return clip.phases[np.minimum(frame, len(clip.phases) - 1)]
 
-    def _shorten(self, b, w, stride, rot, root, jt, turn_q, forward, settle, down, laid) -> None:
+    def _shorten(self, b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
@@ -649,7 +650,7 @@ class Locomotion(Controller):
             k = b.balls_on_ankles
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
-    def _pin(self, b, st, rot, root, jt, contact, forward, dt, spun) -> None:
+    def _pin(self, b: LocomotionBinding, st: LocomotionState, rot, root, jt, contact, forward, dt, spun) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
         (the foot pivoting about it, its heel rising further when the leg would not reach). A planted
         foot does not turn with the part of the heading's turn spun at the root (turning on the spot,
@@ -953,7 +954,7 @@ def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndar
     return axis, np.where(c < height, np.minimum(angle, most), 0.0)
 
 
-def _keep_feet_up(sk, floors, rot, root, jt, st, dt: float) -> None:
+def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, st: LocomotionState, dt: float) -> None:
     """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
     ball joint would go below the height it stands at, the foot pitches about its ankle until it does
     not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
@@ -1004,7 +1005,7 @@ def _standing_speed(clips) -> float:
 
 
 
-def _turn_feet(b, rot, rise) -> np.ndarray:
+def _turn_feet(b: LocomotionBinding, rot, rise) -> np.ndarray:
     """Turn both feet by ``rise`` (F, 2, 3) rotation vectors in their own frames, in place, the toes
     keeping their orientation where the ball joint hangs from the ankle; returns the turns (F, 2, 4)."""
     delta = quat.from_rotvec(rise)
@@ -1033,7 +1034,7 @@ def _towards(direction: float) -> str:
     return "forward" if abs(deg) < 1.0 else f"{abs(deg):.0f} deg to the {'left' if deg > 0 else 'right'} of the facing"
 
 
-def _slowest_towards(b, direction) -> np.ndarray:
+def _slowest_towards(b: LocomotionBinding, direction) -> np.ndarray:
     """(F,) speed (m/s) of the slowest moving example travelling within 45 degrees of each ``direction``
     (F,) radians (of any moving example where none does): a pack without an idle walks slower than
     that by slowing it. (A blend of walks forward and back may stand still, but it steps on the spot.)"""
@@ -1045,7 +1046,7 @@ def _slowest_towards(b, direction) -> np.ndarray:
     return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
 
 
-def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+def _weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     """Blend weights (F, N) for the requests and the moving share (F,) of the slowest walk's speed:
     where the full request lies outside the tessellation, its turn rate is the nearest one the
     tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
@@ -1071,7 +1072,7 @@ def _weights(b, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
     return w, slow
 
 
-def _settle_phases(b, w) -> np.ndarray:
+def _settle_phases(b: LocomotionBinding, w) -> np.ndarray:
     """(F, 2) phases past a landing of the left foot (phase 0) and of the right (0.5) at which a stop
     holds the gait: :data:`SETTLE_PHASE`, or earlier where the trailing foot's stance share would start
     to fall before it (its toe off less the stance ramp), so the stop's last frame does not move the
@@ -1087,7 +1088,7 @@ def _settle_phases(b, w) -> np.ndarray:
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
 
 
-def _clock(st, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, ...]:
+def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, ...]:
     """The blend's phase (F,) in [0, 1), each frame's step of it to the next frame (F,) (from that
     frame's own cadence: the same whichever frames are evaluated with it), stride factor (F,), idle
     share (F,) and how far it has come to rest (F,) (the idle share's easing, with an idle or not) for moving shares
@@ -1176,7 +1177,11 @@ def mean_rotations(motion) -> np.ndarray:
     return quat.normalize(np.where((sides < 0.0)[..., None], -rot, rot).mean(axis=0))
 
 
-def _accumulate(acc, rot, root, jt, weight):
+#: Running sums of weighted poses (:func:`_accumulate`): rotations (4, F, J), root (3, F), joint translations (3, F, J) or None.
+Sums = tuple[np.ndarray, np.ndarray, np.ndarray | None]
+
+
+def _accumulate(acc: Sums | None, rot: np.ndarray, root: np.ndarray, jt: np.ndarray | None, weight: np.ndarray) -> Sums:
     """Add a pose (component-major: rotations (4, F, J), root (3, F), joint translations (3, F, J) or
     None) weighted by ``weight`` (F,) to the running sums ``acc`` (None to start), each rotation
     turned to the sum's side."""
