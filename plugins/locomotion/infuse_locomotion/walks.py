@@ -22,6 +22,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.bml.model import BEHAVIOR_DEGRADED
 from infuse.runtime import Activity, Clip
+from infuse.stage import Stage
 
 from .state import LocomotionState
 from .steering import SteeringState
@@ -57,7 +58,7 @@ class Walks:
     settles it at ``2k + 3``, so each blends over the one before (the pack's first idle plays at 0).
     """
 
-    def __init__(self, stage):
+    def __init__(self, stage: Stage):
         self.stage = stage
         self.walks: dict[str, list[Walk]] = {}
         self._handovers: list[tuple[int, Activity, Activity | None]] = []
