@@ -70,6 +70,8 @@ STAND_FRACTION = 0.2
 #: slowest walk as the speed nears zero: renormalized alone, the blend would jump from the slowest walk
 #: to whichever clip the request first gives weight to (a turning walk's pose at the start of a turn).
 SLOW_RAMP = 0.1
+#: Share of the slowest walk always mixed into the moving clips' weights (its steps' events stay in the blend).
+SLOW_EPS = 1e-3
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
 STOP_CADENCE = 1.2
@@ -486,7 +488,7 @@ class Locomotion(Controller):
         wm = np.where(b.idle[None], 0.0, w)
         moving = wm.sum(axis=1)
         near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
-        wm = near * wm / np.maximum(moving, 1e-12)[:, None] + (1.0 - near) * b.slowest[None]
+        wm = near * (wm + SLOW_EPS * b.slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * b.slowest[None]
         period = np.maximum(wm @ b.durations, 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
                                                         _settle_phases(b, wm))
