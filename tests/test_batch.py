@@ -276,3 +276,32 @@ def test_chunks_keep_to_one_folder_and_the_limits(tmp_path, monkeypatch):
         path.write_bytes(b"x" * size)
         files.append(jobs.Source(str(path), rel))
     assert [[s.name for s in c] for c in jobs.chunks(files)] == [["a/1.bvh", "a/2.bvh"], ["a/3.bvh"], ["a/4.bvh"], ["b/5.bvh"]]
+
+
+def test_batch_hands_the_character_s_meshes_to_the_retargeter():
+    """The soles of feet without a ball joint come from the mesh: batch passes the character's meshes to
+    ``prepare`` as ``infuse retarget`` does (none when they cannot be decoded)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from infuse.plugin_types import Retargeter
+    from infuse_batch.work import _Loaded, _planner
+
+    seen = {}
+
+    def prepare(source_skeleton, source_mapping, target_skeleton, target_mapping, **options):
+        seen.update(options)
+        return lambda motion: motion
+
+    def broken():
+        raise ValueError("bad accessor")
+
+    xbot = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    clip = infuse.Motion(xbot.skeleton, 30.0, np.tile(xbot.skeleton.rest_rotations, (2, 1, 1)), np.zeros((2, 3)))
+    spy = Retargeter("spy", lambda *a, **k: None, prepare=prepare)
+    _planner(spy, clip, None, _Loaded(xbot, None, {}, 0.0), "a.bvh", "b.glb")
+    assert len(seen["target_meshes"]) > 0 and seen["target_meshes"] is xbot.meshes and seen["source_motion"] is clip
+    unreadable = replace(xbot, mesh_loader=broken)
+    _planner(spy, clip, None, _Loaded(unreadable, None, {}, 0.0), "a.bvh", "b.glb")
+    assert seen["target_meshes"] == ()

@@ -53,7 +53,9 @@ class Retargeter:
     ``prepare`` (optional) does the per-pair work once for many clips on one source skeleton:
     ``prepare(source_skeleton, source_mapping, target_skeleton, target_mapping, **options)`` returns
     a callable ``(motion) -> Motion``; ``options`` may name ``source_motion`` (a clip on the source
-    skeleton, for its default pose), ``target_motion``, ``source_file`` and ``target_file``.
+    skeleton, for its default pose), ``target_motion``, ``source_file``, ``target_file`` and
+    ``target_meshes`` (the target's skinned meshes, for the soles of feet without a ball joint): accept
+    ``**options`` to take those you do not use.
     """
 
     name: str

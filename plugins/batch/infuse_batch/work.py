@@ -149,8 +149,17 @@ def _planner(retargeter, clip, src_map, loaded: _Loaded, source_file, target_fil
     target_clip = next(iter(loaded.asset.motions.values()), None)
     if retargeter.prepare is not None:
         return retargeter.prepare(clip.skeleton, src_map, loaded.asset.skeleton, loaded.mapping, source_motion=clip,
-                                  target_motion=target_clip, source_file=source_file, target_file=target_file)
+                                  target_motion=target_clip, source_file=source_file, target_file=target_file,
+                                  target_meshes=_meshes_if_readable(loaded.asset))
     return lambda motion: retargeter.retarget(motion, src_map, loaded.asset.skeleton, loaded.mapping)
+
+
+def _meshes_if_readable(asset: Asset) -> tuple:
+    """The character's meshes (soles of feet without a ball joint), or none when they cannot be decoded."""
+    try:
+        return asset.meshes
+    except (InputError, UnusableInputError):  # malformed, or compressed with a codec not installed
+        return ()
 
 
 def _file_name(name: str) -> str:
