@@ -21,6 +21,7 @@ from .analysis import analyse_clip, blend_groups, coordinates_of, headings, reso
 from .coverage import coverage, describe_coverage
 from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, straighten, transition_kind
 from .manifest import read_manifest
+from .order import content_order
 from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
 from .tessellation import Tessellation
 
@@ -113,8 +114,9 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         raise UnusableInputError(manifest.path, "no clips to read the skeleton of its .skm skeleton file with")
     skeleton = skeleton_asset.skeleton
     motions = {n: on_skeleton(m, skeleton, manifest.clip(n).file).replace(name=n) for n, m in motions.items()}
-    first = next(iter(motions.values()))
-    # A rest pose that does not stand (bone-along-one-axis rigs) is mapped on a clip frame.
+    first = motions[content_order(motions)[0]]
+    # A rest pose that does not stand (bone-along-one-axis rigs) is mapped on a clip frame (of the
+    # clip first by content, so the mapping does not depend on the clips' names or order).
     mapping = map_skeleton(skeleton_asset if skeleton_asset.motions else skeleton_asset.__class__(
         skeleton_asset.path, skeleton_asset.format, skeleton, {first.name: first}), mapper=mapper or "heuristic")
     index = mapping.indices(skeleton)
@@ -127,7 +129,9 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         usable_cycles(manifest.clips, motions, clips, fks, index, mapping)
     coords = coordinates_of(manifest.kind)
     tessellations = {}
+    rank = {n: k for k, n in enumerate(content_order(motions))}
     for group, members in blend_groups(manifest.kind, clips).items():
+        members = sorted(members, key=lambda c: rank[c["name"]])  # examples by content, not by file name
         if members:
             t = Tessellation.build(coords, [c["name"] for c in members], [[c["parameters"][k] for k in coords] for c in members],
                                    resolution=resolution_of(manifest.kind))

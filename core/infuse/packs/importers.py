@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from .folder import write_pack_folder
+from .pack import file_digest
 
 #: The version of a newly imported pack.
 FIRST_VERSION = "0.1.0"
@@ -67,7 +68,8 @@ def import_smartbody(source: str | Path, dest: str | Path, name: str | None = No
 def import_bvh_folder(source: str | Path, dest: str | Path, name: str | None = None, pattern: str = "*.bvh",
                       kind: str = "locomotion", version: str = FIRST_VERSION, description: str | None = None) -> Path:
     """Copy the BVH files of ``source`` matching ``pattern`` into a pack folder ``dest`` (clips that are
-    recorded takes, not loops: the builder finds a cycle in each); returns the manifest path."""
+    recorded takes, not loops: the builder finds a cycle in each); returns the manifest path. The pack
+    skeleton is the hierarchy of the file first by content (SHA-256), not by name."""
     source = Path(source).resolve()
     if not source.is_dir():
         raise InputError(source, None, "not a folder of BVH files")
@@ -76,6 +78,7 @@ def import_bvh_folder(source: str | Path, dest: str | Path, name: str | None = N
         raise InputError(source, None, f"no BVH files matching {pattern!r}")
     role = {"locomotion": "cycle", "posture": "posture"}.get(kind, "reach")
     clips = [{"name": f.stem, "file": str(f), "role": role, "tags": _tags(f.stem), "loop": kind == "posture"} for f in files]
-    pack = {"name": name or f"bvh-{source.name.lower()}", "version": version, "kind": kind, "skeleton": str(files[0]),
+    skeleton = min(files, key=file_digest)  # the pack skeleton by content: the same whatever the files are called
+    pack = {"name": name or f"bvh-{source.name.lower()}", "version": version, "kind": kind, "skeleton": str(skeleton),
             "analysis": "analysis.json", "description": description or f"BVH clips from {source.name} ({pattern})"}
     return write_pack_folder(dest, pack, clips)

@@ -34,6 +34,7 @@ from ..motion import Motion
 from ..skeleton import Skeleton
 from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of, transition_parameters
 from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
+from .order import content_order
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
@@ -157,9 +158,13 @@ def _signature(pack: Pack) -> str:
 
 def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, retargeter: str | None = None,
                    **options) -> dict[str, tuple[Motion, np.ndarray]]:
-    """Every clip of ``packs`` on ``character``: pack name -> (all its clips joined, (N+1,) frame bounds).
+    """Every clip of ``packs`` on ``character``: pack name -> (all its clips joined in the order of its
+    analysis, (N+1,) frame bounds).
 
-    Packs sharing a skeleton go through the retargeter as one clip (one plan, one batch).
+    Packs sharing a skeleton go through the retargeter as one clip (one plan, one batch), their clips
+    joined in :func:`~infuse.packs.order.content_order`: the retargeter reads the batch as a whole (its
+    reference pose, its first root position), so the order is set by the clips' content, not by the
+    names of the packs and clips or the order they are listed in.
     """
     if not registry.retargeters():
         raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
@@ -169,25 +174,24 @@ def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, re
         groups.setdefault(_signature(p), []).append(p)
     out = {}
     for members in groups.values():
-        first_pack = members[0]
-        sk = first_pack.skeleton
-        motions = [m if m.skeleton is sk else m.replace(skeleton=sk) for p in members for m in p.motions.values()]
+        sk = members[0].skeleton
+        every = {(p.name, n): m if m.skeleton is sk else m.replace(skeleton=sk) for p in members for n, m in p.motions.items()}
+        order = content_order(every)
+        motions = [every[key] for key in order]
         fps = motions[0].fps
         moved = any(m.joint_translations is not None for m in motions)
         joined = Motion(sk, fps, np.concatenate([m.local_rotations for m in motions]),
                         np.concatenate([m.root_translations for m in motions]),
-                        np.concatenate([m.local_translations() for m in motions]) if moved else None, name=first_pack.name)
-        result = chosen.retarget(joined, first_pack.mapping, character.skeleton, mapping, **options)
-        start = 0
+                        np.concatenate([m.local_translations() for m in motions]) if moved else None, name=members[0].name)
+        result = chosen.retarget(joined, members[0].mapping, character.skeleton, mapping, **options)
+        starts = dict(zip(order, np.cumsum([0] + [m.num_frames for m in motions[:-1]])))
+        jt = result.joint_translations
         for p in members:
-            lengths = [m.num_frames for m in p.motions.values()]
-            total = int(sum(lengths))
-            jt = result.joint_translations
-            part = Motion(character.skeleton, fps, result.local_rotations[start:start + total],
-                          result.root_translations[start:start + total], None if jt is None else jt[start:start + total],
-                          name=p.name)
-            out[p.name] = (part, np.cumsum([0] + lengths))
-            start += total
+            frames = np.concatenate([np.arange(starts[(p.name, n)], starts[(p.name, n)] + m.num_frames)
+                                     for n, m in p.motions.items()])
+            part = Motion(character.skeleton, fps, result.local_rotations[frames], result.root_translations[frames],
+                          None if jt is None else jt[frames], name=p.name)
+            out[p.name] = (part, np.cumsum([0] + [m.num_frames for m in p.motions.values()]))
     return out
 
 
@@ -201,9 +205,8 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
     heading = headings(g_pos, index)
     root = g_pos[:, index["base"]]
     pair = feet(sk, mapping)
-    lowest = lowest_points(sk, pair, *forward_kinematics(sk, out.local_rotations[:1], out.root_translations[:1],
-                                                          None if out.joint_translations is None else out.joint_translations[:1]))
-    ground = float(lowest.min())
+    starts = np.asarray(bounds[:-1], dtype=np.int64)
+    ground = float(lowest_points(sk, pair, g_rot[starts], g_pos[starts]).min())  # the feet at the clips' starts, any order
     clips = {}
     for k, info in enumerate(doc["clips"]):
         a, b = int(bounds[k]), int(bounds[k + 1])
