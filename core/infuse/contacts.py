@@ -45,6 +45,16 @@ DOWN_TOLERANCE = 0.01
 #: counts as off: about 2.5 mm on an adult, a heel rise of about 1 degree, so the foot starts to
 #: pivot about its ball as soon as the heel starts to rise (:func:`contact_phases`).
 RISE_TOLERANCE = 0.003
+#: Share of the speed threshold by which position noise may move a point's measured speed before
+#: :func:`detect` low-passes the positions (:func:`smoothed`).
+NOISE_SPEED = 0.1
+#: The widest window (seconds) over which :func:`detect` low-passes noisy positions.
+MAX_SMOOTHING_S = 0.3
+#: A point lands below, and lifts off above, these multiples of the speed that the noise left after
+#: low-passing gives a point at rest, when that exceeds the speed threshold (:func:`detect`): noise
+#: that moves a planted foot faster than a foot landing must not break its contact.
+NOISE_LAND = 4.0
+NOISE_LIFT = 6.0
 
 
 @dataclass(frozen=True)
@@ -223,6 +233,40 @@ def hysteresis(enter: np.ndarray, stay: np.ndarray) -> np.ndarray:
     return stay & (entered > broken)
 
 
+def position_noise(positions: np.ndarray) -> float:
+    """Frame-to-frame position noise (metres) of points moving through ``positions`` (F, P, 3).
+
+    The fourth difference of a smooth path is nearly zero at any frame rate, while noise of standard
+    deviation s per frame gives one of s x sqrt(70): the lower quintile of its length over every point
+    and frame (the feet at rest, where nothing else moves them), over sqrt(70). 0 below 5 frames.
+    """
+    if len(positions) < 5:
+        return 0.0
+    fourth = np.linalg.norm(np.diff(positions, n=4, axis=0), axis=-1)
+    return float(np.percentile(fourth, 20.0)) / np.sqrt(70.0)
+
+
+def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[np.ndarray, float]:
+    """``positions`` (F, P, 3) metres low-passed just enough that their noise (:func:`position_noise`)
+    moves a speed measured from them by at most ``tolerance_m_s`` (m/s) along each axis: a local
+    quadratic fit over the fewest frames that does it, at most :data:`MAX_SMOOTHING_S` seconds, the
+    positions unchanged when one frame to either side suffices (clean motion). Also returns the speed
+    (m/s) the noise left gives a point at rest (the mean length of its noisy velocity)."""
+    noise = position_noise(positions)
+    widest = max(int(MAX_SMOOTHING_S * fps / 2.0), 1)
+    half = np.arange(1, widest + 1)
+    # the slope of a local fit over 2h + 1 frames carries noise x fps x sqrt(3 / (h (h + 1) (2h + 1)))
+    axis_noise = noise * fps * np.sqrt(3.0 / (half * (half + 1) * (2 * half + 1)))
+    enough = axis_noise <= tolerance_m_s
+    h = int(half[np.argmax(enough)] if enough.any() else widest)
+    at_rest = float(axis_noise[h - 1]) * np.sqrt(3.0)
+    if h <= 1 or len(positions) < 2 * h + 1:
+        return positions, at_rest
+    from scipy.signal import savgol_filter  # scipy loads slowly: only for noisy motion
+
+    return savgol_filter(positions, 2 * h + 1, 2, axis=0, mode="interp"), at_rest
+
+
 def detect(
     positions: np.ndarray,
     fps: float,
@@ -244,14 +288,16 @@ def detect(
     pos = np.asarray(positions, dtype=np.float64)
     if len(pos) < 2:
         return np.ones(pos.shape[:2], dtype=bool)
+    pos, at_rest = smoothed(pos, fps, NOISE_SPEED * speed * leg)
     vel = np.gradient(pos, axis=0) * fps
     sp = np.linalg.norm(vel, axis=-1)
     y = pos[..., 1]
     planted = np.maximum(np.percentile(y, 5.0, axis=0), ground)
     rise = y - planted
     loose = max(float(release), 1.0)
-    slow = sp < speed * leg
-    flags = hysteresis(slow & (rise < height * leg), slow & (rise < loose * height * leg))
+    slow = sp < max(speed * leg, NOISE_LAND * at_rest)
+    still = sp < max(speed * leg, NOISE_LIFT * at_rest)
+    flags = hysteresis(slow & (rise < height * leg), still & (rise < loose * height * leg))
     return clean_runs(flags, max(1, int(round(min_duration * fps))))
 
 
