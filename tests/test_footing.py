@@ -155,6 +155,32 @@ def _limb(frames: int, bend: float = 0.4) -> tuple[np.ndarray, np.ndarray, np.nd
     return root, middle, end
 
 
+def test_goals_beyond_reach_are_drawn_in_smoothly_no_nearer_than_the_animated_ankle():
+    frames = 201
+    hip = np.tile([0.0, 0.9, 0.0], (frames, 1))
+    knee = hip + [0.0, -0.4, 0.12]
+    ankle = knee + [0.0, -0.4, -0.12]  # the animated ankle 0.8 m from the hip: 0.958 of the leg's length
+    leg = np.stack((hip, knee, ankle), axis=1)
+    length = 2.0 * np.hypot(0.4, 0.12)
+    direction = np.array([0.0, -0.8, 0.6])
+    share = np.linspace(0.9, 1.1, frames)  # goals from 0.9 to 1.1 of the length away, one direction
+    goal = hip + share[:, None] * length * direction
+    out = footing.within_reach(goal, leg)
+    away = np.linalg.norm(out - hip, axis=-1) / length
+    assert np.allclose(np.cross(out - hip, direction), 0.0)  # along the line from the hip
+    inside = share <= footing.SOFT_REACH
+    assert np.allclose(out[inside], goal[inside]) and (away[~inside] < share[~inside]).all()
+    assert (away <= footing.REACH + 1e-12).all() and away[-1] > footing.REACH - 1e-3
+    # Continuous and never turning back: no step larger than the goal's own.
+    steps = np.diff(away)
+    assert (steps >= 0.0).all() and (steps <= np.diff(share) + 1e-12).all()
+    # An animated ankle farther than REACH is the bound: nearer goals stay, farther ones are held at it.
+    half = length / 2.0
+    straight = np.stack((hip, hip + [0.0, -0.997 * half, half * np.sqrt(1.0 - 0.997**2)], hip + [0.0, -0.997 * length, 0.0]), axis=1)
+    away = np.linalg.norm(footing.within_reach(goal, straight) - hip, axis=-1) / length
+    assert np.allclose(away, np.minimum(share, 0.997))
+
+
 def test_turn_limb_meets_reachable_goals_as_solve_limb_does():
     frames = 400
     root, middle, end = _limb(frames)

@@ -5,7 +5,8 @@ for the heel, ball of the foot) is down; this module turns those flags into pinn
 two-bone leg IK of :mod:`infuse.runtime.limb_ik` enforces them. Retargeting pins a whole clip at
 once (:func:`pinned`: each contact held at one place, the correction gliding between contacts);
 locomotion pins block by block as it plays (:func:`anchors` says which point of each foot holds,
-:func:`heel_rise` lets the heel rise about a pinned ball where the leg would not reach).
+:func:`heel_rise` lets the heel rise about a pinned ball where the leg would not reach,
+:func:`within_reach` draws a goal beyond reach in toward the hip).
 
 Trajectories here are component-major (3, F) world metres, +Y up, as the retargeter keeps them;
 the streaming helpers take frame-major (F, ..., 3) arrays, as the runtime's pose blocks are.
@@ -20,8 +21,11 @@ from .contacts import contact_runs
 #: What holds a foot in a frame (:func:`anchors`): nothing (swinging), the ankle (heel down), the
 #: ball (heel off, the foot pivoting about its ball).
 FREE, ANKLE, BALL = 0, 1, 2
-#: Share of the leg's full length (thigh + shin) a pinned ankle may lie from the hip (:func:`heel_rise`).
+#: Share of the leg's full length (thigh + shin) a pinned ankle may lie from the hip (:func:`heel_rise`,
+#: :func:`within_reach`).
 REACH = 0.99
+#: Share of the leg's full length from which :func:`within_reach` draws a goal toward the hip.
+SOFT_REACH = 0.98
 #: The heel rises further about the ball (:func:`heel_rise`) only while each step of its rise brings the
 #: ankle toward the hip by at least this share of how far the ankle moves: near the closest the ankle's arc
 #: about the ball comes to the hip, a hip a millimetre farther would take tens of degrees more rise.
@@ -140,6 +144,29 @@ def anchors(heel: np.ndarray, ball: np.ndarray, has_ball: np.ndarray) -> np.ndar
     down = np.maximum(heel, ball) > 0.5
     by_ball = (ball > heel) & np.asarray(has_ball, dtype=bool)
     return np.where(down, np.where(by_ball, BALL, ANKLE), FREE)
+
+
+def within_reach(goal: np.ndarray, leg: np.ndarray) -> np.ndarray:
+    """Ankle goals (F, 3) ``goal`` drawn toward the hip so that none lies farther from it than the
+    animated ankle does or :data:`REACH` of the leg's full length, whichever is the farther; ``leg``
+    (F, 3, 3) the animated hip, knee and ankle positions.
+
+    Goals nearer than that, or than :data:`SOFT_REACH` of the length, stay; farther ones are brought
+    in along the line from the hip, their distance eased toward that bound (a tanh: value and slope
+    continuous), so the knee bends at least as much as the animation's or as :data:`REACH` leaves it,
+    and never locks straight: a goal pinned beyond reach that comes back within it would bend a
+    straight knee by tens of degrees in one frame.
+    """
+    length = np.linalg.norm(leg[:, 1] - leg[:, 0], axis=-1) + np.linalg.norm(leg[:, 2] - leg[:, 1], axis=-1)
+    length = np.maximum(length, 1e-12)
+    away = goal - leg[:, 0]
+    share = np.linalg.norm(away, axis=-1) / length
+    start = np.maximum(np.linalg.norm(leg[:, 2] - leg[:, 0], axis=-1) / length, SOFT_REACH)
+    band = np.maximum(REACH - start, 0.0)
+    excess = np.maximum(share - start, 0.0)
+    eased = start + np.where(band > 1e-9, band * np.tanh(excess / np.maximum(band, 1e-9)), 0.0)
+    out: np.ndarray = leg[:, 0] + away * (np.minimum(share, eased) / np.maximum(share, 1e-12))[:, None]
+    return out
 
 
 def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarray,

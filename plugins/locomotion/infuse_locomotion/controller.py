@@ -25,7 +25,8 @@ ball plus the animated ball-to-ankle offset, which carries the foot's pitch, and
 IK (``infuse.runtime.limb_ik``) reaches it with the foot keeping its animated rotation; where the
 hip cannot reach it, the heel rises further about the ball. The ball takes over where the corrected
 foot had it a frame earlier, so the switch is continuous, and at toe off the correction fades out
-over :data:`RELEASE_S`.
+over :data:`RELEASE_S`; a foot without a ball, held by its ankle, is let go with its goal kept within
+the leg's reach (:func:`infuse.footing.within_reach`).
 """
 from __future__ import annotations
 
@@ -782,6 +783,13 @@ class Locomotion(Controller):
             st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
             st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
         st.last = feet_pos[-1].copy()
+        # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
+        # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
+        # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
+        # goal is kept within reach, the knee bending at least as the animation's.
+        for k in np.flatnonzero(~b.has_ball):
+            free = anchors[:, k] == footing.FREE
+            goals[free, k] = footing.within_reach(goals[free, k], g_pos[free, k, :3])
         if rises.any():
             g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
