@@ -273,7 +273,7 @@ def baseline(row: Row, key: str, cache: str, frames: int, baselines: dict):
 _LEGS = ("hip", "knee", "ankle", "forefoot", "toe")
 
 
-def channel_joints(key: str, channel: str) -> np.ndarray:
+def joints_of_channel(key: str, channel: str) -> np.ndarray:
     """Indices of the joints of ``channel`` on the character ``key``."""
     c = character(key)
     sk = c.skeleton
@@ -337,7 +337,7 @@ def _channel(channel, key, scene, motion, base, start, end, activation) -> tuple
         late = abs(float(got[0].global_time) - activation.start)
         return late < 1.0 / FPS, f"syncPointProgress b:x:{got[0].sync} at {float(got[0].global_time):.2f} s"
     if channel == "delay":
-        joints = channel_joints(key, "head")
+        joints = joints_of_channel(key, "head")
         diff = _angle_deg(motion.local_rotations[:, joints], base.local_rotations[:len(motion.local_rotations), joints])
         over = np.nonzero(diff.max(axis=1) > ANGLE_DEG)[0]
         if not over.size:
@@ -365,7 +365,7 @@ def _channel(channel, key, scene, motion, base, start, end, activation) -> tuple
         pelvis = rig.joint("base")
         gap = np.linalg.norm((pos[:, pelvis] - bpos[:, pelvis])[:, [0, 2]], axis=1)
         return _verdict(gap, first, end, 0.05, "pelvis {:.2f} m from where it stood")
-    joints = channel_joints(key, channel)
+    joints = joints_of_channel(key, channel)
     n = motion.num_frames
     moved, figure = False, ""
     if joints.size:

@@ -100,7 +100,7 @@ class Controller:
     layer: Layer = Layer.BASE  # per class, or per instance (keyed curves choose theirs)
     mode: ClassVar[Mode] = Mode.OVERRIDE
     priority: ClassVar[int] = 0
-    # Per class, or per instance (a gesture's blends follow its phases, a gaze settles at its own speeds).
+    # Per class, or per instance (a gesture's blends follow its phases, a look settles at its own speeds).
     blend_in_s: float = 0.3
     blend_out_s: float = 0.3
     settle_s: float = 0.0
