@@ -65,3 +65,15 @@ def test_no_plugin_imports_another():
     problems = [f"{where}: {package} imports {module}" for where, module, package, packages in _imports_of_plugins()
                 if module.split(".")[0] in packages and module.split(".")[0] != package]
     assert problems == [], "\n".join(problems + ["(what two plugins share belongs in the core, behind infuse.api)"])
+
+
+def test_the_scene_and_runtime_name_no_controller_kind():
+    """The core realizes behaviours through the registry and the stage: its scene and runtime packages name
+    none of the built-in controller kinds (a plugin realizes its own, and a third party may replace it)."""
+    import re
+
+    kinds = re.compile(r"\b(locomotion|reach|gaze|blink|breathing|lipsync)\b")
+    found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()}"
+             for folder in ("scene", "runtime") for path in sorted((ROOT / "core/infuse" / folder).glob("*.py"))
+             for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if kinds.search(line)]
+    assert not found, found
