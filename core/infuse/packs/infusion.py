@@ -38,7 +38,7 @@ from .order import content_order
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
-CACHE_FORMAT = 4
+CACHE_FORMAT = 5
 #: Transitions a locomotion controller plays whole, with their own root motion.
 PLAYED_TRANSITIONS = ("start", "stop", "turn")
 #: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
@@ -253,8 +253,10 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
                                         params, stroke, phases, transition, pelvis)
     coords = coordinates_of(pack.kind)
     tess = {}
+    rank = {n: k for k, n in enumerate(content_order(pack.motions))}
     for group, t in pack.tessellations().items():
-        tess[group] = Tessellation.build(coords, t.labels, [[clips[n].parameters[c] for c in coords] for n in t.labels],
+        labels = sorted(t.labels, key=rank.__getitem__)  # by content, as the builder lists them (packs built before listed by name)
+        tess[group] = Tessellation.build(coords, labels, [[clips[n].parameters[c] for c in coords] for n in labels],
                                          resolution=resolution_of(pack.kind))
     return BlendSpace(pack.name, pack.version, pack.kind, clips, tess)
 
