@@ -246,25 +246,47 @@ def position_noise(positions: np.ndarray) -> float:
     return float(np.percentile(fourth, 20.0)) / np.sqrt(70.0)
 
 
-def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[np.ndarray, float]:
-    """``positions`` (F, P, 3) metres low-passed just enough that their noise (:func:`position_noise`)
-    moves a speed measured from them by at most ``tolerance_m_s`` (m/s) along each axis: a local
-    quadratic fit over the fewest frames that does it, at most :data:`MAX_SMOOTHING_S` seconds, the
-    positions unchanged when one frame to either side suffices (clean motion). Also returns the speed
-    (m/s) the noise left gives a point at rest (the mean length of its noisy velocity)."""
-    noise = position_noise(positions)
+def _slope_noise(half: np.ndarray) -> np.ndarray:
+    """Noise of a velocity measured over ``half`` frames to either side, per unit of position noise
+    and frame rate: a local linear slope's sqrt(3 / (h (h + 1) (2h + 1))), one frame's difference
+    sqrt(2) at a clip's ends (``half`` 0)."""
+    h = np.maximum(half, 1).astype(np.float64)
+    return np.where(half > 0, np.sqrt(3.0 / (h * (h + 1) * (2 * h + 1))), np.sqrt(2.0))
+
+
+def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Positions (F, P, 3) metres and velocities (F, P, 3) m/s low-passed just enough that the noise
+    of ``positions`` (:func:`position_noise`) moves a velocity by at most ``tolerance_m_s`` along
+    each axis, and the speed (F,) m/s that the noise left gives a point at rest (the mean length of
+    its noisy velocity).
+
+    A local quadratic fit over the fewest frames to either side that does it, at most
+    :data:`MAX_SMOOTHING_S` seconds, the window narrowing towards the clip's ends so that a foot
+    landing in its first frames is seen moving; clean motion keeps its positions and central
+    differences.
+    """
+    pos = np.asarray(positions, dtype=np.float64)
+    frames = len(pos)
+    noise = position_noise(pos)
     widest = max(int(MAX_SMOOTHING_S * fps / 2.0), 1)
     half = np.arange(1, widest + 1)
-    # the slope of a local fit over 2h + 1 frames carries noise x fps x sqrt(3 / (h (h + 1) (2h + 1)))
-    axis_noise = noise * fps * np.sqrt(3.0 / (half * (half + 1) * (2 * half + 1)))
-    enough = axis_noise <= tolerance_m_s
+    enough = noise * fps * _slope_noise(half) <= tolerance_m_s
     h = int(half[np.argmax(enough)] if enough.any() else widest)
-    at_rest = float(axis_noise[h - 1]) * np.sqrt(3.0)
-    if h <= 1 or len(positions) < 2 * h + 1:
-        return positions, at_rest
-    from scipy.signal import savgol_filter  # scipy loads slowly: only for noisy motion
-
-    return savgol_filter(positions, 2 * h + 1, 2, axis=0, mode="interp"), at_rest
+    t = np.arange(frames)
+    reach = np.minimum(np.minimum(t, frames - 1 - t), h)  # (F,) frames to either side
+    velocity = np.gradient(pos, axis=0) * fps
+    out = pos.copy()
+    for m in range(2, h + 1):
+        at = np.nonzero(reach == m)[0]
+        if not at.size:
+            continue
+        k = np.arange(-m, m + 1)
+        window = pos[at[:, None] + k]  # (n, 2m + 1, P, 3)
+        # least-squares quadratic through the window: its value and slope at the middle frame
+        value = (3.0 * (3 * m * m + 3 * m - 1) - 15.0 * k * k) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3))
+        out[at] = np.einsum("k,nkpc->npc", value, window)
+        velocity[at] = np.einsum("k,nkpc->npc", k / float(k @ k), window) * fps
+    return out, velocity, np.sqrt(3.0) * noise * fps * _slope_noise(reach)
 
 
 def detect(
@@ -288,15 +310,14 @@ def detect(
     pos = np.asarray(positions, dtype=np.float64)
     if len(pos) < 2:
         return np.ones(pos.shape[:2], dtype=bool)
-    pos, at_rest = smoothed(pos, fps, NOISE_SPEED * speed * leg)
-    vel = np.gradient(pos, axis=0) * fps
+    pos, vel, at_rest = smoothed(pos, fps, NOISE_SPEED * speed * leg)
     sp = np.linalg.norm(vel, axis=-1)
     y = pos[..., 1]
     planted = np.maximum(np.percentile(y, 5.0, axis=0), ground)
     rise = y - planted
     loose = max(float(release), 1.0)
-    slow = sp < max(speed * leg, NOISE_LAND * at_rest)
-    still = sp < max(speed * leg, NOISE_LIFT * at_rest)
+    slow = sp < np.maximum(speed * leg, NOISE_LAND * at_rest)[:, None]
+    still = sp < np.maximum(speed * leg, NOISE_LIFT * at_rest)[:, None]
     flags = hysteresis(slow & (rise < height * leg), still & (rise < loose * height * leg))
     return clean_runs(flags, max(1, int(round(min_duration * fps))))
 
