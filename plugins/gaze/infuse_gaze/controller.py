@@ -115,7 +115,8 @@ class Gaze(Controller):
         rows: dict[str, list] = {}
         for job in jobs:
             rows.setdefault(job.rig.name, []).append(job)
-        rows = {name: sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)) for name, row in rows.items()}
+        rows = {name: _drop_superseded(sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)), block)
+                for name, row in rows.items()}
         frames, dt = len(block), block.dt
         names = list(rows)
         n_groups = len(GROUPS)
@@ -196,6 +197,25 @@ class Gaze(Controller):
             job, state = rows[name][0], states[c]
             state.groups, state.eyes, state.first = groups_state[c], eyes_state[c], first_state[c]
             job.pose.add_offsets(job.binding.joints, turns[c][:, job.binding.present])
+
+
+def _drop_superseded(row, block) -> list:
+    """A character's gaze jobs (sorted by start) without those an open-ended gaze has taken over from.
+
+    Once the latest gaze without an end (a ``gazeShift``) is fully blended in by the block's first
+    frame, it leads until it is stopped and its weight 1 is the largest: the gazes before it can no
+    longer lead nor weigh (:func:`_in_charge`). They end where that gaze's blend-in completed, so
+    the runtime soon stops evaluating them; the frames are the same. A gaze so ended does not come
+    back when the one that took over is later stopped: the character then returns to rest."""
+    first = block.times[0]
+    takeover = max((k for k, job in enumerate(row) if job.activity.end_s is None
+                    and job.activity.start_s + job.activity.blend_in_s <= first + 1e-9), default=0)
+    lead = row[takeover].activity
+    ended = lead.start_s + lead.blend_in_s
+    for job in row[:takeover]:
+        if job.activity.end_s is None or job.activity.end_s > ended:
+            block.runtime.stop(job.activity, ended, blend_out_s=0.0)
+    return row[takeover:]
 
 
 def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
