@@ -234,16 +234,18 @@ def hysteresis(enter: np.ndarray, stay: np.ndarray) -> np.ndarray:
 
 
 def position_noise(positions: np.ndarray) -> float:
-    """Frame-to-frame position noise (metres) of points moving through ``positions`` (F, P, 3).
+    """Frame-to-frame position noise (metres, standard deviation along each axis) of points moving
+    through ``positions`` (F, P, 3).
 
-    The fourth difference of a smooth path is nearly zero at any frame rate, while noise of standard
-    deviation s per frame gives one of s x sqrt(70): the lower quintile of its length over every point
-    and frame (the feet at rest, where nothing else moves them), over sqrt(70). 0 below 5 frames.
+    The fourth difference of a smooth path is nearly zero, while noise of standard deviation s per
+    axis and frame gives one of s x sqrt(70) per axis, whose length has its 5th percentile at 0.585
+    times that; the 5th percentile over every point and frame is taken (the feet at rest, where
+    nothing else moves them; a fast foot at a low frame rate moves in every frame). 0 below 5 frames.
     """
     if len(positions) < 5:
         return 0.0
     fourth = np.linalg.norm(np.diff(positions, n=4, axis=0), axis=-1)
-    return float(np.percentile(fourth, 20.0)) / np.sqrt(70.0)
+    return float(np.percentile(fourth, 5.0)) / (0.585 * np.sqrt(70.0))
 
 
 def _slope_noise(half: np.ndarray) -> np.ndarray:
