@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import infuse_gaze.controller as gaze_controller
-from infuse.kinematics import motion_fk
+from infuse.kinematics import forward_kinematics, motion_fk
 from infuse.scene import Scene
 from infuse_gaze import Gaze
 
@@ -83,3 +83,30 @@ def test_only_the_last_gaze_is_still_evaluated(runs):
     assert [a.source.element for a in gaze_activities(ended) if a.rig.name == "ann"] == ["gazeShift"]
     ended.forget(1.0)
     assert len([a for a in ended.runtime.activities if isinstance(a.controller, Gaze)]) == 2  # ann's last, bob's
+
+
+def live_gazes(forget: bool) -> tuple[Scene, np.ndarray]:
+    """Ann gazes at a new point every 0.5 s, 100 times, the scene run between calls as a live one runs;
+    with ``forget``, it keeps 1 s of frames and what ended before then. Returns the scene and the FK
+    positions (F, J, 3) of every frame, gathered as they are evaluated."""
+    rng = np.random.default_rng(11)
+    scene = Scene(fps=30.0, quiet=True)
+    scene.add_character(synthetic_character("ann"), "ann")
+    skeleton = scene.runtime.rig("ann").skeleton
+    positions = []
+    for _ in range(SHIFTS):
+        scene.gaze("ann", (rng.uniform(-2.0, 2.0), rng.uniform(0.5, 2.2), rng.uniform(0.5, 3.0)), influence="WAIST")
+        scene.run(0.5)
+        positions.append(forward_kinematics(skeleton, *scene.runtime.last_frames("ann", 15))[1])
+        if forget:
+            scene.forget(1.0)
+    return scene, np.concatenate(positions)
+
+
+def test_point_targets_of_ended_gazes_are_reused():
+    (bounded, reused), (growing, fresh) = live_gazes(forget=True), live_gazes(forget=False)
+    assert len(growing.targets) == SHIFTS
+    assert len(bounded.targets) <= 12, sorted(bounded.targets)
+    assert reused.shape == fresh.shape == (15 * SHIFTS, synthetic_character().skeleton.num_joints, 3)
+    assert np.abs(reused - fresh).max() < 1e-6
+    assert np.ptp(fresh[:, synthetic_character().skeleton.index["skullbase"]], axis=0).max() > 0.05

@@ -126,6 +126,8 @@ class Scene(BuilderCalls):
         self._realize_notes: list[str] = []
         self._ids = itertools.count(1)
         self._points = itertools.count(1)
+        self._made_points: set[str] = set()  # the point targets the builder named
+        self._free_points: list[str] = []  # those of them nothing refers to any more, to reuse
         self._facing_later: dict[str, tuple] = {}  # character -> (name it faces, character, mapping, position)
         if not quiet:
             self.feedback.subscribe(_print_warning, kinds=["warningFeedback"])
@@ -519,10 +521,25 @@ class Scene(BuilderCalls):
         if isinstance(target, str):
             return self.resolve_name(target)
         point = _point(target, "target")
+        if self._free_points:  # one that no behaviour refers to any more (see :meth:`forget`): it moves here
+            name = self._free_points.pop()
+            self.runtime.add_target(name, point)
+            return name
         name = f"point{next(self._points)}"
         while name in self.characters or name in self.objects or name in self.targets:
             name = f"point{next(self._points)}"
+        self._made_points.add(name)
         return self.add_target(name, point)
+
+    def _free_point_targets(self) -> None:
+        """Offer the point targets the builder named for reuse once no activity the runtime keeps and no BML
+        block the scheduler keeps refers to them."""
+        named: set[str] = set()
+        sources = itertools.chain((a.source for a in self.runtime.activities),
+                                  (a for record in self.scheduler.blocks.values() for a in record.activations))
+        for source in sources:
+            _strings_in(getattr(source, "parameters", None), named)
+        self._free_points = sorted(self._made_points - named, reverse=True)
 
     # -- evaluation -----------------------------------------------------------------------------------
     @property
@@ -572,7 +589,8 @@ class Scene(BuilderCalls):
         """Keep memory bounded in a scene that runs for hours (a live one): drop the frames evaluated more
         than ``keep_s`` seconds ago (:meth:`motion` and :meth:`audio` then start later), the activities,
         utterances and BML blocks that ended before then (:meth:`~infuse.bml.Scheduler.forget`), and all
-        but the last 1,000 feedback events of the log."""
+        but the last 1,000 feedback events of the log. The point targets the builder named for a gaze or
+        a point at a point, once nothing kept refers to them, are reused for the next such points."""
         before = self.time - float(keep_s)
         self.runtime.forget(keep_s)
         self.scheduler.forget(before)
@@ -580,6 +598,7 @@ class Scene(BuilderCalls):
         for key, activity in list(self.activities.items()):
             if activity.end_s is not None and activity.end_s < before:
                 del self.activities[key]
+        self._free_point_targets()
         for name, spoken in self._spoken.items():
             self._spoken[name] = [s for s in spoken if s.start_s + s.utterance.duration_s >= before
                                   and (s.stop_s is None or s.stop_s >= before)]
@@ -620,6 +639,18 @@ class Scene(BuilderCalls):
         from .preview import render_scene
 
         return render_scene(self, path, **options)
+
+
+def _strings_in(value, found: set[str]) -> None:
+    """Add the strings in ``value`` (BML parameters: plain data, nested in dicts, lists and tuples) to ``found``."""
+    if isinstance(value, str):
+        found.add(value)
+    elif isinstance(value, dict):
+        for item in value.values():
+            _strings_in(item, found)
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            _strings_in(item, found)
 
 
 def _point(value, what: str) -> np.ndarray:
