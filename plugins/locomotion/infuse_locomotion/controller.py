@@ -787,7 +787,7 @@ class Locomotion(Controller):
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
         # goal is kept within reach, the knee bending at least as the animation's.
-        for k in np.flatnonzero(~b.has_ball):
+        for k in np.flatnonzero(~b.has_ball).tolist():
             free = anchors[:, k] == footing.FREE
             goals[free, k] = footing.within_reach(goals[free, k], g_pos[free, k, :3])
         if rises.any():
