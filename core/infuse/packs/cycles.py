@@ -33,8 +33,8 @@ STRAIGHTEN_DEG_S = 30.0
 #: A cycle travelling within this many degrees of its facing (or of straight back) walks forward (back):
 #: its body is turned to travel exactly so (the hips of a real take seldom face its travel exactly).
 ALIGN_DEG = 10.0
-#: A clip's pelvis moving slower than this many leg lengths per second over its first (last) quarter
-#: second stands there.
+#: A clip's pelvis travelling slower than this many leg lengths per second over its first (last)
+#: quarter second (net ground travel) stands there.
 STILL_LEGS_S = 0.15
 #: Clips of at most this many steps may be transitions (starts, stops, steps).
 SHORT_STEPS = 4
@@ -189,10 +189,11 @@ def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarra
         return None
     if steps <= 2 and travel < leg:
         return "step"
-    speed = np.linalg.norm(np.gradient(root[:, [0, 2]], axis=0), axis=-1) * fps
-    span = max(int(round(0.25 * fps)), 1)
+    span = min(max(int(round(0.25 * fps)), 1), len(root) - 1)
+    # net ground travel over each end: mocap noise on the pelvis adds to a frame-by-frame speed, not to it
+    travelled = np.linalg.norm((root[[span, -1]] - root[[0, -1 - span]])[:, [0, 2]], axis=-1) * fps / span
     still = STILL_LEGS_S * leg
-    begins, ends = speed[:span].mean() < still, speed[-span:].mean() < still
+    begins, ends = travelled < still
     if begins and ends:
         return "step"
     if begins:
