@@ -589,8 +589,8 @@ class Scene(BuilderCalls):
         """Keep memory bounded in a scene that runs for hours (a live one): drop the frames evaluated more
         than ``keep_s`` seconds ago (:meth:`motion` and :meth:`audio` then start later), the activities,
         utterances and BML blocks that ended before then (:meth:`~infuse.bml.Scheduler.forget`), and all
-        but the last 1,000 feedback events of the log. The point targets the builder named for a gaze or
-        a point at a point, once nothing kept refers to them, are reused for the next such points."""
+        but the last 1,000 feedback events of the log. The point targets the builder named for points given
+        as targets, once nothing kept refers to them, are reused for the next such points."""
         before = self.time - float(keep_s)
         self.runtime.forget(keep_s)
         self.scheduler.forget(before)
