@@ -264,8 +264,8 @@ def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[n
 
     A local quadratic fit over the fewest frames to either side that does it, at most
     :data:`MAX_SMOOTHING_S` seconds, the window narrowing towards the clip's ends so that a foot
-    landing in its first frames is seen moving; clean motion keeps its positions and central
-    differences.
+    landing in its first frames is seen moving (the first and last frame of a noisy clip take their
+    neighbour's velocity); clean motion keeps its positions and central differences.
     """
     pos = np.asarray(positions, dtype=np.float64)
     frames = len(pos)
@@ -288,6 +288,9 @@ def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[n
         value = (3.0 * (3 * m * m + 3 * m - 1) - 15.0 * k * k) / ((2 * m - 1) * (2 * m + 1) * (2 * m + 3))
         out[at] = np.einsum("k,nkpc->npc", value, window)
         velocity[at] = np.einsum("k,nkpc->npc", k / float(k @ k), window) * fps
+    if h > 1 and frames > 2:  # a noisy clip's end frames: one frame's difference tells nothing
+        velocity[[0, -1]] = velocity[[1, -2]]
+        reach[[0, -1]] = 1
     return out, velocity, np.sqrt(3.0) * noise * fps * _slope_noise(reach)
 
 
