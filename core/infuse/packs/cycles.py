@@ -189,11 +189,11 @@ def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarra
         return None
     if steps <= 2 and travel < leg:
         return "step"
-    span = min(max(int(round(0.25 * fps)), 1), len(root) - 1)
-    # net ground travel over each end: mocap noise on the pelvis adds to a frame-by-frame speed, not to it
-    travelled = np.linalg.norm((root[[span, -1]] - root[[0, -1 - span]])[:, [0, 2]], axis=-1) * fps / span
+    velocity = np.gradient(root[:, [0, 2]], axis=0) * fps
+    span = max(int(round(0.25 * fps)), 1)
     still = STILL_LEGS_S * leg
-    begins, ends = travelled < still
+    # the mean velocity's length (net travel), not the mean speed, which mocap noise on the pelvis inflates
+    begins, ends = (np.linalg.norm(velocity[:span].mean(axis=0)) < still, np.linalg.norm(velocity[-span:].mean(axis=0)) < still)
     if begins and ends:
         return "step"
     if begins:
