@@ -22,8 +22,8 @@ SOURCE = ("bandai/Bandai-Namco-Research-Motiondataset-1/data", "dataset-1_*_norm
 #: Walks to targets 4 m away at these angles (degrees) in the pack trials.
 TARGET_ANGLES = (0.0, 90.0, 180.0)
 #: Worst foot skate (cm/m) over the straight walks: the target where the original set meets it, else the
-#: figure the variant reaches (measured 2.25, 2.50, 1.89 and 1.73; see docs/packs.md) with a tenth more.
-SKATE_CM_M = {"fps_24": 2.5, "jitter": 2.75, "no_runs": 2.1, "facing_curving": 1.9}
+#: figure the variant reaches (measured 2.25, 1.93, 1.89 and 1.73; see docs/packs.md) with a tenth more.
+SKATE_CM_M = {"fps_24": 2.5, "jitter": 2.15, "no_runs": 2.1, "facing_curving": 1.9}
 
 
 @pytest.fixture(scope="module")
@@ -162,3 +162,10 @@ def test_variant_packs_steer(trials, name):
     assert w["miss_m"] <= 0.05, w
     assert w["path_ratio"] <= 1.15 and w["loops"] == 0, w
     assert w["skate_cm_m"] <= SKATE_CM_M.get(name, 1.5), w
+
+
+def test_rotation_noise_costs_a_walk_to_a_target_little_skate(trials):
+    """With 1 degree of rotation noise on every joint, contacts are still found at the strikes: a whole walk
+    to a target skates at most 1.3 times what the set as recorded does (measured 12.9 cm against 11.2; 36.5
+    when a foot's noise broke its contacts)."""
+    assert trials["jitter"][0]["target_skate_cm"] <= 1.3 * trials["original"][0]["target_skate_cm"], trials["jitter"][0]
