@@ -157,14 +157,15 @@ def _signature(pack: Pack) -> str:
 
 
 def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, retargeter: str | None = None,
-                   **options) -> dict[str, tuple[Motion, np.ndarray]]:
-    """Every clip of ``packs`` on ``character``: pack name -> (all its clips joined in the order of its
-    analysis, (N+1,) frame bounds).
+                   **options) -> dict[str, tuple[Motion, np.ndarray, list[str]]]:
+    """Every clip of ``packs`` on ``character``: pack name -> (all its clips joined, (N+1,) frame bounds,
+    the N clip names in the order joined).
 
     Packs sharing a skeleton go through the retargeter as one clip (one plan, one batch), their clips
     joined in :func:`~infuse.packs.order.content_order`: the retargeter reads the batch as a whole (its
-    reference pose, its first root position), so the order is set by the clips' content, not by the
-    names of the packs and clips or the order they are listed in.
+    reference pose), so the order is set by the clips' content, not by the names of the packs and clips
+    or the order they are listed in. Each pack's clips keep that order. Each clip goes in moved to start
+    over the origin (:func:`_from_origin`).
     """
     if not registry.retargeters():
         raise MissingFeatureError(None, "no retargeter installed: install infuse-anim-retarget")
@@ -177,7 +178,7 @@ def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, re
         sk = members[0].skeleton
         every = {(p.name, n): m if m.skeleton is sk else m.replace(skeleton=sk) for p in members for n, m in p.motions.items()}
         order = content_order(every)
-        motions = [every[key] for key in order]
+        motions = _from_origin([every[key] for key in order], members[0].mapping.indices(sk))
         fps = motions[0].fps
         moved = any(m.joint_translations is not None for m in motions)
         joined = Motion(sk, fps, np.concatenate([m.local_rotations for m in motions]),
@@ -187,18 +188,34 @@ def retarget_packs(packs: list[Pack], character: Character, mapping: Mapping, re
         starts = dict(zip(order, np.cumsum([0] + [m.num_frames for m in motions[:-1]])))
         jt = result.joint_translations
         for p in members:
-            frames = np.concatenate([np.arange(starts[(p.name, n)], starts[(p.name, n)] + m.num_frames)
-                                     for n, m in p.motions.items()])
+            names = [n for pack, n in order if pack == p.name]
+            lengths = [p.motions[n].num_frames for n in names]
+            frames = np.concatenate([np.arange(starts[(p.name, n)], starts[(p.name, n)] + f) for n, f in zip(names, lengths)])
             part = Motion(character.skeleton, fps, result.local_rotations[frames], result.root_translations[frames],
                           None if jt is None else jt[frames], name=p.name)
-            out[p.name] = (part, np.cumsum([0] + [m.num_frames for m in p.motions.values()]))
+            out[p.name] = (part, np.cumsum([0] + lengths), names)
     return out
 
 
-def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: tuple[Motion, np.ndarray]) -> BlendSpace:
-    """The :class:`BlendSpace` of ``pack`` on ``character`` from its ``retargeted`` clips (see :func:`retarget_packs`)."""
-    doc = pack.require_built()
-    out, bounds = retargeted
+def _from_origin(motions: list[Motion], index: dict[str, int]) -> list[Motion]:
+    """``motions`` each moved on the ground so that the midpoint of its hip joints starts over the origin.
+
+    The retargeter scales a batch's travel about where its first clip starts: moved so, every clip's
+    travel on the character is the same whichever clip comes first (where a clip was recorded on
+    the capture floor carries no meaning)."""
+    sk = motions[0].skeleton
+    jt = [m.local_translations()[:1] for m in motions] if any(m.joint_translations is not None for m in motions) else None
+    _, g_pos = forward_kinematics(sk, np.concatenate([m.local_rotations[:1] for m in motions]),
+                                  np.concatenate([m.root_translations[:1] for m in motions]), None if jt is None else np.concatenate(jt))
+    start = 0.5 * (g_pos[:, index["l_hip"]] + g_pos[:, index["r_hip"]]) * np.array([1.0, 0.0, 1.0])  # (N, 3)
+    return [m.replace(root_translations=m.root_translations - s) for m, s in zip(motions, start)]
+
+
+def infuse_pack(pack: Pack, character: Character, mapping: Mapping,
+                retargeted: tuple[Motion, np.ndarray, list[str]]) -> BlendSpace:
+    """The :class:`BlendSpace` of ``pack`` on ``character`` from its ``retargeted`` clips (see
+    :func:`retarget_packs`); its clips and each tessellation's examples are in the order retargeted (by content)."""
+    out, bounds, names = retargeted
     sk = character.skeleton
     index = mapping.indices(sk)
     g_rot, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
@@ -208,7 +225,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
     starts = np.asarray(bounds[:-1], dtype=np.int64)
     ground = float(lowest_points(sk, pair, g_rot[starts], g_pos[starts]).min())  # the feet at the clips' starts, any order
     clips = {}
-    for k, info in enumerate(doc["clips"]):
+    for k, info in enumerate(pack.clip_info(n) for n in names):
         a, b = int(bounds[k]), int(bounds[k + 1])
         contacts = np.asarray(info["contacts"], dtype=bool).T
         phases = None  # a pack built without phases: the heel is down whenever the foot is
@@ -253,7 +270,7 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping, retargeted: 
                                         params, stroke, phases, transition, pelvis)
     coords = coordinates_of(pack.kind)
     tess = {}
-    rank = {n: k for k, n in enumerate(content_order(pack.motions))}
+    rank = {n: k for k, n in enumerate(names)}
     for group, t in pack.tessellations().items():
         labels = sorted(t.labels, key=rank.__getitem__)  # by content, as the builder lists them (packs built before listed by name)
         tess[group] = Tessellation.build(coords, labels, [[clips[n].parameters[c] for c in coords] for n in labels],

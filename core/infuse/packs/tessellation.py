@@ -13,6 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: Examples closer than this in the normalized, reduced space stand at one point and share its weight.
+SAME_POINT = 1e-9
+
+
 @dataclass
 class Tessellation:
     """Simplices over example points.
@@ -104,7 +108,8 @@ class Tessellation:
             best[outside] = nearest
             chosen[outside] = clamped[nearest, :, np.arange(outside.size)]
         out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
-        return out, np.asarray(inside)
+        share = self._shares()
+        return (out if share is None else out @ share), np.asarray(inside)
 
     def contains(self, query) -> np.ndarray:
         """(Q,) flags of (Q, D) query points inside the hull (as :meth:`weights` reports them), without the weights."""
@@ -134,6 +139,19 @@ class Tessellation:
             cached = (key, corners, base, np.linalg.pinv(edges))
             self.__dict__["_cached_frames"] = cached
         return cached[1], cached[2], cached[3]
+
+    def _shares(self) -> np.ndarray | None:
+        """(N, N) matrix spreading a weight evenly over examples at one point (within :data:`SAME_POINT`
+        in the reduced space), or None when no two coincide. Qhull keeps one of coinciding points, and
+        which one turns on the last bits of their coordinates: spread, their blend does not."""
+        key = (self.points, self.origin, self.scale, self.basis)
+        cached = self.__dict__.get("_cached_shares")
+        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+            y = self.reduced(self.points)
+            same = np.linalg.norm(y[:, None] - y[None], axis=-1) <= SAME_POINT
+            share = same / same.sum(axis=1, keepdims=True) if same.sum() > len(y) else None
+            cached = self.__dict__["_cached_shares"] = (key, share)
+        return cached[1]
 
     def to_dict(self) -> dict:
         return {"coordinates": list(self.coordinates), "labels": list(self.labels), "points": self.points.tolist(),
