@@ -256,7 +256,8 @@ def _slope_noise(half: np.ndarray) -> np.ndarray:
     and frame rate: a local linear slope's sqrt(3 / (h (h + 1) (2h + 1))), one frame's difference
     sqrt(2) at a clip's ends (``half`` 0)."""
     h = np.maximum(half, 1).astype(np.float64)
-    return np.where(half > 0, np.sqrt(3.0 / (h * (h + 1) * (2 * h + 1))), np.sqrt(2.0))
+    out: np.ndarray = np.where(half > 0, np.sqrt(3.0 / (h * (h + 1) * (2 * h + 1))), np.sqrt(2.0))
+    return out
 
 
 def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
