@@ -11,7 +11,9 @@ Each foot has up to two contact points: the ankle (heel side) and the ball (``fo
 ``toe``). A point lands when it moves slower than ``speed`` leg lengths per second and sits less than
 ``height`` leg lengths above its own planted height, and stays down until it moves faster or rises
 ``release`` times that high (hysteresis: a point hovering at the height does not flicker); runs
-shorter than ``min_duration`` seconds are dropped and gaps shorter than that are filled.
+shorter than ``min_duration`` seconds are dropped and gaps shorter than that are filled. On noisy
+mocap (:func:`position_noise`) the paths are first low-passed over a window set in seconds and the
+speed thresholds kept above the noise that remains (:func:`smoothed`); clean motion is not touched.
 :func:`contact_phases` then tells the heel (ankle) from the ball of each planted foot.
 """
 from __future__ import annotations
