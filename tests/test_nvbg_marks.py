@@ -18,7 +18,8 @@ def test_a_mark_between_sentences_is_timed_at_its_word_with_espeak():
     require_espeak()
     engine = registry.get("tts", "espeak").factory()
     timing = EngineSpeechTimer(engine).time_speech(TEXT, [("first", 13), ("you", 19)])
-    words = engine.synthesize(TEXT).words  # without marks: the same words to well within a frame
+    words = timing.details["words"]  # the words of that very synthesis (espeak's timing varies between calls)
+    assert words[3][2] == "you"  # (espeak cuts the word after a dropped mark: "irst")
     assert timing.mark_times_s["first"] == pytest.approx(words[2][0], abs=1e-3) and words[2][0] > 0.5
     assert timing.mark_times_s["you"] == pytest.approx(words[3][0], abs=1e-3)
 
