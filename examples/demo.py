@@ -116,17 +116,24 @@ def scene_demo() -> int:
               f"joints), packs {', '.join(entry.packs) or 'none'}")
     scene.on("blockProgress", lambda e: print(f"  {e.global_time:5.2f} s  {e.character}: {e.block} {e.sync}s"))
     scene.run(spec.duration)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name in scene.characters:
-        written += scene.export(name, out / f"{name}.glb")
-    written += write_feedback(scene, out)
-    written.append(scene.render(out / "preview.png", strip=6))
+    written = write_outputs(scene, out, strip=6)
     written.append(scene.render(out / "scene.gif", fps=15, size=(720, 480)))
     report(scene)
     for path in written:
         print(f"wrote      {path}")
     return 0
+
+
+def write_outputs(scene, out: Path, strip: int) -> list[Path]:
+    """Every character as a glb (with its WAV when it speaks), the feedback, and a preview strip of
+    ``strip`` frames, in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in scene.characters:
+        written += scene.export(name, out / f"{name}.glb")
+    written += write_feedback(scene, out)
+    written.append(scene.render(out / "preview.png", strip=strip))
+    return written
 
 
 def report(scene) -> None:
@@ -150,12 +157,7 @@ def conversation_demo() -> int:
     spec = read_scene_file(CONVERSATION)
     scene = build_scene(spec)
     scene.run(spec.duration)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name in scene.characters:
-        written += scene.export(name, out / f"{name}.glb")
-    written += write_feedback(scene, out)
-    written.append(scene.render(out / "preview.png", strip=8))
+    written = write_outputs(scene, out, strip=8)
     conversation_report(scene)
     for path in written:
         print(f"wrote      {path}")
