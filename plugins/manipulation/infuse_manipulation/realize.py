@@ -47,16 +47,22 @@ def pointing_from_bml(parameters: dict, runtime, character: str, activation) -> 
     return controller
 
 
-def realize_pointing(activation, stage):
+def _realized(activation, stage, from_bml, cannot: str):
+    """The controller ``from_bml`` builds for ``activation``, activated until its end; a failure warns that
+    the behaviour ``cannot`` (what it cannot do) and why."""
     parameters = _resolved(activation, stage)
     if parameters is None:
         return None
     try:
-        controller = pointing_from_bml(parameters, stage.runtime, activation.character, activation)
+        controller = from_bml(parameters, stage.runtime, activation.character, activation)
+        return stage.activate(activation, controller, end_s(activation))
     except InfuseError as exc:
-        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot point: {exc}")
+        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> {cannot}: {exc}")
         return None
-    return stage.activate(activation, controller, end_s(activation))
+
+
+def realize_pointing(activation, stage):
+    return _realized(activation, stage, pointing_from_bml, "cannot point")
 
 
 # -- constraints ------------------------------------------------------------------------------------------
@@ -81,15 +87,7 @@ def constraint_from_bml(parameters: dict, runtime, character: str, activation) -
 
 
 def realize_constraint(activation, stage):
-    parameters = _resolved(activation, stage)
-    if parameters is None:
-        return None
-    try:
-        controller = constraint_from_bml(parameters, stage.runtime, activation.character, activation)
-        return stage.activate(activation, controller, end_s(activation))
-    except InfuseError as exc:
-        stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}> cannot hold its effector: {exc}")
-        return None
+    return _realized(activation, stage, constraint_from_bml, "cannot hold its effector")
 
 
 # -- grabbing ---------------------------------------------------------------------------------------------
