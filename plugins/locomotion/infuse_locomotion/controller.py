@@ -953,14 +953,19 @@ def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndar
     (...), turning ``v``'s end up in front (toes bending up, a foot's heel coming down); zero where
     ``v`` already reaches that high. A turn is at most :data:`LIFT_MAX_DEG`, less as ``v`` comes to
     point straight down or back (none then: which way is up in front is lost)."""
-    axis = np.stack((-along[..., 2], np.zeros(along.shape[:-1]), along[..., 0]), axis=-1)
-    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
+    # Written out component by component: numpy's generic cross, norm, stack and clip cost more than
+    # the arithmetic on a block's few feet.
+    ax, az = -along[..., 2], along[..., 0]
+    size = np.maximum(np.sqrt(ax * ax + az * az), 1e-12)
+    ax, az = ax / size, az / size
+    axis = np.zeros(along.shape)
+    axis[..., 0], axis[..., 2] = ax, az
     # The height after a turn t about the axis is c cos t + s sin t (the axis is horizontal); with
     # s > 0 it rises from t = 0 to its top at t = atan2(s, c), in (0, pi).
-    c, s = v[..., 1], np.cross(axis, v)[..., 1]
+    c, s = v[..., 1], az * v[..., 0] - ax * v[..., 2]  # s: (axis x v)'s vertical component
     r = np.maximum(np.hypot(c, s), 1e-12)
-    angle = np.maximum(np.arctan2(s, c) - np.arccos(np.clip(height / r, -1.0, 1.0)), 0.0)
-    most = math.radians(LIFT_MAX_DEG) * np.clip(4.0 * s / r, 0.0, 1.0)  # 15 degrees or more off straight down
+    angle = np.maximum(np.arctan2(s, c) - np.arccos(np.minimum(np.maximum(height / r, -1.0), 1.0)), 0.0)
+    most = math.radians(LIFT_MAX_DEG) * np.minimum(np.maximum(4.0 * s / r, 0.0), 1.0)  # 15 degrees or more off straight down
     return axis, np.where(c < height, np.minimum(angle, most), 0.0)
 
 
@@ -975,26 +980,34 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, st: LocomotionState, dt
     g_rot, g_pos = chain_fk(sk, rot, root, jt, floors.joints)
     g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
     ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
-    point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
-    axis, angle = _lift(point, floors.point_floor - ankle[..., 1], point)
-    pitch = quat.from_rotvec(axis * (angle * floors.kept)[..., None])
-    ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
-    rot[:, floors.ankles] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
+    ball_rot, ball_parent = g_rot[:, :, 3], g_rot[:, :, 2]
+    angle = None
+    if floors.kept.any():
+        point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
+        axis, angle = _lift(point, floors.point_floor - ankle[..., 1], point)
+        angle = angle * floors.kept
+    if angle is not None and angle.any():  # feet that pitch (others keep their rotations as they are)
+        pitch = quat.from_axis_angle(axis, angle)
+        ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
+        rot[:, floors.ankles] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
+        # Below the ankle everything turned by the pitch: the ball, its parent and the tip.
+        ball = ankle + quat.rotate(pitch, ball - ankle)
+        ball_rot = quat.multiply(pitch, ball_rot)
+        ball_parent = np.where((floors.ball_parents == floors.ankles)[None, :, None], ankle_rot,
+                               quat.multiply(pitch, ball_parent))
     if not floors.toes.any():
         return
-    # Below the ankle everything turned by the pitch: the ball, its parent and the tip.
-    ball = ankle + quat.rotate(pitch, ball - ankle)
-    ball_rot = quat.multiply(pitch, g_rot[:, :, 3])
-    ball_parent = np.where((floors.ball_parents == floors.ankles)[None, :, None], ankle_rot,
-                           quat.multiply(pitch, g_rot[:, :, 2]))
     tip = quat.rotate(ball_rot, floors.tip)
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ball + tip - ankle)  # across the whole foot
     up = _slow_fall(angle, st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)
     st.toe_bend = up[-1].copy()
-    bend = quat.from_rotvec(axis * (up * floors.toes)[..., None])
+    up = up * floors.toes
+    if not up.any():  # no toes bent: they keep their rotations
+        return
+    bend = quat.from_axis_angle(axis, up)
     rot[:, floors.balls] = np.where(floors.toes[None, :, None],
-                                       quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
-                                       rot[:, floors.balls])
+                                    quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
+                                    rot[:, floors.balls])
 
 
 def _slowest_walk(clips) -> int:
