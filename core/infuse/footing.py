@@ -37,9 +37,15 @@ _RISE_COS, _RISE_SIN = np.cos(_RISES), np.sin(_RISES)
 
 def smoothstep(x: np.ndarray | float) -> np.ndarray:
     """``3x² - 2x³`` of ``x`` clipped to [0, 1]: 0 and 1 with zero slope at both ends."""
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+    x = np.minimum(np.maximum(np.asarray(x, dtype=np.float64), 0.0), 1.0)  # a clip, cheaper than np.clip on few values
     out: np.ndarray = x * x * (3.0 - 2.0 * x)
     return out
+
+
+def _length(v: np.ndarray) -> np.ndarray:
+    """Lengths (...) of vectors ``v`` (..., 3), as ``np.linalg.norm(v, axis=-1)`` gives them, for less
+    on a block's few frames."""
+    return np.sqrt((v * v).sum(axis=-1))
 
 
 def planted_height(heights: np.ndarray, flags: np.ndarray) -> float:
@@ -185,21 +191,25 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     ``ankle_rotation`` (F, 4) is the ankle's global rotation (x, y, z, w), ``leg`` (F, 3, 3) the hip,
     knee and ankle positions.
     """
-    reach = REACH * (np.linalg.norm(leg[:, 1] - leg[:, 0], axis=-1) + np.linalg.norm(leg[:, 2] - leg[:, 1], axis=-1))
+    reach = REACH * (_length(leg[:, 1] - leg[:, 0]) + _length(leg[:, 2] - leg[:, 1]))
     v = ankle_goal - ball_goal
     out, rise = ball_goal + v, np.zeros_like(ankle_goal)
-    short = np.nonzero(np.linalg.norm(out - leg[:, 0], axis=-1) > reach)[0]
+    short = np.nonzero(_length(out - leg[:, 0]) > reach)[0]
     if not short.size:
         return out, rise
     v, ball, hip = v[short], ball_goal[short], leg[short, 0]
-    axis = np.stack((-v[:, 2], np.zeros(len(v)), v[:, 0]), axis=-1)  # v x +Y: the horizontal axis across v
-    axis /= np.maximum(np.linalg.norm(axis, axis=-1, keepdims=True), 1e-12)
-    up = np.cross(axis, v)  # v turned 90 degrees toward +Y about the ball
+    # v x +Y: the horizontal axis across v; up = axis x v: v turned 90 degrees toward +Y about the ball.
+    ax, az = -v[:, 2], v[:, 0]
+    size = np.maximum(np.sqrt(ax * ax + az * az), 1e-12)
+    ax, az = ax / size, az / size
+    axis = np.zeros(v.shape)
+    axis[:, 0], axis[:, 2] = ax, az
+    up = np.stack((-az * v[:, 1], az * v[:, 0] - ax * v[:, 2], ax * v[:, 1]), axis=-1)
     # Each rise's ankle, coordinate by coordinate (F, R), and its squared distance from the hip.
     far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
     beyond = np.maximum(np.sqrt(far) - reach[short, None], 0.0)
-    arc = RISE_GAIN * np.linalg.norm(v, axis=-1)[:, None] * _RISES
+    arc = RISE_GAIN * _length(v)[:, None] * _RISES
     pick = np.argmin(beyond + arc, axis=1)
     out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
     rise[short] = quat.rotate(quat.conjugate(ankle_rotation[short]), axis * _RISES[pick][:, None])
