@@ -2,7 +2,6 @@
 at the frame it starts; memory stays bounded; a full queue says so at once."""
 from __future__ import annotations
 
-import math
 import threading
 import time
 
@@ -292,27 +291,3 @@ def test_a_failing_frame_callback_stops_the_scene_with_its_error():
         assert not live.running
         with pytest.raises(UsageError, match="stopped: no screen for frame"):
             live.nod("bob")
-
-
-def test_blocks_are_evaluated_as_late_as_they_can_be():
-    """In blocks of four frames, the frames evaluated but not shown yet are never more than a block and
-    the lead (how long before its first frame a block starts): a block waits for its time rather than
-    being evaluated as soon as the one before is in hand, so what arrives meanwhile shows on its first
-    frame, which is the start a block accepted then gets."""
-    with LiveScene(_scene(), max_block_frames=4) as live:
-        frames = Frames(live)
-        frames.wait(10)
-        live.block_frames = 4  # held: costs under a quarter of a frame halve blocks only after two seconds
-        ahead, starts = [], []
-        for k in range(12):
-            time.sleep(0.013 * (k % 5) + 0.02)
-            last = live.last_frame.index
-            evaluated = live.scene.runtime.frame
-            lead_frames = math.ceil(live.stats.summary()["lead_ms"] * 1e-3 * FPS)
-            ahead.append((evaluated - 1 - last, 4 + lead_frames + 1))
-            block = live.bml("bob", f'<bml xmlns="{BML_NS}" id="n{k}"><head id="h" lexeme="NOD"/></bml>')[0]
-            starts.append(round(live.scene.scheduler.blocks[block].start_s * FPS))
-        frames.wait(starts[-1])
-        blocks = {first for first, _ in live.stats.blocks}
-    assert all(n <= bound for n, bound in ahead), ahead
-    assert set(starts) <= blocks  # each starts on the first frame of a block

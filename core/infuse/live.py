@@ -18,19 +18,24 @@ Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch
 threads run it: the evaluator (the loop thread) applies commands (BML, builder calls, target moves) and evaluates blocks
 of frames; the presenter shows each frame when it is due (:meth:`LiveScene.on_frame` callbacks). Each
 block starts as late as it can and still be ready when its first frame is due (the lead: the 90th
-percentile of how long the last blocks took from their planned start, waking late included), so a
-command that arrives before then shows on that frame. The evaluator spends at most
-:attr:`LiveScene.command_budget_s` per block on commands once a block is due; the rest wait. Commands
-wait in a bounded queue: a full queue raises :class:`~infuse.errors.BusyError` at once.
+percentile of how long the blocks of the last second took, waking late included, commands excluded), so
+a command that arrives before then shows on that frame. Commands are applied between blocks, each where
+it fits: one expected to run past the next block's start (it takes as long as the longest of its kind
+lately) waits for the gap after that block, so a burst of them delays no frame. A loop running late
+spends at most :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
+full queue raises :class:`~infuse.errors.BusyError` at once.
 
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
 much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
 while a frame costs under 60% of a frame's time; twice as many (up to ``max_block_frames``) when it
-costs more; half as many after two seconds of frames that cost under 25% (costs as the median of the
-last blocks; the first frame, evaluated as the loop starts, sizes the first ones). With blocks of B
-frames a command shows within B frames plus the lead. A frame still waiting when the next one is due is
-skipped and counts as missed (:attr:`LiveStats.missed`). At most a block and the frames already due when
-it started wait to be shown.
+costs more; as soon as the median of the last blocks says a shorter block's frames would cost under 50%
+(a shorter block costs at most what a longer one does), that many (the first frame, evaluated as the
+loop starts, sizes the first blocks). With blocks of one frame a command shows at most a frame, the lead
+and the commands before it after it arrives; with blocks of B frames, within B frames plus the lead. A
+slow moment (the machine busy elsewhere, a costly controller) grows blocks and the lead; both are back
+within a second of its end. A frame still waiting when the next one is due is skipped and counts as
+missed (:attr:`LiveStats.missed`). At most a block and the frames already due when it started wait to
+be shown.
 
 Frames stand on the ground as exported files do: each character is lowered by how low its feet reach at
 rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
@@ -61,6 +66,9 @@ from .scene import Scene
 KEEP_S = 2.0
 #: Seconds a block's frames are meant to be ready before the first is due (handing them to the presenter).
 LEAD_MARGIN_S = 0.001
+#: Blocks double while a frame costs more than this share of a frame's time, and shrink to a size whose
+#: frames would cost under :data:`SHRINK_AT` of it (what is left: commands, and the machine's other work).
+GROW_AT, SHRINK_AT = 0.6, 0.5
 
 
 @dataclass(frozen=True)
@@ -143,7 +151,8 @@ class LiveScene:
 
     ``scene``: the :class:`~infuse.scene.Scene` (characters added, blocks maybe scheduled; nothing
     evaluated yet, or its time is taken as now). ``queue_size``: most commands waiting.
-    ``command_budget_s``: most seconds per frame spent on commands (default a quarter of a frame).
+    ``command_budget_s``: most seconds per block spent on commands once the block is due (default a
+    quarter of a frame).
     ``keep_s``: seconds of evaluated frames kept. ``max_block_frames``: the largest block evaluated at once.
     """
 
@@ -158,8 +167,7 @@ class LiveScene:
         self.keep_s = float(keep_s)
         self.max_block_frames = max(1, int(max_block_frames))
         self.block_frames = 1
-        self._cheap = 0  # frames evaluated since blocks of half the size became cheap enough
-        self._costs: deque[float] = deque(maxlen=12)  # a frame's evaluation time (s) in the last blocks of this size
+        self._costs: deque[tuple[int, float]] = deque(maxlen=5)  # (frames, seconds) of the last blocks since a resize
         self.stats = LiveStats()
         self.epoch: float | None = None
         self.error: BaseException | None = None
@@ -174,7 +182,9 @@ class LiveScene:
         self._ready = threading.Condition()
         self._presenter: threading.Thread | None = None
         self._lead_s = 0.0  # how long before a block's first frame is due its evaluation starts
-        self._leads: deque[float] = deque(maxlen=30)
+        self._leads: deque[tuple[int, int, float]] = deque(maxlen=120)  # (first frame, frames, seconds) per block
+        self._held: tuple | None = None  # a command taken from the queue that waits for the next gap
+        self._command_s: dict[str, deque[float]] = {}  # kind -> seconds the last commands of that kind took
         self._grounds: dict[str, float] = {}
         self._movable: dict[str, MovableTarget] = {}
         self._warm = False
@@ -215,10 +225,13 @@ class LiveScene:
         # up (a block costs much the same whatever its length), so the first seconds miss no frames.
         started = time.perf_counter()
         self._pending.extend(self._evaluate(1))
-        needed = (time.perf_counter() - started) / (0.6 * self.period_s)
+        first_s = time.perf_counter() - started
+        needed = first_s / (GROW_AT * self.period_s)
         self.block_frames = min(1 << max(0, math.ceil(math.log2(max(needed, 1.0)))), self.max_block_frames)
         self.stats.block_frames = self.block_frames
         self._costs.clear()
+        self._leads.append((self._pending[0][0], 1, first_s))
+        self._update_lead()
         self.epoch = time.perf_counter() - self._pending[0][0] * self.period_s
         self._thread = threading.Thread(target=self._run, name="infuse-live", daemon=True)
         self._presenter = threading.Thread(target=self._present, name="infuse-live-frames", daemon=True)
@@ -237,12 +250,14 @@ class LiveScene:
         self._refuse_waiting()
 
     def _refuse_waiting(self) -> None:
-        """Commands still queued get :class:`UsageError` (the loop has stopped)."""
+        """Commands still queued (or held for the next gap) get :class:`UsageError` (the loop has stopped)."""
+        held, self._held = self._held, None
         while True:
             try:
-                future = self._commands.get_nowait()[0]
+                future = held[0] if held is not None else self._commands.get_nowait()[0]
             except queue.Empty:
                 break
+            held = None
             future.set_exception(UsageError(f"the live scene has stopped{f': {self.error}' if self.error else ''}"))
 
     @property
@@ -268,25 +283,33 @@ class LiveScene:
                 first = scene.runtime.frame
                 planned = self.due_s(first) - self._lead_s - LEAD_MARGIN_S
                 begun = max(planned, time.perf_counter())  # a block that is late already starts at once
-                self._apply_commands(planned)
+                commands_s = self._apply_commands(planned)
                 if self._stop.is_set():
                     break
                 overdue = int((time.perf_counter() - self.due_s(first)) / self.period_s)  # due already: shown no more
-                size = self.block_frames
-                frames = self._evaluate(size + max(overdue, 0))
-                # the lead: from the planned start to the frames in hand (waking late included), the 90th
-                # percentile of the last blocks: one late block (the machine busy elsewhere) does not move it.
-                # Blocks grown longer may take as much longer: the lead grows with them until measured.
-                self._leads.append(time.perf_counter() - begun)
-                if self.block_frames > size:
-                    self._leads = deque((lead * self.block_frames / size for lead in self._leads), maxlen=self._leads.maxlen)
-                self._lead_s = min(float(np.percentile(self._leads, 90)), self.max_block_frames * self.period_s)
-                self.stats.lead_ms = self._lead_s * 1e3
+                frames = self._evaluate(self.block_frames + max(overdue, 0))
+                # the lead: from the planned start to the frames in hand, waking late included and commands
+                # applied meanwhile left out (a burst of them delays its own block, not every later one's)
+                self._leads.append((first, len(frames), time.perf_counter() - begun - commands_s))
+                self._update_lead()
                 with self._ready:
                     self._pending.extend(frames)
                     self._ready.notify_all()
         except BaseException as exc:  # kept (with its traceback) for callers, which get errors from then on
             self._fail(exc)
+
+    def _update_lead(self) -> None:
+        """The lead for blocks of :attr:`block_frames`: the 90th percentile of what the blocks of the last
+        second took (at least the last few), from those of this size once there are three, else from all
+        of them, a shorter block's scaled by how much longer this one is (a block started late, the
+        machine busy elsewhere, moves it for a second at most)."""
+        size, now = self.block_frames, self.scene.runtime.frame
+        recent = [lead for lead in self._leads if lead[0] >= now - self.fps] or list(self._leads)[-3:]
+        same = [seconds for _, frames, seconds in recent if frames == size]
+        if len(same) < 3:
+            same = [seconds * max(1.0, size / frames) for _, frames, seconds in recent]
+        self._lead_s = min(float(np.percentile(same, 90)), self.max_block_frames * self.period_s)
+        self.stats.lead_ms = self._lead_s * 1e3
 
     def _present(self) -> None:
         """The presenter: shows each evaluated frame when it is due; a frame still waiting when the next
@@ -333,7 +356,7 @@ class LiveScene:
         self.stats.evaluate_ms.append(spent * 1e3 / count)
         self.stats.evaluate_cpu_ms.append((time.thread_time() - started_cpu) * 1e3 / count)
         self.stats.blocks.append((first, count))
-        self._resize(spent / count, count)
+        self._resize(count, spent)
         self.stats.block_frames = self.block_frames
         poses = {}
         for name in scene.characters:
@@ -346,24 +369,27 @@ class LiveScene:
             self._forget()
         return frames
 
-    def _resize(self, per_frame_s: float, count: int) -> None:
-        """Adapt :attr:`block_frames` to what a frame costs (``per_frame_s`` in the block just evaluated, of
-        ``count`` frames), by the median of the last blocks of this size: one late block (the machine busy
-        elsewhere) resizes nothing. Blocks double when a frame costs over 60% of its time, and halve after two
-        seconds under 25%: a block costs much the same whatever its length, so the halved blocks' frames
-        cost at most twice as much, under 50%."""
-        self._costs.append(per_frame_s)
-        cost = float(np.median(self._costs))
-        if len(self._costs) >= 3 and cost > 0.6 * self.period_s and self.block_frames < self.max_block_frames:
-            self.block_frames, self._cheap = min(2 * self.block_frames, self.max_block_frames), 0
-            self._costs.clear()
-        elif cost < 0.25 * self.period_s and self.block_frames > 1:
-            self._cheap += count
-            if self._cheap >= 2 * self.fps:
-                self.block_frames, self._cheap = self.block_frames // 2, 0
-                self._costs.clear()
+    def _resize(self, frames: int, seconds: float) -> None:
+        """Adapt :attr:`block_frames` to what the block just evaluated (``frames`` frames in ``seconds``)
+        cost, by the median of the blocks since the last resize (three at least: one late block, the
+        machine busy elsewhere, resizes nothing). Blocks double while a frame costs over
+        :data:`GROW_AT` of its time. They shrink at once to the shortest size whose frames would cost
+        under :data:`SHRINK_AT` of it, counting a shorter block as costly as the longer ones measured (a
+        block costs much the same whatever its length, and never more for fewer frames)."""
+        self._costs.append((frames, seconds))
+        if len(self._costs) < 3:
+            return
+        per_frame = float(np.median([s / f for f, s in self._costs]))
+        per_block = float(np.median([s for f, s in self._costs if f >= self.block_frames] or [np.inf]))
+        size = self.block_frames
+        if per_frame > GROW_AT * self.period_s:
+            size = min(2 * size, self.max_block_frames)
         else:
-            self._cheap = 0
+            while size > 1 and per_block / (size // 2) < SHRINK_AT * self.period_s:
+                size //= 2
+        if size != self.block_frames:
+            self.block_frames = size
+            self._costs.clear()
 
     def _foot_height(self, name: str) -> float:
         """How low (m) the character's feet reach, soles included, at rest: its frames are lowered by it, as
@@ -374,28 +400,50 @@ class LiveScene:
             height = self._grounds[name] = _rest_foot_height(rig.character.asset, rig.mapping)
         return height
 
-    def _apply_commands(self, until: float) -> None:
-        """Apply commands until the wall clock reaches ``until`` (waiting for them meanwhile); at most
-        :attr:`command_budget_s` of work once ``until`` has passed."""
-        spent = 0.0
+    def _apply_commands(self, until: float) -> float:
+        """Apply commands, waiting for them, until the wall clock reaches ``until`` (the block's start):
+        each one expected to end by then (it takes as long as the longest of its kind lately), or that
+        waited through the last block already (it goes first in this gap). Once ``until`` has passed (a
+        loop running late), at most :attr:`command_budget_s` of them. Returns the seconds spent on commands
+        after ``until``."""
+        late_s = 0.0
+        waited = self._held is not None
         while not self._stop.is_set():
             wait = until - time.perf_counter()
-            if wait <= 0 and (spent >= self.command_budget_s or self._commands.empty()):
-                return
-            try:
-                future, function, args = self._commands.get(timeout=min(max(wait, 0.0), 0.05)) if wait > 0 \
-                    else self._commands.get_nowait()
-            except queue.Empty:
-                continue
+            command = self._held
+            if command is None:
+                if wait <= 0 and late_s >= self.command_budget_s:
+                    return late_s
+                try:
+                    command = self._commands.get(timeout=min(wait, 0.05)) if wait > 0 else self._commands.get_nowait()
+                except queue.Empty:
+                    if wait <= 0:
+                        return late_s
+                    continue
+            self._held = None
+            future, function, args, kind = command
             started = time.perf_counter()
+            if started < until and not waited and started + self._expected_s(kind) > until:
+                self._held = command  # it would hold the block up: first thing after it
+                self._stop.wait(until - started)
+                return late_s
+            waited = False
             if future.set_running_or_notify_cancel():
                 try:
                     future.set_result(function(*args))
                 except Exception as exc:  # noqa: BLE001 - the caller gets it; the loop goes on
                     future.set_exception(exc)
+            ended = time.perf_counter()
+            self._command_s.setdefault(kind, deque(maxlen=8)).append(ended - started)
             self.stats.commands += 1
-            if time.perf_counter() >= until:
-                spent += time.perf_counter() - started
+            late_s += max(0.0, ended - max(started, until))
+        return late_s
+
+    def _expected_s(self, kind: str) -> float:
+        """Seconds a command of ``kind`` is expected to take: the longest of the last of its kind (0 for
+        the first)."""
+        taken = self._command_s.get(kind)
+        return max(taken) if taken else 0.0
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
@@ -426,25 +474,27 @@ class LiveScene:
             self._speech.lock.release()
 
     # -- commands -------------------------------------------------------------------------------------
-    def submit(self, function: Callable, *args) -> Future:
-        """Run ``function(*args)`` on the loop thread before the next frame; returns its future.
+    def submit(self, function: Callable, *args, kind: str | None = None) -> Future:
+        """Run ``function(*args)`` on the loop thread before the next frame; returns its future. ``kind``
+        names what it does (default: the function's name): the loop expects a command to take as long as
+        the last ones of its kind, and starts it where it fits between two blocks.
         :class:`BusyError` when the queue is full, :class:`UsageError` when the loop is not running."""
         if self.error is not None or self._stop.is_set():
             raise UsageError(f"the live scene has stopped{f': {self.error}' if self.error else ''}")
         future: Future = Future()
         try:
-            self._commands.put_nowait((future, function, args))
+            self._commands.put_nowait((future, function, args, kind or getattr(function, "__qualname__", "command")))
         except queue.Full:
             raise BusyError(f"{self._commands.maxsize} commands are waiting; try again later") from None
         if self._stop.is_set():  # stopped meanwhile: nothing will take it
             self._refuse_waiting()
         return future
 
-    def call(self, function: Callable, *args, timeout_s: float = 10.0):
+    def call(self, function: Callable, *args, timeout_s: float = 10.0, kind: str | None = None):
         """:meth:`submit` and wait for the result (the exception it raised is raised here)."""
         if self._thread is None:
             return function(*args)  # not started: nothing runs concurrently
-        return self.submit(function, *args).result(timeout_s)
+        return self.submit(function, *args, kind=kind).result(timeout_s)
 
     def on_frame(self, callback: Callable[[LiveFrame], None]) -> Callable[[], None]:
         """Call ``callback(frame)`` on the presenter thread as each frame is shown (it must return at once);
@@ -495,7 +545,7 @@ class LiveScene:
     def bml(self, character: str | None, bml) -> list[str]:
         """Schedule BML from the next frame on; returns the block ids. Runs on the caller's thread up to
         the scheduling itself (parse, speech synthesis)."""
-        return self.call(self.schedule, self.parse(character, bml))
+        return self.call(self.schedule, self.parse(character, bml), kind="bml")
 
     def schedule(self, blocks) -> list[str]:
         """Schedule blocks returned by :meth:`parse` now (on the loop thread: inside :meth:`submit`);
@@ -544,7 +594,7 @@ class LiveScene:
     def _build(self, method: str, character: str, **arguments) -> str:
         arguments = {k: v for k, v in arguments.items() if v is not None}
         self.prepare_call(method, character, arguments)
-        return self.call(self.builder_call, method, character, arguments)
+        return self.call(self.builder_call, method, character, arguments, kind=method)
 
     def say(self, character: str, text: str, voice: str | None = None) -> str:
         """Speak ``text`` from the next frame (BML ``<sync id="..."/>`` marks allowed); returns the block id."""
@@ -620,7 +670,7 @@ class LiveScene:
             if height is not None:
                 self._grounds[added] = height
             return added
-        added = self.call(join, timeout_s=120.0)
+        added = self.call(join, timeout_s=120.0, kind="add")
         self._warm_up(added)
         return added
 
@@ -631,7 +681,7 @@ class LiveScene:
         point = np.asarray(position, dtype=np.float64).reshape(-1)
         if point.shape != (3,) or not np.all(np.isfinite(point)):
             raise UsageError(f"target {name!r}: a position is three finite numbers (x, y, z) metres, got {position!r}")
-        return self.call(self.place_target, str(name), point)
+        return self.call(self.place_target, str(name), point, kind="target")
 
     def place_target(self, name: str, point) -> float:
         """Put target ``name`` at ``point`` (3,) metres now (on the loop thread: inside :meth:`submit`);

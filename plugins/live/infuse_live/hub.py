@@ -161,7 +161,7 @@ class Hub:
             return {"type": "status", "request": request, "frame": self.live.scene.runtime.frame,
                     "time": self.live.scene.time, **self.live.stats.summary(), "clients": len(self.clients), **mine}
         if message.type == "target":
-            at = await asyncio.wrap_future(self.live.submit(self._move, fields["name"], fields["position"]))
+            at = await asyncio.wrap_future(self.live.submit(self._move, fields["name"], fields["position"], kind="target"))
             return {"type": "accepted", "request": request, "target": fields["name"], "time": at,
                     "frame": round(at * self.live.fps)}
         if message.type == "add":
@@ -178,13 +178,13 @@ class Hub:
         if message.type == "bml":
             blocks, _ = await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.parse,
                                                         fields.get("character"), fields["bml"])
-            function = self.live.schedule, blocks
+            kind, function = "bml", (self.live.schedule, blocks)
         else:
             method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
             await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.prepare_call, method,
                                             character, arguments)
-            function = self.live.builder_call, method, character, arguments
-        ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function))
+            kind, function = method, (self.live.builder_call, method, character, arguments)
+        ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function, kind=kind))
         ids = ids if isinstance(ids, list) else [ids]
         return {"type": "accepted", "request": request, "blocks": [i for b in ids for i in (b if isinstance(b, list) else [b])],
                 "time": at, "frame": round(at * self.live.fps)}

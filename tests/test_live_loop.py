@@ -1,0 +1,153 @@
+"""``infuse.live.LiveScene``'s loop by design: blocks of one frame while the machine allows, blocks longer
+while a controller is slow and short again within a second once it is not; the lead measured on the
+evaluation, so a burst of slow commands (applied between frames) leaves later blocks' lead alone; blocks
+evaluated as late as they can be."""
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+
+from infuse.live import LiveScene
+from infuse.runtime import Controller
+from infuse.scene import Scene
+
+from corpus_data import corpus_file
+from live_support import BML_NS
+
+FPS = 60
+
+
+class Slow(Controller):
+    """A controller made slow on purpose: while :attr:`slow` is set, each block it evaluates takes
+    ``seconds`` of wall clock (it moves nothing)."""
+
+    kind = "slow"
+
+    def __init__(self, seconds: float):
+        self.seconds = seconds
+        self.slow = threading.Event()
+
+    def evaluate_one(self, job, block) -> None:
+        if self.slow.is_set():
+            time.sleep(self.seconds)
+
+
+def _live(seconds: float, **options) -> tuple[LiveScene, Slow]:
+    scene = Scene(fps=FPS, quiet=True)
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob")
+    slow = Slow(seconds)
+    scene.runtime.activate("bob", slow, 0.0)
+    return LiveScene(scene, **options), slow
+
+
+class Shown:
+    """Wall-clock time each frame a live scene shows was shown at."""
+
+    def __init__(self, live: LiveScene):
+        self.live = live
+        self.wall: dict[int, float] = {}
+        self.event = threading.Condition()
+        live.on_frame(self._keep)
+
+    def _keep(self, frame) -> None:
+        with self.event:
+            self.wall[frame.index] = frame.wall_s
+            self.event.notify_all()
+
+    def latency(self, block_id: str) -> float:
+        """Seconds from now (a nod's BML sent) to the first frame at or after its start being shown."""
+        sent = time.perf_counter()
+        block = self.live.bml("bob", f'<bml xmlns="{BML_NS}" id="{block_id}"><head id="h" lexeme="NOD"/></bml>')[0]
+        index = round(self.live.scene.scheduler.blocks[block].start_s * FPS)
+        with self.event:
+            assert self.event.wait_for(lambda: any(i >= index for i in self.wall), 5.0), index
+            return min(wall for i, wall in self.wall.items() if i >= index) - sent
+
+    def probe(self, prefix: str, count: int = 8) -> list[float]:
+        out = []
+        for k in range(count):
+            time.sleep(0.013 * (k % 5) + 0.03)  # at various points of a frame
+            out.append(self.latency(f"{prefix}{k}"))
+        return out
+
+
+def test_latency_recovers_within_a_second_of_a_slow_moment():
+    """A controller takes 35 ms a block (two frames' time) for 0.6 s: blocks grow to four frames and the
+    lead with them; a second after it is quick again, blocks hold one frame, the lead is what it was, and
+    BML shows on the next frame again."""
+    live, slow = _live(0.035)
+    with live:
+        shown = Shown(live)
+        time.sleep(0.5)
+        before = shown.probe("before")
+        lead_before = live.stats.lead_ms
+        assert live.block_frames == 1
+        slow.slow.set()
+        time.sleep(0.6)
+        grown = live.block_frames
+        during = shown.latency("during")
+        slow.slow.clear()
+        time.sleep(1.0)
+        assert live.block_frames == 1, live.stats.summary()
+        lead_after = live.stats.lead_ms
+        after = shown.probe("after")
+    assert grown >= 4, grown
+    assert during > 3 / FPS, during  # blocks of four frames and a long lead meanwhile
+    assert lead_after <= max(2 * lead_before, lead_before + 3.0), (lead_before, lead_after)
+    # wall-clock latency depends on the machine's load (tests run beside other test workers): the median
+    # is held within a frame of the target (one frame and 10 ms), which benchmarks/live.py measures
+    for latencies in (before, after):
+        assert np.median(latencies) <= 2 / FPS + 0.010, (before, after)
+
+
+def test_a_burst_of_slow_commands_leaves_the_lead_alone():
+    """Twenty commands of 8 ms each, submitted at once: each is applied between two frames, where it fits,
+    so frames keep coming on time and the lead (measured on the evaluation only) does not grow."""
+    live, _ = _live(0.0)
+    with live:
+        shown = Shown(live)
+        time.sleep(0.5)
+        lead_before, missed_before, count_before = live.stats.lead_ms, live.stats.missed, len(shown.wall)
+        futures = [live.submit(time.sleep, 0.008, kind="slow command") for _ in range(20)]
+        for future in futures:
+            future.result(5.0)
+        leads = [live.stats.lead_ms]
+        for _ in range(5):
+            time.sleep(0.05)
+            leads.append(live.stats.lead_ms)
+        missed = live.stats.missed - missed_before
+        frames = len(shown.wall) - count_before
+    assert live.stats.commands >= 20
+    assert max(leads) <= max(2 * lead_before, lead_before + 3.0), (lead_before, leads)
+    assert missed <= 1, missed  # the first one of the kind is not known yet, and may run into a frame's time
+    assert frames >= 0.9 * 20 * 0.008 * FPS, frames  # frames kept coming while the commands ran
+
+
+def test_blocks_are_evaluated_as_late_as_they_can_be():
+    """A controller that takes 25 ms a block keeps blocks at four frames. The frames evaluated but not
+    shown yet are never more than a block and the lead (how long before its first frame a block starts):
+    a block waits for its time rather than being evaluated as soon as the one before is in hand, so what
+    arrives meanwhile shows on its first frame, which is the start a block accepted then gets."""
+    live, slow = _live(0.025, max_block_frames=4)
+    slow.slow.set()
+    with live:
+        shown = Shown(live)
+        time.sleep(0.5)
+        assert live.block_frames == 4, live.stats.summary()
+        ahead, starts = [], []
+        for k in range(12):
+            time.sleep(0.013 * (k % 5) + 0.02)
+            last = live.last_frame.index
+            evaluated = live.scene.runtime.frame
+            lead_frames = math.ceil(live.stats.lead_ms * 1e-3 * FPS)
+            ahead.append((evaluated - 1 - last, 4 + lead_frames + 1))
+            block = live.bml("bob", f'<bml xmlns="{BML_NS}" id="n{k}"><head id="h" lexeme="NOD"/></bml>')[0]
+            starts.append(round(live.scene.scheduler.blocks[block].start_s * FPS))
+        with shown.event:
+            shown.event.wait_for(lambda: max(shown.wall) >= starts[-1], 5.0)
+        blocks = {first for first, _ in live.stats.blocks}
+    assert all(n <= bound for n, bound in ahead), ahead
+    assert set(starts) <= blocks  # each starts on the first frame of a block
