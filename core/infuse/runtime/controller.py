@@ -10,25 +10,27 @@ of the block: its character's pose so far, its weight per frame and its persiste
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar, Sequence, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
 from .layers import Layer, Mode
-from .pose import PoseBlock
+from .pose import PoseBlock, PoseTable
 
 State = TypeVar("State")
 
 
 @dataclass
 class Block:
-    """The frames being evaluated: ``frames`` (F,) indices and ``times`` (F,) seconds (``frames / fps``)."""
+    """The frames being evaluated: ``frames`` (F,) indices and ``times`` (F,) seconds (``frames / fps``);
+    ``poses``: each character's :class:`PoseBlock`, views of ``table`` (every character's pose side by side)."""
 
     runtime: Any
     frames: np.ndarray
     times: np.ndarray
     fps: float
     poses: dict
+    table: PoseTable | None = None
 
     @property
     def dt(self) -> float:
@@ -82,6 +84,41 @@ class Job:
         self.activity.runtime.report(self.rig.name, message)
 
 
+class Jobs(list):
+    """Every job of one controller class, layer and priority in a block (a list of :class:`Job`), with
+    what a class evaluating them together needs at hand: ``weights`` (N, F) and ``local_times`` (N, F),
+    the jobs' own stacked, ``table``, the block's :class:`~infuse.runtime.pose.PoseTable`, and :meth:`memo`."""
+
+    def __init__(self, jobs, weights: np.ndarray, local_times: np.ndarray, table: PoseTable, memo: list):
+        super().__init__(jobs)
+        self.weights = weights
+        self.local_times = local_times
+        self.table = table
+        self._memo = memo
+
+    def memo(self, make):
+        """``make(jobs)``, worked out again only when these jobs are not the activities they were at the
+        last call (for what depends only on the activities: their bindings stacked, their settings)."""
+        key = tuple(job.activity.id for job in self)
+        if self._memo[0] != key:
+            self._memo[:] = [key, make(self)]
+        return self._memo[1]
+
+
+def table_columns(jobs: Jobs, indices, morphs: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where each job's joints ``indices`` (a sequence of (K_i,) index arrays, one per job; with
+    ``morphs``, morph target columns) sit in the jobs' table: (K,) table columns side by side and (K,)
+    the job of each; None when two jobs share a character (they then apply one after the other, not
+    side by side)."""
+    names = [job.rig.name for job in jobs]
+    if len(set(names)) < len(names):
+        return None
+    first = jobs.table.first_morph if morphs else jobs.table.first_joint
+    columns = [np.asarray(i, dtype=np.int64) + first[name] for i, name in zip(indices, names)]
+    return (np.concatenate(columns) if columns else np.zeros(0, dtype=np.int64),
+            np.repeat(np.arange(len(columns)), [len(c) for c in columns]))
+
+
 class Controller:
     """Base class of runtime controllers.
 
@@ -117,8 +154,11 @@ class Controller:
         return None
 
     @classmethod
-    def evaluate(cls, jobs: Sequence[Job], block: Block) -> None:
-        """Evaluate every job of this class in ``block`` (by default one at a time)."""
+    def evaluate(cls, jobs: Jobs, block: Block) -> None:
+        """Evaluate every job of this class in ``block`` (by default one at a time). A class that
+        overrides it evaluates many characters at once: ``jobs`` stacks their weights and times
+        (:class:`Jobs`), ``block.table`` holds every character's pose in shared arrays
+        (:class:`~infuse.runtime.pose.PoseTable`)."""
         for job in jobs:
             job.controller.evaluate_one(job, block)
 

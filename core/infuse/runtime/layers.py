@@ -67,3 +67,15 @@ def _fully_on(first: float, last: float, start_s: float, end_s: float | None, bl
     if end_s is None or not started:
         return started
     return (end_s - last) / blend_out_s >= 1.0 if blend_out_s > 0 else last < end_s - 1e-9
+
+
+def blend_weights_of(times, start_s: np.ndarray, end_s: np.ndarray, blend_in_s: np.ndarray, blend_out_s: np.ndarray) -> np.ndarray:
+    """(N, F) weights of N activities at ``times`` (F,) seconds, each as :func:`blend_weights` gives it
+    (to the bit): ``start_s``, ``end_s`` (inf: no end), ``blend_in_s``, ``blend_out_s`` are (N,) seconds."""
+    t = np.asarray(times, dtype=np.float64)[None]
+    start, end = start_s[:, None], end_s[:, None]
+    ramp_in, ramp_out = blend_in_s[:, None], blend_out_s[:, None]
+    with np.errstate(invalid="ignore"):  # inf - inf never happens: times are finite
+        rising = np.where(ramp_in > 0, smoothstep((t - start) / np.where(ramp_in > 0, ramp_in, 1.0)), t >= start - 1e-9)
+        falling = np.where(ramp_out > 0, smoothstep((end - t) / np.where(ramp_out > 0, ramp_out, 1.0)), t < end - 1e-9)
+    return rising * falling

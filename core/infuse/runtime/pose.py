@@ -36,20 +36,37 @@ def weighted_rotations(rotations: np.ndarray, weight) -> np.ndarray:
     return quat.normalize(out)
 
 
-class PoseBlock:
-    """The pose of one character (its :class:`~infuse.runtime.rig.Rig`) on ``frames`` frames, starting at the rest pose."""
+def _weighted_columns(rotations: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """Rotations (F, K, 4) scaled toward the identity by ``weight`` (F, K), as :func:`weighted_rotations`."""
+    r = quat.canonical_sign(rotations)
+    out = r * weight[..., None]
+    out[..., 3] += 1.0 - weight
+    return quat.normalize(out)
 
-    def __init__(self, rig, frames: int):
+
+class PoseBlock:
+    """The pose of one character (its :class:`~infuse.runtime.rig.Rig`) on ``frames`` frames, starting at the rest pose.
+
+    ``rotations`` (F, J, 4), ``morphs`` (F, M) and ``written`` (M,): writable arrays to hold the pose in,
+    already at rest (views of a :class:`PoseTable`); made here when not given.
+    """
+
+    def __init__(self, rig, frames: int, rotations: np.ndarray | None = None, morphs: np.ndarray | None = None,
+                 written: np.ndarray | None = None):
         sk = rig.skeleton
         self.rig = rig
         self.frames = frames
-        self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0)
+        self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0) if rotations is None else rotations
         self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0)
         #: (F, J, 3) once a controller moves joints other than the root
         self.joint_translations: np.ndarray | None = None
-        self.morph_weights = np.zeros((frames, len(rig.morph_targets)))
-        self.morph_written = np.zeros(len(rig.morph_targets), dtype=bool)
+        self.morph_weights = np.zeros((frames, len(rig.morph_targets))) if morphs is None else morphs
+        self.morph_written = np.zeros(len(rig.morph_targets), dtype=bool) if written is None else written
         self._fk: tuple[np.ndarray, np.ndarray] | None = None
+
+    def moved(self) -> None:
+        """Forget the cached forward kinematics: the joints were written from outside (a :class:`PoseTable`)."""
+        self._fk = None
 
     # -- joints ----------------------------------------------------------------------------------
     def set_rotations(self, joints, rotations: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:
@@ -145,6 +162,99 @@ class PoseBlock:
             return g_rot[:, joints], g_pos[:, joints]
         return self.rig.place(*chain_fk(self.rig.skeleton, self.local_rotations, self.root_translations,
                                         self.joint_translations, joints))
+
+
+class PoseTable:
+    """Every character's pose over one block in shared arrays, so that a controller acting on many
+    characters reads and writes them all in one step.
+
+    ``local_rotations`` (F, N, 4) holds the N joints of every character side by side, one character's
+    from ``first_joint[name]`` on; ``morph_weights`` (F, M) and ``morph_written`` (M,) their morph
+    targets, from ``first_morph[name]`` on. ``poses`` are the characters' :class:`PoseBlock` objects,
+    whose arrays are views of these. ``layout`` is a :class:`TableLayout` of the characters.
+    """
+
+    def __init__(self, layout: "TableLayout", frames: int):
+        self.layout = layout
+        self.frames = frames
+        self.local_rotations = np.repeat(layout.rest_rotations[None], frames, axis=0)
+        self.morph_weights = np.zeros((frames, layout.morph_count))
+        self.morph_written = np.zeros(layout.morph_count, dtype=bool)
+        self.poses = {rig.name: PoseBlock(rig, frames, self.local_rotations[:, j0:j1], self.morph_weights[:, m0:m1],
+                                          self.morph_written[m0:m1])
+                      for rig, (j0, j1), (m0, m1) in zip(layout.rigs, layout.joint_spans, layout.morph_spans)}
+
+    @property
+    def first_joint(self) -> dict[str, int]:
+        return self.layout.first_joint
+
+    @property
+    def first_morph(self) -> dict[str, int]:
+        return self.layout.first_morph
+
+    def add_offsets(self, columns: np.ndarray, offsets: np.ndarray, weight: np.ndarray, poses) -> None:
+        """Post-multiply local offsets (F, K, 4) onto table joints ``columns`` (K,), scaled by ``weight``
+        (F, K) (as :meth:`PoseBlock.add_offsets` does, column by column); ``poses``: the characters'
+        :class:`PoseBlock` objects written."""
+        self.set_rotations(columns, offsets, weight, Mode.ADDITIVE, poses)
+
+    def set_rotations(self, columns: np.ndarray, rotations: np.ndarray, weight: np.ndarray | None, mode: Mode, poses) -> None:
+        """Write local rotations (F, K, 4) of table joints ``columns`` (K,) with weights (F, K) (None: 1), as
+        :meth:`PoseBlock.set_rotations` writes each character's: a column whose weights are all 0 is
+        left as it is, one whose weights are all at least 1 takes the rotations (or offsets) unweighted.
+        ``poses``: the characters' :class:`PoseBlock` objects written."""
+        if columns.size == 0:
+            return
+        if weight is None:
+            weight = np.ones(rotations.shape[:2])
+        positive = (weight > 0.0).any(axis=0)  # (K,)
+        full = (weight >= 1.0).all(axis=0)
+        current = self.local_rotations[:, columns]
+        if Mode(mode) is Mode.ADDITIVE:
+            offsets = rotations if full.all() else np.where(full[:, None], rotations, _weighted_columns(rotations, weight))
+            result = quat.multiply(current, offsets)
+        elif full.all():
+            result = np.array(rotations, dtype=np.float64)
+        else:
+            result = np.where(full[:, None], rotations, quat.slerp(current, rotations, weight))
+        if not positive.all():
+            result = np.where(positive[:, None], result, current)
+        self.local_rotations[:, columns] = result
+        for pose in poses:
+            pose.moved()
+
+
+    def set_morphs(self, columns: np.ndarray, values: np.ndarray, weight: np.ndarray, mode: Mode) -> None:
+        """Write morph weights (F, K) of table morph columns ``columns`` (K,) with weights (F, K), as
+        :meth:`PoseBlock.set_morphs` writes each character's."""
+        if columns.size == 0:
+            return
+        current = self.morph_weights[:, columns]
+        if Mode(mode) is Mode.ADDITIVE:
+            current = current + weight * values
+        else:
+            current = current + weight * (values - current)
+        self.morph_weights[:, columns] = np.clip(current, 0.0, 1.0)
+        self.morph_written[columns] = True
+
+
+class TableLayout:
+    """Where each of ``rigs`` sits in a :class:`PoseTable`: ``joint_spans`` and ``morph_spans``, (start,
+    end) columns per character, ``first_joint`` / ``first_morph`` by name, ``rest_rotations`` (N, 4)
+    every character's rest pose side by side and ``morph_count`` the morph targets of all. Made once
+    for a set of characters."""
+
+    def __init__(self, rigs):
+        self.rigs = list(rigs)
+        joints = np.cumsum([0] + [rig.skeleton.num_joints for rig in self.rigs])
+        morphs = np.cumsum([0] + [len(rig.morph_targets) for rig in self.rigs])
+        self.joint_spans = list(zip(joints[:-1].tolist(), joints[1:].tolist()))
+        self.morph_spans = list(zip(morphs[:-1].tolist(), morphs[1:].tolist()))
+        self.first_joint = {rig.name: span[0] for rig, span in zip(self.rigs, self.joint_spans)}
+        self.first_morph = {rig.name: span[0] for rig, span in zip(self.rigs, self.morph_spans)}
+        self.morph_count = int(morphs[-1])
+        self.rest_rotations = (np.concatenate([rig.skeleton.rest_rotations for rig in self.rigs]) if self.rigs
+                               else np.zeros((0, 4)))
 
 
 def ancestors(skeleton, joints) -> list[int]:

@@ -28,9 +28,9 @@ from ..asset import Asset, Character
 from ..errors import UsageError
 from ..grounding import on_ground
 from ..motion import Motion
-from .controller import Block, Controller, Job
-from .layers import Layer, Mode, blend_weights
-from .pose import PoseBlock
+from .controller import Block, Controller, Job, Jobs
+from .layers import Layer, Mode, blend_weights, blend_weights_of
+from .pose import PoseTable, TableLayout
 from .rig import Rig, State
 
 
@@ -118,6 +118,9 @@ class Runtime:
         self._speech: dict[str, list[tuple[float, float]]] = {}
         self._targets: dict = {}
         self._next_id = 0
+        self._layout: TableLayout | None = None  # where each character sits in a block's PoseTable
+        self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
+        self._speakers: list[Activity] = []  # the activities whose controller speaks
 
     # -- characters ------------------------------------------------------------------------------------
     def add_character(self, character, name: str | None = None, mapping=None, position=(0.0, 0.0, 0.0),
@@ -211,6 +214,8 @@ class Runtime:
                             Mode(mode) if mode is not None else controller.mode, binding, source=source)
         self._next_id += 1
         self.activities.append(activity)
+        if controller.speaks:
+            self._speakers.append(activity)
         return activity
 
     def stop(self, activity: Activity, at_s: float | None = None, blend_out_s: float | None = None) -> None:
@@ -247,11 +252,14 @@ class Runtime:
 
     def speech_intervals(self, character) -> list[tuple[float, float]]:
         """(start, end) seconds when the character speaks: :meth:`add_speech` and speaking controllers."""
-        name = self._track(character).rig.name
-        spans = list(self._speech.get(name, ()))
-        spans += [(a.start_s, a.end_s if a.end_s is not None else np.inf)
-                  for a in self.activities if a.rig.name == name and a.controller.speaks]
-        return sorted(spans)
+        return self.speaking().get(self._track(character).rig.name, [])
+
+    def speaking(self) -> dict[str, list[tuple[float, float]]]:
+        """:meth:`speech_intervals` of every character that speaks, by name, in one pass."""
+        spans = {name: list(told) for name, told in self._speech.items()}
+        for a in self._speakers:
+            spans.setdefault(a.rig.name, []).append((a.start_s, a.end_s if a.end_s is not None else np.inf))
+        return {name: sorted(told) for name, told in spans.items()}
 
     def realize(self, activation, character=None) -> Activity | None:
         """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller that
@@ -310,14 +318,24 @@ class Runtime:
     def _evaluate(self, n: int) -> None:
         frames = self.frame + np.arange(n)
         times = frames / self.fps
-        poses = {name: PoseBlock(track.rig, n) for name, track in self._tracks.items()}
-        block = Block(self, frames, times, self.fps, poses)
-        groups: dict[tuple, list[Activity]] = {}
-        for a in self.activities:
-            if a.active_between(times[0], times[-1]):
-                groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(a)
-        for key in sorted(groups, key=lambda k: (k[0], k[1], groups[k][0].id)):
-            jobs = [Job(a, poses[a.rig.name], a.weights(times), times - a.start_s) for a in groups[key]]
+        if self._layout is None or len(self._layout.rigs) != len(self._tracks):
+            self._layout = TableLayout(track.rig for track in self._tracks.values())
+        table = PoseTable(self._layout, n)
+        poses = table.poses
+        block = Block(self, frames, times, self.fps, poses, table)
+        first, last = float(times[0]), float(times[-1])
+        active = [a for a in self.activities if a.active_between(first, last)]
+        # Every active activity's weights in one step, each group's jobs then rows of them.
+        weights = blend_weights_of(times, *np.array([(a.start_s, np.inf if a.end_s is None else a.end_s, a.blend_in_s,
+                                                      a.blend_out_s) for a in active]).reshape(-1, 4).T)
+        local_times = times[None] - np.array([a.start_s for a in active])[:, None]
+        groups: dict[tuple, list[int]] = {}
+        for k, a in enumerate(active):
+            groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
+        for key in sorted(groups, key=lambda g: (g[0], g[1], active[groups[g][0]].id)):
+            rows = groups[key]
+            jobs = Jobs([Job(active[k], poses[active[k].rig.name], weights[k], local_times[k]) for k in rows],
+                        weights[rows], local_times[rows], table, self._memos.setdefault(key, [None, None]))
             key[2].evaluate(jobs, block)
         for name, track in self._tracks.items():
             pose = poses[name]
@@ -393,8 +411,8 @@ class Runtime:
 
     def forget(self, keep_s: float) -> None:
         """Drop the evaluated frames older than ``keep_s`` seconds (whole blocks; :meth:`motion` then starts
-        later than frame 0) and the activities that ended before then, so that a runtime that runs for
-        hours keeps bounded memory. Frames still needed by :meth:`last_frames` up to ``keep_s`` stay."""
+        later than frame 0), and the activities and the speech (:meth:`add_speech`) that ended before then,
+        so that a runtime that runs for hours keeps bounded memory. Frames still needed by :meth:`last_frames` up to ``keep_s`` stay."""
         keep = max(int(round(float(keep_s) * self.fps)), 1)
         for track in self._tracks.values():
             lengths = [len(r) for r in track.rotations]
@@ -406,6 +424,8 @@ class Runtime:
                 del parts[:cut]
         before = self.time - float(keep_s)
         self.activities = [a for a in self.activities if a.end_s is None or a.end_s + a.controller.settle_s >= before]
+        self._speakers = [a for a in self._speakers if a.end_s is None or a.end_s + a.controller.settle_s >= before]
+        self._speech = {name: [(s, e) for s, e in spans if e >= before] for name, spans in self._speech.items()}
 
     def morph_weights(self, character) -> np.ndarray:
         """(F, M) morph weights of every frame evaluated so far (columns: the character's morph targets)."""

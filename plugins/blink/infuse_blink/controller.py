@@ -21,6 +21,7 @@ import numpy as np
 
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.controller import table_columns
 from infuse.runtime.swing import local_offsets, swing
 
 RATES_PER_MIN = {"rest": 17.0, "conversation": 26.0, "reading": 4.5}
@@ -130,15 +131,46 @@ class Blink(Controller):
         report("has no eyelid morph targets or joints: blinks are not shown")
         return BlinkBinding(schedule)
 
-    def evaluate_one(self, job, block) -> None:
-        b: BlinkBinding = job.binding
-        t = job.local_times
-        starts = b.schedule.until(float(t[-1]))
+    def level(self, schedule: BlinkSchedule, t: np.ndarray) -> np.ndarray | None:
+        """(F,) eyelid closure at ``t`` (F,) seconds from the activity's start, ``amount`` included; None
+        when no blink falls on them (the closure is 0)."""
+        starts = schedule.until(float(t[-1]))
+        # The blinks that may overlap the times (sorted starts: a slice), then exactly those that do.
+        starts = starts[np.searchsorted(starts, t[0] - self.blink_s - 1e-6):np.searchsorted(starts, t[-1], side="right")]
         starts = starts[(starts <= t[-1]) & (starts + self.blink_s >= t[0])]
+        if not len(starts):
+            return None
         level = np.zeros(len(t))
         for start in starts:  # at most a few blinks fall in a block
             level = np.maximum(level, closure(t - start, self.curve))
         level *= self.amount
+        return level
+
+    @classmethod
+    def evaluate(cls, jobs, block) -> None:
+        """Every character's blinks at once: the closure (N, F), then the eyelid morph targets and joints
+        of all characters side by side."""
+        batch = jobs.memo(_Batch.of)
+        if batch is None:
+            return super().evaluate(jobs, block)
+        level = np.zeros(jobs.local_times.shape)
+        for n, job in enumerate(jobs):
+            closing = job.controller.level(job.binding.schedule, job.local_times)
+            if closing is not None:
+                level[n] = closing
+        level, weight = level.T, jobs.weights.T  # (F, N)
+        table = block.table
+        table.set_morphs(batch.morph_columns, level[:, batch.morph_rows], weight[:, batch.morph_rows], Mode.ADDITIVE)
+        if batch.lid_columns.size:
+            angles = level[:, batch.lid_rows] * batch.lid_pitch
+            table.add_offsets(batch.lid_columns, local_offsets(batch.lid_aligned, swing(np.zeros_like(angles), angles)),
+                              weight[:, batch.lid_rows], [job.pose for job in jobs])
+
+    def evaluate_one(self, job, block) -> None:
+        b: BlinkBinding = job.binding
+        t = job.local_times
+        level = self.level(b.schedule, t)
+        level = np.zeros(len(t)) if level is None else level
         if b.morphs:
             values = np.repeat(level[:, None], len(b.morphs), axis=1)
             job.pose.set_morphs(b.morphs, values, job.weight, job.mode)
@@ -146,6 +178,33 @@ class Blink(Controller):
             angles = level[:, None] * b.lids.pitch[None]
             delta = swing(np.zeros_like(angles), angles)
             job.pose.set_rotations(b.lids.joints, local_offsets(b.lids.aligned, delta), job.weight, job.mode)
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """Blink jobs side by side: the table's eyelid morph columns (K,) and the job of each (K,); the
+    table's eyelid joints (L,), the job of each, their aligned frames (L, 4) and closed pitch (L,)."""
+
+    morph_columns: np.ndarray
+    morph_rows: np.ndarray
+    lid_columns: np.ndarray
+    lid_rows: np.ndarray
+    lid_aligned: np.ndarray
+    lid_pitch: np.ndarray
+
+    @classmethod
+    def of(cls, jobs) -> "_Batch | None":
+        """The batch of ``jobs``; None unless each is additive on a character of its own."""
+        if any(job.mode is not Mode.ADDITIVE for job in jobs):
+            return None
+        morphs = table_columns(jobs, [job.binding.morphs for job in jobs], morphs=True)
+        lids = [job.binding.lids for job in jobs]
+        joints = table_columns(jobs, [np.zeros(0, dtype=np.int64) if b is None else b.joints for b in lids])
+        if morphs is None or joints is None:
+            return None
+        present = [b for b in lids if b is not None]
+        return cls(*morphs, *joints, np.concatenate([b.aligned for b in present]) if present else np.zeros((0, 4)),
+                   np.concatenate([b.pitch for b in present]) if present else np.zeros(0))
 
 
 def _eyelid_joints(rig) -> list[tuple[int, float]]:

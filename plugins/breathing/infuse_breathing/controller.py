@@ -18,6 +18,7 @@ import numpy as np
 
 from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.controller import table_columns
 from infuse.runtime.swing import SWING_AXES, local_axes, local_turns
 
 #: Degrees at depth 1: pitch of each spine joint, roll of the clavicles.
@@ -94,10 +95,47 @@ class Breathing(Controller):
         return BreathingBinding(joints=np.array(joints), axes=local_axes(rig.aligned[joints], SWING_AXES[axis]),
                                 angles=angles[np.arange(len(joints)), axis])
 
+    @classmethod
+    def evaluate(cls, jobs, block) -> None:
+        """Every character's breath at once: the levels (N, F), then the turns of all their joints side by side."""
+        batch = jobs.memo(_Batch.of)
+        if batch is None:
+            return super().evaluate(jobs, block)
+        level = batch.depth * breath_curve(jobs.local_times, batch.rate_bpm, batch.inhale_fraction, batch.phase)  # (N, F)
+        turns = local_turns(batch.axes, level.T[:, batch.rows] * batch.angles)
+        block.table.add_offsets(batch.columns, turns, jobs.weights.T[:, batch.rows], [job.pose for job in jobs])
+
     def evaluate_one(self, job, block) -> None:
         b: BreathingBinding = job.binding
         level = self.depth * breath_curve(job.local_times, self.rate_bpm, self.inhale_fraction, self.phase)
         job.pose.set_rotations(b.joints, local_turns(b.axes, level[:, None] * b.angles), job.weight, job.mode)
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """Breathing jobs side by side: per job (N, 1) ``depth``, ``rate_bpm``, ``inhale_fraction``, ``phase``;
+    per joint (K,) table ``columns``, the ``rows`` (job) each belongs to, ``axes`` (K, 3) and ``angles``."""
+
+    depth: np.ndarray
+    rate_bpm: np.ndarray
+    inhale_fraction: np.ndarray
+    phase: np.ndarray
+    columns: np.ndarray
+    rows: np.ndarray
+    axes: np.ndarray
+    angles: np.ndarray
+
+    @classmethod
+    def of(cls, jobs) -> "_Batch | None":
+        """The batch of ``jobs``; None unless each is additive on a character of its own."""
+        if any(job.mode is not Mode.ADDITIVE for job in jobs):
+            return None
+        placed = table_columns(jobs, [job.binding.joints for job in jobs])
+        if placed is None:
+            return None
+        settings = np.array([(g.depth, g.rate_bpm, g.inhale_fraction, g.phase) for g in (job.controller for job in jobs)])
+        return cls(*(settings[:, k:k + 1] for k in range(4)), *placed, np.concatenate([job.binding.axes for job in jobs]),
+                   np.concatenate([job.binding.angles for job in jobs]))
 
 
 def breathing_from_bml(parameters: dict, runtime, character: str, activation=None) -> Breathing:

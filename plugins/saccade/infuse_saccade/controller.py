@@ -8,13 +8,14 @@ makes no saccades: the eyes return to the gaze direction when speech starts.
 from __future__ import annotations
 
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode
+from infuse.runtime.controller import table_columns
 from infuse.runtime.swing import clamp_ellipse, swing, swing_angles
 
 from .model import MODES, SaccadeSchedule, ease_out, saccade_duration
@@ -80,29 +81,85 @@ class Saccades(Controller):
                               to_turn=quat.left_matrix(quat.conjugate(placed)) @ quat.right_matrix(aligned),
                               from_turn=quat.left_matrix(placed) @ quat.right_matrix(quat.conjugate(aligned)))
 
-    def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
-        """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
-        saccade inside ``pauses`` ((start, end) seconds) and a return to the gaze direction at each pause start."""
-        count = schedule.until(float(t[-1]))
+    def events(self, schedule: SaccadeSchedule, t_last: float, pauses=()) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The saccades the eyes make up to ``t_last`` seconds from the start, with none inside ``pauses``
+        ((start, end) seconds) and a return to the gaze direction at each pause start: times (E,), the
+        offsets (E, 2) (heading, pitch) degrees each moves to, and those it starts from (E, 2)."""
+        count = schedule.until(t_last)
         times, offsets = schedule.times[:count], schedule.offsets[:count]
-        keep = times <= t[-1]
+        keep = times <= t_last
         if len(pauses):
             starts, ends = np.asarray(pauses, dtype=np.float64).reshape(-1, 2).T
             keep &= ~np.any((times >= starts[:, None]) & (times < ends[:, None]), axis=0)
-        back = np.array([s for s, e in pauses if s <= t[-1]])
+        back = np.array([s for s, e in pauses if s <= t_last])
         times = np.concatenate((times[keep], back))
         offsets = np.concatenate((offsets[keep], np.zeros((len(back), 2))))
         order = np.argsort(times, kind="stable")
         times, offsets = times[order], offsets[order]
+        return times, offsets, np.concatenate((np.zeros((1, 2)), offsets[:-1]))
+
+    def offsets(self, schedule: SaccadeSchedule, t: np.ndarray, pauses=()) -> np.ndarray:
+        """(F, 2) eye offsets (heading, pitch) in degrees at ``t`` seconds from the start, with no
+        saccade inside ``pauses`` ((start, end) seconds) and a return to the gaze direction at each pause start."""
+        times, offsets, before = self.events(schedule, float(t[-1]), pauses)
         if len(times) == 0:
             return np.zeros((len(t), 2))
-        before = np.concatenate((np.zeros((1, 2)), offsets[:-1]))
         durations = saccade_duration(np.hypot(*(offsets - before).T))
         last = np.searchsorted(times, t, side="right") - 1
         started = last >= 0
         k = np.maximum(last, 0)
         progress = ease_out((t - times[k]) / durations[k])[:, None]
         return np.where(started[:, None], before[k] + progress * (offsets[k] - before[k]), 0.0)
+
+    def follow(self, state: "SaccadeState", schedule: SaccadeSchedule, t: np.ndarray, pauses: list) -> np.ndarray | None:
+        """The eye offsets at ``t`` as :meth:`offsets`, (F, 2) degrees, when the saccade ``state`` holds
+        for them is not enough to say them (then ``state`` is brought up to their last time); None
+        when it is (:meth:`SaccadeState.path` gives them)."""
+        first, last = float(t[0]), float(t[-1])
+        if state.pauses == pauses and state.start_s <= first and last < state.until_s:
+            return None
+        times, offsets, before = self.events(schedule, last, pauses)
+        k = int(np.searchsorted(times, last, side="right")) - 1
+        later = [s for s, _ in pauses if s > last]
+        state.pauses, state.until_s = pauses, min([schedule.next_after(last)] + later)
+        if k < 0:
+            state.start_s, state.offset, state.before, state.duration_s = -np.inf, np.zeros(2), np.zeros(2), np.ones(1)
+        else:
+            state.start_s, state.offset, state.before = float(times[k]), offsets[k], before[k]
+            state.duration_s = saccade_duration(np.hypot(*(offsets[k:k + 1] - before[k:k + 1]).T))
+        return self.offsets(schedule, t, pauses)
+
+    @classmethod
+    def evaluate(cls, jobs, block) -> None:
+        """Every character's saccades at once: each one's last saccade events looked up (a few
+        operations per character), then the eye turns of all characters side by side."""
+        batch = jobs.memo(_Batch.of)
+        if batch is None:
+            return super().evaluate(jobs, block)
+        speaking = block.runtime.speaking()
+        # Each character's saccade in progress, where it holds for the whole block (else the path itself).
+        held = np.zeros((len(batch.seeing), 6))  # start, duration, offset (2), before (2); at first none
+        held[:, :2] = (-np.inf, 1.0)
+        paths = {}
+        for n, k in enumerate(batch.seeing):
+            job = jobs[k]
+            start, gaze, state = job.activity.start_s, job.controller, job.state_of(SaccadeState)
+            pauses = [(s - start, e - start + gaze.resume_s) for s, e in speaking.get(job.rig.name, ())]
+            path = gaze.follow(state, job.binding.schedule, job.local_times, pauses)
+            if path is None:
+                held[n] = (state.start_s, state.duration_s[0], *state.offset, *state.before)
+            else:
+                paths[n] = path
+        degrees = SaccadeState.path(held, jobs.local_times[batch.seeing])
+        for n, path in paths.items():
+            degrees[n] = path
+        radians = np.radians(degrees) * jobs.weights[batch.seeing][..., None]  # (N', F, 2)
+        rows = batch.rows
+        turn = _apply_per_eye(batch.to_turn, block.table.local_rotations[:, batch.columns])
+        heading, pitch, roll = swing_angles(turn)
+        heading, pitch = clamp_ellipse(heading + radians[rows, :, 0].T, pitch + radians[rows, :, 1].T, *batch.limits)
+        block.table.set_rotations(batch.columns, _apply_per_eye(batch.from_turn, swing(heading, pitch, roll)), None,
+                                  Mode.OVERRIDE, [jobs[k].pose for k in batch.seeing])
 
     def evaluate_one(self, job, block) -> None:
         b: SaccadeBinding | None = job.binding
@@ -116,6 +173,61 @@ class Saccades(Controller):
         heading, pitch, roll = swing_angles(turn)
         heading, pitch = clamp_ellipse(heading + offsets[:, :1], pitch + offsets[:, 1:], *self.eye_limits)
         job.pose.set_rotations(b.eyes, _apply_per_eye(b.from_turn, swing(heading, pitch, roll)))
+
+
+@dataclass(eq=False)
+class SaccadeState:
+    """The saccade a character's eyes follow, kept from block to block while nothing changes it: it
+    started at ``start_s`` seconds from the activity's start (-inf: none yet; the eyes stay on the gaze),
+    moves from ``before`` to ``offset`` ((heading, pitch) degrees) over ``duration_s`` (1,) seconds, and
+    holds until ``until_s`` (the next saccade or pause), as long as the ``pauses`` stay as they are."""
+
+    pauses: list | None = None
+    until_s: float = -np.inf
+    start_s: float = np.inf
+    duration_s: np.ndarray = field(default_factory=lambda: np.ones(1))
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    before: np.ndarray = field(default_factory=lambda: np.zeros(2))
+
+    @staticmethod
+    def path(held: np.ndarray, t: np.ndarray) -> np.ndarray:
+        """(N, F, 2) offsets in degrees at ``t`` (N, F) seconds of N saccades in progress, ``held`` (N, 6):
+        start (-inf: none, 0 offsets), duration, offset (2) and the offset before (2); as
+        :meth:`Saccades.offsets` works them out."""
+        start, duration = held[:, :1], held[:, 1:2]
+        offset, before = held[:, None, 2:4], held[:, None, 4:6]
+        progress = ease_out((t - start) / duration)[..., None]
+        return np.where(np.isfinite(start)[..., None], before + progress * (offset - before), 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """Saccade jobs side by side: ``seeing`` (N',) the jobs whose characters have eyes; per eye (K = 2 N')
+    its table ``columns``, its job among ``seeing`` (``rows``), ``to_turn`` and ``from_turn`` (K, 4, 4)
+    and ``limits``: (heading, up, down) radians, each (K,)."""
+
+    seeing: list
+    columns: np.ndarray
+    rows: np.ndarray
+    to_turn: np.ndarray
+    from_turn: np.ndarray
+    limits: tuple
+
+    @classmethod
+    def of(cls, jobs) -> "_Batch | None":
+        """The batch of ``jobs``; None when two share a character."""
+        seeing = [k for k, job in enumerate(jobs) if job.binding is not None]
+        chosen = [jobs[k] for k in seeing]
+        placed = table_columns(jobs, [np.zeros(0, dtype=np.int64) if job.binding is None else job.binding.eyes for job in jobs])
+        if placed is None:
+            return None
+        columns, rows = placed
+        rows = np.searchsorted(seeing, rows)  # from jobs to the jobs that see
+        if not chosen:
+            return cls(seeing, columns, rows, np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), (np.zeros(0),) * 3)
+        limits = np.concatenate([np.repeat(job.controller.eye_limits[None], len(job.binding.eyes), axis=0) for job in chosen])
+        return cls(seeing, columns, rows, np.concatenate([job.binding.to_turn for job in chosen]),
+                   np.concatenate([job.binding.from_turn for job in chosen]), tuple(limits.T))
 
 
 def _apply_per_eye(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -139,6 +139,12 @@ class SaccadeSchedule:
             self._extend()
         return len(self.times)
 
+    def next_after(self, t_s: float) -> float:
+        """Seconds of the first saccade after ``t_s`` (generated as needed)."""
+        count = self.until(t_s)
+        after = int(np.searchsorted(self.times[:count], t_s, side="right"))
+        return float(self.times[after]) if after < count else self._next_time
+
     def sample(self, n: int) -> "SaccadeSchedule":
         """Generate at least ``n`` saccades (for statistics); returns self."""
         while len(self.times) < n:
