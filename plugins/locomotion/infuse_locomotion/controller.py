@@ -712,13 +712,13 @@ class Locomotion(Controller):
                     # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
                     # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
                     # ground last, and the fading turn would swing it along the ground).
-                    turn[s:e] = quat.slerp(_IDENTITY, left, fade)
+                    turn[s:e] = _share_of(left, fade)
                     hang = quat.rotate(turn[s:e], lever[s:e])
                     if lifted.any():
                         rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
                         # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
                         corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
-                        hang = quat.rotate(quat.from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
+                        hang = quat.rotate(_from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
                     goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
                     # A foot far from where the animation has it steps there over an arc, not along the
                     # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
@@ -739,7 +739,7 @@ class Locomotion(Controller):
                     if kind != prev and prev == footing.FREE:
                         # The anchor lands: it stays where the corrected foot puts it now.
                         fade = 1.0 - footing.smoothstep(released / RELEASE_S)
-                        left = quat.slerp(_IDENTITY, left, fade)
+                        left = _share_of(left, fade)
                         pin = feet_pos[s, k, 1] + ball_offset * fade
                         if kind == footing.ANKLE:
                             pin = pin - quat.rotate(left, lever[s])
@@ -766,7 +766,7 @@ class Locomotion(Controller):
                         kept = quat.multiply(yaw(landed_spun - spun[s:e]), since)
                     else:
                         kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
-                        kept /= np.maximum(np.linalg.norm(kept, axis=-1, keepdims=True), 1e-12)
+                        kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
                     turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
                     goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
                     goal[s:e, 1] = ankle[s:e, 1]
@@ -1031,13 +1031,37 @@ def _standing_speed(clips) -> float:
 def _turn_feet(b: LocomotionBinding, rot, rise) -> np.ndarray:
     """Turn both feet by ``rise`` (F, 2, 3) rotation vectors in their own frames, in place, the toes
     keeping their orientation where the ball joint hangs from the ankle; returns the turns (F, 2, 4)."""
-    delta = quat.from_rotvec(rise)
+    delta = _from_rotvec(rise)
     ankles = [leg[2] for leg in b.legs]
     rot[:, ankles] = quat.multiply(rot[:, ankles], delta)
     k = b.balls_on_ankles
     if k.size:
         rot[:, b.balls[k]] = quat.multiply(quat.conjugate(delta[:, k]), rot[:, b.balls[k]])
     return delta
+
+
+def _share_of(turn: np.ndarray, share) -> np.ndarray:
+    """Turns (F, 4) by ``share`` (F,) in [0, 1] of the turn ``turn`` (4,): the slerp from the identity,
+    its angle worked out once (``quat.slerp``'s general form costs more than the maths on a block's
+    few frames)."""
+    q = turn if turn[3] >= 0.0 else -turn
+    theta = math.acos(min(abs(float(q[3])), 1.0))
+    s = math.sin(theta)
+    t = np.asarray(share, dtype=np.float64)
+    if s < 1e-6:  # (nearly) no turn: a plain lerp
+        wa, wb = 1.0 - t, t
+    else:
+        wa, wb = np.sin((1.0 - t) * theta) / s, np.sin(t * theta) / s
+    out = wb[..., None] * q
+    out[..., 3] += wa
+    return out / np.sqrt((out * out).sum(axis=-1, keepdims=True))
+
+
+def _from_rotvec(rotvec: np.ndarray) -> np.ndarray:
+    """Quaternions (..., 4) of rotation vectors (..., 3) (axis times angle, radians), through their axis
+    and angle (SciPy's conversion costs more than the maths on a block's few frames)."""
+    angle = np.sqrt((rotvec * rotvec).sum(axis=-1))
+    return quat.from_axis_angle(rotvec / np.maximum(angle, 1e-300)[..., None], angle)
 
 
 def _radians(value, name: str, timed: bool = True):
