@@ -75,6 +75,8 @@ class LocomotionBinding:
     joint), ``has_ball`` (2,) bool, ``balls_on_ankles`` the feet whose ball hangs from the ankle, and the
     joints one FK gives the stride (``shorten_joints``) and the pinning (``pin_joints``: hip, knee,
     ankle, the hip's parent and the ball of each leg).
+    The straight walk's cadence (cycles per second) ``walk_cadences`` (S,) at speeds ``walk_speeds``
+    (S,) m/s, from standing to the top speed (:func:`~.controller.straight_walk`), for pacing its stops.
     """
 
     space: BlendSpace
@@ -110,3 +112,5 @@ class LocomotionBinding:
     balls_on_ankles: np.ndarray = field(default_factory=_no_joints)
     shorten_joints: list[int] = field(default_factory=list)
     pin_joints: list[int] = field(default_factory=list)
+    walk_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    walk_cadences: np.ndarray = field(default_factory=lambda: np.zeros(0))

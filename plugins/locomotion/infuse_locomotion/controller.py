@@ -43,7 +43,7 @@ from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from . import transitions
+from . import pacing, transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .state import LocomotionState
@@ -214,8 +214,12 @@ class Locomotion(Controller):
             return None
         dt = 1.0 / float(fps)
         last, frames, decide, stopped = path[-1], 0, True, False
-        played = transitions.played(space, _standing_speed(space.group("locomotion"))) if top else []
+        clips = space.group("locomotion") if top else []
+        played = transitions.played(space, _standing_speed(clips)) if top else []
         stops = transitions.stops(played)
+        paced = pacing.pacing_for(stops, fps, *straight_walk(space, clips), float(getattr(state, "phase", 0.0))) if stops else None
+        slowest_keys = clips[_slowest_walk(clips)].keys if top else (0.0, 0.0, 1.0)
+        half = 0.5 * float(slowest_keys[2] - slowest_keys[0])
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
             if decide:  # a transition played whole from standing (as the walk will decide)
                 decide = False
@@ -225,8 +229,10 @@ class Locomotion(Controller):
                     frames += int(round(transitions.handover_s(pick, fps) * fps))
                     st.go_on_from(transitions.end_state(pick, transitions.placement(pick, st.x, st.z, st.heading), fps))
                     decide = pick.transition == "turn"
+                    if paced is not None and pick.transition == "start":
+                        paced.phase = transitions.start_phase(pick, fps, half)
                     continue
-            self.steering.run(st, np.array([frames * dt]), dt, top=top)
+            self.steering.run(st, np.array([frames * dt]), dt, top=top, pacing=paced)
             frames += 1
             stop = transitions.stop_due(stops, st, last, fps) if stops and st.waypoint == len(path) - 1 else None
             if stop is not None:  # where it is as far from the point as a stop clip travels (the walk's own
@@ -347,23 +353,24 @@ class Locomotion(Controller):
         trace, st.trace = st.trace, None
         if path is None or trace is None or st.waypoint != len(path) - 1:
             return None
-        x, z, heading, speed, phase = trace
+        x, z, heading, speed, phase, advance = trace
         last = path[-1]
         dist = np.hypot(last[0] - x, last[1] - z)
         off = np.abs((np.arctan2(last[0] - x, last[1] - z) - heading + np.pi) % (2.0 * np.pi) - np.pi)
-        prev = np.concatenate(([before.phase], phase[:-1]))
         best = None
         for clip in b.stops:
             at = transitions.stop_phase(clip)
             if at is None:
                 continue
             travel = transitions.stop_travel(clip, fps)
-            ok = ((np.mod(phase - at, 1.0) < np.mod(phase - prev, 1.0) + 1e-9) & (np.mod(phase - prev, 1.0) < 0.5)
+            # The clip's phase reached between this frame and the next (each frame's own advance, so
+            # the frame found is the same whichever frames are evaluated together).
+            ok = ((np.mod(at - phase, 1.0) < advance) & (advance < 0.5)
                   & (off < transitions.STOP_BEARING) & (np.abs(np.log(np.maximum(speed, 1e-9) / clip.parameters["speed_start"])) < math.log(transitions.STOP_SPEEDS))
                   & (np.abs(np.log(np.maximum(dist, 1e-9) / travel)) < math.log(transitions.STOP_SCALES)))
             # A stride later it may have about as far to go as the clip travels: then it waits for that.
             scale = np.log(np.maximum(dist, 1e-9) / travel)
-            stride = speed * dt / np.maximum(np.mod(phase - prev, 1.0), 1e-9)
+            stride = speed * dt / np.maximum(advance, 1e-9)
             later = np.log(np.maximum(dist - stride, 1e-9) / travel)
             hits = np.flatnonzero(ok & (np.abs(scale) <= np.abs(later)))
             if hits.size and (best is None or hits[0] < best[0]):
@@ -407,14 +414,7 @@ class Locomotion(Controller):
             st.settled, st.stand, st.landings, st.to_go = True, 1.0, -1, -1.0
             st.chooser = None if clip.transition == "turn" else id(self)
             return
-        at = transitions.handover_s(clip, fps)
-        strikes = [(t, k) for t, k in transitions.strikes_of(clip) if t <= at + 1e-9]
-        phase = 0.0
-        if strikes:
-            last, foot = strikes[-1]
-            other = [t for t, k in strikes if k != foot]
-            half = last - other[-1] if other and last - other[-1] > 1e-3 else 0.5 * float(b.durations[np.argmax(b.slowest)])
-            phase = (0.5 * foot + 0.5 * (at - last) / half) % 1.0
+        phase = transitions.start_phase(clip, fps, 0.5 * float(b.durations[np.argmax(b.slowest)]))
         st.settled, st.stand, st.landings, st.to_go, st.phase = False, 0.0, -1, -1.0, float(phase)
 
     def _faded(self, b: LocomotionBinding, st: LocomotionState, part, times, fps: float):
@@ -456,14 +456,17 @@ class Locomotion(Controller):
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned."""
         x0, z0, h0 = st.x, st.z, st.heading
-        req = self.steering.run(st, times, dt, top=b.limit)
+        # The stop clip begun on time (:mod:`.pacing`), from the gait's phase now.
+        paced = pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase) \
+            if self.steering.path is not None else None
+        req = self.steering.run(st, times, dt, top=b.limit, pacing=paced)
         if st.capped is not None and not st.warned:
             asked, done, towards = st.capped
             report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
-        speed, turn, direction, stopping = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5
-        w, slow = _weights(b, speed, direction, turn)
+        speed, turn, direction, stopping, pace = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4]
+        w, slow = _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
         vf, vl = speed * np.cos(direction), speed * np.sin(direction)
@@ -486,15 +489,12 @@ class Locomotion(Controller):
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
-        wm = np.where(b.idle[None], 0.0, w)
-        moving = wm.sum(axis=1)
-        near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
-        wm = near * (wm + SLOW_EPS * b.slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * b.slowest[None]
+        wm = _moving(w, b.idle, b.slowest)
         period = np.maximum(wm @ b.durations, 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
-                                                        _settle_phases(b, wm))
+                                                        _settle_phases(b, wm), pace)
         if b.stops:  # where it went, frame by frame: where a stop clip may take over
-            st.trace = (px, pz, heading, speed, phase)
+            st.trace = (px, pz, heading, speed, phase, advance)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -526,7 +526,7 @@ class Locomotion(Controller):
         down = settle[:, None] * support
         laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
-        if np.any(stride < 1.0 - 1e-6) and len(b.legs) == 2:
+        if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
         return rot, root, jt, contact, forward, spun
 
@@ -647,7 +647,7 @@ class Locomotion(Controller):
         goal[..., 1] = low + (pos[:, 2:4, 1] - low) * (1.0 - down)
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
-        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=(stride < 1.0 - 1e-6).astype(float),
+        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=(np.abs(stride - 1.0) > 1e-6).astype(float),
                    pole=forward, end_rotation=feet[:, :, 0], distance=False)
         if stance_feet is not None and b.balls_on_ankles.size:
             k = b.balls_on_ankles
@@ -880,6 +880,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         heights = pos[:, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
         played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
     body = np.nonzero(limbs == 0)[0]
+    walk_speeds, walk_cadences = straight_walk(space, clips)
     two = len(legs) == 2  # the joints the stride and the pinning work on, both legs at once
     balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs] if two else [], dtype=np.int64)
     return LocomotionBinding(
@@ -899,7 +900,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         shorten_joints=[legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + (balls.tolist() if stance_feet is not None else [])
         if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
-                    for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)])
+                    for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
+        walk_speeds=walk_speeds, walk_cadences=walk_cadences)
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
@@ -1081,42 +1083,67 @@ def _towards(direction: float) -> str:
     return "forward" if abs(deg) < 1.0 else f"{abs(deg):.0f} deg to the {'left' if deg > 0 else 'right'} of the facing"
 
 
-def _slowest_towards(b: LocomotionBinding, direction) -> np.ndarray:
+def _slowest_towards(velocities: np.ndarray, idle: np.ndarray, direction) -> np.ndarray:
     """(F,) speed (m/s) of the slowest moving example travelling within 45 degrees of each ``direction``
     (F,) radians (of any moving example where none does): a pack without an idle walks slower than
     that by slowing it. (A blend of walks forward and back may stand still, but it steps on the spot.)"""
-    v = b.velocities
-    moving = ~b.idle & (np.hypot(v[:, 0], v[:, 1]) > 1e-3)
+    v = velocities
+    moving = ~idle & (np.hypot(v[:, 0], v[:, 1]) > 1e-3)
     speeds = np.where(moving, np.hypot(v[:, 0], v[:, 1]), np.inf)
     off = np.abs((direction[:, None] - np.arctan2(v[:, 1], v[:, 0])[None] + np.pi) % (2.0 * np.pi) - np.pi)
     near = np.where(off < np.pi / 4, speeds[None], np.inf).min(axis=1)
     return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
 
 
-def _weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
-    """Blend weights (F, N) for the requests and the moving share (F,) of the slowest walk's speed:
+def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+    """Blend weights (F, N) in the locomotion blend ``space`` (examples ``idle`` (N,) bool, with
+    ``velocities`` (N, 3), speed ``limit``) for the requests (F,) and the moving share (F,) of the slowest walk's speed:
     where the full request lies outside the tessellation, its turn rate is the nearest one the
     tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
     at that example's speed and the share is the ratio of the speeds."""
-    space = b.space
     slow = np.ones(len(speed))
-    if not b.idle.any():
-        floor = _slowest_towards(b, direction)
+    if not idle.any():
+        floor = _slowest_towards(velocities, idle, direction)
         slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
         speed = np.maximum(speed, floor)
     query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
     w, inside = space.weights("locomotion", query)
     out = np.nonzero(~inside)[0]
     if out.size:  # the turn rate nearest the request's that the tessellation holds at that velocity
-        turns, ok = b.limit.hull.nearest_turns(query[out, :2], query[out, 2])
+        turns, ok = limit.hull.nearest_turns(query[out, :2], query[out, 2])
         cut = np.nonzero(ok)[0]  # the others keep the weights of the full request's nearest point
         if cut.size:
             query[out[cut], 2] = turns[cut]
             w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
-    if b.idle.any():
-        slow = np.clip(1.0 - w[:, b.idle].sum(axis=1), 0.0, 1.0)
+    if idle.any():
+        slow = np.clip(1.0 - w[:, idle].sum(axis=1), 0.0, 1.0)
     return w, slow
+
+
+def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
+    """(F, N) the moving clips' weights from blend weights ``w`` (F, N): the idle's left out, the rest
+    renormalized, turning into the slowest walk (``slowest`` (N,) one there) as their share falls to
+    nothing (:data:`SLOW_RAMP`)."""
+    wm = np.where(idle[None], 0.0, w)
+    moving = wm.sum(axis=1)
+    near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
+    return near * (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * slowest[None]
+
+
+def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
+    """Speeds (S,) m/s from standing to the pack's top speed straight ahead, and the cadence (S,)
+    (cycles per second) the steered blend walks straight ahead at each (:func:`_steered`'s weights)."""
+    idle = np.array([c.role == "idle" for c in clips])
+    velocities = np.array([[c.parameters[k] for k in ("forward_speed", "lateral_speed", "turn_rate")] for c in clips])
+    limit = space.speed_limit()
+    grid = np.linspace(0.0, max(float(limit(0.0)), 1e-3), 64)
+    slowest = np.zeros(len(clips))
+    slowest[_slowest_walk(clips)] = 1.0
+    ahead = np.zeros(len(grid))
+    w, slow = _weights(space, idle, velocities, limit, grid, ahead, ahead)
+    durations = np.array([c.keys[2] - c.keys[0] for c in clips])
+    return grid, pacing.straight_cadences(_moving(w, idle, slowest) @ durations, slow)
 
 
 def _settle_phases(b: LocomotionBinding, w) -> np.ndarray:
@@ -1135,14 +1162,15 @@ def _settle_phases(b: LocomotionBinding, w) -> np.ndarray:
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
 
 
-def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at) -> tuple[np.ndarray, ...]:
+def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at, pace) -> tuple[np.ndarray, ...]:
     """The blend's phase (F,) in [0, 1), each frame's step of it to the next frame (F,) (from that
     frame's own cadence: the same whichever frames are evaluated with it), stride factor (F,), idle
     share (F,) and how far it has come to rest (F,) (the idle share's easing, with an idle or not) for moving shares
     ``slow`` (F,) of the slowest walk, the steering's ``stopping`` (F,) flags, ``spinning`` (F,)
     flags (the root turns on the spot) and cycle durations ``period`` (F,) seconds; updates ``st``.
 
-    Walking, cadence and stride are both the slowest walk's times the square root of ``slow``.
+    Walking, cadence and stride are both the slowest walk's times the square root of ``slow``, the
+    cadence further times ``pace`` (F,) and the stride over it (:mod:`.pacing`: the speed kept).
     Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
     ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
@@ -1161,6 +1189,8 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     done = st.phase  # the (unwrapped) phase at the start of each run
     for a, e in zip(bounds[:-1], bounds[1:]):
         if not stop[a]:
+            rate[a:e] *= pace[a:e]
+            stride[a:e] /= pace[a:e]
             advance[a:e] = dt * rate[a:e] / period[a:e]
             st.settled, st.landings, st.to_go = False, -1, -1.0
         elif st.settled and not spinning[a]:
@@ -1214,7 +1244,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
         level[a:e] = np.clip(ramp, 0.0, 1.0)
         st.stand = float(level[e - 1])
     rest = footing.smoothstep(level)
-    return phase % 1.0, advance, np.minimum(stride, 1.0), rest if idle else np.zeros(f), rest
+    return phase % 1.0, advance, np.where(stop, np.minimum(stride, 1.0), stride), rest if idle else np.zeros(f), rest
 
 
 def mean_rotations(motion) -> np.ndarray:

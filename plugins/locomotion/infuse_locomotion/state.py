@@ -37,8 +37,8 @@ class LocomotionState(SteeringState):
       bend up (radians);
     - the transitions played whole (:mod:`.transitions`): ``playing`` and ``fading`` (the clip's name, its
       start in the activity's time, its :data:`Placement`) or None, ``chooser`` the walk that decided
-      (its controller's id), ``trace`` the steered stretch's ground points, headings, speeds and phases
-      (F,) each, where a stop may take over;
+      (its controller's id), ``trace`` the steered stretch's ground points, headings, speeds, phases
+      and each frame's advance of the phase (F,) each, where a stop may take over;
     - each planted foot (:meth:`~.controller.Locomotion._pin`): ``anchor`` (2,) what holds it (free, ankle,
       ball), ``pins`` (2, 3) where, ``offset`` (2, 3) and ``ball_offset`` (2, 3) the ankle's and ball's
       corrections, ``released`` (2,) seconds since let go, ``free_s`` (2,) seconds in the air, ``let_go``

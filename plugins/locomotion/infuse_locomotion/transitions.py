@@ -100,6 +100,20 @@ def stop_phase(clip) -> float | None:
     return float((0.5 * foot - 0.5 * t1 / (t2 - t1)) % 1.0)
 
 
+def start_phase(clip, fps: float, half_s: float) -> float:
+    """The gait phase (left strike 0, right strike 0.5) where the steering takes over a start ``clip``
+    at ``fps``: from its last strike before then and the one of the other foot before it (``half_s``
+    seconds apart where there is none)."""
+    at = handover_s(clip, fps)
+    strikes = [(t, k) for t, k in strikes_of(clip) if t <= at + 1e-9]
+    if not strikes:
+        return 0.0
+    last, foot = strikes[-1]
+    other = [t for t, k in strikes if k != foot]
+    half = last - other[-1] if other and last - other[-1] > 1e-3 else half_s
+    return float((0.5 * foot + 0.5 * (at - last) / half) % 1.0)
+
+
 def strikes_of(clip) -> list[tuple[float, int]]:
     """(seconds, foot: 0 left, 1 right) of each landing in ``clip``, in time order (its contact flags)."""
     flags = clip.contacts.astype(np.int8)

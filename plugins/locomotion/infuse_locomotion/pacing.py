@@ -1,0 +1,94 @@
+"""Pacing a walk's last strides so that its stop clip begins on time: at the clip's gait phase, with as
+far left to go as the clip travels.
+
+A stop clip (:mod:`.transitions`) begins at one gait phase, and the walk reaches that phase once a
+stride; at a fixed cadence the distance left then is wherever the walk's start put it, so a clip
+whose travel may be scaled by :data:`~.transitions.STOP_SCALES` either way fits only if that window
+is longer than a stride. Instead, on its way to its last point the walk changes its cadence, its
+speed kept: its steps grow shorter and quicker (up to :data:`FASTER`) or longer and slower (down to
+:data:`SLOWER`), so that the stop's phase comes exactly where the distance left is the clip's
+travel. Of the strides to go the walk takes the whole number that needs the smallest change, and
+recomputes it every frame from where it is (a constant factor holds once chosen: the distance and
+the phase left both shrink at its rate). The controller shortens or lengthens the steps by leg IK
+(:meth:`~.controller.Locomotion._shorten`).
+
+Phases are cycles (left strike 0, right strike 0.5), distances metres, speeds m/s, times seconds.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import transitions
+
+#: Least and greatest cadence factor (phase rate over the blend's at that speed, the speed kept): the
+#: steps are shorter by its inverse. Quicker, shorter steps are easier than longer ones.
+FASTER = 1.25
+SLOWER = 0.9
+
+
+@dataclass
+class StopPacing:
+    """What pacing needs: the stops' gait phases at their start ``phases`` (K,), the ground travel of
+    each to where the steering takes over ``travels`` (K,) m, their speeds at their start ``speeds``
+    (K,) m/s; the straight walk's cadence (cycles per second) ``cadences`` (S,) at speeds ``grid``
+    (S,) m/s; and ``phase``, the walk's gait phase, which :meth:`step` carries on frame by frame."""
+
+    phases: np.ndarray
+    travels: np.ndarray
+    speeds: np.ndarray
+    grid: np.ndarray
+    cadences: np.ndarray
+    phase: float = 0.0
+
+    def cadence(self, speed: float) -> float:
+        """Cycles per second of the straight walk at ``speed`` m/s."""
+        return float(np.interp(speed, self.grid, self.cadences))
+
+    def factor(self, speed: float, dist: float, bearing: float) -> float:
+        """The cadence factor for a walk at ``speed`` m/s with ``dist`` m to its last point, ``bearing``
+        radians off its facing: for the stop begun nearest its speed, where it heads for the point and
+        walks at about that stop's speed (:data:`~.transitions.STOP_BEARING`,
+        :data:`~.transitions.STOP_SPEEDS`); 1 where no stop fits (too near already)."""
+        if speed <= 1e-6 or self.phases.size == 0 or abs(bearing) >= transitions.STOP_BEARING:
+            return 1.0
+        ratios = np.abs(np.log(np.maximum(self.speeds, 1e-9) / speed))
+        k = int(np.argmin(ratios))
+        if ratios[k] >= math.log(transitions.STOP_SPEEDS):
+            return 1.0
+        left = dist - float(self.travels[k])
+        stride = speed / max(self.cadence(speed), 1e-9)  # metres a cycle at the blend's own cadence
+        if left <= 0.0 or stride <= 1e-9:
+            return 1.0
+        to_phase = (float(self.phases[k]) - self.phase) % 1.0
+        # Strides to go (whole ones beyond the next time it passes the phase): the factor each needs.
+        n = np.arange(int(left / stride * FASTER) + 2)
+        need = stride * (to_phase + n) / left
+        fits = need[(need >= SLOWER) & (need <= FASTER)]
+        return float(fits[np.argmin(np.abs(np.log(fits)))]) if fits.size else 1.0
+
+    def step(self, speed: float, factor: float, dt: float) -> None:
+        """Carry the phase on by one frame of ``dt`` s at ``speed`` m/s and cadence ``factor``."""
+        self.phase = (self.phase + dt * factor * self.cadence(speed)) % 1.0
+
+
+def straight_cadences(periods: np.ndarray, slow: np.ndarray) -> np.ndarray:
+    """Cycles per second of a straight walk from the blend's cycle durations
+    ``periods`` (S,) s and moving shares ``slow`` (S,) (below the slowest walk the cadence falls with
+    their square root)."""
+    return np.sqrt(np.clip(slow, 0.0, 1.0)) / np.maximum(periods, 1e-3)
+
+
+def pacing_for(stops: list, fps: float, grid: np.ndarray, cadences: np.ndarray, phase: float) -> StopPacing | None:
+    """A :class:`StopPacing` for the stop clips ``stops`` (whose phase at their start is known) at
+    ``fps``, with the straight walk's ``cadences`` (S,) at speeds ``grid`` (S,), from the gait's
+    ``phase``; None without stops."""
+    if not stops:
+        return None
+    return StopPacing(phases=np.array([transitions.stop_phase(c) for c in stops]),
+                      travels=np.array([transitions.stop_travel(c, fps) for c in stops]),
+                      speeds=np.array([c.parameters["speed_start"] for c in stops]), grid=np.asarray(grid),
+                      cadences=np.asarray(cadences), phase=float(phase))
+
