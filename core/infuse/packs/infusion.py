@@ -31,6 +31,7 @@ from ..errors import MissingFeatureError, MissingJointsError, UsageError
 from ..kinematics import forward_kinematics
 from ..mapping import Mapping, map_skeleton
 from ..motion import Motion
+from ..runtime.limb_ik import hangs_below, is_carried
 from ..skeleton import Skeleton
 from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of, transition_parameters
 from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
@@ -279,7 +280,8 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping,
 
 
 #: The limbs a pack of each kind poses with IK, root to end ("{s}": each side its clips use, "l" and "r"
-#: for locomotion). Each joint must be mapped and hang below the one before it.
+#: for locomotion). Each joint must be mapped and hang below the one before it, but the end may hang
+#: outside its limb (carried by the end of the middle joint's bone: :func:`~infuse.runtime.limb_ik.is_carried`).
 DRIVEN_LIMBS = {
     "locomotion": (("{s}_hip", "{s}_knee", "{s}_ankle"),),
     "reach": (("{s}_shoulder", "{s}_elbow", "{s}_wrist"),),
@@ -293,7 +295,6 @@ def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
     hands = {c.hand for c in pack.manifest.clips if c.hand}
     sides = ("l", "r") if pack.kind in ("locomotion", "posture") or "both" in hands else \
         tuple(sorted({h[0] for h in hands}))
-    parents = character.skeleton.parents
     index = {n: k for k, n in enumerate(character.skeleton.names)}
     missing, detached = [], []
     for limb in DRIVEN_LIMBS.get(pack.kind, ()):
@@ -301,13 +302,11 @@ def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
             names = [n.format(s=s) for n in limb]
             missing += [n for n in names if mapping.get(n) is None]
             joints = [index.get(mapping.get(n) or "") for n in names]
+            carried = None not in joints and is_carried(character.skeleton, joints)
             for upper, lower, name in zip(joints, joints[1:], names[1:]):
-                if upper is None or lower is None:
+                if upper is None or lower is None or (carried and lower == joints[-1]):
                     continue
-                k = parents[lower]
-                while k > upper:
-                    k = parents[k]
-                if k != upper:
+                if not hangs_below(character.skeleton, lower, upper):
                     detached.append(name)
     if missing:
         raise MissingJointsError(character.asset.path, f"pack '{pack.name}' drives {', '.join(missing)}, which "
@@ -315,8 +314,7 @@ def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
     if detached:
         raise MissingJointsError(character.asset.path, f"pack '{pack.name}' poses limbs with IK, but "
                                  f"{', '.join(detached)} {'does' if len(detached) == 1 else 'do'} not hang below the joint before it "
-                                 f"in its limb "
-                                 f"(a foot or hand driven from outside its limb)")
+                                 f"in its limb (a limb's end may hang outside the limb, not from inside it)")
 
 
 def _restraightened(motion: Motion, params: dict, index: dict[str, int]) -> tuple[Motion, dict]:

@@ -13,15 +13,23 @@ entry points give that one solution:
   for callers that keep their own pose (the retargeter), bending about a hinge axis they give
   (:func:`hinge_axes`) and never straightening a limb past a least flexion.
 
+**Carried ends.** Some rigs built for IK hang the end joint outside its limb (a foot hanging from the
+root, not from the shin): the joint is then *carried* by the end of the middle joint's bone, the point
+where it sits at rest in b's frame (:func:`carried_offsets`). :func:`solve_limb` brings that point to
+the goal and places the end joint there by its own local translation, its global rotation kept or
+set as for any limb; :func:`carry_ends` puts such joints back on their bones' ends in any pose.
+
 Positions are metres; quaternions (x, y, z, w).
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import quaternions as quat
+from ..skeleton import Skeleton
 from .pose import chain_fk
 
 
@@ -55,6 +63,76 @@ def _arccos(cosine: np.ndarray) -> np.ndarray:
 
 #: Margin (metres) inside a limb's span for a goal to count as reachable (:func:`turn_limb`).
 REACH_MARGIN = 5e-4
+#: Each skeleton's carried-end offsets by limb (:func:`carried_offset`), for as long as the skeleton lives.
+_CARRIED: weakref.WeakKeyDictionary[Skeleton, dict[tuple[int, int, int], np.ndarray | None]] = weakref.WeakKeyDictionary()
+
+
+def hangs_below(skeleton, joint: int, ancestor: int) -> bool:
+    """Whether ``joint`` hangs, at any depth, below ``ancestor``."""
+    parents = skeleton.parents
+    j = int(parents[joint])
+    while j >= 0:
+        if j == ancestor:
+            return True
+        j = int(parents[j])
+    return False
+
+
+def is_carried(skeleton, limb) -> bool:
+    """Whether the end c of ``limb`` (a, b, c) hangs outside it: below neither a nor b, and a not below c."""
+    a, b, c = (int(j) for j in limb)
+    return not (hangs_below(skeleton, c, a) or hangs_below(skeleton, a, c) or a == c)
+
+
+def carried_offset(skeleton, limb) -> np.ndarray | None:
+    """Where the end c of ``limb`` (a, b, c) is carried when it hangs outside its limb: (3,) metres, c's
+    rest position in b's rest frame (the end of b's bone as the rig has it); None when c hangs below b.
+
+    Raises ValueError when c hangs below a but not below b, or a hangs below c: turning the limb
+    would move the joint c hangs from."""
+    a, b, c = (int(j) for j in limb)
+    known = _CARRIED.setdefault(skeleton, {})
+    key = (a, b, c)
+    if key not in known:
+        if hangs_below(skeleton, c, b):
+            known[key] = None
+        elif not is_carried(skeleton, key):
+            names = skeleton.names
+            raise ValueError(f"joint {names[c]!r} hangs neither below {names[b]!r} nor outside the limb from {names[a]!r}")
+        else:
+            rest_rot, rest_pos = skeleton.rest_global_rotations, skeleton.rest_global_positions
+            known[key] = quat.rotate(quat.conjugate(rest_rot[b]), rest_pos[c] - rest_pos[b])
+    return known[key]
+
+
+def carry_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations: np.ndarray,
+               limbs) -> None:
+    """Put the carried end of each limb (a, b, c) of ``limbs`` (K, 3) on the end of b's bone
+    (:func:`carried_offset`), in place: c's local translation in ``joint_translations`` (F, J, 3) is set,
+    its rotation left as it is (its global rotation does not change). Limbs whose end hangs below b are left."""
+    limbs = np.asarray(limbs, dtype=np.int64).reshape(-1, 3)
+    offsets = [carried_offset(skeleton, limb) for limb in limbs]
+    kept = [k for k, o in enumerate(offsets) if o is not None]
+    if kept:
+        _place_carried(skeleton, local_rotations, root_translations, joint_translations, limbs[kept, 1], limbs[kept, 2],
+                       np.stack([offsets[k] for k in kept]))
+
+
+def _place_carried(skeleton, local_rotations, root_translations, joint_translations, middles, ends,
+                   offsets) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Set the local translations of carried ``ends`` (K,) so each sits at its ``offsets`` (K, 3) in its
+    middle joint's frame (``middles`` (K,)); returns their positions (F, K, 3), the global rotations
+    (F, K, 4) of the joints they hang from (the identity for a root) and of the middle joints."""
+    holders = skeleton.parents[ends]
+    hung = holders >= 0
+    g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations,
+                            np.concatenate((middles, np.where(hung, holders, middles))))
+    k = len(middles)
+    places = g_pos[:, :k] + quat.rotate(g_rot[:, :k], offsets)
+    holder_rot = np.where(hung[:, None], g_rot[:, k:], quat.IDENTITY)
+    holder_pos = np.where(hung[:, None], g_pos[:, k:], 0.0)
+    joint_translations[:, ends] = quat.rotate(quat.conjugate(holder_rot), places - holder_pos)
+    return places, holder_rot, g_rot[:, :k]
 
 
 @dataclass(frozen=True)
@@ -154,6 +232,10 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
 
     ``chains``: the global rotations (F, [K,] R, 4) and positions (F, [K,] R, 3) of a, b, c and, when
     a has a parent, that parent (R = 4), when the caller has them already (else one FK finds them).
+
+    A carried end (:func:`carried_offset`) is brought to the goal as the end of b's bone, then placed
+    there on every frame, whatever ``weight``, by its local translation, written in ``joint_translations``
+    (F, J, 3), which must then be given, writable, and kept with the rotations.
     """
     limbs = np.asarray(joints, dtype=np.int64)
     several = limbs.ndim == 2
@@ -161,7 +243,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     T = np.asarray(goal, dtype=np.float64)
     parents = skeleton.parents[limbs[:, 0]]
     hung = parents >= 0
-    if hung.any() and not hung.all():  # a's parent rotation only where it has one: solved apart
+    offsets = [carried_offset(skeleton, limb) for limb in limbs]
+    carried = np.array([o is not None for o in offsets])
+    if (hung.any() and not hung.all()) or (carried.any() and not carried.all()):  # solved apart
         left = [solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb), T[:, k],
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
                            None if chains is None else tuple(c[:, k] for c in chains), distance)
@@ -176,6 +260,12 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         g_rot, g_pos = chains
     parent_rot = g_rot[..., 3, :] if hung.all() else None
     A, B, C = g_pos[..., 0, :], g_pos[..., 1, :], g_pos[..., 2, :]
+    if carried.all():
+        if joint_translations is None or not joint_translations.flags.writeable:
+            raise ValueError(f"joint {skeleton.names[limbs[0, 2]]!r} hangs outside its limb: placing it needs "
+                             f"writable joint translations (F, J, 3), which the caller keeps")
+        carried_at = np.stack(offsets)  # (K, 3)
+        C = B + quat.rotate(g_rot[..., 1, :], carried_at if several else carried_at[0])
     # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3), their lengths and directions.
     sides = np.empty((4,) + A.shape)
     for k, (end, start) in enumerate(((B, A), (C, B), (C, A), (T, A))):
@@ -230,6 +320,17 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         else:
             new = quat.slerp(old, new, w)
     local_rotations[:, columns[..., :2]] = new
+    if carried.all():
+        places, holders, middles = _place_carried(skeleton, local_rotations, root_translations, joint_translations,
+                                                  limbs[:, 1], limbs[:, 2], carried_at)
+        if end_rotation is not None or not keep_end:  # c hangs from a joint the limb does not turn
+            if end_rotation is None:  # turned as b turned
+                end_rotation = quat.multiply(quat.multiply(middles if several else middles[:, 0],
+                                                           quat.conjugate(g_rot[..., 1, :])), g_rot[..., 2, :])
+            end_rotation = np.asarray(end_rotation, dtype=np.float64)
+            local_rotations[:, limbs[:, 2]] = quat.multiply(quat.conjugate(holders),
+                                                            end_rotation if several else end_rotation[:, None])
+        return _norm((places if several else places[:, 0]) - T) if distance else None
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
     paths = [_path_below(skeleton, a, c) for a, _, c in limbs]

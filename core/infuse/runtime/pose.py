@@ -58,8 +58,11 @@ class PoseBlock:
         self.frames = frames
         self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0) if rotations is None else rotations
         self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0)
-        #: (F, J, 3) once a controller moves joints other than the root
+        #: (F, J, 3) once a controller moves joints other than the root, from the start on a character
+        #: whose limbs carry ends hanging outside them (placed by their translations, :meth:`carry_ends`)
         self.joint_translations: np.ndarray | None = None
+        if len(rig.carried_limbs):
+            self.joint_translations = np.repeat(sk.rest_translations[None], frames, axis=0)
         self.morph_weights = np.zeros((frames, len(rig.morph_targets))) if morphs is None else morphs
         self.morph_written = np.zeros(len(rig.morph_targets), dtype=bool) if written is None else written
         self._fk: tuple[np.ndarray, np.ndarray] | None = None
@@ -128,6 +131,17 @@ class PoseBlock:
         else:
             self.root_translations += w * (translations - self.root_translations)
         self._fk = None
+
+    def carry_ends(self) -> None:
+        """Put each limb end that hangs outside its limb (the rig's ``carried_limbs``) on the end of its
+        middle joint's bone, keeping its rotation (:func:`~infuse.runtime.limb_ik.carry_ends`): whatever
+        the controllers blended, a foot hanging from the root stays on its shin."""
+        limbs = self.rig.carried_limbs
+        if len(limbs):
+            from .limb_ik import carry_ends  # limb IK builds on this module's FK
+
+            carry_ends(self.rig.skeleton, self.local_rotations, self.root_translations, self.joint_translations, limbs)
+            self._fk = None
 
     # -- face channels ----------------------------------------------------------------------------
     def set_morphs(self, columns, values: np.ndarray, weight=None, mode: Mode = Mode.OVERRIDE) -> None:

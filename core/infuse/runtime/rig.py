@@ -25,7 +25,10 @@ from .. import quaternions as quat
 from ..asset import Character
 from ..mapping import Mapping
 from ..skeleton import Skeleton
+from .limb_ik import is_carried
 
+#: The limbs IK turns, root to end, by canonical name ("{s}": each side, "l" and "r").
+LIMBS = (("{s}_hip", "{s}_knee", "{s}_ankle"), ("{s}_shoulder", "{s}_elbow", "{s}_wrist"))
 # Canonical joints tried, in order, for the top of the body and for the left-right axis.
 _UP_JOINTS = ("skullbase", "spine5", "spine4", "spine3", "spine2")
 _SIDE_PAIRS = (("l_hip", "r_hip"), ("l_shoulder", "r_shoulder"), ("l_acromioclavicular", "r_acromioclavicular"),
@@ -173,6 +176,19 @@ class Rig:
         """(J, 4) rotations ``A_j = G_j⁻¹ · B`` from each joint's frame to its aligned frame
         (``G_j``: the joint's global rotation in the reference pose)."""
         return quat.multiply(quat.conjugate(self.reference_rotations), self.body)
+
+    @cached_property
+    def carried_limbs(self) -> np.ndarray:
+        """(K, 3) the mapped limbs of :data:`LIMBS` (a, b, c joints) whose end c hangs outside the limb
+        (:func:`~infuse.runtime.limb_ik.is_carried`: a foot hanging from the root in a rig built for IK),
+        carried by the end of b's bone; (0, 3) when there are none."""
+        found = []
+        for limb in LIMBS:
+            for s in "lr":
+                joints = [self.joints.get(n.format(s=s)) for n in limb]
+                if None not in joints and is_carried(self.skeleton, joints):
+                    found.append(joints)
+        return np.array(found, dtype=np.int64).reshape(-1, 3)
 
     @cached_property
     def morph_targets(self) -> tuple[str, ...]:

@@ -339,6 +339,7 @@ class Runtime:
             key[2].evaluate(jobs, block)
         for name, track in self._tracks.items():
             pose = poses[name]
+            pose.carry_ends()
             track.rotations.append(pose.local_rotations)
             track.roots.append(pose.root_translations)
             track.translations.append(pose.joint_translations)
