@@ -31,7 +31,9 @@ For every humanoid rig of the wild folder:
    within 10 cm for good (s), foot skate over the walk (cm per metre), how far the beat moved the
    right wrist and the posture the wrists (relative to the chest, % of the arm's length), every
    value finite, the deepest a foot goes below the level it stood at in the first frame (cm, soles
-   included), and the joint (fingers aside) that turns most in one frame (degrees).
+   included), the joint (fingers aside) that turns most in one frame (degrees), and on a rig whose
+   feet hang outside their legs (from the root, in rigs built for IK) how far a foot joint gets from
+   its shin's end (mm, :func:`infuse.runtime.limb_ik.carried_offset`).
 
 The worst cases of each table are named at the end. Run: ``python benchmarks/wild_pipeline.py``
 (``--quick``: 6 rigs and the Bandai walk only; ``--rigs TEXT``: rigs whose path contains TEXT;
@@ -60,6 +62,7 @@ from infuse.grounding import foot_height, grounded, sole_depth
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
 from infuse.packs import infuse_character
+from infuse.runtime.limb_ik import carried_offset
 from infuse.scene import Scene
 from infuse_retarget import RetargetPlan, retarget_clip
 from infuse_retarget.command import source_mapping
@@ -204,7 +207,9 @@ class PackRow:
     ``miss_m``, ``arrival_s`` and ``skate`` (cm/m), NaN without locomotion; ``beat_arm`` /
     ``posture_arm`` how far the wrists moved, % of the arm's length, NaN when not played;
     ``depth_cm`` the deepest a foot went below the level it started at; ``pop_joint`` / ``pop_deg`` /
-    ``pop_frame`` the joint turning most in one frame; ``motion`` the scene's output, ``mapping`` the rig's."""
+    ``pop_frame`` the joint turning most in one frame; ``carried_mm`` the farthest a foot hanging outside
+    its leg got from its shin's end (NaN where the feet hang from the shins); ``motion`` the scene's
+    output, ``mapping`` the rig's."""
 
     rig: str
     packs: tuple[str, ...]
@@ -219,6 +224,7 @@ class PackRow:
     pop_joint: str = ""
     pop_deg: float = float("nan")
     pop_frame: int = 0
+    carried_mm: float = float("nan")
     seconds: float = 0.0
     motion: object = None
     mapping: object = None
@@ -303,9 +309,21 @@ def pack_row(rel: str, cache: Path) -> PackRow:
     turns = np.degrees(quat.angle_between(g[:-1][:, [index[n] for n in names]], g[1:][:, [index[n] for n in names]]))
     f, k = np.unravel_index(int(np.argmax(turns)), turns.shape)
     row.pop_joint, row.pop_deg, row.pop_frame = names[k], float(turns[f, k]), int(f) + 1
+    row.carried_mm = _off_shins(rig, g, p)
     row.seconds = time.perf_counter() - start
     row.motion, row.mapping = motion, mapping
     return row
+
+
+def _off_shins(rig, g: np.ndarray, p: np.ndarray) -> float:
+    """mm: the farthest any limb end hanging outside its limb (``rig.carried_limbs``) gets from the end of
+    its middle joint's bone over global rotations (F, J, 4) and positions (F, J, 3); NaN without one."""
+    limbs = rig.carried_limbs
+    if not len(limbs):
+        return float("nan")
+    offsets = np.stack([carried_offset(rig.skeleton, limb) for limb in limbs])
+    ends = p[:, limbs[:, 1]] + quat.rotate(g[:, limbs[:, 1]], offsets)
+    return 1000.0 * float(np.linalg.norm(p[:, limbs[:, 2]] - ends, axis=-1).max())
 
 
 def _fmt(x: float, width: int = 6, digits: int = 2) -> str:
@@ -327,14 +345,15 @@ def print_retargeting(rows: list[RetargetRow]) -> None:
 
 def print_packs(rows: list[PackRow]) -> None:
     head = (f"{'rig':<42} {'packs':<5} | {'miss m':>6} {'arrive':>6} {'skate':>6} | {'beat':>5} {'post':>5} | "
-            f"{'depth':>5} | {'largest turn':<16} {'deg':>5} {'frame':>5} | {'s':>4}")
+            f"{'depth':>5} | {'largest turn':<16} {'deg':>5} {'frame':>5} | {'shin mm':>7} | {'s':>4}")
     print(head)
     print("-" * len(head))
     for r in rows:
         played = "".join(p[0].upper() if p in r.packs else "." for p in PACKS)
         print(f"{r.rig[-42:]:<42} {played:<5} | {_fmt(r.miss_m, 6, 3)} {_fmt(r.arrival_s, 6, 1)} {_fmt(r.skate)} | "
               f"{_fmt(r.beat_arm, 5, 0)} {_fmt(r.posture_arm, 5, 0)} | {_fmt(r.depth_cm, 5, 1)} | {r.pop_joint:<16} "
-              f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {r.seconds:4.1f}" + ("" if r.finite else "  NON-FINITE"))
+              f"{_fmt(r.pop_deg, 5, 1)} {r.pop_frame:5d} | {_fmt(r.carried_mm, 7, 3)} | {r.seconds:4.1f}"
+              + ("" if r.finite else "  NON-FINITE"))
     for r in rows:
         for pack, reason in r.refused.items():
             print(f"  {r.rig} refuses {pack}: {reason}")
@@ -359,6 +378,8 @@ def print_worst(retargeted: list[RetargetRow], packs: list[PackRow], n: int = 5)
     print("  packs, walk miss (m): " + names(packs, lambda r: r.miss_m, lambda r: f"{r.rig} {r.miss_m:.3f}"))
     print("  packs, walk skate (cm/m): " + names(packs, lambda r: r.skate, lambda r: f"{r.rig} {r.skate:.2f}"))
     print("  packs, foot below its start level (cm): " + names(packs, lambda r: r.depth_cm, lambda r: f"{r.rig} {r.depth_cm:.1f}"))
+    print("  packs, foot hanging outside its leg off its shin's end (mm): "
+          + names(packs, lambda r: r.carried_mm, lambda r: f"{r.rig} {r.carried_mm:.3f}"))
     failed = [r for r in retargeted if not r.ok]
     refused = sum(len(r.refused) for r in packs)
     print(f"\n{len(retargeted)} retargeted pairs, {len(failed)} miss a target; {len(packs)} rigs infused, "
@@ -405,7 +426,8 @@ def main(argv=None) -> int:
     print(f"retargeting onto {len(rigs)} wild rigs (cm, degrees; lowest: cm, as written)\n")
     print_retargeting(retargeted)
     print(f"\nbehaviour packs (L locomotion-male, G gestures, P postures played): walk to {TARGET} m, a beat, "
-          "a posture; miss m, arrival s, skate cm/m, wrist travel % of the arm, depth cm\n")
+          "a posture; miss m, arrival s, skate cm/m, wrist travel % of the arm, depth cm, feet hanging outside "
+          "their legs: farthest from their shins' ends, mm\n")
     print_packs(infused)
     print_worst(retargeted, infused)
     if args.markdown:
