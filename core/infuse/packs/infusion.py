@@ -26,20 +26,21 @@ import numpy as np
 from .. import __version__, fileio, registry
 from ..asset import Asset, Character
 from ..atomic import atomic_path
-from ..contacts import contact_phases, feet, foot_contacts, lowest_points
+from ..contacts import contact_phases, feet, foot_contacts, leg_length, lowest_points
 from ..errors import MissingFeatureError, MissingJointsError, UsageError
 from ..kinematics import forward_kinematics
 from ..mapping import Mapping, map_skeleton
 from ..motion import Motion
 from ..runtime.limb_ik import hangs_below, is_carried
 from ..skeleton import Skeleton
+from .balls import balls_above, depths, planted_heights
 from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of, transition_parameters
 from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
 from .order import content_order
 from .pack import Pack, file_digest, load_pack
 from .tessellation import Tessellation
 
-CACHE_FORMAT = 5
+CACHE_FORMAT = 6
 #: Transitions a locomotion controller plays whole, with their own root motion.
 PLAYED_TRANSITIONS = ("start", "stop", "turn")
 #: Options for the retargeter. The runtime controllers pin the feet and place the hands themselves, so
@@ -219,10 +220,12 @@ def infuse_pack(pack: Pack, character: Character, mapping: Mapping,
     out, bounds, names = retargeted
     sk = character.skeleton
     index = mapping.indices(sk)
+    pair = feet(sk, mapping)
+    if pack.kind == "locomotion":
+        out = _balls_grounded(pack, names, out, pair)
     g_rot, g_pos = forward_kinematics(sk, out.local_rotations, out.root_translations, out.joint_translations)
     heading = headings(g_pos, index)
     root = g_pos[:, index["base"]]
-    pair = feet(sk, mapping)
     starts = np.asarray(bounds[:-1], dtype=np.int64)
     ground = float(lowest_points(sk, pair, g_rot[starts], g_pos[starts]).min())  # the feet at the clips' starts, any order
     clips = {}
@@ -315,6 +318,28 @@ def _require_joints(pack: Pack, character: Character, mapping: Mapping) -> None:
         raise MissingJointsError(character.asset.path, f"pack '{pack.name}' poses limbs with IK, but "
                                  f"{', '.join(detached)} {'does' if len(detached) == 1 else 'do'} not hang below the joint before it "
                                  f"in its limb (a limb's end may hang outside the limb, not from inside it)")
+
+
+def _balls_grounded(pack: Pack, names: list[str], out: Motion, pair) -> Motion:
+    """The retargeted clips ``out`` (joined in ``names`` order) with each foot's ball kept from going
+    deeper below the height it stands at, where the pack's clips have that foot flat, than the source's
+    ball goes below its own (scaled by the legs' ratio; :mod:`.balls`)."""
+    infos = [pack.clip_info(n) for n in names]
+    if not all("heel_contacts" in info for info in infos):
+        return out
+    flat = np.concatenate([(np.asarray(i["heel_contacts"], dtype=bool) & np.asarray(i["ball_contacts"], dtype=bool)).T
+                           for i in infos])
+    sk = pack.skeleton
+    source_pair = feet(sk, pack.mapping)
+    source = [pack.motions[n] for n in names]
+    _, s_pos = forward_kinematics(sk, np.concatenate([m.local_rotations for m in source]),
+                                  np.concatenate([m.root_translations for m in source]),
+                                  np.concatenate([m.local_translations() for m in source])
+                                  if any(m.joint_translations is not None for m in source) else None)
+    _, g_pos = forward_kinematics(out.skeleton, out.local_rotations, out.root_translations, out.joint_translations)
+    scale = leg_length(out.skeleton, pair) / leg_length(sk, source_pair)
+    allowed = scale * depths(s_pos, source_pair, planted_heights(s_pos, source_pair, flat))
+    return balls_above(out, pair, planted_heights(g_pos, pair, flat), allowed)[0]
 
 
 def _restraightened(motion: Motion, params: dict, index: dict[str, int]) -> tuple[Motion, dict]:
