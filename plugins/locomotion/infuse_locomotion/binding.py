@@ -66,7 +66,8 @@ class LocomotionBinding:
     rotations of the joints outside the legs, ``ankle_means`` (N, 2, 3) each ankle's mean offset from the
     hips' midpoint, ``ankle_low`` (N, 2) its lowest height (m).
     The transitions played whole (:mod:`.transitions`): ``played``, ``stops`` among them, and each one's
-    ``played_facing`` (F,) radians and ``played_phases`` (F, 2, 2) heel and ball contacts, by name.
+    ``played_facing`` (F,) radians, ``played_phases`` (F, 2, 2) heel and ball contacts and
+    ``played_motions`` (its motion, swivelling feet lifted: :mod:`.swivels`), by name.
     The skeleton: ``skeleton``, ``pelvis``, ``legs`` (0 or 2), ``limbs`` (J,) 0 body, 1 left leg, 2
     right leg, ``body`` (B,) the joints outside the legs, ``grounded_m`` how near the ground a foot
     counts as on it (m), ``stance_feet`` (2, 2, 4) or None each foot's ankle and ball global rotations
@@ -98,6 +99,7 @@ class LocomotionBinding:
     stops: list[BlendClip]
     played_facing: dict[str, np.ndarray]
     played_phases: dict[str, np.ndarray]
+    played_motions: dict[str, Any]
     skeleton: Skeleton
     pelvis: int
     legs: list[Leg]

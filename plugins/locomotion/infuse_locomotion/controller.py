@@ -43,7 +43,7 @@ from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
 from infuse.runtime.limb_ik import solve_limb
 from infuse.runtime.pose import chain_fk
 
-from . import pacing, transitions
+from . import pacing, swivels, transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .state import LocomotionState
@@ -382,7 +382,7 @@ class Locomotion(Controller):
         """A transition ``clip`` placed by ``place`` (:func:`~.transitions.placement`) at its times
         ``local`` (F,) seconds: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and ``heading``
         follow it."""
-        rot, root, jt, _ = sample_motion(clip.motion, local, loop=False)
+        rot, root, jt, _ = sample_motion(b.played_motions[clip.name], local, loop=False)
         turn, root0, at, scale = place
         q = yaw(turn)
         rot = np.array(rot)
@@ -869,7 +869,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
                                 [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
             stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
-    played_facing, played_phases = {}, {}  # each played transition's facing (F,) radians, and contact phases (F, 2, 2)
+    # Each played transition's facing (F,) radians, contact phases (F, 2, 2) and motion (its swivelling feet lifted).
+    played_facing, played_phases, played_motions = {}, {}, {}
     for c in played:
         m = c.motion
         _, pos = chain_fk(sk, m.local_rotations, m.root_translations, m.joint_translations,
@@ -878,7 +879,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         h = np.unwrap(np.arctan2(-left[:, 2], left[:, 0]))
         played_facing[c.name] = h + 2.0 * math.pi * round((c.parameters["facing_start"] - h[0]) / (2.0 * math.pi))
         heights = pos[:, 2:, 1].reshape(-1, 2, 2).swapaxes(1, 2)  # (F, foot, ankle / ball)
-        played_phases[c.name] = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
+        grounded = transitions.grounded(c.phases, heights, GROUNDED * leg_length, LIFTED * leg_length, GROUNDED_SHARE)
+        played_motions[c.name], played_phases[c.name] = swivels.lift_swivels(sk, m, legs, grounded, played_facing[c.name], leg_length)
     body = np.nonzero(limbs == 0)[0]
     walk_speeds, walk_cadences = straight_walk(space, clips)
     two = len(legs) == 2  # the joints the stride and the pinning work on, both legs at once
@@ -891,7 +893,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         stepping=np.array([e is not None for e in events]), idle=idle, slowest=slowest,
         body_means=(np.stack([m[body] for m in means]) * np.stack(signs)[:, body]).reshape(len(clips), -1),
         ankle_means=ankle_means, ankle_low=ankle_low, played=played, stops=transitions.stops(played),
-        played_facing=played_facing, played_phases=played_phases, skeleton=sk, pelvis=pelvis, legs=legs, limbs=limbs,
+        played_facing=played_facing, played_phases=played_phases, played_motions=played_motions, skeleton=sk, pelvis=pelvis, legs=legs, limbs=limbs,
         body=body, grounded_m=grounded_m, stance_feet=stance_feet, floors=floors,
         leg_limbs=[(leg[0], leg[1], leg[2]) for leg in legs] if two else [], balls=balls,
         has_ball=np.array([leg[3] is not None for leg in legs] if two else [], dtype=bool),
