@@ -291,11 +291,43 @@ class Locomotion(Controller):
             cached = prepared[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
         return cached[2]
 
-    def evaluate_one(self, job, block) -> None:
+    @classmethod
+    def evaluate(cls, jobs, block) -> None:
+        """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`); then the walks of
+        characters that share a binding (one asset, one pack) have their feet pinned and kept above the
+        ground together, their frames stacked (one forward kinematics and one leg IK for them all: a
+        block of one frame costs about the same for one walk as for several); then each writes its
+        pose, in the jobs' order."""
+        driven = [(job, job.controller._drive(job, block)) for job in jobs]
+        groups: dict[tuple, list] = {}
+        for job, walk in driven:
+            if walk is not None:
+                groups.setdefault((id(job.binding), job.controller.pin_feet, walk[1][2] is None), []).append((job, walk[1]))
+        dt = 1.0 / block.fps
+        poses = {}
+        for group in groups.values():
+            b: LocomotionBinding = group[0][0].binding
+            rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*(p for _, p in group)))
+            ends = np.cumsum([0] + [len(p[0]) for _, p in group]).tolist()
+            runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
+            if group[0][0].controller.pin_feet and len(b.legs) == 2:
+                cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun)
+            if b.floors is not None:
+                _keep_feet_up(b.skeleton, b.floors, rot, root, jt, runs, dt)
+            for (job, _), (_, a, e) in zip(group, runs):
+                poses[id(job)] = (rot[a:e], root[a:e], None if jt is None else jt[a:e])
+        for job, walk in driven:
+            if walk is not None:
+                cls._write(job, walk[0], *poses[id(job)])
+
+    def _drive(self, job, block):
+        """The walk's state carried through the block and its pose before the feet are pinned: its
+        active frames (A,) of the block and the parts :meth:`_steered` gives over them, or None when
+        the walk has not begun."""
         b: LocomotionBinding = job.binding
         active = np.nonzero(job.local_times >= -1e-9)[0]
         if not active.size:
-            return
+            return None
         st = job.state_of(LocomotionState)
         dt = 1.0 / block.fps
         times = job.local_times[active]
@@ -335,12 +367,7 @@ class Locomotion(Controller):
             if handing is not None:
                 self._hand_over(b, st, handing[0], handing[2], block.fps)
                 st.fading = (handing[0].name, handing[1], handing[2])
-        rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*parts))
-        if self.pin_feet and len(b.legs) == 2:
-            self._pin(b, st, rot, root, jt, contact, forward, dt, spun)
-        if b.floors is not None:
-            _keep_feet_up(b.skeleton, b.floors, rot, root, jt, st, dt)
-        self._write(job, active, rot, root, jt)
+        return active, tuple(None if a[0] is None else np.concatenate(a) for a in zip(*parts))
 
     def _stop_at(self, b: LocomotionBinding, before: LocomotionState, st: LocomotionState, fps: float, dt: float):
         """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st.trace``)
@@ -653,7 +680,8 @@ class Locomotion(Controller):
             k = b.balls_on_ankles
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
-    def _pin(self, b: LocomotionBinding, st: LocomotionState, rot, root, jt, contact, forward, dt, spun) -> None:
+    @staticmethod
+    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun) -> None:
         """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
         (the foot pivoting about it, its heel rising further when the leg would not reach). A planted
         foot does not turn with the part of the heading's turn spun at the root (turning on the spot,
@@ -662,145 +690,148 @@ class Locomotion(Controller):
         and roll it had as the ball took over: the animation's twist or roll of a foot on the ground
         (a take's, a blend's) would swing the ankle about the pinned ball. The corrections fade out
         after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
-        (F,) the turn spun at the root so far (radians)."""
+        (F,) the turn spun at the root so far (radians). ``runs``: the walks whose frames the arrays
+        stack, each as its state and its frames (start, end)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
-        g_rot, g_pos = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
-        frames = len(rot)
-        g_rot, g_pos = g_rot.reshape(frames, 2, 5, 4), g_pos.reshape(frames, 2, 5, 3)
-        feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
-        ankle_pos = g_pos[:, :, 2]
-        heel_w, ball_w = contact[..., 0], contact[..., 1]
-        anchors = footing.anchors(heel_w, ball_w, b.has_ball)
-        # The feet one frame earlier (from the last block at the first frame).
-        before = np.concatenate((st.last[None], feet_pos[:-1]))
-        on_ball = (anchors == footing.BALL)[..., None]
-        points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
-        points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
-        goals = ankle_pos.copy()
-        weights = np.zeros(anchors.shape)
-        rises = np.zeros(ankle_pos.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
-        turns = np.zeros(anchors.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
+        g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
+        g_rot_all, g_pos_all = g_rot_all.reshape(len(rot), 2, 5, 4), g_pos_all.reshape(len(rot), 2, 5, 3)
+        anchors_all = footing.anchors(contact[..., 0], contact[..., 1], b.has_ball)
+        goals = g_pos_all[:, :, 2].copy()
+        weights = np.zeros(anchors_all.shape)
+        rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
+        turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
-        changes = np.diff(np.concatenate((st.anchor[None], anchors)), axis=0) != 0
-        for k in range(2):
-            goal, weight, rise, point, ankle, turn = goals[:, k], weights[:, k], rises[:, k], points[:, k], ankle_pos[:, k], turns[:, k]
-            prev = int(st.anchor[k])
-            offset, pin, released, lifted = st.offset[k].copy(), st.pins[k].copy(), float(st.released[k]), st.rise[k].copy()
-            landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
-            landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
-            let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
-            lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
-            bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
-            for s, e in zip(bounds[:-1], bounds[1:]):
-                kind = int(anchors[s, k])
-                if kind == footing.FREE:
-                    if prev != footing.FREE:
-                        released, free_s = 0.0, 0.0
-                    # The ball stays where it was let go until it leaves the ground (a take's ball may push
-                    # off moving along it), at most HOLD_S, and the release's clock runs from then on.
-                    since = free_s + dt * np.arange(1, e - s + 1)
-                    up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
-                    free_s = float(since[-1])
-                    down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
-                    if down[-1] >= 0:
-                        ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
+        for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
+            g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
+            frames = a1 - a0
+            feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
+            ankle_pos = g_pos[:, :, 2]
+            # The feet one frame earlier (from the last block at the first frame).
+            before = np.concatenate((st.last[None], feet_pos[:-1]))
+            on_ball = (anchors == footing.BALL)[..., None]
+            points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
+            points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
+            changes = np.diff(np.concatenate((st.anchor[None], anchors)), axis=0) != 0
+            heading, turned = forward[a0:a1], spun[a0:a1]
+            for k in range(2):
+                goal, weight, rise, point, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], points[:, k], ankle_pos[:, k], turns[a0:a1, k]
+                prev = int(st.anchor[k])
+                offset, pin, released, lifted = st.offset[k].copy(), st.pins[k].copy(), float(st.released[k]), st.rise[k].copy()
+                landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
+                landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
+                let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
+                lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
+                bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
+                for s, e in zip(bounds[:-1], bounds[1:]):
+                    kind = int(anchors[s, k])
+                    if kind == footing.FREE:
+                        if prev != footing.FREE:
+                            released, free_s = 0.0, 0.0
+                        # The ball stays where it was let go until it leaves the ground (a take's ball may push
+                        # off moving along it), at most HOLD_S, and the release's clock runs from then on.
+                        since = free_s + dt * np.arange(1, e - s + 1)
+                        up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
+                        free_s = float(since[-1])
+                        down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
+                        if down[-1] >= 0:
+                            ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
+                        else:
+                            ball_offset = np.broadcast_to(ball_offset, (e - s, 3))
+                        age = released + dt * np.cumsum(up)
+                        fade = 1.0 - footing.smoothstep(age / RELEASE_S)
+                        # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
+                        # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
+                        # ground last, and the fading turn would swing it along the ground).
+                        turn[s:e] = _share_of(left, fade)
+                        hang = quat.rotate(turn[s:e], lever[s:e])
+                        if lifted.any():
+                            rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
+                            # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
+                            corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
+                            hang = quat.rotate(_from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
+                        goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
+                        # A foot far from where the animation has it steps there over an arc, not along the
+                        # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
+                        goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
+                        held = np.nonzero(~up)[0]
+                        if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
+                            h = s + held
+                            goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
+                            rise[h] += more
+                            if held[-1] == e - s - 1:  # the rise the release fades from
+                                lifted = rise[e - 1].copy()
+                        ball_offset = ball_offset[-1].copy()
+                        weight[s:e] = fade > 0.0
+                        released = float(age[-1])
+                        if fade[-1] <= 0.0:
+                            offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
                     else:
-                        ball_offset = np.broadcast_to(ball_offset, (e - s, 3))
-                    age = released + dt * np.cumsum(up)
-                    fade = 1.0 - footing.smoothstep(age / RELEASE_S)
-                    # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
-                    # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
-                    # ground last, and the fading turn would swing it along the ground).
-                    turn[s:e] = _share_of(left, fade)
-                    hang = quat.rotate(turn[s:e], lever[s:e])
-                    if lifted.any():
-                        rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
-                        # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
-                        corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
-                        hang = quat.rotate(_from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
-                    goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
-                    # A foot far from where the animation has it steps there over an arc, not along the
-                    # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
-                    goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
-                    held = np.nonzero(~up)[0]
-                    if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
-                        h = s + held
-                        goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
-                        rise[h] += more
-                        if held[-1] == e - s - 1:  # the rise the release fades from
-                            lifted = rise[e - 1].copy()
-                    ball_offset = ball_offset[-1].copy()
-                    weight[s:e] = fade > 0.0
-                    released = float(age[-1])
-                    if fade[-1] <= 0.0:
-                        offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
-                else:
-                    if kind != prev and prev == footing.FREE:
-                        # The anchor lands: it stays where the corrected foot puts it now.
-                        fade = 1.0 - footing.smoothstep(released / RELEASE_S)
-                        left = _share_of(left, fade)
-                        pin = feet_pos[s, k, 1] + ball_offset * fade
+                        if kind != prev and prev == footing.FREE:
+                            # The anchor lands: it stays where the corrected foot puts it now.
+                            fade = 1.0 - footing.smoothstep(released / RELEASE_S)
+                            left = _share_of(left, fade)
+                            pin = feet_pos[s, k, 1] + ball_offset * fade
+                            if kind == footing.ANKLE:
+                                pin = pin - quat.rotate(left, lever[s])
+                            pin[1] = 0.0
+                        elif kind != prev:
+                            # The anchor passes from the ankle to the ball (or back): the new one stays
+                            # where the corrected foot had it a frame ago (the ball's correction is the
+                            # ankle's and the foot's turn about it), so the foot does not move on with the
+                            # blend's drift at the switch, nor jump by the turn.
+                            pin = points_before[s, k] + (ball_offset if kind == footing.BALL else offset)
+                            pin[1] = 0.0
+                        if kind != prev:
+                            # The foot's orientation now (corrected as a frame ago), and the axis across it.
+                            landed, landed_spun = g_rot[s, k, 2], turned[s]
+                            landed_as = quat.multiply(left, landed)
+                            along = feet_pos[s, k, 1] - feet_pos[s, k, 0]
+                            along = along if math.hypot(along[0], along[2]) > 1e-6 else heading[s]
+                            across = np.array([along[2], 0.0, -along[0]]) / math.hypot(along[0], along[2])
+                        # The animation's turn of the foot since then (world frame): on its heel all of it
+                        # but the turn spun at the root, on its ball only its pitch (the twist about the
+                        # axis across the foot).
+                        since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
                         if kind == footing.ANKLE:
-                            pin = pin - quat.rotate(left, lever[s])
-                        pin[1] = 0.0
-                    elif kind != prev:
-                        # The anchor passes from the ankle to the ball (or back): the new one stays
-                        # where the corrected foot had it a frame ago (the ball's correction is the
-                        # ankle's and the foot's turn about it), so the foot does not move on with the
-                        # blend's drift at the switch, nor jump by the turn.
-                        pin = points_before[s, k] + (ball_offset if kind == footing.BALL else offset)
-                        pin[1] = 0.0
-                    if kind != prev:
-                        # The foot's orientation now (corrected as a frame ago), and the axis across it.
-                        landed, landed_spun = g_rot[s, k, 2], spun[s]
-                        landed_as = quat.multiply(left, landed)
-                        along = feet_pos[s, k, 1] - feet_pos[s, k, 0]
-                        along = along if math.hypot(along[0], along[2]) > 1e-6 else forward[s]
-                        across = np.array([along[2], 0.0, -along[0]]) / math.hypot(along[0], along[2])
-                    # The animation's turn of the foot since then (world frame): on its heel all of it
-                    # but the turn spun at the root, on its ball only its pitch (the twist about the
-                    # axis across the foot).
-                    since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
-                    if kind == footing.ANKLE:
-                        kept = quat.multiply(yaw(landed_spun - spun[s:e]), since)
-                    else:
-                        kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
-                        kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
-                    turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
-                    goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
-                    goal[s:e, 1] = ankle[s:e, 1]
-                    weight[s:e] = 1.0
-                    ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
-                    if kind == footing.BALL:
-                        balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
-                        goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
-                        ball_goal = balls[-1]
-                    offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
-                    let_go = ball_goal.copy()
-                prev = kind
-            st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
-            st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
-            st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
-        st.last = feet_pos[-1].copy()
+                            kept = quat.multiply(yaw(landed_spun - turned[s:e]), since)
+                        else:
+                            kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
+                            kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
+                        turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
+                        goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
+                        goal[s:e, 1] = ankle[s:e, 1]
+                        weight[s:e] = 1.0
+                        ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
+                        if kind == footing.BALL:
+                            balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
+                            goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
+                            ball_goal = balls[-1]
+                        offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
+                        let_go = ball_goal.copy()
+                    prev = kind
+                st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
+                st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
+                st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
+            st.last = feet_pos[-1].copy()
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
         # goal is kept within reach, the knee bending at least as the animation's.
         for k in np.flatnonzero(~b.has_ball).tolist():
-            free = anchors[:, k] == footing.FREE
-            goals[free, k] = footing.within_reach(goals[free, k], g_pos[free, k, :3])
+            free = anchors_all[:, k] == footing.FREE
+            goals[free, k] = footing.within_reach(goals[free, k], g_pos_all[free, k, :3])
         if rises.any():
-            g_rot[:, :, 2] = quat.multiply(g_rot[:, :, 2], _turn_feet(b, rot, rises))
-        feet_rot = quat.multiply(turns, g_rot[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
+            g_rot_all[:, :, 2] = quat.multiply(g_rot_all[:, :, 2], _turn_feet(b, rot, rises))
+        feet_rot = quat.multiply(turns, g_rot_all[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
         solving = [k for k in range(2) if weights[:, k].any()]
         if len(solving) == 1:
             k = solving[0]
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs[k], goals[:, k], weight=weights[:, k], pole=forward,
-                       end_rotation=feet_rot[:, k], chains=(g_rot[:, k, :4], g_pos[:, k, :4]), distance=False)
+                       end_rotation=feet_rot[:, k], chains=(g_rot_all[:, k, :4], g_pos_all[:, k, :4]), distance=False)
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
-                       end_rotation=feet_rot, chains=(g_rot[:, :, :4], g_pos[:, :, :4]), distance=False)
+                       end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
 
 
 def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
@@ -973,7 +1004,7 @@ def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndar
     return axis, np.where(c < height, np.minimum(angle, most), 0.0)
 
 
-def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, st: LocomotionState, dt: float) -> None:
+def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> None:
     """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
     ball joint would go below the height it stands at, the foot pitches about its ankle until it does
     not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
@@ -1003,8 +1034,10 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, st: LocomotionState, dt
         return
     tip = quat.rotate(ball_rot, floors.tip)
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ball + tip - ankle)  # across the whole foot
-    up = _slow_fall(angle, st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)
-    st.toe_bend = up[-1].copy()
+    up = np.empty(angle.shape)
+    for st, a0, a1 in runs:
+        up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)
+        st.toe_bend = up[a1 - 1].copy()
     up = up * floors.toes
     if not up.any():  # no toes bent: they keep their rotations
         return
