@@ -13,7 +13,8 @@ in a :class:`infuse.live.LiveScene` for ``--seconds`` (default 60), and the benc
   is shown, for 20 messages at random points of a frame (target: at most one frame plus 10 ms);
 - the same over a WebSocket: the servers of ``infuse serve`` run in process, and a client sends the nod's
   BML and times it to the first binary frame at or after the frame the reply names;
-- frames missed: frames evaluated too late to be shown on time (target: none up to 10 characters).
+- frames missed: frames evaluated too late to be shown on time (target: none up to 10 characters);
+- encoding the last frame as a JSON ``frame`` message and as a binary message (mean milliseconds).
 
 Then ``infuse serve``'s servers run in process with 10 characters while one client sends 1,000 bad
 messages a second (malformed JSON, unknown characters, malformed BML) and another subscribes to the
@@ -34,6 +35,7 @@ import os
 import random
 import threading
 import time
+import timeit
 from pathlib import Path
 
 import numpy as np
@@ -149,6 +151,7 @@ async def ws_latency(port: int, character: str, samples: int = 20) -> list[float
 
 
 def run_count(count: int, seconds: float) -> dict:
+    from infuse_live.frames import binary_frame, frame_text
     from infuse_live.hub import Hub
     from infuse_live.server import LiveServer
 
@@ -174,10 +177,13 @@ def run_count(count: int, seconds: float) -> dict:
     server.shutdown()
     serving.join(10)
     ms = np.asarray(live.stats.evaluate_ms)
+    frame = live.last_frame
+    json_ms, binary_ms = (timeit.timeit(lambda: encode(frame), number=200) / 200 * 1e3 for encode in (frame_text, binary_frame))
     return {"count": count, "load_s": load_s, "shown": summary["shown"], "missed": summary["missed"],
             "block": summary["block_frames"], "cpu_ms": summary["cpu_mean_ms"],
             "mean_ms": float(ms.mean()), "p50_ms": float(np.median(ms)), "p99_ms": float(np.percentile(ms, 99)),
-            "max_ms": float(ms.max()), "latency_ms": np.array(delays) * 1e3, "ws_latency_ms": np.array(ws_delays) * 1e3}
+            "max_ms": float(ms.max()), "latency_ms": np.array(delays) * 1e3, "ws_latency_ms": np.array(ws_delays) * 1e3,
+            "json_ms": json_ms, "binary_ms": binary_ms}
 
 
 def flood(seconds: float) -> dict:
@@ -238,13 +244,14 @@ def main() -> None:
     random.seed(0)
     print(f"live at {FPS:g} fps for {args.seconds:g} s per cast; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| characters | load + warm-up s | frame ms mean | p50 | p99 | max | CPU ms mean | block | frames shown | "
-          "missed | latency ms median | max | over WebSocket median | max |")
-    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "missed | latency ms median | max | over WebSocket median | max | JSON frame ms | binary frame ms |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for count in (int(c) for c in args.counts.split(",")):
         r = run_count(count, args.seconds)
         print(f"| {count} | {r['load_s']:.1f} | {r['mean_ms']:.2f} | {r['p50_ms']:.2f} | {r['p99_ms']:.2f} | "
               f"{r['max_ms']:.2f} | {r['cpu_ms']:.2f} | {r['block']} | {r['shown']} | {r['missed']} | {np.median(r['latency_ms']):.1f} | "
-              f"{r['latency_ms'].max():.1f} | {np.median(r['ws_latency_ms']):.1f} | {r['ws_latency_ms'].max():.1f} |", flush=True)
+              f"{r['latency_ms'].max():.1f} | {np.median(r['ws_latency_ms']):.1f} | {r['ws_latency_ms'].max():.1f} | "
+              f"{r['json_ms']:.2f} | {r['binary_ms']:.3f} |", flush=True)
     if not args.no_flood:
         f = flood(min(args.seconds, 10.0))
         print(f"flood: {f['sent']} bad messages in {f['seconds']:.1f} s, {f['replies']} error replies "

@@ -12,7 +12,6 @@ import asyncio
 import base64
 import io
 import itertools
-import struct
 import threading
 import wave
 from collections import deque
@@ -24,6 +23,7 @@ from infuse.errors import UsageError
 from infuse.live import LiveFrame, LiveScene
 from infuse.scene.speech import utterance_samples
 
+from .frames import binary_frame, frame_text
 from .protocol import Message, dumps, error_message, feedback_message, parse_message
 
 #: Replies and feedback waiting for one client before it is dropped as stalled.
@@ -31,8 +31,6 @@ MAX_PENDING = 2000
 #: Blocks whose sender is remembered for their feedback (the oldest forgotten first; a block's entry goes
 #: when it ends, so only blocks that never end, failed ones, pile up to this).
 MAX_OWNED_BLOCKS = 10_000
-#: Decimals sent for rotations (quaternion components) and positions (metres) in the pose stream.
-ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS = 6, 6, 4
 
 
 class Client:
@@ -256,29 +254,8 @@ class Hub:
         encoded = {}
         for client in [c for c in self.clients if c.frames and not c.closed]:
             if client.format not in encoded:
-                encoded[client.format] = binary_frame(frame) if client.format == "binary" else dumps(frame_message(frame))
+                encoded[client.format] = binary_frame(frame) if client.format == "binary" else frame_text(frame)
             client.put_frame(encoded[client.format])
-
-
-def frame_message(frame: LiveFrame) -> dict:
-    """A ``frame`` message: per character ``rotations`` (J*4, scalar-last, flat), ``root`` (3,) metres and
-    ``morphs`` (M,), rounded (:data:`ROTATION_DECIMALS`...)."""
-    return {"type": "frame", "frame": frame.index, "time": frame.time_s,
-            "characters": {name: {"rotations": np.round(c.rotations, ROTATION_DECIMALS).ravel().tolist(),
-                                  "root": np.round(c.root, POSITION_DECIMALS).tolist(),
-                                  "morphs": np.round(c.morphs, MORPH_DECIMALS).tolist()}
-                           for name, c in frame.characters.items()}}
-
-
-def binary_frame(frame: LiveFrame) -> bytes:
-    """A frame as one binary message: a little-endian uint32 N, N bytes of JSON ``{"frame", "time",
-    "characters": [[name, J, M], ...]}``, then for each character in that order float32 (little-endian)
-    ``rotations`` (J*4), ``root`` (3) and ``morphs`` (M), unrounded."""
-    layout = [[name, len(c.rotations), len(c.morphs)] for name, c in frame.characters.items()]
-    header = dumps({"frame": frame.index, "time": frame.time_s, "characters": layout}).encode("utf-8")
-    values = [part for c in frame.characters.values() for part in (c.rotations.ravel(), c.root, c.morphs)]
-    body = np.concatenate(values).astype("<f4").tobytes() if values else b""
-    return struct.pack("<I", len(header)) + header + body
 
 
 def _wav(samples: np.ndarray, rate: int) -> bytes:

@@ -10,7 +10,7 @@ Client to server (one JSON object per WebSocket text message, or an HTTP POST bo
 - ``{"type": "target", "name": "ball", "position": [x, y, z]}``: a named target (added when new) stands
   there from the next frame on;
 - ``{"type": "subscribe", "frames": true, "feedback": "all", "format": "binary"}``: receive the pose
-  stream (as JSON ``frame`` messages, or binary messages: :func:`binary_frame`); feedback of every block
+  stream (as JSON ``frame`` messages, or binary messages: :func:`~infuse_live.frames.binary_frame`); feedback of every block
   (default: only of the blocks this client sent);
 - ``{"type": "status", "blocks": true}``: frame counts and timings (and the last blocks evaluated,
   [first frame, frames] each, to replay the session offline);
