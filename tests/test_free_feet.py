@@ -137,32 +137,32 @@ def test_a_carried_foot_needs_joint_translations_and_a_foot_hung_inside_its_leg_
         carried_offset(thigh_foot, leg)
 
 
-def ankles_hung_from_the_thighs(asset: infuse.Asset) -> infuse.Asset:
-    """``asset`` with each ankle hanging from its hip joint where it sits at rest (the toes below it):
-    a foot the leg's turns would carry, but not as the leg. No motions."""
+def rehung(asset: infuse.Asset, moves) -> infuse.Asset:
+    """``asset`` with each joint of ``moves`` ((joint, new parent) index pairs) hanging from its new
+    parent where it sits at rest (the joints below it following). No motions."""
     sk = asset.skeleton
-    index = map_skeleton(asset).indices(sk)
     parents, translations, rotations = sk.parents.copy(), sk.rest_translations.copy(), sk.rest_rotations.copy()
     g_rot, g_pos = sk.rest_global_rotations, sk.rest_global_positions
-    for s in "lr":
-        hip, ankle = index[f"{s}_hip"], index[f"{s}_ankle"]
-        parents[ankle] = hip
-        translations[ankle] = quat.rotate(quat.conjugate(g_rot[hip]), g_pos[ankle] - g_pos[hip])
-        rotations[ankle] = quat.multiply(quat.conjugate(g_rot[hip]), g_rot[ankle])
+    for joint, parent in moves:
+        parents[joint] = parent
+        translations[joint] = quat.rotate(quat.conjugate(g_rot[parent]), g_pos[joint] - g_pos[parent])
+        rotations[joint] = quat.multiply(quat.conjugate(g_rot[parent]), g_rot[joint])
     skeleton = Skeleton(sk.names, parents, translations, rotations, sk.end_site_parents, sk.end_site_offsets)
     return dataclasses.replace(asset, skeleton=skeleton, motions={}, path=None)
 
 
 def test_feet_hung_inside_their_legs_are_refused_naming_them_and_feet_outside_them_walk():
     """RobotExpressive's feet hang from its ground bone: locomotion is infused (it was refused); X Bot with
-    its ankles hung from its thighs is refused, naming them."""
+    its ankles hung from its thighs (a foot the leg's turns would carry, but not as the leg) is refused,
+    naming them."""
     robot = infuse_character(corpus_file("adibkn1-robot/RobotExpressive.glb"), ["locomotion-female"])
     assert set(robot.spaces) == {"locomotion-female"}
     original = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
     mapping = map_skeleton(original)  # the joints as mapped on X Bot (a mapper may not find such feet)
+    index = mapping.indices(original.skeleton)
+    variant = rehung(original, [(index[f"{s}_ankle"], index[f"{s}_hip"]) for s in "lr"])
     with pytest.raises(MissingJointsError) as err:
-        infuse_character(infuse.Character("x", ankles_hung_from_the_thighs(original), mapping), ["locomotion-female"],
-                         mapping=mapping)
+        infuse_character(infuse.Character("x", variant, mapping), ["locomotion-female"], mapping=mapping)
     assert "l_ankle, r_ankle do not hang below the joint before it" in str(err.value)
 
 
@@ -214,3 +214,47 @@ def test_rigs_built_for_ik_walk_to_a_target_with_their_feet_on_their_shins(key, 
     turns = metrics.largest_turns(g_rot[:, joints])
     source = played_source_turns(row, infuse.load(wild_file(rel)), tmp_path / "infusions")
     assert (turns <= 1.5 * source + metrics.POP_MARGIN_DEG).all(), (turns, source)
+
+
+def test_hands_hanging_outside_their_arms_gesture_and_pose(tmp_path):
+    """X Bot with each wrist (its fingers below it) hanging from the joint its shoulder hangs from walks to
+    a point 2 m to its left (within 6 cm), beats (the right wrist moves 10 cm or more) and crosses
+    its arms (both 15 cm or more), its wrists on its forearms' ends (within 1 mm) throughout."""
+    import sys
+    from pathlib import Path
+
+    from infuse.scene import Scene
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from benchmarks.wild_pipeline import BEAT, BML, POSTURE
+
+    xbot = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    mapping = map_skeleton(xbot)  # as mapped on X Bot (a mapper may not find such hands)
+    index = mapping.indices(xbot.skeleton)
+    parents = xbot.skeleton.parents
+    variant = rehung(xbot, [(index[f"{s}_wrist"], int(parents[index[f"{s}_shoulder"]])) for s in "lr"])
+    scene = Scene(fps=30.0, tts=None, quiet=True, idle=False, pack_cache=tmp_path / "infusions")
+    scene.add_character(infuse.Character("bob", variant, mapping), "bob", facing=0.0,
+                        packs=("locomotion-male", "gestures", "postures"))
+    scene.walk_to("bob", (2.0, 0.0), at=0.2)
+    scene.run(5.0)
+    scene.bml("bob", BML.format(id="beat", body=BEAT), at=5.2)
+    scene.bml("bob", BML.format(id="pose", body=POSTURE), at=7.0)
+    scene.run(scene.end_time + 0.5)
+    motion = scene.motion("bob")
+    assert len(scene.runtime.rig("bob").carried_limbs) == 2  # the arms
+    sk = variant.skeleton
+    g_rot, g_pos = forward_kinematics(sk, motion.local_rotations, motion.root_translations, motion.joint_translations)
+    assert np.isfinite(g_pos).all()
+    assert np.linalg.norm(g_pos[135:150, index["base"]][:, [0, 2]].mean(axis=0) - (2.0, 0.0)) < 0.06
+    for s in "lr":
+        arm = tuple(index[f"{s}_{j}"] for j in ("shoulder", "elbow", "wrist"))
+        forearm_end = g_pos[:, arm[1]] + quat.rotate(g_rot[:, arm[1]], carried_offset(sk, arm))
+        assert np.linalg.norm(g_pos[:, arm[2]] - forearm_end, axis=-1).max() < 1e-3
+        chest = int(parents[index[f"{s}_shoulder"]])
+        wrist = quat.rotate(quat.conjugate(g_rot[:, chest]), g_pos[:, arm[2]] - g_pos[:, chest])  # in the chest's frame
+        crossed = np.linalg.norm(wrist[210:] - wrist[205], axis=-1).max()
+        assert crossed > 0.15, crossed  # the posture moves both wrists (metres, an arm of about 0.5 m)
+        if s == "r":
+            beat = np.linalg.norm(wrist[156:200] - wrist[156], axis=-1).max()
+            assert beat > 0.1, beat
