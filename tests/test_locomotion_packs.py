@@ -200,10 +200,11 @@ def test_a_walk_taken_over_before_it_arrives_is_reported(xbot):
 
 def test_feet_of_an_imported_pack_stay_planted(xbot, bandai_masculinity):
     """Straight walks over the forward range of recorded takes (Bandai masculinity) on Xbot: foot skate
-    at most 1.5 cm/m at every speed (the takes' heels land and their balls push off moving, a few
-    frames beyond their detected contacts: pinned from where they reach the ground to where they
-    leave it); a planted foot does not twist: the ankle-to-ball line turns less than 1.5 degrees a
-    frame (95th percentile) while the ball is down."""
+    at most 1.1 cm/m at every speed (measured 0.14-1.01, the fastest the dash; counting the joints'
+    travel 0.08-1.31; the takes' heels land and their balls push off moving, a few frames beyond
+    their detected contacts: pinned from where they reach the ground to where they leave it); a
+    planted foot does not twist: the ankle-to-ball line turns less than 1.5 degrees a frame (95th
+    percentile) while the ball is down."""
     from dataclasses import replace
 
     from infuse.contacts import foot_contacts
@@ -233,5 +234,5 @@ def test_feet_of_an_imported_pack_stay_planted(xbot, bandai_masculinity):
             turn = np.abs(np.diff(np.degrees(np.unwrap(np.arctan2(lever[:, 0], lever[:, 2])))))
             down = found.flags[1:, 2 * k + 1] & found.flags[:-1, 2 * k + 1]
             twists.append(float(np.percentile(turn[down], 95)) if down.any() else 0.0)
-    assert max(skates) <= 1.5, skates
+    assert max(skates) <= 1.1, skates
     assert max(twists) < 1.5, twists

@@ -47,6 +47,8 @@ DOWN_TOLERANCE = 0.01
 #: counts as off: about 2.5 mm on an adult, a heel rise of about 1 degree, so the foot starts to
 #: pivot about its ball as soon as the heel starts to rise (:func:`contact_phases`).
 RISE_TOLERANCE = 0.003
+#: Speed (leg lengths per second) below which a point lands, by default (:func:`detect`).
+LANDING_SPEED = 0.5
 #: Share of the speed threshold by which position noise may move a point's measured speed before
 #: :func:`detect` low-passes the positions (:func:`smoothed`).
 NOISE_SPEED = 0.1
@@ -262,6 +264,16 @@ def _slope_noise(half: np.ndarray) -> np.ndarray:
     return out
 
 
+def smoothing_frames(noise: float, fps: float, tolerance_m_s: float) -> int:
+    """Frames to either side of the fewest (at least 1, at most :data:`MAX_SMOOTHING_S` seconds in all)
+    over which a local fit keeps position noise of ``noise`` metres (:func:`position_noise`) from moving
+    a velocity measured at ``fps`` by more than ``tolerance_m_s`` along each axis; 1 for clean motion."""
+    widest = max(int(MAX_SMOOTHING_S * fps / 2.0), 1)
+    half = np.arange(1, widest + 1)
+    enough = noise * fps * _slope_noise(half) <= tolerance_m_s
+    return int(half[np.argmax(enough)] if enough.any() else widest)
+
+
 def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (F, P, 3) metres and velocities (F, P, 3) m/s low-passed just enough that the noise
     of ``positions`` (:func:`position_noise`) moves a velocity by at most ``tolerance_m_s`` along
@@ -276,10 +288,7 @@ def smoothed(positions: np.ndarray, fps: float, tolerance_m_s: float) -> tuple[n
     pos = np.asarray(positions, dtype=np.float64)
     frames = len(pos)
     noise = position_noise(pos)
-    widest = max(int(MAX_SMOOTHING_S * fps / 2.0), 1)
-    half = np.arange(1, widest + 1)
-    enough = noise * fps * _slope_noise(half) <= tolerance_m_s
-    h = int(half[np.argmax(enough)] if enough.any() else widest)
+    h = smoothing_frames(noise, fps, tolerance_m_s)
     t = np.arange(frames)
     reach = np.minimum(np.minimum(t, frames - 1 - t), h)  # (F,) frames to either side
     velocity = np.gradient(pos, axis=0) * fps
@@ -306,7 +315,7 @@ def detect(
     leg: float,
     ground: float,
     *,
-    speed: float = 0.5,
+    speed: float = LANDING_SPEED,
     height: float = 0.06,
     release: float = RELEASE,
     min_duration: float = 0.05,
@@ -350,6 +359,52 @@ def foot_contacts(motion: Motion, mapping: MappingLike, fk: tuple[np.ndarray, np
     foot_of = np.array([k for k, f in enumerate(pair) for _ in f.points], dtype=np.int64)
     flags = detect(g_pos[:, points], motion.fps, leg, ground, **thresholds)
     return FootContacts(points, foot_of, flags, ground, leg, lowest)
+
+
+def foot_frames(heel: np.ndarray, ball: np.ndarray) -> np.ndarray:
+    """(F, 3, 3) orthonormal frames of a foot from its heel (ankle) and ball joints (F, 3) metres:
+    rows forward (heel to ball), side (forward x up, horizontal) and up (side x forward), so a foot
+    pitching about its side axis or turning about the vertical carries its frame exactly (a roll
+    about its own length, which two points cannot show, is not followed)."""
+    forward = np.asarray(ball, dtype=np.float64) - heel
+    forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-12)
+    side = np.cross(forward, (0.0, 1.0, 0.0))
+    side /= np.maximum(np.linalg.norm(side, axis=-1, keepdims=True), 1e-12)
+    return np.stack((forward, side, np.cross(side, forward)), axis=-2)
+
+
+def sole_points(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
+    """(F, P, 3) the points of the sole that the contact joints stand for, metres, carried by the foot.
+
+    ``positions`` (F, P, 3): the contact joints, columns as ``found.points``. The sole is taken at
+    the level of the ball joint, about which the foot rolls at heel off: the ball stands for itself,
+    the ankle for the point of the sole under the heel. That point lies straight below the ankle at
+    the ball's height in the foot's flat pose (the frames where both joints are planted and lowest,
+    their summed height within ``tolerance`` leg lengths of its least); its offset from the ankle,
+    in the foot's frame (:func:`foot_frames`, the median over the flat frames), is carried by that
+    frame in every frame. A rigid foot rolling about its ball or its heel leaves that point still
+    while the ankle swings along an arc above it; a foot sliding moves it as far as the joints. A
+    foot with only its ankle keeps the joint, whose horizontal path is that of the ground below it.
+    """
+    pos = np.asarray(positions, dtype=np.float64)
+    out = pos.copy()
+    if not len(pos):
+        return out
+    for k in (0, 1):
+        cols = np.nonzero(found.foot_of_point == k)[0]
+        if len(cols) < 2:
+            continue
+        ankle, ball = pos[:, cols[0]], pos[:, cols[1]]
+        frames = foot_frames(ankle, ball)
+        both = found.flags[:, cols[:2]].all(axis=1)
+        height = ankle[:, 1] + ball[:, 1]
+        candidates = both if both.any() else np.ones(len(pos), dtype=bool)
+        flat = candidates & (height <= height[candidates].min() + tolerance * found.leg_length)
+        drop = np.zeros((int(flat.sum()), 3))
+        drop[:, 1] = ball[flat, 1] - ankle[flat, 1]
+        offset = np.median(np.einsum("fij,fj->fi", frames[flat], drop), axis=0)
+        out[:, cols[0]] = ankle + offset @ frames
+    return out
 
 
 def contact_phases(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE,

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import quaternions as quat
 from .canonical import BODY_NAMES, canonical_joint
-from .contacts import FootContacts
+from .contacts import FootContacts, sole_points
 
 
 def horizontal_path(points: np.ndarray) -> float:
@@ -51,18 +51,22 @@ def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points:
                lift: float = SKATE_LIFT) -> Skate:
     """Foot skate of a clip whose contact flags are ``contacts`` (found on this clip or its source).
 
-    For each foot and each pair of consecutive frames in which some of its points are planted, the
-    foot travels the mean horizontal distance those points move, each weighted by
-    :func:`skate_weight` of its height above its planted height (its 5th-percentile height while
-    planted), with H = ``lift`` x the leg length: a point sliding on the ground counts fully, a
-    point lifting off (the ankle rising as the foot rolls over its ball) less the higher it is, and
-    not at all from H up. ``lift=inf`` counts every planted frame fully. ``points`` (P,) gives the
-    joints of ``positions`` that play the contact points (default ``contacts.points``: the same
-    skeleton); ``root`` is the joint whose horizontal path is the distance walked.
+    The travel counted is that of the sole, not of the joints: each contact joint (ankle, ball)
+    stands for the point of the sole below it, carried rigidly by the foot
+    (:func:`infuse.contacts.sole_points`), so a foot rolling over its ball or heel, whose ankle
+    swings forward along an arc above a still sole, counts nothing, and a foot sliding, twisting
+    or sliding while it rolls counts the sole's travel. For each foot and each pair of consecutive
+    frames in which some of its points are planted, the foot travels the mean horizontal distance
+    those sole points move, each weighted by :func:`skate_weight` of its height above its planted
+    height (its 5th-percentile height while planted), with H = ``lift`` x the leg length: a point
+    sliding on the ground counts fully, a point lifting off less the higher it is, and not at all
+    from H up. ``lift=inf`` counts every planted frame fully. ``points`` (P,) gives the joints of
+    ``positions`` (F, J, 3) metres that play the contact points (default ``contacts.points``: the
+    same skeleton); ``root`` is the joint whose horizontal path is the distance walked.
     """
     pos = np.asarray(positions, dtype=np.float64)
     pts = contacts.points if points is None else np.asarray(points)
-    p = pos[:, pts]
+    p = sole_points(contacts, pos[:, pts])
     step = np.linalg.norm(np.diff(p[..., [0, 2]], axis=0), axis=-1)  # (F-1, P)
     held = contacts.flags[1:] & contacts.flags[:-1]
     y = p[..., 1]
