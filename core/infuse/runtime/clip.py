@@ -9,6 +9,7 @@ morph weights linearly; the clip's morph weights drive the character's morph tar
 """
 from __future__ import annotations
 
+import hashlib
 import weakref
 from dataclasses import dataclass
 
@@ -17,7 +18,7 @@ import numpy as np
 from .. import quaternions as quat
 from ..errors import UsageError
 from ..motion import Motion
-from .controller import Block, Controller, Job
+from .controller import Block, Controller, Job, Jobs
 from .layers import Layer, Mode
 
 
@@ -27,8 +28,7 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     wrapped over its duration when ``loop``. ``joints`` (K,) indices: only those joints are sampled
     (J = K in the results), the same values as the full sampling's columns."""
     f = motion.num_frames
-    position = np.asarray(times, dtype=np.float64) * motion.fps
-    cycles = np.zeros(len(position))
+    position, cycles = clip_positions(motion, times, loop)
     jt = motion.joint_translations
     columns = slice(None) if joints is None else np.asarray(joints, dtype=np.int64)
 
@@ -39,11 +39,6 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
 
     if f == 1:
         return held(np.zeros(len(position), dtype=np.int64))
-    span = f - 1  # the last frame closes the cycle: it is drawn like the first
-    if loop:
-        cycles = np.floor(position / span + 1e-9)
-        position = position - cycles * span
-    position = np.clip(position, 0.0, span)
     nearest = np.rint(position)
     if np.all(np.abs(position - nearest) < 1e-6):  # on the clip's own frames: no interpolation
         return held(nearest.astype(np.int64))
@@ -59,6 +54,27 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     if jt is not None:
         jt = jt[frames, columns] + frac[:, :, None] * (jt[frames + 1, columns] - jt[frames, columns])
     return rot, root, jt, cycles
+
+
+def clip_positions(motion: Motion, times, loop: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Where ``times`` (any shape, seconds from the start) fall in ``motion``: fractional frames in
+    [0, F - 1] and completed cycles (0 unless ``loop``), as :func:`sample_motion` samples them."""
+    position = np.asarray(times, dtype=np.float64) * motion.fps
+    cycles = np.zeros(position.shape)
+    if motion.num_frames == 1:
+        return np.zeros(position.shape), cycles
+    span = motion.num_frames - 1  # the last frame closes the cycle: it is drawn like the first
+    if loop:
+        cycles = np.floor(position / span + 1e-9)
+        position = position - cycles * span
+    return np.clip(position, 0.0, span), cycles
+
+
+def on_frames(motion: Motion, times, loop: bool) -> np.ndarray:
+    """(n,) whether every time of each row of ``times`` (n, T) falls on one of the motion's own frames,
+    where :func:`sample_motion` takes them as they are, without interpolating."""
+    position = clip_positions(motion, times, loop)[0]
+    return np.all(np.abs(position - np.rint(position)) < 1e-6, axis=-1)
 
 
 def sample_morph_weights(motion: Motion, times: np.ndarray, loop: bool) -> np.ndarray:
@@ -151,6 +167,23 @@ class LoopTable:
 #: Each clip's interpolation table, for as long as the clip lives: a Motion is immutable and hashed by
 #: identity, so the table is the clip's own and goes with it.
 _TABLES: weakref.WeakKeyDictionary[Motion, tuple[np.ndarray, np.ndarray]] = weakref.WeakKeyDictionary()
+
+
+#: Each clip's :func:`content_key`, for as long as the clip lives.
+_CONTENT: weakref.WeakKeyDictionary[Motion, bytes] = weakref.WeakKeyDictionary()
+
+
+def content_key(motion: Motion) -> bytes:
+    """A digest of what :func:`sample_motion` reads of ``motion`` (its skeleton, rate and channels), so that
+    copies of one clip (characters infused from one cache each hold their own) are sampled as one."""
+    key = _CONTENT.get(motion)
+    if key is None:
+        digest = hashlib.blake2b(digest_size=16)
+        digest.update(f"{id(motion.skeleton)}:{motion.fps!r}:{motion.local_rotations.shape}".encode())
+        for channel in (motion.local_rotations, motion.root_translations, motion.joint_translations):
+            digest.update(b"-" if channel is None else np.ascontiguousarray(channel).tobytes())
+        key = _CONTENT[motion] = digest.digest()
+    return key
 
 
 def continuous_rotations(motion: Motion) -> np.ndarray:
@@ -288,6 +321,19 @@ class Clip(Controller):
         retargeter = registry.get("retargeter")
         return retargeter.retarget(self.motion, self.source_mapping, rig.skeleton, rig.mapping)
 
+    @classmethod
+    def evaluate(cls, jobs: Jobs, block: Block) -> None:
+        """The characters playing one clip the same way sampled together, in one call over all their
+        times, and written side by side; clips that move inner joints, write morph weights, play
+        additively or stand in for no root play one at a time (:meth:`evaluate_one`)."""
+        if cls.evaluate_one is not Clip.evaluate_one:  # a subclass plays its own way
+            return super().evaluate(jobs, block)
+        together, alone = jobs.memo(_Together.of)
+        for group in together:
+            group.evaluate(jobs, block)
+        for k in alone:
+            jobs[k].controller.evaluate_one(jobs[k], block)
+
     def evaluate_one(self, job: Job, block: Block) -> None:
         b: ClipBinding = job.binding
         motion = b.motion
@@ -316,3 +362,70 @@ class Clip(Controller):
         if b.morph_columns.size:  # from the clip as given: a retargeted copy keeps no morph weights
             weights = sample_morph_weights(self.motion, local, self.loop)[:, b.morph_sources]
             job.pose.set_morphs(b.morph_columns, weights, job.weight, job.mode)
+
+
+@dataclass(frozen=True, eq=False)
+class _Together:
+    """Clip jobs that sample one motion the same way (looping or not, the same joints), on characters of
+    their own: ``rows`` (n,) their places among the jobs, ``offset_s`` and ``speed`` (n, 1) each clip's,
+    table ``columns`` (n K,) of the joints they drive (job-major) and the sampled ``sources`` (K,)."""
+
+    motion: Motion
+    loop: bool
+    rows: list
+    offset_s: np.ndarray
+    speed: np.ndarray
+    columns: np.ndarray
+    sources: np.ndarray
+
+    @staticmethod
+    def of(jobs: Jobs) -> tuple[list["_Together"], list[int]]:
+        """The groups of ``jobs`` that play together, and the jobs (indices) that play alone."""
+        groups: dict[tuple, list[int]] = {}
+        alone = []
+        characters = [job.rig.name for job in jobs]
+        for k, job in enumerate(jobs):
+            b: ClipBinding = job.binding
+            plain = (job.mode is Mode.OVERRIDE and b.mover == 0 and not b.moved_joints.size and not b.morph_columns.size
+                     and b.motion.joint_translations is None and characters.count(characters[k]) == 1)
+            if plain:
+                groups.setdefault((content_key(b.motion), job.controller.loop, b.columns.tobytes()), []).append(k)
+            else:
+                alone.append(k)
+        together = []
+        for rows in groups.values():
+            chosen = [jobs[k] for k in rows]
+            b = chosen[0].binding
+            together.append(_Together(
+                b.motion, chosen[0].controller.loop, rows, np.array([[job.controller.offset_s] for job in chosen]),
+                np.array([[job.controller.speed] for job in chosen]),
+                np.concatenate([jobs.table.first_joint[job.rig.name] + job.binding.joints for job in chosen]), b.columns))
+        return together, alone
+
+    def evaluate(self, jobs: Jobs, block: Block) -> None:
+        """Sample the clip at every job's times at once (as :meth:`Clip.evaluate_one` does, job by job),
+        write the joints side by side and each character's root."""
+        count, frames = len(self.rows), jobs.local_times.shape[1]
+        local = self.offset_s + np.maximum(jobs.local_times[self.rows], 0.0) * self.speed  # (n, F)
+        every = self.sources.size == self.motion.skeleton.num_joints and bool((self.sources == np.arange(self.sources.size)).all())
+        # Sampled as each job alone would be: held on the clip's frames when all its times are, else interpolated.
+        rot = np.empty((count, frames, self.sources.size, 4))
+        root, cycles = np.empty((count, frames, 3)), np.empty((count, frames))
+        held = on_frames(self.motion, local, self.loop)
+        for rows in (np.flatnonzero(held), np.flatnonzero(~held)):
+            if rows.size:
+                r, t, _, c = sample_motion(self.motion, local[rows].ravel(), self.loop, None if every else self.sources)
+                rot[rows], root[rows], cycles[rows] = (r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3),
+                                                      c.reshape(rows.size, frames))
+        joints = rot.shape[2]
+        rot = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
+        weight = np.repeat(jobs.weights[self.rows].T, joints, axis=1)  # (F, n K)
+        chosen = [jobs[k] for k in self.rows]
+        block.table.set_rotations(self.columns, rot, weight, Mode.OVERRIDE, [job.pose for job in chosen])
+        first_root = self.motion.root_translations[0]
+        for n, job in enumerate(chosen):
+            b: ClipBinding = job.binding
+            if b.drives_root:
+                travel = root[n] + cycles[n][:, None] * b.step if job.controller.root_motion \
+                    else np.broadcast_to(first_root, root[n].shape)
+                job.pose.set_root(travel, job.weight, job.mode)

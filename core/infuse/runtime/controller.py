@@ -96,12 +96,14 @@ class Jobs(list):
         self.table = table
         self._memo = memo
 
-    def memo(self, make):
-        """``make(jobs)``, worked out again only when these jobs are not the activities they were at the
-        last call (for what depends only on the activities: their bindings stacked, their settings)."""
-        key = tuple(job.activity.id for job in self)
+    def memo(self, make, chosen=None):
+        """``make(jobs)``, worked out again only when these jobs (or the ``chosen`` ones among them) are
+        not the activities they were at the last call (for what depends only on the activities: their
+        bindings stacked, their settings)."""
+        jobs = self if chosen is None else chosen
+        key = tuple(job.activity.id for job in jobs)
         if self._memo[0] != key:
-            self._memo[:] = [key, make(self)]
+            self._memo[:] = [key, make(jobs)]
         return self._memo[1]
 
 

@@ -121,6 +121,7 @@ class Runtime:
         self._layout: TableLayout | None = None  # where each character sits in a block's PoseTable
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
         self._speakers: list[Activity] = []  # the activities whose controller speaks
+        self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
 
     # -- characters ------------------------------------------------------------------------------------
     def add_character(self, character, name: str | None = None, mapping=None, position=(0.0, 0.0, 0.0),
@@ -151,6 +152,7 @@ class Runtime:
         rotation = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), np.radians(heading_deg))
         rig = Rig(name, character, mapping, position, rotation)
         self._tracks[name] = _Track(rig)
+        self._resolved.clear()
         for note in rig.notes:
             self.report(name, note)
         return name
@@ -231,18 +233,25 @@ class Runtime:
         from .targets import as_target
 
         self._targets[str(name)] = as_target(target)
+        self._resolved.clear()
 
     def target(self, name: str):
         """The target called ``name``: one added with :meth:`add_target`, ``"character:joint"``, or a
         character (its face); :class:`UsageError` otherwise."""
         from .targets import JointTarget, as_target
 
+        found = self._resolved.get(name)
+        if found is not None:
+            return found
         if name in self._targets:
-            return self._targets[name]
-        if ":" in name:
-            return as_target(name)
-        if name in self._tracks:
-            return JointTarget(name)
+            found = self._targets[name]
+        elif ":" in name:
+            found = as_target(name)
+        elif name in self._tracks:
+            found = JointTarget(name)
+        if found is not None:
+            self._resolved[name] = found
+            return found
         known = sorted(set(self._targets) | set(self._tracks))
         raise UsageError(f"no target or character named {name!r}; known: {', '.join(known) or 'none'}")
 

@@ -119,41 +119,23 @@ class Gaze(Controller):
                 for name, row in rows.items()}
         frames, dt = len(block), block.dt
         names = list(rows)
-        n_groups = len(GROUPS)
-        shape = (len(names), frames)
-        arrays = {
-            "targets": np.empty(shape + (3,)), "weights": np.empty(shape), "active": np.empty(shape + (n_groups,)),
-            "fractions": np.empty(shape + (n_groups,)), "limits": np.empty(shape + (n_groups, 4)),
-            "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
-            "offsets": np.empty(shape + (2,)),
-        }
-        spans = []
-        for c, name in enumerate(names):
-            row = rows[name]
-            owner, arrays["weights"][c] = _in_charge(row, block.times)
-            # (job, the frames it leads): a slice when one gaze leads the whole block
-            spans.append([(row[0], slice(None))] if len(row) == 1 else
-                         [(job, owner == k) for k, job in enumerate(row) if np.any(owner == k)])
-            for job, these in spans[c]:
-                b, gaze = job.binding, job.controller
-                if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
-                    joints = b.joints
-                    rest = job.rig.skeleton.rest_rotations[joints]
-                    leads = np.zeros(frames, dtype=bool)
-                    leads[these] = True
-                    job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * leads)
-                arrays["active"][c, these] = b.active
-                arrays["fractions"][c, these] = b.fractions
-                arrays["offsets"][c, these] = gaze.offset
-                arrays["limits"][c, these] = gaze.limits
-                arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
+        leads = [rows[name][0] for name in names]
+        # The usual case, one additive gaze per character: what depends only on the gazes is kept.
+        single = all(len(row) == 1 for row in rows.values()) and all(job.mode is Mode.ADDITIVE for job in leads)
+        chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads) if single else _Chains(leads, block.table)
+        if single:
+            arrays = chains.settings(frames, dt)
+            arrays["weights"] = np.array([job.weight for job in leads])
+            spans = [[(job, slice(None))] for job in leads]
+        else:
+            arrays, spans = _settings_per_frame(rows, names, block)
         # The pose below, along each chain; characters on one skeleton share the forward kinematics.
-        first_jobs = [rows[name][0] for name in names]
-        chain = dict(zip(("frames_world", "positions", "origin"), _chain_frames(first_jobs)))
+        chain = dict(zip(("frames_world", "positions", "origin"), _chain_frames(leads, chains, block.table)))
         positions = chain["positions"]  # each slot's joint in the world
         # Where the priority joint points: the mean forward (+Z) axis of the eyes or the head.
         forward_axes = quat.rotate(chain["frames_world"], _FORWARD)
-        chain["forward"] = _weighted_slots(np.array([span[0][0].binding.lead_weights() for span in spans]), forward_axes)
+        lead_weights = chains.lead_weights if single else np.array([span[0][0].binding.lead_weights() for span in spans])
+        chain["forward"] = _weighted_slots(lead_weights, forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
             for job, these in spans[c][1:]:
                 chain["forward"][c, these] = _weighted_slots(job.binding.lead_weights()[None], forward_axes[c:c + 1, these])[0]
@@ -161,6 +143,7 @@ class Gaze(Controller):
         # joints from the chain above, and again from its solved chain (``refine``).
         index = {name: c for c, name in enumerate(names)}
         refine: list[tuple[int, int, tuple[int, ...], slice | np.ndarray]] = []
+        targets = arrays["targets"] = np.empty((len(names), frames, 3))
         for c, name in enumerate(names):
             for job, these in spans[c]:
                 target = job.controller.target
@@ -168,35 +151,146 @@ class Gaze(Controller):
                     target = block.runtime.target(target) if isinstance(target, str) else target
                     slots: tuple[int, ...] = ()
                     if isinstance(target, JointTarget) and target.character in index:
-                        slots = _slots_of(target, rows[target.character][0], block)
+                        slots = chains.slots_of(target, rows[target.character][0], block)
                     if slots:  # on the frames this gaze leads, whether or not another leads the rest of the block
-                        other = index[target.character]
-                        refine.append((c, other, slots, these))
-                        arrays["targets"][c, these] = positions[other][these][:, list(slots)].mean(axis=1)
+                        refine.append((c, index[target.character], slots, these))
                     else:
-                        arrays["targets"][c, these] = target.positions(block.times, block)[these]
+                        targets[c, these] = target.positions(block.times, block)[these]
                 except UsageError as exc:  # a target that names nothing in the scene: this gaze rests
                     job.report(f"gaze target {job.controller.target!r} cannot be found ({exc}); the gaze is skipped")
-                    arrays["targets"][c, these] = 0.0
+                    targets[c, these] = 0.0
                     arrays["weights"][c, these] = 0.0
-        inp = SolverInput(present=np.stack([rows[n][0].binding.present for n in names]),
-                          counts=np.stack([rows[n][0].binding.counts for n in names]), refine=tuple(refine), **arrays, **chain)
+        _faces(targets, positions, refine)
+        inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), **arrays, **chain)
         # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver
         # and written back after it.
-        states = [rows[n][0].rig.state_of(GazeState) for n in names]
+        states = [job.rig.state_of(GazeState) for job in leads]
         groups_state = np.stack([st.groups for st in states])
         eyes_state = np.stack([st.eyes for st in states])
         first_state = np.stack([st.first for st in states])
         offsets = solve(inp, groups_state, eyes_state, first_state)
-        # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
-        # character at once, then written per character.
-        aligned = np.stack([rows[n][0].binding.chain_aligned for n in names])  # (C, S, 4)
-        to_local = quat.left_matrix(aligned) @ quat.right_matrix(quat.conjugate(aligned))  # (C, S, 4, 4)
-        turns = _apply_per_slot(to_local, swing(offsets[..., 0], offsets[..., 1]))
-        for c, name in enumerate(names):
-            job, state = rows[name][0], states[c]
+        for c, state in enumerate(states):
             state.groups, state.eyes, state.first = groups_state[c], eyes_state[c], first_state[c]
-            job.pose.add_offsets(job.binding.joints, turns[c][:, job.binding.present])
+        # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
+        # character at once, written onto every character's joints at once.
+        turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
+        present = np.swapaxes(turns, 0, 1).reshape(frames, -1, 4)[:, chains.present_cells]
+        block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
+
+
+def _faces(targets: np.ndarray, positions: np.ndarray, refine: list) -> None:
+    """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain ``positions``
+    (C, F, S, 3) for each ``(c, c2, slots, frames)`` of ``refine``: at once for the whole block's entries
+    with the same slots."""
+    whole: dict[tuple, tuple[list, list]] = {}
+    for c, other, slots, these in refine:
+        if isinstance(these, slice):
+            gazers, others = whole.setdefault(slots, ([], []))
+            gazers.append(c)
+            others.append(other)
+        else:
+            targets[c, these] = positions[other][these][:, list(slots)].mean(axis=1)
+    for slots, (gazers, others) in whole.items():
+        targets[gazers] = positions[others][:, :, list(slots)].mean(axis=2)
+
+
+def _settings_per_frame(rows: dict, names: list, block) -> tuple[dict, list]:
+    """The solver's settings (C, F, ...) when a character's gazes take turns within the block (or one
+    overrides the pose below), frame by frame, and per character the (job, frames it leads) spans."""
+    frames, dt = len(block), block.dt
+    n_groups = len(GROUPS)
+    shape = (len(names), frames)
+    arrays = {
+        "weights": np.empty(shape), "active": np.empty(shape + (n_groups,)),
+        "fractions": np.empty(shape + (n_groups,)), "limits": np.empty(shape + (n_groups, 4)),
+        "smoothing": np.empty(shape + (n_groups,)), "max_step": np.empty(shape + (n_groups,)),
+        "offsets": np.empty(shape + (2,)),
+    }
+    spans = []
+    for c, name in enumerate(names):
+        row = rows[name]
+        owner, arrays["weights"][c] = _in_charge(row, block.times)
+        # (job, the frames it leads): a slice when one gaze leads the whole block
+        spans.append([(row[0], slice(None))] if len(row) == 1 else
+                     [(job, owner == k) for k, job in enumerate(row) if np.any(owner == k)])
+        for job, these in spans[c]:
+            b, gaze = job.binding, job.controller
+            if job.mode is Mode.OVERRIDE:  # the gaze joints start from their rest rotation, not the pose below
+                joints = b.joints
+                rest = job.rig.skeleton.rest_rotations[joints]
+                leads = np.zeros(frames, dtype=bool)
+                leads[these] = True
+                job.pose.set_rotations(joints, np.broadcast_to(rest, (frames,) + rest.shape), job.weight * leads)
+            arrays["active"][c, these] = b.active
+            arrays["fractions"][c, these] = b.fractions
+            arrays["offsets"][c, these] = gaze.offset
+            arrays["limits"][c, these] = gaze.limits
+            arrays["smoothing"][c, these], arrays["max_step"][c, these] = gaze.rates(dt)
+    return arrays, spans
+
+
+class _Chains:
+    """The gazing characters' chains side by side, one leading gaze each (``jobs``, in order): what the
+    solver needs of them that changes only with the gazes.
+
+    - ``present`` (C, S), ``counts`` (C, G), ``aligned`` (C, S, 4): each binding's, stacked;
+    ``to_local`` (C, S, 4, 4): matrices of ``A Δ A⁻¹`` (A: the slot's aligned frame) acting on Δ;
+    - ``lead_weights`` and ``origin_weights`` (C, S): the slots the gaze points and starts from (the
+      leading gaze's: a gaze taking over within the block may point other slots);
+    - ``world`` (C, 1, S, 1) or None: the slots that are the world itself (no pelvis);
+    - ``skeletons``: per skeleton and chain, (characters, a lead job, table columns (C_k, K)) of the
+      joints down to the chain, for one forward kinematics over its characters;
+    - ``columns`` (P,): the table columns of every character's present slots, ``present_cells`` (P,):
+      their cells ``c S + s`` among every character's slots.
+    """
+
+    def __init__(self, jobs, table):
+        bindings = [job.binding for job in jobs]
+        self.jobs = jobs
+        self.present = np.stack([b.present for b in bindings])
+        self.counts = np.stack([b.counts for b in bindings])
+        self.aligned = np.stack([b.chain_aligned for b in bindings])  # (C, S, 4)
+        self.to_local = quat.left_matrix(self.aligned) @ quat.right_matrix(quat.conjugate(self.aligned))
+        self.lead_weights = np.array([b.lead_weights() for b in bindings])
+        self.origin_weights = np.array([b.origin_weights() for b in bindings])
+        world = np.stack([b.slot_source < 0 for b in bindings])[:, None, :, None]
+        self.world = world if world.any() else None
+        same_chain: dict[tuple, list[int]] = {}
+        for c, job in enumerate(jobs):
+            same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
+        self.skeletons = [(members, jobs[members[0]], np.array([table.first_joint[jobs[c].rig.name] + bindings[c].columns
+                                                                   for c in members])) for members in same_chain.values()]
+        self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
+        self.present_cells = np.flatnonzero(self.present)
+        self._settings: dict[tuple, dict] = {}
+        self._slots: dict[tuple, tuple[int, ...]] = {}
+
+    def settings(self, frames: int, dt: float) -> dict:
+        """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
+        seconds (read-only views: the same for every frame)."""
+        kept = self._settings.get((frames, dt))
+        if kept is None:
+            gazes = [job.controller for job in self.jobs]
+            count = len(gazes)
+            rates = [gaze.rates(dt) for gaze in gazes]
+            per_character = {
+                "active": np.stack([job.binding.active for job in self.jobs]),
+                "fractions": np.stack([job.binding.fractions for job in self.jobs]),
+                "limits": np.stack([gaze.limits for gaze in gazes]),
+                "smoothing": np.stack([r[0] for r in rates]), "max_step": np.stack([r[1] for r in rates]),
+                "offsets": np.array([gaze.offset for gaze in gazes], dtype=np.float64).reshape(count, 2),
+            }
+            kept = self._settings[(frames, dt)] = {key: np.broadcast_to(value[:, None], (count, frames) + value.shape[1:])
+                                                   for key, value in per_character.items()}
+        return dict(kept)
+
+    def slots_of(self, target: JointTarget, job, block) -> tuple[int, ...]:
+        """:func:`_slots_of`, kept per target and gazing character's binding."""
+        key = (target, id(job.binding))
+        slots = self._slots.get(key)
+        if slots is None:
+            slots = self._slots[key] = _slots_of(target, job, block)
+        return slots
 
 
 def _drop_superseded(row, block) -> list:
@@ -243,33 +337,29 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
     return owner, np.where(latest_running >= 0, np.maximum(weight, own), own)
 
 
-def _chain_frames(jobs):
-    """For the gazing characters (one job each), from the pose below: each slot's aligned frame
-    (C, F, S, 4, unit quaternions) and position (C, F, S, 3) in the world, and where
-    the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all else runs
-    on every character at once."""
-    frames = len(jobs[0].pose.root_translations)
+def _chain_frames(jobs, chains: _Chains, table):
+    """For the gazing characters (one job each, their ``chains``), from the pose below in ``table``:
+    each slot's aligned frame (C, F, S, 4, unit quaternions) and position (C, F, S, 3) in the world, and
+    where the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all else
+    runs on every character at once."""
+    frames = table.frames
     rot = np.empty((len(jobs), frames, len(SLOTS), 4))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
-    same_chain: dict[tuple, list[int]] = {}
-    for c, job in enumerate(jobs):
-        same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
-    for members in same_chain.values():
-        rot[members], pos[members] = _slot_poses([jobs[c] for c in members])
+    for members, lead, columns in chains.skeletons:
+        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns)
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot, as one matrix product over the frames (F, 4) x (4, 4).
     placement = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
-    aligned = np.stack([job.binding.chain_aligned for job in jobs])  # (C, S, 4)
+    aligned = chains.aligned  # (C, S, 4)
     to_world = quat.left_matrix(placement)[:, None] @ quat.right_matrix(aligned)  # (C, S, 4, 4)
     frames_w = _apply_per_slot(to_world, rot)
     turn = quat.unit_to_matrix(placement)  # (C, 3, 3)
     pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(turn, -1, -2)).reshape(pos.shape)
     pos += np.stack([job.rig.position for job in jobs])[:, None, None]
-    world = np.stack([job.binding.slot_source < 0 for job in jobs])[:, None, :, None]  # (C, 1, S, 1)
-    if world.any():  # the world itself (no pelvis) stays put
-        frames_w = np.where(world, aligned[:, None], frames_w)
-        pos = np.where(world, 0.0, pos)
-    origin = _weighted_slots(np.array([job.binding.origin_weights() for job in jobs]), pos)
+    if chains.world is not None:  # the world itself (no pelvis) stays put
+        frames_w = np.where(chains.world, aligned[:, None], frames_w)
+        pos = np.where(chains.world, 0.0, pos)
+    origin = _weighted_slots(chains.origin_weights, pos)
     return frames_w, pos, origin
 
 
@@ -278,20 +368,20 @@ def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.swapaxes(np.swapaxes(q, 1, 2) @ np.swapaxes(matrices, -1, -2), 1, 2)
 
 
-def _slot_poses(jobs) -> tuple[np.ndarray, np.ndarray]:
+def _slot_poses(jobs, lead, table, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotations (C, F, S, 4) and positions (C, F, S, 3) of each slot's joint in the characters' own
-    frames, for characters on one skeleton with one chain (an absent slot repeats its parent's joint)."""
-    b = jobs[0].binding
-    skeleton = jobs[0].rig.skeleton
-    columns = b.columns
-    local = np.stack([j.pose.local_rotations[:, columns] for j in jobs])
+    frames, for characters on one skeleton with one chain (``lead`` one of them; ``columns`` (C, K)
+    their joints down to the chain in ``table``; an absent slot repeats its parent's joint)."""
+    b = lead.binding
+    skeleton = lead.rig.skeleton
+    local = np.swapaxes(table.local_rotations[:, columns], 0, 1)  # (C, F, K, 4)
     root = np.stack([j.pose.root_translations for j in jobs])
     moved = [j.pose.joint_translations for j in jobs]
     translations = None
     if any(t is not None for t in moved):
-        rest = skeleton.rest_translations[columns]
-        translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, columns] for t in moved])
-    rot, pos = chain_fk(skeleton, local, root, translations, b.joints, columns)
+        rest = skeleton.rest_translations[b.columns]
+        translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, b.columns] for t in moved])
+    rot, pos = chain_fk(skeleton, local, root, translations, b.joints, b.columns)
     source = np.maximum(b.slot_source, 0)  # the world's slots are set apart by the caller
     return rot[..., source, :], pos[..., source, :]
 
