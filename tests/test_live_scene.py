@@ -12,6 +12,7 @@ from infuse import quaternions as quat
 from infuse.errors import BusyError, InputError, UsageError
 from infuse.live import LiveScene
 from infuse.scene import Scene
+from infuse.speech import tts_engine
 from infuse_manipulation.pointing import PointingState
 
 from corpus_data import corpus_file
@@ -133,6 +134,60 @@ def test_memory_stays_bounded_and_a_full_queue_says_so():
     waiting.submit(print)
     with pytest.raises(BusyError, match="2 commands are waiting"):
         waiting.submit(print)
+
+
+class CountingTTS:
+    """espeak, counting what it is asked to synthesize and on which thread; with ``replay`` (an earlier
+    one), the utterances that one made for the same texts, instead (espeak's timing varies slightly
+    between calls)."""
+
+    def __init__(self, replay: "CountingTTS | None" = None):
+        self.engine = tts_engine("espeak")
+        self.calls: list[tuple[str, str]] = []
+        self.made: dict[str, object] = {}
+        self.replay = replay
+
+    def synthesize(self, text):
+        self.calls.append((threading.current_thread().name, text))
+        if self.replay is not None:
+            return self.replay.made[text]
+        utterance = self.made[text] = self.engine.synthesize(text)
+        return utterance
+
+    def __getattr__(self, name):
+        return getattr(self.engine, name)
+
+
+def test_speech_is_synthesized_once_with_the_nonverbal_generator_on():
+    """With the nonverbal generator on, BML speech and ``say`` are put through the generator on the
+    caller's thread and synthesized once there, with the marks it adds (none on the loop thread); the
+    blocks scheduled are those an offline scene schedules from the same input, to the same times."""
+    def generating(tts) -> Scene:
+        scene = Scene(fps=FPS, quiet=True, tts=tts, generators=("nonverbal",))
+        scene.add_character(corpus_file("talkinghead/avatars/brunette-t.glb"), "ann", position=(0, 0, 2), facing=(0, 0, 0))
+        scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob", facing="ann")
+        return scene
+    talk = (f'<bml xmlns="{BML_NS}" id="talk"><speech id="s1"><text>I really think the big red barn should be '
+            'painted before winter comes.</text></speech></bml>')
+    reply = "Well, the paint costs more than the whole barn is worth these days."
+    tts = CountingTTS()
+    with LiveScene(generating(tts)) as live:
+        ids = live.bml("ann", talk) + [live.say("bob", reply)]
+        live_blocks = {i: live.scene.scheduler.blocks[i] for i in ids}
+    offline = generating(CountingTTS(replay=tts))  # the same texts, marks included, or KeyError
+    offline.bml("ann", talk)
+    offline.say("bob", reply)
+    assert len(tts.calls) == 2, tts.calls  # one synthesis per utterance
+    assert all(thread != "infuse-live" for thread, _ in tts.calls), tts.calls
+    assert all("<mark" in text for _, text in tts.calls)  # with the generator's marks
+    for block_id, record in live_blocks.items():
+        expected = offline.scheduler.blocks[block_id]
+        assert len(record.activations) > 1  # the speech and what the generator added to it
+        assert [(a.behaviour, a.element) for a in record.activations] == [(a.behaviour, a.element) for a in expected.activations]
+        for mine, theirs in zip(record.activations, expected.activations):
+            assert mine.sync_times.keys() == theirs.sync_times.keys()
+            for sync, at in mine.sync_times.items():
+                assert abs((at - record.start_s) - (theirs.sync_times[sync] - expected.start_s)) < 1e-9, (block_id, sync)
 
 
 def test_bad_bml_and_names_are_refused_before_the_loop():

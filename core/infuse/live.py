@@ -40,8 +40,8 @@ be shown.
 Frames stand on the ground as exported files do: each character is lowered by how low its feet reach at
 rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
 
-Speech is synthesized on the caller's thread before its block reaches the loop, so synthesis never
-stalls a frame. Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
+Blocks are put through the scene's BML generators and their speech synthesized (once, with the marks the
+generators added) on the caller's thread before they reach the loop, so synthesis never stalls a frame. Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
 """
 from __future__ import annotations
 
@@ -515,8 +515,10 @@ class LiveScene:
     # -- BML ------------------------------------------------------------------------------------------
     def parse(self, character: str | None, bml) -> list:
         """Parse ``bml`` (text, bytes or a document) into its blocks, each with its character (``character``
-        or the one it names), and synthesize its speech; runs on the caller's thread.
-        :class:`~infuse.errors.InputError` for malformed XML, :class:`UsageError` for unknown characters."""
+        or the one it names), put them through the scene's BML generators (their ``generatedBml`` feedback
+        is given here) and synthesize their speech, once, with what the generators marked in it; runs on
+        the caller's thread. :class:`~infuse.errors.InputError` for malformed XML, :class:`UsageError` for
+        unknown characters."""
         document = bml if isinstance(bml, BmlDocument) else parse_bml(bml)
         blocks = []
         for block in document.blocks:
@@ -527,11 +529,13 @@ class LiveScene:
             if resolved not in self.scene.characters:
                 raise UsageError(f"no character {name!r}; characters: {', '.join(self.scene.characters) or 'none'}")
             blocks.append(replace(block, character_id=resolved))
+        blocks = [generated for block in blocks for generated in self.scene.scheduler.generate(block)]
         self.prepare(blocks)
         return blocks
 
     def prepare(self, blocks) -> None:
-        """Synthesize the speech of ``blocks`` (parsed, with their characters) ahead, on this thread."""
+        """Synthesize the speech of ``blocks`` (parsed, with their characters, generated) ahead, on this
+        thread."""
         if not any(b.element == "speech" for block in blocks for b in block.behaviours):
             return
         planner = Scheduler(speech_timer=self._speech)
@@ -549,12 +553,12 @@ class LiveScene:
 
     def schedule(self, blocks) -> list[str]:
         """Schedule blocks returned by :meth:`parse` now (on the loop thread: inside :meth:`submit`);
-        their ids."""
+        their ids (the generators' blocks for other characters included)."""
         ids = []
         for block in blocks:
             self._speech.local.character = block.character_id
             try:
-                ids.append(self.scene.bml(block.character_id, BmlDocument((block,))))
+                ids.append(self.scene.bml(block.character_id, BmlDocument((block,)), generated=True))
             finally:
                 self._speech.local.character = None
         return ids
@@ -567,24 +571,34 @@ class LiveScene:
     #: Scene builder methods a live scene offers, each starting on the next frame.
     BUILDER = ("say", "gaze", "head", "nod", "shake", "expression", "walk_to", "reach", "point", "grab", "release")
 
-    def prepare_call(self, method: str, character: str, arguments: dict) -> None:
-        """Check a builder call and synthesize its speech ahead (``say``), on the caller's thread."""
+    def prepare_call(self, method: str, character: str, arguments: dict) -> list | None:
+        """Check a builder call, on the caller's thread. A ``say`` is made into its block here (the scene's
+        ``say``, its id taken now), parsed and prepared (:meth:`parse`); its blocks are returned, for
+        :meth:`builder_call`."""
         if method not in self.BUILDER:
             raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
-        if self.scene.resolve_name(character) not in self.scene.characters:
+        name = self.scene.resolve_name(character)
+        if name not in self.scene.characters:
             raise UsageError(f"no character {character!r}; characters: {', '.join(self.scene.characters) or 'none'}")
-        if method == "say":
-            text = arguments.get("text")
-            if not isinstance(text, str):
-                raise UsageError("say needs the text to speak")
-            content = builder.element("text", {}, builder.speech_text(text))
-            speech = builder.element("speech", {"id": "s1", "voice": arguments.get("voice")}, content)
-            self.prepare(parse_bml(builder.block("say", self.scene.resolve_name(character), speech)).blocks)
+        if method != "say":
+            return None
+        text = arguments.get("text")
+        if not isinstance(text, str):
+            raise UsageError("say needs the text to speak")
+        unknown = set(arguments) - {"text", "voice"}
+        if unknown:
+            raise UsageError(f"say takes text and voice, not {', '.join(sorted(unknown))}")
+        content = builder.element("text", {}, builder.speech_text(text))
+        speech = builder.element("speech", {"id": "s1", "voice": arguments.get("voice")}, content)
+        return self.parse(name, builder.block(self.scene.block_id("say"), name, speech))
 
-    def builder_call(self, method: str, character: str, arguments: dict) -> str:
-        """Run a builder method of the scene now (on the loop thread: inside :meth:`submit`); the block id."""
+    def builder_call(self, method: str, character: str, arguments: dict, prepared: list | None = None) -> str:
+        """Run a builder method of the scene now (on the loop thread: inside :meth:`submit`); the block id.
+        ``prepared``: what :meth:`prepare_call` returned (a ``say``'s blocks, scheduled as they are)."""
         if method not in self.BUILDER:
             raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
+        if prepared is not None:
+            return self.schedule(prepared)[0]
         self._speech.local.character = self.scene.resolve_name(character)
         try:
             return getattr(self.scene, method)(character, **arguments)
@@ -593,8 +607,8 @@ class LiveScene:
 
     def _build(self, method: str, character: str, **arguments) -> str:
         arguments = {k: v for k, v in arguments.items() if v is not None}
-        self.prepare_call(method, character, arguments)
-        return self.call(self.builder_call, method, character, arguments, kind=method)
+        prepared = self.prepare_call(method, character, arguments)
+        return self.call(self.builder_call, method, character, arguments, prepared, kind=method)
 
     def say(self, character: str, text: str, voice: str | None = None) -> str:
         """Speak ``text`` from the next frame (BML ``<sync id="..."/>`` marks allowed); returns the block id."""

@@ -394,12 +394,14 @@ class Scene(BuilderCalls):
         """Seconds evaluated so far: the time of the next frame."""
         return self.runtime.time
 
-    def bml(self, character: str | None, bml, at: float | None = None):
+    def bml(self, character: str | None, bml, at: float | None = None, *, generated: bool = False):
         """Schedule and realize BML (XML text or bytes, a :class:`~pathlib.Path` to a file, or a parsed document).
 
         Its blocks play on ``character`` (None: the character each block names) from ``at`` seconds (default:
         now). Returns the block id, or a list of ids for a document with several blocks. Malformed XML raises
-        :class:`~infuse.errors.InputError`; everything else it holds becomes warningFeedback.
+        :class:`~infuse.errors.InputError`; everything else it holds becomes warningFeedback. ``generated``:
+        the blocks have been through the BML generators already (:meth:`~infuse.bml.Scheduler.generate`, as
+        a live scene does ahead, so that their speech is synthesized once); they do not run again.
         """
         if isinstance(bml, Path):
             document = parse_bml_file(bml)
@@ -421,7 +423,7 @@ class Scene(BuilderCalls):
             self.character(name)
             blocks.append(replace(block, character_id=name))
         ids = [block.id for block in blocks]
-        for block in (generated for b in blocks for generated in self.scheduler.generate(b)):
+        for block in (blocks if generated else [g for b in blocks for g in self.scheduler.generate(b)]):
             self._scheduling = block.character_id
             try:
                 record = self.scheduler.schedule_block(block, at)
@@ -504,7 +506,9 @@ class Scene(BuilderCalls):
         return self.feedback.subscribe(callback, kinds=[kinds] if isinstance(kinds, str) else kinds)
 
     # -- the builder (its calls: :class:`~infuse.bml.builder.BuilderCalls`) ----------------------------
-    def _block_id(self, what: str) -> str:
+    def block_id(self, what: str) -> str:
+        """A new block id for the builder: ``what`` and a number no block scheduled so far uses (ids taken
+        from several threads differ)."""
         while True:
             block_id = f"{what}{next(self._ids)}"
             if block_id not in self.scheduler.blocks:
@@ -513,7 +517,7 @@ class Scene(BuilderCalls):
     def _submit(self, character: str, what: str, behaviour: str, at, composition: str = "MERGE") -> str:
         character = self.resolve_name(character)
         self.character(character)
-        block_id = self._block_id(what)
+        block_id = self.block_id(what)
         return self.bml(character, builder.block(block_id, character, behaviour, composition), at)
 
     def _target_name(self, target) -> str:

@@ -179,9 +179,9 @@ class Hub:
             kind, function = "bml", (self.live.schedule, blocks)
         else:
             method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
-            await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.prepare_call, method,
-                                            character, arguments)
-            kind, function = method, (self.live.builder_call, method, character, arguments)
+            prepared, _ = await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.prepare_call,
+                                                          method, character, arguments)
+            kind, function = method, (self.live.builder_call, method, character, arguments, prepared)
         ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function, kind=kind))
         ids = ids if isinstance(ids, list) else [ids]
         return {"type": "accepted", "request": request, "blocks": [i for b in ids for i in (b if isinstance(b, list) else [b])],
