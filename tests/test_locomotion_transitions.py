@@ -83,7 +83,7 @@ def test_a_walk_from_standing_plays_the_start_whole_then_steers(xbot, space):
     clip = space.clips["Idle01_ToWalk01"]
     hand = transitions.handover_s(clip, FPS)
     frames = int(round(hand * FPS))
-    expected = transitions.placed_root(clip, transitions.placement(clip, 0.0, 0.0, 0.0), np.arange(frames) / FPS)
+    expected = transitions.placed_root(clip, transitions.placement(clip, 0.0, 0.0, 0.0, 0.5), np.arange(frames) / FPS, FPS)
     pelvis = pos[:, rig.joint("base")][:, [0, 2]]
     assert np.abs(pelvis[:frames] - expected).max() < 1e-6  # its own root motion, its pelvis placed at the origin
     assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.05
@@ -126,7 +126,7 @@ def test_a_walk_ends_with_the_stop_clip_on_its_target(xbot, space, monkeypatch):
     monkeypatch.setattr(transitions, "stop_placement", record)
     target = (1.0, 5.0)
     _, pos, rig = walk(xbot, space, target, 16.0)
-    (name, (_, _, _, scale)), = placed
+    (name, (_, _, _, scale, _)), = placed
     assert name == "Walk01_ToIdle01" and 1.0 / transitions.STOP_SCALES < scale < transitions.STOP_SCALES
     pelvis = pos[:, rig.joint("base")][:, [0, 2]]
     assert np.linalg.norm(pelvis[-15:].mean(axis=0) - target) < 0.01  # its travel scaled onto the target

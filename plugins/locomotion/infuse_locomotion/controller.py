@@ -47,7 +47,7 @@ from . import pacing, swivels, transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .state import LocomotionState
-from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState
+from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState, of_time
 
 
 #: Seconds over which a released foot's pin correction fades back to the animation, and its extra
@@ -223,11 +223,12 @@ class Locomotion(Controller):
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
             if decide:  # a transition played whole from standing (as the walk will decide)
                 decide = False
-                pick = transitions.choose(played, st, path, fps, self.steering.max_decel, TURN_IN_PLACE, STAY_M) \
+                asked = self._asked(frames * dt, top)
+                pick = transitions.choose(played, st, path, fps, self.steering.max_decel, TURN_IN_PLACE, STAY_M, asked) \
                     if st.speed < 1e-9 else None
                 if pick is not None:
                     frames += int(round(transitions.handover_s(pick, fps) * fps))
-                    st.go_on_from(transitions.end_state(pick, transitions.placement(pick, st.x, st.z, st.heading), fps))
+                    st.go_on_from(transitions.end_state(pick, transitions.placement(pick, st.x, st.z, st.heading, asked), fps))
                     decide = pick.transition == "turn"
                     if paced is not None and pick.transition == "start":
                         paced.phase = transitions.start_phase(pick, fps, half)
@@ -337,10 +338,11 @@ class Locomotion(Controller):
             if st.playing is None and st.chooser != id(self):
                 st.chooser = id(self)  # a walk decides once it begins (again after a turn on the spot)
                 if st.settled and st.speed < 1e-9 and len(b.legs) == 2:
+                    asked = self._asked(float(times[i]), b.limit)
                     pick = transitions.choose(b.played, st, self.steering.path, block.fps, self.steering.max_decel,
-                                              TURN_IN_PLACE, STAY_M)
+                                              TURN_IN_PLACE, STAY_M, asked)
                     if pick is not None:
-                        st.playing = (pick.name, float(times[i]), transitions.placement(pick, st.x, st.z, st.heading))
+                        st.playing = (pick.name, float(times[i]), transitions.placement(pick, st.x, st.z, st.heading, asked))
             start, part, handing = i, None, None
             if st.playing is None:
                 before = copy.deepcopy(st) if b.stops and self.steering.path is not None else None
@@ -360,7 +362,7 @@ class Locomotion(Controller):
                 clip = b.space.clips[name]
                 i += int(np.count_nonzero(times[i:] < began + transitions.handover_s(clip, block.fps) - 1e-9))
                 if i > start:
-                    part = self._played(b, st, clip, place, times[start:i] - began)
+                    part = self._played(b, st, clip, place, times[start:i] - began, block.fps)
                 handing = (clip, began, place) if i < len(times) else None
             if part is not None:
                 parts.append(self._faded(b, st, part, times[start:i], block.fps))
@@ -368,6 +370,12 @@ class Locomotion(Controller):
                 self._hand_over(b, st, handing[0], handing[2], block.fps)
                 st.fading = (handing[0].name, handing[1], handing[2])
         return active, tuple(None if a[0] is None else np.concatenate(a) for a in zip(*parts))
+
+    def _asked(self, t: float, top) -> float:
+        """The speed (m/s) asked at the activity's time ``t`` seconds, kept to ``top(0)`` (the pack's
+        top speed straight ahead) where given."""
+        asked = of_time(self.steering.speed)(t)
+        return min(asked, float(top(0.0))) if top is not None else asked
 
     def _stop_at(self, b: LocomotionBinding, before: LocomotionState, st: LocomotionState, fps: float, dt: float):
         """Where a steered stretch (from state ``before`` to ``st``, its frames in ``st.trace``)
@@ -405,19 +413,19 @@ class Locomotion(Controller):
                 best = (f, clip, transitions.stop_placement(clip, fps, float(x[f]), float(z[f]), last))
         return best
 
-    def _played(self, b: LocomotionBinding, st: LocomotionState, clip, place, local):
+    def _played(self, b: LocomotionBinding, st: LocomotionState, clip, place, local, fps: float):
         """A transition ``clip`` placed by ``place`` (:func:`~.transitions.placement`) at its times
-        ``local`` (F,) seconds: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and ``heading``
-        follow it."""
+        ``local`` (F,) seconds, at ``fps``: the parts :meth:`_steered` gives; ``st``'s ``x``, ``z`` and
+        ``heading`` follow it."""
         rot, root, jt, _ = sample_motion(b.played_motions[clip.name], local, loop=False)
-        turn, root0, at, scale = place
+        turn, root0, at, scale, _ = place
         q = yaw(turn)
         rot = np.array(rot)
         rot[:, 0] = quat.multiply(q, rot[:, 0])
-        # The pelvis's ground travel is scaled (a stop's), the root carried with the pelvis.
+        # The pelvis's ground travel is eased (a start's) and scaled (a stop's), the root carried with the pelvis.
         pelvis = transitions.pelvis_at(clip, local)
         rel = root - np.array([root0[0], 0.0, root0[1]])
-        rel[:, [0, 2]] = root[:, [0, 2]] - pelvis + scale * (pelvis - root0)
+        rel[:, [0, 2]] = root[:, [0, 2]] - pelvis + scale * (transitions.placed_pelvis(clip, place, local, fps) - root0)
         root = quat.rotate(q, rel) + np.array([at[0], 0.0, at[1]])
         if b.table.translations is None:
             jt = None
@@ -427,7 +435,7 @@ class Locomotion(Controller):
         contact = b.played_phases[clip.name][frames].astype(np.float64)
         facing = turn + b.played_facing[clip.name][frames]
         forward = np.stack((np.sin(facing), np.zeros_like(facing), np.cos(facing)), axis=-1)
-        ground = transitions.placed_root(clip, place, local[-1:])[0]
+        ground = transitions.placed_root(clip, place, local[-1:], fps)[0]
         st.x, st.z, st.heading = float(ground[0]), float(ground[1]), float(facing[-1])
         return rot, root, jt, contact, forward, np.full(len(local), st.spun)
 
@@ -460,7 +468,7 @@ class Locomotion(Controller):
         rot, root, jt, contact, forward, spun = part
         rot, root, contact, forward = np.array(rot), np.array(root), np.array(contact), np.array(forward)
         jt = None if jt is None else np.array(jt)
-        was = self._played(b, LocomotionState(), clip, place, local[mixing])
+        was = self._played(b, LocomotionState(), clip, place, local[mixing], fps)
         on = transitions.handover_s(clip, fps)
         w = footing.smoothstep((local[mixing] - on) / max(clip.duration - on, 1e-9))
         # The pelvis goes straight from the clip's to what follows (joint 0 may sit away from it: mixed

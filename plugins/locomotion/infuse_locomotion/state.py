@@ -13,8 +13,8 @@ import numpy as np
 from .steering import SteeringState
 
 #: How a transition clip is placed (:func:`~.transitions.placement`): its turn (radians), its pelvis's
-#: first ground point (2,), where that goes (2,) and the scale of its ground travel.
-Placement = tuple[float, np.ndarray, np.ndarray, float]
+#: first ground point (2,), where that goes (2,), the scale of its ground travel and its easing.
+Placement = tuple[float, np.ndarray, np.ndarray, float, float]
 
 
 def _feet(*shape: int, value: float = 0.0) -> np.ndarray:

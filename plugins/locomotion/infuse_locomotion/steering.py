@@ -31,7 +31,7 @@ TURN_GAIN = 3.0
 STAY = 0.15
 
 
-def _of_time(v):
+def of_time(v):
     """A request as a function of time (seconds): ``v`` itself, or a constant."""
     if callable(v):
         return lambda t: float(v(t))
@@ -103,7 +103,7 @@ class Steering:
         last_k = -1 if path is None else len(path) - 1
         accel, decel = self.max_accel * dt, self.max_decel * dt
         turn_accel = self.max_turn_accel * dt
-        speed_at, turn_rate_at, direction_at = _of_time(self.speed), _of_time(self.turn_rate), _of_time(self.direction)
+        speed_at, turn_rate_at, direction_at = of_time(self.speed), of_time(self.turn_rate), of_time(self.direction)
         for t in times.tolist():
             direction = direction_at(t)
             stopping = 0.0

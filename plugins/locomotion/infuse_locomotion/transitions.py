@@ -31,6 +31,8 @@ import math
 
 import numpy as np
 
+from infuse import footing
+
 from .steering import SteeringState
 
 #: Seconds before a transition's end at which the steering takes over and the clip starts fading out.
@@ -39,6 +41,9 @@ HANDOVER_S = 0.25
 START_BEARING = math.radians(15.0)
 #: ...and at least this far (metres) beyond that, besides the braking distance at the start's end speed.
 START_ROOM_M = 0.6
+
+#: A start eases its travel down to the walk's speed by at most this share.
+EASE_MOST = 0.75
 
 #: A stop is played from a frame heading for the path's last point within this (radians)...
 STOP_BEARING = math.radians(10.0)
@@ -60,11 +65,16 @@ def handover_s(clip, fps: float) -> float:
     return math.floor(max(clip.duration - HANDOVER_S, 0.0) * fps + 1e-9) / fps
 
 
-def placement(clip, x: float, z: float, heading: float) -> tuple[float, np.ndarray, np.ndarray, float]:
+def placement(clip, x: float, z: float, heading: float, speed: float | None = None) -> tuple[float, np.ndarray, np.ndarray, float, float]:
     """How ``clip`` is placed to start at ground point (``x``, ``z``) facing ``heading``: the turn
     (radians) about +Y, the clip's pelvis ground point (2,) (x, z) at its first frame that goes to
-    (``x``, ``z``) (2,), and the scale of its ground travel (1)."""
-    return heading - clip.parameters["facing_start"], pelvis_at(clip, np.zeros(1))[0], np.array([x, z]), 1.0
+    (``x``, ``z``) (2,), the scale of its ground travel (1) and its easing (:func:`eased_travel`): a
+    start ending faster than the walk's ``speed`` (m/s) that follows it eases its travel down to that
+    speed where it hands over (by :data:`EASE_MOST` at most), so its last steps are the walk's."""
+    ease = 1.0
+    if clip.transition == "start" and speed is not None and speed < clip.parameters["speed_end"]:
+        ease = max(speed / clip.parameters["speed_end"], EASE_MOST)
+    return heading - clip.parameters["facing_start"], pelvis_at(clip, np.zeros(1))[0], np.array([x, z]), 1.0, ease
 
 
 def pelvis_at(clip, t: np.ndarray) -> np.ndarray:
@@ -82,10 +92,33 @@ def _heading_of(v) -> float:
     return math.atan2(float(v[0]), float(v[1]))
 
 
-def placed_root(clip, place, t: np.ndarray) -> np.ndarray:
+def eased_travel(clip, t: np.ndarray, fps: float) -> np.ndarray:
+    """(T, 2) the clip's pelvis ground travel (x, z) to its times ``t`` (T,) seconds, each frame's
+    step weighted by how far the clip is toward where the steering takes over (a smoothstep from 0
+    at its start to 1 there): a placement's easing ``e`` adds ``(e - 1)`` times it to the travel, so
+    the clip's speed comes to ``e`` times its own there, continuously."""
+    m = clip.motion
+    r = (m.root_translations if clip.pelvis is None else clip.pelvis)[:, [0, 2]]
+    mid = (np.arange(max(m.num_frames - 1, 0)) + 0.5) / m.fps
+    w = footing.smoothstep(mid / max(handover_s(clip, fps), 1e-9))[:, None]
+    cum = np.concatenate((np.zeros((1, 2)), np.cumsum(w * np.diff(r, axis=0), axis=0)))
+    f = np.clip(np.asarray(t, dtype=np.float64) * m.fps, 0.0, m.num_frames - 1)
+    i = np.minimum(np.floor(f).astype(np.int64), max(m.num_frames - 2, 0))
+    u = (f - i)[:, None]
+    return cum[i] * (1.0 - u) + cum[np.minimum(i + 1, m.num_frames - 1)] * u
+
+
+def placed_pelvis(clip, place, t: np.ndarray, fps: float) -> np.ndarray:
+    """(T, 2) the clip's own pelvis ground points (x, z) at its times ``t`` (T,) seconds, eased as
+    ``place`` says (:func:`eased_travel`), before the placement's scale, turn and move."""
+    ease = place[4]
+    return pelvis_at(clip, t) if ease == 1.0 else pelvis_at(clip, t) + (ease - 1.0) * eased_travel(clip, t, fps)
+
+
+def placed_root(clip, place, t: np.ndarray, fps: float) -> np.ndarray:
     """(T, 2) ground points (x, z) of the placed clip's pelvis at its times ``t`` (T,) seconds."""
-    turn, root0, at, scale = place
-    d = (pelvis_at(clip, t) - root0) * scale
+    turn, root0, at, scale, _ = place
+    d = (placed_pelvis(clip, place, t, fps) - root0) * scale
     c, s = math.cos(turn), math.sin(turn)
     return at + np.stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]), axis=-1)
 
@@ -143,21 +176,22 @@ def stop_travel(clip, fps: float) -> float:
     return float(np.hypot(*(pelvis_at(clip, np.array([handover_s(clip, fps)]))[0] - pelvis_at(clip, np.zeros(1))[0])))
 
 
-def stop_placement(clip, fps: float, x: float, z: float, target) -> tuple[float, np.ndarray, np.ndarray, float]:
+def stop_placement(clip, fps: float, x: float, z: float, target) -> tuple[float, np.ndarray, np.ndarray, float, float]:
     """``clip`` (a stop) placed to start at (``x``, ``z``) with its pelvis where the steering takes over
     at ``target`` (x, z): turned so its travel points there, its ground travel scaled to reach it."""
     root0 = pelvis_at(clip, np.zeros(1))[0]
     travel = pelvis_at(clip, np.array([handover_s(clip, fps)]))[0] - root0
     want = np.asarray(target, dtype=np.float64) - (x, z)
     scale = float(np.hypot(*want) / max(np.hypot(*travel), 1e-9))
-    return _heading_of(want) - _heading_of(travel), np.array(root0), np.array([x, z]), scale
+    return _heading_of(want) - _heading_of(travel), np.array(root0), np.array([x, z]), scale, 1.0
 
 
 def end_state(clip, place, fps: float) -> SteeringState:
     """The steering's state where the steering takes over the placed ``clip``: ``x``, ``z`` (its pelvis),
     ``heading`` (its facing at its end), ``speed`` (its speed at its end, m/s; 0 for a turn or a stop)."""
-    x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]))[0]
-    speed = clip.parameters["speed_end"] if clip.transition == "start" else 0.0  # a turn or a stop ends standing
+    x, z = placed_root(clip, place, np.array([handover_s(clip, fps)]), fps)[0]
+    # A turn or a stop ends standing; a start at its end speed, eased.
+    speed = clip.parameters["speed_end"] * place[4] if clip.transition == "start" else 0.0
     return SteeringState(x=float(x), z=float(z), heading=float(place[0] + clip.parameters["facing_end"]), speed=float(speed))
 
 
@@ -167,10 +201,12 @@ def _bearing(st: SteeringState, point) -> tuple[float, float]:
     return (math.atan2(dx, dz) - st.heading + math.pi) % (2.0 * math.pi) - math.pi, math.hypot(dx, dz)
 
 
-def choose(clips: list, st: SteeringState, path, fps: float, max_decel: float, turn_in_place: float, stay_m: float):
+def choose(clips: list, st: SteeringState, path, fps: float, max_decel: float, turn_in_place: float, stay_m: float,
+           speed: float | None = None):
     """The transition a walk standing in state ``st`` (``x``, ``z``, ``heading``) plays on its way along
     ``path`` (K, 2) (see the module doc), or None. ``turn_in_place``: radians off the facing from which
-    the steering turns on the spot; ``stay_m``: a point this near is where the character stands."""
+    the steering turns on the spot; ``stay_m``: a point this near is where the character stands;
+    ``speed``: the speed (m/s) the walk then goes at (a start eases down to it)."""
     if not clips or path is None:
         return None
     k = st.waypoint
@@ -188,7 +224,7 @@ def choose(clips: list, st: SteeringState, path, fps: float, max_decel: float, t
     for c in clips:
         if c.transition != "start":
             continue
-        end = end_state(c, placement(c, st.x, st.z, st.heading), fps)
+        end = end_state(c, placement(c, st.x, st.z, st.heading, speed), fps)
         off, room = _bearing(end, path[min(k, len(path) - 1)])
         braking = end.speed ** 2 / (2.0 * max_decel)
         if abs(off) <= best_off and room >= START_ROOM_M + braking:
