@@ -237,14 +237,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     there on every frame, whatever ``weight``, by its local translation, written in ``joint_translations``
     (F, J, 3), which must then be given, writable, and kept with the rotations.
     """
-    limbs = np.asarray(joints, dtype=np.int64)
-    several = limbs.ndim == 2
-    limbs = limbs.reshape(-1, 3)  # (K, 3)
+    plan = _limb_plan(skeleton, joints)
+    limbs, several, parents, hung, offsets, carried = plan.limbs, plan.several, plan.parents, plan.hung, plan.offsets, plan.carried
     T = np.asarray(goal, dtype=np.float64)
-    parents = skeleton.parents[limbs[:, 0]]
-    hung = parents >= 0
-    offsets = [carried_offset(skeleton, limb) for limb in limbs]
-    carried = np.array([o is not None for o in offsets])
     if (hung.any() and not hung.all()) or (carried.any() and not carried.all()):  # solved apart
         left = [solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb), T[:, k],
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
@@ -333,12 +328,12 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         return _norm((places if several else places[:, 0]) - T) if distance else None
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
-    paths = [_path_below(skeleton, a, c) for a, _, c in limbs]
+    paths = plan.paths
     position = A if distance else None
     if not several:
         position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], position, rotation)
-    elif len({len(p) for p in paths}) == 1:  # all limbs step down together
-        position, rotation = _down(skeleton, local_rotations, joint_translations, np.array(paths).T, position, rotation)
+    elif plan.steps is not None:  # all limbs step down together
+        position, rotation = _down(skeleton, local_rotations, joint_translations, plan.steps, position, rotation)
     else:
         ends = [_down(skeleton, local_rotations, joint_translations, p, None if position is None else position[:, i],
                       rotation[:, i]) for i, p in enumerate(paths)]
@@ -348,6 +343,52 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         target = g_rot[..., 2, :] if end_rotation is None else end_rotation
         local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
     return _norm(position - T) if position is not None else None
+
+
+@dataclass(frozen=True)
+class _LimbPlan:
+    """What :func:`solve_limb` needs of its limbs on one skeleton, worked out once (a walk solves the same
+    legs every block): ``limbs`` (K, 3), ``several`` (given as K triples), ``parents`` (K,) a's parents
+    and ``hung`` (K,) whether a has one, ``offsets`` (K,) each carried end's offset or None and ``carried``
+    (K,) whether it has one; ``paths`` (K,) the joints below a down to c, and ``steps`` (S, K) the same
+    side by side when every path is as long (else None); no paths for carried ends or limbs solved apart."""
+
+    limbs: np.ndarray
+    several: bool
+    parents: np.ndarray
+    hung: np.ndarray
+    offsets: list
+    carried: np.ndarray
+    paths: list | None
+    steps: np.ndarray | None
+
+
+_PLANS: weakref.WeakKeyDictionary[Skeleton, dict[tuple, _LimbPlan]] = weakref.WeakKeyDictionary()
+
+
+def _limb_plan(skeleton, joints) -> _LimbPlan:
+    """The :class:`_LimbPlan` of ``joints`` (an (a, b, c) triple or K of them) on ``skeleton``, kept for
+    the skeleton (raising as :func:`carried_offset` does for a limb that cannot be turned)."""
+    limbs = np.asarray(joints, dtype=np.int64)
+    key = (limbs.ndim, *limbs.ravel().tolist())
+    known = _PLANS.setdefault(skeleton, {})
+    plan = known.get(key)
+    if plan is None:
+        several = limbs.ndim == 2
+        limbs = limbs.reshape(-1, 3)  # (K, 3)
+        parents = skeleton.parents[limbs[:, 0]]
+        hung = parents >= 0
+        offsets = [carried_offset(skeleton, limb) for limb in limbs]
+        carried = np.array([o is not None for o in offsets])
+        paths = steps = None
+        if not carried.any() and (hung.all() or not hung.any()):
+            paths = [_path_below(skeleton, a, c) for a, _, c in limbs]
+            if len({len(p) for p in paths}) == 1:
+                steps = np.array(paths).T
+        for shared in (limbs, parents, hung, carried):
+            shared.flags.writeable = False
+        plan = known[key] = _LimbPlan(limbs, several, parents, hung, offsets, carried, paths, steps)
+    return plan
 
 
 def _down(skeleton, local_rotations, joint_translations, steps, position, rotation):
