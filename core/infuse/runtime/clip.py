@@ -368,15 +368,22 @@ class Clip(Controller):
 class _Together:
     """Clip jobs that sample one motion the same way (looping or not, the same joints), on characters of
     their own: ``rows`` (n,) their places among the jobs, ``offset_s`` and ``speed`` (n, 1) each clip's,
-    table ``columns`` (n K,) of the joints they drive (job-major) and the sampled ``sources`` (K,)."""
+    table ``columns`` (n K,) of the joints they drive (job-major) and the sampled ``sources`` (K,);
+    ``moving`` and ``held`` (among the n) those whose root the clip carries along or holds at its first
+    frame, their ``characters`` in the table (``character_index``) and ``steps`` (m, 3) metres per cycle."""
 
     motion: Motion
     loop: bool
-    rows: list
+    rows: np.ndarray
     offset_s: np.ndarray
     speed: np.ndarray
     columns: np.ndarray
     sources: np.ndarray
+    moving: np.ndarray
+    moving_characters: np.ndarray
+    steps: np.ndarray
+    held: np.ndarray
+    held_characters: np.ndarray
 
     @staticmethod
     def of(jobs: Jobs) -> tuple[list["_Together"], list[int]]:
@@ -392,40 +399,49 @@ class _Together:
                 groups.setdefault((content_key(b.motion), job.controller.loop, b.columns.tobytes()), []).append(k)
             else:
                 alone.append(k)
-        together = []
-        for rows in groups.values():
-            chosen = [jobs[k] for k in rows]
-            b = chosen[0].binding
-            together.append(_Together(
-                b.motion, chosen[0].controller.loop, rows, np.array([[job.controller.offset_s] for job in chosen]),
-                np.array([[job.controller.speed] for job in chosen]),
-                np.concatenate([jobs.table.first_joint[job.rig.name] + job.binding.joints for job in chosen]), b.columns))
-        return together, alone
+        return [_Together.group(jobs, rows) for rows in groups.values()], alone
+
+    @staticmethod
+    def group(jobs: Jobs, rows: list[int]) -> "_Together":
+        chosen = [jobs[k] for k in rows]
+        b = chosen[0].binding
+        index = jobs.table.character_index
+        moving = np.array([job.binding.drives_root and job.controller.root_motion for job in chosen], dtype=bool)
+        held = np.array([job.binding.drives_root and not job.controller.root_motion for job in chosen], dtype=bool)
+        return _Together(
+            b.motion, chosen[0].controller.loop, np.array(rows), np.array([[job.controller.offset_s] for job in chosen]),
+            np.array([[job.controller.speed] for job in chosen]),
+            np.concatenate([jobs.table.first_joint[job.rig.name] + job.binding.joints for job in chosen]), b.columns,
+            np.flatnonzero(moving), np.array([index[job.rig.name] for job, m in zip(chosen, moving) if m], dtype=np.int64),
+            np.array([job.binding.step for job, m in zip(chosen, moving) if m]).reshape(-1, 3),
+            np.flatnonzero(held), np.array([index[job.rig.name] for job, h in zip(chosen, held) if h], dtype=np.int64))
 
     def evaluate(self, jobs: Jobs, block: Block) -> None:
         """Sample the clip at every job's times at once (as :meth:`Clip.evaluate_one` does, job by job),
-        write the joints side by side and each character's root."""
+        write the joints and the roots side by side."""
         count, frames = len(self.rows), jobs.local_times.shape[1]
         local = self.offset_s + np.maximum(jobs.local_times[self.rows], 0.0) * self.speed  # (n, F)
         every = self.sources.size == self.motion.skeleton.num_joints and bool((self.sources == np.arange(self.sources.size)).all())
         # Sampled as each job alone would be: held on the clip's frames when all its times are, else interpolated.
         rot = np.empty((count, frames, self.sources.size, 4))
         root, cycles = np.empty((count, frames, 3)), np.empty((count, frames))
-        held = on_frames(self.motion, local, self.loop)
-        for rows in (np.flatnonzero(held), np.flatnonzero(~held)):
+        on = on_frames(self.motion, local, self.loop)
+        for rows in (np.flatnonzero(on), np.flatnonzero(~on)):
             if rows.size:
                 r, t, _, c = sample_motion(self.motion, local[rows].ravel(), self.loop, None if every else self.sources)
                 rot[rows], root[rows], cycles[rows] = (r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3),
                                                       c.reshape(rows.size, frames))
         joints = rot.shape[2]
         rot = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
-        weight = np.repeat(jobs.weights[self.rows].T, joints, axis=1)  # (F, n K)
-        chosen = [jobs[k] for k in self.rows]
-        block.table.set_rotations(self.columns, rot, weight, Mode.OVERRIDE, [job.pose for job in chosen])
-        first_root = self.motion.root_translations[0]
-        for n, job in enumerate(chosen):
-            b: ClipBinding = job.binding
-            if b.drives_root:
-                travel = root[n] + cycles[n][:, None] * b.step if job.controller.root_motion \
-                    else np.broadcast_to(first_root, root[n].shape)
-                job.pose.set_root(travel, job.weight, job.mode)
+        weights = jobs.weights[self.rows]  # (n, F)
+        poses = [jobs[k].pose for k in self.rows]
+        block.table.set_rotations(self.columns, rot, np.repeat(weights.T, joints, axis=1), Mode.OVERRIDE, poses)
+        # The roots the clip drives: carried on by the cycles completed, or held at its first frame.
+        table = block.table
+        if self.moving.size:
+            m = self.moving
+            travel = root[m] + cycles[m][..., None] * self.steps[:, None]
+            table.set_roots(self.moving_characters, np.swapaxes(travel, 0, 1), weights[m].T, Mode.OVERRIDE, ())
+        if self.held.size:
+            first = np.broadcast_to(self.motion.root_translations[0], (frames, self.held.size, 3))
+            table.set_roots(self.held_characters, first, weights[self.held].T, Mode.OVERRIDE, ())

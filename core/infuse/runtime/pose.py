@@ -47,17 +47,17 @@ def _weighted_columns(rotations: np.ndarray, weight: np.ndarray) -> np.ndarray:
 class PoseBlock:
     """The pose of one character (its :class:`~infuse.runtime.rig.Rig`) on ``frames`` frames, starting at the rest pose.
 
-    ``rotations`` (F, J, 4), ``morphs`` (F, M) and ``written`` (M,): writable arrays to hold the pose in,
-    already at rest (views of a :class:`PoseTable`); made here when not given.
+    ``rotations`` (F, J, 4), ``morphs`` (F, M), ``written`` (M,) and ``roots`` (F, 3): writable arrays to
+    hold the pose in, already at rest (views of a :class:`PoseTable`); made here when not given.
     """
 
     def __init__(self, rig, frames: int, rotations: np.ndarray | None = None, morphs: np.ndarray | None = None,
-                 written: np.ndarray | None = None):
+                 written: np.ndarray | None = None, roots: np.ndarray | None = None):
         sk = rig.skeleton
         self.rig = rig
         self.frames = frames
         self.local_rotations = np.repeat(sk.rest_rotations[None], frames, axis=0) if rotations is None else rotations
-        self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0)
+        self.root_translations = np.repeat(sk.rest_translations[:1], frames, axis=0) if roots is None else roots
         #: (F, J, 3) once a controller moves joints other than the root, from the start on a character
         #: whose limbs carry ends hanging outside them (placed by their translations, :meth:`carry_ends`)
         self.joint_translations: np.ndarray | None = None
@@ -183,7 +183,8 @@ class PoseTable:
     characters reads and writes them all in one step.
 
     ``local_rotations`` (F, N, 4) holds the N joints of every character side by side, one character's
-    from ``first_joint[name]`` on; ``morph_weights`` (F, M) and ``morph_written`` (M,) their morph
+    from ``first_joint[name]`` on; ``root_translations`` (F, C, 3) the C characters' roots, in the
+    order of ``character_index[name]``; ``morph_weights`` (F, M) and ``morph_written`` (M,) their morph
     targets, from ``first_morph[name]`` on. ``poses`` are the characters' :class:`PoseBlock` objects,
     whose arrays are views of these. ``layout`` is a :class:`TableLayout` of the characters.
     """
@@ -192,11 +193,16 @@ class PoseTable:
         self.layout = layout
         self.frames = frames
         self.local_rotations = np.repeat(layout.rest_rotations[None], frames, axis=0)
+        self.root_translations = np.repeat(layout.rest_roots[None], frames, axis=0)
         self.morph_weights = np.zeros((frames, layout.morph_count))
         self.morph_written = np.zeros(layout.morph_count, dtype=bool)
         self.poses = {rig.name: PoseBlock(rig, frames, self.local_rotations[:, j0:j1], self.morph_weights[:, m0:m1],
-                                          self.morph_written[m0:m1])
-                      for rig, (j0, j1), (m0, m1) in zip(layout.rigs, layout.joint_spans, layout.morph_spans)}
+                                          self.morph_written[m0:m1], self.root_translations[:, c])
+                      for c, (rig, (j0, j1), (m0, m1)) in enumerate(zip(layout.rigs, layout.joint_spans, layout.morph_spans))}
+
+    @property
+    def character_index(self) -> dict[str, int]:
+        return self.layout.character_index
 
     @property
     def first_joint(self) -> dict[str, int]:
@@ -238,6 +244,20 @@ class PoseTable:
             pose.moved()
 
 
+    def set_roots(self, characters: np.ndarray, translations: np.ndarray, weight: np.ndarray, mode: Mode, poses) -> None:
+        """Write the root translations (F, n, 3) metres of characters ``characters`` (n,) (their
+        ``character_index``) with weights (F, n), as :meth:`PoseBlock.set_root` writes each character's;
+        ``poses``: their :class:`PoseBlock` objects."""
+        w = weight[..., None]
+        current = self.root_translations[:, characters]
+        if Mode(mode) is Mode.ADDITIVE:
+            current += w * translations
+        else:
+            current += w * (translations - current)
+        self.root_translations[:, characters] = current
+        for pose in poses:
+            pose.moved()
+
     def set_morphs(self, columns: np.ndarray, values: np.ndarray, weight: np.ndarray, mode: Mode) -> None:
         """Write morph weights (F, K) of table morph columns ``columns`` (K,) with weights (F, K), as
         :meth:`PoseBlock.set_morphs` writes each character's."""
@@ -254,9 +274,9 @@ class PoseTable:
 
 class TableLayout:
     """Where each of ``rigs`` sits in a :class:`PoseTable`: ``joint_spans`` and ``morph_spans``, (start,
-    end) columns per character, ``first_joint`` / ``first_morph`` by name, ``rest_rotations`` (N, 4)
-    every character's rest pose side by side and ``morph_count`` the morph targets of all. Made once
-    for a set of characters."""
+    end) columns per character, ``first_joint`` / ``first_morph`` / ``character_index`` by name,
+    ``rest_rotations`` (N, 4) and ``rest_roots`` (C, 3) every character's rest pose side by side and
+    ``morph_count`` the morph targets of all. Made once for a set of characters."""
 
     def __init__(self, rigs):
         self.rigs = list(rigs)
@@ -266,9 +286,11 @@ class TableLayout:
         self.morph_spans = list(zip(morphs[:-1].tolist(), morphs[1:].tolist()))
         self.first_joint = {rig.name: span[0] for rig, span in zip(self.rigs, self.joint_spans)}
         self.first_morph = {rig.name: span[0] for rig, span in zip(self.rigs, self.morph_spans)}
+        self.character_index = {rig.name: c for c, rig in enumerate(self.rigs)}
         self.morph_count = int(morphs[-1])
         self.rest_rotations = (np.concatenate([rig.skeleton.rest_rotations for rig in self.rigs]) if self.rigs
                                else np.zeros((0, 4)))
+        self.rest_roots = np.array([rig.skeleton.rest_translations[0] for rig in self.rigs]).reshape(-1, 3)
 
 
 def ancestors(skeleton, joints) -> list[int]:

@@ -64,6 +64,12 @@ class BlinkSchedule:
             self._next = float(self._next + steps[-1])
         return self.starts
 
+    def around(self, t_s: float) -> tuple[float, float]:
+        """Seconds of the last blink start at or before ``t_s`` (-inf: none) and of the first after it."""
+        starts = self.until(t_s)
+        k = int(np.searchsorted(starts, t_s, side="right"))
+        return (float(starts[k - 1]) if k else -np.inf), (float(starts[k]) if k < len(starts) else self._next)
+
 
 @dataclass(frozen=True, eq=False)
 class EyelidJoints:
@@ -155,9 +161,14 @@ class Blink(Controller):
             return super().evaluate(jobs, block)
         level = np.zeros(jobs.local_times.shape)
         for n, job in enumerate(jobs):
-            closing = job.controller.level(job.binding.schedule, job.local_times)
+            times, quiet = job.local_times, job.state_of(BlinkQuiet)
+            if quiet.after_s < times[0] and times[-1] < quiet.before_s:
+                continue  # no blink falls on these times
+            closing = job.controller.level(job.binding.schedule, times)
             if closing is not None:
                 level[n] = closing
+            last, following = job.binding.schedule.around(float(times[-1]))
+            quiet.after_s, quiet.before_s = last + job.controller.blink_s, following
         level, weight = level.T, jobs.weights.T  # (F, N)
         table = block.table
         table.set_morphs(batch.morph_columns, level[:, batch.morph_rows], weight[:, batch.morph_rows], Mode.ADDITIVE)
@@ -178,6 +189,15 @@ class Blink(Controller):
             angles = level[:, None] * b.lids.pitch[None]
             delta = swing(np.zeros_like(angles), angles)
             job.pose.set_rotations(b.lids.joints, local_offsets(b.lids.aligned, delta), job.weight, job.mode)
+
+
+@dataclass
+class BlinkQuiet:
+    """When an activity's eyelids are still open, kept from block to block: after ``after_s`` (the last
+    blink's end) and before ``before_s`` (the next blink's start), seconds from the activity's start."""
+
+    after_s: float = np.inf
+    before_s: float = -np.inf
 
 
 @dataclass(frozen=True, eq=False)

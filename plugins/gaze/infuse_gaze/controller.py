@@ -25,7 +25,7 @@ from infuse.runtime.targets import JointTarget
 
 from .binding import GazeBinding, GazeState, bind_chain
 from .model import DEFAULT_INFLUENCE, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOTS, group_name, smoothing_factor
-from .solver import SolverInput, solve
+from .solver import SolverInput, faces, solve
 
 _FORWARD = np.array([0.0, 0.0, 1.0])  # an aligned frame's forward axis
 
@@ -160,7 +160,7 @@ class Gaze(Controller):
                     job.report(f"gaze target {job.controller.target!r} cannot be found ({exc}); the gaze is skipped")
                     targets[c, these] = 0.0
                     arrays["weights"][c, these] = 0.0
-        _faces(targets, positions, refine)
+        faces(targets, positions, refine)
         inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), **arrays, **chain)
         # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver
         # and written back after it.
@@ -176,22 +176,6 @@ class Gaze(Controller):
         turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
         present = np.swapaxes(turns, 0, 1).reshape(frames, -1, 4)[:, chains.present_cells]
         block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
-
-
-def _faces(targets: np.ndarray, positions: np.ndarray, refine: list) -> None:
-    """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain ``positions``
-    (C, F, S, 3) for each ``(c, c2, slots, frames)`` of ``refine``: at once for the whole block's entries
-    with the same slots."""
-    whole: dict[tuple, tuple[list, list]] = {}
-    for c, other, slots, these in refine:
-        if isinstance(these, slice):
-            gazers, others = whole.setdefault(slots, ([], []))
-            gazers.append(c)
-            others.append(other)
-        else:
-            targets[c, these] = positions[other][these][:, list(slots)].mean(axis=1)
-    for slots, (gazers, others) in whole.items():
-        targets[gazers] = positions[others][:, :, list(slots)].mean(axis=2)
 
 
 def _settings_per_frame(rows: dict, names: list, block) -> tuple[dict, list]:
@@ -238,8 +222,9 @@ class _Chains:
     - ``lead_weights`` and ``origin_weights`` (C, S): the slots the gaze points and starts from (the
       leading gaze's: a gaze taking over within the block may point other slots);
     - ``world`` (C, 1, S, 1) or None: the slots that are the world itself (no pelvis);
-    - ``skeletons``: per skeleton and chain, (characters, a lead job, table columns (C_k, K)) of the
-      joints down to the chain, for one forward kinematics over its characters;
+    - ``skeletons``: per skeleton and chain, (characters, a lead job, table columns (C_k, K) of the
+      joints down to the chain, the characters' roots in the table), for one forward kinematics over
+      its characters;
     - ``columns`` (P,): the table columns of every character's present slots, ``present_cells`` (P,):
       their cells ``c S + s`` among every character's slots.
     """
@@ -259,7 +244,8 @@ class _Chains:
         for c, job in enumerate(jobs):
             same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
         self.skeletons = [(members, jobs[members[0]], np.array([table.first_joint[jobs[c].rig.name] + bindings[c].columns
-                                                                   for c in members])) for members in same_chain.values()]
+                                                                   for c in members]),
+                           np.array([table.character_index[jobs[c].rig.name] for c in members])) for members in same_chain.values()]
         self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
         self.present_cells = np.flatnonzero(self.present)
         self._settings: dict[tuple, dict] = {}
@@ -298,17 +284,18 @@ def _drop_superseded(row, block) -> list:
 
     Once the latest gaze without an end (a ``gazeShift``) is fully blended in by the block's first
     frame, it leads until it is stopped and its weight 1 is the largest: the gazes before it can no
-    longer lead nor weigh (:func:`_in_charge`). They end where that gaze's blend-in completed, so
-    the runtime soon stops evaluating them; the frames are the same. A gaze so ended does not come
-    back when the one that took over is later stopped: the character then returns to rest."""
+    longer lead nor weigh (:func:`_in_charge`). They end where that gaze's blend-in completed (or
+    earlier, where they ended), without a settle (:meth:`~infuse.runtime.Runtime.end`): the character's
+    turn is carried on by the gaze that took over, so the runtime evaluates them no more; the frames are
+    the same. A gaze so ended does not come back when the one that took over is later stopped: the
+    character then returns to rest."""
     first = block.times[0]
     takeover = max((k for k, job in enumerate(row) if job.activity.end_s is None
                     and job.activity.start_s + job.activity.blend_in_s <= first + 1e-9), default=0)
     lead = row[takeover].activity
     ended = lead.start_s + lead.blend_in_s
     for job in row[:takeover]:
-        if job.activity.end_s is None or job.activity.end_s > ended:
-            block.runtime.stop(job.activity, ended, blend_out_s=0.0)
+        block.runtime.end(job.activity, ended)
     return row[takeover:]
 
 
@@ -345,8 +332,8 @@ def _chain_frames(jobs, chains: _Chains, table):
     frames = table.frames
     rot = np.empty((len(jobs), frames, len(SLOTS), 4))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
-    for members, lead, columns in chains.skeletons:
-        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns)
+    for members, lead, columns, characters in chains.skeletons:
+        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns, characters)
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot, as one matrix product over the frames (F, 4) x (4, 4).
     placement = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
@@ -368,14 +355,15 @@ def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.swapaxes(np.swapaxes(q, 1, 2) @ np.swapaxes(matrices, -1, -2), 1, 2)
 
 
-def _slot_poses(jobs, lead, table, columns: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _slot_poses(jobs, lead, table, columns: np.ndarray, characters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rotations (C, F, S, 4) and positions (C, F, S, 3) of each slot's joint in the characters' own
     frames, for characters on one skeleton with one chain (``lead`` one of them; ``columns`` (C, K)
-    their joints down to the chain in ``table``; an absent slot repeats its parent's joint)."""
+    their joints down to the chain in ``table``, ``characters`` (C,) their roots there; an absent slot
+    repeats its parent's joint)."""
     b = lead.binding
     skeleton = lead.rig.skeleton
     local = np.swapaxes(table.local_rotations[:, columns], 0, 1)  # (C, F, K, 4)
-    root = np.stack([j.pose.root_translations for j in jobs])
+    root = np.swapaxes(table.root_translations[:, characters], 0, 1)  # (C, F, 3)
     moved = [j.pose.joint_translations for j in jobs]
     translations = None
     if any(t is not None for t in moved):

@@ -370,9 +370,24 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
     first = groups_state.copy() if first_state is None else first_state
     _, positions = _solve_once(inp, block, first, eyes_state, eyes=False, place=True)
     targets = inp.targets.copy()
-    for c, c2, slots, frames in inp.refine:
-        targets[c, frames] = positions[c2][frames][:, list(slots)].mean(axis=1)
+    faces(targets, positions, inp.refine)
     return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)[0]
+
+
+def faces(targets: np.ndarray, positions: np.ndarray, refine: list) -> None:
+    """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain ``positions``
+    (C, F, S, 3) for each ``(c, c2, slots, frames)`` of ``refine``: at once for the whole block's entries
+    with the same slots."""
+    whole: dict[tuple, tuple[list, list]] = {}
+    for c, other, slots, these in refine:
+        if isinstance(these, slice) and these == slice(None):
+            gazers, others = whole.setdefault(slots, ([], []))
+            gazers.append(c)
+            others.append(other)
+        else:
+            targets[c, these] = positions[other][these][:, list(slots)].mean(axis=1)
+    for slots, (gazers, others) in whole.items():
+        targets[gazers] = positions[others][:, :, list(slots)].mean(axis=2)
 
 
 def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True,
