@@ -190,6 +190,41 @@ def test_speech_is_synthesized_once_with_the_nonverbal_generator_on():
                 assert abs((at - record.start_s) - (theirs.sync_times[sync] - expected.start_s)) < 1e-9, (block_id, sync)
 
 
+def test_ended_gazes_stop_costing():
+    """Bob looks at a new point every 0.4 s for 4.8 s, every third time in a REPLACE block, Ann at him
+    throughout: a gaze another has taken over from (once blended in, in 0.3 s) is no longer evaluated (it
+    would settle for 3.5 s, 9 of them at a time), so Bob's gazes evaluated are the one leading and the one
+    blending in. A gaze
+    a REPLACE ends with no gaze after it settles back to rest, and is evaluated no more after that."""
+    def gazes(live: LiveScene, name: str) -> list:
+        runtime = live.scene.runtime
+        return [a for a in list(runtime.activities)
+                if a.rig.name == name and a.controller.kind == "gaze" and a.active_between(runtime.time, runtime.time)]
+    with LiveScene(_scene()) as live:
+        live.gaze("ann", "bob")
+        counts, rng = [], np.random.default_rng(3)
+        for k in range(12):
+            point = " ".join(f"{v:.3f}" for v in (rng.uniform(-1.5, 1.5), rng.uniform(1.0, 1.8), rng.uniform(0.5, 2.5)))
+            live.move_target(f"p{k}", [float(v) for v in point.split()])
+            composition = ' composition="REPLACE"' if k % 3 == 2 else ""
+            live.bml("bob", f'<bml xmlns="{BML_NS}" id="look{k}"{composition}><gazeShift id="g" target="p{k}"/></bml>')
+            time.sleep(0.4)
+            counts.append(len(gazes(live, "bob")))
+        assert max(counts) <= 2 and min(counts) >= 1, counts
+        assert len(gazes(live, "ann")) == 1
+        cut = live.bml("bob", f'<bml xmlns="{BML_NS}" id="cut" composition="REPLACE"><head id="h" lexeme="NOD"/></bml>')[0]
+        cut_s = live.scene.scheduler.blocks[cut].start_s
+        settling = gazes(live, "bob")
+        assert len(settling) == 1 and settling[0].end_s is not None
+        settled_s = settling[0].end_s + settling[0].controller.settle_s
+        while live.scene.time < settled_s - 0.2:
+            time.sleep(0.1)
+        assert len(gazes(live, "bob")) == 1  # returning to rest
+        while live.scene.time < settled_s + 0.2:
+            time.sleep(0.1)
+        assert gazes(live, "bob") == [] and settled_s > cut_s
+
+
 def test_bad_bml_and_names_are_refused_before_the_loop():
     with LiveScene(_scene()) as live:
         with pytest.raises(InputError, match="line 1"):

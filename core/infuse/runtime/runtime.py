@@ -42,7 +42,8 @@ class Activity:
     ``blend_in_s`` from the start and down over ``blend_out_s`` to 0 at the end. ``binding`` is
     what the controller prepared for the character; ``state`` persists between blocks.
     ``source`` is what it was made from (a BML activation, if any). A controller keeps its own typed
-    state there through :meth:`state_of`.
+    state there through :meth:`state_of`. ``settle_s``: how long after its end it is still evaluated
+    (None: its controller's ``settle_s``; 0 once :meth:`Runtime.end` ended it).
     """
 
     id: int
@@ -58,6 +59,7 @@ class Activity:
     binding: Any = None
     state: dict = field(default_factory=dict)
     source: Any = None
+    settle_s: float | None = None
 
     @property
     def character(self) -> str:
@@ -79,11 +81,18 @@ class Activity:
         """(F,) blend weights at ``times`` seconds."""
         return blend_weights(times, self.start_s, self.end_s, self.blend_in_s, self.blend_out_s)
 
+    @property
+    def settled_s(self) -> float:
+        """Global seconds after which it is no longer evaluated: its end and its settle (inf: no end yet)."""
+        if self.end_s is None:
+            return np.inf
+        return self.end_s + (self.controller.settle_s if self.settle_s is None else self.settle_s)
+
     def active_between(self, t0: float, t1: float) -> bool:
         """Whether frames between ``t0`` and ``t1`` (seconds) need this activity."""
         if self.start_s > t1 + 1e-9:
             return False
-        return self.end_s is None or self.end_s + self.controller.settle_s >= t0 - 1e-9
+        return self.settled_s >= t0 - 1e-9
 
 
 @dataclass
@@ -227,6 +236,16 @@ class Runtime:
             activity.blend_out_s = float(blend_out_s)
         end = max(at, activity.start_s) + activity.blend_out_s
         activity.end_s = end if activity.end_s is None else min(activity.end_s, end)
+
+    def end(self, activity: Activity, at_s: float | None = None) -> None:
+        """End an activity at ``at_s`` (default: now; an earlier end stays) at once, with no blend-out and
+        no settle: no frame after it evaluates it. For an activity whose weight is 0 from then on anyway
+        and that keeps nothing going that later frames need (a gaze another has taken over from); a
+        blend-out is :meth:`stop`."""
+        at = max(self.time if at_s is None else float(at_s), activity.start_s)
+        if activity.end_s is None or activity.end_s > at:
+            activity.end_s, activity.blend_out_s = at, 0.0
+        activity.settle_s = 0.0
 
     def add_target(self, name: str, target) -> None:
         """Name a target (a scene object: a point, a track, a function of time...) for gazes and BML."""
@@ -433,8 +452,8 @@ class Runtime:
             for parts in (track.rotations, track.roots, track.translations, track.morphs):
                 del parts[:cut]
         before = self.time - float(keep_s)
-        self.activities = [a for a in self.activities if a.end_s is None or a.end_s + a.controller.settle_s >= before]
-        self._speakers = [a for a in self._speakers if a.end_s is None or a.end_s + a.controller.settle_s >= before]
+        self.activities = [a for a in self.activities if a.settled_s >= before]
+        self._speakers = [a for a in self._speakers if a.settled_s >= before]
         self._speech = {name: [(s, e) for s, e in spans if e >= before] for name, spans in self._speech.items()}
 
     def morph_weights(self, character) -> np.ndarray:
