@@ -131,6 +131,11 @@ def test_a_carried_foot_needs_joint_translations_and_a_foot_hung_inside_its_leg_
     leg = legs_of(carried.names)[0]
     with pytest.raises(ValueError, match="'l_ankle' hangs outside its limb"):
         solve_limb(carried, local, np.zeros((3, 3)), None, leg, np.zeros((3, 3)))
+    frozen = np.repeat(carried.rest_translations[None], 3, axis=0)
+    frozen.flags.writeable = False  # a Motion's arrays: the foot's place would be lost
+    with pytest.raises(ValueError, match="writable joint translations"):
+        carry_ends(carried, local, np.zeros((3, 3)), frozen, [leg])
+    carry_ends(attached, local, np.zeros((3, 3)), None, [leg])  # nothing to carry: no translations needed
     thigh_foot = Skeleton(carried.names, np.where(np.arange(carried.num_joints) == 3, 1, carried.parents),
                           carried.rest_translations, carried.rest_rotations)
     with pytest.raises(ValueError, match="'l_ankle' hangs neither below 'l_knee'"):

@@ -109,11 +109,17 @@ def carry_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                limbs) -> None:
     """Put the carried end of each limb (a, b, c) of ``limbs`` (K, 3) on the end of b's bone
     (:func:`carried_offset`), in place: c's local translation in ``joint_translations`` (F, J, 3) is set,
-    its rotation left as it is (its global rotation does not change). Limbs whose end hangs below b are left."""
+    its rotation left as it is (its global rotation does not change). Limbs whose end hangs below b are
+    left (``joint_translations`` may then be None). A blend of poses (rotations interpolated, the end's
+    translation averaged) leaves a carried end off its bone; this puts it back where a foot hanging
+    from its shin would be."""
     limbs = np.asarray(limbs, dtype=np.int64).reshape(-1, 3)
     offsets = [carried_offset(skeleton, limb) for limb in limbs]
     kept = [k for k, o in enumerate(offsets) if o is not None]
     if kept:
+        if joint_translations is None or not joint_translations.flags.writeable:
+            raise ValueError(f"joint {skeleton.names[limbs[kept[0], 2]]!r} hangs outside its limb: placing it needs "
+                             f"writable joint translations (F, J, 3), which the caller keeps")
         _place_carried(skeleton, local_rotations, root_translations, joint_translations, limbs[kept, 1], limbs[kept, 2],
                        np.stack([offsets[k] for k in kept]))
 
