@@ -233,7 +233,12 @@ class Locomotion(Controller):
                     if paced is not None and pick.transition == "start":
                         paced.phase = transitions.start_phase(pick, fps, half)
                     continue
-            self.steering.run(st, np.array([frames * dt]), dt, top=top, pacing=paced)
+            row = self.steering.run(st, np.array([frames * dt]), dt, top=top)[0]
+            if paced is not None:  # the gait's phase, paced as the walk will be
+                last_x, last_z = last[0] - st.x, last[1] - st.z
+                bearing = (math.atan2(last_x, last_z) - st.heading + math.pi) % (2.0 * math.pi) - math.pi
+                factor = paced.factor(st.speed, math.hypot(last_x, last_z), bearing) if row[4] > 0.5 else 1.0
+                paced.phase = (paced.phase + dt * factor * paced.cadence(st.speed)) % 1.0
             frames += 1
             stop = transitions.stop_due(stops, st, last, fps) if stops and st.waypoint == len(path) - 1 else None
             if stop is not None:  # where it is as far from the point as a stop clip travels (the walk's own
@@ -491,16 +496,13 @@ class Locomotion(Controller):
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned."""
         x0, z0, h0 = st.x, st.z, st.heading
-        # The stop clip begun on time (:mod:`.pacing`), from the gait's phase now.
-        paced = pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase) \
-            if self.steering.path is not None else None
-        req = self.steering.run(st, times, dt, top=b.limit, pacing=paced)
+        req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
             asked, done, towards = st.capped
             report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
-        speed, turn, direction, stopping, pace = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4]
+        speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
         w, slow = _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
@@ -518,6 +520,12 @@ class Locomotion(Controller):
         pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
         st.x, st.z, st.heading = float(px[-1] + step_x[-1]), float(pz[-1] + step_z[-1]), float(heading[-1] + turn[-1] * dt)
         spinning = np.abs(turn - vt) > SPIN_STEP
+        pace, path = None, self.steering.path
+        if b.stops and path is not None and final.any():  # the stop clip begun on time (:mod:`.pacing`)
+            to_x, to_z = path[-1][0] - px, path[-1][1] - pz  # the last point from each frame, as the steering saw it
+            bearing = (np.arctan2(to_x, to_z) - direction - heading + np.pi) % (2.0 * np.pi) - np.pi
+            pace = (pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase),
+                    np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing)
         # The heading's turn the blend does not show, spun at the root (radians, from the walk's start).
         spun = st.spun + np.concatenate(([0.0], np.cumsum((turn - vt)[:-1] * dt)))
         st.spun = float(spun[-1] + (turn[-1] - vt[-1]) * dt)
@@ -1205,7 +1213,7 @@ def _settle_phases(b: LocomotionBinding, w) -> np.ndarray:
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
 
 
-def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at, pace) -> tuple[np.ndarray, ...]:
+def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at, pace=None) -> tuple[np.ndarray, ...]:
     """The blend's phase (F,) in [0, 1), each frame's step of it to the next frame (F,) (from that
     frame's own cadence: the same whichever frames are evaluated with it), stride factor (F,), idle
     share (F,) and how far it has come to rest (F,) (the idle share's easing, with an idle or not) for moving shares
@@ -1213,7 +1221,10 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     flags (the root turns on the spot) and cycle durations ``period`` (F,) seconds; updates ``st``.
 
     Walking, cadence and stride are both the slowest walk's times the square root of ``slow``, the
-    cadence further times ``pace`` (F,) and the stride over it (:mod:`.pacing`: the speed kept).
+    cadence further times the pacing's factor and the stride over it (:mod:`.pacing`, the speed kept;
+    ``pace``: None, or a :class:`~.pacing.StopPacing`, and each frame's speed (0 where not on the way
+    to the path's last point), distance to that point and its bearing (F,) each), each frame's from
+    the phase it is at.
     Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
     ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
@@ -1232,8 +1243,10 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     done = st.phase  # the (unwrapped) phase at the start of each run
     for a, e in zip(bounds[:-1], bounds[1:]):
         if not stop[a]:
-            rate[a:e] *= pace[a:e]
-            stride[a:e] /= pace[a:e]
+            if pace is not None and pace[1][a:e].any():
+                factor = pace[0].factors(pace[1][a:e], pace[2][a:e], pace[3][a:e], done, dt * rate[a:e] / period[a:e])
+                rate[a:e] *= factor
+                stride[a:e] /= factor
             advance[a:e] = dt * rate[a:e] / period[a:e]
             st.settled, st.landings, st.to_go = False, -1, -1.0
         elif st.settled and not spinning[a]:

@@ -34,7 +34,7 @@ class StopPacing:
     """What pacing needs: the stops' gait phases at their start ``phases`` (K,), the ground travel of
     each to where the steering takes over ``travels`` (K,) m, their speeds at their start ``speeds``
     (K,) m/s; the straight walk's cadence (cycles per second) ``cadences`` (S,) at speeds ``grid``
-    (S,) m/s; and ``phase``, the walk's gait phase, which :meth:`step` carries on frame by frame."""
+    (S,) m/s; and ``phase``, the walk's gait phase where it is asked for a factor."""
 
     phases: np.ndarray
     travels: np.ndarray
@@ -69,9 +69,16 @@ class StopPacing:
         fits = need[(need >= SLOWER) & (need <= FASTER)]
         return float(fits[np.argmin(np.abs(np.log(fits)))]) if fits.size else 1.0
 
-    def step(self, speed: float, factor: float, dt: float) -> None:
-        """Carry the phase on by one frame of ``dt`` s at ``speed`` m/s and cadence ``factor``."""
-        self.phase = (self.phase + dt * factor * self.cadence(speed)) % 1.0
+    def factors(self, speed: np.ndarray, dist: np.ndarray, bearing: np.ndarray, phase: float, advance: np.ndarray) -> np.ndarray:
+        """(F,) each frame's cadence factor (:meth:`factor`; 1 where ``speed`` (F,) is 0: not on the
+        way to the last point), from the gait's ``phase`` at the first frame, each frame's phase
+        carried on by its ``advance`` (F,) (the blend's, cycles) times its factor: frame by frame,
+        as the factor turns on the phase it is at. ``dist`` (F,) m, ``bearing`` (F,) radians."""
+        out = np.ones(len(speed))
+        for j in np.flatnonzero(speed > 0.0).tolist():
+            self.phase = (phase + float(np.dot(out[:j], advance[:j]))) % 1.0
+            out[j] = self.factor(float(speed[j]), float(dist[j]), float(bearing[j]))
+        return out
 
 
 def straight_cadences(periods: np.ndarray, slow: np.ndarray) -> np.ndarray:

@@ -85,15 +85,13 @@ class Steering:
                 raise ValueError("a path is (K, 2) ground points (x, z) or (K, 3) points, metres")
             self.path = p
 
-    def run(self, state: SteeringState, times: np.ndarray, dt: float, top=None, pacing=None) -> np.ndarray:
-        """(F, 5) requests (speed, turn rate, direction, stopping, cadence factor) for ``times``; updates
+    def run(self, state: SteeringState, times: np.ndarray, dt: float, top=None) -> np.ndarray:
+        """(F, 5) requests (speed, turn rate, direction, stopping, final) for ``times``; updates
         ``state`` (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
         requests themselves. ``stopping`` is 1 on the way into a path's last point: braking for it,
-        or there. ``top(direction)``: the fastest speed (m/s) realizable in a travel direction
-        (radians); a faster speed asked is kept to it and ``state.capped`` is set the first time.
-        ``pacing`` (a :class:`~.pacing.StopPacing`, its ``phase`` the gait's at the first frame, carried
-        on): on the way to the last point the cadence factor that makes a stop clip begin on time
-        (1 elsewhere)."""
+        or there; ``final`` is 1 on the way to it, not braking yet. ``top(direction)``: the fastest
+        speed (m/s) realizable in a travel direction (radians); a faster speed asked is kept to it and
+        ``state.capped`` is set the first time."""
         # Plain floats in the loop: it runs once per frame, and numpy scalars cost more than the maths.
         rows = []
         x, z, h = float(state.x), float(state.z), float(state.heading)
@@ -140,12 +138,8 @@ class Steering:
                 stopping = float(last and (arrived or v_goal < v))
             v += max(-decel, min(accel, v_goal - v))
             w += max(-turn_accel, min(turn_accel, w_goal - w))
-            pace = 1.0
-            if pacing is not None:
-                if path is not None and last and not arrived and not stopping:
-                    pace = pacing.factor(v, dist, err)
-                pacing.step(v, pace, dt)
-            rows.append((v, w, direction, stopping, pace))
+            final = float(path is not None and last and not arrived and not stopping)
+            rows.append((v, w, direction, stopping, final))
             h += w * dt
             x += v * math.sin(h + direction) * dt
             z += v * math.cos(h + direction) * dt
