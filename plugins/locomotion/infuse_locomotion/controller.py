@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import copy
 import math
+import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -300,15 +301,16 @@ class Locomotion(Controller):
     @classmethod
     def evaluate(cls, jobs, block) -> None:
         """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`); then the walks of
-        characters that share a binding (one asset, one pack) have their feet pinned and kept above the
-        ground together, their frames stacked (one forward kinematics and one leg IK for them all: a
-        block of one frame costs about the same for one walk as for several); then each writes its
-        pose, in the jobs' order."""
+        characters alike in skeleton, legs and feet (:func:`_stack_key`: one asset, one pack) have their
+        feet pinned and kept above the ground together, their frames stacked (one forward kinematics
+        and one leg IK for them all: a block of one frame costs about the same for one walk as for
+        several); then each writes its pose, in the jobs' order."""
         driven = [(job, job.controller._drive(job, block)) for job in jobs]
         groups: dict[tuple, list] = {}
         for job, walk in driven:
             if walk is not None:
-                groups.setdefault((id(job.binding), job.controller.pin_feet, walk[1][2] is None), []).append((job, walk[1]))
+                key = (_stack_key(job.binding), job.controller.pin_feet, walk[1][2] is None)
+                groups.setdefault(key, []).append((job, walk[1]))
         dt = 1.0 / block.fps
         poses = {}
         for group in groups.values():
@@ -848,6 +850,23 @@ class Locomotion(Controller):
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
                        end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
+
+
+#: Each binding's :func:`_stack_key`, kept for as long as the binding lives.
+_STACK_KEYS: weakref.WeakKeyDictionary[LocomotionBinding, tuple] = weakref.WeakKeyDictionary()
+
+
+def _stack_key(b: LocomotionBinding) -> tuple:
+    """What the walks pinned and kept up together share (:meth:`Locomotion.evaluate`): the skeleton (the
+    same object), the legs and how low the feet may go (:class:`~.binding.FootFloors`, by value).
+    Characters of one asset walking one pack have it alike, each with its own binding."""
+    key = _STACK_KEYS.get(b)
+    if key is None:
+        f = b.floors
+        floors = None if f is None else tuple(tuple(np.asarray(v).ravel().tolist()) for v in (
+            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor))
+        key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors)
+    return key
 
 
 def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
