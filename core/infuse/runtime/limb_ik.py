@@ -105,7 +105,7 @@ def carried_offset(skeleton, limb) -> np.ndarray | None:
     return known[key]
 
 
-def carry_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations: np.ndarray,
+def carry_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations: np.ndarray | None,
                limbs) -> None:
     """Put the carried end of each limb (a, b, c) of ``limbs`` (K, 3) on the end of b's bone
     (:func:`carried_offset`), in place: c's local translation in ``joint_translations`` (F, J, 3) is set,
