@@ -1,0 +1,115 @@
+"""What a walking character costs per block of a live scene: locomotion's CPU time in blocks of one frame.
+
+A live scene evaluates blocks of one frame when it can (latency), so what counts is the fixed cost of
+each block per character. Ten characters (Mixamo's X Bot and a Ready Player Me avatar in turn, each
+with its locomotion pack, in a ring at 60 fps) look at the next one's face with listening saccades
+(and blink, breathe, idle); four of them walk across the ring, turning and stopping where they are
+sent, and two walk on to the middle. The scene is stepped one frame per block (then in blocks of 8 for
+comparison) and the benchmark prints the scene's CPU milliseconds per block and locomotion's (its
+controller class's ``evaluate``), per walking character. Times are CPU time of this process, best of
+``--rounds``; the load average is printed with them (the machine is shared).
+
+Run: ``.venv/bin/python benchmarks/walking_blocks.py [--frames 240] [--rounds 3]`` (needs the corpus,
+``INFUSE_CORPUS``).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import infuse
+from infuse import Character
+from infuse.mapping import map_skeleton
+from infuse.scene import Scene
+from infuse_locomotion.controller import Locomotion
+
+CORPUS = Path(os.environ.get("INFUSE_CORPUS", Path(__file__).resolve().parents[1].parent / "shared" / "corpus"))
+FPS = 60.0
+CAST = (("runxaway-models/Xbot.glb", "locomotion-male"), ("talkinghead/avatars/brunette-t.glb", "locomotion-female"))
+BML_NS = "http://www.bml-initiative.org/bml/bml-1.0"
+COUNT, WALKING = 10, 4
+
+
+def walking_scene() -> Scene:
+    """:data:`COUNT` characters in a ring of radius 4 m facing its centre, each looking at the next; the
+    first :data:`WALKING` walk: toward the middle, across the ring, outward and sideways (turning on the
+    spot first), and the first two walk on to the middle 3.5 s in."""
+    scene = Scene(fps=FPS, quiet=True)
+    cast = []
+    for path, pack in CAST:
+        asset = infuse.load(CORPUS / path)
+        cast.append((Character(Path(path).stem, asset, map_skeleton(asset)), pack))
+    radius = 1.5 + 0.25 * COUNT
+    for k in range(COUNT):
+        character, pack = cast[k % len(cast)]
+        angle = 2 * math.pi * k / COUNT
+        scene.add_character(character, f"c{k}", position=(radius * math.sin(angle), 0.0, radius * math.cos(angle)),
+                            facing=(0.0, 0.0, 0.0), packs=[pack])
+    names = list(scene.characters)
+    for k, name in enumerate(names):
+        scene.bml(name, f'<bml xmlns="{BML_NS}" xmlns:sbm="http://ict.usc.edu" id="look{k}">'
+                        f'<gazeShift id="g" target="{names[(k + 1) % COUNT]}"/><sbm:saccade id="s" mode="listen"/></bml>')
+    for k, name in enumerate(names[:WALKING]):
+        position = scene.runtime.rig(name).position
+        x, z = float(position[0]), float(position[2])
+        goals = ((0.2 * x, 0.2 * z), (-0.5 * x, -0.5 * z), (1.6 * x, 1.6 * z), (x + 2.0 * z / radius, z - 2.0 * x / radius))
+        scene.walk_to(name, goals[k % len(goals)])
+    for name in names[:2]:
+        scene.walk_to(name, (0.0, 0.0), at=3.5)
+    return scene
+
+
+def run(frames: int, block: int) -> tuple[float, float, float]:
+    """CPU seconds per block of the scene and of locomotion, and walks evaluated per block, stepping
+    :func:`walking_scene` in blocks of ``block`` frames for ``frames`` frames after its first half second."""
+    scene = walking_scene()
+    scene.step(int(FPS // 2))
+    spent, walks = [0.0], [0]
+    own = Locomotion.__dict__.get("evaluate")  # None: the base class's (one walk at a time)
+    evaluate = Locomotion.evaluate.__func__
+
+    def timed(cls, jobs, at):
+        start = time.process_time()
+        evaluate(cls, jobs, at)
+        spent[0] += time.process_time() - start
+        walks[0] += sum(1 for job in jobs if job.local_times[-1] >= 0.0)
+
+    Locomotion.evaluate = classmethod(timed)
+    try:
+        start, steps = time.process_time(), frames // block
+        for _ in range(steps):
+            scene.step(block)
+        cpu = time.process_time() - start
+    finally:
+        if own is None:
+            del Locomotion.evaluate
+        else:
+            Locomotion.evaluate = own
+    return cpu / steps, spent[0] / steps, walks[0] / steps
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--frames", type=int, default=240, help="frames stepped per round (default 240: 4 s)")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds per block size; the best counts (default 3)")
+    args = parser.parse_args()
+    if not (CORPUS / CAST[0][0]).is_file():
+        print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
+        return 2
+    print(f"{COUNT} characters, {WALKING} walking, {FPS:g} fps; CPU ms, best of {args.rounds} rounds of {args.frames} frames; "
+          f"load average {os.getloadavg()[0]:.2f}")
+    for block in (1, 8):
+        scene_s, walk_s, walks = min((run(args.frames, block) for _ in range(args.rounds)), key=lambda r: r[1])
+        print(f"  blocks of {block}: scene {1e3 * scene_s:.2f} ms per block, locomotion {1e3 * walk_s:.2f} "
+              f"({100 * walk_s / scene_s:.0f}%), {1e3 * walk_s / max(walks, 1e-9):.3f} ms per walking character "
+              f"({walks:.2f} walks per block)")
+    print(f"  load average after: {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
