@@ -8,8 +8,10 @@ import time
 import numpy as np
 import pytest
 
+import infuse_gaze.controller as gaze_controller
 from infuse import quaternions as quat
 from infuse.errors import BusyError, InputError, UsageError
+from infuse.kinematics import forward_kinematics
 from infuse.live import LiveScene
 from infuse.scene import Scene
 from infuse.speech import tts_engine
@@ -194,8 +196,8 @@ def test_ended_gazes_stop_costing():
     """Bob looks at a new point every 0.4 s for 4.8 s, every third time in a REPLACE block, Ann at him
     throughout: a gaze another has taken over from (once blended in, in 0.3 s) is no longer evaluated (it
     would settle for 3.5 s, 9 of them at a time), so Bob's gazes evaluated are the one leading and the one
-    blending in. A gaze
-    a REPLACE ends with no gaze after it settles back to rest, and is evaluated no more after that."""
+    blending in. A gaze a REPLACE ends with no gaze after it returns to rest, and is evaluated no more
+    once there (not for the rest of its 3.5 s settle)."""
     def gazes(live: LiveScene, name: str) -> list:
         runtime = live.scene.runtime
         return [a for a in list(runtime.activities)
@@ -215,14 +217,48 @@ def test_ended_gazes_stop_costing():
         cut = live.bml("bob", f'<bml xmlns="{BML_NS}" id="cut" composition="REPLACE"><head id="h" lexeme="NOD"/></bml>')[0]
         cut_s = live.scene.scheduler.blocks[cut].start_s
         settling = gazes(live, "bob")
-        assert len(settling) == 1 and settling[0].end_s is not None
-        settled_s = settling[0].end_s + settling[0].controller.settle_s
-        while live.scene.time < settled_s - 0.2:
+        assert len(settling) == 1 and settling[0].end_s is not None  # cut: blending out, then back to rest
+        end_s = settling[0].end_s
+        assert live.scene.time < end_s
+        while live.scene.time < end_s + 1.5:
             time.sleep(0.1)
-        assert len(gazes(live, "bob")) == 1  # returning to rest
-        while live.scene.time < settled_s + 0.2:
-            time.sleep(0.1)
-        assert gazes(live, "bob") == [] and settled_s > cut_s
+        # back at rest within a second and a half of its end, not evaluated for the rest of its settle
+        assert gazes(live, "bob") == [] and settling[0].controller.settle_s == 3.5 and end_s > cut_s
+
+
+def test_a_gaze_cut_short_is_evaluated_until_back_at_rest():
+    """Timed gazes cut by REPLACE blocks (speech), one every 1.5 s: each blends out and the character's
+    turn comes back to rest within about a second; from then on it is not evaluated (its settle would
+    last 3.5 s). The frames are those evaluated with every gaze kept for its whole settle, to 1e-6 m."""
+    def cut_gazes() -> tuple[Scene, list[int]]:
+        scene = Scene(fps=30, quiet=True)
+        scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob")
+        counts = []
+        for k in range(6):
+            scene.add_target(f"t{k}", ((-1.5, 1.5)[k % 2], 1.0 + 0.1 * k, 1.0))
+            scene.bml("bob", f'<bml xmlns="{BML_NS}" id="look{k}"><gaze id="g" target="t{k}" influence="WAIST" '
+                             'start="0" end="3"/></bml>')
+            scene.step(24)
+            scene.bml("bob", f'<bml xmlns="{BML_NS}" id="cut{k}" composition="REPLACE"><speech id="s"><text>Right.'
+                             '</text></speech></bml>')
+            for _ in range(7):
+                scene.step(3)
+                now = scene.runtime.time
+                counts.append(sum(a.controller.kind == "gaze" and a.active_between(now, now) for a in scene.runtime.activities))
+        scene.step(60)
+        now = scene.runtime.time
+        counts.append(sum(a.controller.kind == "gaze" and a.active_between(now, now) for a in scene.runtime.activities))
+        return scene, counts
+    ended, counts = cut_gazes()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(gaze_controller, "_end_settled", lambda rows, states, block: None)
+        kept, kept_counts = cut_gazes()
+    assert max(counts) == 1 and counts[-1] == 0, counts  # the last gaze, cut 2.7 s ago, back at rest
+    assert max(kept_counts) == 3 and kept_counts[-1] == 1, kept_counts  # each settling 3.5 s
+    skeleton = ended.runtime.rig("bob").skeleton
+    mine, theirs = (forward_kinematics(skeleton, *s.runtime.last_frames("bob", s.runtime.frame))[1] for s in (ended, kept))
+    assert mine.shape == theirs.shape and np.ptp(theirs, axis=0).max() > 0.05  # it did look around
+    assert np.abs(mine - theirs).max() < 1e-6
 
 
 def test_bad_bml_and_names_are_refused_before_the_loop():

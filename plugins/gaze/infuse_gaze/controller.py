@@ -28,6 +28,8 @@ from .model import DEFAULT_INFLUENCE, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DI
 from .solver import SolverInput, faces, solve
 
 _FORWARD = np.array([0.0, 0.0, 1.0])  # an aligned frame's forward axis
+#: Radians under which an ended gaze's turn is back at rest (the runtime then evaluates it no more).
+SETTLED_RAD = 1e-6
 
 
 def offset_vector(angle_deg: float, direction) -> tuple[float, float]:
@@ -171,6 +173,7 @@ class Gaze(Controller):
         offsets = solve(inp, groups_state, eyes_state, first_state)
         for c, state in enumerate(states):
             state.groups, state.eyes, state.first = groups_state[c], eyes_state[c], first_state[c]
+        _end_settled([rows[name] for name in names], states, block)
         # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
         # character at once, written onto every character's joints at once.
         turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
@@ -297,6 +300,24 @@ def _drop_superseded(row, block) -> list:
     for job in row[:takeover]:
         block.runtime.end(job.activity, ended)
     return row[takeover:]
+
+
+def _end_settled(rows: list, states: list, block) -> None:
+    """End the gazes no later frame needs, without a settle (:meth:`~infuse.runtime.Runtime.end`), per
+    character (``rows``: its gaze jobs sorted by start; ``states``: its turn): one that has ended by the
+    block's last frame once a later one has started (that one carries the turn on: :func:`_in_charge`),
+    and all of them once every one has ended and the turn is back at rest (every offset under
+    :data:`SETTLED_RAD`): for the rest of their settling time they would only carry that turn on."""
+    last = block.times[-1] + 1e-9
+    for row, state in zip(rows, states):
+        ended = [job.activity.end_s is not None and job.activity.end_s <= last for job in row]
+        if all(ended) and max(np.abs(state.groups).max(), np.abs(state.eyes).max(), np.abs(state.first).max()) < SETTLED_RAD:
+            done = row
+        else:
+            newest = max(k for k, job in enumerate(row) if job.activity.start_s <= last)
+            done = [job for job, over in zip(row[:newest], ended) if over]
+        for job in done:
+            block.runtime.end(job.activity, block.times[-1])
 
 
 def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
