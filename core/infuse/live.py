@@ -41,7 +41,8 @@ Frames stand on the ground as exported files do: each character is lowered by ho
 rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
 
 Blocks are put through the scene's BML generators and their speech synthesized (once, with the marks the
-generators added) on the caller's thread before they reach the loop, so synthesis never stalls a frame. Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
+generators added) on the caller's thread before they reach the loop, so synthesis never stalls a frame.
+Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
 """
 from __future__ import annotations
 
