@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import infuse
+from infuse.contacts import foot_contacts, sole_points
 from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.packs.analysis import TRANSITION_END_S, headings
 from infuse.runtime import Runtime, controller
@@ -180,3 +181,61 @@ def test_landings_are_pinned_from_where_the_heel_reached_the_ground():
     assert out[7:10, 0, 0].all() and not out[:7, 0, 0].any()
     assert not out[:10, 0, 1].any()  # the ball is not down early
     assert (out[:, 1] == phases[:, 1]).all()
+
+
+def sole_slide(m, mapping) -> np.ndarray:
+    """(F - 1, 2) metres each foot's sole slides on the ground in each frame of motion ``m``: the
+    farthest a sole point (:func:`infuse.contacts.sole_points`: the ball, the sole under the heel)
+    moves horizontally while within 3 mm of its planted height at both ends of the frame."""
+    g_rot, g_pos = infuse.motion_fk(m)
+    found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
+    sole = sole_points(found, g_pos[:, found.points])
+    height = sole[..., 1]
+    planted = np.nanpercentile(np.where(found.flags, height, np.nan), 5.0, axis=0)
+    low = height - planted < 0.003
+    moved = np.linalg.norm(np.diff(sole[..., [0, 2]], axis=0), axis=-1) * (low[1:] & low[:-1])
+    return np.stack([moved[:, found.foot_of_point == k].max(axis=1) for k in (0, 1)], axis=1)
+
+
+def test_a_turn_on_the_spot_turns_its_feet_off_the_ground(xbot, space):
+    """Turn180Lf01 swivels its left foot 127 degrees on its heel, the ball sweeping the floor, then
+    drags it on its ball: those feet are lifted while they turn (25.5 cm of sole slide in the turn
+    before, on this walk)."""
+    clip = space.clips["Turn180Lf01"]
+    target = (4.0 * math.sin(math.radians(135.0)), 4.0 * math.cos(math.radians(135.0)))
+    m, pos, rig = walk(xbot, space, target, 16.0)
+    frames = int(round(transitions.handover_s(clip, FPS) * FPS))
+    turned = np.unwrap(headings(pos, {"l_hip": rig.joint("l_hip"), "r_hip": rig.joint("r_hip")}))
+    span = int(TRANSITION_END_S * FPS)
+    assert np.degrees(turned[frames - span:frames].mean() - turned[:span].mean()) == pytest.approx(
+        math.degrees(clip.parameters["turn"]), abs=15.0)  # this turn was played
+    slide = sole_slide(m, rig.mapping)[:frames]
+    assert slide.sum() < 0.02 and slide.max() < 0.005
+    assert np.linalg.norm(pos[-15:, rig.joint("base")][:, [0, 2]].mean(axis=0) - target) < 0.05
+
+
+def test_a_start_eases_into_the_speed_of_the_walk_after_it(xbot, space):
+    """Idle01_ToWalk01 ends at 0.69 m/s; walking on at 0.5 m/s, its travel eases down to 0.5 by the
+    handover, so the pelvis does not slow from 0.69 to 0.39 m/s there (as it did)."""
+    clip = space.clips["Idle01_ToWalk01"]
+    assert clip.parameters["speed_end"] > 0.6
+    _, pos, rig = walk(xbot, space, (0.0, 5.0), 14.0)
+    frames = int(round(transitions.handover_s(clip, FPS) * FPS))
+    pelvis = pos[:, rig.joint("base")][:, [0, 2]]
+    window = 6  # 0.2 s: about a quarter of a stride, over which the sway mostly cancels
+    speed = np.linalg.norm(pelvis[window:] - pelvis[:-window], axis=-1) * FPS / window
+    around = speed[frames - 15:frames + 30]
+    assert around.min() > 0.47 and around.max() < 0.56  # 0.45-0.70 before
+
+
+def test_a_walk_evaluated_frame_by_frame_is_the_walk_evaluated_in_blocks(xbot, space):
+    """The stop clip begins at its gait phase and the walk's last strides are paced for it from each
+    frame's own phase: a walk evaluated a frame at a time (as live) plays the stop as in blocks."""
+    out = []
+    for block in (1, 150):
+        rt = Runtime(fps=FPS, block_frames=block)
+        name = rt.add_character(infuse.Character("x", xbot))
+        rt.activate(name, controller("locomotion", pack=space, speed=0.5, target=(1.0, 5.0)), 0.0)
+        rt.run(16.0)
+        out.append(infuse.motion_fk(rt.motion(name))[1])
+    assert np.abs(out[0] - out[1]).max() < 1e-4
