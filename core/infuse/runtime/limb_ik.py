@@ -114,14 +114,14 @@ def carry_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     translation averaged) leaves a carried end off its bone; this puts it back where a foot hanging
     from its shin would be."""
     limbs = np.asarray(limbs, dtype=np.int64).reshape(-1, 3)
-    offsets = [carried_offset(skeleton, limb) for limb in limbs]
-    kept = [k for k, o in enumerate(offsets) if o is not None]
-    if kept:
+    found = [(k, o) for k, o in enumerate(carried_offset(skeleton, limb) for limb in limbs) if o is not None]
+    if found:
+        kept = [k for k, _ in found]
         if joint_translations is None or not joint_translations.flags.writeable:
             raise ValueError(f"joint {skeleton.names[limbs[kept[0], 2]]!r} hangs outside its limb: placing it needs "
                              f"writable joint translations (F, J, 3), which the caller keeps")
         _place_carried(skeleton, local_rotations, root_translations, joint_translations, limbs[kept, 1], limbs[kept, 2],
-                       np.stack([offsets[k] for k in kept]))
+                       np.stack([o for _, o in found]))
 
 
 def _place_carried(skeleton, local_rotations, root_translations, joint_translations, middles, ends,
@@ -335,6 +335,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
     paths = plan.paths
+    assert paths is not None  # every limb solved here has its path (none is carried or solved apart)
     position = A if distance else None
     if not several:
         position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], position, rotation)
