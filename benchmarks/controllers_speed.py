@@ -10,10 +10,19 @@ at a time (no batching over characters, no vectorizing over frames), run in the 
 smaller share of the work; its output is checked equal to the batched one. Times are CPU seconds of
 this process, best of 3 (other processes on the machine do not count); the wall clock is shown beside.
 
-Run: ``.venv/bin/python benchmarks/controllers_speed.py`` (needs the corpus, ``INFUSE_CORPUS``).
+Then the cost of a live scene's blocks of one frame (``--blocks`` runs only this): 10 and 50 characters
+(Mixamo's X Bot and a Ready Player Me avatar in turn, each with its locomotion pack, in a ring at 60 fps)
+idle on their pack's idle clip, blink, breathe, look at the next character's face and make listening
+saccades, evaluated one frame per block as a live scene does when it can. It prints CPU milliseconds per
+block and per character, and each controller class's share (its ``evaluate``), the rest being the
+runtime's and the scene's own work per block.
+
+Run: ``.venv/bin/python benchmarks/controllers_speed.py [--blocks]`` (needs the corpus, ``INFUSE_CORPUS``).
 """
 from __future__ import annotations
 
+import argparse
+import math
 import os
 import platform
 import sys
@@ -25,6 +34,7 @@ import numpy as np
 import infuse
 from infuse import Character
 from infuse.runtime import Clip, Runtime, controller
+from infuse.scene import Scene
 
 FPS = 30.0
 SECONDS = 10.0
@@ -86,10 +96,89 @@ def one_at_a_time(character, walk, count: int, frames: int) -> tuple[float, floa
     return time.perf_counter() - start, time.process_time() - cpu, runtimes
 
 
+LIVE_FPS = 60.0
+LIVE_CAST = (("runxaway-models/Xbot.glb", "locomotion-male"), ("talkinghead/avatars/brunette-t.glb", "locomotion-female"))
+BML_NS = "http://www.bml-initiative.org/bml/bml-1.0"
+
+
+def live_scene(count: int) -> Scene:
+    """``count`` characters in a ring of radius 1.5 m + 0.25 m per character, facing the centre, each
+    looking at the next one's face with listening saccades (and the scene's idle clip, blinks, breathing)."""
+    scene = Scene(fps=LIVE_FPS, quiet=True)
+    cast = []
+    for path, pack in LIVE_CAST:
+        asset = infuse.load(CORPUS / path)
+        cast.append((Character(Path(path).stem, asset, mapping=infuse.mapping.map_skeleton(asset)), pack))
+    radius = 1.5 + 0.25 * count
+    for k in range(count):
+        character, pack = cast[k % len(cast)]
+        angle = 2 * math.pi * k / count
+        scene.add_character(character, f"c{k}", position=(radius * math.sin(angle), 0.0, radius * math.cos(angle)),
+                            facing=(0.0, 0.0, 0.0), packs=[pack])
+    names = list(scene.characters)
+    for k, name in enumerate(names):
+        scene.bml(name, f'<bml xmlns="{BML_NS}" xmlns:sbm="http://ict.usc.edu" id="look{k}">'
+                        f'<gazeShift id="g" target="{names[(k + 1) % count]}"/><sbm:saccade id="s" mode="listen"/></bml>')
+    return scene
+
+
+def one_frame_blocks(count: int, blocks: int) -> tuple[float, dict[str, float]]:
+    """CPU seconds per block of one frame of :func:`live_scene` (after a settling second), and each
+    controller class's CPU seconds per block in its ``evaluate``."""
+    scene = live_scene(count)
+    scene.step(int(LIVE_FPS))
+    spent: dict[str, float] = {}
+    classes = {type(a.controller) for a in scene.runtime.activities}
+    originals = {cls: cls.__dict__.get("evaluate") for cls in classes}
+
+    def timed(cls):
+        evaluate = cls.evaluate.__func__
+
+        def run(klass, jobs, block):
+            start = time.process_time()
+            evaluate(klass, jobs, block)
+            spent[cls.__name__] = spent.get(cls.__name__, 0.0) + time.process_time() - start
+        return classmethod(run)
+
+    for cls in classes:
+        cls.evaluate = timed(cls)
+    try:
+        start = time.process_time()
+        for _ in range(blocks):
+            scene.step(1)
+        cpu = time.process_time() - start
+    finally:
+        for cls, original in originals.items():
+            if original is None:
+                del cls.evaluate
+            else:
+                cls.evaluate = original
+    return cpu / blocks, {name: seconds / blocks for name, seconds in spent.items()}
+
+
+def report_blocks(blocks: int = 600) -> None:
+    print(f"one-frame blocks at {LIVE_FPS:g} fps (X Bot and an RPM avatar in turn: idle clip, blinks, breathing, gaze at "
+          f"the next one's face, listening saccades), load average {os.getloadavg()[0]:.2f}")
+    for count in (10, 50):
+        runs = [one_frame_blocks(count, blocks if count <= 10 else blocks // 2) for _ in range(3)]
+        cpu, shares = min(runs, key=lambda r: r[0])
+        parts = ", ".join(f"{name} {1000 * s / count:.4f}" for name, s in sorted(shares.items(), key=lambda kv: -kv[1]))
+        rest = cpu - sum(shares.values())
+        print(f"  {count:>3} characters: {1000 * cpu:.2f} CPU ms per block, {1000 * cpu / count:.4f} per character "
+              f"(best of 3); per character: {parts}, runtime and scene {1000 * rest / count:.4f}")
+    print(f"  load average after: {os.getloadavg()[0]:.2f}")
+
+
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--blocks", action="store_true", help="only the one-frame blocks of a live scene")
+    args = parser.parse_args()
     if not (CORPUS / SKELETON).is_file():
         print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
         return 2
+    if args.blocks:
+        report_blocks()
+        return 0
     character, walk = load()
     frames = int(SECONDS * FPS)
     print(f"controller runtime: utah skeleton ({character.skeleton.num_joints} joints), walk loop + breathing + blink "
@@ -118,6 +207,7 @@ def main() -> int:
     print(f"  largest difference between the two outputs: {worst:.1e} (quaternion components)")
     ok = SECONDS / cpu100 > 1.0
     print(f"  target (100 characters at 30 fps faster than real time): {'met' if ok else 'NOT met'}")
+    report_blocks()
     return 0 if ok else 1
 
 
