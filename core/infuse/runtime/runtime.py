@@ -240,8 +240,8 @@ class Runtime:
     def end(self, activity: Activity, at_s: float | None = None) -> None:
         """End an activity at ``at_s`` (default: now; an earlier end stays) at once, with no blend-out and
         no settle: no frame after it evaluates it. For an activity whose weight is 0 from then on anyway
-        and that keeps nothing going that later frames need (a gaze another has taken over from); a
-        blend-out is :meth:`stop`."""
+        and that keeps nothing going that later frames need (one that another of its kind has taken over
+        from); a blend-out is :meth:`stop`."""
         at = max(self.time if at_s is None else float(at_s), activity.start_s)
         if activity.end_s is None or activity.end_s > at:
             activity.end_s, activity.blend_out_s = at, 0.0
