@@ -14,12 +14,14 @@ import numpy as np
 
 from .. import __version__, fileio
 from ..atomic import atomic_path
+from ..contacts import feet
 from ..errors import UnusableInputError
 from ..kinematics import batch_fk
 from ..mapping import map_skeleton
-from .analysis import analyse_clip, blend_groups, coordinates_of, headings, resolution_of
+from .analysis import analyse_clip, blend_groups, coordinates_of, headings, locomotion_parameters, resolution_of
 from .coverage import coverage, describe_coverage
-from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, straighten, transition_kind
+from .denoise import denoised
+from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, straighten, transition_kind
 from .manifest import read_manifest
 from .order import content_order
 from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
@@ -76,9 +78,15 @@ def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: d
 
 
 def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:
-    """Straighten, align and close cycle ``i`` (see :func:`usable_cycles`)."""
+    """Straighten, align and close cycle ``i`` (see :func:`usable_cycles`); a low-passed take's cycle
+    ends on the frame, within its low-pass's reach, whose pose comes nearest its first."""
     p, cycle = info["parameters"], tuple(info["cycle"])
     motion = motions[entry.name]
+    end = closest_loop_end(motion.local_rotations, cycle, info.get("low_passed_frames", 1) - 1)
+    if end != cycle[1]:
+        cycle = (cycle[0], end)
+        info["keys"] = info["keys"][:2] + [info["keys"][0] + (end - cycle[0]) / info["fps"]]
+        info["parameters"] = p = locomotion_parameters(fks[i][1][:, index["base"]], headings(fks[i][1], index), cycle, info["fps"])
     turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
     align = alignment(p["direction"])
     derived: dict[str, float] = {}
@@ -125,6 +133,16 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         raise UnusableInputError(manifest.path, f"the pack skeleton lacks {', '.join(missing)} after mapping")
     fks = batch_fk(list(motions.values()))
     clips = [analyse_clip(motions[e.name], e, manifest.kind, index, mapping, fk) for e, fk in zip(manifest.clips, fks)]
+    if manifest.kind == "locomotion":  # noisy takes low-passed: cycles close and transitions play on poses
+        pair = feet(skeleton, mapping, manifest.path)
+        for k, info in enumerate(clips):
+            motions[info["name"]], half = denoised(motions[info["name"]], pair)
+            if half > 1:  # measured again on the poses; its contacts and steps stay those found through the noise
+                fks[k] = batch_fk([motions[info["name"]]])[0]
+                root, heading = fks[k][1][:, index["base"]], headings(fks[k][1], index)
+                info["parameters"] = locomotion_parameters(root, heading, tuple(info["cycle"]), info["fps"])
+                info["low_passed_frames"] = half
+                info["notes"].append(f"noisy: low-passed over {2 * half + 1} frames")
     if manifest.kind == "locomotion":
         usable_cycles(manifest.clips, motions, clips, fks, index, mapping)
     coords = coordinates_of(manifest.kind)

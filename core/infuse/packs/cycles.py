@@ -63,6 +63,19 @@ def steadiest_cycle(step_list: list[dict], speed_of, fps: float) -> tuple[int, i
     return strides[int(np.argmin(np.abs(speeds - np.median(speeds))))]
 
 
+def closest_loop_end(rotations: np.ndarray, cycle: tuple[int, int], reach: int) -> int:
+    """The frame within ``reach`` of a cycle's (first, last) last frame whose pose (local rotations
+    (F, J, 4) of every joint but the root, whose turn the closing takes apart) comes nearest its first:
+    where noise leaves a stride's strikes a frame or two off, the loop closes over the stride's own gap,
+    not the timing's. ``reach`` 0 keeps the last frame."""
+    a, b = cycle
+    candidates = np.arange(max(b - reach, a + 2), min(b + reach, len(rotations) - 1) + 1)
+    if reach <= 0 or candidates.size < 2:
+        return b
+    gap = quat.angle_between(rotations[a, 1:][None], rotations[candidates, 1:]).mean(axis=1)
+    return int(candidates[np.argmin(gap)])
+
+
 def _arc(speed: float, direction: float, turn: float, heading: float, t: np.ndarray) -> np.ndarray:
     """(T, 3) ground points at times ``t`` (T,) along a circle (or line, ``turn`` 0) from the origin,
     travelled at ``speed`` m/s in ``direction`` off a facing that starts at ``heading`` and turns at
