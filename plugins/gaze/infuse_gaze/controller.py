@@ -126,7 +126,7 @@ class Gaze(Controller):
         single = all(len(row) == 1 for row in rows.values()) and all(job.mode is Mode.ADDITIVE for job in leads)
         chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads) if single else _Chains(leads, block.table)
         if single:
-            arrays = chains.settings(frames, dt)
+            arrays = chains.settings(frames, dt)  # with "kept", what the solver keeps of them
             arrays["weights"] = np.array([job.weight for job in leads])
             spans = [[(job, slice(None))] for job in leads]
         else:
@@ -256,7 +256,7 @@ class _Chains:
 
     def settings(self, frames: int, dt: float) -> dict:
         """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
-        seconds (read-only views: the same for every frame)."""
+        seconds (read-only views: the same for every frame), and the solver's ``kept`` dict for them."""
         kept = self._settings.get((frames, dt))
         if kept is None:
             gazes = [job.controller for job in self.jobs]
@@ -271,6 +271,7 @@ class _Chains:
             }
             kept = self._settings[(frames, dt)] = {key: np.broadcast_to(value[:, None], (count, frames) + value.shape[1:])
                                                    for key, value in per_character.items()}
+            kept["kept"] = {}
         return dict(kept)
 
     def slots_of(self, target: JointTarget, job, block) -> tuple[int, ...]:

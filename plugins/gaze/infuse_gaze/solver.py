@@ -67,6 +67,8 @@ class SolverInput:
       ``offsets`` (C, F, 2): heading and pitch added to the target direction.
     - ``refine``: (c, c2, slots, frames) entries: character c looks at the mean of ``slots`` of
       character c2 on ``frames`` (a slice or an (F,) mask), taken from a first solve of the block.
+    - ``kept``: None, or a dict the solver keeps what it works out of the settings in (the groups'
+      limits and smoothing), for the next blocks given the very same settings.
     """
 
     frames_world: np.ndarray
@@ -84,6 +86,7 @@ class SolverInput:
     max_step: np.ndarray
     offsets: np.ndarray
     refine: tuple = ()
+    kept: dict | None = None
 
 
 #: Where the nine entries of ``(R_Y(h) R_X(-p))^T`` come from, row by row, among (ch, sh, cp, sp, ch cp,
@@ -109,8 +112,7 @@ class _Clamp:
 
     def __init__(self, limits: np.ndarray):
         turns = limits[..., :3] > 0
-        with np.errstate(divide="ignore"):
-            self.inverse = np.where(turns, 1.0 / limits[..., :3], 0.0)  # (..., 3): 0 where locked
+        self.inverse = np.divide(1.0, limits[..., :3], out=np.zeros(turns.shape), where=turns)  # (..., 3): 0 where locked
         self.locked = not turns.all()
 
     def __call__(self, h: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -254,10 +256,10 @@ class _Group:
 
     def __init__(self, inp: SolverInput, gains: np.ndarray, g: int):
         self.fraction = inp.fractions[:, :, g]
-        self.clamp = _Clamp(inp.limits[:, :, g])
         self.gain = gains[:, :, g]
-        self.smoothing = _Smoothing(inp.smoothing[:, :, g], inp.max_step[:, :, g])
-        self.counts = np.maximum(inp.counts[:, g], 1)[:, None, None]
+        self.clamp, self.smoothing, self.counts = _kept(inp, g, lambda: (
+            _Clamp(inp.limits[:, :, g]), _Smoothing(inp.smoothing[:, :, g], inp.max_step[:, :, g]),
+            np.maximum(inp.counts[:, g], 1)[:, None, None]))
 
     def turn(self, dh: np.ndarray, dv: np.ndarray, state: np.ndarray) -> np.ndarray:
         """The path (C, F, 2) each of the group's joints turns, given the turn left to do (C, F) from
@@ -265,6 +267,15 @@ class _Group:
         dh, dv = self.clamp(dh * self.fraction, dv * self.fraction)
         state[:], path = self.smoothing(_pairs(dh, dv, self.gain), state)
         return path / self.counts
+
+
+def _kept(inp: SolverInput, key, make):
+    """``make()``, kept in ``inp.kept`` under ``key`` when the caller keeps the settings' products."""
+    if inp.kept is None:
+        return make()
+    if key not in inp.kept:
+        inp.kept[key] = make()
+    return inp.kept[key]
 
 
 class _Block:
@@ -312,8 +323,10 @@ class _Block:
         """The eyes' clamp, gain (2, C, F) and smoothing over 2 C rows (one per eye, eye-major)."""
         if self._eyes is None:
             inp = self.inp
-            self._eyes = (_Clamp(inp.limits[:, :, EYES]), self.gains[:, :, EYES] * inp.present[:, _EYE_SLOTS].T[:, :, None],
-                          _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1))))
+            clamp, smoothing = _kept(inp, "eyes", lambda: (
+                _Clamp(inp.limits[:, :, EYES]),
+                _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1)))))
+            self._eyes = (clamp, self.gains[:, :, EYES] * inp.present[:, _EYE_SLOTS].T[:, :, None], smoothing)
         return self._eyes
 
 
