@@ -537,7 +537,7 @@ class Locomotion(Controller):
         wm = _moving(w, b.idle, b.slowest)
         period = np.maximum(wm @ b.durations, 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
-                                                        _settle_phases(b, wm), pace)
+                                                        lambda i: _settle_phases(b, wm[i:i + 1])[0], pace)
         if b.stops:  # where it went, frame by frame: where a stop clip may take over
             st.trace = (px, pz, heading, speed, phase, advance)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
@@ -553,8 +553,8 @@ class Locomotion(Controller):
         # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
         # ahead, behind or aside of their path as their gait goes): its ground point (F, 3) in the
         # facing frame, wherever joint 0 sits, is taken out by ``settle``.
-        _, pelvis = chain_fk(b.skeleton, rot, root, jt, [b.pelvis])
-        centre = pelvis[:, 0] * np.array([1.0, 0.0, 1.0]) * settle[:, None]
+        pelvis = root if b.pelvis == 0 else chain_fk(b.skeleton, rot, root, jt, [b.pelvis])[1][:, 0]  # joint 0: its root translation
+        centre = pelvis * np.array([1.0, 0.0, 1.0]) * settle[:, None]
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
@@ -730,7 +730,7 @@ class Locomotion(Controller):
             on_ball = (anchors == footing.BALL)[..., None]
             points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
             points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
-            changes = np.diff(np.concatenate((st.anchor[None], anchors)), axis=0) != 0
+            changes = anchors != np.concatenate((st.anchor[None], anchors[:-1]))
             heading, turned = forward[a0:a1], spun[a0:a1]
             for k in range(2):
                 goal, weight, rise, point, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], points[:, k], ankle_pos[:, k], turns[a0:a1, k]
@@ -755,7 +755,7 @@ class Locomotion(Controller):
                         if down[-1] >= 0:
                             ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
                         else:
-                            ball_offset = np.broadcast_to(ball_offset, (e - s, 3))
+                            ball_offset = ball_offset[None]  # the same on every frame
                         age = released + dt * np.cumsum(up)
                         fade = 1.0 - footing.smoothstep(age / RELEASE_S)
                         # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
@@ -842,7 +842,7 @@ class Locomotion(Controller):
         if rises.any():
             g_rot_all[:, :, 2] = quat.multiply(g_rot_all[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot_all[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
-        solving = [k for k in range(2) if weights[:, k].any()]
+        solving = np.flatnonzero(weights.any(axis=0)).tolist()
         if len(solving) == 1:
             k = solving[0]
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs[k], goals[:, k], weight=weights[:, k], pole=forward,
@@ -1248,8 +1248,8 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
     ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
     character nearly still (below :data:`STAND_FRACTION`): both then stand under the body; the phase holds in the double support
-    after that landing, ``settle_at`` (F, 2) past a left (phase 0) or right (0.5) landing (see
-    :func:`_settle_phases`), and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it
+    after that landing, ``settle_at(i)`` (2,) past a left (phase 0) or right (0.5) landing at frame i
+    (see :func:`_settle_phases`; asked only where a stop holds), and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it
     steps the same way and settles again once the turn is over."""
     f = len(slow)
     stop = (slow < STAND_FRACTION) | stopping
@@ -1291,7 +1291,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
                 if ready.any():
                     j = int(np.argmax(ready))
                     strike = np.floor(2.0 * ph[j]) / 2.0  # the landing's phase: a left (whole) or right (half) strike
-                    goal = strike + settle_at[a + j, int(round(2.0 * strike)) % 2]
+                    goal = strike + settle_at(a + j)[int(round(2.0 * strike)) % 2]
                 st.landings = int(count[-1])
             stride[a:e] = slow[a:e] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
             if goal is not None:
