@@ -6,8 +6,8 @@ stride; at a fixed cadence the distance left then is wherever the walk's start p
 whose travel may be scaled by :data:`~.transitions.STOP_SCALES` either way fits only if that window
 is longer than a stride. Instead, on its way to its last point the walk changes its cadence, its
 speed kept: its steps grow shorter and quicker (up to :data:`FASTER`) or longer and slower (down to
-:data:`SLOWER`), so that the stop's phase comes exactly where the distance left is the clip's
-travel. Of the strides to go the walk takes the whole number that needs the smallest change, and
+:data:`SLOWER`), so that the stop's phase comes where the distance left is the clip's travel (scaled
+by at most :data:`SCALES` either way; where it lines up already, the cadence is left alone). Of the strides to go the walk takes the whole number that needs the smallest change, and
 recomputes it every frame from where it is (a constant factor holds once chosen: the distance and
 the phase left both shrink at its rate). The controller shortens or lengthens the steps by leg IK
 (:meth:`~.controller.Locomotion._shorten`).
@@ -27,6 +27,9 @@ from . import transitions
 #: steps are shorter by its inverse. Quicker, shorter steps are easier than longer ones.
 FASTER = 1.25
 SLOWER = 0.9
+#: The stop clip's travel may be scaled by up to this either way where pacing brings it (a margin within
+#: :data:`~.transitions.STOP_SCALES`).
+SCALES = 1.15
 
 
 @dataclass
@@ -58,16 +61,25 @@ class StopPacing:
         k = int(np.argmin(ratios))
         if ratios[k] >= math.log(transitions.STOP_SPEEDS):
             return 1.0
-        left = dist - float(self.travels[k])
+        travel = float(self.travels[k])
+        # Metres left to where the stop may begin, the clip's travel scaled within SCALES either way.
+        most, least = dist - travel / SCALES, dist - travel * SCALES
         stride = speed / max(self.cadence(speed), 1e-9)  # metres a cycle at the blend's own cadence
-        if left <= 0.0 or stride <= 1e-9:
+        if most <= 0.0 or stride <= 1e-9:
             return 1.0
         to_phase = (float(self.phases[k]) - self.phase) % 1.0
-        # Strides to go (whole ones beyond the next time it passes the phase): the factor each needs.
-        n = np.arange(int(left / stride * FASTER) + 2)
-        need = stride * (to_phase + n) / left
-        fits = need[(need >= SLOWER) & (need <= FASTER)]
-        return float(fits[np.argmin(np.abs(np.log(fits)))]) if fits.size else 1.0
+        # Strides to go (whole ones beyond the next time it passes the phase): the factors that bring
+        # it there with as far left as the scaled clip travels, within the cadence's bounds; the
+        # nearest 1 of them (1 itself where it lines up already).
+        n = np.arange(int(most / stride * FASTER) + 2)
+        cycles = stride * (to_phase + n)
+        low = np.maximum(cycles / most, SLOWER)
+        high = np.minimum(cycles / least, FASTER) if least > 0.0 else np.full(len(n), FASTER)
+        fits = np.nonzero(low <= high)[0]
+        if not fits.size:
+            return 1.0
+        nearest = np.clip(1.0, low[fits], high[fits])
+        return float(nearest[np.argmin(np.abs(np.log(nearest)))])
 
     def factors(self, speed: np.ndarray, dist: np.ndarray, bearing: np.ndarray, phase: float, advance: np.ndarray) -> np.ndarray:
         """(F,) each frame's cadence factor (:meth:`factor`; 1 where ``speed`` (F,) is 0: not on the
