@@ -8,7 +8,8 @@ infused clip carries it (``BlendClip.transition``). A walk to a point that begin
   the rest of the turn left to the steering; then it decides again, standing;
 - else a **start** (standing, then walking): of the starts after which the point lies within
   :data:`START_BEARING` of the facing and at least :data:`START_ROOM_M` beyond where the start hands
-  over, the one leaving it nearest straight ahead;
+  over (and where it is the last point, far enough for the stop the walk would end with), the one
+  leaving it nearest straight ahead;
 - else nothing: the steering starts the walk from the cycles as without transitions.
 
 On its way to its last point a walk ends with a **stop** where it heads for the point, walks at
@@ -221,12 +222,17 @@ def choose(clips: list, st: SteeringState, path, fps: float, max_decel: float, t
                 return best
         return None
     best, best_off = None, START_BEARING
+    ends = stops(clips)
     for c in clips:
         if c.transition != "start":
             continue
         end = end_state(c, placement(c, st.x, st.z, st.heading, speed), fps)
         off, room = _bearing(end, path[min(k, len(path) - 1)])
         braking = end.speed ** 2 / (2.0 * max_decel)
+        # Where the point is the last, room for the stop the walk would end with (begun at its speed).
+        if ends and k >= len(path) - 1 and end.speed > 0.0:
+            stop = min(ends, key=lambda e: abs(math.log(max(e.parameters["speed_start"], 1e-9) / end.speed)))
+            braking = max(braking, stop_travel(stop, fps) / STOP_SCALES - START_ROOM_M)
         if abs(off) <= best_off and room >= START_ROOM_M + braking:
             best, best_off = c, abs(off)
     return best
