@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from infuse.contacts import FootContacts, foot_frames, sole_points
+from infuse.contacts import FootContacts, foot_frames, sole_positions
 from infuse.metrics import foot_skate
 
 #: A flat foot (metres, +Y up, +Z forward): the ankle 9 cm up, the ball joint 11 cm ahead and 3 cm up;
@@ -53,7 +53,7 @@ def skate_cm(pos: np.ndarray, planted: tuple[bool, bool] = (True, True)) -> floa
 def test_sole_points_lie_under_the_flat_foot_and_move_with_it():
     pos = rigid_foot(np.zeros(3), "y", 0.6, np.array([0.05, 0.02, 0.1]))
     found = contacts(len(pos))
-    sole = sole_points(found, pos[:, 1:])
+    sole = sole_positions(found, pos[:, 1:])
     assert sole[:FLAT] == pytest.approx(np.broadcast_to(np.stack((HEEL, BALL)), (FLAT, 2, 3)))
     # rigidly attached: each sole point keeps its distances to both joints in every frame
     for j in (0, 1):
@@ -111,5 +111,5 @@ def test_a_foot_without_ball_counts_its_ankle():
     pos = rigid_foot(np.zeros(3), "x", 0.0, np.array([0.0, 0.0, 0.1]))
     flags = np.ones((len(pos), 1), dtype=bool)
     found = FootContacts(np.array([1]), np.array([0]), flags, 0.0, 0.85, np.zeros((len(pos), 2)))
-    assert sole_points(found, pos[:, [1]]) == pytest.approx(pos[:, [1]])
+    assert sole_positions(found, pos[:, [1]]) == pytest.approx(pos[:, [1]])
     assert foot_skate(pos, found, root=0).per_metre == pytest.approx(10.0)

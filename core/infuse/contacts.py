@@ -373,7 +373,7 @@ def foot_frames(heel: np.ndarray, ball: np.ndarray) -> np.ndarray:
     return np.stack((forward, side, np.cross(side, forward)), axis=-2)
 
 
-def sole_points(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
+def sole_positions(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
     """(F, P, 3) the points of the sole that the contact joints stand for, metres, carried by the foot.
 
     ``positions`` (F, P, 3): the contact joints, columns as ``found.points``. The sole is taken at

@@ -12,7 +12,7 @@ import numpy as np
 
 from . import quaternions as quat
 from .canonical import BODY_NAMES, canonical_joint
-from .contacts import FootContacts, sole_points
+from .contacts import FootContacts, sole_positions
 
 
 def horizontal_path(points: np.ndarray) -> float:
@@ -53,7 +53,7 @@ def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points:
 
     The travel counted is that of the sole, not of the joints: each contact joint (ankle, ball)
     stands for the point of the sole below it, carried rigidly by the foot
-    (:func:`infuse.contacts.sole_points`), so a foot rolling over its ball or heel, whose ankle
+    (:func:`infuse.contacts.sole_positions`), so a foot rolling over its ball or heel, whose ankle
     swings forward along an arc above a still sole, counts nothing, and a foot sliding, twisting
     or sliding while it rolls counts the sole's travel. For each foot and each pair of consecutive
     frames in which some of its points are planted, the foot travels the mean horizontal distance
@@ -66,7 +66,7 @@ def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points:
     """
     pos = np.asarray(positions, dtype=np.float64)
     pts = contacts.points if points is None else np.asarray(points)
-    p = sole_points(contacts, pos[:, pts])
+    p = sole_positions(contacts, pos[:, pts])
     step = np.linalg.norm(np.diff(p[..., [0, 2]], axis=0), axis=-1)  # (F-1, P)
     held = contacts.flags[1:] & contacts.flags[:-1]
     y = p[..., 1]
