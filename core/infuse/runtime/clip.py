@@ -432,10 +432,10 @@ class _Together:
                 rot[rows], root[rows], cycles[rows] = (r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3),
                                                       c.reshape(rows.size, frames))
         joints = rot.shape[2]
-        rot = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
+        side_by_side = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
         weights = jobs.weights[self.rows]  # (n, F)
         poses = [jobs[k].pose for k in self.rows]
-        block.table.set_rotations(self.columns, rot, np.repeat(weights.T, joints, axis=1), Mode.OVERRIDE, poses)
+        block.table.set_rotations(self.columns, side_by_side, np.repeat(weights.T, joints, axis=1), Mode.OVERRIDE, poses)
         # The roots the clip drives: carried on by the cycles completed, or held at its first frame.
         table = block.table
         if self.moving.size:

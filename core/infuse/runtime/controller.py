@@ -30,7 +30,7 @@ class Block:
     times: np.ndarray
     fps: float
     poses: dict
-    table: PoseTable | None = None
+    table: PoseTable
 
     @property
     def dt(self) -> float:

@@ -227,8 +227,8 @@ class PoseTable:
             return
         if weight is None:
             weight = np.ones(rotations.shape[:2])
-        positive = (weight > 0.0).any(axis=0)  # (K,)
-        full = (weight >= 1.0).all(axis=0)
+        positive = np.asarray((weight > 0.0).any(axis=0))  # (K,)
+        full = np.asarray((weight >= 1.0).all(axis=0))
         current = self.local_rotations[:, columns]
         if Mode(mode) is Mode.ADDITIVE:
             offsets = rotations if full.all() else np.where(full[:, None], rotations, _weighted_columns(rotations, weight))

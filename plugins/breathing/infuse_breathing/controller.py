@@ -134,8 +134,10 @@ class _Batch:
         if placed is None:
             return None
         settings = np.array([(g.depth, g.rate_bpm, g.inhale_fraction, g.phase) for g in (job.controller for job in jobs)])
-        return cls(*(settings[:, k:k + 1] for k in range(4)), *placed, np.concatenate([job.binding.axes for job in jobs]),
-                   np.concatenate([job.binding.angles for job in jobs]))
+        columns, rows = placed
+        return cls(depth=settings[:, 0:1], rate_bpm=settings[:, 1:2], inhale_fraction=settings[:, 2:3], phase=settings[:, 3:4],
+                   columns=columns, rows=rows, axes=np.concatenate([job.binding.axes for job in jobs]),
+                   angles=np.concatenate([job.binding.angles for job in jobs]))
 
 
 def breathing_from_bml(parameters: dict, runtime, character: str, activation=None) -> Breathing:

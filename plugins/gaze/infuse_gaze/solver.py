@@ -387,7 +387,7 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
     return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)[0]
 
 
-def faces(targets: np.ndarray, positions: np.ndarray, refine: list) -> None:
+def faces(targets: np.ndarray, positions: np.ndarray, refine) -> None:
     """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain ``positions``
     (C, F, S, 3) for each ``(c, c2, slots, frames)`` of ``refine``: at once for the whole block's entries
     with the same slots."""
