@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import infuse
-from infuse.contacts import foot_contacts, sole_points
+from infuse.contacts import foot_contacts, sole_positions
 from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.packs.analysis import TRANSITION_END_S, headings
 from infuse.runtime import Runtime, controller
@@ -185,11 +185,11 @@ def test_landings_are_pinned_from_where_the_heel_reached_the_ground():
 
 def sole_slide(m, mapping) -> np.ndarray:
     """(F - 1, 2) metres each foot's sole slides on the ground in each frame of motion ``m``: the
-    farthest a sole point (:func:`infuse.contacts.sole_points`: the ball, the sole under the heel)
+    farthest a sole point (:func:`infuse.contacts.sole_positions`: the ball, the sole under the heel)
     moves horizontally while within 3 mm of its planted height at both ends of the frame."""
     g_rot, g_pos = infuse.motion_fk(m)
     found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
-    sole = sole_points(found, g_pos[:, found.points])
+    sole = sole_positions(found, g_pos[:, found.points])
     height = sole[..., 1]
     planted = np.nanpercentile(np.where(found.flags, height, np.nan), 5.0, axis=0)
     low = height - planted < 0.003
