@@ -1,0 +1,70 @@
+"""Walks of characters alike (one asset, one pack) have their feet pinned and kept up together, their
+frames stacked in one forward kinematics and one leg IK: each character walks as it does when every
+walk is pinned on its own.
+
+Three X Bots made of one asset walk at once (toward a point ahead, to one behind them, turning on the
+spot first, and sideways), frame by frame as a live scene evaluates them and in blocks of 7 frames,
+stacked and each on its own; compared by forward kinematics on every frame of the written motions.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse.kinematics import motion_fk
+from infuse.mapping import map_skeleton
+from infuse.scene import Scene
+from infuse_locomotion import Locomotion, controller
+
+from corpus_data import corpus_file
+
+FPS = 30.0
+SECONDS = 2.5
+#: Where each walker stands and where it walks to from there (x, z metres).
+WALKS = {"a": ((0.0, 0.0), (0.4, 2.0)), "b": ((3.0, 0.0), (-0.3, -1.5)), "c": ((-3.0, 1.0), (1.5, 0.5))}
+
+
+@pytest.fixture(scope="module")
+def xbot():
+    asset = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    return infuse.Character("Xbot", asset, map_skeleton(asset))
+
+
+def walked(character, block: int, stacked: list) -> Scene:
+    """The walkers of :data:`WALKS` (made of one ``character``) after :data:`SECONDS` in blocks of
+    ``block`` frames; ``stacked`` collects how many walks each pinning stacked."""
+    scene = Scene(fps=FPS, quiet=True)
+    for name, ((x, z), (dx, dz)) in WALKS.items():
+        scene.add_character(character, name, position=(x, 0.0, z), facing=0.0, packs=["locomotion-male"])
+        scene.walk_to(name, (x + dx, z + dz))
+    pin = Locomotion.__dict__["_pin"]
+
+    def counted(b, runs, *args):
+        stacked.append(len(runs))
+        return pin.__func__(b, runs, *args)
+
+    Locomotion._pin = staticmethod(counted)
+    try:
+        for _ in range(int(round(SECONDS * FPS)) // block):
+            scene.step(block)
+    finally:
+        Locomotion._pin = pin
+    return scene
+
+
+@pytest.mark.parametrize("block", [1, 7])
+def test_walks_pinned_together_walk_as_each_on_its_own(xbot, block, monkeypatch):
+    together: list[int] = []
+    stacked = walked(xbot, block, together)
+    assert max(together) == len(WALKS)  # the three walks were pinned in one stack
+    apart: list[int] = []
+    monkeypatch.setattr(controller, "_stack_key", lambda b: (id(b),))  # every walk a stack of its own
+    alone = walked(xbot, block, apart)
+    assert max(apart) == 1 and len(apart) == len(WALKS) * len(together)
+    for name, (_, (dx, dz)) in WALKS.items():
+        a, b = motion_fk(stacked.motion(name))[1], motion_fk(alone.motion(name))[1]
+        assert a.shape == b.shape
+        assert np.abs(a - b).max() < 1e-9
+        # It walked: its hips travelled most of the way to where it was sent.
+        assert np.hypot(*(a[-1, 0, [0, 2]] - a[0, 0, [0, 2]])) > 0.5 * np.hypot(dx, dz)
