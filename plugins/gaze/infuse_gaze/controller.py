@@ -312,6 +312,8 @@ def _end_settled(rows: list, states: list, block) -> None:
     last = block.times[-1] + 1e-9
     for row, state in zip(rows, states):
         ended = [job.activity.end_s is not None and job.activity.end_s <= last for job in row]
+        if not any(ended):
+            continue  # the usual case: nothing to end
         if all(ended) and max(np.abs(state.groups).max(), np.abs(state.eyes).max(), np.abs(state.first).max()) < SETTLED_RAD:
             done = row
         else:
