@@ -131,6 +131,8 @@ class Runtime:
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
         self._speakers: list[Activity] = []  # the activities whose controller speaks
         self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
+        #: Counts the targets and characters added: what :meth:`target` resolves a name to changes only with it.
+        self.targets_version = 0
 
     # -- characters ------------------------------------------------------------------------------------
     def add_character(self, character, name: str | None = None, mapping=None, position=(0.0, 0.0, 0.0),
@@ -162,6 +164,7 @@ class Runtime:
         rig = Rig(name, character, mapping, position, rotation)
         self._tracks[name] = _Track(rig)
         self._resolved.clear()
+        self.targets_version += 1
         for note in rig.notes:
             self.report(name, note)
         return name
@@ -253,6 +256,7 @@ class Runtime:
 
         self._targets[str(name)] = as_target(target)
         self._resolved.clear()
+        self.targets_version += 1
 
     def target(self, name: str):
         """The target called ``name``: one added with :meth:`add_target`, ``"character:joint"``, or a

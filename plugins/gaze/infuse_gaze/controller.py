@@ -117,7 +117,7 @@ class Gaze(Controller):
         rows: dict[str, list] = {}
         for job in jobs:
             rows.setdefault(job.rig.name, []).append(job)
-        rows = {name: _drop_superseded(sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)), block)
+        rows = {name: row if len(row) == 1 else _drop_superseded(sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)), block)
                 for name, row in rows.items()}
         frames, dt = len(block), block.dt
         names = list(rows)
@@ -143,25 +143,15 @@ class Gaze(Controller):
                 chain["forward"][c, these] = _weighted_slots(job.binding.lead_weights()[None], forward_axes[c:c + 1, these])[0]
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
-        index = {name: c for c, name in enumerate(names)}
-        refine: list[tuple[int, int, tuple[int, ...], slice | np.ndarray]] = []
         targets = arrays["targets"] = np.empty((len(names), frames, 3))
-        for c, name in enumerate(names):
-            for job, these in spans[c]:
-                target = job.controller.target
-                try:
-                    target = block.runtime.target(target) if isinstance(target, str) else target
-                    slots: tuple[int, ...] = ()
-                    if isinstance(target, JointTarget) and target.character in index:
-                        slots = chains.slots_of(target, rows[target.character][0], block)
-                    if slots:  # on the frames this gaze leads, whether or not another leads the rest of the block
-                        refine.append((c, index[target.character], slots, these))
-                    else:
-                        targets[c, these] = target.positions(block.times, block)[these]
-                except UsageError as exc:  # a target that names nothing in the scene: this gaze rests
-                    job.report(f"gaze target {job.controller.target!r} cannot be found ({exc}); the gaze is skipped")
-                    targets[c, these] = 0.0
-                    arrays["weights"][c, these] = 0.0
+        plan = chains.plan(block) if single else _plan_targets(rows, names, spans, chains, block)
+        refine, elsewhere, lost = plan
+        for c, job, these, target in elsewhere:
+            targets[c, these] = target.positions(block.times, block)[these]
+        for c, job, these, problem in lost:  # a target that names nothing in the scene: this gaze rests
+            job.report(f"gaze target {job.controller.target!r} cannot be found ({problem}); the gaze is skipped")
+            targets[c, these] = 0.0
+            arrays["weights"][c, these] = 0.0
         faces(targets, positions, refine)
         inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), **arrays, **chain)
         # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver
@@ -179,6 +169,30 @@ class Gaze(Controller):
         turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
         present = np.swapaxes(turns, 0, 1).reshape(frames, -1, 4)[:, chains.present_cells]
         block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
+
+
+def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block) -> tuple[list, list, list]:
+    """What each gaze of ``spans`` looks at: (c, c2, slots, frames) entries of faces of gazing
+    characters (``refine``), (c, job, frames, target) of other targets and (c, job, frames, problem)
+    of targets that cannot be found."""
+    index = {name: c for c, name in enumerate(names)}
+    refine: list[tuple[int, int, tuple[int, ...], slice | np.ndarray]] = []
+    elsewhere, lost = [], []
+    for c, name in enumerate(names):
+        for job, these in spans[c]:
+            target = job.controller.target
+            try:
+                target = block.runtime.target(target) if isinstance(target, str) else target
+                slots: tuple[int, ...] = ()
+                if isinstance(target, JointTarget) and target.character in index:
+                    slots = chains.slots_of(target, rows[target.character][0], block)
+                if slots:  # on the frames this gaze leads, whether or not another leads the rest of the block
+                    refine.append((c, index[target.character], slots, these))
+                else:
+                    elsewhere.append((c, job, these, target))
+            except UsageError as exc:
+                lost.append((c, job, these, exc))
+    return refine, elsewhere, lost
 
 
 def _settings_per_frame(rows: dict, names: list, block) -> tuple[dict, list]:
@@ -253,6 +267,7 @@ class _Chains:
         self.present_cells = np.flatnonzero(self.present)
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
+        self._plan: tuple[int, tuple[list, list, list]] | None = None
 
     def settings(self, frames: int, dt: float) -> dict:
         """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
@@ -273,6 +288,16 @@ class _Chains:
                                                    for key, value in per_character.items()}
             kept["kept"] = {}
         return dict(kept)
+
+    def plan(self, block) -> tuple[list, list, list]:
+        """:func:`_plan_targets` of the gazes (one each, leading the block), kept while the runtime
+        resolves target names as it did."""
+        version = block.runtime.targets_version
+        if self._plan is None or self._plan[0] != version:
+            rows = {job.rig.name: [job] for job in self.jobs}
+            spans = [[(job, slice(None))] for job in self.jobs]
+            self._plan = (version, _plan_targets(rows, list(rows), spans, self, block))
+        return self._plan[1]
 
     def slots_of(self, target: JointTarget, job, block) -> tuple[int, ...]:
         """:func:`_slots_of`, kept per target and gazing character's binding."""
