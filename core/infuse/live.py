@@ -20,8 +20,8 @@ of frames; the presenter shows each frame when it is due (:meth:`LiveScene.on_fr
 block starts as late as it can and still be ready when its first frame is due (the lead: the 90th
 percentile of how long the blocks of the last second took, waking late included, commands excluded), so
 a command that arrives before then shows on that frame. Commands are applied between blocks, each where
-it fits: one expected to run past the next block's start (it takes as long as the longest of its kind
-lately) waits for the gap after that block, so a burst of them delays no frame. A loop running late
+it fits: one expected to run past the next block's start (it takes as long as the last ones of its kind,
+the median) waits for the gap after that block, so a burst of them delays no frame. A loop running late
 spends at most :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
 
@@ -403,7 +403,7 @@ class LiveScene:
 
     def _apply_commands(self, until: float) -> float:
         """Apply commands, waiting for them, until the wall clock reaches ``until`` (the block's start):
-        each one expected to end by then (it takes as long as the longest of its kind lately), or that
+        each one expected to end by then (it takes as long as the last ones of its kind, the median), or that
         waited through the last block already (it goes first in this gap). Once ``until`` has passed (a
         loop running late), at most :attr:`command_budget_s` of them. Returns the seconds spent on commands
         after ``until``."""
@@ -441,10 +441,10 @@ class LiveScene:
         return late_s
 
     def _expected_s(self, kind: str) -> float:
-        """Seconds a command of ``kind`` is expected to take: the longest of the last of its kind (0 for
-        the first)."""
+        """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (0
+        for the first; one slowed down by the machine's other work does not hold the next ones back)."""
         taken = self._command_s.get(kind)
-        return max(taken) if taken else 0.0
+        return float(np.median(taken)) if taken else 0.0
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
