@@ -31,6 +31,7 @@ the leg's reach (:func:`infuse.footing.within_reach`).
 from __future__ import annotations
 
 import copy
+import hashlib
 import math
 import weakref
 from dataclasses import dataclass, replace
@@ -95,9 +96,11 @@ _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
 class PreparedWalks(dict):
     """What :meth:`Locomotion.bind` prepared (:func:`_prepare`) for a character's asset, by (pack name,
-    legs, pelvis): the blend space it was prepared from, the skeleton, and the binding. Kept for the asset
-    (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): every walk of a character made of it reuses it, one
-    per pack (a space infused again, by another scene, takes its place), and it goes with the asset."""
+    the space's content (:func:`_space_content`), legs, pelvis): the blend space it was prepared from, the
+    skeleton, and the binding. Kept for the asset (:meth:`~infuse.runtime.rig.Rig.asset_state_of`): every
+    walk of a character made of it reuses it, also where each character has the pack infused into a
+    space of its own (a scene's characters); one per pack (a space infused otherwise takes its place),
+    and it goes with the asset."""
 
 
 def yaw(angle) -> np.ndarray:
@@ -292,9 +295,11 @@ class Locomotion(Controller):
             raise MissingFeatureError(None, f"pack {space.pack!r} has no locomotion cycles")
         pelvis = rig.joint("base") or 0
         prepared = rig.asset_state_of(PreparedWalks)
-        key = (space.pack, tuple(legs), pelvis)
+        key = (space.pack, _space_content(space), tuple(legs), pelvis)
         cached = prepared.get(key)
-        if cached is None or cached[0] is not space or cached[1] is not rig.skeleton:
+        if cached is None or cached[1] is not rig.skeleton:
+            for other in [k for k in prepared if k[0] == key[0] and k[2:] == key[2:] and k != key]:
+                del prepared[other]  # a space infused otherwise takes its place
             cached = prepared[key] = (space, rig.skeleton, _prepare(space, clips, rig.skeleton, legs, pelvis))
         return cached[2]
 
@@ -850,6 +855,41 @@ class Locomotion(Controller):
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
                        end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
+
+
+#: Each blend space's :func:`_space_content`, by the space's id, for as long as the space lives.
+_CONTENTS: dict[int, str] = {}
+
+
+def _space_content(space) -> str:
+    """A digest of what :func:`_prepare` reads of a blend space: its clips (motions, keys, contacts,
+    parameters) and tessellations. Worked out once per space: spaces infused alike (one pack on
+    characters of one asset, infused for each) share one prepared binding, not one each, prepared again
+    whenever another of them walked last."""
+    known = _CONTENTS.get(id(space))
+    if known is None:
+        digest = hashlib.blake2b(digest_size=20)
+
+        def add(*values) -> None:
+            for v in values:
+                if isinstance(v, np.ndarray):
+                    digest.update(repr((v.dtype.str, v.shape)).encode())
+                    digest.update(np.ascontiguousarray(v).tobytes())
+                else:
+                    digest.update(repr(v).encode())
+
+        add(space.pack, space.version, space.kind)
+        for name in sorted(space.clips):
+            c = space.clips[name]
+            m = c.motion
+            add(name, c.role, c.hand, c.loop, c.stroke, c.transition, sorted((k, repr(v)) for k, v in c.parameters.items()),
+                m.fps, m.local_rotations, m.root_translations, m.joint_translations, c.keys, c.contacts, c.phases, c.pelvis)
+        for group in sorted(space.tessellations):
+            t = space.tessellations[group]
+            add(group, t.coordinates, t.labels, t.points, t.origin, t.scale, t.basis, t.simplices)
+        known = _CONTENTS[id(space)] = digest.hexdigest()
+        weakref.finalize(space, _CONTENTS.pop, id(space), None)
+    return known
 
 
 #: Each binding's :func:`_stack_key`, kept for as long as the binding lives.
