@@ -59,7 +59,7 @@ def test_walks_pinned_together_walk_as_each_on_its_own(xbot, block, monkeypatch)
     stacked = walked(xbot, block, together)
     assert max(together) == len(WALKS)  # the three walks were pinned in one stack
     apart: list[int] = []
-    monkeypatch.setattr(controller, "_stack_key", lambda b: (id(b),))  # every walk a stack of its own
+    monkeypatch.setattr(controller, "_stack_key", lambda b: (object(),))  # every walk a stack of its own
     alone = walked(xbot, block, apart)
     assert max(apart) == 1 and len(apart) == len(WALKS) * len(together)
     for name, (_, (dx, dz)) in WALKS.items():
