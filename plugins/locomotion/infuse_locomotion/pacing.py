@@ -6,10 +6,11 @@ stride; at a fixed cadence the distance left then is wherever the walk's start p
 whose travel may be scaled by :data:`~.transitions.STOP_SCALES` either way fits only if that window
 is longer than a stride. Instead, on its way to its last point the walk changes its cadence, its
 speed kept: its steps grow shorter and quicker (up to :data:`FASTER`) or longer and slower (down to
-:data:`SLOWER`), so that the stop's phase comes where the distance left is the clip's travel (scaled
-by at most :data:`SCALES` either way; where it lines up already, the cadence is left alone). Of the strides to go the walk takes the whole number that needs the smallest change, and
-recomputes it every frame from where it is (a constant factor holds once chosen: the distance and
-the phase left both shrink at its rate). The controller shortens or lengthens the steps by leg IK
+:data:`SLOWER`), so that the stop's phase comes where the distance left is the clip's travel
+(scaled by at most :data:`SCALES` either way; a walk that lines up already keeps its cadence). Of
+the strides to go the walk takes the whole number that needs the least change, and works it out
+again every frame from the phase it is at (a factor once chosen holds: the distance and the phase
+left both shrink at its rate). The controller shortens or lengthens the steps by leg IK
 (:meth:`~.controller.Locomotion._shorten`).
 
 Phases are cycles (left strike 0, right strike 0.5), distances metres, speeds m/s, times seconds.
