@@ -101,8 +101,27 @@ class BlendSpace:
         return [self.clips[n] for n in self.tessellations[name].labels]
 
     def weights(self, group: str, query) -> tuple[np.ndarray, np.ndarray]:
-        """Blend weights (Q, N) over :meth:`group` ``group``'s clips for (Q, D) parameter points."""
-        return self.tessellations[group].weights(query)
+        """Blend weights (Q, N) over :meth:`group` ``group``'s clips for (Q, D) parameter points, and (Q,)
+        flags of the points inside its tessellation; a locomotion request is blended from the examples
+        that do not travel against it wherever they reach it (:mod:`.compatible`)."""
+        w, inside = self.tessellations[group].weights(query)
+        if self.kind == "locomotion":
+            w = self._compatible(group).weights(query, w)
+        return w, inside
+
+    def slowest(self, direction) -> np.ndarray:
+        """(Q,) the slowest speed (m/s) at which the locomotion examples not travelling against each of (Q,)
+        ``direction`` radians (+ left of the facing) reach it; NaN where they do not."""
+        return self._compatible("locomotion").slowest(direction)
+
+    def _compatible(self, group: str):
+        from .compatible import CompatibleBlend
+
+        cached = self.__dict__.setdefault("_compatible_blends", {})
+        t = self.tessellations[group]
+        if group not in cached or cached[group].t is not t:
+            cached[group] = CompatibleBlend(t, resolution_of(self.kind))
+        return cached[group]
 
     def contains(self, group: str, query) -> np.ndarray:
         """(Q,) flags of (Q, D) parameter points inside ``group``'s tessellation."""
