@@ -1215,6 +1215,9 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
     slow = np.ones(len(speed))
     if not idle.any():
         floor = _slowest_towards(velocities, idle, direction)
+        # no slower than the examples not travelling against it reach, which the space blends it from
+        reached = space.slowest(direction)
+        floor = np.where(np.isfinite(reached), np.maximum(reached, floor), floor)
         slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
         speed = np.maximum(speed, floor)
     query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
