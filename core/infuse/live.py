@@ -21,8 +21,9 @@ block starts as late as it can and still be ready when its first frame is due (t
 percentile of how long the blocks of the last second took, waking late included, commands excluded), so
 a command that arrives before then shows on that frame. Commands are applied between blocks, each where
 it fits: one expected to run past the next block's start (it takes as long as the last ones of its kind,
-the median) waits for the gap after that block, so a burst of them delays no frame. A loop running late
-spends at most :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
+the median) waits for the gap after that block, which is made long enough for it (the block holds more
+frames), so a burst of them delays no frame. A loop running late spends at most
+:attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
 
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
@@ -288,7 +289,7 @@ class LiveScene:
                 if self._stop.is_set():
                     break
                 overdue = int((time.perf_counter() - self.due_s(first)) / self.period_s)  # due already: shown no more
-                frames = self._evaluate(self.block_frames + max(overdue, 0))
+                frames = self._evaluate(self.block_frames + self._room() + max(overdue, 0))
                 # the lead: from the planned start to the frames in hand, waking late included and commands
                 # applied meanwhile left out (a burst of them delays its own block, not every later one's)
                 self._leads.append((first, len(frames), time.perf_counter() - begun - commands_s))
@@ -403,10 +404,10 @@ class LiveScene:
 
     def _apply_commands(self, until: float) -> float:
         """Apply commands, waiting for them, until the wall clock reaches ``until`` (the block's start):
-        each one expected to end by then (it takes as long as the last ones of its kind, the median), or that
-        waited through the last block already (it goes first in this gap). Once ``until`` has passed (a
-        loop running late), at most :attr:`command_budget_s` of them. Returns the seconds spent on commands
-        after ``until``."""
+        each one expected to end by then (it takes as long as the last ones of its kind, the median). Once
+        ``until`` has passed (a loop running late), those expected to fit :attr:`command_budget_s`. One that
+        does not fit waits for the next gap, which :meth:`_room` makes long enough, and goes first in it.
+        Returns the seconds spent on commands after ``until``."""
         late_s = 0.0
         waited = self._held is not None
         while not self._stop.is_set():
@@ -424,9 +425,11 @@ class LiveScene:
             self._held = None
             future, function, args, kind = command
             started = time.perf_counter()
-            if started < until and not waited and started + self._expected_s(kind) > until:
+            expected = self._expected_s(kind)
+            if not waited and (started + expected > until if started < until else late_s + expected > self.command_budget_s):
                 self._held = command  # it would hold the block up: first thing after it
-                self._stop.wait(until - started)
+                if started < until:
+                    self._stop.wait(until - started)
                 return late_s
             waited = False
             if future.set_running_or_notify_cancel():
@@ -439,6 +442,16 @@ class LiveScene:
             self.stats.commands += 1
             late_s += max(0.0, ended - max(started, until))
         return late_s
+
+    def _room(self) -> int:
+        """Frames added to the next block so that the gap after it fits the command held for it: a block
+        of n frames is ready as its first frame is due, and the next one starts the lead before its own
+        first frame, n frames later. The loop evaluates a longer block, which costs little more, rather
+        than let the command run into a frame's time."""
+        if self._held is None:
+            return 0
+        needed = math.ceil((self._expected_s(self._held[3]) + self._lead_s) / self.period_s)
+        return min(max(needed - self.block_frames, 0), self.max_block_frames - self.block_frames)
 
     def _expected_s(self, kind: str) -> float:
         """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (0
