@@ -305,12 +305,30 @@ class Locomotion(Controller):
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
-        """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`); then the walks of
-        characters alike in skeleton, legs and feet (:func:`_stack_key`: one asset, one pack) have their
-        feet pinned and kept above the ground together, their frames stacked (one forward kinematics
-        and one leg IK for them all: a block of one frame costs about the same for one walk as for
-        several); then each writes its pose, in the jobs' order."""
-        driven = [(job, job.controller._drive(job, block)) for job in jobs]
+        """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`), the blends asked for
+        at once by walks sharing a binding and blending the same clips in the same order evaluated
+        together (:func:`_blend_key`); then the walks of characters alike in skeleton, legs and feet
+        (:func:`_stack_key`: one asset, one pack) have their feet pinned and kept above the ground
+        together, their frames stacked (one forward kinematics and one leg IK for them all: a block of
+        one frame costs about the same for one walk as for several); then each writes its pose, in the
+        jobs' order."""
+        drives = [job.controller._drive(job, block) for job in jobs]
+        asked: dict[int, tuple] = {}
+        done: dict[int, tuple | None] = {}
+        for n, drive in enumerate(drives):
+            _resume(n, drive, None, asked, done)
+        while asked:  # the blends asked for, together where they can be
+            asking: dict[tuple, list[int]] = {}
+            for n, request in asked.items():
+                asking.setdefault(_blend_key(*request), []).append(n)
+            now, asked = asked, {}
+            for members in asking.values():
+                rows = [now[n] for n in members]
+                ends = np.cumsum([0] + [len(r[2]) for r in rows]).tolist()
+                blended = jobs[members[0]].controller._blend(rows[0][0], *(np.concatenate(a) for a in zip(*(r[1:] for r in rows))))
+                for n, a, e in zip(members, ends[:-1], ends[1:]):
+                    _resume(n, drives[n], tuple(None if x is None else x[a:e] for x in blended), asked, done)
+        driven = [(job, done[n]) for n, job in enumerate(jobs)]
         groups: dict[tuple, list] = {}
         for job, walk in driven:
             if walk is not None:
@@ -336,7 +354,8 @@ class Locomotion(Controller):
     def _drive(self, job, block):
         """The walk's state carried through the block and its pose before the feet are pinned: its
         active frames (A,) of the block and the parts :meth:`_steered` gives over them, or None when
-        the walk has not begun."""
+        the walk has not begun. A generator: it yields the blends :meth:`_steered` asks for and takes
+        them back (:meth:`evaluate` evaluates them), and returns that."""
         b: LocomotionBinding = job.binding
         active = np.nonzero(job.local_times >= -1e-9)[0]
         if not active.size:
@@ -358,12 +377,12 @@ class Locomotion(Controller):
             start, part, handing = i, None, None
             if st.playing is None:
                 before = copy.deepcopy(st) if b.stops and self.steering.path is not None else None
-                part = self._steered(b, st, times[i:], dt, job.report)
+                part = yield from self._steered(b, st, times[i:], dt, job.report)
                 stop = None if before is None else self._stop_at(b, before, st, block.fps, dt)
                 if stop is not None:  # walk up to where the stop begins, then play it
                     f, clip, place = stop
                     st.restore(before)
-                    part = self._steered(b, st, times[i:i + f], dt, job.report) if f else None
+                    part = (yield from self._steered(b, st, times[i:i + f], dt, job.report)) if f else None
                     st.trace = None
                     st.playing = (clip.name, float(times[i + f]), place)
                     i += f
@@ -501,7 +520,8 @@ class Locomotion(Controller):
     def _steered(self, b: LocomotionBinding, st: LocomotionState, times, dt, report):
         """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
-        and the turn spun at the root so far (F,) radians, before the feet are pinned."""
+        and the turn spun at the root so far (F,) radians, before the feet are pinned. A generator: it
+        yields the arguments of the :meth:`_blend` it needs and takes that blend back."""
         x0, z0, h0 = st.x, st.z, st.heading
         req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
@@ -548,7 +568,7 @@ class Locomotion(Controller):
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
-        rot, root, jt, contact, support = self._blend(b, wm, phase, standing, times, 0.5 * advance)
+        rot, root, jt, contact, support = yield b, wm, phase, standing, times, 0.5 * advance  # :meth:`_blend`'s
         if not b.idle.any() and rest.any():
             # Come to rest without an idle: both feet stay down where they are, laid flat about their
             # balls over the rest's fade (the held phase of a walk may have a foot in the air).
@@ -604,8 +624,7 @@ class Locomotion(Controller):
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
         faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``).
         ``half_frame`` (F,): half a frame's advance of the phase."""
-        used = np.nonzero(w.max(axis=0) > 1e-6)[0]
-        order = used[np.argsort(-w[:, used].sum(axis=0))]
+        used, order = _clips_of(w)
         stepping = used[b.stepping[used]]
         if stepping.size:
             ws = w[:, stepping]
@@ -855,6 +874,29 @@ class Locomotion(Controller):
         elif solving:  # the legs are apart: both in one solve
             solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
                        end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
+
+
+def _resume(n: int, drive, value, asked: dict, done: dict) -> None:
+    """Go on with walk ``n``'s :meth:`Locomotion._drive` generator, sending it ``value``: what it asks
+    for next goes into ``asked``, what it returns into ``done``, by ``n``."""
+    try:
+        asked[n] = drive.send(value)
+    except StopIteration as stop:
+        done[n] = stop.value
+
+
+def _clips_of(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The clips blended by weights ``w`` (F, N): those weighing more than 1e-6 on some frame, and the
+    same in the order the blend sums them (most weight over the frames first)."""
+    used = np.nonzero(w.max(axis=0) > 1e-6)[0]
+    return used, used[np.argsort(-w[:, used].sum(axis=0))]
+
+
+def _blend_key(b: LocomotionBinding, w, phase, standing, times, half_frame) -> tuple:
+    """What blends evaluated together share (:meth:`Locomotion.evaluate`): the binding, the clips in
+    the order they are summed (so each frame's sum, and the sign of its rotations, is its own walk's),
+    and whether the idle clips are faded in."""
+    return id(b), tuple(_clips_of(w)[1].tolist()), bool(standing.max() > 1e-6)
 
 
 #: Each blend space's :func:`_space_content`, by the space's id, for as long as the space lives.
