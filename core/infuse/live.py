@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 import queue
+import statistics
 import threading
 import time
 from collections import deque
@@ -310,7 +311,7 @@ class LiveScene:
         same = [seconds for _, frames, seconds in recent if frames == size]
         if len(same) < 3:
             same = [seconds * max(1.0, size / frames) for _, frames, seconds in recent]
-        self._lead_s = min(float(np.percentile(same, 90)), self.max_block_frames * self.period_s)
+        self._lead_s = min(sorted(same)[math.ceil(0.9 * len(same)) - 1], self.max_block_frames * self.period_s)
         self.stats.lead_ms = self._lead_s * 1e3
 
     def _present(self) -> None:
@@ -381,8 +382,8 @@ class LiveScene:
         self._costs.append((frames, seconds))
         if len(self._costs) < 3:
             return
-        per_frame = float(np.median([s / f for f, s in self._costs]))
-        per_block = float(np.median([s for f, s in self._costs if f >= self.block_frames] or [np.inf]))
+        per_frame = statistics.median(s / f for f, s in self._costs)
+        per_block = statistics.median([s for f, s in self._costs if f >= self.block_frames] or [math.inf])
         size = self.block_frames
         if per_frame > GROW_AT * self.period_s:
             size = min(2 * size, self.max_block_frames)
@@ -457,7 +458,7 @@ class LiveScene:
         """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (0
         for the first; one slowed down by the machine's other work does not hold the next ones back)."""
         taken = self._command_s.get(kind)
-        return float(np.median(taken)) if taken else 0.0
+        return statistics.median(taken) if taken else 0.0
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
