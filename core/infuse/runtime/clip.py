@@ -435,7 +435,9 @@ class _Together:
         side_by_side = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
         weights = jobs.weights[self.rows]  # (n, F)
         poses = [jobs[k].pose for k in self.rows]
-        block.table.set_rotations(self.columns, side_by_side, np.repeat(weights.T, joints, axis=1), Mode.OVERRIDE, poses)
+        full = bool((weights >= 1.0).all())
+        block.table.set_rotations(self.columns, side_by_side, None if full else np.repeat(weights.T, joints, axis=1),
+                                  Mode.OVERRIDE, poses)
         # The roots the clip drives: carried on by the cycles completed, or held at its first frame.
         table = block.table
         if self.moving.size:

@@ -225,21 +225,23 @@ class PoseTable:
         ``poses``: the characters' :class:`PoseBlock` objects written."""
         if columns.size == 0:
             return
-        if weight is None:
-            weight = np.ones(rotations.shape[:2])
-        positive = np.asarray((weight > 0.0).any(axis=0))  # (K,)
-        full = np.asarray((weight >= 1.0).all(axis=0))
-        current = self.local_rotations[:, columns]
-        if Mode(mode) is Mode.ADDITIVE:
-            offsets = rotations if full.all() else np.where(full[:, None], rotations, _weighted_columns(rotations, weight))
-            result = quat.multiply(current, offsets)
-        elif full.all():
-            result = np.array(rotations, dtype=np.float64)
+        additive = Mode(mode) is Mode.ADDITIVE
+        if weight is None:  # fully on
+            self.local_rotations[:, columns] = quat.multiply(self.local_rotations[:, columns], rotations) if additive else rotations
         else:
-            result = np.where(full[:, None], rotations, quat.slerp(current, rotations, weight))
-        if not positive.all():
-            result = np.where(positive[:, None], result, current)
-        self.local_rotations[:, columns] = result
+            positive = np.asarray((weight > 0.0).any(axis=0))  # (K,)
+            full = np.asarray((weight >= 1.0).all(axis=0))
+            current = self.local_rotations[:, columns]
+            if additive:
+                offsets = rotations if full.all() else np.where(full[:, None], rotations, _weighted_columns(rotations, weight))
+                result = quat.multiply(current, offsets)
+            elif full.all():
+                result = rotations
+            else:
+                result = np.where(full[:, None], rotations, quat.slerp(current, rotations, weight))
+            if not positive.all():
+                result = np.where(positive[:, None], result, current)
+            self.local_rotations[:, columns] = result
         for pose in poses:
             pose.moved()
 
