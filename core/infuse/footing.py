@@ -45,7 +45,8 @@ def smoothstep(x: np.ndarray | float) -> np.ndarray:
 def _length(v: np.ndarray) -> np.ndarray:
     """Lengths (...) of vectors ``v`` (..., 3), as ``np.linalg.norm(v, axis=-1)`` gives them, for less
     on a block's few frames."""
-    return np.sqrt((v * v).sum(axis=-1))
+    out: np.ndarray = np.sqrt((v * v).sum(axis=-1))
+    return out
 
 
 def planted_height(heights: np.ndarray, flags: np.ndarray) -> float:
