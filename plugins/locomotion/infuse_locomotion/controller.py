@@ -338,7 +338,9 @@ class Locomotion(Controller):
         poses = {}
         for group in groups.values():
             b: LocomotionBinding = group[0][0].binding
-            rot, root, jt, contact, forward, spun = (None if a[0] is None else np.concatenate(a) for a in zip(*(p for _, p in group)))
+            parts = list(zip(*(p for _, p in group)))  # each walk's rotations, root, translations or None, ...
+            rot, root, contact, forward, spun = (np.concatenate(parts[k]) for k in (0, 1, 3, 4, 5))
+            jt = None if parts[2][0] is None else np.concatenate(parts[2])
             ends = np.cumsum([0] + [len(p[0]) for _, p in group]).tolist()
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
