@@ -100,7 +100,7 @@ def unswing_matrices(hv: np.ndarray) -> np.ndarray:
     """Component-major matrices (3, 3, C, F) of ``(R_Y(h) R_X(-p))^T``, the inverse of the turn taking +Z
     to (h, p), for (heading, pitch) pairs ``hv`` (C, F, 2) in radians."""
     lead = hv.shape[:-1]
-    trig = np.cos(np.moveaxis(hv, -1, 0)[:, None] - _SINE_PHASE)  # (2, 2, C, F): (cos, sin) of h, then of p
+    trig = np.cos(hv.transpose(2, 0, 1)[:, None] - _SINE_PHASE)  # (2, 2, C, F): (cos, sin) of h, then of p
     products = trig[0, :, None] * trig[1, None, :]  # (ch cp, ch sp, sh cp, sh sp)
     values = np.concatenate((trig.reshape((4,) + lead), products.reshape((4,) + lead), np.zeros((1,) + lead)))
     return (values[_UNSWING_SOURCE] * _UNSWING_SIGN).reshape((3, 3) + lead)
@@ -304,7 +304,7 @@ class _Block:
         self.offset = np.einsum("sjicf,sjcf->sicf", parents, positions - positions[_PARENT_SLOTS])
         aimed = frames[_AIMED_SLOTS]
         self.origin = np.einsum("sjicf,sjcf->sicf", aimed, _contiguous(inp.origin, (2, 0, 1)) - positions[_AIMED_SLOTS])
-        forward_h, forward_v = _angles(np.moveaxis(np.einsum("sjicf,jcf->sicf", aimed, _contiguous(inp.forward, (2, 0, 1))), 1, 0))
+        forward_h, forward_v = _angles(np.einsum("sjicf,jcf->sicf", aimed, _contiguous(inp.forward, (2, 0, 1))).swapaxes(0, 1))
         self.aim_h = inp.offsets[..., 0] - forward_h + np.pi
         self.aim_v = inp.offsets[..., 1] - forward_v
         self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
@@ -468,7 +468,7 @@ def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_
         view = np.einsum("ejicf,ejcf->eicf", block.frames[pair], target - block.positions[pair])
     else:
         view = np.einsum("eijcf,ejcf->eicf", block.to_slot[pair], seen - block.offset[pair])
-    heading, pitch = _angles(np.moveaxis(view, 1, 0))  # (2, C, F): one row per eye
+    heading, pitch = _angles(view.swapaxes(0, 1))  # (2, C, F): one row per eye
     clamp, gain, smoothing = block.eyes()
     dh, dv = clamp((heading + inp.offsets[..., 0] + np.pi) % (2 * np.pi) - np.pi, pitch + inp.offsets[..., 1])
     final, path = smoothing(_pairs(dh, dv, gain).reshape(2 * c_count, frames, 2),
