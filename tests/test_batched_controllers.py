@@ -6,8 +6,8 @@ Here they run side by side with the same controllers forced to play one job at a
 (``Controller.evaluate``, job by job through ``evaluate_one``), on a cast that takes every path: copies
 of one clip with the same content, clips held on their frames and interpolated in one block, a clip
 holding its root, a character with two breathing activities, eyelids as morph targets and as joints, a
-character without eyes, speech told while running, characters looking at each other, and blocks of 1
-and of 7 frames.
+character without eyes, speech told while running, characters looking at each other, a character added
+while running, and blocks of 1 and of 7 frames.
 """
 from __future__ import annotations
 
@@ -67,10 +67,22 @@ def cast_runtime(block_frames: int) -> tuple[Runtime, list[str]]:
 
 
 def play(block_frames: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    from infuse_blink.controller import Blink
+    from infuse_breathing.controller import Breathing
+    from infuse_gaze import Gaze
+    from infuse_saccade.controller import Saccades
+
     rt, names = cast_runtime(block_frames)
     rt.run(1.2)
     rt.add_speech("b", 1.5, 2.1)  # told while running: saccades pause and come back
     rt.add_speech("d", 0.8, 1.4)  # told late, partly in the past
+    late = synthetic_character("late", morphs=("blink",))
+    names.append(rt.add_character(late, "e", position=(0.0, 0.0, -2.0)))  # joins the table while it runs
+    rt.activate("e", Clip(swaying(late.skeleton), speed=1.3), rt.time)
+    rt.activate("e", Breathing(), rt.time)
+    rt.activate("e", Blink(rate_per_min=100.0, seed=9), rt.time)
+    rt.activate("e", Saccades("listen", seed=9), rt.time)
+    rt.activate("e", Gaze("a"), rt.time)
     rt.run(2.4)
     return [(rt.motion(n).local_rotations, rt.motion(n).root_translations, rt.morph_weights(n)) for n in names]
 
