@@ -75,7 +75,6 @@ def blend_weights_of(times, start_s: np.ndarray, end_s: np.ndarray, blend_in_s: 
     t = np.asarray(times, dtype=np.float64)[None]
     start, end = start_s[:, None], end_s[:, None]
     ramp_in, ramp_out = blend_in_s[:, None], blend_out_s[:, None]
-    with np.errstate(invalid="ignore"):  # inf - inf never happens: times are finite
-        rising = np.where(ramp_in > 0, smoothstep((t - start) / np.where(ramp_in > 0, ramp_in, 1.0)), t >= start - 1e-9)
-        falling = np.where(ramp_out > 0, smoothstep((end - t) / np.where(ramp_out > 0, ramp_out, 1.0)), t < end - 1e-9)
-    return rising * falling
+    rising = np.where(ramp_in > 0, smoothstep((t - start) / np.where(ramp_in > 0, ramp_in, 1.0)), t >= start - 1e-9)
+    falling = np.where(ramp_out > 0, smoothstep((end - t) / np.where(ramp_out > 0, ramp_out, 1.0)), t < end - 1e-9)
+    return rising * falling  # no end: (inf - t) / ramp is inf, a ramp that never comes down
