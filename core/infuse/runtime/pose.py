@@ -212,10 +212,10 @@ class PoseTable:
     def first_morph(self) -> dict[str, int]:
         return self.layout.first_morph
 
-    def add_offsets(self, columns: np.ndarray, offsets: np.ndarray, weight: np.ndarray, poses) -> None:
+    def add_offsets(self, columns: np.ndarray, offsets: np.ndarray, weight: np.ndarray | None, poses) -> None:
         """Post-multiply local offsets (F, K, 4) onto table joints ``columns`` (K,), scaled by ``weight``
-        (F, K) (as :meth:`PoseBlock.add_offsets` does, column by column); ``poses``: the characters'
-        :class:`PoseBlock` objects written."""
+        (F, K) (None: 1) (as :meth:`PoseBlock.add_offsets` does, column by column); ``poses``: the
+        characters' :class:`PoseBlock` objects written."""
         self.set_rotations(columns, offsets, weight, Mode.ADDITIVE, poses)
 
     def set_rotations(self, columns: np.ndarray, rotations: np.ndarray, weight: np.ndarray | None, mode: Mode, poses) -> None:
@@ -244,7 +244,6 @@ class PoseTable:
             self.local_rotations[:, columns] = result
         for pose in poses:
             pose.moved()
-
 
     def set_roots(self, characters: np.ndarray, translations: np.ndarray, weight: np.ndarray, mode: Mode, poses) -> None:
         """Write the root translations (F, n, 3) metres of characters ``characters`` (n,) (their
