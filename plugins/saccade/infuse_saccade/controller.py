@@ -136,6 +136,8 @@ class Saccades(Controller):
         batch = jobs.memo(_Batch.of)
         if batch is None:
             return super().evaluate(jobs, block)
+        if not batch.seeing:  # no character with eyes
+            return
         speaking = block.runtime.speaking()
         # Each character's saccade in progress, where it holds for the whole block (else the path itself).
         held = np.zeros((len(batch.seeing), 6))  # start, duration, offset (2), before (2); at first none
@@ -143,9 +145,9 @@ class Saccades(Controller):
         paths = {}
         for n, k in enumerate(batch.seeing):
             job = jobs[k]
-            start, gaze, state = job.activity.start_s, job.controller, job.state_of(SaccadeState)
-            pauses = [(s - start, e - start + gaze.resume_s) for s, e in speaking.get(job.rig.name, ())]
-            path = gaze.follow(state, job.binding.schedule, job.local_times, pauses)
+            start, saccades, state = job.activity.start_s, job.controller, job.state_of(SaccadeState)
+            pauses = [(s - start, e - start + saccades.resume_s) for s, e in speaking.get(job.rig.name, ())]
+            path = saccades.follow(state, job.binding.schedule, job.local_times, pauses)
             if path is None:
                 held[n] = (state.start_s, state.duration_s[0], *state.offset, *state.before)
             else:
