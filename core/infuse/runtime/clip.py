@@ -324,8 +324,9 @@ class Clip(Controller):
     @classmethod
     def evaluate(cls, jobs: Jobs, block: Block) -> None:
         """The characters playing one clip the same way sampled together, in one call over all their
-        times, and written side by side; clips that move inner joints, write morph weights, play
-        additively or stand in for no root play one at a time (:meth:`evaluate_one`)."""
+        times, and written side by side. Clips with position channels (an inner joint that travels or
+        moves), morph weights or an additive mode, and characters playing more than one clip (a
+        crossfade: one after the other), play one job at a time (:meth:`evaluate_one`)."""
         if cls.evaluate_one is not Clip.evaluate_one:  # a subclass plays its own way
             return super().evaluate(jobs, block)
         together, alone = jobs.memo(_Together.of)
