@@ -5,9 +5,9 @@ PoseTable, and keep state from block to block (the saccade in progress, when the
 Here they run side by side with the same controllers forced to play one job at a time
 (``Controller.evaluate``, job by job through ``evaluate_one``), on a cast that takes every path: copies
 of one clip with the same content, clips held on their frames and interpolated in one block, a clip
-holding its root, a character with two breathing activities, eyelids as morph targets and as joints, a
-character without eyes, speech told while running, characters looking at each other, a character added
-while running, and blocks of 1 and of 7 frames.
+holding its root, a crossfade, a character with two breathing activities, eyelids as morph targets and
+as joints, a character without eyes, speech told while running, characters looking at each other, a
+character added while running, and blocks of 1 and of 7 frames.
 """
 from __future__ import annotations
 
@@ -54,6 +54,7 @@ def cast_runtime(block_frames: int) -> tuple[Runtime, list[str]]:
     rt.activate("b", Clip(copy, offset_s=0.3), 0.0)
     rt.activate("c", Clip(clip, speed=0.55), 0.0)  # between the clip's frames while the others are on them
     rt.activate("d", Clip(copy, root_motion=False, loop=False), 0.0)
+    rt.activate("c", Clip(copy, offset_s=0.5), 1.0, blend_in_s=0.5)  # a crossfade: c's clips one after the other
     for k, name in enumerate(names):
         rt.activate(name, Breathing(rate_bpm=12.0 + 5 * k, phase=0.2 * k, depth=0.8), 0.1 * k, blend_in_s=0.4)
         rt.activate(name, Blink(rate_per_min=90.0, seed=k), 0.0)
