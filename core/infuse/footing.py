@@ -143,13 +143,15 @@ def pinned(
     return ankle_goal * (1.0 - w) + on_sphere * w, ball_goal
 
 
-def anchors(heel: np.ndarray, ball: np.ndarray, has_ball: np.ndarray) -> np.ndarray:
+def anchors(heel: np.ndarray, ball: np.ndarray, has_ball: np.ndarray, risen: np.ndarray | None = None) -> np.ndarray:
     """(F, K) :data:`FREE`, :data:`ANKLE` or :data:`BALL` per frame and foot, from how much the heel
     and the ball of each foot are down, ``heel`` and ``ball`` (F, K) in [0, 1] (blended contact
     flags): a foot holds while either is more than half down, by its ball where the ball is the
-    more down and the foot has one (``has_ball`` (K,) bool), else by its ankle."""
+    more down or the pose has lifted its heel (``risen`` (F, K) bool, optional: flags that say only
+    that the foot is down, as a standing pose's share of a blend does, cannot tell which point) and
+    the foot has one (``has_ball`` (K,) bool), else by its ankle."""
     down = np.maximum(heel, ball) > 0.5
-    by_ball = (ball > heel) & np.asarray(has_ball, dtype=bool)
+    by_ball = ((ball > heel) if risen is None else (ball > heel) | risen) & np.asarray(has_ball, dtype=bool)
     return np.where(down, np.where(by_ball, BALL, ANKLE), FREE)
 
 

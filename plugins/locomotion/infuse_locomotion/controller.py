@@ -555,9 +555,6 @@ class Locomotion(Controller):
             bearing = (np.arctan2(to_x, to_z) - direction - heading + np.pi) % (2.0 * np.pi) - np.pi
             pace = (pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase),
                     np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing)
-        # The heading's turn the blend does not show, spun at the root (radians, from the walk's start).
-        spun = st.spun + np.concatenate(([0.0], np.cumsum((turn - vt)[:-1] * dt)))
-        st.spun = float(spun[-1] + (turn[-1] - vt[-1]) * dt)
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
@@ -567,6 +564,11 @@ class Locomotion(Controller):
                                                         lambda i: _settle_phases(b, wm[i:i + 1])[0], pace)
         if b.stops:  # where it went, frame by frame: where a stop clip may take over
             st.trace = (px, pz, heading, speed, phase, advance)
+        # The heading's turn the blend does not show, spun at the root (radians, from the walk's start):
+        # the idle's share of the pose shows none of the turning clips' (their planted feet turning back).
+        shown = vt * (1.0 - standing)
+        spun = st.spun + np.concatenate(([0.0], np.cumsum((turn - shown)[:-1] * dt)))
+        st.spun = float(spun[-1] + (turn[-1] - shown[-1]) * dt)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
@@ -740,7 +742,7 @@ class Locomotion(Controller):
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
         g_rot_all, g_pos_all = g_rot_all.reshape(len(rot), 2, 5, 4), g_pos_all.reshape(len(rot), 2, 5, 3)
-        anchors_all = footing.anchors(contact[..., 0], contact[..., 1], b.has_ball)
+        anchors_all = footing.anchors(contact[..., 0], contact[..., 1], b.has_ball, _heels_up(b, g_rot_all, g_pos_all))
         goals = g_pos_all[:, :, 2].copy()
         weights = np.zeros(anchors_all.shape)
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
@@ -1002,7 +1004,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
-    stance_feet = floors = None
+    stance_feet = floors = heel_soles = None
     walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
@@ -1014,10 +1016,14 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
         floors = _floors(sk, legs, m, frames, leg_length)
         if all(leg[3] is not None for leg in legs):
-            g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
-                                None if m.joint_translations is None else m.joint_translations[frames],
-                                [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+            g_rot, g_pos = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
+                                    None if m.joint_translations is None else m.joint_translations[frames],
+                                    [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
             stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
+            feet_pos = np.stack((g_pos[0, :2], g_pos[1, 2:]))  # (2, ankle / ball, 3)
+            drop = np.zeros((2, 3))
+            drop[:, 1] = feet_pos[:, 1, 1] - feet_pos[:, 0, 1]
+            heel_soles = quat.rotate(quat.conjugate(stance_feet[:, 0]), drop)
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
     # Each played transition's facing (F,) radians, contact phases (F, 2, 2) and motion (its swivelling feet lifted).
     played_facing, played_phases, played_motions = {}, {}, {}
@@ -1053,7 +1059,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
-        walk_speeds=walk_speeds, walk_cadences=walk_cadences)
+        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_soles=heel_soles)
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
@@ -1182,6 +1188,18 @@ def _standing_speed(clips) -> float:
     return STAND_FRACTION * math.hypot(p["forward_speed"], p["lateral_speed"])
 
 
+
+
+def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.ndarray | None:
+    """(F, 2) bool: the feet whose heel the pose has lifted, its sole under the heel more than
+    ``b.grounded_m`` above the ball's height (level with it standing), from the legs' global
+    rotations and positions (F, 2, 5, 4 / 3) as :meth:`Locomotion._pin` has them (the ankle third,
+    the ball last); None without the feet's standing pose (``b.heel_soles``)."""
+    if b.heel_soles is None:
+        return None
+    heel = g_pos[:, :, 2, 1] + quat.rotate(g_rot[:, :, 2], b.heel_soles)[..., 1]
+    up: np.ndarray = heel - g_pos[:, :, 4, 1] > b.grounded_m
+    return up
 
 
 def _turn_feet(b: LocomotionBinding, rot, rise) -> np.ndarray:
