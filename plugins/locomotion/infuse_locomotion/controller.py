@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from infuse import footing, quaternions as quat
+from infuse.contacts import foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
@@ -728,10 +729,12 @@ class Locomotion(Controller):
 
     @staticmethod
     def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun) -> None:
-        """Pin planted feet by leg IK: the ankle while the heel is down, the ball while only it is down
-        (the foot pivoting about it, its heel rising further when the leg would not reach). A planted
-        foot does not turn with the part of the heading's turn spun at the root (turning on the spot,
-        the body turns over it; the clips' own turning shows in their feet already), and on its ball
+        """Pin planted feet by leg IK: the sole under the heel while the heel is down (a foot landing
+        turned up rolls down about it, its ankle swinging over it; the ankle itself where the binding
+        knows no heel, ``b.heel_levers``), the ball while only it is down (the foot pivoting about it,
+        its heel rising further when the leg would not reach). A planted foot does not turn with the
+        part of the heading's turn spun at the root (turning on the spot, the body turns over it; the
+        clips' own turning shows in their feet already), and on its ball
         it only pitches (about the horizontal axis across it, rolling over its ball), keeping the yaw
         and roll it had as the ball took over: the animation's twist or roll of a foot on the ground
         (a take's, a blend's) would swing the ankle about the pinned ball. The corrections fade out
@@ -748,16 +751,18 @@ class Locomotion(Controller):
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
+        # (F, 2, 3) each animated ankle to the sole under its heel, carried by the foot.
+        heels_all = (np.zeros(goals.shape) if b.heel_levers is None else
+                     np.einsum("ki,fkij->fkj", b.heel_levers, foot_frames(g_pos_all[:, :, 2], g_pos_all[:, :, 4])))
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
             frames = a1 - a0
-            feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
             ankle_pos = g_pos[:, :, 2]
+            feet_pos = np.stack((ankle_pos, g_pos[:, :, 4], ankle_pos + heels_all[a0:a1]), axis=2)  # (F, 2, 3, 3) ankle, ball, heel's sole
             # The feet one frame earlier (from the last block at the first frame).
             before = np.concatenate((st.last[None], feet_pos[:-1]))
             on_ball = (anchors == footing.BALL)[..., None]
-            points = np.where(on_ball, feet_pos[:, :, 1], ankle_pos)  # the animated anchors
-            points_before = np.where(on_ball, before[:, :, 1], before[:, :, 0])
+            points = np.where(on_ball, feet_pos[:, :, 1], feet_pos[:, :, 2])  # the animated anchors
             changes = anchors != np.concatenate((st.anchor[None], anchors[:-1]))
             heading, turned = forward[a0:a1], spun[a0:a1]
             for k in range(2):
@@ -818,15 +823,17 @@ class Locomotion(Controller):
                             fade = 1.0 - footing.smoothstep(released / RELEASE_S)
                             left = _share_of(left, fade)
                             pin = feet_pos[s, k, 1] + ball_offset * fade
-                            if kind == footing.ANKLE:
-                                pin = pin - quat.rotate(left, lever[s])
+                            if kind == footing.ANKLE:  # the heel's sole, back from the ball along the corrected foot
+                                pin = pin - quat.rotate(left, feet_pos[s, k, 1] - feet_pos[s, k, 2])
                             pin[1] = 0.0
                         elif kind != prev:
-                            # The anchor passes from the ankle to the ball (or back): the new one stays
+                            # The anchor passes from the heel to the ball (or back): the new one stays
                             # where the corrected foot had it a frame ago (the ball's correction is the
-                            # ankle's and the foot's turn about it), so the foot does not move on with the
+                            # ankle's and the foot's turn about it; the heel's sole, the ankle's and that
+                            # turn of the foot as it was then), so the foot does not move on with the
                             # blend's drift at the switch, nor jump by the turn.
-                            pin = points_before[s, k] + (ball_offset if kind == footing.BALL else offset)
+                            was = before[s, k]
+                            pin = was[1] + ball_offset if kind == footing.BALL else was[0] + offset + quat.rotate(left, was[2] - was[0])
                             pin[1] = 0.0
                         if kind != prev:
                             # The foot's orientation now (corrected as a frame ago), and the axis across it.
@@ -1004,7 +1011,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
-    stance_feet = floors = heel_soles = None
+    stance_feet = floors = heel_soles = heel_levers = None
     walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
@@ -1024,6 +1031,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
             drop = np.zeros((2, 3))
             drop[:, 1] = feet_pos[:, 1, 1] - feet_pos[:, 0, 1]
             heel_soles = quat.rotate(quat.conjugate(stance_feet[:, 0]), drop)
+            heel_levers = np.einsum("kij,kj->ki", foot_frames(feet_pos[:, 0], feet_pos[:, 1]), drop)
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
     # Each played transition's facing (F,) radians, contact phases (F, 2, 2) and motion (its swivelling feet lifted).
     played_facing, played_phases, played_motions = {}, {}, {}
@@ -1059,7 +1067,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
-        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_soles=heel_soles)
+        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_soles=heel_soles,
+        heel_levers=heel_levers)
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
