@@ -267,26 +267,28 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                              f"writable joint translations (F, J, 3), which the caller keeps")
         carried_at = np.stack(offsets)  # (K, 3)
         C = B + quat.rotate(g_rot[..., 1, :], carried_at if several else carried_at[0])
-    # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3), their lengths and directions.
+    # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3) and their lengths.
     sides = np.empty((4,) + A.shape)
     for k, (end, start) in enumerate(((B, A), (C, B), (C, A), (T, A))):
         np.subtract(end, start, out=sides[k])
     lengths = _norm(sides)
     lab, lcb, lca, lta = lengths
     lat = np.minimum(np.maximum(lta, np.abs(lab - lcb) + 1e-6), (lab + lcb) * (1.0 - 1e-6))
-    units = sides / np.maximum(lengths, 1e-12)[..., None]
-    # The cosines of the angles at a (to b) and at b (between b->a and b->c) now, of the goal's angle
-    # off a->c at a, and of the angles at a and b once solved (law of cosines): one arccos.
-    cosines = np.empty((5,) + lab.shape)
-    cosines[:3] = _dot(np.take(units, [2, 0, 2], 0), np.take(units, [0, 1, 3], 0))
-    cosines[1] *= -1.0
-    lab2, lcb2, lat2 = lab * lab, lcb * lcb, lat * lat
-    np.divide(lcb2 - lab2 - lat2, -2.0 * lab * lat, out=cosines[3])
-    np.divide(lat2 - lab2 - lcb2, -2.0 * lab * lcb, out=cosines[4])
-    ac_ab_0, ba_bc_0, ac_at_0, ac_ab_1, ba_bc_1 = _arccos(cosines)
+    # a->c x a->goal (toward the goal), a->c x a->b (the bend's normal) and a->b x b->c, their lengths.
     ca = sides[2]
-    axes = _cross(ca, np.take(sides, [3, 0], 0))  # toward the goal; the bend's normal
-    axis_norms = _norm(axes)
+    first, second = np.take(sides, [2, 2, 0], 0), np.take(sides, [3, 0, 1], 0)
+    crossed = _cross(first, second)
+    axes, cross_norms = crossed[:2], _norm(crossed)
+    axis_norms = cross_norms[:2]
+    # The angles of the goal off a->c at a, at a (to b) and at b (between b->a and b->c) now, from
+    # their sines and cosines: an arccos of a cosine near 1 would turn its last bit into some 1e-8
+    # radians (a goal on the animated end would move the limb by 1e-8 m). The angles at a and b once
+    # solved, by the law of cosines (the limb kept off straight, where arccos is well conditioned).
+    dots = _dot(first, second)
+    dots[2] *= -1.0
+    ac_at_0, ac_ab_0, ba_bc_0 = np.arctan2(cross_norms, dots)
+    lab2, lcb2, lat2 = lab * lab, lcb * lcb, lat * lat
+    ac_ab_1, ba_bc_1 = _arccos(np.stack(((lcb2 - lab2 - lat2) / (-2.0 * lab * lat), (lat2 - lab2 - lcb2) / (-2.0 * lab * lcb))))
     small = axis_norms[0] < 1e-12
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
     if flat.any() or small.any():
