@@ -274,7 +274,7 @@ class Locomotion(Controller):
         """At rest once the stop steps are over (both feet landed under the body) and the idle has fully
         faded in; a walk not evaluated yet (no :class:`~.state.LocomotionState`) counts as at rest."""
         walk = state.get(LocomotionState)
-        return walk is None or (walk.settled and walk.stand >= 1.0 - 1e-9)
+        return walk is None or (walk.settled and walk.idle_frames_left == 0.0)
 
     def bind(self, rig, report) -> LocomotionBinding:
         from infuse.packs import space_on  # packs load lazily: importing a plugin stays cheap
@@ -480,11 +480,11 @@ class Locomotion(Controller):
         st.go_on_from(transitions.end_state(clip, place, fps))
         st.playing = None
         if clip.transition != "start":  # standing: after a turn it decides again, after a stop it is there
-            st.settled, st.stand, st.landings, st.to_go = True, 1.0, -1, -1.0
+            st.settled, st.idle_frames_left, st.landings, st.to_go = True, 0.0, -1, -1.0
             st.chooser = None if clip.transition == "turn" else id(self)
             return
         phase = transitions.start_phase(clip, fps, 0.5 * float(b.durations[np.argmax(b.slowest)]))
-        st.settled, st.stand, st.landings, st.to_go, st.phase = False, 0.0, -1, -1.0, float(phase)
+        st.settled, st.idle_frames_left, st.landings, st.to_go, st.phase = False, _settle_frames(1.0 / fps), -1, -1.0, float(phase)
 
     def _faded(self, b: LocomotionBinding, st: LocomotionState, part, times, fps: float):
         """``part`` (see :meth:`_steered`) at the activity's ``times`` (F,) with the transition that
@@ -1346,6 +1346,11 @@ def _settle_phases(b: LocomotionBinding, w) -> np.ndarray:
     return np.clip(np.minimum(out, trailing - STANCE_RAMP - SETTLE_MARGIN), 0.0, SETTLE_PHASE)
 
 
+def _settle_frames(dt: float) -> float:
+    """How many frames of ``dt`` seconds the idle takes to fade in (:data:`SETTLE_S`), not rounded."""
+    return SETTLE_S / dt
+
+
 def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool, settle_at, pace=None) -> tuple[np.ndarray, ...]:
     """The blend's phase (F,) in [0, 1), each frame's step of it to the next frame (F,) (from that
     frame's own cadence: the same whichever frames are evaluated with it), stride factor (F,), idle
@@ -1425,14 +1430,18 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
         done += float(advance[a:e].sum())
     phase = st.phase + np.concatenate(([0.0], np.cumsum(advance[:-1])))
     st.phase = float((phase[-1] + advance[-1]) % 1.0)
-    # The idle's share follows the settled flag at 1 / SETTLE_S per second.
-    level = np.empty(f)
+    # The idle's share follows the settled flag at 1 / SETTLE_S per second, counted in whole frames
+    # from 0 or from the fade's length (exact in floating point), so that every partition of the
+    # frames into blocks gives the same shares to the bit: a share of exactly one half decides
+    # whether a foot holds (:func:`~infuse.footing.anchors`).
+    full = _settle_frames(dt)
+    left = np.empty(f)
     edges = np.concatenate(([0], np.nonzero(np.diff(settled.astype(np.int8)))[0] + 1, [f]))
     for a, e in zip(edges[:-1], edges[1:]):
-        ramp = st.stand + (1.0 if settled[a] else -1.0) * dt * np.arange(1, e - a + 1) / SETTLE_S
-        level[a:e] = np.clip(ramp, 0.0, 1.0)
-        st.stand = float(level[e - 1])
-    rest = footing.smoothstep(level)
+        ramp = st.idle_frames_left + (-1.0 if settled[a] else 1.0) * np.arange(1, e - a + 1)
+        left[a:e] = np.clip(ramp, 0.0, full)
+        st.idle_frames_left = float(left[e - 1])
+    rest = footing.smoothstep(1.0 - left / full)
     return phase % 1.0, advance, np.where(stop, np.minimum(stride, 1.0), stride), rest if idle else np.zeros(f), rest
 
 

@@ -32,7 +32,8 @@ class LocomotionState(SteeringState):
     - the gait: ``phase`` in [0, 1) (left strike 0, right strike 0.5); stopping (:func:`~.controller._clock`):
       ``settled`` (standing, its stop steps over), ``landings`` since the stop began (-1: not stopping),
       ``to_go`` phase left to where it holds (-1: not known yet), ``floor`` the cadence factor it began
-      at, ``stop_age`` seconds since, ``stand`` the idle's share (0 to 1); ``spun`` the heading's turn
+      at, ``stop_age`` seconds since, ``idle_frames_left`` how many frames the idle's share has still to
+      rise to be whole (0: the idle fully in; the fade's length in frames: fully out); ``spun`` the heading's turn
       spun at the root so far; ``laid`` (2,) how far each foot is laid down; ``toe_bend`` (2,) the toes'
       bend up (radians);
     - the transitions played whole (:mod:`.transitions`): ``playing`` and ``fading`` (the clip's name, its
@@ -55,7 +56,7 @@ class LocomotionState(SteeringState):
     to_go: float = -1.0
     floor: float = 0.0
     stop_age: float = 0.0
-    stand: float = 1.0
+    idle_frames_left: float = 0.0
     spun: float = 0.0
     laid: np.ndarray = field(default_factory=lambda: _feet())
     toe_bend: np.ndarray = field(default_factory=lambda: _feet())
