@@ -123,8 +123,8 @@ def test_pack_test_prints_the_trials_and_draws_them(tmp_path, capsys):
     (parts,) = [line for line in printed.splitlines() if "foot skate of the walks to a target by part" in line]
     cm = {p.rsplit(" ", 1)[0].strip(): float(p.rsplit(" ", 1)[1]) for p in parts.split(": ", 1)[1].split(",")}
     assert list(cm) == ["on the spot", "start", "walk", "stop", "settle"], cm
-    # the walk up to 6 m long, up to 14.4 cm: the heel's sole swinging back under the ankle held from each strike
-    assert all(0.0 <= v < (20.0 if part == "walk" else 10.0) for part, v in cm.items()), cm
+    # measured 0.1-1.1 cm (the walk part 0.7, 14.4 while the pinning held the ankle from each heel strike)
+    assert all(0.0 <= v < 3.0 for v in cm.values()), cm
     for name in ("male.png", "male-straight.png", "male-target.png"):
         from PIL import Image
 
