@@ -40,8 +40,12 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     if f == 1:
         return held(np.zeros(len(position), dtype=np.int64))
     nearest = np.rint(position)
-    if np.all(np.abs(position - nearest) < 1e-6):  # on the clip's own frames: no interpolation
+    on = np.abs(position - nearest) < 1e-6
+    if on.all():  # on the clip's own frames: no interpolation
         return held(nearest.astype(np.int64))
+    # A time on one of the clip's frames takes that frame, whatever the other times are (each time is
+    # sampled as it would be alone, to rounding: a block of frames samples as its frames one by one).
+    position = np.where(on, nearest, position)
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
     rotations, steps = _interpolation_table(motion)
@@ -99,8 +103,8 @@ class LoopTable:
     sampled in one gather, each joint at one of a few times (a leg at its own foot's time).
 
     Each motion is sampled as :func:`sample_motion` with ``loop=True`` samples it (interpolated on
-    its sign-continuous rotations, held on its own frames when every time of a set lies on one), the
-    same values to rounding. The tables and the samples are component-major ((4, ...) quaternions,
+    its sign-continuous rotations, held on its own frames where a time lies on one), the same values
+    to rounding. The tables and the samples are component-major ((4, ...) quaternions,
     (3, ...) translations): weighting a sample frame by frame then runs over contiguous rows, where
     numpy broadcasts a weight along a last axis of 3 or 4 several times slower. Built once per set
     of motions (a blend space's binding).
@@ -144,8 +148,8 @@ class LoopTable:
         position = position - np.floor(position / span + 1e-9) * span
         position = np.clip(position, 0.0, span)
         nearest = np.rint(position)
-        held = np.all(np.abs(position - nearest) < 1e-6, axis=-1, keepdims=True)  # a set on the motion's own frames
-        position = np.where(held, nearest, position)
+        # A time on one of the motion's own frames takes that frame (each time as it would be alone).
+        position = np.where(np.abs(position - nearest) < 1e-6, nearest, position)
         start = np.minimum(np.floor(position).astype(np.int64), self.last[which][lead])
         frac = position - start
         row = self.offsets[which][lead] + start  # (U, S, F)
