@@ -91,6 +91,8 @@ SPIN_STEP = 0.15
 SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
 HANDOVER = 0.5
+#: A clip weighing no more than this on a frame is left out of its blend there.
+_LEAST_WEIGHT = 1e-6
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -630,6 +632,9 @@ class Locomotion(Controller):
         faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``).
         ``half_frame`` (F,): half a frame's advance of the phase."""
         used, order = _clips_of(w)
+        # A clip is left out of each frame it weighs no more than that on, as when that frame is
+        # blended alone: other frames of the block do not bring it in (by up to 1e-7 m).
+        w = np.where(w > _LEAST_WEIGHT, w, 0.0)
         stepping = used[b.stepping[used]]
         if stepping.size:
             ws = w[:, stepping]
@@ -897,9 +902,9 @@ def _resume(n: int, drive, value, asked: dict, done: dict) -> None:
 
 
 def _clips_of(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The clips blended by weights ``w`` (F, N): those weighing more than 1e-6 on some frame, and the
-    same in the order the blend sums them (most weight over the frames first)."""
-    used = np.nonzero(w.max(axis=0) > 1e-6)[0]
+    """The clips blended by weights ``w`` (F, N): those weighing more than :data:`_LEAST_WEIGHT` on some
+    frame, and the same in the order the blend sums them (most weight over the frames first)."""
+    used = np.nonzero(w.max(axis=0) > _LEAST_WEIGHT)[0]
     return used, used[np.argsort(-w[:, used].sum(axis=0))]
 
 
