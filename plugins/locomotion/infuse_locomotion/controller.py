@@ -751,6 +751,9 @@ class Locomotion(Controller):
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
         g_rot_all, g_pos_all = g_rot_all.reshape(len(rot), 2, 5, 4), g_pos_all.reshape(len(rot), 2, 5, 3)
         anchors_all = footing.anchors(contact[..., 0], contact[..., 1], b.has_ball, _heels_up(b, g_rot_all, g_pos_all))
+        # (F, 2) held by the ball because the pose lifted the heel, not by the contact flags (a foot the
+        # idle's fading share holds down while the walk's has left the ground).
+        posed_all = (anchors_all == footing.BALL) & (contact[..., 1] <= contact[..., 0])
         goals = g_pos_all[:, :, 2].copy()
         weights = np.zeros(anchors_all.shape)
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
@@ -830,7 +833,6 @@ class Locomotion(Controller):
                             pin = feet_pos[s, k, 1] + ball_offset * fade
                             if kind == footing.ANKLE:  # the heel's sole, back from the ball along the corrected foot
                                 pin = pin - quat.rotate(left, feet_pos[s, k, 1] - feet_pos[s, k, 2])
-                            pin[1] = 0.0
                         elif kind != prev:
                             # The anchor passes from the heel to the ball (or back): the new one stays
                             # where the corrected foot had it a frame ago (the ball's correction is the
@@ -839,7 +841,6 @@ class Locomotion(Controller):
                             # blend's drift at the switch, nor jump by the turn.
                             was = before[s, k]
                             pin = was[1] + ball_offset if kind == footing.BALL else was[0] + offset + quat.rotate(left, was[2] - was[0])
-                            pin[1] = 0.0
                         if kind != prev:
                             # The foot's orientation now (corrected as a frame ago), and the axis across it.
                             landed, landed_spun = g_rot[s, k, 2], turned[s]
@@ -858,7 +859,11 @@ class Locomotion(Controller):
                             kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
                         turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
                         goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
-                        goal[s:e, 1] = ankle[s:e, 1]
+                        # The ankle at the animation's height; held by the ball for the pose's sake, no
+                        # lower than keeps the ball at the height it took over at (the blend's leg, half
+                        # standing and half swinging, would push it into the ground, and it would rise
+                        # from there still down and slide as the foot is let go).
+                        goal[s:e, 1] = np.where(posed_all[a0 + s:a0 + e, k], np.maximum(ankle[s:e, 1], goal[s:e, 1]), ankle[s:e, 1])
                         weight[s:e] = 1.0
                         ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
                         if kind == footing.BALL:
