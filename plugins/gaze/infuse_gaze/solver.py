@@ -20,8 +20,8 @@ Up the chain it carries one vector per frame, the target seen from the current s
 above a slot is rigid until its group is solved, so what a slot sees is what its parent sees,
 moved into the slot's frame (a rotation and an offset from the pose below, worked out once per
 block for all slots, :class:`_Block`) and turned back by the slot's own swing. Positions are only
-needed when another character looks at this one's face: that pass also carries each slot's frame in
-the world.
+needed when another character looks at this one's face: that pass also carries the world's origin
+and axes, from which a slot's position follows at the end.
 Inside a block, vectors and matrices are component-major ((3, C, F), (3, 3, C, F)): each component
 is one contiguous array over the characters and frames, so a product over a block is a few calls on
 long arrays (numpy's products of stacks of 3 x 3 matrices cost far more per frame).
@@ -31,7 +31,7 @@ from __future__ import annotations
 import functools
 import math
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -89,21 +89,24 @@ class SolverInput:
     kept: dict | None = None
 
 
-#: Where the nine entries of ``(R_Y(h) R_X(-p))^T`` come from, row by row, among (ch, sh, cp, sp, ch cp,
-#: ch sp, sh cp, sh sp, 0) (c: cosine, s: sine), and their signs (see :func:`unswing_matrices`).
-_UNSWING_SOURCE = np.array([0, 8, 1, 7, 2, 5, 6, 3, 4])
-_UNSWING_SIGN = np.array([1.0, 1.0, -1.0, -1.0, 1.0, -1.0, 1.0, 1.0, 1.0])[:, None, None]
-_SINE_PHASE = np.array([0.0, 0.5 * np.pi])[None, :, None, None]  # cos(x - pi/2) = sin(x): both in one call
+#: ``(R_Y(h) R_X(-p))^T`` row by row (nine entries) from (ch, sh, cp, sp, ch cp, ch sp, sh cp, sh sp) (c: cosine,
+#: s: sine): each entry one of them or its negative, or 0 (see :func:`unswing_matrices`).
+_UNSWING_TABLE = np.zeros((9, 8))
+for _entry, (_source, _sign) in enumerate(((0, 1), (None, 0), (1, -1), (7, -1), (2, 1), (5, -1), (6, 1), (3, 1), (4, 1))):
+    if _source is not None:
+        _UNSWING_TABLE[_entry, _source] = _sign
+_SINE_PHASE = np.array([0.0, 0.5 * np.pi])[None, :, None]  # cos(x - pi/2) = sin(x): both in one call
+_HALF_TURN = np.array([np.pi, 0.0])[:, None, None]  # added to (heading, pitch) before the heading's wrap
 
 
 def unswing_matrices(hv: np.ndarray) -> np.ndarray:
-    """Component-major matrices (3, 3, C, F) of ``(R_Y(h) R_X(-p))^T``, the inverse of the turn taking +Z
-    to (h, p), for (heading, pitch) pairs ``hv`` (C, F, 2) in radians."""
-    lead = hv.shape[:-1]
-    trig = np.cos(hv.transpose(2, 0, 1)[:, None] - _SINE_PHASE)  # (2, 2, C, F): (cos, sin) of h, then of p
-    products = trig[0, :, None] * trig[1, None, :]  # (ch cp, ch sp, sh cp, sh sp)
-    values = np.concatenate((trig.reshape((4,) + lead), products.reshape((4,) + lead), np.zeros((1,) + lead)))
-    return (values[_UNSWING_SOURCE] * _UNSWING_SIGN).reshape((3, 3) + lead)
+    """Component-major matrices (3, 3, ...) of ``(R_Y(h) R_X(-p))^T``, the inverse of the turn taking +Z
+    to (h, p), for (heading, pitch) rows ``hv`` (2, ...) in radians."""
+    lead = hv.shape[1:]
+    trig = np.cos(hv.reshape(2, 1, -1) - _SINE_PHASE)  # (2, 2, M): (cos, sin) of h, then of p
+    products = (trig[0, :, None] * trig[1, None, :]).reshape(4, -1)  # (ch cp, ch sp, sh cp, sh sp)
+    # Each entry is one value times 1, -1 or 0: the table product is exact.
+    return (_UNSWING_TABLE @ np.concatenate((trig.reshape(4, -1), products))).reshape((3, 3) + lead)
 
 
 class _Clamp:
@@ -112,16 +115,18 @@ class _Clamp:
 
     def __init__(self, limits: np.ndarray):
         turns = limits[..., :3] > 0
-        self.inverse = np.divide(1.0, limits[..., :3], out=np.zeros(turns.shape), where=turns)  # (..., 3): 0 where locked
+        inverse = np.divide(1.0, limits[..., :3], out=np.zeros(turns.shape), where=turns)  # 0 where locked
+        self.inverse = np.ascontiguousarray(np.moveaxis(inverse, -1, 0))  # (3, ...): heading, up, down
         self.locked = not turns.all()
 
-    def __call__(self, h: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        vertical = np.where(v >= 0.0, self.inverse[..., 1], self.inverse[..., 2])
-        f = 1.0 / np.maximum(np.hypot(h * self.inverse[..., 0], v * vertical), 1.0)
+    def __call__(self, hv: np.ndarray) -> None:
+        """Clamps (heading, pitch) rows ``hv`` (2, ...) (the limits' shape, or with leading axes) in place."""
+        inverse = self.inverse
+        vertical = np.where(hv[1] >= 0.0, inverse[1], inverse[2])
+        hv /= np.maximum(np.hypot(hv[0] * inverse[0], hv[1] * vertical), 1.0)
         if self.locked:
-            h = np.where(self.inverse[..., 0] > 0, h, 0.0)
-            v = np.where(vertical > 0, v, 0.0)
-        return h * f, v * f
+            hv[0] = np.where(inverse[0] > 0, hv[0], 0.0)
+            hv[1] = np.where(vertical > 0, hv[1], 0.0)
 
 
 def follow(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndarray, state: np.ndarray):
@@ -140,11 +145,13 @@ class _Smoothing:
     Without smoothing and with no step above the limit the path is the target. Without the speed
     limit at work and with one share per row the path is a linear filter (:func:`_smoothing_filter`);
     else it is stepped frame by frame, the only loop over frames in the solver (rows at rest with
-    nothing to follow stay at rest without it).
+    nothing to follow stay at rest without it). A block of one frame is one step
+    (:meth:`one_frame`).
     """
 
     def __init__(self, smoothing: np.ndarray, max_step: np.ndarray):
         self.smoothing, self.max_step = smoothing, max_step
+        self.share, self.limit = np.ascontiguousarray(smoothing[:, 0]), np.ascontiguousarray(max_step[:, 0])
         self.instant = bool((smoothing >= 1.0).all())
         shares = smoothing[:, 0]
         self.filter = None
@@ -167,6 +174,13 @@ class _Smoothing:
         if rows.size:
             final[rows], path[rows] = _step_frames(desired[rows], self.smoothing[rows], self.max_step[rows], state[rows])
         return final, path
+
+    def one_frame(self, desired: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """The state (2, R) after one frame toward ``desired`` (2, R) from ``state`` (2, R), as :meth:`__call__`
+        steps it (heading and pitch rows; for rows of one frame)."""
+        step = (desired - state) * self.share
+        step *= np.minimum(1.0, self.limit / np.maximum(np.hypot(step[0], step[1]), 1e-300))
+        return state + step
 
     def _within_limit(self, path: np.ndarray, state: np.ndarray) -> bool:
         """Whether no step of ``path`` (R, F, 2) from ``state`` (R, 2) is longer than the limit."""
@@ -230,18 +244,20 @@ def _follow_scalar(desired: np.ndarray, smoothing: np.ndarray, max_step: np.ndar
     return np.array(finals, dtype=np.float64).reshape(state.shape), np.array(paths, dtype=np.float64).reshape(desired.shape)
 
 
-def _pairs(h, v, gain):
-    """(..., 2) heading and pitch (...) times ``gain`` (...)."""
-    out = np.empty(h.shape + (2,))
-    np.multiply(h, gain, out=out[..., 0])
-    np.multiply(v, gain, out=out[..., 1])
-    return out
-
-
-def _angles(local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Heading and pitch (...) of component-major vectors (3, ...) given in an aligned frame."""
+def _angles(local: np.ndarray) -> np.ndarray:
+    """Heading and pitch rows (2, ...) of component-major vectors (3, ...) given in an aligned frame."""
     x, y, z = local
-    return np.arctan2(x, z), np.arctan2(y, np.hypot(x, z))
+    hv = np.empty((2,) + x.shape)
+    np.arctan2(x, z, out=hv[0])
+    np.hypot(x, z, out=hv[1])
+    np.arctan2(y, hv[1], out=hv[1])
+    return hv
+
+
+def _wrap_heading(hv: np.ndarray) -> None:
+    """Headings ``hv[0]`` given plus pi brought into [-pi, pi), in place."""
+    hv[0] %= 2 * np.pi
+    hv[0] -= np.pi
 
 
 def _contiguous(a: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
@@ -249,24 +265,38 @@ def _contiguous(a: np.ndarray, axes: tuple[int, ...]) -> np.ndarray:
     return np.ascontiguousarray(a.transpose(axes))
 
 
+def _follow(smoothing: "_Smoothing", desired: np.ndarray, state: np.ndarray) -> np.ndarray:
+    """The path (2, R, F) from ``state`` (R, 2) toward ``desired`` (2, R, F); ``state`` is updated in place."""
+    if desired.shape[-1] == 1:
+        final = smoothing.one_frame(desired[..., 0], state.T)
+        state[:] = final.T
+        return final[..., None]
+    state[:], path = smoothing(desired.transpose(1, 2, 0), state)
+    return path.transpose(2, 0, 1)
+
+
 class _Group:
     """One joint group over a block, for every character: the share of the turn it takes
     (``fraction`` (C, F)), its limits, its gain (``gain`` (C, F): moves times the blend weight), its
-    smoothing and the joints it has (``counts`` (C, 1, 1))."""
+    smoothing and the joints it has (``counts`` (C, 1))."""
 
     def __init__(self, inp: SolverInput, gains: np.ndarray, g: int):
         self.fraction = inp.fractions[:, :, g]
         self.gain = gains[:, :, g]
         self.clamp, self.smoothing, self.counts = _kept(inp, g, lambda: (
             _Clamp(inp.limits[:, :, g]), _Smoothing(inp.smoothing[:, :, g], inp.max_step[:, :, g]),
-            np.maximum(inp.counts[:, g], 1)[:, None, None]))
+            np.maximum(inp.counts[:, g], 1)[:, None].astype(np.float64)))
 
-    def turn(self, dh: np.ndarray, dv: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """The path (C, F, 2) each of the group's joints turns, given the turn left to do (C, F) from
-        the group's first slot; ``state`` (C, 2) (the group's offsets so far) is updated in place."""
-        dh, dv = self.clamp(dh * self.fraction, dv * self.fraction)
-        state[:], path = self.smoothing(_pairs(dh, dv, self.gain), state)
-        return path / self.counts
+    def turn(self, hv: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """The path (2, C, F) each of the group's joints turns, given the turn left to do ``hv`` (2, C, F)
+        from the group's first slot (changed in place); ``state`` (C, 2) (the group's offsets so far) is
+        updated in place."""
+        hv *= self.fraction
+        self.clamp(hv)
+        hv *= self.gain
+        path = _follow(self.smoothing, hv, state)
+        path /= self.counts
+        return path
 
 
 def _kept(inp: SolverInput, key, make):
@@ -285,12 +315,13 @@ class _Block:
     - ``frames`` (S, 3, 3, C, F), ``positions`` (S, 3, C, F): each slot's aligned frame and position in
       the world;
     - ``to_slot`` (S, 3, 3, C, F): matrices taking a vector from the parent slot's aligned frame into
-      the slot's, ``offset`` (S, 3, C, F): the slot's position in its parent's aligned frame;
+      the slot's; ``lift`` (S, 3, C, F): the parent slot's position seen from the slot, negated (the
+      slot's position from its parent's, in the slot's aligned frame);
     - ``origin`` (A, 3, C, F): where the gaze starts, seen from the aligned frame of each slot a group's
       turn is worked out from (:data:`_AIMED_SLOTS`, row :data:`_AIM_ROW`);
-    - ``aim_h``, ``aim_v`` (A, C, F): heading (plus pi, for the wrap) and pitch of the fixed offsets minus
-      those of where the priority joint points, seen from those slots: added to the target's angles,
-      the turn left;
+    - ``aim`` (A, 2, C, F): heading (plus pi, for the wrap) and pitch of the fixed offsets minus those
+      of where the priority joint points, seen from those slots: added to the target's angles, the
+      turn left; ``eyes_aim`` (2, C, F): the offsets' alone (heading plus pi), for the eyes;
     - the groups' and eyes' settings, made when first asked.
     """
 
@@ -298,19 +329,19 @@ class _Block:
         self.inp = inp
         frames = _contiguous(quat.unit_to_matrix(inp.frames_world), (2, 3, 4, 0, 1))
         positions = _contiguous(inp.positions, (2, 3, 0, 1))
-        parents = frames[_PARENT_SLOTS]
         self.frames, self.positions = frames, positions
-        self.to_slot = np.einsum("sjicf,sjkcf->sikcf", frames, parents)
-        self.offset = np.einsum("sjicf,sjcf->sicf", parents, positions - positions[_PARENT_SLOTS])
+        self.to_slot = np.einsum("sjicf,sjkcf->sikcf", frames, frames[_PARENT_SLOTS])
+        self.lift = np.einsum("sjicf,sjcf->sicf", frames, positions - positions[_PARENT_SLOTS])
         aimed = frames[_AIMED_SLOTS]
         self.origin = np.einsum("sjicf,sjcf->sicf", aimed, _contiguous(inp.origin, (2, 0, 1)) - positions[_AIMED_SLOTS])
-        forward_h, forward_v = _angles(np.einsum("sjicf,jcf->sicf", aimed, _contiguous(inp.forward, (2, 0, 1))).swapaxes(0, 1))
-        self.aim_h = inp.offsets[..., 0] - forward_h + np.pi
-        self.aim_v = inp.offsets[..., 1] - forward_v
+        forward = _angles(np.einsum("sjicf,jcf->iscf", aimed, _contiguous(inp.forward, (2, 0, 1))))
+        self.eyes_aim = inp.offsets.transpose(2, 0, 1) + _HALF_TURN  # (2, C, F)
+        self.aim = _contiguous(self.eyes_aim[:, None] - forward, (1, 0, 2, 3))
         self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
-        self.present = inp.present[:, None, :, None]  # (C, 1, S, 1)
-        self.everyone: list[bool] = np.all(inp.present, axis=0).tolist()  # slots every character has
-        self.absent: list[bool] = (~np.any(inp.present, axis=0)).tolist()  # slots no character has: they repeat their parent
+        self.present, self.everyone, self.absent = _kept(inp, "present", lambda: (
+            np.ascontiguousarray(inp.present.T[:, :, None]),  # (S, C, 1)
+            np.all(inp.present, axis=0).tolist(),  # slots every character has
+            (~np.any(inp.present, axis=0)).tolist()))  # slots no character has: they repeat their parent
         self._groups: dict[int, _Group] = {}
         self._eyes = None
 
@@ -326,41 +357,27 @@ class _Block:
             clamp, smoothing = _kept(inp, "eyes", lambda: (
                 _Clamp(inp.limits[:, :, EYES]),
                 _Smoothing(np.tile(inp.smoothing[:, :, EYES], (2, 1)), np.tile(inp.max_step[:, :, EYES], (2, 1)))))
-            self._eyes = (clamp, self.gains[:, :, EYES] * inp.present[:, _EYE_SLOTS].T[:, :, None], smoothing)
+            self._eyes = (clamp, self.gains[:, :, EYES] * self.present[_EYE_PAIR], smoothing)
         return self._eyes
 
+    def start(self, s: int, target: np.ndarray, place: bool) -> np.ndarray:
+        """What the walk up the chain carries, from slot ``s`` as the pose below has it: the target (3, C, F)
+        seen from the slot's aligned frame, as (3, 1, C, F); with ``place`` also the world's origin and
+        axes, as (3, 5, C, F) (the points first: see :func:`_solve_once`)."""
+        if not place:
+            return np.einsum("jicf,jcf->icf", self.frames[s], target - self.positions[s])[:, None]
+        world = np.zeros((3, 5) + target.shape[1:])
+        world[:, 0] = target
+        world[:, :2] -= self.positions[s][:, None]
+        world[:, 2:] = np.eye(3)[:, :, None, None]
+        return np.einsum("jicf,jkcf->ikcf", self.frames[s], world)
 
-class _Placement:
-    """The chain placed in the world as a solve turns it, bottom up (for characters looking at this one's
-    face): every slot's position (S, 3, C, F), as in the pose below until the solve passes it, and the
-    aligned frame (3, 3, C, F) in the world of the last slot passed."""
-
-    def __init__(self, block: _Block):
-        self.block = block
-        self.positions = block.positions.copy()
-        self.world: np.ndarray
-
-    def start(self, s: int) -> None:
-        """The first slot passed, ``s``: where the pose below has it."""
-        self.world = self.block.frames[s]
-
-    def repeat(self, s: int) -> None:
-        """Slot ``s``, absent on every character: its parent."""
-        self.positions[s] = self.positions[s - 1]
-
-    def step(self, s: int) -> None:
-        """Slot ``s`` on its parent as turned so far."""
-        self.positions[s] = self.positions[s - 1] + np.einsum("ijcf,jcf->icf", self.world, self.block.offset[s])
-        self.world = np.einsum("ijcf,kjcf->ikcf", self.world, self.block.to_slot[s])
-
-    def turn(self, turn: np.ndarray) -> None:
-        """The last slot passed turned by ``turn`` (3, 3, C, F)."""
-        self.world = np.einsum("ijcf,kjcf->ikcf", self.world, turn)
-
-    def place_eyes(self) -> None:
-        """The eyes on the head as turned."""
-        head = self.positions[SLOT_PARENTS[_BELOW_EYES]]
-        self.positions[_EYE_PAIR] = head + np.einsum("ijcf,ejcf->eicf", self.world, self.block.offset[_EYE_PAIR])
+    def placed(self, s: int, carried: np.ndarray) -> np.ndarray:
+        """Slot ``s``'s position (3, C, F) in the world, given what the walk carried (3, 5, C, F) past its
+        parent slot (as turned): the slot's offset in the parent's aligned frame, taken back to the world."""
+        parent = SLOT_PARENTS[s]
+        offset = np.einsum("jicf,jcf->icf", self.frames[parent], self.positions[s] - self.positions[parent])
+        return np.einsum("ikcf,icf->kcf", carried[:, 2:], offset - carried[:, 1])
 
 
 def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, first_state: np.ndarray | None = None):
@@ -374,17 +391,22 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
     it from ``groups_state``.
     """
     block = _Block(inp)
+    target = _contiguous(inp.targets, (2, 0, 1))  # (3, C, F)
     if not inp.refine:
-        offsets, _ = _solve_once(inp, block, groups_state, eyes_state)
+        offsets, _ = _solve_once(inp, block, target, groups_state, eyes_state)
         if first_state is not None:
             first_state[:] = groups_state
         return offsets
     # The first pass only places the chains (no joint's position depends on the eyes' turn).
     first = groups_state.copy() if first_state is None else first_state
-    _, positions = _solve_once(inp, block, first, eyes_state, eyes=False, place=True)
+    slots = sorted({s for _, _, faced, _ in inp.refine for s in faced})
+    _, placed = _solve_once(inp, block, target, first, eyes_state, eyes=False, place=slots)
+    positions = inp.positions.copy()
+    for s, position in placed.items():
+        positions[:, :, s] = position.transpose(1, 2, 0)
     targets = inp.targets.copy()
     faces(targets, positions, inp.refine)
-    return _solve_once(replace(inp, targets=targets), block, groups_state, eyes_state)[0]
+    return _solve_once(inp, block, _contiguous(targets, (2, 0, 1)), groups_state, eyes_state)[0]
 
 
 def faces(targets: np.ndarray, positions: np.ndarray, refine) -> None:
@@ -403,76 +425,73 @@ def faces(targets: np.ndarray, positions: np.ndarray, refine) -> None:
         targets[gazers] = positions[others][:, :, list(slots)].mean(axis=2)
 
 
-def _solve_once(inp: SolverInput, block: _Block, groups_state: np.ndarray, eyes_state: np.ndarray, eyes: bool = True,
-                place: bool = False):
+def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_state: np.ndarray, eyes_state: np.ndarray,
+                eyes: bool = True, place=()):
     """Groups bottom-up, each over all frames at once: a group's wish at a frame depends only on the
     groups below it at that frame, so only the smoothing runs frame by frame (:func:`follow`). A group
     no character turns (and none is on its way back) is skipped: its joints stay as they are. Without
-    ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was). Returns the
-    offsets (C, F, S, 2), and with ``place`` the slots' positions (C, F, S, 3) in the world (else None)."""
-    c_count, frames = inp.targets.shape[:2]
+    ``eyes`` the eyes keep still (their offsets are 0 and their state is left as it was).
+
+    Up the chain the walk carries the target ``target`` (3, C, F) seen from the current slot; to place
+    the slots ``place`` (slot indices) in the world it also carries the world's origin and axes (points
+    move with the slots' offsets, axes only turn), from which each slot's position follows. Returns the
+    offsets (C, F, S, 2) and {slot: position (3, C, F) in the world} of the slots ``place``.
+    """
+    c_count, frames = target.shape[1:]
     out = np.zeros((c_count, frames, _S, 2))
-    target = _contiguous(inp.targets, (2, 0, 1))  # (3, C, F)
     turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
-    seen = None  # (3, C, F): the target seen from the last slot's aligned frame; None until a slot turns
-    share = np.zeros((c_count, frames, 2))  # (C, F, 2): the current group's turn
-    unturn: np.ndarray | None = None  # its unswing matrices, when every character shares them
-    placement = _Placement(block) if place else None
+    points = 2 if place else 1  # the carried columns that are points
+    carried = None  # (3, K, C, F): what the walk carries, seen from the last slot's aligned frame as turned; None until a slot turns
+    past: dict[int, np.ndarray] = {}  # with ``place``: what it carried past each slot
+    share = unturn = None  # the current group's turn (2, C, F) and its unswing matrices, when every character shares them
     for s in range(_BELOW_EYES):
         g = SLOT_GROUPS[s]
         first = _FIRST_SLOT[g] == s
-        if seen is None:
+        if carried is None:
             if not (turning[g] and first):
                 continue  # the chain stands as in the pose below
-            view = np.einsum("jicf,jcf->icf", block.frames[s], target - block.positions[s])
-            if placement is not None:
-                placement.start(s)
+            view = block.start(s, target, bool(place))
         elif block.absent[s]:
-            view = seen  # the slot is its parent
-            if placement is not None:
-                placement.repeat(s)
+            view = carried  # the slot is its parent
         else:
-            view = np.einsum("ijcf,jcf->icf", block.to_slot[s], seen - block.offset[s])
-            if placement is not None:
-                placement.step(s)
+            view = np.einsum("ijcf,jkcf->ikcf", block.to_slot[s], carried)
+            view[:, :points] -= block.lift[s][:, None]
         if turning[g] and first:
             row = _AIM_ROW[s]
-            heading, pitch = _angles(view - block.origin[row])
-            share = block.group(g).turn((heading + block.aim_h[row]) % (2 * np.pi) - np.pi, pitch + block.aim_v[row],
-                                        groups_state[:, g])
+            hv = _angles(view[:, 0] - block.origin[row])
+            hv += block.aim[row]
+            _wrap_heading(hv)
+            share = block.group(g).turn(hv, groups_state[:, g])
             unturn = None
-        if not turning[g] or block.absent[s]:
-            seen = view
-            continue
-        if block.everyone[s]:  # the group's slots share one turn
-            unturn = unswing_matrices(share) if unturn is None else unturn
-            out[:, :, s] = share
-            turn = unturn
-        else:
-            hv = np.where(block.present[:, :, s], share, 0.0)
-            out[:, :, s] = hv
-            turn = unswing_matrices(hv)
-        seen = np.einsum("ijcf,jcf->icf", turn, view)
-        if placement is not None:
-            placement.turn(turn)
-    pair = _EYE_PAIR
-    placed = None
-    if placement is not None:
-        if seen is not None:
-            placement.place_eyes()
-        placed = placement.positions.transpose(2, 3, 0, 1)
+        if turning[g] and not block.absent[s]:
+            if block.everyone[s]:  # the group's slots share one turn
+                unturn = unswing_matrices(share) if unturn is None else unturn
+                out[:, :, s] = share.transpose(1, 2, 0)
+                turn = unturn
+            else:
+                hv = share * block.present[s]
+                out[:, :, s] = hv.transpose(1, 2, 0)
+                turn = unswing_matrices(hv)
+            view = np.einsum("ijcf,jkcf->ikcf", turn, view)
+        carried = past[s] = view
+    placed = {s: block.placed(s, past[SLOT_PARENTS[s]]) if SLOT_PARENTS[s] in past else block.positions[s] for s in place}
     if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
         return out, placed
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
-    if seen is None:
-        view = np.einsum("ejicf,ejcf->eicf", block.frames[pair], target - block.positions[pair])
+    pair = _EYE_PAIR
+    if carried is None:
+        view = np.einsum("ejicf,ejcf->iecf", block.frames[pair], target - block.positions[pair])
     else:
-        view = np.einsum("eijcf,ejcf->eicf", block.to_slot[pair], seen - block.offset[pair])
-    heading, pitch = _angles(view.swapaxes(0, 1))  # (2, C, F): one row per eye
+        view = np.einsum("eijcf,jcf->iecf", block.to_slot[pair], carried[:, 0]) - block.lift[pair].swapaxes(0, 1)
+    hv = _angles(view)  # (2, 2, C, F): heading and pitch, one row per eye
+    hv += block.eyes_aim[:, None]
+    _wrap_heading(hv)
     clamp, gain, smoothing = block.eyes()
-    dh, dv = clamp((heading + inp.offsets[..., 0] + np.pi) % (2 * np.pi) - np.pi, pitch + inp.offsets[..., 1])
-    final, path = smoothing(_pairs(dh, dv, gain).reshape(2 * c_count, frames, 2),
-                            np.ascontiguousarray(eyes_state.transpose(1, 0, 2)).reshape(2 * c_count, 2))
-    eyes_state[:] = final.reshape(2, c_count, 2).transpose(1, 0, 2)
-    out[:, :, pair] = np.where(block.present[:, :, pair], path.reshape(2, c_count, frames, 2).transpose(1, 2, 0, 3), 0.0)
+    clamp(hv)
+    hv *= gain
+    state = np.ascontiguousarray(eyes_state.transpose(1, 0, 2)).reshape(2 * c_count, 2)  # eye-major rows
+    path = _follow(smoothing, hv.reshape(2, 2 * c_count, frames), state)
+    eyes_state[:] = state.reshape(2, c_count, 2).transpose(1, 0, 2)
+    path = path.reshape(2, 2, c_count, frames) * block.present[pair]
+    out[:, :, pair] = path.transpose(2, 3, 1, 0)
     return out, placed
