@@ -72,10 +72,10 @@ class LocomotionBinding:
     right leg, ``body`` (B,) the joints outside the legs, ``grounded_m`` how near the ground a foot
     counts as on it (m), ``stance_feet`` (2, 2, 4) or None each foot's ankle and ball global rotations
     standing, ``heel_soles`` (2, 3) or None (with ``stance_feet``) each foot's sole under the heel (the
-    point below the ankle at the ball's height, standing) as an offset in its ankle's frame, and
-    ``heel_levers`` (2, 3) or None the same offset in the foot's frame (:func:`infuse.contacts.foot_frames`:
-    forward, side, up; the frame the heel is pinned in, as the skate measure carries it), ``floors`` or
-    None (:class:`FootFloors`).
+    point below the ankle at the ball's height, standing) as an offset in its ankle's frame,
+    ``heel_levers`` (2, 3) or None (feet with a ball) that point as the foot lies flat in the clips, in
+    the foot's frame (:func:`infuse.contacts.foot_frames`: forward, side, up), where a planted heel is
+    pinned, ``floors`` or None (:class:`FootFloors`).
     With two legs: ``leg_limbs`` (hip, knee, ankle) each, ``balls`` (2,) (the ankle without a ball
     joint), ``has_ball`` (2,) bool, ``balls_on_ankles`` the feet whose ball hangs from the ankle, and the
     joints one FK gives the stride (``shorten_joints``) and the pinning (``pin_joints``: hip, knee,

@@ -39,7 +39,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from infuse import footing, quaternions as quat
-from infuse.contacts import foot_frames
+from infuse.contacts import DOWN_TOLERANCE, foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
@@ -759,22 +759,17 @@ class Locomotion(Controller):
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
-        # (F, 2, 3) each animated ankle to the sole under its heel, carried by the foot.
-        heels_all = (np.zeros(goals.shape) if b.heel_levers is None else
-                     np.einsum("ki,fkij->fkj", b.heel_levers, foot_frames(g_pos_all[:, :, 2], g_pos_all[:, :, 4])))
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
             frames = a1 - a0
+            feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
             ankle_pos = g_pos[:, :, 2]
-            feet_pos = np.stack((ankle_pos, g_pos[:, :, 4], ankle_pos + heels_all[a0:a1]), axis=2)  # (F, 2, 3, 3) ankle, ball, heel's sole
             # The feet one frame earlier (from the last block at the first frame).
             before = np.concatenate((st.last[None], feet_pos[:-1]))
-            on_ball = (anchors == footing.BALL)[..., None]
-            points = np.where(on_ball, feet_pos[:, :, 1], feet_pos[:, :, 2])  # the animated anchors
             changes = anchors != np.concatenate((st.anchor[None], anchors[:-1]))
             heading, turned = forward[a0:a1], spun[a0:a1]
             for k in range(2):
-                goal, weight, rise, point, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], points[:, k], ankle_pos[:, k], turns[a0:a1, k]
+                goal, weight, rise, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], ankle_pos[:, k], turns[a0:a1, k]
                 prev = int(st.anchor[k])
                 offset, pin, released, lifted = st.offset[k].copy(), st.pins[k].copy(), float(st.released[k]), st.rise[k].copy()
                 landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
@@ -831,8 +826,9 @@ class Locomotion(Controller):
                             fade = 1.0 - footing.smoothstep(released / RELEASE_S)
                             left = _share_of(left, fade)
                             pin = feet_pos[s, k, 1] + ball_offset * fade
-                            if kind == footing.ANKLE:  # the heel's sole, back from the ball along the corrected foot
-                                pin = pin - quat.rotate(left, feet_pos[s, k, 1] - feet_pos[s, k, 2])
+                            if kind == footing.ANKLE:  # back from the ball to the heel's sole, along the corrected foot
+                                reach = quat.rotate(left, lever[s])
+                                pin = pin - reach + _heel_of(b, k, reach)
                         elif kind != prev:
                             # The anchor passes from the heel to the ball (or back): the new one stays
                             # where the corrected foot had it a frame ago (the ball's correction is the
@@ -840,7 +836,10 @@ class Locomotion(Controller):
                             # turn of the foot as it was then), so the foot does not move on with the
                             # blend's drift at the switch, nor jump by the turn.
                             was = before[s, k]
-                            pin = was[1] + ball_offset if kind == footing.BALL else was[0] + offset + quat.rotate(left, was[2] - was[0])
+                            if kind == footing.BALL:
+                                pin = was[1] + ball_offset
+                            else:
+                                pin = was[0] + offset + _heel_of(b, k, quat.rotate(left, was[1] - was[0]))
                         if kind != prev:
                             # The foot's orientation now (corrected as a frame ago), and the axis across it.
                             landed, landed_spun = g_rot[s, k, 2], turned[s]
@@ -858,7 +857,8 @@ class Locomotion(Controller):
                             kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
                             kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
                         turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
-                        goal[s:e] = pin + quat.rotate(turn[s:e], ankle[s:e] - point[s:e])
+                        reach = quat.rotate(turn[s:e], lever[s:e])  # the corrected ankle to ball
+                        goal[s:e] = pin - (reach if kind == footing.BALL else _heel_of(b, k, reach))
                         # The ankle at the animation's height; held by the ball for the pose's sake, no
                         # lower than keeps the ball at the height it took over at (the blend's leg, half
                         # standing and half swinging, would push it into the ground, and it would rise
@@ -993,7 +993,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     signs = [np.where(np.sum(m * means[0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
     ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
     ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
-    grounded_m = 0.0
+    grounded_m, heel_levers = 0.0, None
     if len(legs) == 2:  # one FK over every clip's cycle (its closing frame left out)
         cycles = [slice(0, max(m.num_frames - 1, 1)) for m in motions]
         moved = any(m.joint_translations is not None for m in motions)
@@ -1013,6 +1013,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         leg_length = float(np.mean([np.linalg.norm(rest[leg[1]] - rest[leg[0]]) + np.linalg.norm(rest[leg[2]] - rest[leg[1]])
                                     for leg in legs]))
         grounded_m = GROUNDED * leg_length
+        if all(leg[3] is not None for leg in legs):
+            heel_levers = _heel_levers(pos[:, 2:4], pos[:, 4:6], np.concatenate([c.contacts[s] for c, s in zip(clips, cycles)]), leg_length)
         # Strikes where the heels reach the ground, toe offs where the balls leave it (the takes' feet
         # land and push off moving, on the ground a few frames beyond their contacts).
         events = [foot_events(c, h, leg_length) if c.role != "idle" else None for c, h in zip(clips, heights)]
@@ -1021,7 +1023,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
-    stance_feet = floors = heel_soles = heel_levers = None
+    stance_feet = floors = heel_soles = None
     walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
@@ -1041,7 +1043,6 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
             drop = np.zeros((2, 3))
             drop[:, 1] = feet_pos[:, 1, 1] - feet_pos[:, 0, 1]
             heel_soles = quat.rotate(quat.conjugate(stance_feet[:, 0]), drop)
-            heel_levers = np.einsum("kij,kj->ki", foot_frames(feet_pos[:, 0], feet_pos[:, 1]), drop)
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
     # Each played transition's facing (F,) radians, contact phases (F, 2, 2) and motion (its swivelling feet lifted).
     played_facing, played_phases, played_motions = {}, {}, {}
@@ -1207,6 +1208,33 @@ def _standing_speed(clips) -> float:
     return STAND_FRACTION * math.hypot(p["forward_speed"], p["lateral_speed"])
 
 
+
+
+def _heel_levers(ankles: np.ndarray, balls: np.ndarray, planted: np.ndarray, leg_length: float) -> np.ndarray:
+    """(2, 3) each foot's sole under the heel, the point below its ankle at its ball's height, as an
+    offset in the foot's frame (:func:`infuse.contacts.foot_frames`), as the skate measure finds it
+    (:func:`infuse.contacts.sole_positions`): the median over the frames the foot lies flat, planted
+    with its ankle and ball lowest (their summed height within ``DOWN_TOLERANCE`` leg lengths of its
+    least; an idle may stand a foot on its ball). ``ankles``, ``balls`` (F, 2, 3) metres, ``planted``
+    (F, 2) bool, over the clips' cycles."""
+    height = ankles[..., 1] + balls[..., 1]
+    candidates = planted | ~planted.any(axis=0)
+    least = np.where(candidates, height, np.inf).min(axis=0)
+    flat = candidates & (height <= least + DOWN_TOLERANCE * leg_length)
+    drop = np.zeros(ankles.shape)
+    drop[..., 1] = balls[..., 1] - ankles[..., 1]
+    local = np.einsum("fkij,fkj->fki", foot_frames(ankles, balls), drop)
+    return np.stack([np.median(local[flat[:, k], k], axis=0) for k in range(2)])
+
+
+def _heel_of(b: LocomotionBinding, k: int, reach: np.ndarray) -> np.ndarray:
+    """(..., 3) from foot ``k``'s ankle to the sole under its heel (metres), the foot's ankle-to-ball
+    vectors being ``reach`` (..., 3): ``b.heel_levers`` carried by the foot's frame
+    (:func:`infuse.contacts.foot_frames`) as the skate measure carries it; zeros (the ankle) without."""
+    if b.heel_levers is None:
+        return np.zeros_like(reach)
+    heel: np.ndarray = np.einsum("i,...ij->...j", b.heel_levers[k], foot_frames(np.zeros_like(reach), reach))
+    return heel
 
 
 def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.ndarray | None:
