@@ -48,7 +48,7 @@ def skate_weight(height: np.ndarray, threshold: float) -> np.ndarray:
 
 
 def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points: np.ndarray | None = None,
-               lift: float = SKATE_LIFT) -> Skate:
+               lift: float = SKATE_LIFT, steps: np.ndarray | None = None) -> Skate:
     """Foot skate of a clip whose contact flags are ``contacts`` (found on this clip or its source).
 
     The travel counted is that of the sole, not of the joints: each contact joint (ankle, ball)
@@ -62,13 +62,18 @@ def foot_skate(positions: np.ndarray, contacts: FootContacts, root: int, points:
     sliding on the ground counts fully, a point lifting off less the higher it is, and not at all
     from H up. ``lift=inf`` counts every planted frame fully. ``points`` (P,) gives the joints of
     ``positions`` (F, J, 3) metres that play the contact points (default ``contacts.points``: the
-    same skeleton); ``root`` is the joint whose horizontal path is the distance walked.
+    same skeleton); ``root`` is the joint whose horizontal path is the distance walked. ``steps``
+    (F - 1,) bool, optional: count only the travel from frame f to f + 1 where ``steps[f]`` holds,
+    the planted heights still those of the whole clip (so the travels of steps split into parts
+    add up to the whole's); the distance walked stays the whole clip's.
     """
     pos = np.asarray(positions, dtype=np.float64)
     pts = contacts.points if points is None else np.asarray(points)
     p = sole_positions(contacts, pos[:, pts])
     step = np.linalg.norm(np.diff(p[..., [0, 2]], axis=0), axis=-1)  # (F-1, P)
     held = contacts.flags[1:] & contacts.flags[:-1]
+    if steps is not None:
+        held = held & np.asarray(steps, dtype=bool)[:, None]
     y = p[..., 1]
     ever = contacts.flags.any(axis=0)  # a point never planted: its heights over the whole clip
     planted = np.nanpercentile(np.where(contacts.flags | ~ever, y, np.nan), 5.0, axis=0)

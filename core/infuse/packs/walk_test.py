@@ -16,8 +16,10 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
   takes out the sway of the gait) over the straight line; turned = how much that path's direction
   of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
   more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
-  whole walk (its start, turn on the spot and stop), cm in all, and over each of its parts
-  (:func:`walk_parts`: on the spot, start, walk, stop, settle).
+  whole walk (its start, turn on the spot and stop), cm in all, and split over its parts
+  (:func:`walk_parts`: on the spot, start, walk, stop, settle; each frame-to-frame step counted in the
+  part of the frame it ends at, contacts and planted heights those of the whole walk, so the parts
+  add up to the whole).
 
 Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
 """
@@ -241,9 +243,8 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
         found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
         skate = foot_skate(g_pos, found, base).travel
-        parts = walk_parts(ground)
-        by_part = {part: 100.0 * foot_skate(g_pos, replace(found, flags=found.flags & (parts == k)[:, None]), base).travel
-                   for k, part in enumerate(PARTS)}
+        parts = walk_parts(ground)[1:]  # each step's, by the frame it ends at
+        by_part = {part: 100.0 * foot_skate(g_pos, found, base, steps=parts == k).travel for k, part in enumerate(PARTS)}
         trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival, 100.0 * skate, by_part))
         trial.paths.append(smooth)
     return trial
