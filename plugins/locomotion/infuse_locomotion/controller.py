@@ -751,9 +751,13 @@ class Locomotion(Controller):
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
         g_rot_all, g_pos_all = g_rot_all.reshape(len(rot), 2, 5, 4), g_pos_all.reshape(len(rot), 2, 5, 3)
         anchors_all = footing.anchors(contact[..., 0], contact[..., 1], b.has_ball, _heels_up(b, g_rot_all, g_pos_all))
-        # (F, 2) held by the ball because the pose lifted the heel, not by the contact flags (a foot the
-        # idle's fading share holds down while the walk's has left the ground).
-        posed_all = (anchors_all == footing.BALL) & (contact[..., 1] <= contact[..., 0])
+        # (F, 2) held by the ball for the idle's sake: because the pose lifted the heel the flags hold
+        # down (the idle's fading share holding a foot the walk's has lifted), or by flags that are that
+        # share (neither 0 nor 1) of a foot on its ball: a blend of a standing leg and a stepping one.
+        on_ball = anchors_all == footing.BALL
+        posed_all = on_ball & (contact[..., 1] <= contact[..., 0])
+        if b.idle.any():
+            posed_all |= on_ball & ((contact > 1e-6) & (contact < 1.0 - 1e-6)).any(axis=-1)
         goals = g_pos_all[:, :, 2].copy()
         weights = np.zeros(anchors_all.shape)
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
