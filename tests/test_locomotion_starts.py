@@ -1,7 +1,8 @@
 """Starts from the cycles, measured on the output with FK: while the idle fades out under the walk's
 first step, a foot whose heel the blended pose lifts is held by its ball, not by its ankle (the ball
 swept forward along the ground: SmartBody's MaleLocomotion set, which has no start clip, on Brad),
-and a walk's foot skate split by its parts adds up to the whole walk's."""
+and a foot on its ball keeps it on the ground, not in it (the built-in packs); a walk's foot skate
+split by its parts adds up to the whole walk's."""
 from __future__ import annotations
 
 import math
@@ -87,24 +88,28 @@ def test_a_walks_parts_add_up_to_the_whole(xbot):
 
 
 @pytest.fixture(scope="module")
-def brad_male(tmp_path_factory):
-    """SmartBody's Brad with the MaleLocomotion set imported, built and infused."""
+def brad():
     require_corpus()
-    brad = infuse.load(corpus_file("smartbody/ChrBrad/ChrBrad.sk"))
+    return infuse.load(corpus_file("smartbody/ChrBrad/ChrBrad.sk"))
+
+
+@pytest.fixture(scope="module")
+def male_space(brad, tmp_path_factory):
+    """SmartBody's MaleLocomotion set imported, built and infused onto Brad."""
     folder = import_smartbody(corpus_file("smartbody/behaviorsets/MaleLocomotion"), tmp_path_factory.mktemp("packs") / "male",
                               name="sb-male")
     build_pack(folder)
-    return brad, next(iter(infuse_character(infuse.Character("b", brad), [str(folder)]).spaces.values()))
+    return next(iter(infuse_character(infuse.Character("b", brad), [str(folder)]).spaces.values()))
 
 
-def start_slide(brad, space, target, seconds: float) -> np.ndarray:
+def start_slide(asset, pack, target, seconds: float) -> np.ndarray:
     """(S, 2) metres each foot's sole slides in each frame of the start of a walk to ``target``: the
     farthest a sole point (:func:`infuse.contacts.sole_positions`) moves horizontally while within
     :data:`LOW_M` of its planted height at both ends of the frame, over the frames
     :func:`~infuse.packs.walk_test.walk_parts` calls the start."""
     rt = Runtime(fps=FPS)
-    name = rt.add_character(infuse.Character("b", brad))
-    rt.activate(name, controller("locomotion", pack=space, speed=1.3, target=target), 0.0)
+    name = rt.add_character(infuse.Character("b", asset))
+    rt.activate(name, controller("locomotion", pack=pack, speed=1.3, target=target), 0.0)
     rt.run(seconds)
     m, rig = rt.motion(name), rt.rig(name)
     g_rot, g_pos = infuse.motion_fk(m)
@@ -121,13 +126,22 @@ def start_slide(brad, space, target, seconds: float) -> np.ndarray:
 
 
 @pytest.mark.parametrize("angle_deg", [0.0, 45.0])
-def test_a_start_from_the_cycles_keeps_its_feet_still(brad_male, angle_deg):
+def test_a_start_from_the_cycles_keeps_its_feet_still(brad, male_space, angle_deg):
     """The set has no start clip: its first steps blend out of the idle. Walking 4 m ahead and 4 m at
     45 degrees, neither foot slides more than 1.5 cm in all over the start, nor 5 mm in a frame (at
     45 degrees the right foot's ball swept 8.3 cm forward, up to 2.2 cm a frame, while its heel rose
     about a held ankle, and the left foot turned about its heel with the turn the idle's share of
     the pose does not show: 9.9 cm in all)."""
-    brad, space = brad_male
     target = (4.0 * math.sin(math.radians(angle_deg)), 4.0 * math.cos(math.radians(angle_deg)))
-    slide = start_slide(brad, space, target, 12.0)
+    slide = start_slide(brad, male_space, target, 12.0)
     assert slide.sum() < 0.015 and slide.max() < 0.005
+
+
+@pytest.mark.parametrize("angle_deg", [0.0, 45.0])
+def test_a_built_in_packs_start_keeps_its_feet_still(brad, angle_deg):
+    """The built-in pack's first step from standing pushed the ball of the foot leaving the ground up
+    to 2 cm into it, and let it go still down: it slid 3.3 cm in one frame (3.7 cm over the start 4 m
+    ahead, 6.5 at 45 degrees)."""
+    target = (4.0 * math.sin(math.radians(angle_deg)), 4.0 * math.cos(math.radians(angle_deg)))
+    slide = start_slide(brad, "locomotion-male", target, 12.0)
+    assert slide.sum() < 0.02 and slide.max() < 0.005
