@@ -71,11 +71,10 @@ class LocomotionBinding:
     The skeleton: ``skeleton``, ``pelvis``, ``legs`` (0 or 2), ``limbs`` (J,) 0 body, 1 left leg, 2
     right leg, ``body`` (B,) the joints outside the legs, ``grounded_m`` how near the ground a foot
     counts as on it (m), ``stance_feet`` (2, 2, 4) or None each foot's ankle and ball global rotations
-    standing, ``heel_soles`` (2, 3) or None (with ``stance_feet``) each foot's sole under the heel (the
-    point below the ankle at the ball's height, standing) as an offset in its ankle's frame,
-    ``heel_levers`` (2, 3) or None (feet with a ball) that point as the foot lies flat in the clips, in
-    the foot's frame (:func:`infuse.contacts.foot_frames`: forward, side, up), where a planted heel is
-    pinned, ``floors`` or None (:class:`FootFloors`).
+    standing, ``heel_levers`` (2, 3) or None (feet with a ball) each foot's sole under the heel (the
+    point below the ankle at the ball's height) as the foot lies flat in the clips, in the foot's frame
+    (:func:`infuse.contacts.foot_frames`: forward, side, up): where a planted heel is pinned, and how
+    high a pose has lifted it, ``floors`` or None (:class:`FootFloors`).
     With two legs: ``leg_limbs`` (hip, knee, ankle) each, ``balls`` (2,) (the ankle without a ball
     joint), ``has_ball`` (2,) bool, ``balls_on_ankles`` the feet whose ball hangs from the ankle, and the
     joints one FK gives the stride (``shorten_joints``) and the pinning (``pin_joints``: hip, knee,
@@ -120,5 +119,4 @@ class LocomotionBinding:
     pin_joints: list[int] = field(default_factory=list)
     walk_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     walk_cadences: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    heel_soles: np.ndarray | None = None
     heel_levers: np.ndarray | None = None

@@ -1027,7 +1027,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
     # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
-    stance_feet = floors = heel_soles = None
+    stance_feet = floors = None
     walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
@@ -1039,14 +1039,10 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
         floors = _floors(sk, legs, m, frames, leg_length)
         if all(leg[3] is not None for leg in legs):
-            g_rot, g_pos = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
-                                    None if m.joint_translations is None else m.joint_translations[frames],
-                                    [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+            g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
+                                None if m.joint_translations is None else m.joint_translations[frames],
+                                [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
             stance_feet = np.stack((g_rot[0, :2], g_rot[1, 2:]))
-            feet_pos = np.stack((g_pos[0, :2], g_pos[1, 2:]))  # (2, ankle / ball, 3)
-            drop = np.zeros((2, 3))
-            drop[:, 1] = feet_pos[:, 1, 1] - feet_pos[:, 0, 1]
-            heel_soles = quat.rotate(quat.conjugate(stance_feet[:, 0]), drop)
     played = transitions.played(space, _standing_speed(clips)) if len(legs) == 2 else []
     # Each played transition's facing (F,) radians, contact phases (F, 2, 2) and motion (its swivelling feet lifted).
     played_facing, played_phases, played_motions = {}, {}, {}
@@ -1082,8 +1078,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
-        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_soles=heel_soles,
-        heel_levers=heel_levers)
+        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers)
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
@@ -1243,12 +1238,13 @@ def _heel_of(b: LocomotionBinding, k: int, reach: np.ndarray) -> np.ndarray:
 
 def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.ndarray | None:
     """(F, 2) bool: the feet whose heel the pose has lifted, its sole under the heel more than
-    ``b.grounded_m`` above the ball's height (level with it standing), from the legs' global
+    ``b.grounded_m`` above the ball's height (level with it lying flat), from the legs' global
     rotations and positions (F, 2, 5, 4 / 3) as :meth:`Locomotion._pin` has them (the ankle third,
-    the ball last); None without the feet's standing pose (``b.heel_soles``)."""
-    if b.heel_soles is None:
+    the ball last); None without the feet's flat pose (``b.heel_levers``)."""
+    if b.heel_levers is None:
         return None
-    heel = g_pos[:, :, 2, 1] + quat.rotate(g_rot[:, :, 2], b.heel_soles)[..., 1]
+    reach = g_pos[:, :, 4] - g_pos[:, :, 2]
+    heel = g_pos[:, :, 2, 1] + np.stack([_heel_of(b, k, reach[:, k]) for k in range(2)], axis=1)[..., 1]
     up: np.ndarray = heel - g_pos[:, :, 4, 1] > b.grounded_m
     return up
 
