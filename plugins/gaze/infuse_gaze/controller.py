@@ -154,21 +154,26 @@ class Gaze(Controller):
             arrays["weights"][c, these] = 0.0
         faces(targets, positions, refine)
         inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), **arrays, **chain)
-        # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver
-        # and written back after it.
+        # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver,
+        # which updates it in place: each character's state holds views of the stacked arrays.
         states = [job.rig.state_of(GazeState) for job in leads]
-        groups_state = np.stack([st.groups for st in states])
-        eyes_state = np.stack([st.eyes for st in states])
-        first_state = np.stack([st.first for st in states])
-        offsets = solve(inp, groups_state, eyes_state, first_state)
-        for c, state in enumerate(states):
-            state.groups, state.eyes, state.first = groups_state[c], eyes_state[c], first_state[c]
+        offsets = solve(inp, *(chains.stacked_states(states) if single else _stacked_states(states)))
         _end_settled([rows[name] for name in names], states, block)
         # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
         # character at once, written onto every character's joints at once.
         turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
         present = np.swapaxes(turns, 0, 1).reshape(frames, -1, 4)[:, chains.present_cells]
         block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
+
+
+def _stacked_states(states: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The turns of ``states`` (each character's :class:`GazeState`, in order) stacked: groups (C, G, 2),
+    eyes (C, 2, 2) and first pass (C, G, 2); each state then holds its rows of them (views)."""
+    stacked = (np.stack([st.groups for st in states]), np.stack([st.eyes for st in states]),
+               np.stack([st.first for st in states]))
+    for c, state in enumerate(states):
+        state.groups, state.eyes, state.first = stacked[0][c], stacked[1][c], stacked[2][c]
+    return stacked
 
 
 def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block) -> tuple[list, list, list]:
@@ -268,6 +273,7 @@ class _Chains:
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
         self._plan: tuple[int, tuple[list, list, list]] | None = None
+        self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     def settings(self, frames: int, dt: float) -> dict:
         """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
@@ -288,6 +294,16 @@ class _Chains:
                                                    for key, value in per_character.items()}
             kept["kept"] = {}
         return dict(kept)
+
+    def stacked_states(self, states: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`_stacked_states`, the arrays of the last block again while every state still holds the
+        rows it was given (the solver updated them in place)."""
+        kept = self._states
+        if kept is None or any(st.groups is not rows[0] or st.eyes is not rows[1] or st.first is not rows[2]
+                               for st, rows in zip(states, kept[0])):
+            stacked = _stacked_states(states)
+            kept = self._states = ([(st.groups, st.eyes, st.first) for st in states], stacked)
+        return kept[1]
 
     def plan(self, block) -> tuple[list, list, list]:
         """:func:`_plan_targets` of the gazes (one each, leading the block), kept while the runtime
@@ -335,6 +351,8 @@ def _end_settled(rows: list, states: list, block) -> None:
     and all of them once every one has ended and the turn is back at rest (every offset under
     :data:`SETTLED_RAD`): for the rest of their settling time they would only carry that turn on."""
     last = block.times[-1] + 1e-9
+    if all(job.activity.end_s is None or job.activity.end_s > last for row in rows for job in row):
+        return  # the usual case: nothing to end
     for row, state in zip(rows, states):
         ended = [job.activity.end_s is not None and job.activity.end_s <= last for job in row]
         if not any(ended):

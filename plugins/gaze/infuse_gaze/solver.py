@@ -118,11 +118,12 @@ class _Clamp:
         inverse = np.divide(1.0, limits[..., :3], out=np.zeros(turns.shape), where=turns)  # 0 where locked
         self.inverse = np.ascontiguousarray(np.moveaxis(inverse, -1, 0))  # (3, ...): heading, up, down
         self.locked = not turns.all()
+        self.level = bool((self.inverse[1] == self.inverse[2]).all())  # as far up as down
 
     def __call__(self, hv: np.ndarray) -> None:
         """Clamps (heading, pitch) rows ``hv`` (2, ...) (the limits' shape, or with leading axes) in place."""
         inverse = self.inverse
-        vertical = np.where(hv[1] >= 0.0, inverse[1], inverse[2])
+        vertical = inverse[1] if self.level else np.where(hv[1] >= 0.0, inverse[1], inverse[2])
         hv /= np.maximum(np.hypot(hv[0] * inverse[0], hv[1] * vertical), 1.0)
         if self.locked:
             hv[0] = np.where(inverse[0] > 0, hv[0], 0.0)
@@ -179,8 +180,9 @@ class _Smoothing:
         """The state (2, R) after one frame toward ``desired`` (2, R) from ``state`` (2, R), as :meth:`__call__`
         steps it (heading and pitch rows; for rows of one frame)."""
         step = (desired - state) * self.share
-        step *= np.minimum(1.0, self.limit / np.maximum(np.hypot(step[0], step[1]), 1e-300))
-        return state + step
+        step *= self.limit / np.maximum(np.hypot(step[0], step[1]), self.limit)  # 1 within the limit (> 0)
+        step += state
+        return step
 
     def _within_limit(self, path: np.ndarray, state: np.ndarray) -> bool:
         """Whether no step of ``path`` (R, F, 2) from ``state`` (R, 2) is longer than the limit."""
