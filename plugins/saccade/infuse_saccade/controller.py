@@ -195,10 +195,13 @@ class SaccadeState:
     def path(held: np.ndarray, t: np.ndarray) -> np.ndarray:
         """(N, F, 2) offsets in degrees at ``t`` (N, F) seconds of N saccades in progress, ``held`` (N, 6):
         start (-inf: none, 0 offsets), duration, offset (2) and the offset before (2); as
-        :meth:`Saccades.offsets` works them out."""
+        :meth:`Saccades.offsets` works them out. A row of no duration (a placeholder, or a saccade of
+        none) is at its offset from its start on: no division by zero, no NaN."""
         start, duration = held[:, :1], held[:, 1:2]
         offset, before = held[:, None, 2:4], held[:, None, 4:6]
-        progress = ease_out((t - start) / duration)[..., None]
+        elapsed = t - start
+        share = np.divide(elapsed, duration, out=np.where(elapsed >= 0.0, 1.0, 0.0), where=duration > 0.0)
+        progress = ease_out(share)[..., None]
         return np.where(np.isfinite(start)[..., None], before + progress * (offset - before), 0.0)
 
 
