@@ -13,6 +13,7 @@ to 1.8 cm apart.
 from __future__ import annotations
 
 import itertools
+import warnings
 from functools import lru_cache
 
 import numpy as np
@@ -241,13 +242,17 @@ def stepped(blocks: tuple[int, ...]) -> Scene:
 
 @pytest.fixture(scope="module")
 def ring_runs():
-    return {blocks: stepped(blocks) for blocks in ((1,), *MIXED_BLOCKS)}
+    """Each partition's scene, and the RuntimeWarnings (a division by zero, a NaN...) raised running them."""
+    with warnings.catch_warnings(record=True) as raised:
+        warnings.simplefilter("always", RuntimeWarning)
+        runs = {blocks: stepped(blocks) for blocks in ((1,), *MIXED_BLOCKS)}
+    return runs, [w for w in raised if issubclass(w.category, RuntimeWarning)]
 
 
 @pytest.mark.parametrize("blocks", MIXED_BLOCKS, ids=lambda b: "-".join(map(str, b)))
 def test_a_live_scene_gives_the_same_frames_in_any_blocks(ring_runs, blocks):
     """Every joint of every character, by FK on every frame, and every morph weight, as frame by frame."""
-    single, mixed = ring_runs[(1,)], ring_runs[blocks]
+    single, mixed = ring_runs[0][(1,)], ring_runs[0][blocks]
     for name in single.characters:
         one, other = joint_positions(single, name), joint_positions(mixed, name)
         assert one.shape == other.shape == (int(round(RING_S * RING_FPS)), one.shape[1], 3)
@@ -265,7 +270,7 @@ def test_the_live_scene_walks_stops_and_looks(ring_runs):
     """The compared scene does what it is meant to (else the test above would show nothing): four
     characters cover ground, the others stand, the first comes to a stand and walks on, and the
     walks, gazes, saccades, blinks and breathing all play."""
-    scene = ring_runs[(1,)]
+    scene = ring_runs[0][(1,)]
     names = list(scene.characters)
     for k, name in enumerate(names):
         positions = joint_positions(scene, name)
@@ -281,3 +286,29 @@ def test_the_live_scene_walks_stops_and_looks(ring_runs):
     kinds = {a.controller.kind for a in scene.runtime.activities}
     for kind in ("locomotion", "gaze", "saccade", "blink", "breathing"):
         assert kind in kinds, f"no {kind} activity in the scene: {sorted(kinds)}"
+
+
+def test_the_live_scene_raises_no_runtime_warning(ring_runs):
+    """Evaluating the scene in any blocks divides by no zero and makes no NaN."""
+    raised = ring_runs[1]
+    assert not raised, "; ".join(f"{w.filename}:{w.lineno}: {w.message}" for w in raised)
+    for scene in ring_runs[0].values():
+        for name in scene.characters:
+            assert np.isfinite(joint_positions(scene, name)).all(), f"{name}: joint positions not finite"
+
+
+def test_a_saccade_of_no_duration_is_at_its_offset_from_its_start():
+    """A held saccade row of no duration (a placeholder row, or a saccade that takes no time) gives
+    the offset before it until its start and its offset from then on, with no division by zero."""
+    from infuse_saccade.controller import SaccadeState
+
+    # start, duration, offset (2), offset before (2); the second row: no saccade yet.
+    held = np.array([[0.1, 0.0, 3.0, -2.0, 1.0, 1.0], [-np.inf, 1.0, 5.0, 5.0, 5.0, 5.0], [0.0, 0.05, 4.0, 0.0, 0.0, 0.0]])
+    t = np.array([[0.0, 0.1, 0.2], [0.0, 0.1, 0.2], [0.0, 0.025, 0.2]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        path = SaccadeState.path(held, t)
+    assert np.array_equal(path[0], [[1.0, 1.0], [3.0, -2.0], [3.0, -2.0]])
+    assert np.array_equal(path[1], np.zeros((3, 2)))
+    # A saccade with a duration still eases out: none of its way at its start, all of it at its end.
+    assert np.array_equal(path[2, [0, 2]], [[0.0, 0.0], [4.0, 0.0]]) and 0.0 < path[2, 1, 0] < 4.0
