@@ -19,7 +19,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
-from infuse.runtime.pose import chain_fk
+from infuse.runtime.pose import chain_plan
 from infuse.runtime.swing import swing
 from infuse.runtime.targets import JointTarget
 
@@ -27,7 +27,7 @@ from .binding import GazeBinding, GazeState, bind_chain
 from .model import DEFAULT_INFLUENCE, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOTS, group_name, smoothing_factor
 from .solver import SolverInput, faces, solve
 
-_FORWARD = np.array([0.0, 0.0, 1.0])  # an aligned frame's forward axis
+_FORWARD = 2  # an aligned frame's forward axis (+Z): its matrix's third column
 #: Radians under which an ended gaze's turn is back at rest (the runtime then evaluates it no more).
 SETTLED_RAD = 1e-6
 
@@ -135,7 +135,7 @@ class Gaze(Controller):
         chain = dict(zip(("frames_world", "positions", "origin"), _chain_frames(leads, chains, block.table)))
         positions = chain["positions"]  # each slot's joint in the world
         # Where the priority joint points: the mean forward (+Z) axis of the eyes or the head.
-        forward_axes = quat.rotate(chain["frames_world"], _FORWARD)
+        forward_axes = chain["frames_world"][..., _FORWARD]  # (C, F, S, 3)
         lead_weights = chains.lead_weights if single else np.array([span[0][0].binding.lead_weights() for span in spans])
         chain["forward"] = _weighted_slots(lead_weights, forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
@@ -245,8 +245,8 @@ class _Chains:
       leading gaze's: a gaze taking over within the block may point other slots);
     - ``world`` (C, 1, S, 1) or None: the slots that are the world itself (no pelvis);
     - ``skeletons``: per skeleton and chain, (characters, a lead job, table columns (C_k, K) of the
-      joints down to the chain, the characters' roots in the table), for one forward kinematics over
-      its characters;
+      joints down to the chain, the characters' roots in the table, the chain's plan), for one forward
+      kinematics over its characters; ``aligned_matrices`` (C, S, 3, 3): ``aligned`` as matrices;
     - ``columns`` (P,): the table columns of every character's present slots, ``present_cells`` (P,):
       their cells ``c S + s`` among every character's slots.
     """
@@ -267,7 +267,11 @@ class _Chains:
             same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
         self.skeletons = [(members, jobs[members[0]], np.array([table.first_joint[jobs[c].rig.name] + bindings[c].columns
                                                                    for c in members]),
-                           np.array([table.character_index[jobs[c].rig.name] for c in members])) for members in same_chain.values()]
+                           np.array([table.character_index[jobs[c].rig.name] for c in members]),
+                           chain_plan(jobs[members[0]].rig.skeleton, tuple(bindings[members[0]].joints.tolist()),
+                                      tuple(bindings[members[0]].columns.tolist())))
+                          for members in same_chain.values()]
+        self.aligned_matrices = quat.unit_to_matrix(self.aligned)  # (C, S, 3, 3)
         self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
         self.present_cells = np.flatnonzero(self.present)
         self._settings: dict[tuple, dict] = {}
@@ -393,25 +397,22 @@ def _in_charge(row, times) -> tuple[np.ndarray, np.ndarray]:
 
 def _chain_frames(jobs, chains: _Chains, table):
     """For the gazing characters (one job each, their ``chains``), from the pose below in ``table``:
-    each slot's aligned frame (C, F, S, 4, unit quaternions) and position (C, F, S, 3) in the world, and
-    where the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all else
-    runs on every character at once."""
+    each slot's aligned frame (C, F, S, 3, 3, rotation matrices) and position (C, F, S, 3) in the world,
+    and where the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all
+    else runs on every character at once."""
     frames = table.frames
-    rot = np.empty((len(jobs), frames, len(SLOTS), 4))
+    rot = np.empty((len(jobs), frames, len(SLOTS), 3, 3))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
-    for members, lead, columns, characters in chains.skeletons:
-        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns, characters)
+    for members, lead, columns, characters, plan in chains.skeletons:
+        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns, characters, plan)
     # Into the world, where each character stands, and into the aligned frames: one constant product
-    # on either side per character and slot, as one matrix product over the frames (F, 4) x (4, 4).
-    placement = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
-    aligned = chains.aligned  # (C, S, 4)
-    to_world = quat.left_matrix(placement)[:, None] @ quat.right_matrix(aligned)  # (C, S, 4, 4)
-    frames_w = _apply_per_slot(to_world, rot)
-    turn = quat.unit_to_matrix(placement)  # (C, 3, 3)
-    pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(turn, -1, -2)).reshape(pos.shape)
+    # on either side per character and slot.
+    placement = quat.unit_to_matrix(np.stack([job.rig.rotation for job in jobs]))  # (C, 3, 3)
+    frames_w = placement[:, None, None] @ rot @ chains.aligned_matrices[:, None]
+    pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(placement, -1, -2)).reshape(pos.shape)
     pos += np.stack([job.rig.position for job in jobs])[:, None, None]
     if chains.world is not None:  # the world itself (no pelvis) stays put
-        frames_w = np.where(chains.world, aligned[:, None], frames_w)
+        frames_w = np.where(chains.world[..., None], chains.aligned_matrices[:, None], frames_w)
         pos = np.where(chains.world, 0.0, pos)
     origin = _weighted_slots(chains.origin_weights, pos)
     return frames_w, pos, origin
@@ -422,23 +423,33 @@ def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.swapaxes(np.swapaxes(q, 1, 2) @ np.swapaxes(matrices, -1, -2), 1, 2)
 
 
-def _slot_poses(jobs, lead, table, columns: np.ndarray, characters: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rotations (C, F, S, 4) and positions (C, F, S, 3) of each slot's joint in the characters' own
-    frames, for characters on one skeleton with one chain (``lead`` one of them; ``columns`` (C, K)
-    their joints down to the chain in ``table``, ``characters`` (C,) their roots there; an absent slot
-    repeats its parent's joint)."""
+def _slot_poses(jobs, lead, table, columns: np.ndarray, characters: np.ndarray, plan) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation matrices (C, F, S, 3, 3) and positions (C, F, S, 3) of each slot's joint in the
+    characters' own frames, for characters on one skeleton with one chain (``lead`` one of them;
+    ``columns`` (C, K) their joints down to the chain in ``table``, ``characters`` (C,) their roots
+    there, ``plan`` the chain's :class:`~infuse.runtime.pose.ChainPlan`; an absent slot repeats its
+    parent's joint). The forward kinematics of :func:`~infuse.runtime.pose.chain_fk`, on matrices:
+    one product per depth."""
     b = lead.binding
-    skeleton = lead.rig.skeleton
-    local = np.swapaxes(table.local_rotations[:, columns], 0, 1)  # (C, F, K, 4)
-    root = np.swapaxes(table.root_translations[:, characters], 0, 1)  # (C, F, 3)
+    local = np.swapaxes(table.local_rotations[:, columns[:, plan.source]], 0, 1)  # (C, F, N, 4), the chain's order
+    rot = quat.unit_to_matrix(local)  # (C, F, N, 3, 3)
+    for members, parents in plan.levels:
+        rot[:, :, members] = rot[:, :, parents] @ rot[:, :, members]
     moved = [j.pose.joint_translations for j in jobs]
-    translations = None
     if any(t is not None for t in moved):
-        rest = skeleton.rest_translations[b.columns]
-        translations = np.stack([np.broadcast_to(rest, local.shape[:2] + rest.shape) if t is None else t[:, b.columns] for t in moved])
-    rot, pos = chain_fk(skeleton, local, root, translations, b.joints, b.columns)
-    source = np.maximum(b.slot_source, 0)  # the world's slots are set apart by the caller
-    return rot[..., source, :], pos[..., source, :]
+        rest = lead.rig.skeleton.rest_translations[b.columns]
+        offsets = np.stack([np.broadcast_to(rest, local.shape[1:2] + rest.shape) if t is None else t[:, b.columns]
+                            for t in moved])[:, :, plan.source]
+    else:
+        offsets = lead.rig.skeleton.rest_translations[plan.chain]
+    steps = np.empty(local.shape[:-1] + (3,))
+    steps[:, :, plan.inner] = (rot[:, :, plan.inner_parents] @ offsets[..., plan.inner, :, None])[..., 0]
+    if plan.roots.size:
+        steps[:, :, plan.roots] = offsets[..., plan.roots, :]
+    if plan.root is not None:
+        steps[:, :, plan.root] = np.swapaxes(table.root_translations[:, characters], 0, 1)
+    source = plan.out[np.maximum(b.slot_source, 0)]  # the world's slots are set apart by the caller
+    return rot[:, :, source], (plan.paths @ steps)[:, :, source]
 
 
 def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:

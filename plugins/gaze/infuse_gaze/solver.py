@@ -35,8 +35,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from infuse import quaternions as quat
-
 from .model import EYE_SLOTS, EYES, SLOT_GROUPS, SLOT_PARENTS, SLOTS
 
 _S = len(SLOTS)
@@ -55,8 +53,8 @@ _AIM_ROW = {s: k for k, s in enumerate(_AIMED_SLOTS)}
 class SolverInput:
     """Arrays over C characters, F frames, S slots, G groups (angles in radians, lengths in metres).
 
-    - ``frames_world`` (C, F, S, 4), ``positions`` (C, F, S, 3): each slot's aligned frame (a unit
-      quaternion, x, y, z, w) and position in the world, in the pose below the gaze;
+    - ``frames_world`` (C, F, S, 3, 3), ``positions`` (C, F, S, 3): each slot's aligned frame (a rotation
+      matrix, acting on column vectors) and position in the world, in the pose below the gaze;
     - ``origin`` (C, F, 3): where the gaze starts (the eyes, or the head); ``forward`` (C, F, 3): where the
       priority joint points (a unit vector), both in the world and the pose below;
     - ``present`` (C, S) bool; ``counts`` (C, G): joints each group has (eyes: 1, they act side by side);
@@ -329,7 +327,7 @@ class _Block:
 
     def __init__(self, inp: SolverInput):
         self.inp = inp
-        frames = _contiguous(quat.unit_to_matrix(inp.frames_world), (2, 3, 4, 0, 1))
+        frames = _contiguous(inp.frames_world, (2, 3, 4, 0, 1))
         positions = _contiguous(inp.positions, (2, 3, 0, 1))
         self.frames, self.positions = frames, positions
         self.to_slot = np.einsum("sjicf,sjkcf->sikcf", frames, frames[_PARENT_SLOTS])
