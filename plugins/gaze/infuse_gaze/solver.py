@@ -298,6 +298,66 @@ class _Group:
         path /= self.counts
         return path
 
+    def turn_one_frame(self, local: np.ndarray, aim: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`turn` of a block of one frame from the target seen from the group's first slot, less
+        where the gaze starts, ``local`` (3, C), and ``aim`` (2, C) (see :class:`_Block`), on Python
+        floats (:func:`_turn_rows`); also returns the unswing matrices (3, 3, C, 1) of the path."""
+        clamp, smoothing = self.clamp, self.smoothing
+        return _turn_rows(local, aim, self.fraction[:, 0], clamp.inverse[..., 0], self.gain[:, 0], smoothing.share,
+                          smoothing.limit, self.counts[:, 0], state)
+
+
+#: Up to this many characters a block of one frame turns each group on Python floats
+#: (:func:`_turn_rows`): numpy's fixed cost per call on arrays of a few values is then more than the
+#: arithmetic.
+SCALAR_TURN_MAX_CHARACTERS = 16
+
+
+def _turn_rows(local, aim, fraction, inverse, gain, share, limit, counts, state) -> tuple[np.ndarray, np.ndarray]:
+    """One frame of a group's turn over R rows, one Python float at a time (the arithmetic of
+    :func:`_angles`, :class:`_Clamp`, :meth:`_Smoothing.one_frame`): the target less the origin
+    ``local`` (3, R) in the group's aligned frame, ``aim`` (2, R), ``fraction``, ``gain``, ``share``,
+    ``limit``, joints ``counts`` (R,), the clamp's ``inverse`` (3, R) limits. ``state``
+    (R, 2) is updated in place. Returns the path (2, R, 1) and its unswing matrices (3, 3, R, 1)."""
+    atan2, hypot, cos, sin = math.atan2, math.hypot, math.cos, math.sin
+    turn, half = 2.0 * math.pi, math.pi
+    rows = len(state)
+    xs, ys, zs = local.tolist()
+    aim_h, aim_v = aim.tolist()
+    inverse_h, inverse_up, inverse_down = inverse.tolist()
+    fraction, gain, share, limit = fraction.tolist(), gain.tolist(), share.tolist(), limit.tolist()
+    counts = counts.tolist()
+    states = state.tolist()
+    path = [[0.0] * rows, [0.0] * rows]
+    entries = []
+    for r in range(rows):
+        x, y, z = xs[r], ys[r], zs[r]
+        f = fraction[r]
+        h = ((atan2(x, z) + aim_h[r]) % turn - half) * f
+        v = (atan2(y, hypot(x, z)) + aim_v[r]) * f
+        across, upward = inverse_h[r], (inverse_up[r] if v >= 0.0 else inverse_down[r])
+        ellipse = hypot(h * across, v * upward)
+        if ellipse > 1.0:
+            h /= ellipse
+            v /= ellipse
+        if across == 0.0:
+            h = 0.0
+        if upward == 0.0:
+            v = 0.0
+        h *= gain[r]
+        v *= gain[r]
+        x0, y0 = states[r]
+        dx, dy = (h - x0) * share[r], (v - y0) * share[r]
+        k = limit[r] / max(hypot(dx, dy), limit[r])  # 1 within the limit (> 0)
+        x0, y0 = dx * k + x0, dy * k + y0
+        states[r] = (x0, y0)
+        h, v = x0 / counts[r], y0 / counts[r]
+        path[0][r], path[1][r] = h, v
+        ch, sh, cp, sp = cos(h), sin(h), cos(v), sin(v)
+        entries.append((ch, 0.0, -sh, -sh * sp, cp, -ch * sp, sh * cp, sp, ch * cp))
+    state[:] = states
+    return np.array(path)[..., None], np.array(entries).T.reshape(3, 3, rows, 1)
+
 
 def _kept(inp: SolverInput, key, make):
     """``make()``, kept in ``inp.kept`` under ``key`` when the caller keeps the settings' products."""
@@ -438,6 +498,7 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
     offsets (C, F, S, 2) and {slot: position (3, C, F) in the world} of the slots ``place``.
     """
     c_count, frames = target.shape[1:]
+    scalar = frames == 1 and c_count <= SCALAR_TURN_MAX_CHARACTERS
     out = np.zeros((c_count, frames, _S, 2))
     turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
     points = 2 if place else 1  # the carried columns that are points
@@ -458,11 +519,14 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
             view[:, :points] -= block.lift[s][:, None]
         if turning[g] and first:
             row = _AIM_ROW[s]
-            hv = _angles(view[:, 0] - block.origin[row])
-            hv += block.aim[row]
-            _wrap_heading(hv)
-            share = block.group(g).turn(hv, groups_state[:, g])
-            unturn = None
+            if scalar:
+                share, unturn = block.group(g).turn_one_frame(view[:, 0, :, 0] - block.origin[row, :, :, 0],
+                                                              block.aim[row, :, :, 0], groups_state[:, g])
+            else:
+                hv = _angles(view[:, 0] - block.origin[row])
+                hv += block.aim[row]
+                _wrap_heading(hv)
+                share, unturn = block.group(g).turn(hv, groups_state[:, g]), None
         if turning[g] and not block.absent[s]:
             if block.everyone[s]:  # the group's slots share one turn
                 unturn = unswing_matrices(share) if unturn is None else unturn
