@@ -786,44 +786,52 @@ class Locomotion(Controller):
                     if kind == footing.FREE:
                         if prev != footing.FREE:
                             released, free_s = 0.0, 0.0
-                        # The ball stays where it was let go until it leaves the ground (a take's ball may push
-                        # off moving along it), at most HOLD_S, and the release's clock runs from then on.
-                        since = free_s + dt * np.arange(1, e - s + 1)
-                        up = (feet_pos[s:e, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
-                        free_s = float(since[-1])
-                        down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
-                        if down[-1] >= 0:
-                            ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
-                        else:
-                            ball_offset = ball_offset[None]  # the same on every frame
-                        age = released + dt * np.cumsum(up)
-                        fade = 1.0 - footing.smoothstep(age / RELEASE_S)
-                        # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
-                        # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
-                        # ground last, and the fading turn would swing it along the ground).
-                        turn[s:e] = _share_of(left, fade)
-                        hang = quat.rotate(turn[s:e], lever[s:e])
-                        if lifted.any():
-                            rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
-                            # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
-                            corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
-                            hang = quat.rotate(_from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
-                        goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
-                        # A foot far from where the animation has it steps there over an arc, not along the
-                        # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
-                        goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
-                        held = np.nonzero(~up)[0]
-                        if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
-                            h = s + held
-                            goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
-                            rise[h] += more
-                            if held[-1] == e - s - 1:  # the rise the release fades from
-                                lifted = rise[e - 1].copy()
-                        ball_offset = ball_offset[-1].copy()
-                        weight[s:e] = fade > 0.0
-                        released = float(age[-1])
-                        if fade[-1] <= 0.0:
-                            offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
+                        # Processed piece by piece, each ending at a frame whose ball is still held (its heel's
+                        # rise and where it leaves the ball carry to the frames after it), as frame by frame:
+                        # the same frames whatever the block. The time in the air counts whole frames.
+                        end = e
+                        while s < end:
+                            # The ball stays where it was let go until it leaves the ground (a take's ball may push
+                            # off moving along it), at most HOLD_S, and the release's clock runs from then on.
+                            since = (round(free_s / dt) + np.arange(1, end - s + 1)) * dt
+                            up = (feet_pos[s:end, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
+                            e = s + int(np.argmin(up)) + 1 if not up.all() else end
+                            since, up = since[:e - s], up[:e - s]
+                            free_s = float(since[-1])
+                            down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
+                            if down[-1] >= 0:
+                                ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
+                            else:
+                                ball_offset = ball_offset[None]  # the same on every frame
+                            age = released + dt * np.cumsum(up)
+                            fade = 1.0 - footing.smoothstep(age / RELEASE_S)
+                            # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
+                            # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
+                            # ground last, and the fading turn would swing it along the ground).
+                            turn[s:e] = _share_of(left, fade)
+                            hang = quat.rotate(turn[s:e], lever[s:e])
+                            if lifted.any():
+                                rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
+                                # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
+                                corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
+                                hang = quat.rotate(_from_rotvec(quat.rotate(corrected, rise[s:e])), hang)
+                            goal[s:e] = feet_pos[s:e, k, 1] + ball_offset * fade[:, None] - hang
+                            # A foot far from where the animation has it steps there over an arc, not along the
+                            # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
+                            goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
+                            held = np.nonzero(~up)[0]
+                            if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
+                                h = s + held
+                                goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
+                                rise[h] += more
+                                if held[-1] == e - s - 1:  # the rise the release fades from
+                                    lifted = rise[e - 1].copy()
+                            ball_offset = ball_offset[-1].copy()
+                            weight[s:e] = fade > 0.0
+                            released = float(age[-1])
+                            if fade[-1] <= 0.0:
+                                offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
+                            s = e
                     else:
                         if kind != prev and prev == footing.FREE:
                             # The anchor lands: it stays where the corrected foot puts it now.
