@@ -201,13 +201,13 @@ RING_CAST = (("runxaway-models/Xbot.glb", "locomotion-male"), ("talkinghead/avat
 MIXED_BLOCKS = ((7, 3, 16, 1, 2), (32, 5, 11))
 
 
-def walking_ring() -> Scene:
+def walking_ring(fps: float = RING_FPS) -> Scene:
     """Ten characters in a ring facing its centre, each gazing at the next with listening saccades
     (blinking, breathing); four walk from standing: toward the middle, across the ring, outward, and
     sideways (turning on the spot first); at 3.5 s the first two are sent on to the middle (the first
     has come to a stand by then, the second is still walking). Walks start and stop as the idle
     fades out and in, where a foot's contact share passes through one half."""
-    scene = Scene(fps=RING_FPS, quiet=True)
+    scene = Scene(fps=fps, quiet=True)
     radius = 1.5 + 0.25 * RING_COUNT
     for k in range(RING_COUNT):
         path, pack = RING_CAST[k % len(RING_CAST)]
@@ -228,10 +228,10 @@ def walking_ring() -> Scene:
     return scene
 
 
-def stepped(blocks: tuple[int, ...]) -> Scene:
-    """:func:`walking_ring` evaluated for :data:`RING_S` in blocks of ``blocks`` frames in turn."""
-    scene = walking_ring()
-    left = int(round(RING_S * RING_FPS))
+def stepped(blocks: tuple[int, ...], fps: float = RING_FPS, seconds: float = RING_S) -> Scene:
+    """:func:`walking_ring` at ``fps`` evaluated for ``seconds`` in blocks of ``blocks`` frames in turn."""
+    scene = walking_ring(fps)
+    left = int(round(seconds * fps))
     for size in itertools.cycle(blocks):
         if left <= 0:
             return scene
@@ -312,3 +312,15 @@ def test_a_saccade_of_no_duration_is_at_its_offset_from_its_start():
     assert np.array_equal(path[1], np.zeros((3, 2)))
     # A saccade with a duration still eases out: none of its way at its start, all of it at its end.
     assert np.array_equal(path[2, [0, 2]], [[0.0, 0.0], [4.0, 0.0]]) and 0.0 < path[2, 1, 0] < 4.0
+
+
+def test_a_live_scene_at_120_fps_gives_the_same_frames_in_any_blocks():
+    """At 120 fps a foot let go holds its ball for more frames of a block: the frames after one still
+    held take its heel's rise and ball as frame by frame (the first 1.5 s: starts and a turn on the spot)."""
+    seconds, fps = 1.5, 120.0
+    single, mixed = stepped((1,), fps, seconds), stepped(MIXED_BLOCKS[0], fps, seconds)
+    for name in single.characters:
+        apart = np.linalg.norm(joint_positions(single, name) - joint_positions(mixed, name), axis=-1)
+        frame, joint = np.unravel_index(np.argmax(apart), apart.shape)
+        assert apart.max() < BOUND_M, (f"{name} at {fps:g} fps in blocks of {MIXED_BLOCKS[0]}: {apart.max():.3g} m from "
+                                       f"frame by frame at frame {frame}, joint {single.motion(name).skeleton.names[joint]}")
