@@ -482,7 +482,8 @@ def faces(targets: np.ndarray, positions: np.ndarray, refine) -> None:
         else:
             targets[c, these] = positions[other][these][:, list(slots)].mean(axis=1)
     for slots, (gazers, others) in whole.items():
-        targets[gazers] = positions[others][:, :, list(slots)].mean(axis=2)
+        picked = positions[np.array(others)[:, None], :, slots]  # (n, k, F, 3)
+        targets[gazers] = picked[:, 0] if len(slots) == 1 else np.add.reduce(picked, axis=1) / len(slots)
 
 
 def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_state: np.ndarray, eyes_state: np.ndarray,
