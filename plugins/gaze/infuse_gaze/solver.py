@@ -281,6 +281,7 @@ class _Group:
     smoothing and the joints it has (``counts`` (C, 1))."""
 
     def __init__(self, inp: SolverInput, gains: np.ndarray, g: int):
+        self.inp, self.g = inp, g
         self.fraction = inp.fractions[:, :, g]
         self.gain = gains[:, :, g]
         self.clamp, self.smoothing, self.counts = _kept(inp, g, lambda: (
@@ -302,9 +303,10 @@ class _Group:
         """:meth:`turn` of a block of one frame from the target seen from the group's first slot, less
         where the gaze starts, ``local`` (3, C), and ``aim`` (2, C) (see :class:`_Block`), on Python
         floats (:func:`_turn_rows`); also returns the unswing matrices (3, 3, C, 1) of the path."""
-        clamp, smoothing = self.clamp, self.smoothing
-        return _turn_rows(local, aim, self.fraction[:, 0], clamp.inverse[..., 0], self.gain[:, 0], smoothing.share,
-                          smoothing.limit, self.counts[:, 0], state)
+        settings = _kept(self.inp, (self.g, "one frame"), lambda: tuple(
+            a.tolist() for a in (self.fraction[:, 0], *self.clamp.inverse[..., 0], self.smoothing.share, self.smoothing.limit,
+                                 self.counts[:, 0])))
+        return _turn_rows(local, aim, self.gain[:, 0], settings, state)
 
 
 #: Up to this many characters a block of one frame turns each group on Python floats
@@ -313,20 +315,20 @@ class _Group:
 SCALAR_TURN_MAX_CHARACTERS = 16
 
 
-def _turn_rows(local, aim, fraction, inverse, gain, share, limit, counts, state) -> tuple[np.ndarray, np.ndarray]:
+def _turn_rows(local, aim, gain, settings: tuple, state) -> tuple[np.ndarray, np.ndarray]:
     """One frame of a group's turn over R rows, one Python float at a time (the arithmetic of
     :func:`_angles`, :class:`_Clamp`, :meth:`_Smoothing.one_frame`): the target less the origin
-    ``local`` (3, R) in the group's aligned frame, ``aim`` (2, R), ``fraction``, ``gain``, ``share``,
-    ``limit``, joints ``counts`` (R,), the clamp's ``inverse`` (3, R) limits. ``state``
-    (R, 2) is updated in place. Returns the path (2, R, 1) and its unswing matrices (3, 3, R, 1)."""
+    ``local`` (3, R) in the group's aligned frame, ``aim`` (2, R), ``gain`` (R,) and ``settings``, lists
+    of R values: the share of the turn, the clamp's inverse limits (heading, up, down), the smoothing's
+    share and limit per frame, the joints. ``state`` (R, 2) is updated in place. Returns the path
+    (2, R, 1) and its unswing matrices (3, 3, R, 1)."""
     atan2, hypot, cos, sin = math.atan2, math.hypot, math.cos, math.sin
     turn, half = 2.0 * math.pi, math.pi
     rows = len(state)
     xs, ys, zs = local.tolist()
     aim_h, aim_v = aim.tolist()
-    inverse_h, inverse_up, inverse_down = inverse.tolist()
-    fraction, gain, share, limit = fraction.tolist(), gain.tolist(), share.tolist(), limit.tolist()
-    counts = counts.tolist()
+    gain = gain.tolist()
+    fraction, inverse_h, inverse_up, inverse_down, share, limit, counts = settings
     states = state.tolist()
     path = [[0.0] * rows, [0.0] * rows]
     entries = []
