@@ -244,9 +244,8 @@ class _Chains:
     - ``lead_weights`` and ``origin_weights`` (C, S): the slots the gaze points and starts from (the
       leading gaze's: a gaze taking over within the block may point other slots);
     - ``world`` (C, 1, S, 1) or None: the slots that are the world itself (no pelvis);
-    - ``skeletons``: per skeleton and chain, (characters, a lead job, table columns (C_k, K) of the
-      joints down to the chain, the characters' roots in the table, the chain's plan), for one forward
-      kinematics over its characters; ``aligned_matrices`` (C, S, 3, 3): ``aligned`` as matrices;
+    - ``skeletons``: a :class:`_ChainGroup` per skeleton and chain, for one forward kinematics over
+      its characters; ``aligned_matrices`` (C, S, 3, 3): ``aligned`` as matrices;
     - ``columns`` (P,): the table columns of every character's present slots, ``present_cells`` (P,):
       their cells ``c S + s`` among every character's slots.
     """
@@ -265,12 +264,7 @@ class _Chains:
         same_chain: dict[tuple, list[int]] = {}
         for c, job in enumerate(jobs):
             same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
-        self.skeletons = [(members, jobs[members[0]], np.array([table.first_joint[jobs[c].rig.name] + bindings[c].columns
-                                                                   for c in members]),
-                           np.array([table.character_index[jobs[c].rig.name] for c in members]),
-                           chain_plan(jobs[members[0]].rig.skeleton, tuple(bindings[members[0]].joints.tolist()),
-                                      tuple(bindings[members[0]].columns.tolist())))
-                          for members in same_chain.values()]
+        self.skeletons = [_ChainGroup(members, [jobs[c] for c in members], table) for members in same_chain.values()]
         self.aligned_matrices = quat.unit_to_matrix(self.aligned)  # (C, S, 3, 3)
         self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
         self.present_cells = np.flatnonzero(self.present)
@@ -403,8 +397,8 @@ def _chain_frames(jobs, chains: _Chains, table):
     frames = table.frames
     rot = np.empty((len(jobs), frames, len(SLOTS), 3, 3))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
-    for members, lead, columns, characters, plan in chains.skeletons:
-        rot[members], pos[members] = _slot_poses([jobs[c] for c in members], lead, table, columns, characters, plan)
+    for group in chains.skeletons:
+        rot[group.members], pos[group.members] = group.slot_poses([jobs[c] for c in group.members], table)
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot.
     placement = quat.unit_to_matrix(np.stack([job.rig.rotation for job in jobs]))  # (C, 3, 3)
@@ -423,33 +417,49 @@ def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.swapaxes(np.swapaxes(q, 1, 2) @ np.swapaxes(matrices, -1, -2), 1, 2)
 
 
-def _slot_poses(jobs, lead, table, columns: np.ndarray, characters: np.ndarray, plan) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation matrices (C, F, S, 3, 3) and positions (C, F, S, 3) of each slot's joint in the
-    characters' own frames, for characters on one skeleton with one chain (``lead`` one of them;
-    ``columns`` (C, K) their joints down to the chain in ``table``, ``characters`` (C,) their roots
-    there, ``plan`` the chain's :class:`~infuse.runtime.pose.ChainPlan`; an absent slot repeats its
-    parent's joint). The forward kinematics of :func:`~infuse.runtime.pose.chain_fk`, on matrices:
-    one product per depth."""
-    b = lead.binding
-    local = np.swapaxes(table.local_rotations[:, columns[:, plan.source]], 0, 1)  # (C, F, N, 4), the chain's order
-    rot = quat.unit_to_matrix(local)  # (C, F, N, 3, 3)
-    for members, parents in plan.levels:
-        rot[:, :, members] = rot[:, :, parents] @ rot[:, :, members]
-    moved = [j.pose.joint_translations for j in jobs]
-    if any(t is not None for t in moved):
-        rest = lead.rig.skeleton.rest_translations[b.columns]
-        offsets = np.stack([np.broadcast_to(rest, local.shape[1:2] + rest.shape) if t is None else t[:, b.columns]
-                            for t in moved])[:, :, plan.source]
-    else:
-        offsets = lead.rig.skeleton.rest_translations[plan.chain]
-    steps = np.empty(local.shape[:-1] + (3,))
-    steps[:, :, plan.inner] = (rot[:, :, plan.inner_parents] @ offsets[..., plan.inner, :, None])[..., 0]
-    if plan.roots.size:
-        steps[:, :, plan.roots] = offsets[..., plan.roots, :]
-    if plan.root is not None:
-        steps[:, :, plan.root] = np.swapaxes(table.root_translations[:, characters], 0, 1)
-    source = plan.out[np.maximum(b.slot_source, 0)]  # the world's slots are set apart by the caller
-    return rot[:, :, source], (plan.paths @ steps)[:, :, source]
+class _ChainGroup:
+    """Gazing characters on one skeleton with one chain (``members``, their indices among the gazing
+    ones; ``jobs``, one each), and what their forward kinematics down the chain needs of them: the
+    chain's :class:`~infuse.runtime.pose.ChainPlan` (N joints, parents first), their table columns
+    (C_k, N) and roots (C_k,) in ``table``, each slot's joint in the chain (S,) (an absent slot repeats
+    its parent's; the world's slots are set apart by the caller) and the rest offsets of the joints
+    below the chain's roots (n, 3, 1)."""
+
+    def __init__(self, members: list[int], jobs: list, table):
+        lead = jobs[0]
+        b = lead.binding
+        self.members, self.lead = members, lead
+        self.plan = plan = chain_plan(lead.rig.skeleton, tuple(b.joints.tolist()), tuple(b.columns.tolist()))
+        self.columns = np.array([table.first_joint[job.rig.name] + job.binding.columns for job in jobs])[:, plan.source]
+        self.characters = np.array([table.character_index[job.rig.name] for job in jobs])
+        self.source = plan.out[np.maximum(b.slot_source, 0)]
+        self.paths = plan.paths[self.source]  # (S, N)
+        self.rest = lead.rig.skeleton.rest_translations[plan.chain]  # (N, 3)
+        self.inner_rest = self.rest[plan.inner, :, None]
+
+    def slot_poses(self, jobs, table) -> tuple[np.ndarray, np.ndarray]:
+        """Rotation matrices (C_k, F, S, 3, 3) and positions (C_k, F, S, 3) of each slot's joint in the
+        characters' own frames, from the pose in ``table``: the forward kinematics of
+        :func:`~infuse.runtime.pose.chain_fk`, on matrices, one product per depth."""
+        plan = self.plan
+        rot = quat.unit_to_matrix(np.swapaxes(table.local_rotations[:, self.columns], 0, 1))  # (C, F, N, 3, 3)
+        for members, parents in plan.levels:
+            rot[:, :, members] = rot[:, :, parents] @ rot[:, :, members]
+        moved = [j.pose.joint_translations for j in jobs]
+        steps = np.empty(rot.shape[:-1])
+        if any(t is not None for t in moved):
+            columns = self.lead.binding.columns[plan.source]
+            offsets = np.stack([np.broadcast_to(self.rest, rot.shape[1:2] + self.rest.shape) if t is None else t[:, columns]
+                                for t in moved])
+            inner = offsets[..., plan.inner, :, None]
+        else:
+            offsets, inner = self.rest, self.inner_rest
+        steps[:, :, plan.inner] = (rot[:, :, plan.inner_parents] @ inner)[..., 0]
+        if plan.roots.size:
+            steps[:, :, plan.roots] = offsets[..., plan.roots, :]
+        if plan.root is not None:
+            steps[:, :, plan.root] = np.swapaxes(table.root_translations[:, self.characters], 0, 1)
+        return rot[:, :, self.source], self.paths @ steps
 
 
 def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
