@@ -24,7 +24,9 @@ needed when another character looks at this one's face: that pass also carries t
 and axes, from which a slot's position follows at the end.
 Inside a block, vectors and matrices are component-major ((3, C, F), (3, 3, C, F)): each component
 is one contiguous array over the characters and frames, so a product over a block is a few calls on
-long arrays (numpy's products of stacks of 3 x 3 matrices cost far more per frame).
+long arrays (numpy's products of stacks of 3 x 3 matrices cost far more per frame). A block of one
+frame of a few characters (a live scene's) turns each group on Python floats (:func:`_turn_rows`):
+there numpy's fixed cost per call is more than the arithmetic.
 """
 from __future__ import annotations
 
