@@ -108,6 +108,12 @@ async def _serve(server: LiveServer, live: LiveScene, senders, args) -> None:
     live.start()
     for sender in senders:
         sender.start()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        try:  # stopped by the loop itself, not by an exception raised wherever the signal lands
+            loop.add_signal_handler(sig, server.shutdown)
+        except (NotImplementedError, RuntimeError, ValueError):  # no loop signal handlers here: KeyboardInterrupt
+            pass
     vmc = "".join(f"  vmc {s.host}:{s.port} ({s.character})" for s in senders)
     print(f"infuse serve: {len(live.scene.characters)} characters at {live.fps:g} fps; "
           f"ws://{args.host}:{server.port}/  http://{args.host}:{server.http_port}/{vmc}  (Ctrl-C stops)", flush=True)
