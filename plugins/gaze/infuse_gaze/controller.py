@@ -19,7 +19,7 @@ import numpy as np
 from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode, as_target
-from infuse.runtime.pose import chain_plan
+from infuse.runtime.pose import chain_fk, chain_plan
 from infuse.runtime.swing import swing
 from infuse.runtime.targets import JointTarget
 
@@ -395,14 +395,20 @@ def _chain_frames(jobs, chains: _Chains, table):
     and where the gaze starts (C, F, 3). Characters on one skeleton share one forward kinematics; all
     else runs on every character at once."""
     frames = table.frames
-    rot = np.empty((len(jobs), frames, len(SLOTS), 3, 3))
+    matrices = len(jobs) * frames <= MATRIX_FK_MAX_ROWS
+    rot = np.empty((len(jobs), frames, len(SLOTS)) + ((3, 3) if matrices else (4,)))
     pos = np.empty((len(jobs), frames, len(SLOTS), 3))
     for group in chains.skeletons:
-        rot[group.members], pos[group.members] = group.slot_poses([jobs[c] for c in group.members], table)
+        members = [jobs[c] for c in group.members]
+        rot[group.members], pos[group.members] = group.slot_poses(members, table) if matrices else group.slot_quaternions(members, table)
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot.
-    placement = quat.unit_to_matrix(np.stack([job.rig.rotation for job in jobs]))  # (C, 3, 3)
-    frames_w = placement[:, None, None] @ rot @ chains.aligned_matrices[:, None]
+    rotation = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
+    placement = quat.unit_to_matrix(rotation)  # (C, 3, 3)
+    if matrices:
+        frames_w = placement[:, None, None] @ rot @ chains.aligned_matrices[:, None]
+    else:
+        frames_w = quat.unit_to_matrix(_apply_per_slot(quat.left_matrix(rotation)[:, None] @ quat.right_matrix(chains.aligned), rot))
     pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(placement, -1, -2)).reshape(pos.shape)
     pos += np.stack([job.rig.position for job in jobs])[:, None, None]
     if chains.world is not None:  # the world itself (no pelvis) stays put
@@ -410,6 +416,12 @@ def _chain_frames(jobs, chains: _Chains, table):
         pos = np.where(chains.world, 0.0, pos)
     origin = _weighted_slots(chains.origin_weights, pos)
     return frames_w, pos, origin
+
+
+#: Up to this many characters times frames the chains' forward kinematics runs on rotation matrices
+#: (one numpy call per depth); above, on quaternions (:func:`~infuse.runtime.pose.chain_fk`, whose
+#: written-out products cost less per rotation than numpy's products of stacks of 3 x 3 matrices).
+MATRIX_FK_MAX_ROWS = 256
 
 
 def _apply_per_slot(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -460,6 +472,21 @@ class _ChainGroup:
         if plan.root is not None:
             steps[:, :, plan.root] = np.swapaxes(table.root_translations[:, self.characters], 0, 1)
         return rot[:, :, self.source], self.paths @ steps
+
+    def slot_quaternions(self, jobs, table) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`slot_poses` with the rotations as unit quaternions (C_k, F, S, 4), by
+        :func:`~infuse.runtime.pose.chain_fk`."""
+        b, plan = self.lead.binding, self.plan
+        local = np.swapaxes(table.local_rotations[:, self.columns], 0, 1)  # (C, F, N, 4), the chain's order
+        root = np.swapaxes(table.root_translations[:, self.characters], 0, 1)
+        moved = [j.pose.joint_translations for j in jobs]
+        translations = None
+        if any(t is not None for t in moved):
+            columns = b.columns[plan.source]
+            translations = np.stack([np.broadcast_to(self.rest, local.shape[1:2] + self.rest.shape) if t is None else t[:, columns]
+                                     for t in moved])
+        chain = plan.chain[self.source]  # the slots' joints, by skeleton index
+        return chain_fk(self.lead.rig.skeleton, local, root, translations, chain, plan.chain)
 
 
 def _weighted_slots(weights: np.ndarray, values: np.ndarray) -> np.ndarray:
