@@ -779,6 +779,7 @@ class Locomotion(Controller):
                 landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
                 landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
                 let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
+                foot_heading, held_swivel = float(st.foot_heading[k]), float(st.held_swivel[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
                 bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
                 for s, e in zip(bounds[:-1], bounds[1:]):
@@ -870,6 +871,20 @@ class Locomotion(Controller):
                             kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
                         turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
                         reach = quat.rotate(turn[s:e], lever[s:e])  # the corrected ankle to ball
+                        if kind == footing.ANKLE:
+                            # While its ball is down too, the foot's heading (its ankle-to-ball direction about
+                            # the vertical) holds: a blend's or take's swivel about the heel, or a roll down
+                            # about an axis not square to the foot, would sweep the ball along the ground.
+                            # ``held`` (F,) the turn held off (radians), summed frame by frame.
+                            heading_now = np.arctan2(reach[:, 0], reach[:, 2])
+                            step = np.diff(np.concatenate(([foot_heading], heading_now)))
+                            if kind != prev:
+                                step[0], held_swivel = 0.0, 0.0
+                            step = (step + math.pi) % (2.0 * math.pi) - math.pi
+                            held = held_swivel + np.cumsum(np.where(contact[a0 + s:a0 + e, k, 1] > 0.5, step, 0.0))
+                            foot_heading, held_swivel = float(heading_now[-1]), float(held[-1])
+                            turn[s:e] = quat.multiply(yaw(-held), turn[s:e])
+                            reach = quat.rotate(turn[s:e], lever[s:e])
                         goal[s:e] = pin - (reach if kind == footing.BALL else _heel_of(b, k, reach))
                         # The ankle at the animation's height; held by the ball for the pose's sake, no
                         # lower than keeps the ball at the height it took over at (the blend's leg, half
@@ -888,6 +903,7 @@ class Locomotion(Controller):
                 st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
                 st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
                 st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
+                st.foot_heading[k], st.held_swivel[k] = foot_heading, held_swivel
             st.last = feet_pos[-1].copy()
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come

@@ -46,7 +46,9 @@ class LocomotionState(SteeringState):
       (2, 3) where the ball was let go, ``last`` (2, 2, 3) the ankle and ball a frame earlier, ``rise``
       (2, 3) the heel's extra rise (rotation vector), ``landed`` and ``landed_as`` (2, 4) the foot's
       rotation as it landed, animated and corrected, ``landed_spun`` (2,) the turn spun at the root then,
-      ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction;
+      ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction; held by its heel,
+      ``foot_heading`` (2,) its heading a frame earlier (radians about +Y, from +Z) and ``held_swivel``
+      (2,) the turn about the vertical held off it while its ball is down;
     - ``warned``: a speed the pack cannot realize has been reported.
     """
 
@@ -76,6 +78,8 @@ class LocomotionState(SteeringState):
     landed: np.ndarray = field(default_factory=_unturned)
     landed_as: np.ndarray = field(default_factory=_unturned)
     landed_spun: np.ndarray = field(default_factory=lambda: _feet())
+    foot_heading: np.ndarray = field(default_factory=lambda: _feet())
+    held_swivel: np.ndarray = field(default_factory=lambda: _feet())
     across: np.ndarray = field(default_factory=lambda: _feet(3))
     foot_turn: np.ndarray = field(default_factory=_unturned)
     warned: bool = False
