@@ -533,6 +533,7 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
                 _wrap_heading(hv)
                 share, unturn = block.group(g).turn(hv, groups_state[:, g]), None
         if turning[g] and not block.absent[s]:
+            assert share is not None  # set at the group's first slot, which comes before the others
             if block.everyone[s]:  # the group's slots share one turn
                 unturn = unswing_matrices(share) if unturn is None else unturn
                 out[:, :, s] = share.transpose(1, 2, 0)
