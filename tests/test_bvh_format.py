@@ -248,6 +248,18 @@ def test_writer_bakes_rest_rotations_and_keeps_positions(tmp_path):
     assert np.allclose(np.abs(np.sum(quat.multiply(g2[:, order], sk.rest_global_rotations) * g1, axis=-1)), 1.0, atol=1e-6)
 
 
+def test_a_motion_is_saved_as_a_file_of_its_skeleton(tmp_path):
+    sk = _skeleton_with_rest_rotations()
+    rots = Rotation.random(5 * sk.num_joints, random_state=4).as_quat().reshape(5, sk.num_joints, 4)
+    motion = Motion(sk, 30.0, rots, np.tile([0.0, 0.95, 0.0], (5, 1)), name="wave")
+    again = infuse.load(infuse.save(motion, tmp_path / "wave.bvh"), units="cm", up_axis="Y")
+    out = next(iter(again.motions.values()))
+    order = [again.skeleton.index[n] for n in sk.names]
+    assert np.abs(motion_fk(motion)[1] - motion_fk(out)[1][:, order]).max() < 1e-6
+    with pytest.raises(infuse.errors.UsageError, match="wave.bvh: save writes an Asset or a Motion, not a dict"):
+        infuse.save({"clip": motion}, tmp_path / "wave.bvh")
+
+
 def test_writer_adds_channels_an_edited_motion_needs(tmp_path):
     joints = [("Hips", -1, (0, 95, 0), ["Xposition", "Yposition", "Zposition"] + _rotations("ZXY")),
               ("Spine", 0, (0, 25, 0), _rotations("XZ")), ("Head", 1, (0, 45, 0), [])]

@@ -9,7 +9,8 @@ import numpy as np
 from . import references, registry
 from .asset import Asset
 from .atomic import atomic_path
-from .errors import PARSE_ERRORS, InfuseError, InputError, UnsupportedFormatError
+from .errors import PARSE_ERRORS, InfuseError, InputError, UnsupportedFormatError, UsageError
+from .motion import Motion
 from .plugin_types import normalized_extension
 
 
@@ -61,9 +62,16 @@ def load(path: str | Path, format: str | None = None, **options) -> Asset:
         raise InputError(path, None, f"cannot be read as {reader.name}: {type(exc).__name__}: {exc}") from exc
 
 
-def save(asset: Asset, path: str | Path, format: str | None = None, **options) -> Path:
-    """Write ``asset`` to ``path`` atomically with the writer for its extension; returns ``path``."""
+def save(asset: Asset | Motion, path: str | Path, format: str | None = None, **options) -> Path:
+    """Write ``asset`` to ``path`` atomically with the writer for its extension; returns ``path``.
+
+    A :class:`~infuse.motion.Motion` is written as a file of its skeleton holding that one clip.
+    """
     path = Path(path)
+    if isinstance(asset, Motion):
+        asset = Asset(path=None, format="motion", skeleton=asset.skeleton, motions={asset.name or "clip": asset})
+    elif not isinstance(asset, Asset):
+        raise UsageError(f"{path}: save writes an Asset or a Motion, not a {type(asset).__name__}")
     writer = _pick("writer", registry.table_for_file("writer", path, format), path, format)
     with atomic_path(path) as tmp:
         writer.write(asset, tmp, **options)
