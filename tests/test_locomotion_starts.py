@@ -14,11 +14,11 @@ import infuse
 from infuse import footing
 from infuse.contacts import FootContacts, foot_contacts, sole_positions
 from infuse.metrics import foot_skate
-from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.packs.walk_test import PARTS, trial_pack, walk_parts
 from infuse.runtime import Runtime, controller
 
 from corpus_data import corpus_file, require_corpus
+from pack_support import smartbody_space
 
 pytest.importorskip("infuse_locomotion")
 FPS = 30
@@ -96,10 +96,7 @@ def brad():
 @pytest.fixture(scope="module")
 def male_space(brad, tmp_path_factory):
     """SmartBody's MaleLocomotion set imported, built and infused onto Brad."""
-    folder = import_smartbody(corpus_file("smartbody/behaviorsets/MaleLocomotion"), tmp_path_factory.mktemp("packs") / "male",
-                              name="sb-male")
-    build_pack(folder)
-    return next(iter(infuse_character(infuse.Character("b", brad), [str(folder)]).spaces.values()))
+    return smartbody_space(brad, "MaleLocomotion", tmp_path_factory.mktemp("packs"))
 
 
 def start_slide(asset, pack, target, seconds: float) -> np.ndarray:

@@ -8,10 +8,10 @@ import pytest
 
 import infuse
 from infuse.contacts import foot_contacts
-from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.runtime import Runtime, controller
 
 from corpus_data import corpus_file, require_corpus
+from pack_support import smartbody_space
 
 infuse_locomotion = pytest.importorskip("infuse_locomotion")
 transitions = infuse_locomotion.transitions
@@ -27,10 +27,7 @@ def xbot():
 
 @pytest.fixture(scope="module")
 def space(xbot, tmp_path_factory):
-    folder = import_smartbody(corpus_file("smartbody/behaviorsets/MaleLocomotion"), tmp_path_factory.mktemp("packs") / "male",
-                              name="sb-male")
-    build_pack(folder)
-    return next(iter(infuse_character(infuse.Character("x", xbot), [str(folder)]).spaces.values()))
+    return smartbody_space(xbot, "MaleLocomotion", tmp_path_factory.mktemp("packs"))
 
 
 def test_walks_of_any_length_end_with_the_stop_clip_on_their_target(xbot, space, monkeypatch):

@@ -9,10 +9,10 @@ import pytest
 
 import infuse
 from infuse.contacts import foot_contacts, sole_positions
-from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.runtime import Runtime, controller
 
 from corpus_data import corpus_file, require_corpus
+from pack_support import smartbody_space
 
 pytest.importorskip("infuse_locomotion")
 FPS = 30
@@ -58,10 +58,7 @@ def xbot():
 @pytest.fixture(scope="module")
 def female_space(xbot, tmp_path_factory):
     """SmartBody's FemaleLocomotion set imported, built and infused onto Xbot."""
-    folder = import_smartbody(corpus_file("smartbody/behaviorsets/FemaleLocomotion"), tmp_path_factory.mktemp("packs") / "female",
-                              name="sb-female")
-    build_pack(folder)
-    return next(iter(infuse_character(infuse.Character("x", xbot), [str(folder)]).spaces.values()))
+    return smartbody_space(xbot, "FemaleLocomotion", tmp_path_factory.mktemp("packs"))
 
 
 def test_a_flat_foot_held_by_its_heel_keeps_its_heading(xbot, female_space):
