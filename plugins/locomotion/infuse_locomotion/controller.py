@@ -875,15 +875,15 @@ class Locomotion(Controller):
                             # While its ball is down too, the foot's heading (its ankle-to-ball direction about
                             # the vertical) holds: a blend's or take's swivel about the heel, or a roll down
                             # about an axis not square to the foot, would sweep the ball along the ground.
-                            # ``held`` (F,) the turn held off (radians), summed frame by frame.
+                            # ``held_off`` (F,) the turn held off (radians), summed frame by frame.
                             heading_now = np.arctan2(reach[:, 0], reach[:, 2])
-                            step = np.diff(np.concatenate(([foot_heading], heading_now)))
+                            swivel = np.diff(np.concatenate(([foot_heading], heading_now)))
                             if kind != prev:
-                                step[0], held_swivel = 0.0, 0.0
-                            step = (step + math.pi) % (2.0 * math.pi) - math.pi
-                            held = held_swivel + np.cumsum(np.where(contact[a0 + s:a0 + e, k, 1] > 0.5, step, 0.0))
-                            foot_heading, held_swivel = float(heading_now[-1]), float(held[-1])
-                            turn[s:e] = quat.multiply(yaw(-held), turn[s:e])
+                                swivel[0], held_swivel = 0.0, 0.0
+                            swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
+                            held_off = held_swivel + np.cumsum(np.where(contact[a0 + s:a0 + e, k, 1] > 0.5, swivel, 0.0))
+                            foot_heading, held_swivel = float(heading_now[-1]), float(held_off[-1])
+                            turn[s:e] = quat.multiply(yaw(-held_off), turn[s:e])
                             reach = quat.rotate(turn[s:e], lever[s:e])
                         goal[s:e] = pin - (reach if kind == footing.BALL else _heel_of(b, k, reach))
                         # The ankle at the animation's height; held by the ball for the pose's sake, no
