@@ -98,12 +98,15 @@ def decode_binary_frame(data: bytes) -> dict:
     header = json.loads(data[4:4 + length])
     values = np.frombuffer(data, dtype="<f4", offset=4 + length)
     characters, at = {}, 0
-    for name, joints, morphs in header["characters"]:
+    for name, joints, morphs, *translated in header["characters"]:
         rotations = values[at:at + 4 * joints]
         root = values[at + 4 * joints:at + 4 * joints + 3]
         weights = values[at + 4 * joints + 3:at + 4 * joints + 3 + morphs]
         characters[name] = {"rotations": rotations.tolist(), "root": root.tolist(), "morphs": weights.tolist()}
         at += 4 * joints + 3 + morphs
+        if translated == [True]:
+            characters[name]["translations"] = values[at:at + 3 * joints].tolist()
+            at += 3 * joints
     assert at == len(values)
     return {"type": "frame", "frame": header["frame"], "time": header["time"], "characters": characters}
 

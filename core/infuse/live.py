@@ -78,11 +78,14 @@ GROW_AT, SHRINK_AT = 0.6, 0.5
 class CharacterFrame:
     """One character's pose at one frame: ``rotations`` (J, 4) local joint rotations, scalar-last, the
     root joint's with the character's placement; ``root`` (3,) root translation, metres; ``morphs`` (M,)
-    morph weights in the order of the character's morph targets."""
+    morph weights in the order of the character's morph targets; ``translations`` (J, 3) local joint
+    translations, metres (joint 0's is ``root``), for a character whose joints are placed by translation
+    (feet hanging from the root, carried on the shins' ends), None for the others (their rest offsets)."""
 
     rotations: np.ndarray
     root: np.ndarray
     morphs: np.ndarray
+    translations: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -365,8 +368,12 @@ class LiveScene:
         for name in scene.characters:
             rotations, root, morphs = scene.runtime.last_poses(name, count)
             root[:, 1] -= self._foot_height(name)
-            poses[name] = rotations, root, morphs
-        frames = [(first + k, {name: CharacterFrame(r[k], t[k], m[k]) for name, (r, t, m) in poses.items()})
+            translations = scene.runtime.last_translations(name, count)
+            if translations is not None:
+                translations[:, 0] = root
+            poses[name] = rotations, root, morphs, translations
+        frames = [(first + k, {name: CharacterFrame(r[k], t[k], m[k], None if j is None else j[k])
+                               for name, (r, t, m, j) in poses.items()})
                   for k in range(count)]
         if first // int(self.fps) != scene.runtime.frame // int(self.fps):
             self._forget()

@@ -442,6 +442,25 @@ class Runtime:
             local[:, 0], root = rig.place(local[:, 0], root)
         return local, root, np.concatenate(morphs[::-1])
 
+    def last_translations(self, character, count: int) -> np.ndarray | None:
+        """Local joint translations (n, J, 3) metres of the frames :meth:`last_poses` returns (joint 0's:
+        the rest offset, its root translation being :meth:`last_poses`'), for a character whose controllers
+        place joints by translation (a foot carried on its shin's end, a clip's translation channels);
+        None when none of those frames has any (an ordinary rig, at no cost)."""
+        track = self._track(character)
+        parts, n = [], 0
+        for translations, root in zip(reversed(track.translations), reversed(track.roots)):
+            if n >= count:
+                break
+            take = min(count - n, len(root))
+            parts.append((translations, len(root) - take, take))
+            n += take
+        if all(t is None for t, _, _ in parts):
+            return None
+        rest = track.rig.skeleton.rest_translations
+        return np.concatenate([np.repeat(rest[None], take, axis=0) if t is None else t[start:start + take]
+                               for t, start, take in parts[::-1]])
+
     def forget(self, keep_s: float) -> None:
         """Drop the evaluated frames older than ``keep_s`` seconds (whole blocks; :meth:`motion` then starts
         later than frame 0), and the activities and the speech (:meth:`add_speech`) that ended before then,

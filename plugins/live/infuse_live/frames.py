@@ -79,21 +79,33 @@ def decimal_texts(parts: list[np.ndarray], decimals: list[int]) -> list[str]:
 
 def frame_text(frame: LiveFrame) -> str:
     """A ``frame`` message as JSON text: per character ``rotations`` (J*4, scalar-last, flat), ``root``
-    (3,) metres and ``morphs`` (M,), rounded (:data:`ROTATION_DECIMALS`...)."""
+    (3,) metres and ``morphs`` (M,), and ``translations`` (J*3, local, metres, flat) for a character that
+    has them (:attr:`~infuse.live.CharacterFrame.translations`), rounded (:data:`ROTATION_DECIMALS`...)."""
     characters = list(frame.characters.items())
-    parts = [part for _, c in characters for part in (c.rotations, c.root, c.morphs)]
-    texts = decimal_texts(parts, [ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS] * len(characters))
-    poses = ",".join(f'{dumps(name)}:{{"rotations":{texts[3 * k]},"root":{texts[3 * k + 1]},"morphs":{texts[3 * k + 2]}}}'
-                     for k, (name, _) in enumerate(characters))
-    return f'{{"type":"frame","frame":{int(frame.index)},"time":{dumps(frame.time_s)},"characters":{{{poses}}}}}'
+    parts, decimals = [], []
+    for _, c in characters:
+        parts += [c.rotations, c.root, c.morphs]
+        decimals += [ROTATION_DECIMALS, POSITION_DECIMALS, MORPH_DECIMALS]
+        if c.translations is not None:
+            parts.append(c.translations)
+            decimals.append(POSITION_DECIMALS)
+    texts = iter(decimal_texts(parts, decimals))
+    poses = []
+    for name, c in characters:
+        pose = f'{dumps(name)}:{{"rotations":{next(texts)},"root":{next(texts)},"morphs":{next(texts)}'
+        poses.append(pose + ("}" if c.translations is None else f',"translations":{next(texts)}}}'))
+    return f'{{"type":"frame","frame":{int(frame.index)},"time":{dumps(frame.time_s)},"characters":{{{",".join(poses)}}}}}'
 
 
 def binary_frame(frame: LiveFrame) -> bytes:
     """A frame as one binary message: a little-endian uint32 N, N bytes of JSON ``{"frame", "time",
     "characters": [[name, J, M], ...]}``, then for each character in that order float32 (little-endian)
-    ``rotations`` (J*4), ``root`` (3) and ``morphs`` (M), unrounded."""
-    layout = [[name, len(c.rotations), len(c.morphs)] for name, c in frame.characters.items()]
+    ``rotations`` (J*4), ``root`` (3) and ``morphs`` (M), unrounded. A character with local joint
+    translations has ``[name, J, M, true]`` and its ``translations`` (J*3) after its morphs."""
+    layout = [[name, len(c.rotations), len(c.morphs)] + ([] if c.translations is None else [True])
+              for name, c in frame.characters.items()]
     header = dumps({"frame": frame.index, "time": frame.time_s, "characters": layout}).encode("utf-8")
-    values = [part for c in frame.characters.values() for part in (c.rotations.ravel(), c.root, c.morphs)]
+    values = [part for c in frame.characters.values()
+              for part in (c.rotations.ravel(), c.root, c.morphs, *(() if c.translations is None else (c.translations.ravel(),)))]
     body = np.concatenate(values).astype("<f4").tobytes() if values else b""
     return struct.pack("<I", len(header)) + header + body

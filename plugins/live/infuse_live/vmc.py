@@ -77,9 +77,11 @@ class VmcBones:
         self.names = [name for name, _ in found]
         self.joints = np.array([j for _, j in found], dtype=np.int64)
         sent = {int(j): k for k, j in enumerate(self.joints)}
+        # a foot hanging from the root (carried on its shin's end) is under its shin in a receiver's humanoid
+        carriers = {int(c): int(b) for _, b, c in rig.carried_limbs}
         parents = []
         for j in self.joints:
-            p = int(self.skeleton.parents[j])
+            p = carriers.get(int(j), int(self.skeleton.parents[j]))
             while p >= 0 and p not in sent:
                 p = int(self.skeleton.parents[p])
             parents.append(sent[p] if p >= 0 else -1)
@@ -100,10 +102,13 @@ class VmcBones:
             aligned.append(quat.multiply(quat.between(tpose, own), rig.body))
         self.tpose = np.array(aligned)
 
-    def local(self, rotations: np.ndarray, root: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def local(self, rotations: np.ndarray, root: np.ndarray,
+              translations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Local positions (B, 3) and rotations (B, 4) of the sent bones, core frame, for one pose:
-        ``rotations`` (J, 4) local joint rotations and ``root`` (3,) root translation, metres."""
-        global_rotations, global_positions = forward_kinematics(self.skeleton, rotations[None], root[None])
+        ``rotations`` (J, 4) local joint rotations, ``root`` (3,) root translation, metres, and
+        ``translations`` (J, 3) local joint translations, metres (None: the rest offsets)."""
+        global_rotations, global_positions = forward_kinematics(
+            self.skeleton, rotations[None], root[None], None if translations is None else translations[None])
         # (B, 4): the receiver's T-pose bone -> the character's reference pose -> now
         normalized = quat.multiply(quat.multiply(global_rotations[0, self.joints], self.reference_inverse), self.tpose)
         positions = global_positions[0, self.joints]
@@ -184,7 +189,7 @@ class VmcSender:
     def packets(self, frame: LiveFrame) -> list:
         """The OSC bundles of one frame, each at most :data:`MAX_PACKET_BYTES`, ``Blend/Apply`` in the last."""
         pose = frame.characters[self.character]
-        positions, rotations = to_unity(*self.bones.local(pose.rotations, pose.root))
+        positions, rotations = to_unity(*self.bones.local(pose.rotations, pose.root, pose.translations))
         messages = [_message("/VMC/Ext/OK", 1), _message("/VMC/Ext/T", float(frame.time_s)),
                     _message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)]
         messages += [_message("/VMC/Ext/Bone/Pos", name, *p, *q)
