@@ -1,7 +1,7 @@
 """A live scene of a rig whose feet hang from the root (RobotExpressive): its frames carry the joint
 translations that put the feet on the shins' ends, and the pose rebuilt from the stream (the frames
-themselves, their JSON and binary messages, the VMC bones) puts the feet where the offline scene does;
-an ordinary rig's frames carry none and keep their bytes."""
+themselves, their JSON and binary messages, the VMC bones, the live page) puts the feet where the
+offline scene does; an ordinary rig's frames carry none and keep their bytes."""
 from __future__ import annotations
 
 import json
@@ -18,8 +18,9 @@ from infuse_live.frames import binary_frame, frame_text
 from infuse_live.vmc import VmcSender
 
 from corpus_data import corpus_file
-from live_support import decode_binary_frame
+from live_support import BML_NS, Recorder, decode_binary_frame, serving
 from test_live_vmc import rebuild
+from viewer_support import chromium_context
 
 FPS = 60
 ROBOT = "adibkn1-robot/RobotExpressive.glb"
@@ -114,3 +115,36 @@ def test_an_ordinary_rigs_frames_carry_no_translations():
     body = np.concatenate([rotations[0].ravel(), root[0], morphs[0]]).astype("<f4").tobytes()
     assert binary_frame(frame) == struct.pack("<I", len(header)) + header + body
     assert "translations" not in json.loads(frame_text(frame))["characters"]["bot"]
+
+
+def test_the_live_page_puts_carried_feet_where_the_stream_does(tmp_path):
+    """``infuse serve`` of the robot walking, in headless Chromium: the page's foot is where FK on the
+    streamed frame puts it, not at rest beside the root."""
+    path = tmp_path / "robot.toml"
+    path.write_text(f'fps = {FPS}\n[[character]]\nname = "robot"\nfile = "{corpus_file(ROBOT)}"\n'
+                    'packs = ["locomotion-female"]\n')
+    walk = f'<bml xmlns="{BML_NS}" id="walk"><locomotion id="l1" target="0.0 2.0"/></bml>'
+    rig = _walking().runtime.rig("robot")
+    foot = int(rig.joint("l_ankle"))
+    with serving(path) as (process, port, http_port), chromium_context() as browser:
+        page = browser.new_page()
+        problems = []
+        page.on("pageerror", lambda error: problems.append(str(error)))
+        page.goto(f"http://127.0.0.1:{http_port}/")
+        page.wait_for_function("window.infuseLive.ready && window.infuseLive.frames > 10", timeout=60_000)
+        client = Recorder(port)
+        client.wait_for(lambda m: m["type"] == "hello")
+        client.request({"type": "subscribe", "frames": True})
+        assert client.request({"type": "bml", "character": "robot", "bml": walk})["type"] == "accepted"
+        time.sleep(1.5)
+        shown, shown_foot = page.evaluate("([c, j]) => [window.infuseLive.frame, window.infuseLive.jointPosition(c, j)]",
+                                          ["robot", rig.skeleton.names[foot]])
+        client.close()
+    assert not problems, problems
+    pose = client.frames[shown]["characters"]["robot"]
+    rotations, root = np.array(pose["rotations"]).reshape(1, -1, 4), np.array(pose["root"])[None]
+    _, positions = forward_kinematics(rig.skeleton, rotations, root, np.array(pose["translations"]).reshape(1, -1, 3))
+    _, at_rest = forward_kinematics(rig.skeleton, rotations, root)
+    assert np.linalg.norm(positions[0, foot] - root[0]) > 0.1
+    assert np.linalg.norm(positions[0, foot] - shown_foot) < 0.01
+    assert np.linalg.norm(at_rest[0, foot] - shown_foot) > 0.05

@@ -57,7 +57,9 @@ async function loadCharacter(name, info) {
   const top = bones[0];
   const above = top && top.parent ? top.parent.matrixWorld.clone().invert() : new THREE.Matrix4();
   const scale = top ? top.getWorldScale(new THREE.Vector3()) : new THREE.Vector3(1, 1, 1);
-  characters.set(name, { joints: info.joints, morphs: info.morphs, bones, meshes, root, above, scale });
+  // Streamed joint translations are metres; a bone's position is in its parent's units (an Armature at 0.01).
+  const units = bones.map((b) => (b && b.parent ? 1 / b.parent.getWorldScale(new THREE.Vector3()).x : 1));
+  characters.set(name, { joints: info.joints, morphs: info.morphs, bones, meshes, root, above, scale, units });
 }
 
 const placed = { m: new THREE.Matrix4(), p: new THREE.Vector3(), q: new THREE.Quaternion() };
@@ -82,6 +84,8 @@ function applyFrame(message) {
     if (!c) continue;
     const r = pose.rotations;
     c.bones.forEach((bone, j) => { if (bone && j > 0) bone.quaternion.set(r[4 * j], r[4 * j + 1], r[4 * j + 2], r[4 * j + 3]); });
+    const t = pose.translations; // only for characters whose joints are placed by translation (carried feet)
+    if (t) c.bones.forEach((bone, j) => { if (bone && j > 0) bone.position.set(t[3 * j], t[3 * j + 1], t[3 * j + 2]).multiplyScalar(c.units[j]); });
     const top = c.bones[0];
     if (top) {
       placed.p.set(pose.root[0], pose.root[1], pose.root[2]);
@@ -129,18 +133,23 @@ async function playAudio(message) {
 $('audio').addEventListener('click', () => { audio.context?.resume(); $('audio').hidden = true; });
 
 // A binary frame: uint32 header length, JSON header {frame, time, characters: [[name, J, M]...]}, then
-// float32 rotations (J*4), root (3) and morphs (M) per character (see infuse_live/hub.py binary_frame).
+// float32 rotations (J*4), root (3) and morphs (M) per character, and translations (J*3) after the morphs
+// of a character listed as [name, J, M, true] (see infuse_live/frames.py binary_frame).
 function decodeFrame(buffer) {
   const length = new DataView(buffer).getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, length)));
   const values = new Float32Array(buffer.slice(4 + length));
   const characters = {};
   let at = 0;
-  for (const [name, joints, morphs] of header.characters) {
+  for (const [name, joints, morphs, translated] of header.characters) {
     characters[name] = { rotations: values.subarray(at, at + 4 * joints),
       root: values.subarray(at + 4 * joints, at + 4 * joints + 3),
       morphs: values.subarray(at + 4 * joints + 3, at + 4 * joints + 3 + morphs) };
     at += 4 * joints + 3 + morphs;
+    if (translated) {
+      characters[name].translations = values.subarray(at, at + 3 * joints);
+      at += 3 * joints;
+    }
   }
   return { type: 'frame', frame: header.frame, time: header.time, characters };
 }
