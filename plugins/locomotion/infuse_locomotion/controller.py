@@ -1120,7 +1120,9 @@ def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
     ``frames`` (2,) (one per foot): each foot's ankle, its "ball" (the ball joint, else the ankle), the
     tip of a foot without a ball joint (its farthest child or end site, a tenth of the leg's length
     ``leg_length`` (m) or more from the ankle; an offset (3,) in the ankle's frame), the toes' tip (offset in the ball's frame; only with a ball joint), the joints they hang
-    from, and the heights (m) the two tips stand at; None where neither foot has a tip."""
+    from, and the heights (m) the two tips stand at; None where neither foot has a tip. Both feet stand on
+    one ground: where both have a tip, both stand at the lower of their heights (a foot-flat frame whose
+    toes are bent up, as in a walk back, would otherwise hold that foot's toes up all the walk)."""
     ankles = np.array([leg[2] for leg in legs])
     balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs])
     point = np.zeros((2, 3))
@@ -1144,10 +1146,15 @@ def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
     g_rot, g_pos = chain_fk(sk, motion.local_rotations[frames], motion.root_translations[frames],
                             None if motion.joint_translations is None else motion.joint_translations[frames], joints.ravel())
     g_rot, g_pos = g_rot.reshape(2, 2, 4, 4)[[0, 1], [0, 1]], g_pos.reshape(2, 2, 4, 3)[[0, 1], [0, 1]]
+    point_floor = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], point))[:, 1]
+    tip_floor = (g_pos[:, 3] + quat.rotate(g_rot[:, 3], tip))[:, 1]
+    if kept.all():
+        point_floor[:] = point_floor.min()
+    if toes.all():
+        tip_floor[:] = tip_floor.min()
     return FootFloors(ankles=ankles, balls=balls, ankle_parents=ankle_parents, ball_parents=ball_parents,
                       joints=joints.ravel(), point=point, kept=kept, tip=tip, toes=toes,
-                      point_floor=(g_pos[:, 3] + quat.rotate(g_rot[:, 3], point))[:, 1],
-                      tip_floor=(g_pos[:, 3] + quat.rotate(g_rot[:, 3], tip))[:, 1])
+                      point_floor=point_floor, tip_floor=tip_floor)
 
 
 def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
