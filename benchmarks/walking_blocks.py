@@ -15,44 +15,25 @@ Run: ``.venv/bin/python benchmarks/walking_blocks.py [--frames 240] [--rounds 3]
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import time
-from pathlib import Path
 
-import infuse
-from infuse import Character
-from infuse.mapping import map_skeleton
 from infuse.scene import Scene
 from infuse_locomotion.controller import Locomotion
 
-CORPUS = Path(os.environ.get("INFUSE_CORPUS", Path(__file__).resolve().parents[1].parent / "shared" / "corpus"))
-FPS = 60.0
-CAST = (("runxaway-models/Xbot.glb", "locomotion-male"), ("talkinghead/avatars/brunette-t.glb", "locomotion-female"))
-BML_NS = "http://www.bml-initiative.org/bml/bml-1.0"
+from controllers_speed import CORPUS, LIVE_CAST, LIVE_FPS as FPS, live_scene
+
 COUNT, WALKING = 10, 4
 
 
 def walking_scene() -> Scene:
-    """:data:`COUNT` characters in a ring of radius 4 m facing its centre, each looking at the next; the
-    first :data:`WALKING` walk: toward the middle, across the ring, outward and sideways (turning on the
-    spot first), and the first two walk on to the middle 3.5 s in."""
-    scene = Scene(fps=FPS, quiet=True)
-    cast = []
-    for path, pack in CAST:
-        asset = infuse.load(CORPUS / path)
-        cast.append((Character(Path(path).stem, asset, map_skeleton(asset)), pack))
+    """:data:`COUNT` characters in the ring of :func:`controllers_speed.live_scene` (radius 4 m, facing its
+    centre, each looking at the next); the first :data:`WALKING` walk: toward the middle, across the ring,
+    outward and sideways (turning on the spot first), and the first two walk on to the middle 3.5 s in."""
+    scene = live_scene(COUNT)
     radius = 1.5 + 0.25 * COUNT
-    for k in range(COUNT):
-        character, pack = cast[k % len(cast)]
-        angle = 2 * math.pi * k / COUNT
-        scene.add_character(character, f"c{k}", position=(radius * math.sin(angle), 0.0, radius * math.cos(angle)),
-                            facing=(0.0, 0.0, 0.0), packs=[pack])
     names = list(scene.characters)
-    for k, name in enumerate(names):
-        scene.bml(name, f'<bml xmlns="{BML_NS}" xmlns:sbm="http://ict.usc.edu" id="look{k}">'
-                        f'<gazeShift id="g" target="{names[(k + 1) % COUNT]}"/><sbm:saccade id="s" mode="listen"/></bml>')
     for k, name in enumerate(names[:WALKING]):
         position = scene.runtime.rig(name).position
         x, z = float(position[0]), float(position[2])
@@ -97,7 +78,7 @@ def main() -> int:
     parser.add_argument("--frames", type=int, default=240, help="frames stepped per round (default 240: 4 s)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds per block size; the best counts (default 3)")
     args = parser.parse_args()
-    if not (CORPUS / CAST[0][0]).is_file():
+    if not (CORPUS / LIVE_CAST[0][0]).is_file():
         print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
         return 2
     print(f"{COUNT} characters, {WALKING} walking, {FPS:g} fps; CPU ms, best of {args.rounds} rounds of {args.frames} frames; "
