@@ -103,8 +103,9 @@ def test_a_pyttsx3_wav_that_stops_short_is_written_again(engine, tmp_path, monke
     if utterance.meta["wav_writer"] == "pyttsx3":
         assert utterance.meta["pyttsx3_attempts"] == len(calls)
         assert utterance.meta["alignment"] == "WAV identical to the timed synthesis"
-    else:  # the real driver stopped short on every retry too (it does on a busy machine)
-        assert len(calls) == PYTTSX3_ATTEMPTS and utterance.meta["alignment"].startswith("rewritten")
+    else:  # the real driver stopped short on every retry (it does on a busy machine), or a retry's WAV
+        # differed otherwise (espeak's timing varies between processes), which ends the retries at once
+        assert 2 <= len(calls) <= PYTTSX3_ATTEMPTS and utterance.meta["alignment"].startswith("rewritten")
 
 
 def test_a_different_pyttsx3_wav_is_replaced_by_the_timed_audio(engine, tmp_path, monkeypatch):
