@@ -8,7 +8,8 @@ entry points give that one solution:
 
 - :func:`solve_limb` works on a character's local rotations (F, J, 4), joints anywhere in the
   hierarchy (twist joints between them are carried along), the bend staying in the limb's current
-  plane (or toward ``pole`` when the limb is straight), the end joint keeping its global rotation.
+  plane (with a ``pole``: on the pole's side, and in the pole's plane when the limb is within a few
+  degrees of straight), the end joint keeping its global rotation.
 - :func:`turn_limb` works on world positions and returns world turns of the limb's two segments,
   for callers that keep their own pose (the retargeter), bending about a hinge axis they give
   (:func:`hinge_axes`) and never straightening a limb past a least flexion.
@@ -61,6 +62,9 @@ def _arccos(cosine: np.ndarray) -> np.ndarray:
     return np.arccos(np.minimum(np.maximum(cosine, -1.0), 1.0))
 
 
+#: Sines of the bend at b below which a limb with a pole bends in the pole's plane, and from which in its
+#: own (between, the two blended; :func:`_pole_plane`): about 1.1 and 3.4 degrees.
+POLE_PLANE_SINE = (0.02, 0.06)
 #: Margin (metres) inside a limb's span for a goal to count as reachable (:func:`turn_limb`).
 REACH_MARGIN = 5e-4
 #: Each skeleton's carried-end offsets by limb (:func:`carried_offset`), for as long as the skeleton lives.
@@ -229,7 +233,10 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     with ``distance=False`` (c's new position is then not computed).
 
     ``weight`` (F,) in [0, 1] blends from the current pose to the solved one; ``pole`` (F, 3) or (3,)
-    is the bend direction used when the limb is straight. The end joint c keeps its global rotation
+    is the side the limb bends to (a knee's forward): a limb bent away from it (a knee a little past
+    straight, as blends and takes leave them) is bent on the pole's side, the mirror image, and a limb
+    within a few degrees of straight in the plane through the pole (:func:`_pole_plane`); a limb
+    clearly bent toward it bends on in its own plane. The end joint c keeps its global rotation
     when ``keep_end``, or takes the global rotation ``end_rotation`` (F, 4) when given.
 
     Several limbs that do not hang from one another (left and right legs) are solved in one call
@@ -291,12 +298,15 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     ac_ab_1, ba_bc_1 = _arccos(np.stack(((lcb2 - lab2 - lat2) / (-2.0 * lab * lat), (lat2 - lab2 - lcb2) / (-2.0 * lab * lcb))))
     small = axis_norms[0] < 1e-12
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
+    toward = None
+    if pole is not None:  # a->c x pole: the normal of the plane that bends the limb toward the pole
+        pole = np.asarray(pole, dtype=np.float64)
+        toward = _cross(ca, np.broadcast_to(pole[:, None] if several and pole.ndim == 2 else pole, A.shape))
     if flat.any() or small.any():
         axis1, axis0 = axes
         if flat.any():  # a straight limb bends toward the pole, else toward the goal
-            if pole is not None:
-                pole = np.asarray(pole, dtype=np.float64)
-                fallback = _cross(ca, np.broadcast_to(pole[:, None] if several and pole.ndim == 2 else pole, A.shape))
+            if toward is not None:
+                fallback = toward
             else:
                 other = _cross(ca, np.array([0.0, 1.0, 0.0]))
                 fallback = np.where(small[..., None], other, axis1)
@@ -309,6 +319,12 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     inverse = quat.conjugate(np.take(g_rot, [0, 1, 0], -2))  # a's, b's, a's: (F, [K,] 3, 4)
     turns = quat.from_axis_angle(quat.rotate(inverse, np.stack((axis0, axis0, axis1), axis=-2)),
                                  np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0), axis=-1))
+    if toward is not None:
+        plane = _pole_plane(axis0, toward, cross_norms[2] / np.maximum(lab * lcb, 1e-12))
+        moved = ~flat & (_dot(plane, axis0) < 1.0 - 1e-12)
+        if moved.any():  # bent in the plane the pole sides, not in its own
+            turns[moved, :2] = _replaned(axis0[moved], plane[moved], ac_ab_0[moved], ac_ab_1[moved], ba_bc_0[moved],
+                                         ba_bc_1[moved], inverse[moved, :2])
     r0, r1, r2 = turns[..., 0, :], turns[..., 1, :], turns[..., 2, :]
     columns = limbs if several else limbs[0]
     old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
@@ -352,6 +368,36 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         target = g_rot[..., 2, :] if end_rotation is None else end_rotation
         local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
     return _norm(position - T) if position is not None else None
+
+
+def _pole_plane(normal: np.ndarray, toward: np.ndarray, sin_bend: np.ndarray) -> np.ndarray:
+    """(..., 3) unit normals of the planes limbs with a pole bend in: their own ``normal`` (..., 3, unit,
+    a->c x a->b), reflected onto the pole's side where it bends away from the pole (a knee bent
+    backward: the far branch), and turned toward ``toward`` (..., 3, a->c x pole) as the limb comes
+    straight (``sin_bend`` (...) the sine of its bend at b, from :data:`POLE_PLANE_SINE`): the plane
+    of a limb within a few degrees of straight is noise, and so is the side a blend leaves it bent to."""
+    p = _unit(toward)
+    n = normal - 2.0 * np.minimum(_dot(normal, p), 0.0)[..., None] * p
+    lo, hi = POLE_PLANE_SINE
+    w = np.minimum(np.maximum((sin_bend - lo) / (hi - lo), 0.0), 1.0)
+    w = (w * w * (3.0 - 2.0 * w))[..., None]
+    return _unit(w * n + (1.0 - w) * p)
+
+
+def _replaned(normal, plane, ac_ab_0, ac_ab_1, ba_bc_0, ba_bc_1, inverse) -> np.ndarray:
+    """(N, 2, 4) local turns of a and b that straighten limbs bent in the plane of ``normal`` (N, 3) and
+    bend them in the plane of ``plane`` (N, 3) to the solved angles: at a between a->c and a->b
+    (``ac_ab_0`` now, ``ac_ab_1`` solved), at b between b->a and b->c (``ba_bc_*``), radians; c ends on
+    the line a->c as with the limb's own plane. ``inverse`` (N, 2, 4): a's and b's global rotations
+    conjugated (world turns to local ones)."""
+    to_line = quat.from_axis_angle(normal, -ac_ab_0)
+    at_a = quat.multiply(quat.from_axis_angle(plane, ac_ab_1), to_line)
+    # b's turn in the frame before a turns: straighten about the old normal, bend about the new one
+    # as it lies before a's turn.
+    before = quat.rotate(quat.conjugate(to_line), plane)
+    at_b = quat.multiply(quat.from_axis_angle(before, ba_bc_1 - np.pi), quat.from_axis_angle(normal, np.pi - ba_bc_0))
+    world = np.stack((at_a, at_b), axis=-2)
+    return quat.multiply(quat.multiply(inverse, world), quat.conjugate(inverse))
 
 
 @dataclass(frozen=True)
