@@ -143,6 +143,31 @@ def test_last_frames_span_blocks_in_the_characters_own_frame():
     assert len(rt.last_frames(name, 1000)[0]) == 30
 
 
+def test_cast_poses_are_every_characters_last_poses_side_by_side():
+    """Runtime.cast_poses (the live loop's frames, every character at once) equals last_poses character by
+    character, across blocks, placed or not; a character joining within the frames asked for gives None."""
+    character = synthetic_character()
+    rt = Runtime(fps=30, block_frames=7)
+    names = [rt.add_character(character, name, position=position, heading_deg=heading)
+             for name, position, heading in (("a", (1.0, 0.0, 2.0), 90.0), ("b", (0.0, 0.0, 0.0), 0.0), ("c", (-1.0, 0.5, 0.0), -30.0))]
+    for name in names:
+        rt.activate(name, Clip(sway(character.skeleton)), 0.0)
+    rt.run(1.0)
+    rt.step(3)
+    layout, rotations, roots, morphs = rt.cast_poses(12)  # frames of three blocks: 2 + 7 + 3
+    assert rotations.shape[0] == roots.shape[0] == morphs.shape[0] == 12
+    for name in names:
+        c = layout.character_index[name]
+        (j0, j1), (m0, m1) = layout.joint_spans[c], layout.morph_spans[c]
+        own = rt.last_poses(name, 12)
+        assert np.array_equal(rotations[:, j0:j1], own[0]) and np.array_equal(roots[:, c], own[1])
+        assert np.array_equal(morphs[:, m0:m1], own[2])
+    assert len(rt.cast_poses(1000)[1]) == 33  # every frame evaluated
+    rt.add_character(character, "d")
+    rt.step(2)
+    assert rt.cast_poses(2) is not None and rt.cast_poses(3) is None
+
+
 def test_blocks_of_any_size_give_the_same_frames():
     """Clips, gazes at points and objects and saccades carry their state across blocks (two characters
     looking at each other: tests/test_gaze_blocks.py)."""

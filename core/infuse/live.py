@@ -364,20 +364,36 @@ class LiveScene:
         self.stats.blocks.append((first, count))
         self._resize(count, spent)
         self.stats.block_frames = self.block_frames
-        poses = {}
-        for name in scene.characters:
-            rotations, root, morphs = scene.runtime.last_poses(name, count)
-            root[:, 1] -= self._foot_height(name)
-            translations = scene.runtime.last_translations(name, count)
-            if translations is not None:
-                translations[:, 0] = root
-            poses[name] = rotations, root, morphs, translations
-        frames = [(first + k, {name: CharacterFrame(r[k], t[k], m[k], None if j is None else j[k])
-                               for name, (r, t, m, j) in poses.items()})
-                  for k in range(count)]
+        frames = self._frames(first, count)
         if first // int(self.fps) != scene.runtime.frame // int(self.fps):
             self._forget()
         return frames
+
+    def _frames(self, first: int, count: int) -> list[tuple[int, dict]]:
+        """The ``count`` frames evaluated last, from frame ``first``: (index, {name: :class:`CharacterFrame`})
+        each, stood on the ground; every character's at once from the runtime's tables
+        (:meth:`~infuse.runtime.Runtime.cast_poses`), or one at a time when a character joined within them."""
+        runtime, names = self.scene.runtime, list(self.scene.characters)
+        cast = runtime.cast_poses(count)
+        if cast is not None:
+            layout, rotations, roots, morphs = cast
+            index = [layout.character_index[name] for name in names]
+            roots[:, index, 1] -= np.array([self._foot_height(name) for name in names])
+            poses = {name: (rotations[:, slice(*layout.joint_spans[c])], roots[:, c], morphs[:, slice(*layout.morph_spans[c])])
+                     for name, c in zip(names, index)}
+        else:
+            poses = {name: runtime.last_poses(name, count) for name in names}
+            for name, (_, root, _) in poses.items():
+                root[:, 1] -= self._foot_height(name)
+        carried = {}
+        for name in names:
+            translations = runtime.last_translations(name, count)
+            if translations is not None:
+                translations[:, 0] = poses[name][1]
+                carried[name] = translations
+        return [(first + k, {name: CharacterFrame(r[k], t[k], m[k], carried[name][k] if name in carried else None)
+                             for name, (r, t, m) in poses.items()})
+                for k in range(count)]
 
     def _resize(self, frames: int, seconds: float) -> None:
         """Adapt :attr:`block_frames` to what the block just evaluated (``frames`` frames in ``seconds``)
@@ -462,10 +478,14 @@ class LiveScene:
         return min(max(needed - self.block_frames, 0), self.max_block_frames - self.block_frames)
 
     def _expected_s(self, kind: str) -> float:
-        """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (0
-        for the first; one slowed down by the machine's other work does not hold the next ones back)."""
+        """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (one
+        slowed down by the machine's other work does not hold the next ones back). The first of a kind
+        is expected to take as long as the longest kind known, or, before any command, as long as a block
+        takes (the lead): it then waits for a gap made long enough rather than run into a frame's time."""
         taken = self._command_s.get(kind)
-        return statistics.median(taken) if taken else 0.0
+        if taken:
+            return statistics.median(taken)
+        return max((statistics.median(other) for other in self._command_s.values()), default=self._lead_s)
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)

@@ -128,6 +128,7 @@ class Runtime:
         self._targets: dict = {}
         self._next_id = 0
         self._layout: TableLayout | None = None  # where each character sits in a block's PoseTable
+        self._tables: list[PoseTable] = []  # the blocks' tables, oldest first (as the tracks' arrays, up to forget)
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
         self._speakers: list[Activity] = []  # the activities whose controller speaks
         self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
@@ -378,6 +379,7 @@ class Runtime:
             track.morphs.append(pose.morph_weights)
             written = pose.morph_written
             track.morph_written = written if track.morph_written is None else track.morph_written | written
+        self._tables.append(table)
         self.frame += n
 
     # -- results ---------------------------------------------------------------------------------------
@@ -442,6 +444,34 @@ class Runtime:
             local[:, 0], root = rig.place(local[:, 0], root)
         return local, root, np.concatenate(morphs[::-1])
 
+    def cast_poses(self, count: int) -> tuple[TableLayout, np.ndarray, np.ndarray, np.ndarray] | None:
+        """Every character's last ``count`` frames evaluated (n = fewer when fewer were) side by side, placed
+        in the world as :meth:`last_poses` places each: the :class:`~infuse.runtime.pose.TableLayout` of the
+        columns, local rotations (n, N, 4) (each character's root joint with its placement), root
+        translations (n, C, 3) metres and morph weights (n, M), new arrays. None when a character joined
+        within those frames (the blocks' layouts differ: :meth:`last_poses` per character then)."""
+        tables, n = [], 0
+        for table in reversed(self._tables):
+            if n >= count:
+                break
+            take = min(count - n, table.frames)
+            tables.append((table, table.frames - take))
+            n += take
+        if not tables or any(table.layout is not tables[0][0].layout for table, _ in tables):
+            return None
+        layout = tables[0][0].layout
+        tables.reverse()
+        rotations, roots, morphs = (np.concatenate([getattr(table, key)[start:] for table, start in tables])
+                                    for key in ("local_rotations", "root_translations", "morph_weights"))
+        turns = np.stack([rig.rotation for rig in layout.rigs])  # (C, 4)
+        positions = np.stack([rig.position for rig in layout.rigs])  # (C, 3)
+        placed = np.flatnonzero((positions != 0.0).any(axis=1) | (turns != quat.IDENTITY).any(axis=1))  # Rig.placed
+        if placed.size:  # Rig.place on every placed character at once
+            columns = np.array([span[0] for span in layout.joint_spans])[placed]
+            rotations[:, columns] = quat.multiply(turns[placed], rotations[:, columns])
+            roots[:, placed] = quat.rotate(turns[placed], roots[:, placed]) + positions[placed]
+        return layout, rotations, roots, morphs
+
     def last_translations(self, character, count: int) -> np.ndarray | None:
         """Local joint translations (n, J, 3) metres of the frames :meth:`last_poses` returns (joint 0's:
         the rest offset, its root translation being :meth:`last_poses`'), for a character whose controllers
@@ -474,6 +504,12 @@ class Runtime:
                 cut += 1
             for parts in (track.rotations, track.roots, track.translations, track.morphs):
                 del parts[:cut]
+        held = 0
+        for cut in range(len(self._tables) - 1, -1, -1):
+            held += self._tables[cut].frames
+            if held >= keep:
+                del self._tables[:cut]
+                break
         before = self.time - float(keep_s)
         self.activities = [a for a in self.activities if a.settled_s >= before]
         self._speakers = [a for a in self._speakers if a.settled_s >= before]
