@@ -35,6 +35,7 @@ import hashlib
 import math
 import weakref
 from dataclasses import dataclass, replace
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -308,29 +309,31 @@ class Locomotion(Controller):
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
-        """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`), the blends asked for
-        at once by walks sharing a binding and blending the same clips in the same order evaluated
-        together (:func:`_blend_key`); then the walks of characters alike in skeleton, legs and feet
-        (:func:`_stack_key`: one asset, one pack) have their feet pinned and kept above the ground
-        together, their frames stacked (one forward kinematics and one leg IK for them all: a block of
-        one frame costs about the same for one walk as for several); then each writes its pose, in the
+        """Evaluate every walk of the block. Each drives its blend (:meth:`_drive`), the work it asks for
+        (:class:`Ask`: its blend weights, its blend, its shorter steps) done at once for every walk asking
+        the same of one binding, their frames stacked; then the walks of characters alike in skeleton,
+        legs and feet (:func:`_stack_key`: one asset, one pack) have their feet pinned and kept above the
+        ground together, their frames stacked (one forward kinematics and one leg IK for them all: a block
+        of one frame costs about the same for one walk as for several); then each writes its pose, in the
         jobs' order."""
         drives = [job.controller._drive(job, block) for job in jobs]
-        asked: dict[int, tuple] = {}
+        asked: dict[int, Ask] = {}
         done: dict[int, tuple | None] = {}
         for n, drive in enumerate(drives):
             _resume(n, drive, None, asked, done)
-        while asked:  # the blends asked for, together where they can be
+        while asked:  # the work asked for, together where it can be
             asking: dict[tuple, list[int]] = {}
-            for n, request in asked.items():
-                asking.setdefault(_blend_key(*request), []).append(n)
+            for n, ask in asked.items():
+                asking.setdefault((ask.work, ask.key), []).append(n)
             now, asked = asked, {}
             for members in asking.values():
-                rows = [now[n] for n in members]
-                ends = np.cumsum([0] + [len(r[2]) for r in rows]).tolist()
-                blended = jobs[members[0]].controller._blend(rows[0][0], *(np.concatenate(a) for a in zip(*(r[1:] for r in rows))))
+                asks = [now[n] for n in members]
+                rows = asks[0].rows if len(asks) == 1 else \
+                    tuple(None if a[0] is None else np.concatenate(a) for a in zip(*(ask.rows for ask in asks)))
+                out = asks[0].work(*asks[0].shared, *rows)
+                ends = np.cumsum([0] + [len(ask.rows[0]) for ask in asks]).tolist()
                 for n, a, e in zip(members, ends[:-1], ends[1:]):
-                    _resume(n, drives[n], tuple(None if x is None else x[a:e] for x in blended), asked, done)
+                    _resume(n, drives[n], tuple(None if x is None else x[a:e] for x in out), asked, done)
         driven = [(job, done[n]) for n, job in enumerate(jobs)]
         groups: dict[tuple, list] = {}
         for job, walk in driven:
@@ -359,8 +362,8 @@ class Locomotion(Controller):
     def _drive(self, job, block):
         """The walk's state carried through the block and its pose before the feet are pinned: its
         active frames (A,) of the block and the parts :meth:`_steered` gives over them, or None when
-        the walk has not begun. A generator: it yields the blends :meth:`_steered` asks for and takes
-        them back (:meth:`evaluate` evaluates them), and returns that."""
+        the walk has not begun. A generator: it yields the work :meth:`_steered` asks for (:class:`Ask`)
+        and takes it back done (:meth:`evaluate` does it), and returns that."""
         b: LocomotionBinding = job.binding
         active = np.nonzero(job.local_times >= -1e-9)[0]
         if not active.size:
@@ -526,7 +529,8 @@ class Locomotion(Controller):
         """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
         and the turn spun at the root so far (F,) radians, before the feet are pinned. A generator: it
-        yields the arguments of the :meth:`_blend` it needs and takes that blend back."""
+        yields the work it asks for (:class:`Ask`: its blend weights, its blend, its shorter steps) and
+        takes it back done."""
         x0, z0, h0 = st.x, st.z, st.heading
         req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
@@ -535,7 +539,7 @@ class Locomotion(Controller):
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
         speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
-        w, slow = _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
+        w, slow = yield Ask(_bound_weights, (id(b),), (b,), (speed, direction, turn))
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
         vf, vl = speed * np.cos(direction), speed * np.sin(direction)
@@ -575,7 +579,11 @@ class Locomotion(Controller):
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
         stride = stride + (1.0 - stride) * standing
-        rot, root, jt, contact, support = yield b, wm, phase, standing, times, 0.5 * advance  # :meth:`_blend`'s
+        summed = _clips_of(wm)[1]  # the clips in the order this walk sums them
+        order = np.full(len(b.clips), -1)
+        order[:summed.size] = summed
+        rot, root, jt, contact, support = yield Ask(Locomotion._blend, (id(b), bool(standing.max() > 1e-6)), (b,),
+                                                    (wm, np.broadcast_to(order, wm.shape), phase, standing, times, 0.5 * advance))
         if not b.idle.any() and rest.any():
             # Come to rest without an idle: both feet stay down where they are, laid flat about their
             # balls over the rest's fade (the held phase of a walk may have a foot in the air).
@@ -604,7 +612,7 @@ class Locomotion(Controller):
         laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
-            self._shorten(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
+            rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
         return rot, root, jt, contact, forward, spun
 
     @staticmethod
@@ -625,13 +633,18 @@ class Locomotion(Controller):
         if jt is not None:
             pose.set_translations(np.arange(1, jt.shape[1]), jt[:, 1:], weight, job.mode)
 
-    def _blend(self, b: LocomotionBinding, w, phase, standing, times, half_frame):
+    @staticmethod
+    def _blend(b: LocomotionBinding, w, orders, phase, standing, times, half_frame):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
         (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.stance_of`) of the moving clips
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
         faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``).
-        ``half_frame`` (F,): half a frame's advance of the phase."""
-        used, order = _clips_of(w)
+        ``half_frame`` (F,): half a frame's advance of the phase. ``orders`` (F, N): each frame's clips
+        in the order its walk sums them (:func:`_clips_of`), then -1: frames of several walks blending
+        other clips are blended at once, each summed as its walk alone would sum it (a clip another
+        walk brings in weighs nothing on it and adds zeros)."""
+        ordered = orders >= 0
+        used = np.unique(orders[ordered])
         # A clip is left out of each frame it weighs no more than that on, as when that frame is
         # blended alone: other frames of the block do not bring it in (by up to 1e-7 m).
         w = np.where(w > _LEAST_WEIGHT, w, 0.0)
@@ -641,27 +654,38 @@ class Locomotion(Controller):
             events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b.events[stepping].reshape(-1, 8)).reshape(-1, 2, 4)
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
-        phases = np.empty((order.size, 3, len(phase)))
+        phases = np.empty((used.size, 3, len(phase)))
         phases[:] = phase
-        feet = b.stepping[order]
+        feet = b.stepping[used]
         if feet.any():
-            phases[feet, 1:] = np.swapaxes(foot_phase(b.events[order[feet]], events, phase), 1, 2)
-        clock = warp(b.keys[order, None, None], phases)
+            phases[feet, 1:] = np.swapaxes(foot_phase(b.events[used[feet]], events, phase), 1, 2)
+        clock = warp(b.keys[used, None, None], phases)
         fade = np.nonzero(b.idle)[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
         if fade.size:  # the idle clips, played at the activity's times
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
-        rot, root, jt = b.table.sample(np.concatenate((order, fade)), clock, b.limbs)
+        rot, root, jt = b.table.sample(np.concatenate((used, fade)), clock, b.limbs)
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
-        acc = _accumulate(None, rot[:, 0], root[:, 0], None if jt is None else jt[:, 0], w[:, order[0]])
-        for u, i in enumerate(order[1:], start=1):
-            acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], w[:, i])
-        for u in np.nonzero(~feet)[0].tolist():  # a clip without foot events: its own contact flags
-            contact_w = w[:, order[u]]
-            flags = self._phases(b, order[u], clock[u, 0])
-            contact += flags * contact_w[:, None, None]
-            support += flags.max(axis=2) * contact_w[:, None]
+        # Each frame's u-th clip (its place among the samples) and weight: none past its walk's clips.
+        frames = np.arange(len(phase))
+        sample_of = np.searchsorted(used, np.maximum(orders, 0))
+        weight_of = np.where(ordered, w[frames[:, None], np.maximum(orders, 0)], 0.0)
+        at = sample_of[:, 0]
+        acc = _accumulate(None, rot[:, at, frames], root[:, at, frames], None if jt is None else jt[:, at, frames], weight_of[:, 0])
+        for u in range(1, int(ordered.sum(axis=1).max())):
+            at = sample_of[:, u]
+            acc = _accumulate(acc, rot[:, at, frames], root[:, at, frames], None if jt is None else jt[:, at, frames], weight_of[:, u])
+        if not feet.all():  # clips without foot events: their own contact flags, in each walk's order
+            flags = np.zeros((used.size, len(phase), 2, 2))
+            for u in np.flatnonzero(~feet).tolist():
+                flags[u] = Locomotion._phases(b, used[u], clock[u, 0])
+            stepless = weight_of * ~feet[sample_of]
+            for u in range(orders.shape[1]):
+                if stepless[:, u].any():
+                    mine = flags[sample_of[:, u], frames]
+                    contact += mine * stepless[:, u, None, None]
+                    support += mine.max(axis=2) * stepless[:, u, None]
         if stepping.size:
             # A frame holds the half-frame either side of it (as the events were found): a foot lands
             # in the frame whose span holds its strike, and is pinned from there.
@@ -676,9 +700,9 @@ class Locomotion(Controller):
             acc = (acc[0] * kept[:, None], acc[1] * kept, None if acc[2] is None else acc[2] * kept[:, None])
             contact *= (1.0 - standing)[:, None, None]
             support *= (1.0 - standing)[:, None]
-            for u, i in enumerate(fade, start=order.size):
+            for u, i in enumerate(fade, start=used.size):
                 acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], share)
-                flags = self._phases(b, i, times)
+                flags = Locomotion._phases(b, i, times)
                 contact += flags * share[:, None, None]
                 support += flags.max(axis=2) * share[:, None]
         rot, root, jt = acc
@@ -694,7 +718,8 @@ class Locomotion(Controller):
         frame = np.rint((t % max(motion.duration, 1e-9)) * motion.fps).astype(np.int64)
         return clip.phases[np.minimum(frame, len(clip.phases) - 1)]
 
-    def _shorten(self, b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid) -> None:
+    @staticmethod
+    def _shorten(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid) -> None:
         """Shorter steps: each ankle's horizontal offset from the hips scaled by ``stride`` (F,) about
         its cycle mean (the blend ``w`` of the clips'), its height and the foot's rotation kept, by leg
         IK; the other joints' swing about their cycle mean scaled alike (smaller arm swing). While
@@ -941,11 +966,28 @@ def _clips_of(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return used, used[np.argsort(-w[:, used].sum(axis=0))]
 
 
-def _blend_key(b: LocomotionBinding, w, phase, standing, times, half_frame) -> tuple:
-    """What blends evaluated together share (:meth:`Locomotion.evaluate`): the binding, the clips in
-    the order they are summed (so each frame's sum, and the sign of its rotations, is its own walk's),
-    and whether the idle clips are faded in."""
-    return id(b), tuple(_clips_of(w)[1].tolist()), bool(standing.max() > 1e-6)
+class Ask(NamedTuple):
+    """Work a walk's :meth:`Locomotion._drive` asks for and waits on: ``work(*shared, *stacked)``, done
+    once for every walk of the block asking for the same ``work`` and ``key`` (:meth:`Locomotion.evaluate`),
+    with ``shared`` the first one's and ``stacked`` their ``rows`` (arrays (F, ...), or None for all)
+    concatenated. It returns arrays (F, ...) or None, frame by frame: each walk takes back its rows."""
+
+    work: Callable
+    key: tuple
+    shared: tuple
+    rows: tuple
+
+
+def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_weights` in the pack's locomotion blend space as bound in ``b``."""
+    return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
+
+
+def _shortened(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid):
+    """:meth:`Locomotion._shorten` on the arrays given (see there); returns the rotations and the joint
+    translations or None, shortened."""
+    Locomotion._shorten(b, w, stride, rot, root, jt, turn_q, forward, settle, down, laid)
+    return rot, jt
 
 
 #: Each blend space's :func:`_space_content`, by the space's id, for as long as the space lives.
