@@ -11,10 +11,11 @@ fastest forward speeds (:data:`STRAIGHT_S` seconds each, from standing), and to 
   largest the takes show for the same canonical joint at that speed (the takes no faster than the
   slowest example at or above the asked speed, with the standing and transition takes), at least
   :data:`POP_FLOOR_DEG`: a ratio above :data:`POP_RATIO` is a pop; fingers aside;
-- **roll**: how far a foot turns about its length (the rest pose's horizontal from the ankle toward
-  the ball, carried by the ankle; its "up", the rest's vertical carried by the ankle, against the
-  vertical), degrees; past 90 it is upside down;
-- **toe bend**: the toes' pitch about the ball relative to the foot, up positive, against the rest
+- **roll**: how far a foot turns about its length: the tilt of its axis across (square to the
+  horizontal from the ankle toward the ball and the vertical in its flat pose, the frame of the walk
+  or take where ankle and ball are lowest together, both carried by the ankle), degrees; past 90 (its
+  up pointing down while it lies within 45 degrees of level) it is upside down;
+- **toe bend**: the toes' pitch about the ball relative to the foot, up positive, against the flat
   pose (degrees), and how far it goes beyond the range of the takes;
 - **lowest**: the lowest joint of the legs and feet (hips down) over the walk, cm above the ground
   (y = 0, where the runtime stands characters).
@@ -102,9 +103,10 @@ class FootMeasures:
 
 def foot_measures(sk, mapping, g_rot: np.ndarray, g_pos: np.ndarray) -> FootMeasures:
     """Roll and toe bend of both feet (see :class:`FootMeasures`) from (F, J, 4) global rotations and
-    (F, J, 3) positions (metres) of ``sk`` mapped by ``mapping``."""
+    (F, J, 3) positions (metres) of ``sk`` mapped by ``mapping``, each foot against its flat pose in the
+    same motion: the frame where its ankle and ball (or tip) are lowest together (rest poses are not
+    always standing ones)."""
     pair = feet(sk, mapping)
-    rest_rot, rest_pos = sk.rest_global_rotations, sk.rest_global_positions
     up = np.array([0.0, 1.0, 0.0])
     roll = np.zeros((len(g_rot), 2))
     bend = np.full((len(g_rot), 2), np.nan)
@@ -112,32 +114,31 @@ def foot_measures(sk, mapping, g_rot: np.ndarray, g_pos: np.ndarray) -> FootMeas
         tip = _tip(sk, foot.ankle) if foot.ball is None else None
         if foot.ball is not None:
             front = g_pos[:, foot.ball]
-            rest_front = rest_pos[foot.ball]
         elif tip is not None:
             front = g_pos[:, foot.ankle] + quat.rotate(g_rot[:, foot.ankle], tip)
-            rest_front = rest_pos[foot.ankle] + quat.rotate(rest_rot[foot.ankle], tip)
         else:
             continue
-        ahead = rest_front - rest_pos[foot.ankle]
-        ahead = quat.rotate(quat.conjugate(rest_rot[foot.ankle]), _unit(ahead - up * ahead[1]))
-        length = quat.rotate(g_rot[:, foot.ankle], ahead)  # the rest's horizontal ahead, carried by the ankle
-        foot_up = quat.rotate(g_rot[:, foot.ankle], quat.rotate(quat.conjugate(rest_rot[foot.ankle]), up))
-        flat_up = _unit(up - length * length[:, 1:2])
-        side = _unit(foot_up - length * np.sum(foot_up * length, axis=-1, keepdims=True))
-        roll[:, k] = np.degrees(np.arctan2(np.sum(np.cross(flat_up, side) * length, axis=-1), np.sum(flat_up * side, axis=-1)))
+        ankle_rot = g_rot[:, foot.ankle]
+        flat = int(np.argmin(g_pos[:, foot.ankle, 1] + front[:, 1]))
+        ahead = front[flat] - g_pos[flat, foot.ankle]
+        to_local = quat.conjugate(ankle_rot[flat])
+        ahead = quat.rotate(to_local, _unit(ahead - up * ahead[1]))
+        length = quat.rotate(ankle_rot, ahead)  # the flat pose's horizontal ahead, carried by the ankle
+        foot_up = quat.rotate(ankle_rot, quat.rotate(to_local, up))
+        # The axis across the foot tilts as the foot rolls, not as it pitches; a foot whose up points down
+        # while it lies within 45 degrees of level is upside down (past 90).
+        across = np.cross(length, foot_up)
+        tilt = np.degrees(np.arcsin(np.clip(np.abs(across[:, 1]), 0.0, 1.0)))
+        roll[:, k] = np.where((foot_up[:, 1] < 0.0) & (np.abs(length[:, 1]) < math.sqrt(0.5)), 180.0 - tilt, tilt)
         toe = _tip(sk, foot.ball) if foot.ball is not None else None
         if toe is None:
             continue
-
-        def pitch(ankle, ball, ball_rot, ankle_rot):
-            along = _unit(ball - ankle)
-            u = quat.rotate(ankle_rot, quat.rotate(quat.conjugate(rest_rot[foot.ankle]), up))
-            u = _unit(u - along * np.sum(u * along, axis=-1, keepdims=True))
-            d = quat.rotate(ball_rot, toe)
-            return np.degrees(np.arctan2(np.sum(d * u, axis=-1), np.sum(d * along, axis=-1)))
-
-        rest = pitch(rest_pos[foot.ankle], rest_front, rest_rot[foot.ball], rest_rot[foot.ankle])
-        bend[:, k] = pitch(g_pos[:, foot.ankle], front, g_rot[:, foot.ball], g_rot[:, foot.ankle]) - rest
+        # The toes' direction against the foot's (ankle to ball), about the axis across the foot, up positive.
+        along = _unit(front - g_pos[:, foot.ankle])
+        d = quat.rotate(g_rot[:, foot.ball], toe)
+        u = _unit(foot_up - along * np.sum(foot_up * along, axis=-1, keepdims=True))
+        pitch = np.degrees(np.arctan2(np.sum(d * u, axis=-1), np.sum(d * along, axis=-1)))
+        bend[:, k] = pitch - pitch[flat]
     return FootMeasures(roll, bend)
 
 
@@ -202,6 +203,7 @@ class Walk:
     pop_ratio: float = 0.0
     pop_frame: int = 0
     roll_deg: float = 0.0
+    roll_ref_deg: float = 0.0
     toe_up_deg: float = 0.0
     toe_down_deg: float = 0.0
     toe_beyond_deg: float = 0.0
@@ -225,7 +227,7 @@ def measure_walk(label: str, motion, mapping, reference: list[Take], fk=None) ->
         f, j = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
         w.pop_joint, w.pop_deg, w.pop_ref_deg, w.pop_ratio, w.pop_frame = names[j], float(turns[f, j]), float(ref[j]), float(ratio[f, j]), int(f) + 1
     fm = foot_measures(sk, mapping, g_rot, g_pos)
-    w.roll_deg = float(np.abs(fm.roll).max())
+    w.roll_deg, w.roll_ref_deg = float(np.abs(fm.roll).max()), max(t.roll for t in reference)
     if np.isfinite(fm.toe_bend).any():
         lo, hi = min(t.toe_range[0] for t in reference), max(t.toe_range[1] for t in reference)
         b = np.where(np.isfinite(fm.toe_bend), fm.toe_bend, 0.0)
@@ -313,13 +315,13 @@ def line(row: Row) -> str:
         return f"{row.pack:<18} {row.character:<14} refused: {row.refused}"
     p, r, t, lo = row.worst("pop_ratio"), row.worst("roll_deg"), row.worst("toe_beyond_deg"), row.worst("lowest_cm", lowest=True)
     return (f"{row.pack:<18} {row.character:<14} {p.pop_deg:6.1f} {p.pop_ref_deg:5.1f} {p.pop_ratio:5.1f} "
-            f"{p.pop_joint + '@' + str(p.pop_frame) + ' ' + p.label:<38} {r.roll_deg:5.0f} {t.toe_up_deg:6.1f} {t.toe_beyond_deg:6.1f} "
+            f"{p.pop_joint + '@' + str(p.pop_frame) + ' ' + p.label:<38} {r.roll_deg:4.0f}/{r.roll_ref_deg:<3.0f} {t.toe_up_deg:6.1f} {t.toe_beyond_deg:6.1f} "
             f"{t.toe_beyond_frames:4d} {lo.lowest_cm:6.1f} {lo.lowest_joint + '@' + str(lo.lowest_frame) + ' ' + lo.label}")
 
 
-HEADER = (f"{'pack':<18} {'character':<14} {'pop':>6} {'takes':>5} {'ratio':>5} {'where':<38} {'roll':>5} {'toe up':>6} "
+HEADER = (f"{'pack':<18} {'character':<14} {'pop':>6} {'takes':>5} {'ratio':>5} {'where':<38} {'roll/takes':>8} {'toe up':>6} "
           f"{'beyond':>6} {'fr':>4} {'lowest':>6} where\n"
-          f"{'':<18} {'':<14} {'deg':>6} {'deg':>5} {'':>5} {'':<38} {'deg':>5} {'deg':>6} {'deg':>6} {'':>4} {'cm':>6}")
+          f"{'':<18} {'':<14} {'deg':>6} {'deg':>5} {'':>5} {'':<38} {'deg':>8} {'deg':>6} {'deg':>6} {'':>4} {'cm':>6}")
 
 
 def main() -> int:

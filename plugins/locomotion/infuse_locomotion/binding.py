@@ -35,7 +35,10 @@ class FootFloors:
     - ``point`` (2, 3): the tip of a foot without a ball joint, offset in its ankle's frame; ``kept``
       (2,) bool: the feet that have one;
     - ``tip`` (2, 3): the toes' tip, offset in the ball's frame; ``toes`` (2,) bool: the feet that have one;
-    - ``point_floor``, ``tip_floor`` (2,): the heights (m) the two tips stand at.
+    - ``point_floor``, ``tip_floor`` (2,): the heights (m) the two tips stand at;
+    - ``across`` (2, 3): the horizontal axis across each foot as it stands (its ankle-to-tip direction
+      x +Y), a unit vector in its ankle's frame: the axis the foot and toes turn about, carried by the
+      ankle (the ankle-to-tip direction of a foot pitched over its ball points down or back).
     """
 
     ankles: np.ndarray
@@ -49,6 +52,7 @@ class FootFloors:
     toes: np.ndarray
     point_floor: np.ndarray
     tip_floor: np.ndarray
+    across: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)

@@ -1037,7 +1037,7 @@ def _stack_key(b: LocomotionBinding) -> tuple:
     if key is None:
         f = b.floors
         floors = None if f is None else tuple(tuple(np.asarray(v).ravel().tolist()) for v in (
-            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor))
+            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across))
         key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors)
     return key
 
@@ -1194,9 +1194,12 @@ def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
         point_floor[:] = point_floor.min()
     if toes.all():
         tip_floor[:] = tip_floor.min()
+    ahead = g_pos[:, 3] + quat.rotate(g_rot[:, 3], np.where(kept[:, None], point, tip)) - g_pos[:, 1]
+    across = np.stack((-ahead[:, 2], np.zeros(2), ahead[:, 0]), axis=-1)  # ahead x +Y
+    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
     return FootFloors(ankles=ankles, balls=balls, ankle_parents=ankle_parents, ball_parents=ball_parents,
                       joints=joints.ravel(), point=point, kept=kept, tip=tip, toes=toes,
-                      point_floor=point_floor, tip_floor=tip_floor)
+                      point_floor=point_floor, tip_floor=tip_floor, across=quat.rotate(quat.conjugate(g_rot[:, 1]), across))
 
 
 def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1233,10 +1236,15 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
     g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
     ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
     ball_rot, ball_parent = g_rot[:, :, 3], g_rot[:, :, 2]
+    # Ahead along each foot as it stands, carried by its ankle (+Y x the axis across it): the axis the
+    # turns are about stays across the foot when its ankle-to-tip direction points down or back (a foot
+    # pitched over its ball at toe off), which would flip it and bend the toes down a frame.
+    across = quat.rotate(g_rot[:, :, 1], floors.across)
+    ahead = np.stack((across[..., 2], np.zeros(across.shape[:-1]), -across[..., 0]), axis=-1)
     angle = None
     if floors.kept.any():
         point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
-        axis, angle = _lift(point, floors.point_floor - ankle[..., 1], point)
+        axis, angle = _lift(point, floors.point_floor - ankle[..., 1], ahead)
         angle = angle * floors.kept
     if angle is not None and angle.any():  # feet that pitch (others keep their rotations as they are)
         pitch = quat.from_axis_angle(axis, angle)
@@ -1250,7 +1258,7 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
     if not floors.toes.any():
         return
     tip = quat.rotate(ball_rot, floors.tip)
-    axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ball + tip - ankle)  # across the whole foot
+    axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ahead)  # across the whole foot
     up = np.empty(angle.shape)
     for st, a0, a1 in runs:
         up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)

@@ -1,0 +1,69 @@
+"""What users see frame by frame in walks, measured with FK on the output against the pack's takes
+(``benchmarks/locomotion_pops.py``): no joint of the legs turning several times faster in one frame
+than the takes do.
+
+- A knee a degree past straight in the blend (Bandai dataset-1 masculinity's walk on X Bot) was bent
+  backward by the leg IK for two frames: the right hip turned 68 degrees and the knee 85 in one frame.
+- The toes bent up at toe off (the built-in walks on X Bot, whose foot pitches past the vertical over
+  its ball) bent about an axis taken along the ankle-to-tip direction, which flipped once the tip lay
+  behind the ankle: the toes bent down 80 degrees in one frame, their tip 2.8 cm under the floor.
+"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import infuse
+from infuse import quaternions as quat
+from infuse.packs import build_pack, import_bvh_folder, load_pack
+from infuse.packs.infusion import as_character, infuse_character
+from infuse.packs.walk_test import _runtime_walks, forward_speeds
+
+from corpus_data import corpus_file, require_corpus
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from benchmarks.locomotion_pops import leg_joints, measure_walk, takes, takes_at  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def xbot():
+    require_corpus()
+    return infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+
+
+def _walk(asset, pack, speed: float | None, seconds: float):
+    """A straight walk at ``speed`` (m/s; None: the pack's slowest forward) from standing: its motion, FK,
+    the character's mapping and the speed."""
+    character = as_character(asset)
+    infusion = infuse_character(character, [pack])
+    character.mapping = infusion.mapping
+    space = next(iter(infusion.spaces.values()))
+    speed = float(forward_speeds(space)[0]) if speed is None else speed
+    ((motion, fk),), _ = _runtime_walks(character, infusion.mapping, space, [dict(speed=speed)], seconds)
+    return motion, fk, infusion.mapping, speed
+
+
+def test_a_knee_past_straight_in_the_blend_does_not_flip(xbot, tmp_path):
+    data = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    folder = import_bvh_folder(data, tmp_path / "pack", name="masculinity", pattern="dataset-1_*_masculinity_*.bvh")
+    pack = load_pack(build_pack(folder).manifest.path)
+    motion, fk, mapping, _ = _walk(xbot, pack, 1.33, 3.0)
+    walk = measure_walk("straight", motion, mapping, takes_at(takes(pack), 1.33), fk=fk)
+    assert walk.pop_ratio < 4.0, walk  # 9.7 before (r_hip, 75 degrees in a frame against the takes' 7.7); 3.1 left
+    g_rot, _ = fk
+    index = mapping.indices(motion.skeleton)
+    knees = g_rot[:, [index["l_knee"], index["r_knee"]]]
+    assert np.degrees(quat.angle_between(knees[:-1], knees[1:])).max() < 30.0  # 85 before
+
+
+@pytest.mark.parametrize("pack", ["locomotion-male", "locomotion-female"])
+def test_toes_bent_up_at_toe_off_do_not_flick_down(xbot, pack):
+    source = load_pack(pack)
+    motion, fk, mapping, speed = _walk(xbot, pack, None, 3.0)
+    walk = measure_walk("straight", motion, mapping, takes_at(takes(source), speed), fk=fk)
+    assert walk.pop_ratio < 2.0, walk  # 5.2 / 5.8 before (the toes, 81 / 98 degrees in one frame)
+    _, g_pos = fk
+    assert g_pos[:, leg_joints(motion.skeleton, mapping), 1].min() > -0.01  # the toes' tip 2.8 / 3.1 cm under before
