@@ -85,6 +85,9 @@ class LocomotionBinding:
     ankle, the hip's parent and the ball of each leg).
     The straight walk's cadence (cycles per second) ``walk_cadences`` (S,) at speeds ``walk_speeds``
     (S,) m/s, from standing to the top speed (:func:`~.controller.straight_walk`), for pacing its stops.
+    Touching down (:func:`~.controller._touch_downs`): ``sole_floor`` (2,) the height (m) each foot's sole
+    rests at in the clips (its ball's, planted), ``touch_m`` how near it a swinging foot coming down
+    counts as landed (m) if slower than ``landing_m_s`` (m/s).
     """
 
     space: BlendSpace
@@ -124,3 +127,6 @@ class LocomotionBinding:
     walk_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     walk_cadences: np.ndarray = field(default_factory=lambda: np.zeros(0))
     heel_levers: np.ndarray | None = None
+    sole_floor: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    touch_m: float = 0.0
+    landing_m_s: float = 0.0

@@ -40,7 +40,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from infuse import footing, quaternions as quat
-from infuse.contacts import DOWN_TOLERANCE, foot_frames
+from infuse.contacts import DOWN_TOLERANCE, LANDING_SPEED, foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
@@ -92,6 +92,9 @@ SPIN_STEP = 0.15
 SETTLE_S = 0.5
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
 HANDOVER = 0.5
+#: How near its resting height (leg lengths) the lower of a swinging foot's sole points, coming down,
+#: lands the foot (:func:`_touch_downs`): the height from which the skate measure counts a sliding sole.
+TOUCH = 0.03
 #: A clip weighing no more than this on a frame is left out of its blend there.
 _LEAST_WEIGHT = 1e-6
 _ONES4 = np.ones(4)
@@ -345,12 +348,12 @@ class Locomotion(Controller):
         for group in groups.values():
             b: LocomotionBinding = group[0][0].binding
             parts = list(zip(*(p for _, p in group)))  # each walk's rotations, root, translations or None, ...
-            rot, root, contact, forward, spun = (np.concatenate(parts[k]) for k in (0, 1, 3, 4, 5))
+            rot, root, contact, forward, spun, made = (np.concatenate(parts[k]) for k in (0, 1, 3, 4, 5, 6))
             jt = None if parts[2][0] is None else np.concatenate(parts[2])
             ends = np.cumsum([0] + [len(p[0]) for _, p in group]).tolist()
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
-                cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun)
+                cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
             if b.floors is not None:
                 _keep_feet_up(b.skeleton, b.floors, rot, root, jt, runs, dt)
             for (job, _), (_, a, e) in zip(group, runs):
@@ -476,7 +479,7 @@ class Locomotion(Controller):
         forward = np.stack((np.sin(facing), np.zeros_like(facing), np.cos(facing)), axis=-1)
         ground = transitions.placed_root(clip, place, local[-1:], fps)[0]
         st.x, st.z, st.heading = float(ground[0]), float(ground[1]), float(facing[-1])
-        return rot, root, jt, contact, forward, np.full(len(local), st.spun)
+        return rot, root, jt, contact, forward, np.full(len(local), st.spun), np.zeros(len(local), dtype=bool)
 
     def _hand_over(self, b: LocomotionBinding, st: LocomotionState, clip, place, fps: float) -> None:
         """The steering takes over from transition ``clip`` (see :mod:`.transitions`): its state where the
@@ -504,7 +507,7 @@ class Locomotion(Controller):
             st.fading = None
         if not mixing.size:
             return part
-        rot, root, jt, contact, forward, spun = part
+        rot, root, jt, contact, forward, spun, made = part
         rot, root, contact, forward = np.array(rot), np.array(root), np.array(contact), np.array(forward)
         jt = None if jt is None else np.array(jt)
         was = self._played(b, LocomotionState(), clip, place, local[mixing], fps)
@@ -523,14 +526,15 @@ class Locomotion(Controller):
         contact[mixing] = was[3] + (contact[mixing] - was[3]) * w[:, None, None]
         mixed = was[4] + (forward[mixing] - was[4]) * w[:, None]
         forward[mixing] = mixed / np.maximum(np.linalg.norm(mixed, axis=-1, keepdims=True), 1e-9)
-        return rot, root, jt, contact, forward, spun
+        return rot, root, jt, contact, forward, spun, made
 
     def _steered(self, b: LocomotionBinding, st: LocomotionState, times, dt, report):
         """The steered blend at the activity's ``times`` (F,) seconds: rotations (F, J, 4), root (F, 3),
-        joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3)
-        and the turn spun at the root so far (F,) radians, before the feet are pinned. A generator: it
-        yields the work it asks for (:class:`Ask`: its blend weights, its blend, its shorter steps) and
-        takes it back done."""
+        joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3),
+        the turn spun at the root so far (F,) radians and the frames (F,) bool stepping as no clip does
+        (a stop's or a turn on the spot's steps, coming to rest: :func:`_touch_downs`), before the feet
+        are pinned. A generator: it yields the work it asks for (:class:`Ask`: its blend weights, its
+        blend, its shorter steps) and takes it back done."""
         x0, z0, h0 = st.x, st.z, st.heading
         req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
@@ -613,7 +617,10 @@ class Locomotion(Controller):
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
-        return rot, root, jt, contact, forward, spun
+        # The steps of a stop or a turn on the spot (shrinking, on the spot, coming to rest: the clips take
+        # none such) land a foot where it touches.
+        made = (slow < STAND_FRACTION) | stopping | (rest > 0.0)
+        return rot, root, jt, contact, forward, spun, made
 
     @staticmethod
     def _write(job, active, rot, root, jt) -> None:
@@ -758,7 +765,7 @@ class Locomotion(Controller):
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     @staticmethod
-    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun) -> None:
+    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> None:
         """Pin planted feet by leg IK: the sole under the heel while the heel is down (a foot landing
         turned up rolls down about it, its ankle swinging over it; the ankle itself where the binding
         knows no heel, ``b.heel_levers``), the ball while only it is down (the foot pivoting about it,
@@ -770,7 +777,8 @@ class Locomotion(Controller):
         (a take's, a blend's) would swing the ankle about the pinned ball. The corrections fade out
         after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
         (F,) the turn spun at the root so far (radians). ``runs``: the walks whose frames the arrays
-        stack, each as its state and its frames (start, end)."""
+        stack, each as its state and its frames (start, end). A swinging foot of the frames ``made`` (F,)
+        lands where it touches the ground (:func:`_touch_downs`)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
@@ -789,6 +797,9 @@ class Locomotion(Controller):
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
+            touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1])
+            anchors_all[a0:a1] = np.where(touched > 0, touched, anchors_all[a0:a1])
+            posed_all[a0:a1] |= touched == footing.BALL
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
             frames = a1 - a0
             feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
@@ -950,6 +961,40 @@ class Locomotion(Controller):
                        end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
 
 
+def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray) -> np.ndarray:
+    """(F, 2) what holds each swinging foot that has touched the ground before its blend's strike
+    (:data:`~infuse.footing.ANKLE` or :data:`~infuse.footing.BALL`, 0 elsewhere), from ``anchors``
+    (F, 2) (:func:`infuse.footing.anchors`) and the animated ankles and balls ``feet`` (F, 2, 2, 3)
+    metres, frames ``dt`` seconds apart; ``st.touched`` (2,) carries it from the last block.
+
+    A free foot lands where the lower of its sole points (the sole under the heel, the ball), coming
+    down, first comes within ``b.touch_m`` of its resting height (``b.sole_floor``) slower than a
+    foot lands (``b.landing_m_s``), held by that point, and stays held while it stays that low: a
+    blend's swing that reaches the ground before its strike (a stop's shrinking or vanishing stride,
+    a step on the spot) would otherwise slide the foot along the ground to where the strike puts it.
+    A walk's heel coming in fast lands at its strike, as the clips have it."""
+    both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
+    heel = both[:, :, 0] + np.stack([_heel_of(b, k, both[:, k, 1] - both[:, k, 0]) for k in range(2)], axis=1)
+    by_heel = (heel[..., 1] <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
+    sole = np.where(by_heel[..., None], heel, both[:, :, 1])  # the lower sole point
+    lowest = sole[..., 1] - b.sole_floor
+    low = (anchors == footing.FREE) & (lowest[1:] < b.touch_m)
+    coming = low & (lowest[1:] < lowest[:-1]) & made[:, None]
+    f = len(anchors)
+    idx = np.arange(f)[:, None]
+    # Each frame's run of low frames began at ``began``; it is held from its first frame coming down
+    # (or from the block's first, carried) to the run's end, by the point that touched there.
+    began = np.maximum.accumulate(np.where(low & ~np.concatenate((np.zeros((1, 2), bool), low[:-1])), idx, -1), axis=0)
+    carried = low[0] & (st.touched > 0)
+    first = np.maximum.accumulate(np.where(coming | (carried[None] & (idx == 0)), idx, -1), axis=0)
+    held = low & (first >= began) & (first >= 0) & made[:, None]
+    by = np.where(by_heel[1:], footing.ANKLE, footing.BALL)
+    kind = np.where((first == 0) & carried[None], st.touched[None], np.take_along_axis(by, np.maximum(first, 0), axis=0))
+    out: np.ndarray = np.where(held, kind, 0)
+    st.touched = out[-1].copy()
+    return out
+
+
 def _resume(n: int, drive, value, asked: dict, done: dict) -> None:
     """Go on with walk ``n``'s :meth:`Locomotion._drive` generator, sending it ``value``: what it asks
     for next goes into ``asked``, what it returns into ``done``, by ``n``."""
@@ -1063,7 +1108,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     signs = [np.where(np.sum(m * means[0], axis=-1, keepdims=True) < 0.0, -1.0, 1.0) for m in means]
     ankle_means = np.zeros((len(clips), 2, 3))  # (N, foot, 3) ankle from the hips' midpoint, facing frame
     ankle_low = np.zeros((len(clips), 2))  # (N, foot) lowest ankle height over the cycle
-    grounded_m, heel_levers = 0.0, None
+    grounded_m, heel_levers, sole_floor, leg_length = 0.0, None, np.zeros(2), 0.0
     if len(legs) == 2:  # one FK over every clip's cycle (its closing frame left out)
         cycles = [slice(0, max(m.num_frames - 1, 1)) for m in motions]
         moved = any(m.joint_translations is not None for m in motions)
@@ -1083,6 +1128,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         leg_length = float(np.mean([np.linalg.norm(rest[leg[1]] - rest[leg[0]]) + np.linalg.norm(rest[leg[2]] - rest[leg[1]])
                                     for leg in legs]))
         grounded_m = GROUNDED * leg_length
+        planted_feet = np.concatenate([c.contacts[s] for c, s in zip(clips, cycles)])
+        sole_floor = np.array([footing.planted_height(pos[:, 4 + k, 1], planted_feet[:, k]) for k in range(2)])
         if all(leg[3] is not None for leg in legs):
             heel_levers = _heel_levers(pos[:, 2:4], pos[:, 4:6], np.concatenate([c.contacts[s] for c, s in zip(clips, cycles)]), leg_length)
         # Strikes where the heels reach the ground, toe offs where the balls leave it (the takes' feet
@@ -1144,7 +1191,8 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
-        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers)
+        walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers, sole_floor=sole_floor,
+        touch_m=TOUCH * leg_length, landing_m_s=LANDING_SPEED * leg_length)
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:

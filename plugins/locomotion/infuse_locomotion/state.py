@@ -48,7 +48,8 @@ class LocomotionState(SteeringState):
       rotation as it landed, animated and corrected, ``landed_spun`` (2,) the turn spun at the root then,
       ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction; held by its heel,
       ``foot_heading`` (2,) its heading a frame earlier (radians about +Y, from +Z) and ``held_swivel``
-      (2,) the turn about the vertical held off it while its ball is down;
+      (2,) the turn about the vertical held off it while its ball is down; ``touched`` (2,) what holds a
+      swinging foot that has touched the ground before its strike (:func:`~.controller._touch_downs`; 0: none);
     - ``warned``: a speed the pack cannot realize has been reported.
     """
 
@@ -80,6 +81,7 @@ class LocomotionState(SteeringState):
     landed_spun: np.ndarray = field(default_factory=lambda: _feet())
     foot_heading: np.ndarray = field(default_factory=lambda: _feet())
     held_swivel: np.ndarray = field(default_factory=lambda: _feet())
+    touched: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
     across: np.ndarray = field(default_factory=lambda: _feet(3))
     foot_turn: np.ndarray = field(default_factory=_unturned)
     warned: bool = False

@@ -1,0 +1,41 @@
+"""Stops, settling and turns on the spot of a pack without an idle or transitions (Bandai dataset-2
+"normal" takes, imported as a user would): no foot slides while the walk comes to rest or turns on the
+spot. Measured on the output with FK (:func:`infuse.packs.walk_test.trial_pack`, foot skate split by
+the walk's parts)."""
+from __future__ import annotations
+
+import pytest
+
+import infuse
+from infuse.packs.walk_test import trial_pack
+
+from corpus_data import corpus_file, require_corpus
+
+pytest.importorskip("infuse_locomotion")
+
+#: Most foot skate (cm) of any part of a walk to a target but the walk itself.
+MOST_CM = 1.5
+
+
+@pytest.fixture(scope="module")
+def trial(tmp_path_factory):
+    from infuse.packs import build_pack, import_bvh_folder
+
+    require_corpus()
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-2/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path_factory.mktemp("packs") / "d2-normal", name="d2-normal",
+                                        pattern="dataset-2_*_normal_*.bvh"))
+    xbot = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    return trial_pack(infuse.Character("x", xbot), pack, distances=(2.0, 4.0), angles=(0.0, 90.0, 180.0))
+
+
+@pytest.mark.parametrize("part", ["on the spot", "start", "stop", "settle"])
+def test_no_foot_slides_coming_to_rest_or_turning_on_the_spot(trial, part):
+    # Before swinging feet landed where they touched the ground: settling 6.0 cm (2 m ahead), stopping
+    # 6.0 (4 m at 90 degrees), on the spot 3.4 (2 m behind).
+    worst = {(t.distance, t.angle_deg): round(t.part_skate_cm[part], 2) for t in trial.targets}
+    assert max(worst.values()) <= MOST_CM, worst
+
+
+def test_the_walks_still_arrive(trial):
+    assert all(t.miss_m <= 0.05 and not t.loops for t in trial.targets), [(t.distance, t.angle_deg, t.miss_m) for t in trial.targets]
