@@ -228,7 +228,8 @@ class Locomotion(Controller):
         clips = space.group("locomotion") if top else []
         played = transitions.played(space, _standing_speed(clips)) if top else []
         stops = transitions.stops(played)
-        paced = pacing.pacing_for(stops, fps, *straight_walk(space, clips), float(getattr(state, "phase", 0.0))) if stops else None
+        paced = pacing.pacing_for(stops, fps, *straight_walk(space, clips), float(getattr(state, "phase", 0.0)),
+                                  self.steering.max_accel) if stops else None
         slowest_keys = clips[_slowest_walk(clips)].keys if top else (0.0, 0.0, 1.0)
         half = 0.5 * float(slowest_keys[2] - slowest_keys[0])
         while frames * dt < most_s:  # frame by frame: the steering's own loop is per frame anyway
@@ -248,7 +249,8 @@ class Locomotion(Controller):
             if paced is not None:  # the gait's phase, paced as the walk will be
                 last_x, last_z = last[0] - st.x, last[1] - st.z
                 bearing = (math.atan2(last_x, last_z) - st.heading + math.pi) % (2.0 * math.pi) - math.pi
-                factor = paced.factor(st.speed, math.hypot(last_x, last_z), bearing) if row[4] > 0.5 else 1.0
+                factor = paced.factor(st.speed, math.hypot(last_x, last_z), bearing, self._asked(frames * dt, top)) \
+                    if row[4] > 0.5 else 1.0
                 paced.phase = (paced.phase + dt * factor * paced.cadence(st.speed)) % 1.0
             frames += 1
             stop = transitions.stop_due(stops, st, last, fps) if stops and st.waypoint == len(path) - 1 else None
@@ -564,8 +566,9 @@ class Locomotion(Controller):
         if b.stops and path is not None and final.any():  # the stop clip begun on time (:mod:`.pacing`)
             to_x, to_z = path[-1][0] - px, path[-1][1] - pz  # the last point from each frame, as the steering saw it
             bearing = (np.arctan2(to_x, to_z) - direction - heading + np.pi) % (2.0 * np.pi) - np.pi
-            pace = (pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase),
-                    np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing)
+            cruise = np.array([self._asked(t, b.limit) for t in times.tolist()])  # the speed it speeds up to
+            pace = (pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase, self.steering.max_accel),
+                    np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing, cruise)
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
@@ -1528,7 +1531,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     Walking, cadence and stride are both the slowest walk's times the square root of ``slow``, the
     cadence further times the pacing's factor and the stride over it (:mod:`.pacing`, the speed kept;
     ``pace``: None, or a :class:`~.pacing.StopPacing`, and each frame's speed (0 where not on the way
-    to the path's last point), distance to that point and its bearing (F,) each), each frame's from
+    to the path's last point), distance to that point, its bearing and the speed asked (F,) each), each frame's from
     the phase it is at.
     Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
@@ -1549,7 +1552,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     for a, e in zip(bounds[:-1], bounds[1:]):
         if not stop[a]:
             if pace is not None and pace[1][a:e].any():
-                factor = pace[0].factors(pace[1][a:e], pace[2][a:e], pace[3][a:e], done, dt * rate[a:e] / period[a:e])
+                factor = pace[0].factors(pace[1][a:e], pace[2][a:e], pace[3][a:e], done, dt * rate[a:e] / period[a:e], pace[4][a:e])
                 rate[a:e] *= factor
                 stride[a:e] /= factor
             advance[a:e] = dt * rate[a:e] / period[a:e]

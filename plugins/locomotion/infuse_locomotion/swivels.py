@@ -8,8 +8,11 @@ where a flat foot turns faster than :data:`SWIVEL_DEG_S`, by :data:`SWIVEL_MIN_D
 (a landing's twist of a few degrees is left alone), or drags a point that is down along the ground
 (:data:`DRAG_M_S`: a take shuffling a foot into place on its ball), the foot is lifted :data:`LIFT` of the leg's length
 off the ground, its orientation kept, by two-joint leg IK on the clip, rising and coming down over
-:data:`RAMP_S`; those frames do not count as down, so the pinning lets it go and lands it again
-where it comes down: a step that turns the foot, not a slide.
+:data:`RAMP_S`; the frames it is fully up do not count as down, so the pinning lets it go and lands
+it again where it comes down: a step that turns the foot, not a slide. While it rises and comes
+down its contacts stay as they were: a foot that was down is held where it stands as it rises (and
+where it comes down) and let go in the air, since a foot let go as it starts to rise goes on with
+the take's slow turn or drag a few millimetres above the ground.
 
 Positions are metres (+Y up), angles radians about +Y, times seconds; feet are ordered left, right.
 """
@@ -80,7 +83,7 @@ def swivel_lift(ankle: np.ndarray, ball: np.ndarray, phases: np.ndarray, fps: fl
 
 def lift_swivels(sk, motion, legs, phases: np.ndarray, facing: np.ndarray, leg_length: float):
     """``motion`` (a played clip on skeleton ``sk``) with its swivelling feet lifted (see the module
-    doc), and its contact ``phases`` (F, 2, 2) with the lifted frames up. ``legs``: two (hip, knee,
+    doc), and its contact ``phases`` (F, 2, 2) with the frames fully lifted up. ``legs``: two (hip, knee,
     ankle, ball) joints, the ball None without one (that foot is left); ``facing`` (F,) radians."""
     feet = [k for k, leg in enumerate(legs) if leg[3] is not None]
     if not feet:
@@ -101,5 +104,5 @@ def lift_swivels(sk, motion, legs, phases: np.ndarray, facing: np.ndarray, leg_l
             solve_limb(sk, rot, motion.root_translations, jt, legs[k][:3], goal, weight=(share[:, k] > 0.0).astype(float),
                        pole=forward, end_rotation=g_rot[:, 2 * n], distance=False)
     out = np.array(phases, dtype=bool)
-    out[share > 0.0] = False
+    out[share >= 1.0] = False
     return motion.replace(local_rotations=rot, joint_translations=jt) if jt is not None else motion.replace(local_rotations=rot), out
