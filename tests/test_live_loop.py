@@ -174,3 +174,50 @@ def test_blocks_are_evaluated_as_late_as_they_can_be():
         blocks = {first for first, _ in live.stats.blocks}
     assert all(n <= bound for n, bound in ahead), ahead
     assert set(starts) <= blocks  # each starts on the first frame of a block
+
+
+def test_a_walk_is_planned_on_the_callers_thread_and_never_delays_a_block(monkeypatch):
+    """A planner slowed to 40 ms a walk (more than two frames): walk_to plans the path on the caller's
+    thread before the command reaches the loop, which only looks the plan up. No plan runs on the loop's
+    thread, the walk command there takes a fraction of a frame (not the planner's 40 ms: it cannot hold
+    a block up), and the walks are played."""
+    import infuse_locomotion.controller as locomotion
+
+    planned_on = []
+    plan = locomotion.Locomotion.plan
+
+    def slow_plan(self, *args, **kwargs):
+        planned_on.append(threading.current_thread().name)
+        time.sleep(0.040)
+        return plan(self, *args, **kwargs)
+    monkeypatch.setattr(locomotion.Locomotion, "plan", slow_plan)
+    scene = Scene(fps=FPS, quiet=True)
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob", packs=["locomotion-male"])
+    with LiveScene(scene) as live:
+        time.sleep(0.5)
+        for point in [(0.0, 1.0), (0.5, 1.5), (0.0, 0.5)]:
+            live.walk_to("bob", point)
+            time.sleep(0.3)
+        taken = list(live._command_s["walk_to"])
+    assert len(planned_on) == 3 and "infuse-live" not in planned_on, planned_on
+    assert len(taken) == 3 and max(taken) < 0.5 / FPS, taken  # the command on the loop: no plan in it
+    assert sum(type(a.controller) is locomotion.Locomotion for a in live.scene.runtime.activities) == 3
+
+
+def test_a_first_command_of_its_kind_gets_room_as_the_longest_known():
+    """Commands of a kind not seen yet are expected to take as long as the longest kind known: after
+    15 ms commands of one kind (longer than the gap between frames), the first of another 15 ms kind
+    waits for a gap made long enough for it (a block of more frames before it), as the next ones do."""
+    live, slow = _live(0.005)
+    slow.slow.set()
+    with live:
+        time.sleep(0.6)
+        for future in [live.submit(time.sleep, 0.015, kind="known") for _ in range(3)]:
+            future.result(5.0)
+        time.sleep(0.2)
+        frame_before = live.scene.runtime.frame
+        expected = live._expected_s("new")
+        live.submit(time.sleep, 0.015, kind="new").result(5.0)
+        blocks = [frames for first, frames in live.stats.blocks if first >= frame_before]
+    assert expected >= 0.012, expected  # the known kind's 15 ms (its median)
+    assert any(frames >= 2 for frames in blocks), blocks  # room made before it

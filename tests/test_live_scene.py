@@ -417,3 +417,38 @@ def test_a_failing_frame_callback_stops_the_scene_with_its_error():
         assert not live.running
         with pytest.raises(UsageError, match="stopped: no screen for frame"):
             live.nod("bob")
+
+
+def test_a_walk_planned_ahead_is_used_only_from_the_same_inputs(monkeypatch):
+    """LiveScene.parse plans walks ahead (on the caller's thread: LiveScene.prepare). Realizing a walk takes
+    its plan when the walk starts where it was planned from; a walk planned before another walk of the
+    character was realized starts elsewhere and is planned again. Either way the frames are those of a
+    scene that planned nothing ahead, to the bit."""
+    import infuse_locomotion.controller as locomotion
+
+    calls = []
+    plan = locomotion.Locomotion.plan
+
+    def counted(self, *args, **kwargs):
+        calls.append(threading.current_thread().name)
+        return plan(self, *args, **kwargs)
+    monkeypatch.setattr(locomotion.Locomotion, "plan", counted)
+    walks = [f'<bml xmlns="{BML_NS}" id="w{k}"><locomotion id="l1" target="{x} {z}"/></bml>'
+             for k, (x, z) in enumerate([(0.5, 1.5), (-0.5, 0.5)])]
+    motions = []
+    for ahead in (False, True):
+        scene = Scene(fps=FPS, quiet=True)
+        scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob", packs=["locomotion-male"])
+        calls.clear()
+        if ahead:
+            for text in walks:
+                LiveScene(scene).parse("bob", text)
+            assert len(calls) == 2  # both planned here, from where bob stands now
+        scene.bml("bob", walks[0])  # ahead: its plan taken, planned from the same start
+        scene.step(60)
+        scene.bml("bob", walks[1])  # starts where the first walk leaves bob: planned again
+        scene.step(120)
+        assert len(calls) == (3 if ahead else 2), calls
+        motions.append(scene.motion("bob"))
+    assert np.array_equal(motions[0].local_rotations, motions[1].local_rotations)
+    assert np.array_equal(motions[0].root_translations, motions[1].root_translations)

@@ -21,8 +21,8 @@ block starts as late as it can and still be ready when its first frame is due (t
 percentile of how long the blocks of the last second took, waking late included, commands excluded), so
 a command that arrives before then shows on that frame. Commands are applied between blocks, each where
 it fits: one expected to run past the next block's start (it takes as long as the last ones of its kind,
-the median) waits for the gap after that block, which is made long enough for it (the block holds more
-frames), so a burst of them delays no frame. A loop running late spends at most
+the median; the first of a kind as the longest kind known) waits for the gap after that block, which is
+made long enough for it (the block holds more frames), so a burst of them delays no frame. A loop running late spends at most
 :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
 
@@ -41,8 +41,9 @@ be shown.
 Frames stand on the ground as exported files do: each character is lowered by how low its feet reach at
 rest, soles included (:func:`infuse.grounding.foot_height`; a rig with its hips at the origin is lifted).
 
-Blocks are put through the scene's BML generators and their speech synthesized (once, with the marks the
-generators added) on the caller's thread before they reach the loop, so synthesis never stalls a frame.
+Blocks are put through the scene's BML generators, their speech synthesized (once, with the marks the
+generators added) and their walks' paths planned on the caller's thread before they reach the loop, so
+neither stalls a frame.
 Old frames, ended activities and finished blocks are forgotten: memory stays bounded.
 """
 from __future__ import annotations
@@ -576,17 +577,29 @@ class LiveScene:
         return blocks
 
     def prepare(self, blocks) -> None:
-        """Synthesize the speech of ``blocks`` (parsed, with their characters, generated) ahead, on this
-        thread."""
-        if not any(b.element == "speech" for block in blocks for b in block.behaviours):
+        """Synthesize the speech of ``blocks`` (parsed, with their characters, generated) ahead, and let
+        the controllers that realize their behaviours work out what they can ahead
+        (:attr:`~infuse.plugin_types.ControllerFactory.prepare`: a walk plans its path), on this thread.
+        What a controller cannot prepare is left to the loop, which realizes it and reports its problems."""
+        from . import registry
+
+        preparing = any(d.prepare is not None for d in registry.table("controller").values())
+        if not (preparing or any(b.element == "speech" for block in blocks for b in block.behaviours)):
             return
-        planner = Scheduler(speech_timer=self._speech)
+        planner = Scheduler(speech_timer=self._speech, locate=self.scene.locate)
         for block in blocks:
             self._speech.local.character = block.character_id
             try:
-                planner.schedule_block(block, 0.0, block.character_id)
+                record = planner.schedule_block(block, 0.0, block.character_id)
             finally:
                 self._speech.local.character = None
+            for activation in record.activations if preparing else ():
+                try:
+                    descriptor = registry.realizer(activation.controller)
+                    if descriptor is not None and descriptor.prepare is not None:
+                        descriptor.prepare(activation, self.scene.stage)
+                except Exception:  # noqa: BLE001 - only a head start: the loop realizes it and reports why not
+                    continue
 
     def bml(self, character: str | None, bml) -> list[str]:
         """Schedule BML from the next frame on; returns the block ids. Runs on the caller's thread up to
@@ -622,6 +635,12 @@ class LiveScene:
         name = self.scene.resolve_name(character)
         if name not in self.scene.characters:
             raise UsageError(f"no character {character!r}; characters: {', '.join(self.scene.characters) or 'none'}")
+        if method == "walk_to":  # its path is planned here (prepare), not on the loop's thread
+            try:
+                written = getattr(_Written(self.scene), method)(name, **arguments)
+            except TypeError as exc:
+                raise UsageError(f"{method}: {exc}") from None
+            return self.parse(name, written)
         if method != "say":
             return None
         text = arguments.get("text")
@@ -749,6 +768,20 @@ class LiveScene:
             self.scene.add_target(name, target)
         target.point = point
         return self.scene.time
+
+
+class _Written(builder.BuilderCalls):
+    """The scene builder's block for a call (a ``walk_to``), written as XML text, not scheduled; its block
+    id taken from the scene."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+
+    def _submit(self, character: str, what: str, behaviour: str, at, composition: str = "MERGE") -> str:
+        return builder.block(self.scene.block_id(what), character, behaviour, composition)
+
+    def _target_name(self, target) -> str:
+        raise UsageError("only calls that name no target are written ahead")
 
 
 def _rest_foot_height(asset, mapping) -> float:

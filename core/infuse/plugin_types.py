@@ -94,6 +94,11 @@ class ControllerFactory:
     - ``idle(index, seed) -> dict`` (optional) makes it an idle default: every character of a scene
       plays it from the start with these settings (``index``: the character's place in the scene,
       ``seed``: the scene's), until BML realizes the same controller on it.
+    - ``prepare(activation, stage)`` (optional): works out ahead, on another thread, what realizing the
+      activation will cost most (a walk's path plan), from what the stage holds now, and keeps it where
+      ``realize`` finds it; a live scene calls it as BML arrives, so that its loop only looks it up. It
+      only reads the stage, and ``realize`` gives the same result whether it ran or not (it uses what was
+      kept only when it was worked out from the very same inputs).
     - ``warm_up(stage, character) -> Controller | None`` (optional): a controller whose short play on a
       scratch copy of the character prepares what its first real activity would (pack bindings, clip
       tables); a live scene plays it before it starts, so that the first one does not stall a frame.
@@ -107,6 +112,7 @@ class ControllerFactory:
     realizes: tuple[str, ...] = ()
     idle: Callable[[int, int], dict] | None = None
     warm_up: Callable[[Any, str], Any] | None = None
+    prepare: Callable[[Any, Any], None] | None = None
 
     @property
     def behaviour_kinds(self) -> tuple[str, ...]:

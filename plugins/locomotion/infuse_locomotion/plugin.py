@@ -13,6 +13,12 @@ def _realize(activation, stage):
     return realize_walk(activation, stage)
 
 
+def _prepare(activation, stage):
+    from .realize import prepare_walk
+
+    prepare_walk(activation, stage)
+
+
 def _warm_up(stage, character):
     from .realize import warm_up
 
@@ -23,4 +29,4 @@ def _warm_up(stage, character):
 def infuse_controllers():
     return [ControllerFactory("locomotion", Locomotion,
                               "walk, run, turn and strafe by blending a locomotion pack (base layer)", realize=_realize,
-                              warm_up=_warm_up)]
+                              prepare=_prepare, warm_up=_warm_up)]
