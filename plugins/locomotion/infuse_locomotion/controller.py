@@ -981,18 +981,18 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     by_heel = (heel[..., 1] <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
     sole = np.where(by_heel[..., None], heel, both[:, :, 1])  # the lower sole point
     lowest = sole[..., 1] - b.sole_floor
-    low = (anchors == footing.FREE) & (lowest[1:] < b.touch_m)
-    coming = low & (lowest[1:] < lowest[:-1]) & made[:, None]
+    free = anchors == footing.FREE
+    coming = free & (lowest[1:] < b.touch_m) & (lowest[1:] < lowest[:-1]) & made[:, None]
     f = len(anchors)
     idx = np.arange(f)[:, None]
-    # Each frame's run of low frames began at ``began``; it is held from its first frame coming down
-    # (or from the block's first, carried) to the run's end, by the point that touched there.
-    began = np.maximum.accumulate(np.where(low & ~np.concatenate((np.zeros((1, 2), bool), low[:-1])), idx, -1), axis=0)
-    carried = low[0] & (st.touched > 0)
+    # Held from the first frame of its swing (its run of free frames, ``began``) coming down low (or
+    # from the block's first, carried) to the swing's end (the blend's strike), by its lower sole
+    # point: where the blend's foot rocks between heel and ball, it rolls over them.
+    began = np.maximum.accumulate(np.where(free & ~np.concatenate((np.zeros((1, 2), bool), free[:-1])), idx, -1), axis=0)
+    carried = free[0] & (st.touched > 0)
     first = np.maximum.accumulate(np.where(coming | (carried[None] & (idx == 0)), idx, -1), axis=0)
-    held = low & (first >= began) & (first >= 0) & made[:, None]
-    by = np.where(by_heel[1:], footing.ANKLE, footing.BALL)
-    kind = np.where((first == 0) & carried[None], st.touched[None], np.take_along_axis(by, np.maximum(first, 0), axis=0))
+    held = free & (first >= began) & (first >= 0) & made[:, None]
+    kind = np.where(by_heel[1:], footing.ANKLE, footing.BALL)
     out: np.ndarray = np.where(held, kind, 0)
     st.touched = out[-1].copy()
     return out
