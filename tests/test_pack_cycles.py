@@ -12,7 +12,7 @@ import infuse
 from infuse import quaternions as quat
 from infuse.motion import Motion
 from infuse.packs.analysis import headings, locomotion_parameters
-from infuse.packs.cycles import alignment, close_loop, steadiest_cycle, straighten, transition_kind
+from infuse.packs.cycles import alignment, close_loop, steadiest_cycle, straighten, strides, transition_kind
 from infuse.skeleton import Skeleton
 
 from corpus_data import corpus_file
@@ -115,6 +115,71 @@ def test_transitions_are_recognized_by_what_they_do():
     assert transition_kind(flags, walking, flat, FPS, leg, 8) is None  # a take: walking throughout
     short = np.stack((np.zeros(f), np.zeros(f), np.linspace(0.0, 0.4, f)), axis=-1)
     assert transition_kind(flags, short, flat, FPS, leg, 2) == "step"
+
+
+def test_a_start_that_turns_first_stands_on_both_feet():
+    """A start that turns before its first step shifts its weight with both feet down: the pelvis moves
+    0.2 leg lengths per second (SmartBody's turning starts), faster than a body standing still, so
+    only the feet tell that it stands; a walk's double support does not last long enough to count."""
+    leg, f = 0.9, 60
+    shift = 0.2 * leg * np.arange(f) / FPS  # the weight shifting, then walking from frame 15 on
+    pelvis = np.stack((np.zeros(f), np.zeros(f), np.where(np.arange(f) < 15, shift, shift[15] + 1.2 * (np.arange(f) - 15) / FPS)), axis=-1)
+    flat = np.zeros(f)
+    standing_first = np.ones((f, 2), bool)
+    standing_first[15:20, 0] = standing_first[30:35, 1] = standing_first[45:50, 0] = False
+    assert transition_kind(standing_first, pelvis, flat, FPS, leg, 3) == "start"
+    walking = standing_first.copy()
+    walking[4:8, 1] = False  # double support of 0.13 s: walking from the first frame
+    assert transition_kind(walking, pelvis, flat, FPS, leg, 3) is None
+
+
+def test_a_take_of_three_steps_strides_from_right_to_right():
+    """A strafe recorded as right, left, right strikes has no left-to-left stride: its stride runs from
+    right strike to right strike, keyed at the left strike between, the next right and one stride on."""
+    three = [{"foot": "right", "strike": 0.4}, {"foot": "left", "strike": 0.8}, {"foot": "right", "strike": 1.2}]
+    assert strides(three) == [(0.4, 1.2, [0.8, 1.2, 1.6])]
+    assert steadiest_cycle(three, lambda s: 1.0, FPS) == (12, 36)
+    four = three + [{"foot": "left", "strike": 1.6}]
+    assert strides(four) == [(0.8, 1.6, [0.8, 1.2, 1.6])]  # left to left when there is one
+
+
+@pytest.fixture(scope="module")
+def smartbody_as_bvh(tmp_path_factory):
+    """SmartBody's MaleLocomotion motions written as BVH and imported as a third party's folder (no file
+    name tells a start from a walk), and the same set mirrored, built."""
+    import motion_variants as mv
+    from infuse.packs import build_pack, import_bvh_folder
+
+    root = tmp_path_factory.mktemp("smartbody_as_bvh")
+    original = mv.read_set(sorted(corpus_file("smartbody/behaviorsets/MaleLocomotion/motions").glob("*.skm")), "sb")
+    return {name: build_pack(import_bvh_folder(mv.write_set(s, root / "sets" / name), root / name, name=name))
+            for name, s in (("original", original), ("mirrored", mv.mirrored(original)))}
+
+
+def test_takes_imported_without_names_blend_only_steady_strides(smartbody_as_bvh):
+    """The turning starts (both feet down 0.5 s while the weight shifts) are starts, the take from idle to
+    walk and the one from stop to walk (one or two steps, ends 50 degrees apart) are not blended, and the
+    strafes of three steps (no left-to-left stride) are. Before, the turning starts were blended as
+    cycles turning 41-85 deg/s, and the mirrored set's walks to a target 135 degrees away jumped 0.4 m
+    sideways within 0.3 s and looped."""
+    for pack in smartbody_as_bvh.values():
+        clips = {c["name"]: c for c in pack.analysis["clips"]}
+        for name in ("ChrUtah_Idle01_ToWalk01_Turn180Lf01", "ChrUtah_Idle01_ToWalk01_Turn90Lf01"):
+            assert clips[name]["transition"] == "start", (pack.name, name)
+        blended = set(pack.analysis["tessellations"]["locomotion"]["labels"])
+        assert not blended & {"ChrUtah_Idle001_ToWalk001", "ChrUtah_StopToWalkRt01"}
+        assert {"ChrUtah_StrafeFastLf01", "ChrUtah_StrafeSlowLf01", "ChrUtah_StrafeFastRt01", "ChrUtah_StrafeSlowRt01"} <= blended
+
+
+def test_a_mirrored_set_walks_to_targets_without_loops(smartbody_as_bvh):
+    """The mirrored set's walks to targets 135 degrees to the left (which looped, 386-405 degrees turned,
+    path 1.17x): no loop, paths at most 1.15x, within 5 cm (measured: 82-89 degrees, 1.04-1.07x)."""
+    from infuse.packs.walk_test import trial_pack
+
+    character = infuse.Character("Xbot", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
+    trial = trial_pack(character, smartbody_as_bvh["mirrored"], speeds=[1.3], distances=(2.0, 4.0), angles=(135.0,))
+    for t in trial.targets:
+        assert not t.loops and t.path_ratio <= 1.15 and t.miss_m <= 0.05, t
 
 
 @pytest.fixture(scope="module")

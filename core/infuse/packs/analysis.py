@@ -31,7 +31,7 @@ import numpy as np
 
 from ..contacts import contact_phases, foot_contacts
 from ..errors import UnusableInputError
-from .cycles import steadiest_cycle
+from .cycles import steadiest_cycle, strides
 from .manifest import GESTURE_PHASES
 
 LOCOMOTION_COORDINATES = ("forward_speed", "lateral_speed", "turn_rate")
@@ -95,17 +95,18 @@ def cycle_and_keys(step_list: list[dict], frames: int, fps: float, loop: bool,
                    speed_of=None) -> tuple[tuple[int, int], list[float], str]:
     """Cycle (first, last frame), keys (left strike, right strike, next left strike; seconds) and a note.
 
-    A clip holding more than one stride (left strike to left strike, a right strike between) gets the
-    steadiest (:func:`~infuse.packs.cycles.steadiest_cycle`, by ``speed_of((first, last))`` m/s);
-    a loop of one stride is its own cycle."""
+    A clip holding more than one stride (left strike to left strike, a right strike between; else right
+    to right, :func:`~infuse.packs.cycles.strides`) gets the steadiest
+    (:func:`~infuse.packs.cycles.steadiest_cycle`, by ``speed_of((first, last))`` m/s); a loop of one
+    stride is its own cycle."""
     duration = (frames - 1) / fps
     lefts = [s["strike"] for s in step_list if s["foot"] == "left"]
     rights = [s["strike"] for s in step_list if s["foot"] == "right"]
     if speed_of is not None:
         stride = steadiest_cycle(step_list, speed_of, fps)
         if stride is not None:
-            a, b = stride
-            return stride, [a / fps, next(r for r in rights if a / fps < r < b / fps), b / fps], ""
+            keys = {(int(round(a * fps)), int(round(b * fps))): k for a, b, k in strides(step_list)}
+            return stride, keys[stride], ""
     if loop:
         if lefts and rights:
             t0 = lefts[0]

@@ -21,7 +21,7 @@ from ..mapping import map_skeleton
 from .analysis import analyse_clip, blend_groups, coordinates_of, headings, locomotion_parameters, resolution_of
 from .coverage import coverage, describe_coverage
 from .denoise import denoised
-from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, straighten, transition_kind
+from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, straighten, strides, transition_kind
 from .manifest import read_manifest
 from .order import content_order
 from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
@@ -29,18 +29,28 @@ from .tessellation import Tessellation
 
 #: A looping clip whose last frame turns a joint more than this from its first (degrees) does not loop.
 LOOP_TOLERANCE_DEG = 12.0
+#: A take holding no full stride is one stride recorded as a loop (Bandai's runs and dashes: its last
+#: frame within 0-12 degrees of its first on every joint below the pelvis) unless its ends differ by
+#: more than this (degrees): a start's or stop's legs stand at one end and walk at the other (50 degrees).
+ONE_STRIDE_LOOP_DEG = 25.0
+
+
+def loop_gap(motion, base: int) -> float:
+    """The largest turn (degrees) of a joint below the pelvis ``base`` from a motion's first frame to its last."""
+    from .. import quaternions as quat
+
+    rot = motion.local_rotations
+    return float(np.degrees(quat.angle_between(rot[0, base + 1:], rot[-1, base + 1:])).max()) if len(rot) > 1 else 0.0
 
 
 def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, base: int) -> list[str]:
     """Problems worth a person's attention, one sentence each (empty when all is well)."""
-    from .. import quaternions as quat
-
     problems = []
     for c in clips:
         m = motions[c["name"]]
         if c["loop"] and m.num_frames > 2:
             # The pelvis and above carry the facing; below it, a loop's last frame repeats its first.
-            ang = np.degrees(quat.angle_between(m.local_rotations[0, base + 1:], m.local_rotations[-1, base + 1:])).max()
+            ang = loop_gap(m, base)
             if ang > LOOP_TOLERANCE_DEG:
                 problems.append(f"{c['name']}: marked as a loop but its last frame differs from its first by {ang:.0f} deg")
         if kind == "locomotion" and c["role"] == "cycle" and not c["steps"]:
@@ -55,8 +65,8 @@ def validate(kind: str, clips: list[dict], motions: dict, tessellations: dict, b
 
 def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:
     """Make a locomotion pack's recorded clips usable as blend examples, in place (:mod:`.cycles`):
-    transitions recognized by what they do (``transition``; a take given as a cycle that is one is
-    not blended; a loop is a cycle as given), cycles straightened, aligned with their travel and closed, then analysed again on
+    transitions recognized by what they do (``transition``; a take given as a cycle that is one, or
+    that holds no full stride and does not loop as a whole, is not blended; a loop is a cycle as given), cycles straightened, aligned with their travel and closed, then analysed again on
     the same stride. Each change is in the clip's ``derived`` record and ``motions`` holds the result."""
     for i, (entry, info) in enumerate(zip(entries, clips)):
         if info["role"] not in ("cycle", "other") or (info["loop"] and info["role"] == "cycle"):
@@ -73,7 +83,11 @@ def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: d
                 info["notes"].append("no foot steps: not locomotion, not blended" if what == "none"
                                      else f"a {what}, not a steady cycle: not blended")
             continue
-        if info["role"] == "cycle":
+        gap = loop_gap(motions[entry.name], index["base"])
+        if info["role"] == "cycle" and not strides(info["steps"]) and gap > ONE_STRIDE_LOOP_DEG:
+            info["role"] = "other"
+            info["notes"].append(f"no full stride and its ends differ by {gap:.0f} deg (not one stride looping): not blended")
+        elif info["role"] == "cycle":
             _derive(entry, info, i, motions, clips, fks, index, mapping)
 
 
@@ -84,8 +98,10 @@ def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: li
     motion = motions[entry.name]
     end = closest_loop_end(motion.local_rotations, cycle, info.get("low_passed_frames", 1) - 1)
     if end != cycle[1]:
+        left, right = info["keys"][:2]  # a stride from right strike to right strike ends on its right key
+        right = end / info["fps"] if abs(right * info["fps"] - cycle[1]) < 0.5 else right
         cycle = (cycle[0], end)
-        info["keys"] = info["keys"][:2] + [info["keys"][0] + (end - cycle[0]) / info["fps"]]
+        info["keys"] = [left, right, left + (end - cycle[0]) / info["fps"]]
         info["parameters"] = p = locomotion_parameters(fks[i][1][:, index["base"]], headings(fks[i][1], index), cycle, info["fps"])
     turn = p["turn_rate"] if abs(np.degrees(p["turn_rate"])) < STRAIGHTEN_DEG_S else 0.0
     align = alignment(p["direction"])

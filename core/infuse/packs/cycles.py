@@ -36,6 +36,10 @@ ALIGN_DEG = 10.0
 #: A clip's pelvis travelling slower than this many leg lengths per second over its first (last)
 #: quarter second (net ground travel) stands there.
 STILL_LEGS_S = 0.15
+#: Both feet down for at least this long (seconds) at a clip's start (end), the pelvis moving slower
+#: than twice :data:`STILL_LEGS_S` meanwhile, also stands there: a start that turns first shifts its
+#: weight before its first step, faster than a body standing still (a walk's double support is shorter).
+STAND_S = 0.3
 #: Clips of at most this many steps may be transitions (starts, stops, steps).
 SHORT_STEPS = 4
 #: A turn on the spot turns at least this much (degrees) over the clip.
@@ -50,17 +54,32 @@ def _yaw(angle) -> np.ndarray:
     return out
 
 
+def strides(step_list: list[dict]) -> list[tuple[float, float, list[float]]]:
+    """Every stride of a take's steps as (first, next strike of one foot, keys), seconds: left strike to
+    left strike with a right strike between, keys (left strike, right strike, next left strike); a take
+    without one (a strafe of three steps, right-left-right) from right strike to right strike with a left
+    strike between, keys (that left strike, the next right strike, the left strike one stride on), as a
+    loop's keys run past its end."""
+    times = {foot: [s["strike"] for s in step_list if s["foot"] == foot] for foot in ("left", "right")}
+    out = []
+    for foot, other in (("left", "right"), ("right", "left")):
+        for a, b in zip(times[foot][:-1], times[foot][1:]):
+            between = [t for t in times[other] if a < t < b]
+            if between:
+                out.append((a, b, [a, between[0], b] if foot == "left" else [between[0], b, between[0] + b - a]))
+        if out:
+            return out
+    return out
+
+
 def steadiest_cycle(step_list: list[dict], speed_of, fps: float) -> tuple[int, int] | None:
-    """(first, last frame) of the left-to-left stride (with a right strike between) whose speed
-    ``speed_of((first, last))`` (m/s) is nearest the median over the take's strides; None without one."""
-    lefts = [s["strike"] for s in step_list if s["foot"] == "left"]
-    rights = [s["strike"] for s in step_list if s["foot"] == "right"]
-    strides = [(int(round(a * fps)), int(round(b * fps))) for a, b in zip(lefts[:-1], lefts[1:])
-               if any(a < r < b for r in rights)]
-    if not strides:
+    """(first, last frame) of the stride (:func:`strides`) whose speed ``speed_of((first, last))`` (m/s)
+    is nearest the median over the take's strides; None without one."""
+    found = [(int(round(a * fps)), int(round(b * fps))) for a, b, _ in strides(step_list)]
+    if not found:
         return None
-    speeds = np.array([speed_of(s) for s in strides])
-    return strides[int(np.argmin(np.abs(speeds - np.median(speeds))))]
+    speeds = np.array([speed_of(s) for s in found])
+    return found[int(np.argmin(np.abs(speeds - np.median(speeds))))]
 
 
 def closest_loop_end(rotations: np.ndarray, cycle: tuple[int, int], reach: int) -> int:
@@ -185,13 +204,26 @@ def alignment(direction: float) -> float:
     return 0.0
 
 
+def _stands(velocity: np.ndarray, both_down: np.ndarray, fps: float, leg: float) -> bool:
+    """Whether a clip stands at its start, from its pelvis's ground velocity (F, 2) m/s and whether both
+    feet are down (F,): the pelvis nearly still over the first quarter second (the mean velocity's
+    length, net travel, not the mean speed, which mocap noise on the pelvis inflates), or both feet down
+    for :data:`STAND_S` with the pelvis slower than twice that."""
+    still = STILL_LEGS_S * leg
+    span = max(int(round(0.25 * fps)), 1)
+    if np.linalg.norm(velocity[:span].mean(axis=0)) < still:
+        return True
+    down = int(np.argmin(both_down)) if not both_down.all() else len(both_down)
+    return down >= max(STAND_S * fps, 1) and float(np.linalg.norm(velocity[:down].mean(axis=0))) < 2.0 * still
+
+
 def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarray, fps: float, leg: float,
                     steps: int) -> str | None:
     """What a clip does, from its (F, 2) foot contacts, pelvis path (F, 3), facing (F,) radians, leg
     length (m) and number of steps: ``"none"`` (no steps: not locomotion), ``"turn"`` (turning more
     than :data:`TURN_DEG` on the spot), and for clips of at most :data:`SHORT_STEPS` steps ``"step"``
     (one or two steps travelling less than a leg length, or standing before and after), ``"start"`` (standing, then walking) or ``"stop"`` (walking, then
-    standing); None for a walk (what the blend can use)."""
+    standing; standing is told by :func:`_stands`); None for a walk (what the blend can use)."""
     if steps == 0 or len(root) < 3:
         return "none"
     travel = float(np.linalg.norm((root[-1] - root[0])[[0, 2]]))
@@ -203,10 +235,8 @@ def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarra
     if steps <= 2 and travel < leg:
         return "step"
     velocity = np.gradient(root[:, [0, 2]], axis=0) * fps
-    span = max(int(round(0.25 * fps)), 1)
-    still = STILL_LEGS_S * leg
-    # the mean velocity's length (net travel), not the mean speed, which mocap noise on the pelvis inflates
-    begins, ends = (np.linalg.norm(velocity[:span].mean(axis=0)) < still, np.linalg.norm(velocity[-span:].mean(axis=0)) < still)
+    both = np.all(np.asarray(foot_flags, dtype=bool), axis=1, keepdims=True)[:, 0]
+    begins, ends = (_stands(velocity, both, fps, leg), _stands(velocity[::-1], both[::-1], fps, leg))
     if begins and ends:
         return "step"
     if begins:
