@@ -302,6 +302,8 @@ class LiveScene:
                 with self._ready:
                     self._pending.extend(frames)
                     self._ready.notify_all()
+                if first // int(self.fps) != scene.runtime.frame // int(self.fps):
+                    self._forget()  # once a second, after the frames are in the presenter's hands
         except BaseException as exc:  # kept (with its traceback) for callers, which get errors from then on
             self._fail(exc)
 
@@ -366,8 +368,6 @@ class LiveScene:
         self._resize(count, spent)
         self.stats.block_frames = self.block_frames
         frames = self._frames(first, count)
-        if first // int(self.fps) != scene.runtime.frame // int(self.fps):
-            self._forget()
         return frames
 
     def _frames(self, first: int, count: int) -> list[tuple[int, dict]]:
