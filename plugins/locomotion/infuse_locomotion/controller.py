@@ -617,6 +617,13 @@ class Locomotion(Controller):
         # off, and the foot would turn from lying flat to the animation's toe off at once.
         down = settle[:, None] * support
         laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
+        held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not b.idle.any())
+        if held.any():
+            # Standing still at the end of a stop without an idle, a foot lies down no less than as the
+            # stop's last step left it until it comes to rest (the held phase may be past the trailing
+            # foot's toe off starting).
+            down = np.where(held[:, None], np.maximum(down, _held_from(laid, st.laid, held)), down)
+            laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
@@ -1645,6 +1652,16 @@ def _scatter(before: np.ndarray, active: np.ndarray, values: np.ndarray, frames:
     """(F, ...) arrays: ``values`` on the ``active`` frames, ``before`` (F or 1, ...) on the others."""
     out = np.array(np.broadcast_to(before, (frames,) + values.shape[1:]))
     out[active] = values
+    return out
+
+
+def _held_from(x: np.ndarray, before: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """(F, K) for each frame of ``x`` (F, K) in a run of ``held`` (F,) frames, the value of ``x`` at
+    the frame before the run (``before`` (K,) where that is the block's first); ``x`` elsewhere."""
+    f = np.arange(len(x))
+    starts = np.maximum.accumulate(np.where(held & ~np.concatenate(([False], held[:-1])), f, 0))
+    previous = np.concatenate((before[None], x))  # previous[i] is x at frame i - 1
+    out: np.ndarray = np.where(held[:, None], previous[starts], x)
     return out
 
 
