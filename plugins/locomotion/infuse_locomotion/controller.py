@@ -840,8 +840,12 @@ class Locomotion(Controller):
                         while s < end:
                             # The ball stays where it was let go until it leaves the ground (a take's ball may push
                             # off moving along it), at most HOLD_S, and the release's clock runs from then on.
+                            # Once it has left (``released``: time since), it is not held again where the
+                            # animation's ball dips back (a long foot's, pitching down as it swings): held
+                            # again, the ankle swung back by 17-23 cm for a frame.
                             since = (round(free_s / dt) + np.arange(1, end - s + 1)) * dt
                             up = (feet_pos[s:end, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
+                            up = np.logical_or.accumulate(up | (released > 0.0))
                             e = s + int(np.argmin(up)) + 1 if not up.all() else end
                             since, up = since[:e - s], up[:e - s]
                             free_s = float(since[-1])
@@ -866,6 +870,11 @@ class Locomotion(Controller):
                             # A foot far from where the animation has it steps there over an arc, not along the
                             # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
                             goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
+                            # Off the ground, kept within reach as a foot without a ball is (below): a ball let go
+                            # far behind (a long foot's, pinned where it landed) held the leg straight toward it,
+                            # and the knee bent by 18 degrees and the hip turned by 46 in the frame it came back.
+                            lifting = s + np.flatnonzero(up)
+                            goal[lifting] = footing.within_reach(goal[lifting], g_pos[lifting, k, :3])
                             held = np.nonzero(~up)[0]
                             if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
                                 h = s + held
