@@ -81,8 +81,8 @@ class LocomotionBinding:
     high a pose has lifted it, ``floors`` or None (:class:`FootFloors`).
     With two legs: ``leg_limbs`` (hip, knee, ankle) each, ``balls`` (2,) (the ankle without a ball
     joint), ``has_ball`` (2,) bool, ``balls_on_ankles`` the feet whose ball hangs from the ankle, and the
-    joints one FK gives the stride (``shorten_joints``) and the pinning (``pin_joints``: hip, knee,
-    ankle, the hip's parent and the ball of each leg).
+    joints one FK gives the stride and the pinning (``pin_joints``: hip, knee, ankle, the hip's parent
+    and the ball of each leg).
     The straight walk's cadence (cycles per second) ``walk_cadences`` (S,) at speeds ``walk_speeds``
     (S,) m/s, from standing to the top speed (:func:`~.controller.straight_walk`), for pacing its stops.
     Touching down (:func:`~.controller._touch_downs`): ``sole_floor`` (2,) the height (m) each foot's sole
@@ -122,7 +122,6 @@ class LocomotionBinding:
     balls: np.ndarray = field(default_factory=_no_joints)
     has_ball: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     balls_on_ankles: np.ndarray = field(default_factory=_no_joints)
-    shorten_joints: list[int] = field(default_factory=list)
     pin_joints: list[int] = field(default_factory=list)
     walk_speeds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     walk_cadences: np.ndarray = field(default_factory=lambda: np.zeros(0))

@@ -748,28 +748,36 @@ class Locomotion(Controller):
         (F, 2) (the same, let go slower), so nothing jumps at strike or toe off.
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
         stance_feet = b.stance_feet
-        feet_rot, pos = chain_fk(b.skeleton, rot, root, jt, b.shorten_joints)  # hips, ankles[, balls]
-        feet = feet_rot[:, 2:4, None]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
+        body, frames = b.body, len(rot)
+        mean = quat.normalize((w @ b.body_means).reshape(frames, -1, 4))
+        mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
+        calmer = quat.slerp(mean, np.take(rot, body, 1), stride[:, None])
+        # One FK of the legs (hip, knee, ankle, the hip's parent, ball; (2F, 2, 5)) for the pose as it is
+        # (the goals) and with the calmer body (the leg IK's chains), the two stacked.
+        both = np.concatenate((rot, rot))
+        both[frames:, body] = calmer
+        g_rot, g_pos = chain_fk(b.skeleton, both, np.concatenate((root, root)), None if jt is None else np.concatenate((jt, jt)),
+                                b.pin_joints)
+        g_rot, g_pos = g_rot.reshape(2 * frames, 2, 5, 4), g_pos.reshape(2 * frames, 2, 5, 3)
+        pos = g_pos[:frames]
+        feet = g_rot[:frames, :, 2:3]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
             flat = quat.multiply(turn_q[:, None, None], stance_feet)
-            feet = quat.slerp(feet_rot[:, 2:].reshape(-1, 2, 2, 4).swapaxes(1, 2), flat, laid[:, :, None])
-        hips = 0.5 * (pos[:, 0] + pos[:, 1])
-        body = b.body
-        mean = quat.normalize((w @ b.body_means).reshape(len(w), -1, 4))
-        mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
-        rot[:, body] = quat.slerp(mean, np.take(rot, body, 1), stride[:, None])
+            feet = quat.slerp(g_rot[:frames, :, [2, 4]], flat, laid[:, :, None])
+        hips = 0.5 * (pos[:, 0, 0] + pos[:, 1, 0])
+        rot[:, body] = calmer
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
         centre = (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3)
         if b.idle.any():
             centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
-        goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, 2:4] - hips[:, None] - centre)
+        goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, :, 2] - hips[:, None] - centre)
         low = w @ b.ankle_low
-        goal[..., 1] = low + (pos[:, 2:4, 1] - low) * (1.0 - down)
+        goal[..., 1] = low + (pos[:, :, 2, 1] - low) * (1.0 - down)
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
         solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=(np.abs(stride - 1.0) > 1e-6).astype(float),
-                   pole=forward, end_rotation=feet[:, :, 0], distance=False)
+                   pole=forward, end_rotation=feet[:, :, 0], chains=(g_rot[frames:, :, :4], g_pos[frames:, :, :4]), distance=False)
         if stance_feet is not None and b.balls_on_ankles.size:
             k = b.balls_on_ankles
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
@@ -1206,8 +1214,6 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         has_ball=np.array([leg[3] is not None for leg in legs] if two else [], dtype=bool),
         balls_on_ankles=np.array([k for k, leg in enumerate(legs) if two and leg[3] is not None
                                   and int(sk.parents[leg[3]]) == leg[2]], dtype=np.int64),
-        shorten_joints=[legs[0][0], legs[1][0], legs[0][2], legs[1][2]] + (balls.tolist() if stance_feet is not None else [])
-        if two else [],
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
         walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers, sole_floor=sole_floor,
