@@ -146,6 +146,20 @@ def test_a_walk_to_a_target_is_split_into_its_parts():
         assert (parts[(t >= a) & (t < b)] == part).all(), (part, parts[(t >= a) & (t < b)])
 
 
+def test_walking_at_the_speed_asked_is_walking_between_faster_clips():
+    """A start clip speeding up to 0.7 m/s, then the walk asked at 0.54 m/s for 3 s and its stop
+    (SmartBody's female set): the walk after the start is walking (it was split as the stop, being
+    slower than 90% of the start's speed)."""
+    from infuse.packs.walk_test import PARTS, walk_parts
+
+    t = np.arange(240) / 30.0
+    speed = np.interp(t, [0.0, 1.0, 1.5, 2.0, 5.0, 6.0, 8.0], [0.0, 0.7, 0.7, 0.54, 0.54, 0.0, 0.0])
+    ground = np.stack((np.zeros_like(t), np.cumsum(speed) / 30.0), axis=-1)
+    walking = (t >= 2.2) & (t < 4.8)
+    assert (np.array(PARTS)[walk_parts(ground, cruise=0.54)][walking] == "walk").all()
+    assert not (np.array(PARTS)[walk_parts(ground)][walking] == "walk").any()  # by the top speed alone
+
+
 @pytest.mark.parametrize("argv, says", [
     (["pack", "test", "reaching"], "a reach pack"),
     (["pack", "test", "locomotion-male", "--speeds", "fast"], "--speeds takes numbers"),

@@ -67,7 +67,7 @@ def walks(brad, female_space):
         found = foot_contacts(m, rig.mapping, fk=(g_rot, g_pos))
         base = rig.joint("base")
         ground = g_pos[:, base][:, [0, 2]]
-        parts = walk_parts(ground)[1:]
+        parts = walk_parts(ground, 0.54)[1:]
         # The stop clip begins with its pelvis on the point recorded (one of the two, the nearer).
         near = min(np.linalg.norm(ground - np.array(p), axis=-1).min() for p in begins.values())
         first = min(int(np.argmin(np.linalg.norm(ground - np.array(p), axis=-1))) for p in begins.values()

@@ -10,8 +10,10 @@ import pytest
 
 import infuse
 from infuse.contacts import foot_contacts, sole_positions
+from infuse.metrics import foot_skate
 from infuse.packs import build_pack, import_smartbody, infuse_character
 from infuse.packs.analysis import TRANSITION_END_S, headings
+from infuse.packs.walk_test import PARTS, walk_parts
 from infuse.runtime import Runtime, controller
 
 from corpus_data import corpus_file, require_corpus
@@ -212,6 +214,21 @@ def test_a_turn_on_the_spot_turns_its_feet_off_the_ground(xbot, space):
     slide = sole_slide(m, rig.mapping)[:frames]
     assert slide.sum() < 0.02 and slide.max() < 0.005
     assert np.linalg.norm(pos[-15:, rig.joint("base")][:, [0, 2]].mean(axis=0) - target) < 0.05
+
+
+def test_a_foot_sliding_flat_in_a_turn_is_lifted(xbot, space):
+    """Turn180Lf01 slides its right foot flat on the floor at its end (about 12 cm at up to 0.57 m/s,
+    faster than a foot lands, so its contacts break in the middle of it: two drags of 3 cm found, each
+    too short to lift): a foot lying flat counts as down, the slide is lifted, and on the spot the walk
+    2 m away at 135 degrees skates at most 1 cm (1.5 before; the project's foot skate on the frames
+    :func:`~infuse.packs.walk_test.walk_parts` puts on the spot)."""
+    target = (2.0 * math.sin(math.radians(135.0)), 2.0 * math.cos(math.radians(135.0)))
+    m, pos, rig = walk(xbot, space, target, 12.0)
+    found = foot_contacts(m, rig.mapping, fk=infuse.motion_fk(m))
+    base = rig.joint("base")
+    parts = walk_parts(pos[:, base][:, [0, 2]], 0.5)[1:]
+    assert (parts == PARTS.index("on the spot")).sum() > 30  # it turns on the spot
+    assert 100.0 * foot_skate(pos, found, base, steps=parts == PARTS.index("on the spot")).travel < 1.0
 
 
 def test_a_start_eases_into_the_speed_of_the_walk_after_it(xbot, space):

@@ -17,9 +17,9 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
   of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
   more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
   whole walk (its start, turn on the spot and stop), cm in all, and split over its parts
-  (:func:`walk_parts`: on the spot, start, walk, stop, settle; each frame-to-frame step counted in the
-  part of the frame it ends at, contacts and planted heights those of the whole walk, so the parts
-  add up to the whole).
+  (:func:`walk_parts`, walking at 90% of the speed asked or more: on the spot, start, walk, stop,
+  settle; each frame-to-frame step counted in the part of the frame it ends at, contacts and planted
+  heights those of the whole walk, so the parts add up to the whole).
 
 Angles are degrees in every table (turn rates degrees per second); distances metres, speeds m/s.
 """
@@ -162,17 +162,20 @@ def _window_mean(x: np.ndarray, frames: int) -> np.ndarray:
     return (c[frames:] - c[:-frames]) / frames
 
 
-def walk_parts(ground: np.ndarray) -> np.ndarray:
+def walk_parts(ground: np.ndarray, cruise: float | None = None) -> np.ndarray:
     """(F,) index into :data:`PARTS` of each frame of a walk to a target, from its pelvis ground path
     (F, 2) metres: before it first moves at :data:`CRUISE` of its top speed, on the spot (slower than
     :data:`STILL_M_S`: standing, or turning on the spot) or starting; after it last does, stopping or
-    settling (still again); walking between. Speeds over :data:`PART_WINDOW_S` windows."""
+    settling (still again); walking between. Speeds over :data:`PART_WINDOW_S` windows. ``cruise``: the
+    walking speed asked (m/s), the top speed where the walk reaches it (a start or stop clip may go
+    faster than the walk between them: its steps at the walking speed are walking)."""
     v = np.linalg.norm(np.gradient(_window_mean(ground, max(int(PART_WINDOW_S * FPS), 1)), axis=0), axis=-1) * FPS
     out = np.full(len(v), PARTS.index("walk"))
     if len(v) < 2 or v.max() <= STILL_M_S:
         out[:] = PARTS.index("on the spot")
         return out
-    fast = np.nonzero(v >= CRUISE * v.max())[0]
+    top = v.max() if cruise is None else min(float(v.max()), float(cruise))
+    fast = np.nonzero(v >= CRUISE * top)[0]
     still = v < STILL_M_S
     first, last = int(fast[0]), int(fast[-1]) + 1
     out[:first] = np.where(still[:first], PARTS.index("on the spot"), PARTS.index("start"))
@@ -243,7 +246,7 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
         found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
         skate = foot_skate(g_pos, found, base).travel
-        parts = walk_parts(ground)[1:]  # each step's, by the frame it ends at
+        parts = walk_parts(ground, walk_speed)[1:]  # each step's, by the frame it ends at
         by_part = {part: 100.0 * foot_skate(g_pos, found, base, steps=parts == k).travel for k, part in enumerate(PARTS)}
         trial.targets.append(TargetTrial(d, a, float(np.linalg.norm(end - goal)), path / d, turned, arrival, 100.0 * skate, by_part))
         trial.paths.append(smooth)

@@ -6,7 +6,8 @@ Pinned, a foot on its heel keeps the animation's turn (the leg could not twist t
 ball would slide along an arc; on its ball alone it keeps its yaw and the body turns over it. So
 where a flat foot turns faster than :data:`SWIVEL_DEG_S`, by :data:`SWIVEL_MIN_DEG` or more in all
 (a landing's twist of a few degrees is left alone), or drags a point that is down along the ground
-(:data:`DRAG_M_S`: a take shuffling a foot into place on its ball), the foot is lifted :data:`LIFT` of the leg's length
+(:data:`DRAG_M_S`: a take shuffling a foot into place on its ball, or sliding it flat, :data:`FLAT`, its
+contacts broken by its speed), the foot is lifted :data:`LIFT` of the leg's length
 off the ground, its orientation kept, by two-joint leg IK on the clip, rising and coming down over
 :data:`RAMP_S`; the frames it is fully up do not count as down, so the pinning lets it go and lands
 it again where it comes down: a step that turns the foot, not a slide. While it rises and comes
@@ -35,6 +36,9 @@ GAP_S = 0.1
 #: more in one go, is lifted too.
 DRAG_M_S = 0.3
 DRAG_MIN_M = 0.05
+#: A foot lying flat (its ankle and its ball both within this share of the leg of the heights they
+#: stand at) is on the ground, whatever its contacts say: a foot sliding fast enough breaks them.
+FLAT = 0.01
 #: Height (share of the leg's length) a swivelling foot is lifted to, and seconds to get there and back.
 LIFT = 0.04
 RAMP_S = 0.15
@@ -49,11 +53,12 @@ def _runs(flags: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return list(zip(np.r_[idx[0], idx[breaks + 1]].tolist(), (np.r_[idx[breaks], idx[-1]] + 1).tolist()))
 
 
-def swivel_lift(ankle: np.ndarray, ball: np.ndarray, phases: np.ndarray, fps: float) -> np.ndarray:
+def swivel_lift(ankle: np.ndarray, ball: np.ndarray, phases: np.ndarray, fps: float, flat_m: float = 0.0) -> np.ndarray:
     """(F,) how far in [0, 1] a foot is lifted, from its ankle and ball positions (F, 3) and its heel
     and ball contact flags ``phases`` (F, 2) at ``fps``: fully where it swivels flat on the ground or
-    drags a point that is down along it (see the module doc), eased in and out over :data:`RAMP_S`
-    on either side."""
+    drags a point that is down along it (see the module doc; a foot with its ankle and ball both
+    within ``flat_m`` metres of the heights they stand at counts as down), eased in and out over
+    :data:`RAMP_S` on either side."""
     frames = len(ankle)
     if frames < 2:
         return np.zeros(frames)
@@ -69,6 +74,10 @@ def swivel_lift(ankle: np.ndarray, ball: np.ndarray, phases: np.ndarray, fps: fl
     point = np.where(phases[:, 1:2], ball, ankle)[:, [0, 2]]
     speed = np.r_[0.0, np.linalg.norm(np.diff(point, axis=0), axis=-1) * fps]
     down = np.asarray(phases[:, 0] | phases[:, 1], dtype=bool)
+    if flat_m > 0.0 and phases.any(axis=0).all():
+        # Lying flat where both points are as low as they stand (their lowest 5% while down).
+        floors = [np.percentile(p[phases[:, j], 1], 5.0) for j, p in enumerate((ankle, ball))]
+        down |= (ankle[:, 1] < floors[0] + flat_m) & (ball[:, 1] < floors[1] + flat_m)
     held = down & np.concatenate((np.zeros(1, dtype=bool), down[:-1]))  # down at both ends of the frame
     for a, e in _runs(held & (speed > DRAG_M_S), gap):
         if speed[a:e].sum() / fps >= DRAG_MIN_M:
@@ -92,7 +101,7 @@ def lift_swivels(sk, motion, legs, phases: np.ndarray, facing: np.ndarray, leg_l
     g_rot, g_pos = chain_fk(sk, motion.local_rotations, motion.root_translations, motion.joint_translations, joints)
     share = np.zeros((motion.num_frames, 2))
     for n, k in enumerate(feet):
-        share[:, k] = swivel_lift(g_pos[:, 2 * n], g_pos[:, 2 * n + 1], phases[:, k], motion.fps)
+        share[:, k] = swivel_lift(g_pos[:, 2 * n], g_pos[:, 2 * n + 1], phases[:, k], motion.fps, FLAT * leg_length)
     if not share.any():
         return motion, phases
     rot = np.array(motion.local_rotations)
