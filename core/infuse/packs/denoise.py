@@ -7,7 +7,8 @@ played as recorded, noise and all. A take whose feet show such noise (:func:`inf
 has every joint's rotation, the root's translation and any joint translations low-passed over the window
 the detector uses for that noise (:func:`infuse.contacts.smoothing_frames`: a local quadratic fit,
 a Savitzky-Golay filter, over the fewest frames that keep the noise from moving a landing foot's speed by
-more than a tenth); clean takes (one frame to either side) are left exactly as they are.
+more than a tenth); clean takes (one frame to either side, or noise below :data:`CLEAN_NOISE_LEGS`, which
+the detector's own low-pass of the feet's paths takes care of) are left exactly as they are.
 """
 from __future__ import annotations
 
@@ -19,12 +20,23 @@ from ..kinematics import forward_kinematics
 from ..motion import Motion
 
 
+#: Position noise of the feet (leg lengths, :func:`~infuse.contacts.position_noise`) below which a take is
+#: clean whatever its frame rate: about 5 mm on an adult. The measure reads as noise a fast take's feet,
+#: which are seldom at rest (Bandai dataset-1's dash: 0.0024, the 5th percentile reaching frames where the
+#: feet still move) and a resampling's interpolation (0.0053 at most at 24 fps); clean takes measure up to
+#: 0.0014 at 30 fps and above, a degree of rotation noise on every joint 0.0085-0.031.
+CLEAN_NOISE_LEGS = 0.006
+
+
 def noise_frames(motion: Motion, pair: tuple[Foot, Foot]) -> int:
     """Frames to either side over which ``motion``'s feet need low-passing (1: clean)."""
     points = [j for foot in pair for j in foot.points]
     _, pos = forward_kinematics(motion.skeleton, motion.local_rotations, motion.root_translations, motion.joint_translations)
     leg = leg_length(motion.skeleton, pair)
-    return smoothing_frames(position_noise(pos[:, points]), motion.fps, NOISE_SPEED * LANDING_SPEED * leg)
+    noise = position_noise(pos[:, points])
+    if noise < CLEAN_NOISE_LEGS * leg:
+        return 1
+    return smoothing_frames(noise, motion.fps, NOISE_SPEED * LANDING_SPEED * leg)
 
 
 def low_passed(values: np.ndarray, half: int) -> np.ndarray:

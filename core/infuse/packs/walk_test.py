@@ -13,9 +13,10 @@ internals). Walks run side by side as characters of one runtime at 30 fps:
 - **targets**: walks to points :data:`DISTANCES` metres away at :data:`ANGLES` degrees off the facing
   (+ left); miss = distance of the pelvis (its ground point, averaged over the last half second)
   from the target; path ratio = length of the pelvis's ground path (smoothed over one second, which
-  takes out the sway of the gait) over the straight line; turned = how much that path's direction
-  of travel turns, all turns added, degrees (a turn on the spot is not on the path); a loop turns
-  more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
+  takes out the sway of the gait) over the straight line; turned = how far round that path's
+  direction of travel goes, degrees (the range of the unwrapped direction, so a slow walk's sway,
+  which one second leaves in the path where a stride takes longer, does not add up; a turn on the
+  spot is not on the path); a loop turns more than :data:`LOOP_DEG`; arrival = first time the pelvis stays within 5 cm; foot skate over the
   whole walk (its start, turn on the spot and stop), cm in all, and split over its parts
   (:func:`walk_parts`, walking at 90% of the speed asked or more: on the spot, start, walk, stop,
   settle; each frame-to-frame step counted in the part of the frame it ends at, contacts and planted
@@ -46,8 +47,8 @@ ANGLES = (0.0, 45.0, 90.0, 135.0, 180.0, -90.0)
 WALK_SPEED = 1.3
 #: Within this many metres of its target a walk has arrived.
 ARRIVED_M = 0.05
-#: A path whose direction of travel turns more than this (degrees, all turns added, where it moves
-#: faster than :data:`MOVING_M_S`) makes a loop.
+#: A path whose direction of travel goes round more than this (degrees, the range of its unwrapped
+#: direction where it moves faster than :data:`MOVING_M_S`) makes a loop.
 LOOP_DEG = 270.0
 MOVING_M_S = 0.2
 #: The parts of a walk to a target whose foot skate is measured apart (:func:`walk_parts`).
@@ -123,15 +124,16 @@ class PackTrial:
 def forward_speeds(space) -> np.ndarray:
     """(:data:`SPEEDS`,) speeds spanning the forward range of a locomotion blend space: from its slowest
     to its fastest straight forward example (travel within 30 degrees of the facing, turning less than
-    30 degrees per second), at least 0.3 m/s."""
+    30 degrees per second), at least 0.3 m/s (or the fastest, if slower)."""
     t = space.tessellations["locomotion"]
     pts = t.points
     vf, vl, w = pts[:, 0], pts[:, 1], pts[:, 2]
     ahead = (vf > 0.05) & (np.abs(vl) < 0.58 * vf) & (np.abs(w) < math.radians(30.0))
     if not ahead.any():
         return np.zeros(0)
-    lo, hi = max(float(vf[ahead].min()), 0.3), float(vf[ahead].max())
-    return np.linspace(lo, max(hi, lo), SPEEDS)
+    hi = float(vf[ahead].max())
+    lo = min(max(float(vf[ahead].min()), 0.3), hi)  # a character with short legs may walk slower than 0.3 m/s
+    return np.linspace(lo, hi, SPEEDS)
 
 
 def _runtime_walks(character, mapping, space, settings: list[dict], seconds: float):
@@ -243,7 +245,7 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         step = np.diff(smooth, axis=0)
         moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
         tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
-        turned = float(np.degrees(np.abs(np.diff(tangent)).sum()))
+        turned = float(np.degrees(np.ptp(tangent)))
         found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
         skate = foot_skate(g_pos, found, base).travel
         parts = walk_parts(ground, walk_speed)[1:]  # each step's, by the frame it ends at
