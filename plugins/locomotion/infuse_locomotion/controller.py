@@ -660,11 +660,11 @@ class Locomotion(Controller):
         in the order its walk sums them (:func:`_clips_of`), then -1: frames of several walks blending
         other clips are blended at once, each summed as its walk alone would sum it (a clip another
         walk brings in weighs nothing on it and adds zeros)."""
-        ordered = orders >= 0
-        used = np.unique(orders[ordered])
         # A clip is left out of each frame it weighs no more than that on, as when that frame is
         # blended alone: other frames of the block do not bring it in (by up to 1e-7 m).
-        w = np.where(w > _LEAST_WEIGHT, w, 0.0)
+        weighs = w > _LEAST_WEIGHT
+        used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
+        w = np.where(weighs, w, 0.0)
         stepping = used[b.stepping[used]]
         if stepping.size:
             ws = w[:, stepping]
@@ -684,23 +684,25 @@ class Locomotion(Controller):
         rot, root, jt = b.table.sample(np.concatenate((used, fade)), clock, b.limbs)
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
-        # Each frame's u-th clip (its place among the samples) and weight: none past its walk's clips.
-        frames = np.arange(len(phase))
+        # Each frame's clips in its walk's order (U', one gather), their weights (F, U'): none past its walk's clips.
+        count = int((orders >= 0).sum(axis=1).max())
+        orders = orders[:, :count]
+        frames = np.arange(len(phase))[:, None]
         sample_of = np.searchsorted(used, np.maximum(orders, 0))
-        weight_of = np.where(ordered, w[frames[:, None], np.maximum(orders, 0)], 0.0)
-        at = sample_of[:, 0]
-        acc = _accumulate(None, rot[:, at, frames], root[:, at, frames], None if jt is None else jt[:, at, frames], weight_of[:, 0])
-        for u in range(1, int(ordered.sum(axis=1).max())):
-            at = sample_of[:, u]
-            acc = _accumulate(acc, rot[:, at, frames], root[:, at, frames], None if jt is None else jt[:, at, frames], weight_of[:, u])
+        weight_of = np.where(orders >= 0, w[frames, np.maximum(orders, 0)], 0.0)
+        rot_of, root_of = rot[:, sample_of, frames], root[:, sample_of, frames]  # (4, F, U', J), (3, F, U')
+        jt_of = None if jt is None else jt[:, sample_of, frames]
+        acc = _accumulate(None, rot_of[:, :, 0], root_of[:, :, 0], None if jt_of is None else jt_of[:, :, 0], weight_of[:, 0])
+        for u in range(1, count):
+            acc = _accumulate(acc, rot_of[:, :, u], root_of[:, :, u], None if jt_of is None else jt_of[:, :, u], weight_of[:, u])
         if not feet.all():  # clips without foot events: their own contact flags, in each walk's order
             flags = np.zeros((used.size, len(phase), 2, 2))
             for u in np.flatnonzero(~feet).tolist():
                 flags[u] = Locomotion._phases(b, used[u], clock[u, 0])
             stepless = weight_of * ~feet[sample_of]
-            for u in range(orders.shape[1]):
+            for u in range(count):
                 if stepless[:, u].any():
-                    mine = flags[sample_of[:, u], frames]
+                    mine = flags[sample_of[:, u], frames[:, 0]]
                     contact += mine * stepless[:, u, None, None]
                     support += mine.max(axis=2) * stepless[:, u, None]
         if stepping.size:
