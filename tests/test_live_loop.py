@@ -200,6 +200,8 @@ def test_a_walk_is_planned_on_the_callers_thread_and_never_delays_a_block(monkey
             live.walk_to("bob", point)
             time.sleep(0.3)
         taken = list(live._command_s["walk_to"])
+        figures = live.stats.summary()
+    assert 0.0 < figures["controllers_cpu_mean_ms"] < figures["cpu_mean_ms"], figures  # the rest: bookkeeping
     assert len(planned_on) == 3 and "infuse-live" not in planned_on, planned_on
     assert len(taken) == 3 and max(taken) < 0.5 / FPS, taken  # the command on the loop: no plan in it
     assert sum(type(a.controller) is locomotion.Locomotion for a in live.scene.runtime.activities) == 3
