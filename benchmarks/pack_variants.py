@@ -5,7 +5,8 @@ Each source set (takes of the corpus read in place: the Bandai dataset-1 ``norma
 stops, turns and steps, which a BVH import must recognize by what they do, the file names telling it
 nothing) is varied by ``tests/motion_variants.py`` (frame
 rates, unit, up axis, joint names, rest pose, facing and curving takes, trimmed takes, rotation noise,
-fewer speeds, no runs, mirrored takes, different cadences); every variant is written as a folder of BVH
+fewer speeds, no runs, mirrored takes, different cadences, a calibration T-pose opening each take, one
+forward walk); every variant is written as a folder of BVH
 files, imported with ``infuse pack import bvh`` (:func:`infuse.packs.importers.import_bvh_folder`) and
 built into a temporary folder, infused onto X Bot and measured with
 :func:`infuse.packs.walk_test.trial_pack` (speeds over the pack's forward range, heading drift over 8 s,

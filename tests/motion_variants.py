@@ -26,7 +26,12 @@ folder of BVH files, which ``infuse pack import bvh`` then reads as a new user's
 - ``mirrored``: every take mirrored left for right (the left joints moving as the right ones did,
   mirrored through the body's middle plane), names kept (a take named as walking left walks right);
 - ``cadences``: each take played faster or slower (factors 0.85 to 1.15 spread over the takes), so the
-  takes step at different cadences than the set's.
+  takes step at different cadences than the set's;
+- ``fps_25``: every take resampled to 25 fps (PAL video's rate);
+- ``t_pose_start``: each take begins with :data:`T_POSE_S` of the skeleton's rest pose (a T-pose, as
+  capture sessions calibrate with), standing where the take starts, then cuts to the take;
+- ``one_speed``: of the takes that walk forward, only the one nearest :data:`ONE_SPEED_M_S`; every take
+  that does anything else kept.
 
 Times are seconds, distances metres, angles degrees; the core frame is +Y up, +Z forward, +X left.
 """
@@ -56,6 +61,10 @@ TRIM_S = (0.3, 0.7)
 TRIM_SHARE = 0.1
 #: Playback speed factors of the ``cadences`` variant, spread over the takes.
 CADENCE_FACTORS = (0.85, 1.15)
+#: Seconds of rest pose before each take of the ``t_pose_start`` variant.
+T_POSE_S = 0.5
+#: The walking speed (m/s) whose nearest forward take the ``one_speed`` variant keeps.
+ONE_SPEED_M_S = 1.3
 SIX_CHANNELS = ("Xposition", "Yposition", "Zposition", "Zrotation", "Xrotation", "Yrotation")
 _UP = np.array([0.0, 1.0, 0.0])
 
@@ -267,6 +276,35 @@ def cadences(motion_set: MotionSet) -> MotionSet:
     return replace(motion_set, name="cadences", takes=takes)
 
 
+def t_pose_start(motion_set: MotionSet) -> MotionSet:
+    """Each take preceded by :data:`T_POSE_S` of the rest pose (every joint at its rest rotation, the root
+    where the take's first frame has it, its height the rest pose's)."""
+    sk = motion_set.skeleton
+
+    def change(m: Motion) -> Motion:
+        n = int(round(T_POSE_S * m.fps))
+        rest = np.repeat(sk.rest_rotations[None], n, axis=0)
+        root = np.repeat(m.root_translations[:1], n, axis=0)
+        root[:, 1] = sk.rest_translations[0, 1]
+        trans = None
+        if m.joint_translations is not None:
+            trans = np.concatenate((np.repeat(sk.rest_translations[None], n, axis=0), m.joint_translations))
+            trans[:n, 0] = root
+        return m.replace(local_rotations=np.concatenate((rest, m.local_rotations)),
+                         root_translations=np.concatenate((root, m.root_translations)), joint_translations=trans)
+    return _each(motion_set, "t_pose_start", change)
+
+
+def one_speed(motion_set: MotionSet) -> MotionSet:
+    """Of the forward takes (travel within 30 degrees of the facing), only the one nearest
+    :data:`ONE_SPEED_M_S`; the other takes kept."""
+    velocity = take_velocities(motion_set)
+    ahead = [k for k, v in velocity.items() if v[0] > 0.3 and v[1] < 0.58 * v[0]]
+    keep = min(ahead, key=lambda k: abs(velocity[k][0] - ONE_SPEED_M_S))
+    return replace(motion_set, name="one_speed",
+                   takes={k: m for k, m in motion_set.takes.items() if k == keep or k not in ahead})
+
+
 #: Variant name -> function of (set, random generator) -> set.
 VARIANTS = {
     "fps_24": lambda s, rng: resampled(s, 24.0),
@@ -283,6 +321,9 @@ VARIANTS = {
     "no_runs": lambda s, rng: no_runs(s),
     "mirrored": lambda s, rng: mirrored(s),
     "cadences": lambda s, rng: cadences(s),
+    "fps_25": lambda s, rng: resampled(s, 25.0),
+    "t_pose_start": lambda s, rng: t_pose_start(s),
+    "one_speed": lambda s, rng: one_speed(s),
 }
 
 

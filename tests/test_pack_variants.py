@@ -123,6 +123,31 @@ def test_trimmed_two_speed_runless_and_cadence_sets(original):
     assert ratios[0] < 0.9 and ratios[-1] > 1.1
 
 
+def test_t_pose_and_one_speed_sets(original):
+    """Each take of ``t_pose_start`` opens with half a second of the rest pose (the T-pose) where the take
+    starts; ``one_speed`` keeps one forward walk and every take that does something else."""
+    posed = mv.variant(original, "t_pose_start")
+    for take, motion in original.takes.items():
+        n = posed.takes[take].num_frames - motion.num_frames
+        assert n == round(mv.T_POSE_S * motion.fps)
+        np.testing.assert_allclose(posed.takes[take].local_rotations[:n], np.repeat(original.skeleton.rest_rotations[None], n, axis=0))
+        np.testing.assert_allclose(posed.takes[take].local_rotations[n:], motion.local_rotations)
+    velocity = mv.take_velocities(original)
+    kept = mv.variant(original, "one_speed").takes
+    ahead = [k for k in kept if velocity[k][0] > 0.3 and velocity[k][1] < 0.58 * velocity[k][0]]
+    assert len(ahead) == 1 and len(kept) < len(original.takes)
+
+
+def test_calibration_frames_are_cut_away(trials):
+    """A take that opens with the calibration T-pose and cuts to the walk (a joint turning 170-180 degrees
+    in one frame) is built from the walk alone: every clip as recorded, the same cycle, the same analysis."""
+    posed, recorded = trials["t_pose_start"][1], trials["original"][1]
+    for a, b in zip(posed["clips"], recorded["clips"]):
+        assert a["name"] == b["name"] and a["frames"] == b["frames"] and a["cycle"] == b["cycle"], a["name"]
+        assert a["parameters"] == pytest.approx(b["parameters"], abs=1e-6)
+        assert any("cut away: 15 frames at its start" in note for note in a["notes"])
+
+
 @pytest.fixture(scope="module")
 def trials(original, xbot, tmp_path_factory):
     """Variant name -> (worst figures of its pack on X Bot, the pack's analysis); "original": the set as

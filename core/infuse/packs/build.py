@@ -20,6 +20,7 @@ from ..kinematics import batch_fk
 from ..mapping import map_skeleton
 from .analysis import analyse_clip, blend_groups, coordinates_of, headings, locomotion_parameters, resolution_of
 from .coverage import coverage, describe_coverage
+from .cuts import without_cuts
 from .denoise import denoised
 from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, straighten, strides, transition_kind
 from .manifest import read_manifest
@@ -138,6 +139,12 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         raise UnusableInputError(manifest.path, "no clips to read the skeleton of its .skm skeleton file with")
     skeleton = skeleton_asset.skeleton
     motions = {n: on_skeleton(m, skeleton, manifest.clip(n).file).replace(name=n) for n, m in motions.items()}
+    dropped: dict[str, tuple[int, int]] = {}
+    if manifest.kind == "locomotion":  # a capture's calibration frames at a take's ends are no motion
+        for n, m in motions.items():
+            motions[n], cut_start, cut_end = without_cuts(m)
+            if cut_start or cut_end:
+                dropped[n] = (cut_start, cut_end)
     first = motions[content_order(motions)[0]]
     # A rest pose that does not stand (bone-along-one-axis rigs) is mapped on a clip frame (of the
     # clip first by content, so the mapping does not depend on the clips' names or order).
@@ -149,6 +156,10 @@ def build_pack(folder, mapper: str | None = None) -> Pack:
         raise UnusableInputError(manifest.path, f"the pack skeleton lacks {', '.join(missing)} after mapping")
     fks = batch_fk(list(motions.values()))
     clips = [analyse_clip(motions[e.name], e, manifest.kind, index, mapping, fk) for e, fk in zip(manifest.clips, fks)]
+    for info in clips:
+        if info["name"] in dropped:
+            cut_start, cut_end = dropped[info["name"]]
+            info["notes"].append(f"cut away: {cut_start} frames at its start, {cut_end} at its end (a jump to another pose)")
     if manifest.kind == "locomotion":  # noisy takes low-passed: cycles close and transitions play on poses
         pair = feet(skeleton, mapping, manifest.path)
         for k, info in enumerate(clips):
