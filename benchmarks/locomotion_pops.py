@@ -15,8 +15,8 @@ fastest forward speeds (:data:`STRAIGHT_S` seconds each, from standing), and to 
   horizontal from the ankle toward the ball and the vertical in its flat pose, the frame of the walk
   or take where ankle and ball are lowest together, both carried by the ankle), degrees; past 90 (its
   up pointing down while it lies within 45 degrees of level) it is upside down;
-- **toe bend**: the toes' pitch about the ball relative to the foot, up positive, against the flat
-  pose (degrees), and how far it goes beyond the range of the takes;
+- **toe bend**: the ball joint's turn relative to the ankle about the axis across the foot, up
+  positive, against the flat pose (degrees), and how far it goes beyond the range of the takes;
 - **lowest**: the lowest joint of the legs and feet (hips down) over the walk, cm above the ground
   (y = 0, where the runtime stands characters).
 
@@ -95,7 +95,8 @@ def _unit(v: np.ndarray) -> np.ndarray:
 @dataclass
 class FootMeasures:
     """Per-frame foot figures, degrees: ``roll`` (F, 2) about the foot's length; ``toe_bend`` (F, 2) the
-    toes' pitch up against rest (NaN for a foot without toes)."""
+    toes' turn up about the axis across the foot against its flat pose (NaN for a foot without a ball
+    joint)."""
 
     roll: np.ndarray
     toe_bend: np.ndarray
@@ -130,15 +131,13 @@ def foot_measures(sk, mapping, g_rot: np.ndarray, g_pos: np.ndarray) -> FootMeas
         across = np.cross(length, foot_up)
         tilt = np.degrees(np.arcsin(np.clip(np.abs(across[:, 1]), 0.0, 1.0)))
         roll[:, k] = np.where((foot_up[:, 1] < 0.0) & (np.abs(length[:, 1]) < math.sqrt(0.5)), 180.0 - tilt, tilt)
-        toe = _tip(sk, foot.ball) if foot.ball is not None else None
-        if toe is None:
+        if foot.ball is None:
             continue
-        # The toes' direction against the foot's (ankle to ball), about the axis across the foot, up positive.
-        along = _unit(front - g_pos[:, foot.ankle])
-        d = quat.rotate(g_rot[:, foot.ball], toe)
-        u = _unit(foot_up - along * np.sum(foot_up * along, axis=-1, keepdims=True))
-        pitch = np.degrees(np.arctan2(np.sum(d * u, axis=-1), np.sum(d * along, axis=-1)))
-        bend[:, k] = pitch - pitch[flat]
+        # The toes' turn against the foot since the flat pose (in the ankle's frame), about the axis across
+        # the foot there: up (the toes' front toward the foot's up) positive.
+        relative = quat.multiply(quat.conjugate(ankle_rot), g_rot[:, foot.ball])
+        since = quat.to_rotvec(quat.multiply(relative, quat.conjugate(relative[flat])))
+        bend[:, k] = np.degrees(since @ _unit(np.cross(ahead, quat.rotate(to_local, up))))
     return FootMeasures(roll, bend)
 
 
