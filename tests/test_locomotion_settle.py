@@ -52,3 +52,17 @@ def test_a_foot_pivoting_on_its_ball_as_a_start_sets_off_keeps_its_heading(pack)
     brad = infuse.load(corpus_file("smartbody/ChrBrad/ChrBrad.sk"))
     behind = trial_pack(infuse.Character("b", brad), pack, distances=(4.0,), angles=(180.0,)).targets[0]
     assert behind.part_skate_cm["start"] <= MOST_CM, behind.part_skate_cm
+
+
+def test_a_foot_passing_from_heel_to_ball_turning_on_the_spot_keeps_its_heading(tmp_path):
+    # Passing from its heel to its ball, a foot took the animation's turn of that frame whole (the
+    # turn on the spot's steps turn it): Bandai dataset-1 normal on X Bot, 6 m behind, its heading 6
+    # degrees in one frame, the sole under the heel 11.5 mm; on the spot 1.6 cm.
+    from infuse.packs import build_pack, import_bvh_folder
+
+    require_corpus()
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path / "d1-normal", name="d1-normal", pattern="dataset-1_*_normal_*.bvh"))
+    xbot = infuse.load(corpus_file("runxaway-models/Xbot.glb"))
+    behind = trial_pack(infuse.Character("x", xbot), pack, distances=(6.0,), angles=(180.0,)).targets[0]
+    assert behind.part_skate_cm["on the spot"] <= 1.0, behind.part_skate_cm

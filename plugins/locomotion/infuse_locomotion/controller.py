@@ -920,7 +920,12 @@ class Locomotion(Controller):
                                 pin = was[0] + offset + _heel_of(b, k, quat.rotate(left, was[1] - was[0]))
                         if kind != prev:
                             # The foot's orientation now (corrected as a frame ago), and the axis across it.
+                            # Passing from one point to the other, the foot goes on from its pose a frame ago:
+                            # the animation's turn since then shows only as the new anchor lets it (on the
+                            # ball its pitch), not whole (a foot turning on the spot swung about the ball).
                             landed, landed_spun = g_rot[s, k, 2], turned[s]
+                            if prev != footing.FREE:
+                                landed = g_rot[s - 1, k, 2] if s > 0 else st.last_rot[k]
                             landed_as = quat.multiply(left, landed)
                             along = quat.rotate(left, feet_pos[s, k, 1] - feet_pos[s, k, 0])  # the corrected foot's
                             along = along if math.hypot(along[0], along[2]) > 1e-6 else heading[s]
@@ -969,7 +974,7 @@ class Locomotion(Controller):
                 st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
                 st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
                 st.foot_heading[k], st.held_swivel[k] = foot_heading, held_swivel
-            st.last = feet_pos[-1].copy()
+            st.last, st.last_rot = feet_pos[-1].copy(), g_rot[-1, :, 2].copy()
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its

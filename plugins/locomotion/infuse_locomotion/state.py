@@ -43,7 +43,8 @@ class LocomotionState(SteeringState):
     - each planted foot (:meth:`~.controller.Locomotion._pin`): ``anchor`` (2,) what holds it (free, ankle,
       ball), ``pins`` (2, 3) where, ``offset`` (2, 3) and ``ball_offset`` (2, 3) the ankle's and ball's
       corrections, ``released`` (2,) seconds since let go, ``free_s`` (2,) seconds in the air, ``let_go``
-      (2, 3) where the ball was let go, ``last`` (2, 2, 3) the ankle and ball a frame earlier, ``rise``
+      (2, 3) where the ball was let go, ``last`` (2, 2, 3) the ankle and ball a frame earlier and ``last_rot``
+      (2, 4) the ankle's rotation then, ``rise``
       (2, 3) the heel's extra rise (rotation vector), ``landed`` and ``landed_as`` (2, 4) the foot's
       rotation as it landed, animated and corrected, ``landed_spun`` (2,) the turn spun at the root then,
       ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction; held by its heel,
@@ -75,6 +76,7 @@ class LocomotionState(SteeringState):
     free_s: np.ndarray = field(default_factory=lambda: _feet(value=1e9))
     let_go: np.ndarray = field(default_factory=lambda: _feet(3, value=-np.inf))
     last: np.ndarray = field(default_factory=lambda: _feet(2, 3))
+    last_rot: np.ndarray = field(default_factory=_unturned)
     rise: np.ndarray = field(default_factory=lambda: _feet(3))
     landed: np.ndarray = field(default_factory=_unturned)
     landed_as: np.ndarray = field(default_factory=_unturned)
