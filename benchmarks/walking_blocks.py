@@ -6,8 +6,10 @@ with its locomotion pack, in a ring at 60 fps) look at the next one's face with 
 (and blink, breathe, idle); four of them walk across the ring, turning and stopping where they are
 sent, and two walk on to the middle. The scene is stepped one frame per block (then in blocks of 8 for
 comparison) and the benchmark prints the scene's CPU milliseconds per block and locomotion's (its
-controller class's ``evaluate``), per walking character. Times are CPU time of this process, best of
-``--rounds``; the load average is printed with them (the machine is shared).
+controller class's ``evaluate``), per walking character, and how much of that the feet take (pinning
+them and keeping them above the ground), the rest being the blend (steering, weights, phase maps, clip
+sampling, shorter steps). Times are CPU time of this process, best of ``--rounds``; the load average is
+printed with them (the machine is shared).
 
 Run: ``.venv/bin/python benchmarks/walking_blocks.py [--frames 240] [--rounds 3]`` (needs the corpus,
 ``INFUSE_CORPUS``).
@@ -19,6 +21,7 @@ import os
 import sys
 import time
 
+import infuse_locomotion.controller as locomotion
 from infuse.scene import Scene
 from infuse_locomotion.controller import Locomotion
 
@@ -44,22 +47,30 @@ def walking_scene() -> Scene:
     return scene
 
 
-def run(frames: int, block: int) -> tuple[float, float, float]:
-    """CPU seconds per block of the scene and of locomotion, and walks evaluated per block, stepping
-    :func:`walking_scene` in blocks of ``block`` frames for ``frames`` frames after its first half second."""
+def run(frames: int, block: int) -> tuple[float, float, float, float]:
+    """CPU seconds per block of the scene, of locomotion and of its feet, and walks evaluated per block,
+    stepping :func:`walking_scene` in blocks of ``block`` frames for ``frames`` frames after its first
+    half second."""
     scene = walking_scene()
     scene.step(int(FPS // 2))
-    spent, walks = [0.0], [0]
-    own = Locomotion.__dict__.get("evaluate")  # None: the base class's (one walk at a time)
-    evaluate = Locomotion.evaluate.__func__
+    spent, walks = {"walks": 0.0, "feet": 0.0}, [0]
+    evaluate, pin, keep_up = Locomotion.evaluate.__func__, Locomotion.__dict__["_pin"], locomotion._keep_feet_up
 
-    def timed(cls, jobs, at):
-        start = time.process_time()
-        evaluate(cls, jobs, at)
-        spent[0] += time.process_time() - start
+    def timed(function, part):
+        def run(*args):
+            start = time.process_time()
+            function(*args)
+            spent[part] += time.process_time() - start
+        return run
+
+    def walked(cls, jobs, at):
+        timed(evaluate, "walks")(cls, jobs, at)
         walks[0] += sum(1 for job in jobs if job.local_times[-1] >= 0.0)
 
-    Locomotion.evaluate = classmethod(timed)
+    own = Locomotion.__dict__.get("evaluate")  # None: the base class's (one walk at a time)
+    Locomotion.evaluate = classmethod(walked)
+    Locomotion._pin = staticmethod(timed(pin.__func__, "feet"))
+    locomotion._keep_feet_up = timed(keep_up, "feet")
     try:
         start, steps = time.process_time(), frames // block
         for _ in range(steps):
@@ -70,7 +81,8 @@ def run(frames: int, block: int) -> tuple[float, float, float]:
             del Locomotion.evaluate
         else:
             Locomotion.evaluate = own
-    return cpu / steps, spent[0] / steps, walks[0] / steps
+        Locomotion._pin, locomotion._keep_feet_up = pin, keep_up
+    return cpu / steps, spent["walks"] / steps, spent["feet"] / steps, walks[0] / steps
 
 
 def main() -> int:
@@ -84,10 +96,11 @@ def main() -> int:
     print(f"{COUNT} characters, {WALKING} walking, {FPS:g} fps; CPU ms, best of {args.rounds} rounds of {args.frames} frames; "
           f"load average {os.getloadavg()[0]:.2f}")
     for block in (1, 8):
-        scene_s, walk_s, walks = min((run(args.frames, block) for _ in range(args.rounds)), key=lambda r: r[1])
+        scene_s, walk_s, feet_s, walks = min((run(args.frames, block) for _ in range(args.rounds)), key=lambda r: r[1])
         print(f"  blocks of {block}: scene {1e3 * scene_s:.2f} ms per block, locomotion {1e3 * walk_s:.2f} "
               f"({100 * walk_s / scene_s:.0f}%), {1e3 * walk_s / max(walks, 1e-9):.3f} ms per walking character "
-              f"({walks:.2f} walks per block)")
+              f"({walks:.2f} walks per block): the feet {1e3 * feet_s / max(walks, 1e-9):.3f}, the "
+              f"rest (the blend) {1e3 * (walk_s - feet_s) / max(walks, 1e-9):.3f}")
     print(f"  load average after: {os.getloadavg()[0]:.2f}")
     return 0
 
