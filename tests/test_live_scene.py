@@ -452,3 +452,24 @@ def test_a_walk_planned_ahead_is_used_only_from_the_same_inputs(monkeypatch):
         motions.append(scene.motion("bob"))
     assert np.array_equal(motions[0].local_rotations, motions[1].local_rotations)
     assert np.array_equal(motions[0].root_translations, motions[1].root_translations)
+
+
+def test_only_blocks_a_controller_prepares_for_are_scheduled_ahead(monkeypatch):
+    """LiveScene.parse schedules a block on a scratch planner (speech synthesis, walks planned ahead) only
+    when it may have something to prepare: a nod once (to learn that no controller prepares nods), then no
+    more; a walk every time (the locomotion controller prepares its path)."""
+    import infuse.live
+
+    scheduled = []
+
+    class Counting(infuse.live.Scheduler):
+        def schedule_block(self, block, at, character=None):
+            scheduled.append(block.id)
+            return super().schedule_block(block, at, character)
+    monkeypatch.setattr(infuse.live, "Scheduler", Counting)
+    live = LiveScene(_scene())
+    for k in range(3):
+        live.parse("bob", f'<bml xmlns="{BML_NS}" id="n{k}"><head id="h" lexeme="NOD"/></bml>')
+    for k in range(2):
+        live.parse("bob", f'<bml xmlns="{BML_NS}" id="w{k}"><locomotion id="l1" target="1.0 1.0"/></bml>')
+    assert scheduled == ["n0", "w0", "w1"], scheduled

@@ -201,6 +201,7 @@ class LiveScene:
         self._movable: dict[str, MovableTarget] = {}
         self._warm = False
         self._frozen = False  # objects set aside from the garbage collector by start (gc.freeze)
+        self._preparing: dict[str, bool] = {}  # BML element -> whether a controller realizing it prepares ahead
         self._made_before = 0
 
     # -- the loop -------------------------------------------------------------------------------------
@@ -600,8 +601,10 @@ class LiveScene:
         What a controller cannot prepare is left to the loop, which realizes it and reports its problems."""
         from . import registry
 
-        preparing = any(d.prepare is not None for d in registry.table("controller").values())
-        if not (preparing or any(b.element == "speech" for block in blocks for b in block.behaviours)):
+        elements = {b.element for block in blocks for b in block.behaviours}
+        # Scheduled on a scratch planner (0.5 ms for a nod) only for speech, or for behaviours whose
+        # controllers prepare, or may (an element not scheduled here yet)
+        if "speech" not in elements and all(self._preparing.get(element) is False for element in elements):
             return
         planner = Scheduler(speech_timer=self._speech, locate=self.scene.locate)
         for block in blocks:
@@ -610,11 +613,13 @@ class LiveScene:
                 record = planner.schedule_block(block, 0.0, block.character_id)
             finally:
                 self._speech.local.character = None
-            for activation in record.activations if preparing else ():
+            for activation in record.activations:
                 try:
                     descriptor = registry.realizer(activation.controller)
-                    if descriptor is not None and descriptor.prepare is not None:
-                        descriptor.prepare(activation, self.scene.stage)
+                    prepare = descriptor.prepare if descriptor is not None else None
+                    self._preparing[activation.element] = prepare is not None or self._preparing.get(activation.element, False)
+                    if prepare is not None:
+                        prepare(activation, self.scene.stage)
                 except Exception:  # noqa: BLE001 - only a head start: the loop realizes it and reports why not
                     continue
 
