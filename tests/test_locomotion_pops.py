@@ -84,3 +84,16 @@ def test_a_long_foot_let_go_is_not_held_again_nor_pulls_the_leg_straight(tmp_pat
     index = mapping.indices(motion.skeleton)
     hips = g_rot[:, [index["l_hip"], index["r_hip"]]]
     assert np.degrees(quat.angle_between(hips[:-1], hips[1:])).max() < 40.0  # 62 before
+
+
+def test_toes_bent_up_at_toe_off_unbend_as_fast_as_the_packs_toes_turn():
+    """Toes bent up to keep their tip on the ground at toe off unbend in the swing no slower than the
+    pack's own toes turn against their feet (``locomotion-female``: about 300 degrees a second), not at
+    a fixed 150: on Brad they stayed bent beyond the takes' range for 98 frames of a walk, 65 now."""
+    require_corpus()
+    brad = infuse.load(corpus_file("smartbody/ChrBrad/ChrBrad.sk"))
+    source = load_pack("locomotion-female")
+    motion, fk, mapping, speed = _walk(brad, "locomotion-female", 2.02, 6.0)
+    walk = measure_walk("straight", motion, mapping, takes_at(takes(source), speed), fk=fk)
+    assert walk.toe_beyond_frames < 80, walk  # 98 before
+    assert walk.toe_up_deg < 50.0, walk  # 56 before

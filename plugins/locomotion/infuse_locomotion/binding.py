@@ -38,7 +38,9 @@ class FootFloors:
     - ``point_floor``, ``tip_floor`` (2,): the heights (m) the two tips stand at;
     - ``across`` (2, 3): the horizontal axis across each foot as it stands (its ankle-to-tip direction
       x +Y), a unit vector in its ankle's frame: the axis the foot and toes turn about, carried by the
-      ankle (the ankle-to-tip direction of a foot pitched over its ball points down or back).
+      ankle (the ankle-to-tip direction of a foot pitched over its ball points down or back);
+    - ``release``: how fast (rad/s) toes bent up to keep their tip off the ground unbend at most: as
+      fast as the pack's toes turn against their feet.
     """
 
     ankles: np.ndarray
@@ -53,6 +55,7 @@ class FootFloors:
     point_floor: np.ndarray
     tip_floor: np.ndarray
     across: np.ndarray
+    release: float
 
 
 @dataclass(frozen=True, eq=False)

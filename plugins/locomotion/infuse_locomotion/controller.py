@@ -63,7 +63,8 @@ RISE_RELEASE_S = 0.1
 LAY_RELEASE_S = 0.3
 #: The largest turn (degrees) that lifts a foot or toes off the ground (their tip may not reach higher).
 LIFT_MAX_DEG = 90.0
-#: Degrees per second at which toes bent to keep their tip off the ground unbend at most.
+#: Degrees per second at which toes bent to keep their tip off the ground unbend at most, at least (as
+#: fast as the pack's toes turn against their feet: :func:`_toes_rate`).
 TOE_RELEASE_DEG_S = 150.0
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
 HOLD_S = 0.1
@@ -1116,7 +1117,7 @@ def _stack_key(b: LocomotionBinding) -> tuple:
     if key is None:
         f = b.floors
         floors = None if f is None else tuple(tuple(np.asarray(v).ravel().tolist()) for v in (
-            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across))
+            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across, f.release))
         key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors)
     return key
 
@@ -1184,7 +1185,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
             m = motions[i]
             flat = np.mod(0.5 * (slowest_events[:, 1] + slowest_events[:, 2]), 1.0)
             frames = np.clip(np.round(warp(np.asarray(clips[i].keys), flat) * m.fps).astype(np.int64), 0, m.num_frames - 1)
-        floors = _floors(sk, legs, m, frames, leg_length)
+        floors = _floors(sk, legs, m, frames, leg_length, _toes_rate(sk, legs, [mv for mv, e in zip(motions, events) if e is not None]))
         if all(leg[3] is not None for leg in legs):
             g_rot, _ = chain_fk(sk, m.local_rotations[frames], m.root_translations[frames],
                                 None if m.joint_translations is None else m.joint_translations[frames],
@@ -1237,9 +1238,25 @@ def _tip(sk, joint: int) -> np.ndarray | None:
     return np.array(far) if np.linalg.norm(far) > 1e-6 else None
 
 
-def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
+def _toes_rate(sk, legs, motions) -> float:
+    """How fast (radians per second) the toes of a pack's stepping clips ``motions`` turn against their
+    feet: the median over the clips and feet of the 99th percentile of the ball joint's turn relative to
+    the ankle between frames, at least :data:`TOE_RELEASE_DEG_S` (0 rad/s without ball joints)."""
+    if not motions or any(leg[3] is None for leg in legs):
+        return 0.0
+    rates: list[float] = []
+    for m in (m for m in motions if m.num_frames > 1):
+        g_rot, _ = chain_fk(sk, m.local_rotations, m.root_translations, m.joint_translations,
+                            [legs[0][2], legs[0][3], legs[1][2], legs[1][3]])
+        toes = quat.multiply(quat.conjugate(g_rot[:, [0, 2]]), g_rot[:, [1, 3]])  # (F, 2, 4) against the feet
+        rates.extend(np.percentile(quat.angle_between(toes[:-1], toes[1:]) * m.fps, 99, axis=0).tolist())
+    return max(float(np.median(rates)) if rates else 0.0, math.radians(TOE_RELEASE_DEG_S))
+
+
+def _floors(sk, legs, motion, frames, leg_length: float, toes_rate: float = 0.0) -> FootFloors | None:
     """What :func:`_keep_feet_up` needs of two ``legs`` on skeleton ``sk``, standing in ``motion``'s
-    ``frames`` (2,) (one per foot): each foot's ankle, its "ball" (the ball joint, else the ankle), the
+    ``frames`` (2,) (one per foot), the toes kept up unbending at most ``toes_rate`` (rad/s, :func:`_toes_rate`;
+    :data:`TOE_RELEASE_DEG_S` when 0): each foot's ankle, its "ball" (the ball joint, else the ankle), the
     tip of a foot without a ball joint (its farthest child or end site, a tenth of the leg's length
     ``leg_length`` (m) or more from the ankle; an offset (3,) in the ankle's frame), the toes' tip (offset in the ball's frame; only with a ball joint), the joints they hang
     from, and the heights (m) the two tips stand at; None where neither foot has a tip. Both feet stand on
@@ -1279,7 +1296,8 @@ def _floors(sk, legs, motion, frames, leg_length: float) -> FootFloors | None:
     across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
     return FootFloors(ankles=ankles, balls=balls, ankle_parents=ankle_parents, ball_parents=ball_parents,
                       joints=joints.ravel(), point=point, kept=kept, tip=tip, toes=toes,
-                      point_floor=point_floor, tip_floor=tip_floor, across=quat.rotate(quat.conjugate(g_rot[:, 1]), across))
+                      point_floor=point_floor, tip_floor=tip_floor, across=quat.rotate(quat.conjugate(g_rot[:, 1]), across),
+                      release=toes_rate if toes_rate > 0.0 else math.radians(TOE_RELEASE_DEG_S))
 
 
 def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1308,7 +1326,7 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
     """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
     ball joint would go below the height it stands at, the foot pitches about its ankle until it does
     not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
-    no faster than :data:`TOE_RELEASE_DEG_S` (``st.toe_bend`` carries the bends, radians, from block
+    no faster than the pack's toes turn (``floors.release``; ``st.toe_bend`` carries the bends, radians, from block
     to block). A foot rolling over its ball at toe off pitches as the pack's does: a longer foot, or
     toes the pack's clips do not bend, would dig into the ground. Both turns are about the horizontal
     axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None."""
@@ -1341,7 +1359,7 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ahead)  # across the whole foot
     up = np.empty(angle.shape)
     for st, a0, a1 in runs:
-        up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, math.radians(TOE_RELEASE_DEG_S) * dt)
+        up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, floors.release * dt)
         st.toe_bend = up[a1 - 1].copy()
     up = up * floors.toes
     if not up.any():  # no toes bent: they keep their rotations
