@@ -1,6 +1,7 @@
 """Walks of characters alike (one asset, one pack) have their feet pinned and kept up together, their
 frames stacked in one forward kinematics and one leg IK: each character walks as it does when every
-walk is pinned on its own.
+walk is pinned on its own. Likewise the work each walk asks for (blend weights, blends of whichever
+clips each walk blends, shorter steps) done once for all of them: each walks as when its own is done alone.
 
 Three X Bots made of one asset walk at once (toward a point ahead, to one behind them, turning on the
 spot first, and sideways), frame by frame as a live scene evaluates them and in blocks of 7 frames,
@@ -68,3 +69,27 @@ def test_walks_pinned_together_walk_as_each_on_its_own(xbot, block, monkeypatch)
         assert np.abs(a - b).max() < 1e-9
         # It walked: its hips travelled most of the way to where it was sent.
         assert np.hypot(*(a[-1, 0, [0, 2]] - a[0, 0, [0, 2]])) > 0.5 * np.hypot(dx, dz)
+
+
+@pytest.mark.parametrize("block", [1, 7])
+def test_walks_blended_together_walk_as_each_on_its_own(xbot, block, monkeypatch):
+    blends: list[tuple[int, int]] = []  # each blend's frames, and how many clip orders its frames sum in
+    blend = Locomotion.__dict__["_blend"]
+
+    def counted(b, w, orders, *args):
+        blends.append((len(orders), len(np.unique(orders, axis=0))))
+        return blend.__func__(b, w, orders, *args)
+
+    monkeypatch.setattr(Locomotion, "_blend", staticmethod(counted))
+    together = walked(xbot, block, [])
+    # Blends of several walks summing their clips in other orders were evaluated at once.
+    assert max(orders for _, orders in blends) > 1 and max(frames for frames, _ in blends) > block
+    blends.clear()
+    ask = controller.Ask
+    monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows: ask(work, (object(),), shared, rows))  # each alone
+    alone = walked(xbot, block, [])
+    assert max(frames for frames, _ in blends) <= block
+    for name in WALKS:
+        a, b = motion_fk(together.motion(name))[1], motion_fk(alone.motion(name))[1]
+        assert a.shape == b.shape
+        assert np.abs(a - b).max() < 1e-9
