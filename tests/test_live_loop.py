@@ -210,7 +210,8 @@ def test_a_walk_is_planned_on_the_callers_thread_and_never_delays_a_block(monkey
 def test_a_first_command_of_its_kind_gets_room_as_the_longest_known():
     """Commands of a kind not seen yet are expected to take as long as the longest kind known: after
     15 ms commands of one kind (longer than the gap between frames), the first of another 15 ms kind
-    waits for a gap made long enough for it (a block of more frames before it), as the next ones do."""
+    waits for a gap made long enough for it (a block of more frames before it), as the next ones do. A
+    kind longer than a frame (a character joining) makes new kinds expected to take a frame, no more."""
     live, slow = _live(0.005)
     slow.slow.set()
     with live:
@@ -222,8 +223,11 @@ def test_a_first_command_of_its_kind_gets_room_as_the_longest_known():
         expected = live._expected_s("new")
         live.submit(time.sleep, 0.015, kind="new").result(5.0)
         blocks = [frames for first, frames in live.stats.blocks if first >= frame_before]
+        live.submit(time.sleep, 0.050, kind="joining").result(5.0)  # longer than a frame (a character added)
+        capped = live._expected_s("newer")
     assert expected >= 0.012, expected  # the known kind's 15 ms (its median)
     assert any(frames >= 2 for frames in blocks), blocks  # room made before it
+    assert capped == 1.0 / FPS, capped  # at most a frame: not a long block for every new kind
 
 
 def test_the_loaded_scene_is_set_aside_from_full_garbage_collections():

@@ -21,7 +21,8 @@ block starts as late as it can and still be ready when its first frame is due (t
 percentile of how long the blocks of the last second took, waking late included, commands excluded), so
 a command that arrives before then shows on that frame. Commands are applied between blocks, each where
 it fits: one expected to run past the next block's start (it takes as long as the last ones of its kind,
-the median; the first of a kind as the longest kind known) waits for the gap after that block, which is
+the median; the first of a kind as the longest kind known, at most a frame) waits for the gap after that
+block, which is
 made long enough for it (the block holds more frames), so a burst of them delays no frame. A loop running late spends at most
 :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
@@ -499,12 +500,15 @@ class LiveScene:
     def _expected_s(self, kind: str) -> float:
         """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (one
         slowed down by the machine's other work does not hold the next ones back). The first of a kind
-        is expected to take as long as the longest kind known, or, before any command, as long as a block
-        takes (the lead): it then waits for a gap made long enough rather than run into a frame's time."""
+        is expected to take as long as the longest kind known, at most a frame's time (a character added,
+        which takes far longer, would hold a long block for each new kind), or, before any command, as
+        long as a block takes (the lead): it then waits for a gap made long enough rather than run into
+        a frame's time."""
         taken = self._command_s.get(kind)
         if taken:
             return statistics.median(taken)
-        return max((statistics.median(other) for other in self._command_s.values()), default=self._lead_s)
+        known = [statistics.median(other) for other in self._command_s.values()]
+        return min(max(known), self.period_s) if known else self._lead_s
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
