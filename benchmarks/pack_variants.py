@@ -8,7 +8,7 @@ rates, unit, up axis, joint names, rest pose, facing and curving takes, trimmed 
 fewer speeds, no runs, mirrored takes, different cadences, a calibration T-pose opening each take, one
 forward walk); every variant is written as a folder of BVH
 files, imported with ``infuse pack import bvh`` (:func:`infuse.packs.importers.import_bvh_folder`) and
-built into a temporary folder, infused onto X Bot and measured with
+built into a temporary folder, infused onto X Bot (or ``--on`` another character) and measured with
 :func:`infuse.packs.walk_test.trial_pack` (speeds over the pack's forward range, heading drift over 8 s,
 walks to targets, foot skate), every figure by FK on the output. The table shows the worst figure of
 each measure (foot skate on the straight walks in cm/m, and over a whole walk to a target in cm);
@@ -17,8 +17,9 @@ each measure (foot skate on the straight walks in cm/m, and over a whole walk to
 Targets (the issue's): speed within 5%, drift at most 3 degrees, miss at most 5 cm, path at most 1.15x,
 no loops, foot skate at most 1.5 cm/m.
 
-Run: ``.venv/bin/python benchmarks/pack_variants.py [--quick] [--only NAME] [--full]`` (needs the
-corpus, ``INFUSE_CORPUS``). ``--quick``: one source set, walks to targets 4 m away at 0, 90 and 180
+Run: ``.venv/bin/python benchmarks/pack_variants.py [--quick] [--only NAME] [--set NAME] [--full] [--on FILE]``
+(needs the corpus, ``INFUSE_CORPUS``; ``--on``: a character file, a path or relative to the corpus, such as
+``smartbody/ChrRachel/ChrRachel.sk``). ``--quick``: one source set, walks to targets 4 m away at 0, 90 and 180
 degrees.
 """
 from __future__ import annotations
@@ -60,11 +61,13 @@ def main() -> int:
     p.add_argument("--only", help="variants whose name holds this")
     p.add_argument("--full", action="store_true", help="print every trial")
     p.add_argument("--set", help="source sets whose name holds this")
+    p.add_argument("--on", default=XBOT, help="character file (a path, or relative to the corpus; default X Bot)")
     args = p.parse_args()
     if not (CORPUS / "bandai").is_dir():
         print(f"corpus not found at {CORPUS} (set INFUSE_CORPUS)", file=sys.stderr)
         return 2
-    character = infuse.Character("Xbot", infuse.load(CORPUS / XBOT))
+    on = Path(args.on) if Path(args.on).is_file() else CORPUS / args.on
+    character = infuse.Character(on.stem, infuse.load(on))
     targets = QUICK_TARGETS if args.quick else (DISTANCES, ANGLES)
     sources = dict(list(SOURCES.items())[:1]) if args.quick else SOURCES
     sources = {k: v for k, v in sources.items() if not args.set or args.set in k}

@@ -146,6 +146,22 @@ def test_a_walk_to_a_target_is_split_into_its_parts():
         assert (parts[(t >= a) & (t < b)] == part).all(), (part, parts[(t >= a) & (t < b)])
 
 
+def test_a_swaying_path_is_no_loop_and_a_circle_is():
+    """A slow walk (0.3 m/s, 30 fps) whose pelvis path keeps a sway of 2 cm every 1.2 s (a stride the
+    one-second smoothing leaves) swings its direction 19 degrees to either side: summed over 20 s, as
+    the measure did, about a thousand degrees, a "loop"; its direction goes round 38 degrees. A path
+    circling at 1 m/s on a 2 m radius for 20 s goes round 573 degrees."""
+    from infuse.packs.walk_test import LOOP_DEG, path_turn_deg
+
+    t = np.arange(600) / 30.0
+    sway = np.stack((0.02 * np.sin(2 * np.pi * t / 1.2), 0.3 * t), axis=-1)
+    swings = np.diff(np.unwrap(np.arctan2(*np.diff(sway, axis=0).T)))
+    assert np.degrees(np.abs(swings).sum()) > LOOP_DEG  # the measure before: a loop
+    assert path_turn_deg(sway) == pytest.approx(2.0 * np.degrees(np.arctan(2 * np.pi * 0.02 / 1.2 / 0.3)), abs=1.0)
+    circle = np.stack((np.cos(t / 2.0), np.sin(t / 2.0)), axis=-1) * 2.0
+    assert path_turn_deg(circle) == pytest.approx(360.0 * 20.0 / (4.0 * np.pi), rel=0.02)
+
+
 def test_walking_at_the_speed_asked_is_walking_between_faster_clips():
     """A start clip speeding up to 0.7 m/s, then the walk asked at 0.54 m/s for 3 s and its stop
     (SmartBody's female set): the walk after the start is walking (it was split as the stop, being

@@ -164,6 +164,16 @@ def _window_mean(x: np.ndarray, frames: int) -> np.ndarray:
     return (c[frames:] - c[:-frames]) / frames
 
 
+def path_turn_deg(path: np.ndarray) -> float:
+    """How far round (degrees) the direction of travel of a ground path (F, 2) metres, sampled at
+    :data:`FPS`, goes where it moves faster than :data:`MOVING_M_S`: the range of its unwrapped direction
+    (swings to and fro count once, a circle 360 degrees)."""
+    step = np.diff(path, axis=0)
+    moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
+    tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
+    return float(np.degrees(np.ptp(tangent)))
+
+
 def walk_parts(ground: np.ndarray, cruise: float | None = None) -> np.ndarray:
     """(F,) index into :data:`PARTS` of each frame of a walk to a target, from its pelvis ground path
     (F, 2) metres: before it first moves at :data:`CRUISE` of its top speed, on the spot (slower than
@@ -242,10 +252,7 @@ def trial_pack(character, pack, mapping=None, speeds=None, distances=DISTANCES, 
         gap = np.linalg.norm(ground - goal, axis=-1)
         away = np.nonzero(gap > ARRIVED_M)[0]
         arrival = None if gap[-1] > ARRIVED_M else float((away[-1] + 1) / FPS if away.size else 0.0)
-        step = np.diff(smooth, axis=0)
-        moving = np.linalg.norm(step, axis=-1) > MOVING_M_S / FPS
-        tangent = np.unwrap(np.arctan2(step[moving, 0], step[moving, 1])) if moving.any() else np.zeros(1)
-        turned = float(np.degrees(np.ptp(tangent)))
+        turned = path_turn_deg(smooth)
         found = foot_contacts(m, mapping, fk=(g_rot, g_pos))
         skate = foot_skate(g_pos, found, base).travel
         parts = walk_parts(ground, walk_speed)[1:]  # each step's, by the frame it ends at
