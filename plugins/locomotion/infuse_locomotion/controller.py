@@ -68,6 +68,10 @@ LIFT_MAX_DEG = 90.0
 TOE_RELEASE_DEG_S = 150.0
 #: Seconds a released ball is held where it was let go at most, while it has not left the ground.
 HOLD_S = 0.1
+#: A ball let go by the idle's fading share (the walk's blend already swings it) is held along the
+#: ground until it has risen this share of the leg (where the skate measure stops counting it), rising
+#: with the animation: the blend's swing, under way, would carry it along just above the ground.
+SHARE_CLEAR = 0.03
 #: Height of the arc a released foot travels back to the animation over, per metre it travels.
 STEP_ARC = 0.25
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
@@ -810,8 +814,10 @@ class Locomotion(Controller):
         # share (neither 0 nor 1) of a foot on its ball: a blend of a standing leg and a stepping one.
         on_ball = anchors_all == footing.BALL
         posed_all = on_ball & (contact[..., 1] <= contact[..., 0])
+        shared = np.zeros_like(on_ball)  # (F, 2) held by the idle's fading share
         if b.idle.any():
-            posed_all |= on_ball & ((contact > 1e-6) & (contact < 1.0 - 1e-6)).any(axis=-1)
+            shared = on_ball & ((contact > 1e-6) & (contact < 1.0 - 1e-6)).any(axis=-1)
+            posed_all |= shared
         goals = g_pos_all[:, :, 2].copy()
         weights = np.zeros(anchors_all.shape)
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
@@ -836,6 +842,7 @@ class Locomotion(Controller):
                 landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
                 landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
                 let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
+                clear = bool(st.clear[k])
                 foot_heading, held_swivel = float(st.foot_heading[k]), float(st.held_swivel[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
                 bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
@@ -844,6 +851,8 @@ class Locomotion(Controller):
                     if kind == footing.FREE:
                         if prev != footing.FREE:
                             released, free_s = 0.0, 0.0
+                            clear = bool(shared[a0 + s - 1, k] if s > 0 else st.shared[k])
+                        rises_by = b.grounded_m * (SHARE_CLEAR / GROUNDED if clear else 1.0)
                         # Processed piece by piece, each ending at a frame whose ball is still held (its heel's
                         # rise and where it leaves the ball carry to the frames after it), as frame by frame:
                         # the same frames whatever the block. The time in the air counts whole frames.
@@ -855,14 +864,17 @@ class Locomotion(Controller):
                             # animation's ball dips back (a long foot's, pitching down as it swings): held
                             # again, the ankle swung back by 17-23 cm for a frame.
                             since = (round(free_s / dt) + np.arange(1, end - s + 1)) * dt
-                            up = (feet_pos[s:end, k, 1, 1] + ball_offset[1] > let_go[1] + b.grounded_m) | (since > HOLD_S)
+                            up = (feet_pos[s:end, k, 1, 1] + ball_offset[1] > let_go[1] + rises_by) | (since > HOLD_S)
                             up = np.logical_or.accumulate(up | (released > 0.0))
                             e = s + int(np.argmin(up)) + 1 if not up.all() else end
                             since, up = since[:e - s], up[:e - s]
                             free_s = float(since[-1])
                             down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
                             if down[-1] >= 0:
-                                ball_offset = np.where((down >= 0)[:, None], let_go - feet_pos[s + np.maximum(down, 0), k, 1], ball_offset)
+                                held_at = let_go - feet_pos[s + np.maximum(down, 0), k, 1]
+                                if clear:  # held along the ground, rising with the animation
+                                    held_at[:, 1] = ball_offset[1]
+                                ball_offset = np.where((down >= 0)[:, None], held_at, ball_offset)
                             else:
                                 ball_offset = ball_offset[None]  # the same on every frame
                             age = released + dt * np.cumsum(up)
@@ -974,8 +986,9 @@ class Locomotion(Controller):
                 st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
                 st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
                 st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
-                st.foot_heading[k], st.held_swivel[k] = foot_heading, held_swivel
+                st.foot_heading[k], st.held_swivel[k], st.clear[k] = foot_heading, held_swivel, clear
             st.last, st.last_rot = feet_pos[-1].copy(), g_rot[-1, :, 2].copy()
+            st.shared = shared[a1 - 1].copy()
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
