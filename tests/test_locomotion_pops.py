@@ -18,6 +18,7 @@ import pytest
 
 import infuse
 from infuse import quaternions as quat
+from infuse.kinematics import motion_fk
 from infuse.packs import build_pack, import_bvh_folder, load_pack
 from infuse.packs.infusion import as_character, infuse_character
 from infuse.packs.walk_test import _runtime_walks, forward_speeds
@@ -97,3 +98,53 @@ def test_toes_bent_up_at_toe_off_unbend_as_fast_as_the_packs_toes_turn():
     walk = measure_walk("straight", motion, mapping, takes_at(takes(source), speed), fk=fk)
     assert walk.toe_beyond_frames < 80, walk  # 98 before
     assert walk.toe_up_deg < 50.0, walk  # 56 before
+
+
+def _casual():
+    from wild_data import wild_file
+
+    return infuse.load(wild_file("trebeljahr-quaternius-showcase/public/glb/modular_men/Casual.glb"))
+
+
+def test_a_clip_put_in_its_facing_frame_on_a_rig_with_a_root_above_the_hips_keeps_its_pose(tmp_path):
+    """``Casual.glb``'s joint 0 (``Root``) sits above ``Hips`` with it as its only child: its clips turn
+    the hips by minus their heading instead of joint 0, the pose below joint 0 the same as turning the
+    whole body (FK within 1e-9), joint 0 left as the clip has it."""
+    from infuse_locomotion.controller import canonical_clip, yaw
+
+    asset = _casual()
+    data = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-2/data")
+    pack = build_pack(import_bvh_folder(data, tmp_path / "pack", name="normal", pattern="dataset-2_walk*_normal_*.bvh"))
+    character = as_character(asset)
+    infusion = infuse_character(character, [pack.manifest.path])
+    index = infusion.mapping.indices(asset.skeleton)
+    for clip in next(iter(infusion.spaces.values())).clips.values():
+        m = clip.motion
+        canonical, mover = canonical_clip(clip, index["base"])
+        assert mover == 0
+        assert np.allclose(canonical.local_rotations[:, 0], m.local_rotations[:, 0])
+        h = clip.parameters["heading_start"] + clip.parameters["turn_rate"] * np.arange(m.num_frames) / m.fps
+        g_rot, g_pos = motion_fk(m)
+        c_rot, c_pos = motion_fk(canonical)
+        turned = quat.multiply(yaw(-h)[:, None], g_rot)
+        assert np.allclose(np.abs(np.sum(turned * c_rot, axis=-1))[:, 1:], 1.0, atol=1e-9)  # every joint below joint 0
+        # Positions below joint 0: the whole body turned by the same yaw, up to each frame's shift.
+        child = int(np.flatnonzero(m.skeleton.parents == 0)[0])
+        rel = quat.rotate(yaw(-h)[:, None], g_pos - g_pos[:, child:child + 1])
+        assert np.allclose(rel[:, 1:], (c_pos - c_pos[:, child:child + 1])[:, 1:], atol=1e-9)
+
+
+def test_the_body_does_not_turn_round_on_a_rig_with_a_root_above_the_hips(tmp_path):
+    """Blending clips that split the facing between ``Root`` and ``Hips`` differently turned the whole
+    body of ``Casual.glb`` round in two frames (Bandai dataset-2 normal, walk to a point 4 m ahead: the
+    hips 172 degrees in one frame, 21.8 for the head now)."""
+    data = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-2/data")
+    pack = load_pack(build_pack(import_bvh_folder(data, tmp_path / "pack", name="normal", pattern="dataset-2_*_normal_*.bvh")).manifest.path)
+    character = as_character(_casual())
+    infusion = infuse_character(character, [pack])
+    character.mapping = infusion.mapping
+    ((motion, (g_rot, _)),), _ = _runtime_walks(character, infusion.mapping, next(iter(infusion.spaces.values())),
+                                                [dict(speed=1.3, target=(0.0, 4.0))], 8.0)
+    index = infusion.mapping.indices(motion.skeleton)
+    body = g_rot[:, [index[n] for n in ("base", "spine1", "skullbase") if n in index]]
+    assert np.degrees(quat.angle_between(body[:-1], body[1:])).max() < 40.0  # 169-172 before

@@ -137,7 +137,9 @@ def clip_path(params: dict, t: np.ndarray) -> np.ndarray:
 
 def canonical_clip(clip, pelvis: int = 0):
     """The clip with its facing and its travel taken out: joint 0 turned by minus the clip's linear
-    heading, the mover's translation made relative to the clip's path, in the clip's facing frame.
+    heading (or, where joint 0 sits above the pelvis with one child, that child turned as much in
+    joint 0's frame, joint 0 left as the clip has it), the mover's translation made relative to the
+    clip's path, in the clip's facing frame.
     The path is the ``pelvis`` joint's (as the clip's parameters are measured), so it starts on the
     pelvis's ground point at the origin wherever joint 0 sits. Returns (motion, mover joint)."""
     m = clip.motion
@@ -156,6 +158,17 @@ def canonical_clip(clip, pelvis: int = 0):
     start = (pos[0] + first[0, 0] - first[0, 1]) * np.array([1.0, 0.0, 1.0])  # the pelvis's ground point
     offset = quat.rotate(undo, pos - start - path)
     rot = np.array(m.local_rotations)
+    below = np.flatnonzero(m.skeleton.parents == 0)
+    if mover == 0 and pelvis != 0 and below.size == 1:
+        # Joint 0 above the pelvis, with one child: the child turns instead (by the same world turn, in
+        # joint 0's frame) and joint 0's translation keeps it in place. Retargeted clips of such rigs
+        # leave joint 0 as it rests and turn the hips; turned by minus each clip's heading, joint 0
+        # faced 0 degrees in one clip and 180 in another, and a blend of the two turned the body round.
+        child = int(below[0])
+        turn = quat.multiply(quat.conjugate(rot[:, 0]), quat.multiply(undo, rot[:, 0]))
+        rot[:, child] = quat.multiply(turn, rot[:, child])
+        hung = quat.rotate(rot[:, 0], m.local_translations()[:, child])  # joint 0 to its child, world
+        return m.replace(local_rotations=rot, root_translations=offset + quat.rotate(undo, hung) - hung), mover
     rot[:, 0] = quat.multiply(undo, rot[:, 0])
     if mover == 0:
         return m.replace(local_rotations=rot, root_translations=offset), mover
@@ -524,7 +537,15 @@ class Locomotion(Controller):
         # about joint 0, the pelvis would swing by the turn between the two).
         _, before = chain_fk(b.skeleton, was[0], was[1], was[2], [b.pelvis])
         _, after = chain_fk(b.skeleton, rot[mixing], root[mixing], None if jt is None else jt[mixing], [b.pelvis])
-        rot[mixing] = quat.slerp(was[0], rot[mixing], w[:, None])
+        walk = rot[mixing]
+        rot[mixing] = quat.slerp(was[0], walk, w[:, None])
+        below = np.flatnonzero(b.skeleton.parents == 0)
+        if b.pelvis != 0 and below.size == 1:
+            # Joint 0 above the pelvis with one child (see canonical_clip): the clip and the walk may split
+            # the facing between the two differently; the child's turn from the root is mixed as one.
+            c = int(below[0])
+            child = quat.slerp(quat.multiply(was[0][:, 0], was[0][:, c]), quat.multiply(walk[:, 0], walk[:, c]), w)
+            rot[mixing, c] = quat.multiply(quat.conjugate(rot[mixing, 0]), child)
         root[mixing] = was[1] + (root[mixing] - was[1]) * w[:, None]
         if jt is not None:
             jt[mixing] = was[2] + (jt[mixing] - was[2]) * w[:, None, None]
