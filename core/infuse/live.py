@@ -720,7 +720,8 @@ class LiveScene:
         return self._build("expression", character, lexeme=lexeme, amount=amount, duration=duration)
 
     def walk_to(self, character: str, target, manner: str = "walk", speed: float | None = None) -> str:
-        """Walk to a point (x, z) / (x, y, z) or a named object or character from the next frame."""
+        """Walk to a point (x, z) / (x, y, z) or a named object or character from the next frame (its path
+        planned on this thread, before the command reaches the loop)."""
         return self._build("walk_to", character, target=target, manner=manner, speed=speed)
 
     def reach(self, character: str, target, action: str = "touch", hand: str | None = None) -> str:
