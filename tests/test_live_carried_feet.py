@@ -88,7 +88,7 @@ def test_a_carried_feet_rig_walks_live_as_it_walks_offline():
         decoded_binary.append(decode_binary_frame(data)["characters"]["robot"])
         decoded_json.append(json.loads(frame_text(shown[i]))["characters"]["robot"])
         bones = {m.params[0]: np.array(m.params[1:], dtype=np.float64)
-                 for packet in sender.packets(shown[i]) for m in _messages(OscBundle(packet.dgram))
+                 for packet in sender.packets(shown[i]) for m in _messages(OscBundle(packet))
                  if m.address == "/VMC/Ext/Bone/Pos"}
         world = rebuild(bones)
         vmc.append([world[name][1] for name in ("LeftFoot", "RightFoot")])

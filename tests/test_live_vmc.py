@@ -173,3 +173,53 @@ def test_an_a_pose_rest_is_sent_as_a_turn_from_the_receivers_t_pose():
         angle = np.degrees(np.arccos(pointed @ arm / np.linalg.norm(pointed) / np.linalg.norm(arm)))
         assert angle < 0.5, (name, angle)
         assert arm[1] < -0.5 * np.linalg.norm(arm)  # the arm does point down at rest
+
+
+def test_packets_are_the_osc_bundles_of_each_message_built_in_full():
+    """A frame's bundles, written from messages whose fixed parts are kept (names, addresses, type tags)
+    and whose numbers are converted at once, are byte for byte the bundles python-osc builds message by
+    message from the same values; a frame of more than a datagram is split where python-osc's would be."""
+    from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
+    from pythonosc.osc_message_builder import OscMessageBuilder
+
+    import infuse_live.vmc as vmc
+    from infuse.live import LiveFrame, LiveScene
+    from infuse.scene import Scene
+
+    def message(address, *values):
+        built = OscMessageBuilder(address)
+        for value in values:
+            built.add_arg(value, "s" if isinstance(value, str) else "i" if isinstance(value, int) else "f")
+        return built.build()
+
+    scene = Scene(fps=60, quiet=True)
+    scene.add_character(corpus_file("talkinghead/avatars/brunette-t.glb"), "ann")
+    live = LiveScene(scene)
+    scene.bml("ann", f'<bml xmlns="{BML_NS}" id="s"><faceLexeme id="f" lexeme="smile" amount="0.8"/></bml>')
+    index, characters = live._evaluate(30)[-1]
+    frame = LiveFrame(index, index / 60, 0.0, characters)
+    sender = vmc.VmcSender(live, "ann", "127.0.0.1", 9)
+    pose = frame.characters["ann"]
+    assert pose.morphs.any()
+    positions, rotations = to_unity(*sender.bones.local(pose.rotations, pose.root, pose.translations))
+    messages = [message("/VMC/Ext/OK", 1), message("/VMC/Ext/T", float(frame.time_s)),
+                message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)]
+    messages += [message("/VMC/Ext/Bone/Pos", name, *p, *q)
+                 for name, p, q in zip(sender.bones.names, positions.tolist(), rotations.tolist())]
+    messages += [message("/VMC/Ext/Blend/Val", name, float(v)) for name, v in zip(sender.morphs, pose.morphs.tolist())]
+    messages.append(message("/VMC/Ext/Blend/Apply"))
+
+    def bundles(most):
+        out, built, size = [], OscBundleBuilder(IMMEDIATELY), 16
+        for m in messages:
+            if size + 4 + m.size > most:
+                out.append(built.build().dgram)
+                built, size = OscBundleBuilder(IMMEDIATELY), 16
+            built.add_content(m)
+            size += 4 + m.size
+        return out + [built.build().dgram]
+    assert sender.packets(frame) == bundles(vmc.MAX_PACKET_BYTES)
+    values = np.concatenate(([frame.time_s], np.concatenate((positions, rotations), axis=1).ravel(), pose.morphs))
+    split = bundles(1500)
+    assert len(split) > 1 and sender.messages.bundles(values, 1500) == split
+    sender.close()

@@ -23,19 +23,19 @@ a receiver that is gone costs nothing but the UDP sends.
 """
 from __future__ import annotations
 
+import socket
 import threading
 import time
 
 import numpy as np
-from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
-from pythonosc.osc_message_builder import OscMessageBuilder
-from pythonosc.udp_client import SimpleUDPClient
 
 from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
 from infuse.canonical import canonical_joint
 from infuse.live import LiveFrame, LiveScene
 from infuse.runtime.rig import reference_pose
+
+from .osc import FrameMessages
 
 #: Unity HumanBodyBones name -> canonical joint, parents before children.
 VRM_BONES = {
@@ -129,13 +129,6 @@ def from_unity(positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray
     return positions * _FLIP_POSITION, rotations * _FLIP_ROTATION
 
 
-def _message(address: str, *values) -> object:
-    builder = OscMessageBuilder(address)
-    for value in values:
-        builder.add_arg(value, "s" if isinstance(value, str) else "i" if isinstance(value, int) else "f")
-    return builder.build()
-
-
 class VmcSender:
     """Sends ``character`` of a live scene to a VMC receiver at ``host``:``port`` (see the module doc)."""
 
@@ -144,7 +137,18 @@ class VmcSender:
         rig = live.scene.runtime.rig(character)
         self.bones = VmcBones(rig)
         self.morphs = list(rig.morph_targets)
-        self.client = SimpleUDPClient(host, self.port)
+        family, _, _, _, self.address = socket.getaddrinfo(host, self.port, type=socket.SOCK_DGRAM)[0]
+        self.socket = socket.socket(family, socket.SOCK_DGRAM)
+        # Every frame's messages keep their addresses and names: written once, a frame's numbers in one go.
+        self.messages = FrameMessages()
+        self.messages.add("/VMC/Ext/OK", 1)
+        self.messages.add("/VMC/Ext/T", floats=1)
+        self.messages.add("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+        for name in self.bones.names:
+            self.messages.add("/VMC/Ext/Bone/Pos", name, floats=7)
+        for name in self.morphs:  # zeros too: receivers keep the last value they were sent
+            self.messages.add("/VMC/Ext/Blend/Val", name, floats=1)
+        self.messages.add("/VMC/Ext/Blend/Apply")
         self.sent = 0
         self._frame: LiveFrame | None = None
         self._ready = threading.Condition()
@@ -165,6 +169,7 @@ class VmcSender:
             self._ready.notify()
         if self._thread.is_alive():
             self._thread.join(2.0)
+        self.socket.close()
 
     def _offer(self, frame: LiveFrame) -> None:  # on the loop thread: hand over the latest frame only
         with self._ready:
@@ -181,28 +186,16 @@ class VmcSender:
                 frame, self._frame = self._frame, None
             try:
                 for packet in self.packets(frame):
-                    self.client.send(packet)
+                    self.socket.sendto(packet, self.address)
                 self.sent += 1
             except OSError:  # no receiver yet, or a network hiccup: the next frame tries again
                 time.sleep(0.001)
 
-    def packets(self, frame: LiveFrame) -> list:
-        """The OSC bundles of one frame, each at most :data:`MAX_PACKET_BYTES`, ``Blend/Apply`` in the last."""
+    def packets(self, frame: LiveFrame) -> list[bytes]:
+        """The OSC bundles of one frame (bytes), each at most :data:`MAX_PACKET_BYTES`, ``Blend/Apply`` in
+        the last: 0.1 ms for a character of 54 bones and 67 morph targets, where building each message
+        took 2.7 ms (a thread sharing the interpreter with the live loop)."""
         pose = frame.characters[self.character]
         positions, rotations = to_unity(*self.bones.local(pose.rotations, pose.root, pose.translations))
-        messages = [_message("/VMC/Ext/OK", 1), _message("/VMC/Ext/T", float(frame.time_s)),
-                    _message("/VMC/Ext/Root/Pos", "root", 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)]
-        messages += [_message("/VMC/Ext/Bone/Pos", name, *p, *q)
-                     for name, p, q in zip(self.bones.names, positions.tolist(), rotations.tolist())]
-        # zeros too: receivers keep the last value they were sent
-        messages += [_message("/VMC/Ext/Blend/Val", name, float(v)) for name, v in zip(self.morphs, pose.morphs.tolist())]
-        messages.append(_message("/VMC/Ext/Blend/Apply"))
-        bundles, builder, size = [], OscBundleBuilder(IMMEDIATELY), 16
-        for message in messages:
-            if size + 4 + message.size > MAX_PACKET_BYTES:
-                bundles.append(builder.build())
-                builder, size = OscBundleBuilder(IMMEDIATELY), 16
-            builder.add_content(message)
-            size += 4 + message.size
-        bundles.append(builder.build())
-        return bundles
+        values = np.concatenate(([frame.time_s], np.concatenate((positions, rotations), axis=1).ravel(), pose.morphs))
+        return self.messages.bundles(values, MAX_PACKET_BYTES)
