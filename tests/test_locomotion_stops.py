@@ -32,7 +32,7 @@ def space(xbot, tmp_path_factory):
 
 def test_walks_of_any_length_end_with_the_stop_clip_on_their_target(xbot, space, monkeypatch):
     """Walks 3.5 to 6 m straight ahead at 1.3 m/s: every one stops with the clip (4 of 11 did at a fixed
-    cadence, 8 paced at the speed it had while it was still speeding up), stands on its target, and its
+    cadence, 10 paced at the speed it had while it was still speeding up), stands on its target, and its
     strides stay within the pacing's bounds."""
     stopped: dict[float, float] = {}  # target distance -> where the stop clip begins (z, m)
     original = transitions.stop_placement

@@ -122,3 +122,29 @@ def test_stepping_off_after_a_turn_on_the_spot_keeps_the_feet_still(brad, male_s
     assert (parts == PARTS.index("on the spot")).sum() > 30  # it turned on the spot first
     assert 100.0 * foot_skate(g_pos, found, base, steps=parts == PARTS.index("start")).travel < 1.2
     assert np.linalg.norm(g_pos[-15:, base][:, [0, 2]].mean(axis=0) - target) < 0.05
+
+
+def test_short_walks_after_a_turn_on_the_spot_end_with_the_stop_clip(brad, male_space, monkeypatch):
+    """Walks 2 m away at 90, 135, 180 and -90 degrees: a turn on the spot leaves 1.7-1.8 m, most of it
+    walked speeding up, and the stop (1.08 m from 1.2 m/s) begins at one gait phase; paced for the
+    steps it takes as it speeds up, quicker and shorter, each walk ends with the clip, on its target
+    (the walk at 135 degrees needed its steps 1.3-1.45 times quicker, and stopped from the cycles)."""
+    stopped = []
+    original = transitions.stop_placement
+
+    def record(clip, fps, x, z, target):
+        stopped.append(tuple(np.round(target, 3)))
+        return original(clip, fps, x, z, target)
+
+    monkeypatch.setattr(transitions, "stop_placement", record)
+    rt = Runtime(fps=FPS)
+    targets = {}
+    for angle in (90.0, 135.0, 180.0, -90.0):
+        name = rt.add_character(infuse.Character(f"m{angle:g}", brad))
+        targets[name] = (2.0 * math.sin(math.radians(angle)), 2.0 * math.cos(math.radians(angle)))
+        rt.activate(name, controller("locomotion", pack=male_space, speed=1.3, target=targets[name]), 0.0)
+    rt.run(10.0)
+    assert len(set(stopped)) == len(targets)
+    for name, target in targets.items():
+        _, pos = infuse.motion_fk(rt.motion(name))
+        assert np.linalg.norm(pos[-15:, rt.rig(name).joint("base")][:, [0, 2]].mean(axis=0) - target) < 0.05

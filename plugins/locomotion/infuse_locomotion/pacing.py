@@ -29,7 +29,7 @@ from . import transitions
 
 #: Least and greatest cadence factor (phase rate over the blend's at that speed, the speed kept): the
 #: steps are shorter by its inverse. Quicker, shorter steps are easier than longer ones.
-FASTER = 1.3
+FASTER = 1.45
 SLOWER = 0.9
 #: A walk is paced while its last point lies within this (radians) of its facing: it turns onto it
 #: within the strides paced (the stop itself begins within :data:`~.transitions.STOP_BEARING`).
