@@ -143,6 +143,15 @@ def test_a_take_of_three_steps_strides_from_right_to_right():
     assert strides(four) == [(0.8, 1.6, [0.8, 1.2, 1.6])]  # left to left when there is one
 
 
+def test_a_stride_with_a_leap_is_passed_over():
+    """Of a take's strides, one whose right strike comes at two thirds of it (a leap: the flight before
+    the landing long) is no cycle when the take has an even one, whatever their speeds."""
+    take = [{"foot": "left", "strike": 0.0}, {"foot": "right", "strike": 0.5}, {"foot": "left", "strike": 1.0},
+            {"foot": "right", "strike": 1.67}, {"foot": "left", "strike": 2.0}]
+    assert steadiest_cycle(take, {(0, 30): 1.5, (30, 60): 2.2}.get, FPS) == (0, 30)
+    assert steadiest_cycle(take[2:], lambda s: 2.2, FPS) == (30, 60)  # the only stride: taken
+
+
 @pytest.fixture(scope="module")
 def smartbody_as_bvh(tmp_path_factory):
     """SmartBody's MaleLocomotion motions written as BVH and imported as a third party's folder (no file
@@ -169,6 +178,19 @@ def test_takes_imported_without_names_blend_only_steady_strides(smartbody_as_bvh
         blended = set(pack.analysis["tessellations"]["locomotion"]["labels"])
         assert not blended & {"ChrUtah_Idle001_ToWalk001", "ChrUtah_StopToWalkRt01"}
         assert {"ChrUtah_StrafeFastLf01", "ChrUtah_StrafeSlowLf01", "ChrUtah_StrafeFastRt01", "ChrUtah_StrafeSlowRt01"} <= blended
+
+
+def test_a_walk_with_a_jump_blends_its_walking_stride(smartbody_as_bvh):
+    """SmartBody's walk and run with a jump each hold one stride with the leap (the other foot striking at
+    64-67% of it, the pelvis rising 26 cm): it was the walk's cycle, a 2.17 m/s "jog" that leapt, and a walk
+    asked at 2.2 m/s bounced its pelvis 23 cm. Their even strides are the cycles (1.51 and 4.18 m/s)."""
+    for pack in smartbody_as_bvh.values():
+        clips = {c["name"]: c for c in pack.analysis["clips"]}
+        for name in ("ChrUtah_WalkJumpWalk01", "ChrUtah_RunJumpRun01"):
+            c = clips[name]
+            left, right, _ = c["keys"]
+            a, b = c["cycle"]
+            assert abs((right - left) * c["fps"] / (b - a) - 0.5) <= 0.1, (pack.name, name, c["keys"], c["cycle"])
 
 
 def test_a_mirrored_set_walks_to_targets_without_loops(smartbody_as_bvh):

@@ -3,8 +3,9 @@
 Real takes are irregular: they start from standing, curve a little, and a stretch from one left heel
 strike to the next does not end in the pose it began with. The builder, on each locomotion clip:
 
-- picks the **steadiest cycle** of a take (:func:`steadiest_cycle`): of its left-to-left strides,
-  the one whose speed is nearest the take's median stride speed, the starts and stops left out;
+- picks the **steadiest cycle** of a take (:func:`steadiest_cycle`): of its left-to-left strides
+  (stepping evenly, when it has such strides: a leap is no cycle), the one whose speed is nearest the
+  take's median stride speed, the starts and stops left out;
 - **straightens** a cycle that turns slower than :data:`STRAIGHTEN_DEG_S` (:func:`straighten`): the
   root joint is turned back by the turn rate times the time and carried from the circle the take
   walks onto the straight line of the same length, so straight walking exists at every speed the
@@ -40,6 +41,10 @@ STILL_LEGS_S = 0.15
 #: than twice :data:`STILL_LEGS_S` meanwhile, also stands there: a start that turns first shifts its
 #: weight before its first step, faster than a body standing still (a walk's double support is shorter).
 STAND_S = 0.3
+#: A stride steps evenly when the other foot strikes within this share of it from its middle: SmartBody's
+#: walks, runs, strafes and circles 0.46-0.55; the strides with a leap of its walk and run with a jump
+#: 0.64-0.67 (the pelvis rising 26 cm, 2-6 in the others), passed over for an even stride of the take.
+EVEN_STEPS = 0.1
 #: Clips of at most this many steps may be transitions (starts, stops, steps).
 SHORT_STEPS = 4
 #: A turn on the spot turns at least this much (degrees) over the clip.
@@ -72,10 +77,19 @@ def strides(step_list: list[dict]) -> list[tuple[float, float, list[float]]]:
     return out
 
 
+def _between_share(a: float, b: float, keys: list[float]) -> float:
+    """Where the other foot strikes within the stride from ``a`` to ``b`` (seconds), as a share of it."""
+    between = keys[1] if abs(keys[0] - a) < 1e-9 else keys[0]
+    return (between - a) / max(b - a, 1e-9)
+
+
 def steadiest_cycle(step_list: list[dict], speed_of, fps: float) -> tuple[int, int] | None:
     """(first, last frame) of the stride (:func:`strides`) whose speed ``speed_of((first, last))`` (m/s)
-    is nearest the median over the take's strides; None without one."""
-    found = [(int(round(a * fps)), int(round(b * fps))) for a, b, _ in strides(step_list)]
+    is nearest the median over the take's strides; of its strides that step evenly (the other foot
+    striking within :data:`EVEN_STEPS` of the middle), when it has any. None without a stride."""
+    every = strides(step_list)
+    even = [s for s in every if abs(_between_share(*s) - 0.5) <= EVEN_STEPS]
+    found = [(int(round(a * fps)), int(round(b * fps))) for a, b, _ in (even or every)]
     if not found:
         return None
     speeds = np.array([speed_of(s) for s in found])
