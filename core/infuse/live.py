@@ -501,14 +501,15 @@ class LiveScene:
         """Seconds a command of ``kind`` is expected to take: the median of the last ones of its kind (one
         slowed down by the machine's other work does not hold the next ones back). The first of a kind
         is expected to take as long as the longest kind known, at most a frame's time (a character added,
-        which takes far longer, would hold a long block for each new kind), or, before any command, as
-        long as a block takes (the lead): it then waits for a gap made long enough rather than run into
-        a frame's time."""
+        which takes far longer, would hold a long block for each new kind): it then waits for a gap made
+        long enough rather than run into a frame's time. The very first command, nothing known, is
+        expected to take no time (commands take a millisecond or two on the loop: walks plan their paths
+        before), so that it shows on the next frame."""
         taken = self._command_s.get(kind)
         if taken:
             return statistics.median(taken)
         known = [statistics.median(other) for other in self._command_s.values()]
-        return min(max(known), self.period_s) if known else self._lead_s
+        return min(max(known), self.period_s) if known else 0.0
 
     def _show(self, index: int, characters: dict) -> None:
         frame = LiveFrame(index, index / self.fps, time.perf_counter(), characters)
