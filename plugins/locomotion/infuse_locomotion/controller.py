@@ -642,14 +642,11 @@ class Locomotion(Controller):
         # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
         # off, and the foot would turn from lying flat to the animation's toe off at once.
         down = settle[:, None] * support
-        laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
         held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not b.idle.any())
-        if held.any():
-            # Standing still at the end of a stop without an idle, a foot lies down no less than as the
-            # stop's last step left it until it comes to rest (the held phase may be past the trailing
-            # foot's toe off starting).
-            down = np.where(held[:, None], np.maximum(down, _held_from(laid, st.laid, held)), down)
-            laid = _slow_fall(down, st.laid, dt / LAY_RELEASE_S)
+        # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
+        # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
+        # off starting): there it does not fall.
+        laid = _slow_fall(down, st.laid, np.where(held, 0.0, dt / LAY_RELEASE_S)[:, None] if held.any() else dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
@@ -1729,20 +1726,14 @@ def _scatter(before: np.ndarray, active: np.ndarray, values: np.ndarray, frames:
     return out
 
 
-def _held_from(x: np.ndarray, before: np.ndarray, held: np.ndarray) -> np.ndarray:
-    """(F, K) for each frame of ``x`` (F, K) in a run of ``held`` (F,) frames, the value of ``x`` at
-    the frame before the run (``before`` (K,) where that is the block's first); ``x`` elsewhere."""
-    f = np.arange(len(x))
-    starts = np.maximum.accumulate(np.where(held & ~np.concatenate(([False], held[:-1])), f, 0))
-    previous = np.concatenate((before[None], x))  # previous[i] is x at frame i - 1
-    out: np.ndarray = np.where(held[:, None], previous[starts], x)
-    return out
-
-
-def _slow_fall(x: np.ndarray, before: np.ndarray, step: float) -> np.ndarray:
-    """(F, K) ``x`` (F, K) falling by at most ``step`` a frame, from ``before`` (K,) a frame before the
-    first; rising as ``x`` does. Each frame's value is the largest of ``x`` at it and of every earlier
-    value less ``step`` a frame since."""
+def _slow_fall(x: np.ndarray, before: np.ndarray, step: float | np.ndarray) -> np.ndarray:
+    """(F, K) ``x`` (F, K) falling by at most ``step`` a frame (a number, or each frame's (F, 1)), from
+    ``before`` (K,) a frame before the first; rising as ``x`` does. Each frame's value is the largest
+    of ``x`` at it and of every earlier value less the steps since."""
+    if np.ndim(step):
+        fallen = np.cumsum(np.broadcast_to(step, x.shape), axis=0)  # the steps down to each frame from before the first
+        out: np.ndarray = np.maximum(np.maximum.accumulate(x + fallen, axis=0) - fallen, before[None] - fallen)
+        return out
     k = np.arange(len(x))[:, None]
     return np.maximum(np.maximum.accumulate(x + step * k, axis=0) - step * k, before[None] - step * (k + 1))
 
