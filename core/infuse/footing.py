@@ -179,7 +179,7 @@ def within_reach(goal: np.ndarray, leg: np.ndarray) -> np.ndarray:
 
 
 def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarray,
-              ball_goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+              ball_goal: np.ndarray, across: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Ankle goals (F, 3) for a foot pinned by its ball at ``ball_goal`` (F, 3) with its ankle
     wanted at ``ankle_goal`` (F, 3), and the further heel rise that needs as rotation vectors (F, 3)
     in the foot's frame (zero where the hip reaches).
@@ -192,7 +192,10 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     1 / (:data:`RISE_GAIN` × ankle-to-ball distance) radians per metre the hip moves, where the nearest
     reach would jump by tens of degrees between two frames as the hip passes the arc's closest point.
     ``ankle_rotation`` (F, 4) is the ankle's global rotation (x, y, z, w), ``leg`` (F, 3, 3) the hip,
-    knee and ankle positions.
+    knee and ankle positions. ``across`` ((3,) or (F, 3)): the horizontal axis across the foot to rise
+    about (the ball-to-ankle direction x +Y as it lay when the ball took over), with which the heel
+    rises no further than the ankle straight above the ball; without it, the axis across the
+    ball-to-ankle direction, which turns over with it once the ankle passes over the ball.
     """
     reach = REACH * (_length(leg[:, 1] - leg[:, 0]) + _length(leg[:, 2] - leg[:, 1]))
     v = ankle_goal - ball_goal
@@ -201,19 +204,30 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     if not short.size:
         return out, rise
     v, ball, hip = v[short], ball_goal[short], leg[short, 0]
-    # v x +Y: the horizontal axis across v; up = axis x v: v turned 90 degrees toward +Y about the ball.
+    # The horizontal axis across the foot (v x +Y unless given); up = axis x v: v turned 90 degrees toward
+    # +Y about the ball; level: v's part along the axis, which the turn keeps.
     ax, az = -v[:, 2], v[:, 0]
+    if across is not None:
+        given = np.broadcast_to(np.asarray(across, dtype=np.float64), ankle_goal.shape)[short]
+        usable = np.hypot(given[:, 0], given[:, 2]) > 1e-9
+        ax, az = np.where(usable, given[:, 0], ax), np.where(usable, given[:, 2], az)
     size = np.maximum(np.sqrt(ax * ax + az * az), 1e-12)
     ax, az = ax / size, az / size
     axis = np.zeros(v.shape)
     axis[:, 0], axis[:, 2] = ax, az
     up = np.stack((-az * v[:, 1], az * v[:, 0] - ax * v[:, 2], ax * v[:, 1]), axis=-1)
+    level = axis * (ax * v[:, 0] + az * v[:, 2])[:, None]
+    flat = v - level
     # Each rise's ankle, coordinate by coordinate (F, R), and its squared distance from the hip.
-    far = sum((ball[:, k, None] + v[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
+    far = sum((ball[:, k, None] + level[:, k, None] + flat[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
               for k in range(3))
     beyond = np.maximum(np.sqrt(far) - reach[short, None], 0.0)
     arc = RISE_GAIN * _length(v)[:, None] * _RISES
+    if across is not None:  # no further than the ankle straight above the ball (ahead = axis x +Y)
+        ahead = (-az[:, None]) * (flat[:, 0, None] * _RISE_COS + up[:, 0, None] * _RISE_SIN) + \
+            ax[:, None] * (flat[:, 2, None] * _RISE_COS + up[:, 2, None] * _RISE_SIN)
+        arc = np.where((ahead > 0.0) & (_RISES > 0.0), np.inf, arc)
     pick = np.argmin(beyond + arc, axis=1)
-    out[short] = ball + v * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
+    out[short] = ball + level + flat * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]
     rise[short] = quat.rotate(quat.conjugate(ankle_rotation[short]), axis * _RISES[pick][:, None])
     return out, rise

@@ -919,7 +919,8 @@ class Locomotion(Controller):
                             held = np.nonzero(~up)[0]
                             if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
                                 h = s + held
-                                goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h])
+                                goal[h], more = footing.heel_rise(quat.multiply(turn[h], g_rot[h, k, 2]), g_pos[h, k, :3], goal[h], let_go + 0.0 * goal[h],
+                                                                  across)
                                 rise[h] += more
                                 if held[-1] == e - s - 1:  # the rise the release fades from
                                     lifted = rise[e - 1].copy()
@@ -996,7 +997,8 @@ class Locomotion(Controller):
                         ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
                         if kind == footing.BALL:
                             balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
-                            goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls)
+                            goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls,
+                                                                   across)
                             ball_goal = balls[-1]
                         offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
                         let_go = ball_goal.copy()
