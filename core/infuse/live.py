@@ -664,7 +664,7 @@ class LiveScene:
             raise UsageError(f"no character {character!r}; characters: {', '.join(self.scene.characters) or 'none'}")
         if method == "walk_to":  # its path is planned here (prepare), not on the loop's thread
             try:
-                written = getattr(_Written(self.scene), method)(name, **arguments)
+                written = _Written(self.scene).walk_to(name, **arguments)
             except TypeError as exc:
                 raise UsageError(f"{method}: {exc}") from None
             return self.parse(name, written)
