@@ -11,10 +11,10 @@ fastest forward speeds (:data:`STRAIGHT_S` seconds each, from standing), and to 
   largest the takes show for the same canonical joint at that speed (the takes no faster than the
   slowest example at or above the asked speed, with the standing and transition takes), at least
   :data:`POP_FLOOR_DEG`: a ratio above :data:`POP_RATIO` is a pop; fingers aside;
-- **roll**: how far a foot turns about its length: the tilt of its axis across (square to the
-  horizontal from the ankle toward the ball and the vertical in its flat pose, the frame of the walk
-  or take where ankle and ball are lowest together, both carried by the ankle), degrees; past 90 (its
-  up pointing down while it lies within 45 degrees of level) it is upside down;
+- **roll**: how far a foot turns about its length from its flat pose (the frame of the walk or take
+  where ankle and ball are lowest together): its turn less its turn about the vertical, about the
+  horizontal from the ankle toward the ball (turned as the foot yawed), degrees; past 90 it is upside
+  down;
 - **toe bend**: the ball joint's turn relative to the ankle about the axis across the foot, up
   positive, against the flat pose (degrees), and how far it goes beyond the range of the takes;
 - **lowest**: the lowest joint of the legs and feet (hips down) over the walk, cm above the ground
@@ -124,13 +124,16 @@ def foot_measures(sk, mapping, g_rot: np.ndarray, g_pos: np.ndarray) -> FootMeas
         ahead = front[flat] - g_pos[flat, foot.ankle]
         to_local = quat.conjugate(ankle_rot[flat])
         ahead = quat.rotate(to_local, _unit(ahead - up * ahead[1]))
-        length = quat.rotate(ankle_rot, ahead)  # the flat pose's horizontal ahead, carried by the ankle
-        foot_up = quat.rotate(ankle_rot, quat.rotate(to_local, up))
-        # The axis across the foot tilts as the foot rolls, not as it pitches; a foot whose up points down
-        # while it lies within 45 degrees of level is upside down (past 90).
-        across = np.cross(length, foot_up)
-        tilt = np.degrees(np.arcsin(np.clip(np.abs(across[:, 1]), 0.0, 1.0)))
-        roll[:, k] = np.where((foot_up[:, 1] < 0.0) & (np.abs(length[:, 1]) < math.sqrt(0.5)), 180.0 - tilt, tilt)
+        # The foot's turn from its flat pose (world frame) less its turn about the vertical: a turn about a
+        # horizontal axis, whose part about the foot's ahead (the flat pose's, turned as the foot yawed)
+        # is the roll (past 90 degrees, upside down) and the rest the pitch.
+        turn = quat.multiply(ankle_rot, quat.conjugate(ankle_rot[flat]))
+        heading = np.zeros_like(turn)
+        heading[:, 1], heading[:, 3] = turn[:, 1], turn[:, 3]
+        heading = quat.normalize(np.where(np.abs(heading).sum(axis=-1, keepdims=True) > 1e-12, heading, quat.identity()))
+        tilt = quat.to_rotvec(quat.multiply(turn, quat.conjugate(heading)))
+        along = quat.rotate(heading, quat.rotate(ankle_rot[flat], ahead))
+        roll[:, k] = np.degrees(np.abs(np.sum(tilt * along, axis=-1)))
         if foot.ball is None:
             continue
         # The toes' turn against the foot since the flat pose (in the ankle's frame), about the axis across
