@@ -187,3 +187,16 @@ def test_heel_rise_about_a_given_axis_stops_with_the_ankle_over_the_ball():
     assert np.allclose(rise[:, 1:], 0.0)  # about the axis across the foot only
     plain, _ = footing.heel_rise(rotation, leg, ankle, ball)
     assert (plain[:, 2] - ball[:, 2] > 1e-3).any()  # the ball-to-ankle axis swings it past the ball
+
+
+def test_a_heel_joint_hanging_from_the_toes_stays_with_the_foot():
+    """Brad's heel joint hangs from his toe joint, 25 cm behind it: toes bent about the ball (by the
+    animation or to keep their tip down) swung it under the floor (``locomotion-female`` at 2 m/s: 4.0
+    cm; Bandai dataset-1 normal's run 17.3 cm). The toes' child carrying it turns with the foot now."""
+    require_corpus()
+    brad = infuse.load(corpus_file("smartbody/ChrBrad/ChrBrad.sk"))
+    motion, (_, g_pos), mapping, _ = _walk(brad, "locomotion-female", 2.02, 6.0)
+    index = motion.skeleton.index
+    heels = g_pos[:, [index["JtHeelLf"], index["JtHeelRt"]], 1]
+    assert heels.min() > -0.01, heels.min()  # -0.040 before
+    assert g_pos[:, leg_joints(motion.skeleton, mapping), 1].min() > -0.01  # no joint of the legs under the floor

@@ -40,7 +40,10 @@ class FootFloors:
       x +Y), a unit vector in its ankle's frame: the axis the foot and toes turn about, carried by the
       ankle (the ankle-to-tip direction of a foot pitched over its ball points down or back);
     - ``release``: how fast (rad/s) toes bent up to keep their tip off the ground unbend at most: as
-      fast as the pack's toes turn against their feet.
+      fast as the pack's toes turn against their feet;
+    - ``heels`` (H, 2): (foot, joint) children of a ball joint that carry joints lying behind the ball
+      (a heel joint hanging from the toes), kept turned with the foot, not the toes, by ``heel_turns``
+      (H, 4): each one's global rotation against its ankle's at rest.
     """
 
     ankles: np.ndarray
@@ -56,6 +59,8 @@ class FootFloors:
     tip_floor: np.ndarray
     across: np.ndarray
     release: float
+    heels: np.ndarray
+    heel_turns: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)

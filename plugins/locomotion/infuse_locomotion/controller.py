@@ -1150,7 +1150,7 @@ def _stack_key(b: LocomotionBinding) -> tuple:
     if key is None:
         f = b.floors
         floors = None if f is None else tuple(tuple(np.asarray(v).ravel().tolist()) for v in (
-            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across, f.release))
+            f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across, f.release, f.heels, f.heel_turns))
         key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors)
     return key
 
@@ -1324,13 +1324,37 @@ def _floors(sk, legs, motion, frames, leg_length: float, toes_rate: float = 0.0)
         point_floor[:] = point_floor.min()
     if toes.all():
         tip_floor[:] = tip_floor.min()
+    # Children of a ball joint carrying joints behind it (a heel joint hanging from the toes, 25 cm
+    # behind them on SmartBody's rigs): each with its rotation against the ankle at rest.
+    rest_rot, rest_pos = sk.rest_global_rotations, sk.rest_global_positions
+    heels, heel_turns = [], []
+    for k, leg in enumerate(legs):
+        if leg[3] is None:
+            continue
+        forward = (rest_pos[leg[3]] - rest_pos[leg[2]]) * np.array([1.0, 0.0, 1.0])
+        size = float(np.linalg.norm(forward))
+        for child in np.flatnonzero(sk.parents == leg[3]).tolist():
+            below = _subtree(sk, child)
+            if size > 1e-9 and ((rest_pos[below] - rest_pos[leg[3]]) @ forward < -0.5 * size * size).any():
+                heels.append((k, child))
+                heel_turns.append(quat.multiply(quat.conjugate(rest_rot[leg[2]]), rest_rot[child]))
     ahead = g_pos[:, 3] + quat.rotate(g_rot[:, 3], np.where(kept[:, None], point, tip)) - g_pos[:, 1]
     across = np.stack((-ahead[:, 2], np.zeros(2), ahead[:, 0]), axis=-1)  # ahead x +Y
     across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
     return FootFloors(ankles=ankles, balls=balls, ankle_parents=ankle_parents, ball_parents=ball_parents,
                       joints=joints.ravel(), point=point, kept=kept, tip=tip, toes=toes,
                       point_floor=point_floor, tip_floor=tip_floor, across=quat.rotate(quat.conjugate(g_rot[:, 1]), across),
-                      release=toes_rate if toes_rate > 0.0 else math.radians(TOE_RELEASE_DEG_S))
+                      release=toes_rate if toes_rate > 0.0 else math.radians(TOE_RELEASE_DEG_S),
+                      heels=np.array(heels, dtype=np.int64).reshape(-1, 2), heel_turns=np.array(heel_turns).reshape(-1, 4))
+
+
+def _subtree(sk, joint: int) -> list[int]:
+    """``joint`` and every joint below it."""
+    inside = np.zeros(sk.num_joints, dtype=bool)
+    inside[joint] = True
+    for j in range(joint + 1, sk.num_joints):  # parents precede children
+        inside[j] = sk.parents[j] >= 0 and inside[sk.parents[j]]
+    return np.flatnonzero(inside).tolist()
 
 
 def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1395,12 +1419,13 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
         up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, floors.release * dt)
         st.toe_bend = up[a1 - 1].copy()
     up = up * floors.toes
-    if not up.any():  # no toes bent: they keep their rotations
-        return
-    bend = quat.from_axis_angle(axis, up)
-    rot[:, floors.balls] = np.where(floors.toes[None, :, None],
-                                    quat.multiply(quat.conjugate(ball_parent), quat.multiply(bend, ball_rot)),
-                                    rot[:, floors.balls])
+    if up.any():  # toes bent (else they keep their rotations)
+        ball_rot = quat.multiply(quat.from_axis_angle(axis, up), ball_rot)
+        rot[:, floors.balls] = np.where(floors.toes[None, :, None], quat.multiply(quat.conjugate(ball_parent), ball_rot),
+                                        rot[:, floors.balls])
+    if floors.heels.size:  # joints of the foot hanging from the toes stay with the foot, however the toes bend
+        k, child = floors.heels[:, 0], floors.heels[:, 1]
+        rot[:, child] = quat.multiply(quat.conjugate(ball_rot[:, k]), quat.multiply(g_rot[:, k, 1], floors.heel_turns))
 
 
 def _slowest_walk(clips) -> int:
