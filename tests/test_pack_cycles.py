@@ -193,6 +193,21 @@ def test_a_walk_with_a_jump_blends_its_walking_stride(smartbody_as_bvh):
             assert abs((right - left) * c["fps"] / (b - a) - 0.5) <= 0.1, (pack.name, name, c["keys"], c["cycle"])
 
 
+def test_a_standing_take_is_the_idle_of_a_set_without_names(smartbody_as_bvh, imported):
+    """A folder naming no roles still has an idle: the longest take standing still throughout (both feet
+    down, the feet and pelvis staying put, the hands within 0.2 leg lengths of where they mostly are),
+    closed into a loop. SmartBody's idle (its hands 0.002 leg lengths) is; Bandai's wave and raised hand
+    (0.6 and more) and SmartBody's foot lifts (shorter) are not."""
+    for pack in smartbody_as_bvh.values():
+        clips = {c["name"]: c for c in pack.analysis["clips"]}
+        idle = clips["ChrUtah_Idle001"]
+        assert idle["role"] == "idle" and idle["loop"] and "transition" not in idle
+        assert [c["name"] for c in clips.values() if c["role"] == "idle"] == ["ChrUtah_Idle001"]
+        assert "ChrUtah_Idle001" in pack.analysis["tessellations"]["locomotion"]["labels"]
+    _, bandai = imported
+    assert not [c["name"] for c in bandai.analysis["clips"] if c["role"] == "idle"]
+
+
 def test_a_mirrored_set_walks_to_targets_without_loops(smartbody_as_bvh):
     """The mirrored set's walks to targets 135 degrees to the left (which looped, 386-405 degrees turned,
     path 1.17x): no loop, paths at most 1.15x, within 5 cm (measured: 82-89 degrees, 1.04-1.07x)."""

@@ -22,7 +22,8 @@ from .analysis import analyse_clip, blend_groups, coordinates_of, headings, loco
 from .coverage import coverage, describe_coverage
 from .cuts import without_cuts
 from .denoise import denoised
-from .cycles import STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, straighten, strides, transition_kind
+from .cycles import (STRAIGHTEN_DEG_S, alignment, close_loop, closest_loop_end, stands_still, straighten, strides,
+                     transition_kind)
 from .manifest import read_manifest
 from .order import content_order
 from .pack import FORMAT_VERSION, Pack, fingerprint, load_clip, on_skeleton
@@ -90,6 +91,34 @@ def usable_cycles(entries, motions: dict, clips: list[dict], fks: list, index: d
             info["notes"].append(f"no full stride and its ends differ by {gap:.0f} deg (not one stride looping): not blended")
         elif info["role"] == "cycle":
             _derive(entry, info, i, motions, clips, fks, index, mapping)
+    _find_idle(motions, clips, fks, index)
+
+
+def _find_idle(motions: dict, clips: list[dict], fks: list, index: dict[str, int]) -> None:
+    """A pack given no idle takes the longest take that stands still throughout (:func:`.cycles.stands_still`)
+    as its idle, closed into a loop: a third party's folder names no roles. In place, as :func:`usable_cycles`."""
+    if any(c["role"] == "idle" for c in clips):
+        return
+    hands = [index[k] for k in ("l_wrist", "r_wrist") if k in index]
+    soles = [index[k] for k in ("l_ankle", "r_ankle", "l_forefoot", "r_forefoot") if k in index]
+    rank = {n: k for k, n in enumerate(content_order(motions))}
+    standing = [i for i, c in enumerate(clips) if c.get("transition") == "none" and hands
+                and stands_still(np.asarray(c["contacts"], dtype=bool).T, fks[i][1][:, index["base"]], fks[i][1][:, hands],
+                                 fks[i][1][:, soles], c["fps"], c["leg_length"])]
+    if not standing:
+        return
+    i = max(standing, key=lambda k: (clips[k]["frames"], -rank[clips[k]["name"]]))
+    info = clips[i]
+    motion, gap = close_loop(motions[info["name"]], (0, info["frames"] - 1))
+    motions[info["name"]] = motion
+    fks[i] = batch_fk([motion])[0]
+    root, heading = fks[i][1][:, index["base"]], headings(fks[i][1], index)
+    info.update(role="idle", loop=True, cycle=[0, info["frames"] - 1], keys=[0.0, info["duration"] / 2.0, info["duration"]],
+                parameters=locomotion_parameters(root, heading, (0, info["frames"] - 1), info["fps"]),
+                derived={"closed_deg": gap})
+    info.pop("transition")
+    info["notes"] = [n for n in info["notes"] if "not locomotion" not in n and "uniform keys" not in n]
+    info["notes"].append("stands still throughout (both feet down, the hands near the body): the pack's idle")
 
 
 def _derive(entry, info: dict, i: int, motions: dict, clips: list[dict], fks: list, index: dict[str, int], mapping) -> None:

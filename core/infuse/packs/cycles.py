@@ -45,6 +45,14 @@ STAND_S = 0.3
 #: walks, runs, strafes and circles 0.46-0.55; the strides with a leap of its walk and run with a jump
 #: 0.64-0.67 (the pelvis rising 26 cm, 2-6 in the others), passed over for an even stride of the take.
 EVEN_STEPS = 0.1
+#: A standing take travels less than this many leg lengths over its whole length (:func:`stands_still`)...
+IDLE_TRAVEL_LEGS = 0.1
+#: ...its feet travel less than this many leg lengths per second (SmartBody's idle: 0; with a degree of
+#: rotation noise on every joint, low-passed, 0.23)...
+IDLE_FEET_LEGS_S = 0.05
+#: ...and its hands stay within this many leg lengths of where they mostly are, relative to the pelvis:
+#: SmartBody's idle 0.002, Bandai's waves and raised hands 0.6 and more.
+IDLE_HANDS_LEGS = 0.2
 #: Clips of at most this many steps may be transitions (starts, stops, steps).
 SHORT_STEPS = 4
 #: A turn on the spot turns at least this much (degrees) over the clip.
@@ -229,6 +237,25 @@ def _stands(velocity: np.ndarray, both_down: np.ndarray, fps: float, leg: float)
         return True
     down = int(np.argmin(both_down)) if not both_down.all() else len(both_down)
     return down >= max(STAND_S * fps, 1) and float(np.linalg.norm(velocity[:down].mean(axis=0))) < 2.0 * still
+
+
+def stands_still(foot_flags: np.ndarray, root: np.ndarray, hands: np.ndarray, foot_points: np.ndarray, fps: float,
+                 leg: float) -> bool:
+    """Whether a clip stands still throughout, as an idle does: both feet down in every frame of its
+    (F, 2) contacts, its feet's contact joints (F, P, 3) travelling less than :data:`IDLE_FEET_LEGS_S`
+    leg lengths per second along the ground (noise left in them would slide the standing feet), its
+    pelvis (F, 3) less than :data:`IDLE_TRAVEL_LEGS` leg lengths over the clip, and its hands (F, H, 3),
+    relative to the pelvis, staying within :data:`IDLE_HANDS_LEGS` leg lengths of where they mostly are
+    (a wave or a raised hand moves them farther)."""
+    if len(root) < 2 or not np.asarray(foot_flags, dtype=bool).all():
+        return False
+    if np.linalg.norm((root[-1] - root[0])[[0, 2]]) > IDLE_TRAVEL_LEGS * leg:
+        return False
+    feet_travel = np.linalg.norm(np.diff(foot_points[..., [0, 2]], axis=0), axis=-1).sum(axis=0) * fps / (len(root) - 1)
+    if feet_travel.max() > IDLE_FEET_LEGS_S * leg:
+        return False
+    rel = hands - root[:, None]
+    return bool(np.linalg.norm(rel - np.median(rel, axis=0), axis=-1).max() <= IDLE_HANDS_LEGS * leg)
 
 
 def transition_kind(foot_flags: np.ndarray, root: np.ndarray, heading: np.ndarray, fps: float, leg: float,
