@@ -58,6 +58,9 @@ from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState, of
 #: heel rise (a leg that could not reach its pinned ball) in the early swing.
 RELEASE_S = 0.3
 RISE_RELEASE_S = 0.1
+#: Seconds over which a released foot's pin correction fades in the steps of a stop or a turn on the
+#: spot (the foot steps back under the body before it touches down).
+STEP_RELEASE_S = 0.15
 #: Seconds over which a foot laid flat in a stop's last steps is let go at least (its turn back to
 #: the animation's toe off).
 LAY_RELEASE_S = 0.3
@@ -76,6 +79,10 @@ SHARE_CLEAR = 0.03
 STEP_ARC = 0.25
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
 STAND_FRACTION = 0.2
+#: Below this fraction of the slowest walk's speed the pelvis stands over the point it stops at (its
+#: gait's offset taken out but for this share over :data:`STAND_FRACTION`): the landings that end a
+#: stop count from there, so each foot lands once more at the stance under the still body.
+STILL_FRACTION = 0.01
 #: Share of the moving clips (one minus the idle's) below which their blend turns smoothly into the
 #: slowest walk as the speed nears zero: renormalized alone, the blend would jump from the slowest walk
 #: to whichever clip the request first gives weight to (a turning walk's pose at the start of a turn).
@@ -895,7 +902,11 @@ class Locomotion(Controller):
                                 ball_offset = np.where((down >= 0)[:, None], held_at, ball_offset)
                             else:
                                 ball_offset = ball_offset[None]  # the same on every frame
-                            age = released + dt * np.cumsum(up)
+                            # In the steps of a stop or a turn on the spot (short and slow, landing where they
+                            # touch) the correction is gone within STEP_RELEASE_S: faded over RELEASE_S, the foot
+                            # came down before it was back under the body, and stood there.
+                            quick = np.where(made[a0 + s:a0 + e], RELEASE_S / STEP_RELEASE_S, 1.0)
+                            age = released + dt * np.cumsum(up * quick)
                             fade = 1.0 - footing.smoothstep(age / RELEASE_S)
                             # The foot's corrections fade out keeping it rigid: the ball's offset fades and the
                             # ankle hangs from the ball (not the ball from the ankle: the ball leaves the
@@ -1679,7 +1690,9 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
             goal = done + st.to_go if st.to_go >= 0.0 else None
             if goal is None and not spinning[a]:
                 # Strikes (phases 0 and 0.5) with the character nearly still: the foot lands by the body.
-                landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[a:e] < STAND_FRACTION)
+                # Only landings with the body at the point it stands at count (a foot landing while the
+                # pelvis still comes over it would be left out of the stance, short of or past its place).
+                landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[a:e] < STILL_FRACTION)
                 count = st.landings + np.cumsum(landed)
                 ready = landed & (count >= 2)
                 if ready.any():
