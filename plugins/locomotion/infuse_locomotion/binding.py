@@ -7,6 +7,7 @@ are ordered left, right. Positions are metres, in the facing frame of the clips 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -136,4 +137,4 @@ class LocomotionBinding:
     heel_levers: np.ndarray | None = None
     sole_floor: np.ndarray = field(default_factory=lambda: np.zeros(2))
     touch_m: float = 0.0
-    landing_m_s: float = 0.0
+    landing_rad_s: float = math.inf

@@ -40,7 +40,7 @@ from typing import Callable, NamedTuple
 import numpy as np
 
 from infuse import footing, quaternions as quat
-from infuse.contacts import DOWN_TOLERANCE, LANDING_SPEED, foot_frames
+from infuse.contacts import DOWN_TOLERANCE, foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
@@ -850,6 +850,7 @@ class Locomotion(Controller):
         turns[..., 3] = 1.0
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
             touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1])
+            touching = touched > 0  # (F, 2) held where it touched, before its blend's strike
             anchors_all[a0:a1] = np.where(touched > 0, touched, anchors_all[a0:a1])
             posed_all[a0:a1] |= touched == footing.BALL
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
@@ -868,7 +869,7 @@ class Locomotion(Controller):
                 landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
                 let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
                 clear = bool(st.clear[k])
-                foot_heading, held_swivel = float(st.foot_heading[k]), float(st.held_swivel[k])
+                foot_heading, held_swivel, toes_up = float(st.foot_heading[k]), float(st.held_swivel[k]), float(st.toes_up[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
                 bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
                 for s, e in zip(bounds[:-1], bounds[1:]):
@@ -942,6 +943,11 @@ class Locomotion(Controller):
                                 offset, ball_offset, lifted, left = np.zeros(3), np.zeros(3), np.zeros(3), _IDENTITY.copy()
                             s = e
                     else:
+                        if kind == footing.BALL and prev == footing.ANKLE and before[s, k, 1, 1] + ball_offset[1] - feet_pos[s, k, 1, 1] > b.touch_m:
+                            # Its ball (corrected) is up in the air where the animation's has come down (a
+                            # blend's foot slapping flat about its held heel, its pitch slowed): pinned there
+                            # it would hold the foot up and drop it when let go. The heel stays held.
+                            kind = footing.ANKLE
                         if kind != prev and prev == footing.FREE:
                             # The anchor lands: it stays where the corrected foot puts it now.
                             fade = 1.0 - footing.smoothstep(released / RELEASE_S)
@@ -978,6 +984,16 @@ class Locomotion(Controller):
                         # axis across the foot).
                         since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
                         if kind == footing.ANKLE:
+                            # On its heel, its toes come down no faster than the pack's feet turn near the
+                            # ground (a blend's foot slapping flat in a frame would swing the ankle about
+                            # the heel by centimetres). The pitch is the twist of the turn since it landed
+                            # about the axis across; ``toes_up`` carries it (toes up positive).
+                            pitch = 2.0 * np.arctan2(since[:, :3] @ across, since[:, 3])
+                            pitch = (pitch + math.pi) % (2.0 * math.pi) - math.pi  # toes down positive
+                            if math.isfinite(b.landing_rad_s):
+                                up = _slow_fall(-pitch[:, None], np.array([0.0 if kind != prev else toes_up]), b.landing_rad_s * dt)[:, 0]
+                                since = quat.multiply(quat.multiply(since, quat.from_axis_angle(across, -pitch)), quat.from_axis_angle(across, -up))
+                                toes_up = float(up[-1])
                             kept = quat.multiply(yaw(landed_spun - turned[s:e]), since)
                         else:
                             kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
@@ -1002,8 +1018,13 @@ class Locomotion(Controller):
                         # The ankle at the animation's height; held by the ball for the pose's sake, no
                         # lower than keeps the ball at the height it took over at (the blend's leg, half
                         # standing and half swinging, would push it into the ground, and it would rise
-                        # from there still down and slide as the foot is let go).
+                        # from there still down and slide as the foot is let go); touching down by the
+                        # heel, no higher than keeps the heel where it touched (the blend's foot rising
+                        # again before its strike would lift it and drop it back in a frame).
+                        pinned = goal[s:e, 1].copy()
                         goal[s:e, 1] = np.where(posed_all[a0 + s:a0 + e, k], np.maximum(ankle[s:e, 1], goal[s:e, 1]), ankle[s:e, 1])
+                        if kind == footing.ANKLE:
+                            goal[s:e, 1] = np.where(touching[s:e, k], np.minimum(goal[s:e, 1], pinned), goal[s:e, 1])
                         weight[s:e] = 1.0
                         ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
                         if kind == footing.BALL:
@@ -1017,7 +1038,7 @@ class Locomotion(Controller):
                 st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
                 st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
                 st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
-                st.foot_heading[k], st.held_swivel[k], st.clear[k] = foot_heading, held_swivel, clear
+                st.foot_heading[k], st.held_swivel[k], st.clear[k], st.toes_up[k] = foot_heading, held_swivel, clear, toes_up
             st.last, st.last_rot = feet_pos[-1].copy(), g_rot[-1, :, 2].copy()
             st.shared = shared[a1 - 1].copy()
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
@@ -1047,11 +1068,11 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     metres, frames ``dt`` seconds apart; ``st.touched`` (2,) carries it from the last block.
 
     A free foot lands where the lower of its sole points (the sole under the heel, the ball), coming
-    down, first comes within ``b.touch_m`` of its resting height (``b.sole_floor``) slower than a
-    foot lands (``b.landing_m_s``), held by that point, and stays held while it stays that low: a
-    blend's swing that reaches the ground before its strike (a stop's shrinking or vanishing stride,
-    a step on the spot) would otherwise slide the foot along the ground to where the strike puts it.
-    A walk's heel coming in fast lands at its strike, as the clips have it."""
+    down, first comes within ``b.touch_m`` of its resting height (``b.sole_floor``), held by that point
+    to its blend's strike (by the ball only while the ball is that low: a ball pinned in the air is no
+    contact): a blend's swing that reaches the ground before its strike (a stop's shrinking or
+    vanishing stride, a step on the spot) would otherwise slide the foot along the ground to where the
+    strike puts it."""
     both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
     heel = both[:, :, 0] + np.stack([_heel_of(b, k, both[:, k, 1] - both[:, k, 0]) for k in range(2)], axis=1)
     by_heel = (heel[..., 1] <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
@@ -1068,7 +1089,8 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     carried = free[0] & (st.touched > 0)
     first = np.maximum.accumulate(np.where(coming | (carried[None] & (idx == 0)), idx, -1), axis=0)
     held = free & (first >= began) & (first >= 0) & made[:, None]
-    kind = np.where(by_heel[1:], footing.ANKLE, footing.BALL)
+    aloft = both[1:, :, 1, 1] - b.sole_floor >= b.touch_m  # (F, 2) the ball not within touch of its floor
+    kind = np.where(by_heel[1:] | aloft, footing.ANKLE, footing.BALL)
     out: np.ndarray = np.where(held, kind, 0)
     st.touched = out[-1].copy()
     return out
@@ -1155,14 +1177,15 @@ _STACK_KEYS: weakref.WeakKeyDictionary[LocomotionBinding, tuple] = weakref.WeakK
 
 def _stack_key(b: LocomotionBinding) -> tuple:
     """What the walks pinned and kept up together share (:meth:`Locomotion.evaluate`): the skeleton (the
-    same object), the legs and how low the feet may go (:class:`~.binding.FootFloors`, by value).
+    same object), the legs, how low the feet may go (:class:`~.binding.FootFloors`, by value) and how
+    fast a held heel's foot pitches down (``landing_rad_s``).
     Characters of one asset walking one pack have it alike, each with its own binding."""
     key = _STACK_KEYS.get(b)
     if key is None:
         f = b.floors
         floors = None if f is None else tuple(tuple(np.asarray(v).ravel().tolist()) for v in (
             f.ankles, f.balls, f.ankle_parents, f.ball_parents, f.point, f.kept, f.tip, f.toes, f.point_floor, f.tip_floor, f.across, f.release, f.heels, f.heel_turns))
-        key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors)
+        key = _STACK_KEYS[b] = (id(b.skeleton), tuple(b.legs), floors, b.landing_rad_s)
     return key
 
 
@@ -1269,7 +1292,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
         walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers, sole_floor=sole_floor,
-        touch_m=TOUCH * leg_length, landing_m_s=LANDING_SPEED * leg_length)
+        touch_m=TOUCH * leg_length, landing_rad_s=_landing_rate(sk, legs, [mv for mv, e in zip(motions, events) if e is not None], leg_length))
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
@@ -1295,6 +1318,23 @@ def _toes_rate(sk, legs, motions) -> float:
         toes = quat.multiply(quat.conjugate(g_rot[:, [0, 2]]), g_rot[:, [1, 3]])  # (F, 2, 4) against the feet
         rates.extend(np.percentile(quat.angle_between(toes[:-1], toes[1:]) * m.fps, 99, axis=0).tolist())
     return max(float(np.median(rates)) if rates else 0.0, math.radians(TOE_RELEASE_DEG_S))
+
+
+def _landing_rate(sk, legs, motions, leg_length: float) -> float:
+    """How fast (radians per second) the feet of a pack's stepping clips ``motions`` turn near the ground
+    (ankle within :data:`TOUCH` of the leg ``leg_length`` (m) of its lowest in the clip, on both frames):
+    the median over the clips and feet of the 99th percentile of the ankle's turn between such frames
+    (infinite without two legs or clips: no limit)."""
+    if len(legs) != 2 or not motions:
+        return math.inf
+    rates: list[float] = []
+    for m in (m for m in motions if m.num_frames > 1):
+        g_rot, g_pos = chain_fk(sk, m.local_rotations, m.root_translations, m.joint_translations, [legs[0][2], legs[1][2]])
+        low = g_pos[..., 1] < g_pos[..., 1].min(axis=0) + TOUCH * leg_length  # (F, 2)
+        low = low[1:] & low[:-1]
+        turn = quat.angle_between(g_rot[:-1], g_rot[1:]) * m.fps  # (F - 1, 2)
+        rates.extend(float(np.percentile(turn[low[:, k], k], 99)) for k in range(2) if low[:, k].any())
+    return float(np.median(rates)) if rates else math.inf
 
 
 def _floors(sk, legs, motion, frames, leg_length: float, toes_rate: float = 0.0) -> FootFloors | None:

@@ -49,7 +49,8 @@ class LocomotionState(SteeringState):
       rotation as it landed, animated and corrected, ``landed_spun`` (2,) the turn spun at the root then,
       ``across`` (2, 3) the axis across it, ``foot_turn`` (2, 4) its correction; held by its heel,
       ``foot_heading`` (2,) its heading a frame earlier (radians about +Y, from +Z) and ``held_swivel``
-      (2,) the turn about the vertical held off it while its ball is down; ``shared`` (2,) held by the
+      (2,) the turn about the vertical held off it while its ball is down, ``toes_up`` (2,) how far its
+      toes are up from as it landed (radians, a frame earlier); ``shared`` (2,) held by the
       idle's fading share a frame earlier, ``clear`` (2,) let go by it (its ball held along the ground
       until clear of it); ``touched`` (2,) what holds a
       swinging foot that has touched the ground before its strike (:func:`~.controller._touch_downs`; 0: none);
@@ -85,6 +86,7 @@ class LocomotionState(SteeringState):
     landed_spun: np.ndarray = field(default_factory=lambda: _feet())
     foot_heading: np.ndarray = field(default_factory=lambda: _feet())
     held_swivel: np.ndarray = field(default_factory=lambda: _feet())
+    toes_up: np.ndarray = field(default_factory=lambda: _feet())
     touched: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
     shared: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
     clear: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
