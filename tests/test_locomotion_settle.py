@@ -83,3 +83,55 @@ def test_coming_to_rest_is_the_same_in_blocks_of_any_size(pack):
         rt.run(8.0)
         out.append(infuse.motion_fk(rt.motion(name))[1])
     assert np.abs(out[0] - out[1]).max() < 1e-6
+
+
+def _end_stance(motion, mapping, skeleton):
+    """The feet's distance front to back (m, ankles, along the facing from the hips) and the knees'
+    bend (degrees, hip-knee-ankle off straight) at a motion's last frame, by FK."""
+    import numpy as np
+
+    idx = mapping.indices(skeleton)
+    pos = infuse.motion_fk(motion)[1][-1]
+    side = (pos[idx["l_hip"]] - pos[idx["r_hip"]]) * np.array([1.0, 0.0, 1.0])
+    forward = np.cross(side / np.linalg.norm(side), [0.0, 1.0, 0.0])
+    apart = abs(float((pos[idx["l_ankle"]] - pos[idx["r_ankle"]]) @ forward))
+    bends = []
+    for s in "lr":
+        up, down = pos[idx[f"{s}_hip"]] - pos[idx[f"{s}_knee"]], pos[idx[f"{s}_ankle"]] - pos[idx[f"{s}_knee"]]
+        bends.append(180.0 - float(np.degrees(np.arccos(up @ down / np.linalg.norm(up) / np.linalg.norm(down)))))
+    return apart, max(bends)
+
+
+def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
+    # A pack without an idle stands in its held stance: its blend at the stop's double support with
+    # strides of nothing (the feet side by side, 2 cm apart front to back on X Bot). Its last steps
+    # landed where they touched, a foot short of its place (its correction to the pelvis still
+    # fading) or stepping while the pelvis still came over the point it stops at: Bandai dataset-1
+    # masculinity on X Bot ended with the feet 20 cm apart 2 m ahead, 13 cm 4 m at 90 degrees.
+    import math
+
+    from infuse.mapping import map_skeleton
+    from infuse.packs import build_pack, import_bvh_folder
+    from infuse.runtime import Runtime, controller
+
+    require_corpus()
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path / "d1-masc", name="d1-masc", pattern="dataset-1_*_masculinity_*.bvh"))
+    xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
+    mapping = map_skeleton(xbot.asset)
+    targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (6.0, 45.0)]
+    rt = Runtime(fps=30)
+    names = {}
+    for d, a in targets:
+        for pinned in (True, False):
+            name = rt.add_character(xbot, name=f"w{d:g}-{a:g}-{pinned}", mapping=mapping)
+            rt.activate(name, controller("locomotion", pack=pack, speed=1.3, pin_feet=pinned,
+                                         target=(d * math.sin(math.radians(a)), d * math.cos(math.radians(a)))), 0.0)
+            names[d, a, pinned] = name
+    rt.run(10.0)
+    ends = {key: _end_stance(rt.motion(name), mapping, xbot.skeleton) for key, name in names.items()}
+    for d, a in targets:
+        apart, bend = ends[d, a, True]
+        stance, stance_bend = ends[d, a, False]  # the pack's stance, the feet where its blend puts them
+        assert apart <= stance + 0.04, ((d, a), round(apart, 3), round(stance, 3))
+        assert bend <= stance_bend + 5.0, ((d, a), round(bend, 1), round(stance_bend, 1))

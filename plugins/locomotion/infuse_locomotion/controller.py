@@ -653,7 +653,11 @@ class Locomotion(Controller):
         # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
         # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
         # off starting): there it does not fall.
-        laid = _slow_fall(down, st.laid, np.where(held, 0.0, dt / LAY_RELEASE_S)[:, None] if held.any() else dt / LAY_RELEASE_S)
+        # Stepping on the spot (strides of nothing) a foot stays flat through its swing as well: landing
+        # turned up as a walk's heel strike, held where it touched, it rolled down about its heel and
+        # stood short of its place by the roll.
+        flat = np.maximum(down, (settle * (1.0 - np.minimum(stride, 1.0)))[:, None])
+        laid = _slow_fall(flat, st.laid, np.where(held, 0.0, dt / LAY_RELEASE_S)[:, None] if held.any() else dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
