@@ -876,7 +876,10 @@ class Locomotion(Controller):
                 foot_heading, held_swivel, toes_up = float(st.foot_heading[k]), float(st.held_swivel[k]), float(st.toes_up[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
                 bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
-                for s, e in zip(bounds[:-1], bounds[1:]):
+                i = 0
+                while i < len(bounds) - 1:  # each stretch held alike (one may split: a ball aloft, below)
+                    s, e = bounds[i], bounds[i + 1]
+                    i += 1
                     kind = int(anchors[s, k])
                     if kind == footing.FREE:
                         if prev != footing.FREE:
@@ -950,8 +953,15 @@ class Locomotion(Controller):
                         if kind == footing.BALL and prev == footing.ANKLE and before[s, k, 1, 1] + ball_offset[1] - feet_pos[s, k, 1, 1] > b.touch_m:
                             # Its ball (corrected) is up in the air where the animation's has come down (a
                             # blend's foot slapping flat about its held heel, its pitch slowed): pinned there
-                            # it would hold the foot up and drop it when let go. The heel stays held.
-                            kind = footing.ANKLE
+                            # it would hold the foot up and drop it when let go. The heel stays held until
+                            # the foot's pitch has caught up with the animation's.
+                            pitch, up = _toes_slowed(b, quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed)), across, toes_up, dt)
+                            lagging = up > -pitch
+                            if lagging[0]:
+                                kind = footing.ANKLE
+                                if not lagging.all():
+                                    e = s + int(np.argmin(lagging))
+                                    bounds.insert(i, e)
                         if kind != prev and prev == footing.FREE:
                             # The anchor lands: it stays where the corrected foot puts it now.
                             fade = 1.0 - footing.smoothstep(released / RELEASE_S)
@@ -992,12 +1002,9 @@ class Locomotion(Controller):
                             # ground (a blend's foot slapping flat in a frame would swing the ankle about
                             # the heel by centimetres). The pitch is the twist of the turn since it landed
                             # about the axis across; ``toes_up`` carries it (toes up positive).
-                            pitch = 2.0 * np.arctan2(since[:, :3] @ across, since[:, 3])
-                            pitch = (pitch + math.pi) % (2.0 * math.pi) - math.pi  # toes down positive
-                            if math.isfinite(b.landing_rad_s):
-                                up = _slow_fall(-pitch[:, None], np.array([0.0 if kind != prev else toes_up]), b.landing_rad_s * dt)[:, 0]
-                                since = quat.multiply(quat.multiply(since, quat.from_axis_angle(across, -pitch)), quat.from_axis_angle(across, -up))
-                                toes_up = float(up[-1])
+                            pitch, up = _toes_slowed(b, since, across, 0.0 if kind != prev else toes_up, dt)
+                            since = quat.multiply(quat.multiply(since, quat.from_axis_angle(across, -pitch)), quat.from_axis_angle(across, -up))
+                            toes_up = float(up[-1])
                             kept = quat.multiply(yaw(landed_spun - turned[s:e]), since)
                         else:
                             kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
@@ -1098,6 +1105,18 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     out: np.ndarray = np.where(held, kind, 0)
     st.touched = out[-1].copy()
     return out
+
+
+def _toes_slowed(b: LocomotionBinding, since: np.ndarray, across: np.ndarray, before: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """A foot held by its heel: its pitch (F,) radians, toes down positive, the twist about the horizontal
+    axis ``across`` (3,) of its turn ``since`` (F, 4) it landed, and how far its toes are up (F,) radians,
+    coming down no faster than ``b.landing_rad_s`` from ``before`` a frame before the first, frames ``dt``
+    seconds apart (as the animation's where that has no limit)."""
+    pitch = 2.0 * np.arctan2(since[:, :3] @ across, since[:, 3])
+    pitch = (pitch + math.pi) % (2.0 * math.pi) - math.pi
+    if not math.isfinite(b.landing_rad_s):
+        return pitch, -pitch
+    return pitch, _slow_fall(-pitch[:, None], np.array([before]), b.landing_rad_s * dt)[:, 0]
 
 
 def _resume(n: int, drive, value, asked: dict, done: dict) -> None:
