@@ -853,7 +853,7 @@ class Locomotion(Controller):
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
-            touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1])
+            touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1], dt)
             touching = touched > 0  # (F, 2) held where it touched, before its blend's strike
             anchors_all[a0:a1] = np.where(touched > 0, touched, anchors_all[a0:a1])
             posed_all[a0:a1] |= touched == footing.BALL
@@ -1072,7 +1072,8 @@ class Locomotion(Controller):
                        end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
 
 
-def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray) -> np.ndarray:
+def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray,
+                 dt: float) -> np.ndarray:
     """(F, 2) what holds each swinging foot that has touched the ground before its blend's strike
     (:data:`~infuse.footing.ANKLE` or :data:`~infuse.footing.BALL`, 0 elsewhere), from ``anchors``
     (F, 2) (:func:`infuse.footing.anchors`) and the animated ankles and balls ``feet`` (F, 2, 2, 3)
@@ -1083,16 +1084,23 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     to its blend's strike (by the ball only while the ball is that low: a ball pinned in the air is no
     contact): a blend's swing that reaches the ground before its strike (a stop's shrinking or
     vanishing stride, a step on the spot) would otherwise slide the foot along the ground to where the
-    strike puts it."""
+    strike puts it. Not before it has been off the ground long enough for its pinning's correction to
+    fade (:data:`HOLD_S` and :data:`STEP_RELEASE_S`): held sooner, it stood where the correction left
+    it, short of its place (a foot held behind as the pelvis came over it, 30 cm)."""
     both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
     heel = both[:, :, 0] + np.stack([_heel_of(b, k, both[:, k, 1] - both[:, k, 0]) for k in range(2)], axis=1)
     by_heel = (heel[..., 1] <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
     sole = np.where(by_heel[..., None], heel, both[:, :, 1])  # the lower sole point
     lowest = sole[..., 1] - b.sole_floor
     free = anchors == footing.FREE
-    coming = free & (lowest[1:] < b.touch_m) & (lowest[1:] < lowest[:-1]) & made[:, None]
     f = len(anchors)
     idx = np.arange(f)[:, None]
+    # Frames off the ground (F, 2): from the swing's first frame, or carried from the last block.
+    starts = free & ~np.concatenate(((st.anchor == footing.FREE)[None], free[:-1]))
+    swung = np.maximum.accumulate(np.where(starts, idx, -1), axis=0)
+    swung = np.where(swung >= 0, idx - swung, idx + np.rint(np.minimum(st.free_s, 1e3) / dt)) + 1
+    coming = (free & (lowest[1:] < b.touch_m) & (lowest[1:] < lowest[:-1]) & made[:, None]
+              & (swung * dt >= HOLD_S + STEP_RELEASE_S - 1e-9))
     # Held from the first frame of its swing (its run of free frames, ``began``) coming down low (or
     # from the block's first, carried) to the swing's end (the blend's strike), by its lower sole
     # point: where the blend's foot rocks between heel and ball, it rolls over them.
