@@ -1025,7 +1025,16 @@ class Locomotion(Controller):
                             foot_heading, held_swivel = float(heading_now[-1]), float(held_off[-1])
                             turn[s:e] = quat.multiply(yaw(-held_off), turn[s:e])
                             reach = quat.rotate(turn[s:e], lever[s:e])
-                        goal[s:e] = pin - (reach if kind == footing.BALL else _heel_of(b, k, reach))
+                        if kind == footing.BALL:
+                            # Touching down by its ball, the ball goes down as the animation's does (never
+                            # held above it: a ball held where it first touched, the animation's foot
+                            # coming down on, held the foot up in the air and dropped it at the strike).
+                            held_at = np.tile(pin, (e - s, 1))
+                            held_at[:, 1] = np.minimum(pin[1], np.minimum.accumulate(np.where(touching[s:e, k], feet_pos[s:e, k, 1, 1], np.inf)))
+                            pin = held_at[-1].copy()
+                            goal[s:e] = held_at - reach
+                        else:
+                            goal[s:e] = pin - _heel_of(b, k, reach)
                         # The ankle at the animation's height; held by the ball for the pose's sake, no
                         # lower than keeps the ball at the height it took over at (the blend's leg, half
                         # standing and half swinging, would push it into the ground, and it would rise
