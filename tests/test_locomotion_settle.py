@@ -107,7 +107,8 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
     # strides of nothing (the feet side by side, 2 cm apart front to back on X Bot). Its last steps
     # landed where they touched, a foot short of its place (its correction to the pelvis still
     # fading) or stepping while the pelvis still came over the point it stops at: Bandai dataset-1
-    # masculinity on X Bot ended with the feet 20 cm apart 2 m ahead, 13 cm 4 m at 90 degrees.
+    # masculinity on X Bot ended with the feet 20 cm apart 2 m ahead, 13 cm 4 m at 90 degrees; with
+    # each foot stepping once at the end, 9 cm 2 m at 135 degrees (a foot out of reach stood there).
     import math
 
     from infuse.mapping import map_skeleton
@@ -119,7 +120,7 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
     pack = build_pack(import_bvh_folder(source, tmp_path / "d1-masc", name="d1-masc", pattern="dataset-1_*_masculinity_*.bvh"))
     xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
     mapping = map_skeleton(xbot.asset)
-    targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (6.0, 45.0)]
+    targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (6.0, 45.0), (2.0, 135.0)]
     rt = Runtime(fps=30)
     names = {}
     for d, a in targets:
@@ -133,5 +134,5 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
     for d, a in targets:
         apart, bend = ends[d, a, True]
         stance, stance_bend = ends[d, a, False]  # the pack's stance, the feet where its blend puts them
-        assert apart <= stance + 0.04, ((d, a), round(apart, 3), round(stance, 3))
+        assert apart <= stance + 0.03, ((d, a), round(apart, 3), round(stance, 3))
         assert bend <= stance_bend + 5.0, ((d, a), round(bend, 1), round(stance_bend, 1))

@@ -11,7 +11,8 @@ support phase at once. **Slow walking**: below the slowest walk the tessellation
 idle; instead the slowest straight walk plays at a slower cadence with shorter steps (both by the
 square root of the speed ratio). **Stops** (below :data:`STAND_FRACTION` of it, or braking for the
 end of a path): the feet keep stepping with strides shrinking to nothing until each has landed once
-more with the character nearly still, at the idle's stance and laid flat, then the idle fades in
+more (without an idle twice) with the pelvis over the point it stops at, at the idle's stance (else
+the slowest walk's, feet side by side) and laid flat, then the idle fades in
 (:func:`_clock`); turning on the spot steps the same way. **Root motion** is the weighted clips'
 velocities (so the realized speed is the requested one inside the pack's range), along the heading
 the steering asks for; the part of its turn the blend does not show is spun at the root. Each clip
@@ -92,6 +93,10 @@ SLOW_EPS = 1e-3
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
 STOP_CADENCE = 1.2
+#: Landings (both feet) with the pelvis still that end a stop of a pack without an idle (with one,
+#: two: the idle's stance fades in): each foot steps back under the body from wherever the stop left
+#: it, then once more at the stance.
+STOP_LANDINGS = 4
 CADENCE_RAMP = 3.0
 SETTLE_PHASE = 0.05
 #: Phase share over which a foot's stance share rises after strike and falls before toe off
@@ -295,7 +300,9 @@ class Locomotion(Controller):
         slowest = min(walks, key=lambda c: c.parameters["forward_speed"]).keys if walks else (0.0, 0.0, 1.0)
         # A stop clip begins at its gait phase, within a stride of where the plan has it begin.
         late = max(c.keys[2] - c.keys[0] for c in walks) if stopped else 0.0
-        return WalkPlan(frames * dt, frames * dt + (slowest[2] - slowest[0]) / STOP_CADENCE + SETTLE_S + late, st)
+        idle = any(c.role == "idle" for c in space.group("locomotion"))
+        steps = 0.5 * (2 if idle else STOP_LANDINGS) * (slowest[2] - slowest[0]) / STOP_CADENCE  # the stop's last steps
+        return WalkPlan(frames * dt, frames * dt + steps + SETTLE_S + late, st)
 
     def handover(self, state: dict) -> dict:
         """A walk following another goes on from its :class:`~.state.LocomotionState` (where it is, heading,
@@ -1731,8 +1738,9 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     the phase it is at.
     Stopping (below :data:`STAND_FRACTION`, or braking for the end of a path), the cadence does not
     fall below :data:`STOP_CADENCE` (reached at :data:`CADENCE_RAMP` per second) and the strides,
-    ``slow`` over the cadence, shrink to nothing, until each foot has landed once more with the
-    character nearly still (below :data:`STAND_FRACTION`): both then stand under the body; the phase holds in the double support
+    ``slow`` over the cadence, shrink to nothing, until each foot has landed once more (without an
+    idle twice, :data:`STOP_LANDINGS`) with the pelvis over the point it stops at (below
+    :data:`STILL_FRACTION`): both then stand under the body; the phase holds in the double support
     after that landing, ``settle_at(i)`` (2,) past a left (phase 0) or right (0.5) landing at frame i
     (see :func:`_settle_phases`; asked only where a stop holds), and the idle fades in over :data:`SETTLE_S`. Turning on the spot, it
     steps the same way and settles again once the turn is over."""
@@ -1774,7 +1782,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
                 # pelvis still comes over it would be left out of the stance, short of or past its place).
                 landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[a:e] < STILL_FRACTION)
                 count = st.landings + np.cumsum(landed)
-                ready = landed & (count >= 2)
+                ready = landed & (count >= (2 if idle else STOP_LANDINGS))
                 if ready.any():
                     j = int(np.argmax(ready))
                     strike = np.floor(2.0 * ph[j]) / 2.0  # the landing's phase: a left (whole) or right (half) strike
