@@ -6,10 +6,12 @@ about its ankle) about the held heel; then its ball, pinned where it was mid-sla
 foot up for three frames and it dropped to the ground in one. Measured with FK on the output."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import infuse
@@ -52,3 +54,43 @@ def test_a_foot_does_not_drop_to_the_ground_in_one_frame(walks):
             landing = lower[1:] < 0.01
             assert fall[landing].max(initial=0.0) <= MOST_DROP_CM / 100.0, 100.0 * fall[landing].max()
 
+
+
+#: Most skate (cm/m) of SmartBody male walking straight on KayKit's knight at its slowest (0.30 m/s):
+#: 1.81 with the heel keeping its hold through the stretch on the ball, 0.25 with it passed on.
+MOST_SLOW_SKATE_CM_M = 0.5
+#: Most travel (cm) of a planted sole point in one frame on the ground (within 0.5 cm of its lowest):
+#: 0.45 before (the ball sliding forward under the heel held as it rose).
+MOST_PLANTED_SLIDE_CM = 0.1
+
+
+def test_a_heel_held_while_its_toes_come_down_lets_go_as_the_heel_rises():
+    """A slow walk on short legs (SmartBody male on KayKit's knight at 0.30 m/s, its slowest there): the
+    foot's pitch, slowed as it rolls down about its heel, catches up with the animation's while the foot
+    is flat; from then on the ball holds it, and the heel rises about it. Kept by the heel through the
+    stretch on the ball, the heel was held as it rose and the ball slid forward along the ground."""
+    from infuse.metrics import foot_skate
+    from infuse.packs.importers import import_smartbody
+    from infuse.packs.walk_test import FPS, SETTLE_S
+
+    from wild_data import wild_file
+
+    knight = wild_file("sketchpunklabs-kaykit_char/res/anim/Med_General.glb")
+    with tempfile.TemporaryDirectory() as tmp:
+        pack = build_pack(import_smartbody(require_corpus() / "smartbody" / "behaviorsets" / "MaleLocomotion", Path(tmp) / "male", name="sb-male"))
+        character = infuse.Character("knight", infuse.load(knight))
+        space = next(iter(infuse_character(character, [pack]).spaces.values()))
+        [(motion, (g_rot, g_pos))], _ = _runtime_walks(character, character.mapping, space, [dict(speed=0.3, max_accel=50.0)], 5.0)
+    settle = int(SETTLE_S * FPS)
+    found = foot_contacts(motion, character.mapping, fk=(g_rot, g_pos))
+    base = character.mapping.indices(character.skeleton)["base"]
+    walked = dataclasses.replace(found, flags=found.flags[settle:], lowest=found.lowest[settle:])
+    skate = foot_skate(g_pos[settle:], walked, base).per_metre
+    assert skate <= MOST_SLOW_SKATE_CM_M, skate
+    sole = sole_positions(found, g_pos[:, found.points])[settle:]  # (F, P, 3)
+    low = sole[..., 1] - sole[..., 1].min(axis=0) < 0.005
+    planted = walked.flags & low
+    slide = np.linalg.norm(np.diff(sole[..., [0, 2]], axis=0), axis=-1)  # (F - 1, P) metres
+    held = planted[1:] & planted[:-1]
+    assert held.any()
+    assert slide[held].max() <= MOST_PLANTED_SLIDE_CM / 100.0, 100.0 * slide[held].max()
