@@ -136,3 +136,58 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
         stance, stance_bend = ends[d, a, False]  # the pack's stance, the feet where its blend puts them
         assert apart <= stance + 0.03, ((d, a), round(apart, 3), round(stance, 3))
         assert bend <= stance_bend + 5.0, ((d, a), round(bend, 1), round(stance_bend, 1))
+
+
+def test_a_walk_to_a_target_comes_to_rest_standing_up(tmp_path):
+    # Without an idle a walk stands in its slowest walk's double support with strides of nothing: the
+    # feet side by side under a pelvis as low as between two strides apart, the knees bent 40-45
+    # degrees on X Bot (Bandai dataset-1 masculinity, the takes' stance legs 10-13), the pelvis 3-5 cm
+    # below the takes' straightest stance.
+    import math
+
+    import numpy as np
+
+    from infuse.mapping import map_skeleton
+    from infuse.packs import build_pack, import_bvh_folder, space_on
+    from infuse.runtime import Runtime, controller
+
+    require_corpus()
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path / "d1-masc", name="d1-masc", pattern="dataset-1_*_masculinity_*.bvh"))
+    xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
+    mapping = map_skeleton(xbot.asset)
+    idx = mapping.indices(xbot.skeleton)
+    legs = [[idx[f"{s}_{j}"] for j in ("hip", "knee", "ankle")] for s in "lr"]
+    targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (2.0, 135.0)]
+    rt = Runtime(fps=30)
+    names = {}
+    for d, a in targets:
+        names[d, a] = rt.add_character(xbot, name=f"w{d:g}-{a:g}", mapping=mapping)
+        rt.activate(names[d, a], controller("locomotion", pack=pack, speed=1.3,
+                                            target=(d * math.sin(math.radians(a)), d * math.cos(math.radians(a)))), 0.0)
+    rt.run(10.0)
+
+    def bends(pos):  # (F, 2) each knee's bend (degrees off straight) in positions (F, J, 3)
+        out = []
+        for hip, knee, ankle in legs:
+            up, down = pos[:, hip] - pos[:, knee], pos[:, ankle] - pos[:, knee]
+            cos = (up * down).sum(-1) / np.linalg.norm(up, axis=-1) / np.linalg.norm(down, axis=-1)
+            out.append(180.0 - np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+        return np.stack(out, axis=-1)
+
+    # The takes' straightest stance on X Bot: the slowest straight walk's frames with a foot planted,
+    # each leg at its hip farthest from its ankle, and the pelvis's height there.
+    walks = [c for c in space_on(rt.rig(names[targets[0]]), pack).group("locomotion")
+             if c.parameters["forward_speed"] > 0.0 and abs(c.parameters["lateral_speed"]) + abs(c.parameters["turn_rate"]) < 1e-3]
+    slowest = min(walks, key=lambda c: c.parameters["forward_speed"])
+    pos = infuse.motion_fk(slowest.motion)[1]
+    planted = np.asarray(slowest.contacts, dtype=bool)
+    reach = np.where(planted, np.stack([np.linalg.norm(pos[:, h] - pos[:, a], axis=-1) for h, _, a in legs], axis=-1), -1.0)
+    frames = reach.argmax(axis=0)
+    stance_bends = bends(pos)[frames, [0, 1]]
+    stance_height = float(pos[frames, idx["base"], 1].mean())
+    for key, name in names.items():
+        end = infuse.motion_fk(rt.motion(name))[1][-1:]
+        bend, height = bends(end)[0], float(end[0, idx["base"], 1])
+        assert (bend <= stance_bends + 10.0).all(), (key, bend.round(1), stance_bends.round(1))
+        assert abs(height - stance_height) <= 0.02, (key, round(height, 3), round(stance_height, 3))

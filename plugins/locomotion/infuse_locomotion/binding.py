@@ -97,6 +97,8 @@ class LocomotionBinding:
     Touching down (:func:`~.controller._touch_downs`): ``sole_floor`` (2,) the height (m) each foot's sole
     rests at in the clips (its ball's, planted), ``touch_m`` how near it a swinging foot coming down
     counts as landed (m) if slower than ``landing_m_s`` (m/s).
+    Without an idle, ``stand_height`` the pelvis's height (m) a walk comes to rest at: the legs as
+    straight as the slowest walk's straightest stance leg (:func:`~.controller._stand_height`; 0 with an idle).
     """
 
     space: BlendSpace
@@ -138,3 +140,4 @@ class LocomotionBinding:
     sole_floor: np.ndarray = field(default_factory=lambda: np.zeros(2))
     touch_m: float = 0.0
     landing_rad_s: float = math.inf
+    stand_height: float = 0.0

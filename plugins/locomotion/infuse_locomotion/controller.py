@@ -13,7 +13,8 @@ square root of the speed ratio). **Stops** (below :data:`STAND_FRACTION` of it, 
 end of a path): the feet keep stepping with strides shrinking to nothing until each has landed once
 more (without an idle twice) with the pelvis over the point it stops at, at the idle's stance (else
 the slowest walk's, feet side by side) and laid flat, then the idle fades in
-(:func:`_clock`); turning on the spot steps the same way. **Root motion** is the weighted clips'
+(:func:`_clock`; without an idle the pelvis rises instead, to stand on legs as straight as the takes'
+stance legs: :func:`_stand_height`); turning on the spot steps the same way. **Root motion** is the weighted clips'
 velocities (so the realized speed is the requested one inside the pack's range), along the heading
 the steering asks for; the part of its turn the blend does not show is spun at the root. Each clip
 contributes its pelvis motion relative to its own straight or circular path.
@@ -107,6 +108,10 @@ SETTLE_MARGIN = 0.005
 SPIN_STEP = 0.15
 #: Seconds over which a stopped character fades into the pack's idle.
 SETTLE_S = 0.5
+#: Share of the leg's full length a hip stands above its ankle at most, come to rest without an idle
+#: (:func:`_stand_height`): short of :data:`infuse.footing.REACH`, beyond which a foot held by its ball
+#: would have its heel raised, with room for a foot a few centimetres off straight under the hip.
+STAND_REACH = 0.985
 #: Share of the way from foot flat to heel off at which the pinned point passes from the ankle to the ball.
 HANDOVER = 0.5
 #: How near its resting height (leg lengths) the lower of a swinging foot's sole points, coming down,
@@ -642,6 +647,11 @@ class Locomotion(Controller):
         # facing frame, wherever joint 0 sits, is taken out by ``settle``.
         pelvis = root if b.pelvis == 0 else chain_fk(b.skeleton, rot, root, jt, [b.pelvis])[1][:, 0]  # joint 0: its root translation
         centre = pelvis * np.array([1.0, 0.0, 1.0]) * settle[:, None]
+        if b.stand_height > 0.0 and rest.any():
+            # Coming to rest without an idle, the pelvis rises to the takes' standing height (the stop's
+            # held double support had the knees bent 33-45 degrees): the legs, solved to the feet held
+            # down, straighten as the takes' stance legs.
+            centre[:, 1] = rest * (pelvis[:, 1] - b.stand_height)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
         forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
@@ -1320,6 +1330,7 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         played_motions[c.name], played_phases[c.name] = swivels.lift_swivels(sk, m, legs, grounded, played_facing[c.name], leg_length)
     body = np.nonzero(limbs == 0)[0]
     walk_speeds, walk_cadences = straight_walk(space, clips)
+    stand_height = 0.0 if idle.any() or len(legs) != 2 else _stand_height(sk, legs, motions[int(np.argmax(slowest))], clips[int(np.argmax(slowest))], pelvis)
     two = len(legs) == 2  # the joints the stride and the pinning work on, both legs at once
     balls = np.array([leg[2] if leg[3] is None else leg[3] for leg in legs] if two else [], dtype=np.int64)
     return LocomotionBinding(
@@ -1339,7 +1350,30 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
         pin_joints=[j for leg, ball in zip(legs, balls.tolist())
                     for j in (*leg[:3], leg[0] if sk.parents[leg[0]] < 0 else int(sk.parents[leg[0]]), ball)],
         walk_speeds=walk_speeds, walk_cadences=walk_cadences, heel_levers=heel_levers, sole_floor=sole_floor,
-        touch_m=TOUCH * leg_length, landing_rad_s=_landing_rate(sk, legs, [mv for mv, e in zip(motions, events) if e is not None], leg_length))
+        touch_m=TOUCH * leg_length, landing_rad_s=_landing_rate(sk, legs, [mv for mv, e in zip(motions, events) if e is not None], leg_length),
+        stand_height=stand_height)
+
+
+def _stand_height(sk, legs, motion, clip, pelvis: int) -> float:
+    """The height (m, above the clips' ground) the ``pelvis`` joint stands at over legs as straight as
+    the straightest stance leg of a walk's canonical ``motion`` (its ``clip``'s cycle): each leg's hip
+    that far (its hip-to-ankle distance, at most :data:`STAND_REACH` of the leg) straight above its
+    ankle's lowest height, the pelvis as high above the hip as on that frame; the mean of the two legs,
+    0 where no foot is planted."""
+    cycle = slice(0, max(motion.num_frames - 1, 1))
+    planted = np.asarray(clip.contacts[cycle], dtype=bool)
+    if not planted.any():
+        return 0.0
+    _, pos = chain_fk(sk, motion.local_rotations[cycle], motion.root_translations[cycle],
+                      None if motion.joint_translations is None else motion.local_translations()[cycle],
+                      [pelvis, legs[0][0], legs[1][0], legs[0][2], legs[1][2]])
+    reach = np.where(planted, np.linalg.norm(pos[:, 1:3] - pos[:, 3:5], axis=-1), -np.inf)  # (F, 2)
+    straightest = np.argmax(reach, axis=0)
+    rest = sk.rest_global_positions
+    most = [STAND_REACH * (np.linalg.norm(rest[leg[1]] - rest[leg[0]]) + np.linalg.norm(rest[leg[2]] - rest[leg[1]])) for leg in legs]
+    heights = [pos[:, 3 + k, 1].min() + min(reach[f, k], most[k]) + pos[f, 0, 1] - pos[f, 1 + k, 1]
+               for k, f in enumerate(straightest.tolist()) if planted[:, k].any()]
+    return float(np.mean(heights))
 
 
 def _tip(sk, joint: int) -> np.ndarray | None:
