@@ -980,10 +980,13 @@ class Locomotion(Controller):
                                     e = s + int(np.argmin(lagging))
                                     bounds.insert(i, e)
                         if kind != prev and prev == footing.FREE:
-                            # The anchor lands: it stays where the corrected foot puts it now.
+                            # The anchor lands: it stays where the corrected foot puts it now. A ball let go
+                            # that has not left the ground since stays where it is held (its offset is from the
+                            # animation's ball a frame ago: added to this frame's, the foot moved on by the
+                            # animation's step, 3 cm in a frame as a turn on the spot passed to a start).
                             fade = 1.0 - footing.smoothstep(released / RELEASE_S)
                             left = _share_of(left, fade)
-                            pin = feet_pos[s, k, 1] + ball_offset * fade
+                            pin = (feet_pos[s, k, 1] if released > 0.0 else before[s, k, 1]) + ball_offset * fade
                             if kind == footing.ANKLE:  # back from the ball to the heel's sole, along the corrected foot
                                 reach = quat.rotate(left, lever[s])
                                 pin = pin - reach + _heel_of(b, k, reach)
