@@ -200,3 +200,43 @@ def test_a_heel_joint_hanging_from_the_toes_stays_with_the_foot():
     heels = g_pos[:, [index["JtHeelLf"], index["JtHeelRt"]], 1]
     assert heels.min() > -0.01, heels.min()  # -0.040 before
     assert g_pos[:, leg_joints(motion.skeleton, mapping), 1].min() > -0.01  # no joint of the legs under the floor
+
+
+def test_blend_weights_do_not_jump_where_the_request_leaves_the_tessellation(xbot, tmp_path):
+    """Bandai dataset-2 normal (straight walks at 1.25 and 1.37 m/s, a walk turning left at 1.09):
+    slowing toward a target below the slowest straight walk, the request left the tessellation and was
+    brought back to the turn rate it holds there, and the turning walk entered the blend at a third in
+    one frame: the head turned 17.8 degrees in that frame on X Bot (the takes: 3.2). The moving clips'
+    weights now go over in equal steps (4.5 degrees)."""
+    data = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-2/data")
+    pack = load_pack(build_pack(import_bvh_folder(data, tmp_path / "pack", name="normal", pattern="dataset-2_*_normal_*.bvh")).manifest.path)
+    character = as_character(xbot)
+    infusion = infuse_character(character, [pack])
+    character.mapping = infusion.mapping
+    ((motion, fk),), _ = _runtime_walks(character, infusion.mapping, next(iter(infusion.spaces.values())),
+                                        [dict(speed=1.3, target=(4.0 * np.sin(np.pi / 4), 4.0 * np.cos(np.pi / 4)))], 8.0)
+    walk = measure_walk("to 4 m at 45 deg", motion, infusion.mapping, takes_at(takes(pack), 1.3), fk=fk)
+    assert walk.pop_ratio < 3.0, walk  # 5.6 before (the head)
+    head = fk[0][:, infusion.mapping.indices(motion.skeleton)["skullbase"]]
+    assert np.degrees(quat.angle_between(head[:-1], head[1:])).max() < 8.0  # 17.8 before
+
+
+def test_eased_blend_weights_step_at_most_the_rate_whatever_the_blocks():
+    from infuse_locomotion.controller import _eased
+
+    target = np.zeros((40, 3))
+    target[:10, 0] = np.linspace(1.0, 0.8, 10)  # slow enough to follow
+    target[:10, 2] = 1.0 - target[:10, 0]
+    target[10:, 1] = 1.0  # a jump to the second clip
+    target[25:, 1], target[25:, 2] = 0.5, 0.5
+    step = 0.1
+    whole = _eased(target, None, step)
+    assert np.allclose(whole.sum(axis=1), 1.0) and (whole >= 0.0).all()
+    assert np.abs(np.diff(whole, axis=0)).max() <= step + 1e-12
+    assert np.array_equal(whole[:10], target[:10]) and np.array_equal(whole[-5:], target[-5:])  # caught up
+    assert np.abs(whole[10] - whole[9]).max() == pytest.approx(step)  # eased, not jumped
+    parts, before = [], None
+    for a, e in ((0, 7), (7, 12), (12, 13), (13, 40)):
+        parts.append(_eased(target[a:e], before, step))
+        before = parts[-1][-1]
+    assert np.array_equal(np.concatenate(parts), whole)  # the same to the bit in blocks

@@ -91,6 +91,11 @@ STILL_FRACTION = 0.01
 SLOW_RAMP = 0.1
 #: Share of the slowest walk always mixed into the moving clips' weights (its steps' events stay in the blend).
 SLOW_EPS = 1e-3
+#: Seconds the moving clips' weights take at least to go all the way from one blend to another: a
+#: request crossing the edge of the examples' tessellation (a speed below the slowest straight walk
+#: brought back to the turn rate the tessellation holds there) changes them as far in one frame, and
+#: a clip entering at a third of the blend turned the head 18-24 degrees in that frame.
+BLEND_EASE_S = 0.4
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
 STOP_CADENCE = 1.2
@@ -525,7 +530,7 @@ class Locomotion(Controller):
         clip hands over; after a start, the gait's phase from the clip's last strikes (left at 0, right
         at 0.5), walking; after a turn on the spot, standing, to decide again; after a stop, standing there."""
         st.go_on_from(transitions.end_state(clip, place, fps))
-        st.playing = None
+        st.playing, st.blend = None, None
         if clip.transition != "start":  # standing: after a turn it decides again, after a stop it is there
             st.settled, st.idle_frames_left, st.landings, st.to_go = True, 0.0, -1, -1.0
             st.chooser = None if clip.transition == "turn" else id(self)
@@ -617,7 +622,11 @@ class Locomotion(Controller):
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
-        wm = _moving(w, b.idle, b.slowest)
+        target = _moving(w, b.idle, b.slowest)
+        wm = _eased(target, st.blend, dt / BLEND_EASE_S)
+        st.blend = wm[-1].copy()
+        eased = wm - target  # the turn the eased blend shows more than the asked one's
+        vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if b.idle.any() else slow)
         period = np.maximum(wm @ b.durations, 1e-3)
         phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
                                                         lambda i: _settle_phases(b, wm[i:i + 1])[0], pace)
@@ -1723,6 +1732,28 @@ def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
     moving = wm.sum(axis=1)
     near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
     return near * (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * slowest[None]
+
+
+def _eased(target: np.ndarray, before: np.ndarray | None, step: float) -> np.ndarray:
+    """(F, N) blend weights following ``target`` (F, N) from ``before`` (N,) (the last frame's; None: the first target),
+    each frame moving straight toward its target, no weight by more than ``step``: where the target jumps,
+    the blend goes over in equal steps. Frames where it keeps up are the target's, to the bit (so every
+    partition of the frames into blocks gives the same weights); the frame loop runs only while it lags."""
+    if before is None or before.shape != target.shape[1:]:
+        before = target[0]
+    prev = np.concatenate((before[None], target[:-1]))
+    lag = np.abs(target - prev).max(axis=1) > step
+    if not lag.any():
+        return target
+    out = target.copy()
+    first = int(np.argmax(lag))
+    x = out[first - 1] if first else before
+    for i in range(first, len(target)):
+        d = target[i] - x
+        far = float(np.abs(d).max())
+        x = out[i] if far <= step else x + d * (step / far)
+        out[i] = x
+    return out
 
 
 def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
