@@ -77,6 +77,11 @@ HOLD_S = 0.1
 #: ground until it has risen this share of the leg (where the skate measure stops counting it), rising
 #: with the animation: the blend's swing, under way, would carry it along just above the ground.
 SHARE_CLEAR = 0.03
+#: A released ball lifts before it travels: until it is LIFT_CLEAR_M above where it was let go, it rises
+#: at least one part in LIFT_TRAVEL of how far it has moved from there along the ground (the share of its
+#: correction still held): a take's ball pushing off, its drag going on just above the ground, slid there.
+LIFT_CLEAR_M = 0.01
+LIFT_TRAVEL = 2.0
 #: Height of the arc a released foot travels back to the animation over, per metre it travels.
 STEP_ARC = 0.25
 #: Below this fraction of the slowest walk's speed the character stops (and fades into the idle).
@@ -956,6 +961,10 @@ class Locomotion(Controller):
                             # A foot far from where the animation has it steps there over an arc, not along the
                             # ground (a foot let go late in its swing, starting to walk after a turn on the spot).
                             goal[s:e, 1] += STEP_ARC * 4.0 * fade * (1.0 - fade) * np.hypot(ball_offset[:, 0], ball_offset[:, 2])
+                            # Rising, it lifts before it travels (LIFT_TRAVEL): the take's ball may still drag on.
+                            ball = goal[s:e] + hang  # (n, 3) the released ball
+                            rise_m = np.minimum(np.hypot(ball[:, 0] - let_go[0], ball[:, 2] - let_go[2]) / LIFT_TRAVEL, LIFT_CLEAR_M)
+                            goal[s:e, 1] += np.where(up, fade * np.maximum(rise_m - (ball[:, 1] - let_go[1]), 0.0), 0.0)
                             # Off the ground, kept within reach as a foot without a ball is (below): a ball let go
                             # far behind (a long foot's, pinned where it landed) held the leg straight toward it,
                             # and the knee bent by 18 degrees and the hip turned by 46 in the frame it came back.
