@@ -186,8 +186,14 @@ def test_a_walk_to_a_target_comes_to_rest_standing_up(tmp_path):
     frames = reach.argmax(axis=0)
     stance_bends = bends(pos)[frames, [0, 1]]
     stance_height = float(pos[frames, idx["base"], 1].mean())
+    # Each ball's height planted in that walk (median of its planted frames): the feet stand flat on
+    # the ground as they lie in it. Laid as they lie in the walk back (the slowest clip stepping, its
+    # feet landing by the toes), the left ball stood at 1.5 cm and the right at 6.1 (the takes' 4.5, 4.1).
+    balls = [idx[f"{s}_forefoot"] for s in "lr"]
+    planted_balls = np.array([np.median(pos[planted[:, k], balls[k], 1]) for k in range(2)])
     for key, name in names.items():
         end = infuse.motion_fk(rt.motion(name))[1][-1:]
         bend, height = bends(end)[0], float(end[0, idx["base"], 1])
         assert (bend <= stance_bends + 10.0).all(), (key, bend.round(1), stance_bends.round(1))
         assert abs(height - stance_height) <= 0.02, (key, round(height, 3), round(stance_height, 3))
+        assert (np.abs(end[0, balls, 1] - planted_balls) <= 0.015).all(), (key, end[0, balls, 1].round(3), planted_balls.round(3))

@@ -1318,10 +1318,12 @@ def _prepare(space, clips, sk, legs, pelvis: int = 0) -> LocomotionBinding:
     else:
         events = [foot_events(c) if c.role != "idle" else None for c in clips]
     # The idle's feet (ankle and ball rotations, facing frame): how a stop lays them down. Without an
-    # idle, each foot as it lies flat in the slowest stepping walk (midway from foot flat to heel off).
+    # idle, each foot as it lies flat in the slowest straight walk forward, the one stops play (midway
+    # from foot flat to heel off; else the slowest stepping clip): a walk back's feet land by the toes.
     # The same poses give the heights the feet stand at: no foot goes lower (:func:`_keep_feet_up`).
     stance_feet = floors = None
-    walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, speeds)) if (e := events[i]) is not None and not idle[i]]
+    walking = [(int(i), e) for i in np.argsort(np.where(idle, np.inf, np.where(slowest > 0.0, -1.0, speeds)))
+               if (e := events[i]) is not None and not idle[i]]
     if len(legs) == 2 and (idle.any() or walking):
         if idle.any():
             m, frames = motions[int(np.argmax(idle))], np.zeros(2, dtype=np.int64)
