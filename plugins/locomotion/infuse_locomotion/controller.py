@@ -1057,9 +1057,16 @@ class Locomotion(Controller):
                             heading_now = np.arctan2(reach[:, 0], reach[:, 2])
                             swivel = np.diff(np.concatenate(([foot_heading], heading_now)))
                             if kind != prev:
+                                # From the ball, the swivel counts from the corrected foot a frame ago: the
+                                # animation's turn in the frame the heel takes over swept the ball 1 cm.
                                 swivel[0], held_swivel = 0.0, 0.0
+                                if prev == footing.BALL:
+                                    was_reach = quat.rotate(left, before[s, k, 1] - before[s, k, 0])
+                                    swivel[0] = heading_now[0] - math.atan2(was_reach[0], was_reach[2])
                             swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
-                            held_off = held_swivel + np.cumsum(np.where(contact[a0 + s:a0 + e, k, 1] > 0.5, swivel, 0.0))
+                            # The ball is down where the blend's is, and where the foot touched down before its strike.
+                            down = (contact[a0 + s:a0 + e, k, 1] > 0.5) | touching[s:e, k]
+                            held_off = held_swivel + np.cumsum(np.where(down, swivel, 0.0))
                             foot_heading, held_swivel = float(heading_now[-1]), float(held_off[-1])
                             turn[s:e] = quat.multiply(yaw(-held_off), turn[s:e])
                             reach = quat.rotate(turn[s:e], lever[s:e])
