@@ -230,13 +230,20 @@ def test_eased_blend_weights_step_at_most_the_rate_whatever_the_blocks():
     target[10:, 1] = 1.0  # a jump to the second clip
     target[25:, 1], target[25:, 2] = 0.5, 0.5
     step = 0.1
-    whole = _eased(target, None, step)
-    assert np.allclose(whole.sum(axis=1), 1.0) and (whole >= 0.0).all()
-    assert np.abs(np.diff(whole, axis=0)).max() <= step + 1e-12
-    assert np.array_equal(whole[:10], target[:10]) and np.array_equal(whole[-5:], target[-5:])  # caught up
+    outside = np.zeros(40, bool)
+    outside[10] = True  # the jump to the second clip is the request's leaving the tessellation
+    whole, held = _eased(target, None, step, ~outside, False)
+    assert np.allclose(whole.sum(axis=1), 1.0) and (whole >= 0.0).all() and not held
+    assert np.abs(np.diff(whole[:25], axis=0)).max() <= step + 1e-12
+    assert np.array_equal(whole[:10], target[:10]) and np.array_equal(whole[20:], target[20:])  # caught up
+    assert np.abs(whole[25] - whole[24]).max() == pytest.approx(0.5)  # a jump inside is the request's own
     assert np.abs(whole[10] - whole[9]).max() == pytest.approx(step)  # eased, not jumped
+    assert np.abs(whole[12] - whole[11]).max() == pytest.approx(step)  # inside again, still catching up
     parts, before = [], None
     for a, e in ((0, 7), (7, 12), (12, 13), (13, 40)):
-        parts.append(_eased(target[a:e], before, step))
-        before = parts[-1][-1]
+        part, held = _eased(target[a:e], before, step, ~outside[a:e], held)
+        parts.append(part)
+        before = part[-1]
     assert np.array_equal(np.concatenate(parts), whole)  # the same to the bit in blocks
+    inside, _ = _eased(target, None, step, np.ones(40, bool), False)
+    assert np.array_equal(inside, target)  # inside the tessellation the blend follows the request as asked

@@ -96,10 +96,11 @@ STILL_FRACTION = 0.01
 SLOW_RAMP = 0.1
 #: Share of the slowest walk always mixed into the moving clips' weights (its steps' events stay in the blend).
 SLOW_EPS = 1e-3
-#: Seconds the moving clips' weights take at least to go all the way from one blend to another: a
-#: request crossing the edge of the examples' tessellation (a speed below the slowest straight walk
-#: brought back to the turn rate the tessellation holds there) changes them as far in one frame, and
-#: a clip entering at a third of the blend turned the head 18-24 degrees in that frame.
+#: Seconds the moving clips' weights take at least to go all the way from one blend to another where
+#: the request lies outside the examples' tessellation: brought back to its nearest point there (a
+#: speed below the slowest straight walk blended from a slower turning walk), they change far faster
+#: with the request than inside, and a clip entering at a third of the blend in one frame turned the
+#: head 18-24 degrees (as far again coming back inside). Inside, the blend follows the request as asked.
 BLEND_EASE_S = 0.4
 #: Least cadence factor of the steps that end a stop or turn on the spot, how fast it is reached
 #: (per second), and the phase past the last landing at which they end (double support, both feet down).
@@ -600,7 +601,7 @@ class Locomotion(Controller):
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
         speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
-        w, slow = yield Ask(_bound_weights, (id(b),), (b,), (speed, direction, turn))
+        w, slow, inside = yield Ask(_bound_weights, (id(b),), (b,), (speed, direction, turn))
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
         vf, vl = speed * np.cos(direction), speed * np.sin(direction)
@@ -628,7 +629,7 @@ class Locomotion(Controller):
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
         # cadence, stays about constant with speed), and show the idle only when nearly standing.
         target = _moving(w, b.idle, b.slowest)
-        wm = _eased(target, st.blend, dt / BLEND_EASE_S)
+        wm, st.blend_held = _eased(target, st.blend, dt / BLEND_EASE_S, inside, st.blend_held)
         st.blend = wm[-1].copy()
         eased = wm - target  # the turn the eased blend shows more than the asked one's
         vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if b.idle.any() else slow)
@@ -1209,7 +1210,7 @@ class Ask(NamedTuple):
     rows: tuple
 
 
-def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_weights` in the pack's locomotion blend space as bound in ``b``."""
     return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
 
@@ -1713,9 +1714,10 @@ def _slowest_towards(velocities: np.ndarray, idle: np.ndarray, direction) -> np.
     return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
 
 
-def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, direction, turn) -> tuple[np.ndarray, np.ndarray]:
+def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blend weights (F, N) in the locomotion blend ``space`` (examples ``idle`` (N,) bool, with
-    ``velocities`` (N, 3), speed ``limit``) for the requests (F,) and the moving share (F,) of the slowest walk's speed:
+    ``velocities`` (N, 3), speed ``limit``) for the requests (F,), the moving share (F,) of the slowest walk's speed
+    and (F,) flags of the requests inside the tessellation:
     where the full request lies outside the tessellation, its turn rate is the nearest one the
     tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
@@ -1739,7 +1741,7 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
             w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
     if idle.any():
         slow = np.clip(1.0 - w[:, idle].sum(axis=1), 0.0, 1.0)
-    return w, slow
+    return w, slow, inside
 
 
 def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
@@ -1752,26 +1754,35 @@ def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
     return near * (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * slowest[None]
 
 
-def _eased(target: np.ndarray, before: np.ndarray | None, step: float) -> np.ndarray:
-    """(F, N) blend weights following ``target`` (F, N) from ``before`` (N,) (the last frame's; None: the first target),
-    each frame moving straight toward its target, no weight by more than ``step``: where the target jumps,
-    the blend goes over in equal steps. Frames where it keeps up are the target's, to the bit (so every
-    partition of the frames into blocks gives the same weights); the frame loop runs only while it lags."""
+def _eased(target: np.ndarray, before: np.ndarray | None, step: float, inside: np.ndarray,
+           held: bool) -> tuple[np.ndarray, bool]:
+    """(F, N) blend weights following ``target`` (F, N) from ``before`` (N,) (the last frame's; None: the first
+    target), and whether the frame after the last is held too. A frame whose request and the one before lie
+    inside the tessellation (``inside`` (F,) bool; the one before the first: not ``held``) takes its target
+    while the blend kept up; any other moves straight toward its target, no weight by more than ``step``:
+    where the target jumps as the request leaves, lies outside or comes back into the tessellation, the blend
+    goes over in equal steps until it has caught up. Frames where it keeps up are the target's, to the bit (so
+    every partition of the frames into blocks gives the same weights); the frame loop runs only while it lags."""
     if before is None or before.shape != target.shape[1:]:
-        before = target[0]
+        before, held = target[0], False
+    free = inside & np.concatenate(([True], inside[:-1]))
     prev = np.concatenate((before[None], target[:-1]))
-    lag = np.abs(target - prev).max(axis=1) > step
-    if not lag.any():
-        return target
+    jump = (np.abs(target - prev).max(axis=1) > step) & ~free
+    if not held and not jump.any():
+        return target, not inside[-1]
     out = target.copy()
-    first = int(np.argmax(lag))
+    first = 0 if held else int(np.argmax(jump))
     x = out[first - 1] if first else before
+    lagging = held
     for i in range(first, len(target)):
+        if not lagging and not jump[i:].any():
+            break  # caught up, and no jump ahead: the rest is the target's
         d = target[i] - x
         far = float(np.abs(d).max())
-        x = out[i] if far <= step else x + d * (step / far)
+        lagging = far > step and not (free[i] and not lagging)
+        x = x + d * (step / far) if lagging else out[i]
         out[i] = x
-    return out
+    return out, lagging or not inside[-1]
 
 
 def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
@@ -1784,7 +1795,7 @@ def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
     slowest = np.zeros(len(clips))
     slowest[_slowest_walk(clips)] = 1.0
     ahead = np.zeros(len(grid))
-    w, slow = _weights(space, idle, velocities, limit, grid, ahead, ahead)
+    w, slow, _ = _weights(space, idle, velocities, limit, grid, ahead, ahead)
     durations = np.array([c.keys[2] - c.keys[0] for c in clips])
     return grid, pacing.straight_cadences(_moving(w, idle, slowest) @ durations, slow)
 

@@ -54,7 +54,9 @@ class LocomotionState(SteeringState):
       idle's fading share a frame earlier, ``clear`` (2,) let go by it (its ball held along the ground
       until clear of it); ``touched`` (2,) what holds a
       swinging foot that has touched the ground before its strike (:func:`~.controller._touch_downs`; 0: none);
-    - ``blend`` (N,) the moving clips' weights a frame earlier (None: none yet; :func:`~.controller._eased`);
+    - ``blend`` (N,) the moving clips' weights a frame earlier (None: none yet; :func:`~.controller._eased`),
+      ``blend_held`` whether the next frame's may move only at the eased rate (they lag the asked ones, or the request
+      lies outside the tessellation);
     - ``warned``: a speed the pack cannot realize has been reported.
     """
 
@@ -94,6 +96,7 @@ class LocomotionState(SteeringState):
     across: np.ndarray = field(default_factory=lambda: _feet(3))
     foot_turn: np.ndarray = field(default_factory=_unturned)
     blend: np.ndarray | None = None
+    blend_held: bool = False
     warned: bool = False
 
     def restore(self, saved: LocomotionState) -> None:
