@@ -85,6 +85,20 @@ def test_coming_to_rest_is_the_same_in_blocks_of_any_size(pack):
     assert np.abs(out[0] - out[1]).max() < 1e-6
 
 
+@pytest.fixture(scope="module")
+def masculinity_on_xbot(tmp_path_factory):
+    """(pack, X Bot character, its mapping): the Bandai dataset-1 masculinity takes (no idle) built as a pack."""
+    from infuse.mapping import map_skeleton
+    from infuse.packs import build_pack, import_bvh_folder
+
+    require_corpus()
+    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
+    pack = build_pack(import_bvh_folder(source, tmp_path_factory.mktemp("packs") / "d1-masc", name="d1-masc",
+                                        pattern="dataset-1_*_masculinity_*.bvh"))
+    xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
+    return pack, xbot, map_skeleton(xbot.asset)
+
+
 def _end_stance(motion, mapping, skeleton):
     """The feet's distance front to back (m, ankles, along the facing from the hips) and the knees'
     bend (degrees, hip-knee-ankle off straight) at a motion's last frame, by FK."""
@@ -102,7 +116,7 @@ def _end_stance(motion, mapping, skeleton):
     return apart, max(bends)
 
 
-def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
+def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(masculinity_on_xbot):
     # A pack without an idle stands in its held stance: its blend at the stop's double support with
     # strides of nothing (the feet side by side, 2 cm apart front to back on X Bot). Its last steps
     # landed where they touched, a foot short of its place (its correction to the pelvis still
@@ -111,15 +125,9 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
     # each foot stepping once at the end, 9 cm 2 m at 135 degrees (a foot out of reach stood there).
     import math
 
-    from infuse.mapping import map_skeleton
-    from infuse.packs import build_pack, import_bvh_folder
     from infuse.runtime import Runtime, controller
 
-    require_corpus()
-    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
-    pack = build_pack(import_bvh_folder(source, tmp_path / "d1-masc", name="d1-masc", pattern="dataset-1_*_masculinity_*.bvh"))
-    xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
-    mapping = map_skeleton(xbot.asset)
+    pack, xbot, mapping = masculinity_on_xbot
     targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (6.0, 45.0), (2.0, 135.0)]
     rt = Runtime(fps=30)
     names = {}
@@ -138,7 +146,7 @@ def test_a_walk_to_a_target_ends_with_the_feet_side_by_side(tmp_path):
         assert bend <= stance_bend + 5.0, ((d, a), round(bend, 1), round(stance_bend, 1))
 
 
-def test_a_walk_to_a_target_comes_to_rest_standing_up(tmp_path):
+def test_a_walk_to_a_target_comes_to_rest_standing_up(masculinity_on_xbot):
     # Without an idle a walk stands in its slowest walk's double support with strides of nothing: the
     # feet side by side under a pelvis as low as between two strides apart, the knees bent 40-45
     # degrees on X Bot (Bandai dataset-1 masculinity, the takes' stance legs 10-13), the pelvis 3-5 cm
@@ -147,15 +155,10 @@ def test_a_walk_to_a_target_comes_to_rest_standing_up(tmp_path):
 
     import numpy as np
 
-    from infuse.mapping import map_skeleton
-    from infuse.packs import build_pack, import_bvh_folder, space_on
+    from infuse.packs import space_on
     from infuse.runtime import Runtime, controller
 
-    require_corpus()
-    source = corpus_file("bandai/Bandai-Namco-Research-Motiondataset-1/data")
-    pack = build_pack(import_bvh_folder(source, tmp_path / "d1-masc", name="d1-masc", pattern="dataset-1_*_masculinity_*.bvh"))
-    xbot = infuse.Character("x", infuse.load(corpus_file("runxaway-models/Xbot.glb")))
-    mapping = map_skeleton(xbot.asset)
+    pack, xbot, mapping = masculinity_on_xbot
     idx = mapping.indices(xbot.skeleton)
     legs = [[idx[f"{s}_{j}"] for j in ("hip", "knee", "ankle")] for s in "lr"]
     targets = [(2.0, 0.0), (4.0, 90.0), (4.0, 180.0), (2.0, 135.0)]
