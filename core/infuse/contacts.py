@@ -365,12 +365,18 @@ def foot_frames(heel: np.ndarray, ball: np.ndarray) -> np.ndarray:
     """(F, 3, 3) orthonormal frames of a foot from its heel (ankle) and ball joints (F, 3) metres:
     rows forward (heel to ball), side (forward x up, horizontal) and up (side x forward), so a foot
     pitching about its side axis or turning about the vertical carries its frame exactly (a roll
-    about its own length, which two points cannot show, is not followed)."""
+    about its own length, which two points cannot show, is not followed). The cross products are
+    written out (up is +y): numpy's are slow on the few rows of a live block."""
     forward = np.asarray(ball, dtype=np.float64) - heel
-    forward /= np.maximum(np.linalg.norm(forward, axis=-1, keepdims=True), 1e-12)
-    side = np.cross(forward, (0.0, 1.0, 0.0))
-    side /= np.maximum(np.linalg.norm(side, axis=-1, keepdims=True), 1e-12)
-    return np.stack((forward, side, np.cross(side, forward)), axis=-2)
+    forward /= np.maximum(np.sqrt((forward * forward).sum(axis=-1, keepdims=True)), 1e-12)
+    fx, fy, fz = forward[..., 0], forward[..., 1], forward[..., 2]
+    across = np.maximum(np.sqrt(fz * fz + fx * fx), 1e-12)
+    sx, sz = -fz / across, fx / across
+    out = np.empty(forward.shape[:-1] + (3, 3))
+    out[..., 0, :] = forward
+    out[..., 1, 0], out[..., 1, 1], out[..., 1, 2] = sx, 0.0, sz
+    out[..., 2, 0], out[..., 2, 1], out[..., 2, 2] = -(sz * fy), sz * fx - sx * fz, sx * fy
+    return out
 
 
 def sole_positions(found: FootContacts, positions: np.ndarray, tolerance: float = DOWN_TOLERANCE) -> np.ndarray:
