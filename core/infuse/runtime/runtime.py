@@ -20,7 +20,7 @@ from __future__ import annotations
 import sys
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
@@ -62,6 +62,16 @@ class Activity:
     source: Any = None
     settle_s: float | None = None
 
+    #: Counts the assignments to any activity's fields the runtime schedules by (:data:`_SCHEDULE`):
+    #: the runtime works out which activities play, their groups and their weights' shape again only
+    #: when it (or the list of activities) has changed.
+    changes: ClassVar[int] = 0
+
+    def __setattr__(self, name: str, value) -> None:
+        object.__setattr__(self, name, value)
+        if name in _SCHEDULE:
+            Activity.changes += 1
+
     @property
     def character(self) -> str:
         return self.rig.name
@@ -94,6 +104,50 @@ class Activity:
         if self.start_s > t1 + 1e-9:
             return False
         return self.settled_s >= t0 - 1e-9
+
+
+#: The fields of an :class:`Activity` that say when and where among the others it plays.
+_SCHEDULE = frozenset(("rig", "controller", "start_s", "end_s", "blend_in_s", "blend_out_s", "priority", "settle_s"))
+
+
+class _Schedule:
+    """The runtime's activities as arrays, for finding those a block needs and their weights with a few
+    numpy calls: ``starts``, ``settled`` (:attr:`Activity.settled_s`) and (N, 4) ``timing`` (start, end
+    (inf: none), blend in, blend out) seconds; ``on_from`` / ``on_until``: the span of times whose
+    weight is certainly exactly 1 (past the blend-in, before the blend-out, with a margin over
+    rounding); per set of active activities (their indices), their groups (:meth:`groups`)."""
+
+    def __init__(self, activities: list[Activity]):
+        self.activities = activities
+        self.key = (Activity.changes, len(activities))
+        timing = np.array([(a.start_s, np.inf if a.end_s is None else a.end_s, a.blend_in_s, a.blend_out_s)
+                           for a in activities], dtype=np.float64).reshape(-1, 4)
+        self.timing = timing
+        self.starts = timing[:, 0]
+        self.settled = np.array([a.settled_s for a in activities], dtype=np.float64)
+        start, end, blend_in, blend_out = timing.T
+        self.on_from = np.where(blend_in > 0, start + blend_in, start) + 1e-9
+        self.on_until = np.where(blend_out > 0, end - blend_out, end) - 2e-9
+        self._groups: dict[bytes, tuple[list[Activity], list[tuple[tuple, list[int], np.ndarray]]]] = {}
+
+    def current(self, activities: list[Activity]) -> bool:
+        """Whether these arrays still describe ``activities`` (the runtime's list)."""
+        return activities is self.activities and self.key == (Activity.changes, len(activities))
+
+    def groups(self, active: np.ndarray) -> tuple[list[Activity], list[tuple[tuple, list[int], np.ndarray]]]:
+        """The activities of indices ``active`` (in order) and their groups in evaluation order (by
+        layer, priority and first activation): (layer, priority, controller class) keys with the rows
+        (among ``active``) of their activities, as a list and as an array."""
+        key = active.tobytes()
+        found = self._groups.get(key)
+        if found is None:
+            chosen = [self.activities[k] for k in active.tolist()]
+            groups: dict[tuple, list[int]] = {}
+            for k, a in enumerate(chosen):
+                groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
+            order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]].id))
+            found = self._groups[key] = (chosen, [(g, groups[g], np.array(groups[g])) for g in order])
+        return found
 
 
 @dataclass
@@ -131,6 +185,7 @@ class Runtime:
         self._layout: TableLayout | None = None  # where each character sits in a block's PoseTable
         self._tables: list[PoseTable] = []  # the blocks' tables, oldest first (as the tracks' arrays, up to forget)
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
+        self._schedule: _Schedule | None = None  # the activities as arrays, while they stay as they are
         self._speakers: list[Activity] = []  # the activities whose controller speaks
         self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
         #: Counts the targets and characters added: what :meth:`target` resolves a name to changes only with it.
@@ -361,18 +416,21 @@ class Runtime:
         poses = table.poses
         block = Block(self, frames, times, self.fps, poses, table)
         first, last = float(times[0]), float(times[-1])
-        active = [a for a in self.activities if a.active_between(first, last)]
-        # Every active activity's weights in one step, each group's jobs then rows of them.
-        weights = blend_weights_of(times, *np.array([(a.start_s, np.inf if a.end_s is None else a.end_s, a.blend_in_s,
-                                                      a.blend_out_s) for a in active]).reshape(-1, 4).T)
-        local_times = times[None] - np.array([a.start_s for a in active])[:, None]
-        groups: dict[tuple, list[int]] = {}
-        for k, a in enumerate(active):
-            groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
+        schedule = self._schedule
+        if schedule is None or not schedule.current(self.activities):
+            schedule = self._schedule = _Schedule(self.activities)
+        playing = np.flatnonzero((schedule.starts <= last + 1e-9) & (schedule.settled >= first - 1e-9))  # active_between
+        active, groups = schedule.groups(playing)
+        # Every active activity's weights in one step (exactly 1 where certainly past its ramps), each
+        # group's jobs then rows of them.
+        if ((schedule.on_from[playing] <= first) & (schedule.on_until[playing] >= last)).all():
+            weights = np.ones((len(playing), n))
+        else:
+            weights = blend_weights_of(times, *schedule.timing[playing].T)
+        local_times = times[None] - schedule.starts[playing, None]
         started = time.thread_time()
-        for key in sorted(groups, key=lambda g: (g[0], g[1], active[groups[g][0]].id)):
-            rows = groups[key]
-            jobs = Jobs([Job(active[k], poses[active[k].rig.name], weights[k], local_times[k]) for k in rows],
+        for key, members, rows in groups:
+            jobs = Jobs([Job(active[k], poses[active[k].rig.name], weights[k], local_times[k]) for k in members],
                         weights[rows], local_times[rows], table, self._memos.setdefault(key, [None, None]))
             key[2].evaluate(jobs, block)
         self.controllers_cpu_s += time.thread_time() - started

@@ -305,9 +305,9 @@ class _Group:
         """:meth:`turn` of a block of one frame from the target seen from the group's first slot, less
         where the gaze starts, ``local`` (3, C), and ``aim`` (2, C) (see :class:`_Block`), on Python
         floats (:func:`_turn_rows`); also returns the unswing matrices (3, 3, C, 1) of the path."""
-        settings = _kept(self.inp, (self.g, "one frame"), lambda: tuple(
+        settings = _kept(self.inp, (self.g, "one frame"), lambda: list(zip(*(
             a.tolist() for a in (self.fraction[:, 0], *self.clamp.inverse[..., 0], self.smoothing.share, self.smoothing.limit,
-                                 self.counts[:, 0])))
+                                 self.counts[:, 0])))))
         return _turn_rows(local, aim, self.gain[:, 0], settings, state)
 
 
@@ -317,29 +317,25 @@ class _Group:
 SCALAR_TURN_MAX_CHARACTERS = 16
 
 
-def _turn_rows(local, aim, gain, settings: tuple, state) -> tuple[np.ndarray, np.ndarray]:
+def _turn_rows(local, aim, gain, settings: list, state) -> tuple[np.ndarray, np.ndarray]:
     """One frame of a group's turn over R rows, one Python float at a time (the arithmetic of
     :func:`_angles`, :class:`_Clamp`, :meth:`_Smoothing.one_frame`): the target less the origin
-    ``local`` (3, R) in the group's aligned frame, ``aim`` (2, R), ``gain`` (R,) and ``settings``, lists
-    of R values: the share of the turn, the clamp's inverse limits (heading, up, down), the smoothing's
-    share and limit per frame, the joints. ``state`` (R, 2) is updated in place. Returns the path
-    (2, R, 1) and its unswing matrices (3, 3, R, 1)."""
+    ``local`` (3, R) in the group's aligned frame, ``aim`` (2, R), ``gain`` (R,) and ``settings``, one
+    tuple per row: the share of the turn, the clamp's inverse limits (heading, up, down), the
+    smoothing's share and limit per frame, the joints. ``state`` (R, 2) is updated in place. Returns
+    the path (2, R, 1) and its unswing matrices (3, 3, R, 1) (views of one array made at the end)."""
     atan2, hypot, cos, sin = math.atan2, math.hypot, math.cos, math.sin
     turn, half = 2.0 * math.pi, math.pi
     rows = len(state)
     xs, ys, zs = local.tolist()
     aim_h, aim_v = aim.tolist()
-    gain = gain.tolist()
-    fraction, inverse_h, inverse_up, inverse_down, share, limit, counts = settings
-    states = state.tolist()
-    path = [[0.0] * rows, [0.0] * rows]
-    entries = []
-    for r in range(rows):
-        x, y, z = xs[r], ys[r], zs[r]
-        f = fraction[r]
-        h = ((atan2(x, z) + aim_h[r]) % turn - half) * f
-        v = (atan2(y, hypot(x, z)) + aim_v[r]) * f
-        across, upward = inverse_h[r], (inverse_up[r] if v >= 0.0 else inverse_down[r])
+    values: list[float] = []  # per row: the state (2), the path (2), the unswing matrix (9)
+    put = values.extend
+    for x, y, z, ah, av, g, (f, across, up, down, share, limit, count), (x0, y0) in zip(
+            xs, ys, zs, aim_h, aim_v, gain.tolist(), settings, state.tolist()):
+        h = ((atan2(x, z) + ah) % turn - half) * f
+        v = (atan2(y, hypot(x, z)) + av) * f
+        upward = up if v >= 0.0 else down
         ellipse = hypot(h * across, v * upward)
         if ellipse > 1.0:
             h /= ellipse
@@ -348,19 +344,17 @@ def _turn_rows(local, aim, gain, settings: tuple, state) -> tuple[np.ndarray, np
             h = 0.0
         if upward == 0.0:
             v = 0.0
-        h *= gain[r]
-        v *= gain[r]
-        x0, y0 = states[r]
-        dx, dy = (h - x0) * share[r], (v - y0) * share[r]
-        k = limit[r] / max(hypot(dx, dy), limit[r])  # 1 within the limit (> 0)
+        h *= g
+        v *= g
+        dx, dy = (h - x0) * share, (v - y0) * share
+        k = limit / max(hypot(dx, dy), limit)  # 1 within the limit (> 0)
         x0, y0 = dx * k + x0, dy * k + y0
-        states[r] = (x0, y0)
-        h, v = x0 / counts[r], y0 / counts[r]
-        path[0][r], path[1][r] = h, v
+        h, v = x0 / count, y0 / count
         ch, sh, cp, sp = cos(h), sin(h), cos(v), sin(v)
-        entries.append((ch, 0.0, -sh, -sh * sp, cp, -ch * sp, sh * cp, sp, ch * cp))
-    state[:] = states
-    return np.array(path)[..., None], np.array(entries).T.reshape(3, 3, rows, 1)
+        put((x0, y0, h, v, ch, 0.0, -sh, -sh * sp, cp, -ch * sp, sh * cp, sp, ch * cp))
+    table = np.array(values).reshape(rows, 13)
+    state[:] = table[:, :2]
+    return table[:, 2:4].T[..., None], table[:, 4:].T.reshape(3, 3, rows, 1)
 
 
 def _kept(inp: SolverInput, key, make):
