@@ -106,8 +106,9 @@ class LoopTable:
     its sign-continuous rotations, held on its own frames where a time lies on one), the same values
     to rounding. The tables and the samples are component-major ((4, ...) quaternions,
     (3, ...) translations): weighting a sample frame by frame then runs over contiguous rows, where
-    numpy broadcasts a weight along a last axis of 3 or 4 several times slower. Built once per set
-    of motions (a blend space's binding).
+    numpy broadcasts a weight along a last axis of 3 or 4 several times slower. Each table holds a
+    frame's values and its step to the next side by side ((2C, ...): values, then steps), so one gather
+    fetches both. Built once per set of motions (a blend space's binding).
     """
 
     def __init__(self, motions):
@@ -119,22 +120,26 @@ class LoopTable:
         self.fps = np.array([m.fps for m in motions], dtype=np.float64)
         self.durations = np.array([max(m.duration, 1e-9) for m in motions])
         self.joints = motions[0].skeleton.num_joints
+        self._joint_cells = np.arange(self.joints)  # (J,) each joint's cell in a frame's row
+        # (3, M) each motion's duration, frame rate and cycle span; (2, M) its first row and last start.
+        self._timing = np.stack((self.durations, self.fps, self.spans))
+        self._rows = np.stack((self.offsets, self.last))
 
         ends = self.offsets + counts - 1  # each motion's last row: no step to the next motion's first
 
-        def tables(values):
+        def table(values):
             """Values (R, [J,] C) and each frame's step to the next (zero on a motion's last frame), as
-            component-major (C, R * J) or (C, R) tables."""
+            one component-major (2C, R * J) or (2C, R) table: the values' C rows, then the steps'."""
             steps = np.zeros_like(values)
             steps[:-1] = values[1:] - values[:-1]
             steps[ends] = 0.0
-            return tuple(np.ascontiguousarray(v.reshape(-1, v.shape[-1]).T) for v in (values, steps))
+            return np.ascontiguousarray(np.concatenate((values, steps), axis=-1).reshape(-1, 2 * values.shape[-1]).T)
 
-        self.rotations, self.rotation_steps = tables(np.concatenate([continuous_rotations(m) for m in motions]))
-        self.roots, self.root_steps = tables(np.concatenate([m.root_translations for m in motions]))
-        self.translations = self.translation_steps = None
+        self.rotations = table(np.concatenate([continuous_rotations(m) for m in motions]))
+        self.roots = table(np.concatenate([m.root_translations for m in motions]))
+        self.translations = None
         if any(m.joint_translations is not None for m in motions):
-            self.translations, self.translation_steps = tables(np.concatenate(
+            self.translations = table(np.concatenate(
                 [m.local_translations() if m.joint_translations is None else m.joint_translations for m in motions]))
 
     def sample(self, which: np.ndarray, times: np.ndarray, sets: np.ndarray):
@@ -142,29 +147,31 @@ class LoopTable:
         or None of motions ``which`` (U,) at ``times`` (U, S, F) seconds (S sets of times, wrapped over
         each motion's duration), joint j at its time set ``sets[j]`` (the root at joint 0's)."""
         which = np.asarray(which, dtype=np.int64)
-        lead = (slice(None), None, None)
-        position = times % self.durations[which][lead] * self.fps[which][lead]
-        span = self.spans[which][lead]
+        duration, fps, span = self._timing.take(which, 1)[..., None, None]  # (U, 1, 1) each
+        offset, last = self._rows.take(which, 1)[..., None, None]
+        position = times % duration * fps
         position = position - np.floor(position / span + 1e-9) * span
-        position = np.clip(position, 0.0, span)
+        position = np.minimum(np.maximum(position, 0.0), span)  # a clip, cheaper than np.clip on few values
         nearest = np.rint(position)
         # A time on one of the motion's own frames takes that frame (each time as it would be alone).
         position = np.where(np.abs(position - nearest) < 1e-6, nearest, position)
-        start = np.minimum(np.floor(position).astype(np.int64), self.last[which][lead])
+        start = np.minimum(np.floor(position).astype(np.int64), last)
         frac = position - start
-        row = self.offsets[which][lead] + start  # (U, S, F)
+        row = offset + start  # (U, S, F)
         # Gathers by np.take on flat tables: numpy's fancy indexing costs several times more here.
-        cells = np.swapaxes(row.take(sets, 1), 1, 2) * self.joints + np.arange(self.joints)  # (U, F, J)
+        cells = np.swapaxes(row.take(sets, 1), 1, 2) * self.joints + self._joint_cells  # (U, F, J)
         joint_frac = np.swapaxes(frac.take(sets, 1), 1, 2)
-        rot = np.take(self.rotation_steps, cells, axis=1)  # a gathered copy: the interpolation runs in place on it
-        rot *= joint_frac
-        rot += np.take(self.rotations, cells, axis=1)
+        both = np.take(self.rotations, cells, axis=1)  # values (4, ...) then steps (4, ...)
+        rot = both[4:] * joint_frac
+        rot += both[:4]
         rot *= 1.0 / np.sqrt(np.square(rot).sum(axis=0))
         root_rows, root_frac = row[:, sets[0]], frac[:, sets[0]]
-        root = np.take(self.roots, root_rows, axis=1) + root_frac * np.take(self.root_steps, root_rows, axis=1)
+        both = np.take(self.roots, root_rows, axis=1)
+        root = both[:3] + root_frac * both[3:]
         jt = None
         if self.translations is not None:
-            jt = np.take(self.translations, cells, axis=1) + joint_frac * np.take(self.translation_steps, cells, axis=1)
+            both = np.take(self.translations, cells, axis=1)
+            jt = both[:3] + joint_frac * both[3:]
         return rot, root, jt
 
 

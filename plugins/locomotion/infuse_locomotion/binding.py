@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -141,3 +142,8 @@ class LocomotionBinding:
     touch_m: float = 0.0
     landing_rad_s: float = math.inf
     stand_height: float = 0.0
+
+    @cached_property
+    def has_idle(self) -> bool:
+        """Whether an idle is among the clips (``idle.any()``, asked every block)."""
+        return bool(self.idle.any())

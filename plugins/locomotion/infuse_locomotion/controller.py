@@ -602,21 +602,22 @@ class Locomotion(Controller):
             st.warned = True
         speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
         w, slow, inside = yield Ask(_bound_weights, (id(b),), (b,), (speed, direction, turn))
+        has_idle = b.has_idle
         # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
         # the blend shows it; the clips' own turn shows what it can of the heading's.
         vf, vl = speed * np.cos(direction), speed * np.sin(direction)
-        vt = (w @ b.velocities[:, 2]) * (1.0 if b.idle.any() else slow)
+        vt = (w @ b.velocities[:, 2]) * (1.0 if has_idle else slow)
         # Root motion: integrate the blend's own velocities from where the last block ended; the heading
         # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
         # turning examples) spun at the root.
-        heading = h0 + np.concatenate(([0.0], np.cumsum(turn[:-1] * dt)))
-        ahead = heading + turn * dt  # each frame's step along the heading it turns to, as the steering integrates
+        turned = turn * dt
+        heading = _before(h0, turned)
+        ahead = heading + turned  # each frame's step along the heading it turns to, as the steering integrates
         sin_ahead, cos_ahead = np.sin(ahead), np.cos(ahead)
         step_x = (vf * sin_ahead + vl * cos_ahead) * dt
         step_z = (vf * cos_ahead - vl * sin_ahead) * dt
-        px = x0 + np.concatenate(([0.0], np.cumsum(step_x[:-1])))
-        pz = z0 + np.concatenate(([0.0], np.cumsum(step_z[:-1])))
-        st.x, st.z, st.heading = float(px[-1] + step_x[-1]), float(pz[-1] + step_z[-1]), float(heading[-1] + turn[-1] * dt)
+        px, pz = _before(x0, step_x), _before(z0, step_z)
+        st.x, st.z, st.heading = float(px[-1] + step_x[-1]), float(pz[-1] + step_z[-1]), float(heading[-1] + turned[-1])
         spinning = np.abs(turn - vt) > SPIN_STEP
         pace, path = None, self.steering.path
         if b.stops and path is not None and final.any():  # the stop clip begun on time (:mod:`.pacing`)
@@ -632,16 +633,16 @@ class Locomotion(Controller):
         wm, st.blend_held = _eased(target, st.blend, dt / BLEND_EASE_S, inside, st.blend_held)
         st.blend = wm[-1].copy()
         eased = wm - target  # the turn the eased blend shows more than the asked one's
-        vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if b.idle.any() else slow)
+        vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if has_idle else slow)
         period = np.maximum(wm @ b.durations, 1e-3)
-        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, bool(b.idle.any()),
+        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, has_idle,
                                                         lambda i: _settle_phases(b, wm[i:i + 1])[0], pace)
         if b.stops:  # where it went, frame by frame: where a stop clip may take over
             st.trace = (px, pz, heading, speed, phase, advance)
         # The heading's turn the blend does not show, spun at the root (radians, from the walk's start):
         # the idle's share of the pose shows none of the turning clips' (their planted feet turning back).
         shown = vt * (1.0 - standing)
-        spun = st.spun + np.concatenate(([0.0], np.cumsum((turn - shown)[:-1] * dt)))
+        spun = _before(st.spun, (turn - shown) * dt)
         st.spun = float(spun[-1] + (turn[-1] - shown[-1]) * dt)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
         settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
@@ -651,7 +652,7 @@ class Locomotion(Controller):
         order[:summed.size] = summed
         rot, root, jt, contact, support = yield Ask(Locomotion._blend, (id(b), bool(standing.max() > 1e-6)), (b,),
                                                     (wm, np.broadcast_to(order, wm.shape), phase, standing, times, 0.5 * advance))
-        if not b.idle.any() and rest.any():
+        if not has_idle and rest.any():
             # Come to rest without an idle: both feet stay down where they are, laid flat about their
             # balls over the rest's fade (the held phase of a walk may have a foot in the air).
             resting = rest > 0.0
@@ -669,9 +670,11 @@ class Locomotion(Controller):
             centre[:, 1] = rest * (pelvis[:, 1] - b.stand_height)
         # Place the blended pose on the integrated path.
         turn_q = yaw(heading)
-        forward = np.stack((np.sin(heading), np.zeros_like(heading), np.cos(heading)), axis=-1)
+        forward = np.zeros((len(heading), 3))
+        forward[:, 0], forward[:, 2] = np.sin(heading), np.cos(heading)
         rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
-        ground = np.stack((px, np.zeros_like(px), pz), axis=-1)
+        ground = np.zeros((len(px), 3))
+        ground[:, 0], ground[:, 2] = px, pz
         mover = b.movers[int(np.argmax(w.sum(axis=0)))]
         if mover == 0:
             root = ground + quat.rotate(turn_q, root - centre)
@@ -681,7 +684,7 @@ class Locomotion(Controller):
         # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
         # off, and the foot would turn from lying flat to the animation's toe off at once.
         down = settle[:, None] * support
-        held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not b.idle.any())
+        held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not has_idle)
         # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
         # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
         # off starting): there it does not fall.
@@ -836,7 +839,7 @@ class Locomotion(Controller):
         rot[:, body] = calmer
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
         centre = (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3)
-        if b.idle.any():
+        if b.has_idle:
             centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
         goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, :, 2] - hips[:, None] - centre)
@@ -1844,11 +1847,10 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     f = len(slow)
     stop = (slow < STAND_FRACTION) | stopping
     rate = np.sqrt(slow)
-    stride = np.sqrt(slow)
+    stride = rate.copy()
     advance = np.zeros(f)
     settled = np.zeros(f, dtype=bool)
-    key = stop.astype(np.int8) * 2 + spinning.astype(np.int8)
-    bounds = np.concatenate(([0], np.nonzero(np.diff(key))[0] + 1, [f]))
+    bounds = _runs(stop, spinning)
     done = st.phase  # the (unwrapped) phase at the start of each run
     for a, e in zip(bounds[:-1], bounds[1:]):
         if not stop[a]:
@@ -1909,13 +1911,30 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
     # whether a foot holds (:func:`~infuse.footing.anchors`).
     full = _settle_frames(dt)
     left = np.empty(f)
-    edges = np.concatenate(([0], np.nonzero(np.diff(settled.astype(np.int8)))[0] + 1, [f]))
+    edges = _runs(settled)
     for a, e in zip(edges[:-1], edges[1:]):
         ramp = st.idle_frames_left + (-1.0 if settled[a] else 1.0) * np.arange(1, e - a + 1)
-        left[a:e] = np.clip(ramp, 0.0, full)
+        left[a:e] = np.minimum(np.maximum(ramp, 0.0), full)
         st.idle_frames_left = float(left[e - 1])
     rest = footing.smoothstep(1.0 - left / full)
     return phase % 1.0, advance, np.where(stop, np.minimum(stride, 1.0), stride), rest if idle else np.zeros(f), rest
+
+
+def _before(start: float, steps: np.ndarray) -> np.ndarray:
+    """(F,) ``start`` plus the ``steps`` (F,) taken before each frame (none before the first)."""
+    out = np.empty(len(steps))
+    out[0] = 0.0
+    np.cumsum(steps[:-1], out=out[1:])
+    out += start
+    return out
+
+
+def _runs(*flags: np.ndarray) -> list[int]:
+    """Where the runs of frames alike in every one of ``flags`` (F,) each begin, then F: ``[0, ..., F]``."""
+    change = flags[0][1:] != flags[0][:-1]
+    for other in flags[1:]:
+        change = change | (other[1:] != other[:-1])
+    return [0, *(np.flatnonzero(change) + 1).tolist(), len(flags[0])]
 
 
 def mean_rotations(motion) -> np.ndarray:
