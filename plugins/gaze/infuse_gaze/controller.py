@@ -161,8 +161,9 @@ class Gaze(Controller):
         _end_settled([rows[name] for name in names], states, block)
         # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
         # character at once, written onto every character's joints at once.
-        turns = _apply_per_slot(chains.to_local, swing(offsets[..., 0], offsets[..., 1]))  # (C, F, S, 4)
-        present = np.swapaxes(turns, 0, 1).reshape(frames, -1, 4)[:, chains.present_cells]
+        cells = np.swapaxes(offsets, 0, 1).reshape(frames, -1, 2)[:, chains.present_cells]  # (F, P, 2)
+        turns = swing(cells[..., 0], cells[..., 1])  # (F, P, 4)
+        present = np.swapaxes(np.swapaxes(turns, 0, 1) @ chains.present_to_local, 0, 1)
         block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
 
 
@@ -240,7 +241,8 @@ class _Chains:
     solver needs of them that changes only with the gazes.
 
     - ``present`` (C, S), ``counts`` (C, G), ``aligned`` (C, S, 4): each binding's, stacked;
-    ``to_local`` (C, S, 4, 4): matrices of ``A Δ A⁻¹`` (A: the slot's aligned frame) acting on Δ;
+    ``present_to_local`` (P, 4, 4): per present slot (``present_cells``), the transposed matrix of
+    ``A Δ A⁻¹`` (A: the slot's aligned frame) acting on Δ;
     - ``lead_weights`` and ``origin_weights`` (C, S): the slots the gaze points and starts from (the
       leading gaze's: a gaze taking over within the block may point other slots);
     - ``world`` (C, 1, S, 1) or None: the slots that are the world itself (no pelvis);
@@ -256,7 +258,7 @@ class _Chains:
         self.present = np.stack([b.present for b in bindings])
         self.counts = np.stack([b.counts for b in bindings])
         self.aligned = np.stack([b.chain_aligned for b in bindings])  # (C, S, 4)
-        self.to_local = quat.left_matrix(self.aligned) @ quat.right_matrix(quat.conjugate(self.aligned))
+        to_local = quat.left_matrix(self.aligned) @ quat.right_matrix(quat.conjugate(self.aligned))  # (C, S, 4, 4)
         self.lead_weights = np.array([b.lead_weights() for b in bindings])
         self.origin_weights = np.array([b.origin_weights() for b in bindings])
         world = np.stack([b.slot_source < 0 for b in bindings])[:, None, :, None]
@@ -268,10 +270,25 @@ class _Chains:
         self.aligned_matrices = quat.unit_to_matrix(self.aligned)  # (C, S, 3, 3)
         self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
         self.present_cells = np.flatnonzero(self.present)
+        self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
         self._plan: tuple[int, tuple[list, list, list]] | None = None
         self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+
+    def placements(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where the characters stand: their rotations (C, 4), as matrices (C, 3, 3), and positions (C, 3);
+        kept while each rig holds the same placement arrays (a scene turning a character gives its
+        rig a new rotation)."""
+        rigs = [job.rig for job in self.jobs]
+        kept = self._placed
+        if kept is None or any(rig.rotation is not rotation or rig.position is not position
+                               for rig, (rotation, position) in zip(rigs, kept[0])):
+            rotation = np.stack([rig.rotation for rig in rigs])
+            kept = self._placed = ([(rig.rotation, rig.position) for rig in rigs],
+                                   (rotation, quat.unit_to_matrix(rotation), np.stack([rig.position for rig in rigs])))
+        return kept[1]
 
     def settings(self, frames: int, dt: float) -> dict:
         """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
@@ -403,14 +420,13 @@ def _chain_frames(jobs, chains: _Chains, table):
         rot[group.members], pos[group.members] = group.slot_poses(members, table) if matrices else group.slot_quaternions(members, table)
     # Into the world, where each character stands, and into the aligned frames: one constant product
     # on either side per character and slot.
-    rotation = np.stack([job.rig.rotation for job in jobs])  # (C, 4)
-    placement = quat.unit_to_matrix(rotation)  # (C, 3, 3)
+    rotation, placement, position = chains.placements()  # (C, 4), (C, 3, 3), (C, 3)
     if matrices:
         frames_w = placement[:, None, None] @ rot @ chains.aligned_matrices[:, None]
     else:
         frames_w = quat.unit_to_matrix(_apply_per_slot(quat.left_matrix(rotation)[:, None] @ quat.right_matrix(chains.aligned), rot))
     pos = (pos.reshape(len(jobs), -1, 3) @ np.swapaxes(placement, -1, -2)).reshape(pos.shape)
-    pos += np.stack([job.rig.position for job in jobs])[:, None, None]
+    pos += position[:, None, None]
     if chains.world is not None:  # the world itself (no pelvis) stays put
         frames_w = np.where(chains.world[..., None], chains.aligned_matrices[:, None], frames_w)
         pos = np.where(chains.world, 0.0, pos)
