@@ -128,16 +128,16 @@ class _Schedule:
         start, end, blend_in, blend_out = timing.T
         self.on_from = np.where(blend_in > 0, start + blend_in, start) + 1e-9
         self.on_until = np.where(blend_out > 0, end - blend_out, end) - 2e-9
-        self._groups: dict[bytes, tuple[list[Activity], list[tuple[tuple, list[int], np.ndarray]]]] = {}
+        self._groups: dict[bytes, list[tuple[tuple, list[tuple[Activity, str]], np.ndarray]]] = {}
 
     def current(self, activities: list[Activity]) -> bool:
         """Whether these arrays still describe ``activities`` (the runtime's list)."""
         return activities is self.activities and self.key == (Activity.changes, len(activities))
 
-    def groups(self, active: np.ndarray) -> tuple[list[Activity], list[tuple[tuple, list[int], np.ndarray]]]:
-        """The activities of indices ``active`` (in order) and their groups in evaluation order (by
-        layer, priority and first activation): (layer, priority, controller class) keys with the rows
-        (among ``active``) of their activities, as a list and as an array."""
+    def groups(self, active: np.ndarray) -> list[tuple[tuple, list[tuple[Activity, str]], np.ndarray]]:
+        """The groups of the activities of indices ``active`` in evaluation order (by layer, priority and
+        first activation): (layer, priority, controller class) keys with their activities and
+        characters' names, and their rows among ``active``."""
         key = active.tobytes()
         found = self._groups.get(key)
         if found is None:
@@ -146,7 +146,8 @@ class _Schedule:
             for k, a in enumerate(chosen):
                 groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
             order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]].id))
-            found = self._groups[key] = (chosen, [(g, groups[g], np.array(groups[g])) for g in order])
+            found = self._groups[key] = [(g, [(chosen[k], chosen[k].rig.name) for k in groups[g]], np.array(groups[g]))
+                                         for g in order]
         return found
 
 
@@ -420,7 +421,7 @@ class Runtime:
         if schedule is None or not schedule.current(self.activities):
             schedule = self._schedule = _Schedule(self.activities)
         playing = np.flatnonzero((schedule.starts <= last + 1e-9) & (schedule.settled >= first - 1e-9))  # active_between
-        active, groups = schedule.groups(playing)
+        groups = schedule.groups(playing)
         # Every active activity's weights in one step (exactly 1 where certainly past its ramps), each
         # group's jobs then rows of them.
         if ((schedule.on_from[playing] <= first) & (schedule.on_until[playing] >= last)).all():
@@ -430,8 +431,9 @@ class Runtime:
         local_times = times[None] - schedule.starts[playing, None]
         started = time.thread_time()
         for key, members, rows in groups:
-            jobs = Jobs([Job(active[k], poses[active[k].rig.name], weights[k], local_times[k]) for k in members],
-                        weights[rows], local_times[rows], table, self._memos.setdefault(key, [None, None]))
+            group_weights, group_times = weights[rows], local_times[rows]
+            jobs = Jobs([Job(a, poses[name], w, t) for (a, name), w, t in zip(members, group_weights, group_times)],
+                        group_weights, group_times, table, self._memos.setdefault(key, [None, None]))
             key[2].evaluate(jobs, block)
         self.controllers_cpu_s += time.thread_time() - started
         for name, track in self._tracks.items():
