@@ -34,6 +34,11 @@ class CompatibleBlend:
         self.resolution = resolution
         self._subsets: dict[bytes, tuple[np.ndarray, Tessellation, Hull] | None] = {}
         self._hull: Hull | None = None
+        v = tessellation.points[:, :2]
+        speed = np.linalg.norm(v, axis=1)
+        # (2, N) each example's direction of travel (a unit vector; zeros for the still ones), for a
+        # first look at which examples may travel against a request (:meth:`weights`).
+        self._headings = np.where(speed > STILL_M_S, v.T / np.maximum(speed, 1e-12), 0.0)
 
     def against(self, direction) -> np.ndarray:
         """(Q, N) flags of the examples travelling against each of (Q,) ``direction`` radians (+ left)."""
@@ -63,7 +68,12 @@ class CompatibleBlend:
         (as nearly as the tessellation's own weights do), the others' weights."""
         q = np.atleast_2d(np.asarray(query, dtype=np.float64))
         out = np.array(weights, dtype=np.float64)
-        moving = np.nonzero(np.linalg.norm(q[:, :2], axis=1) > STILL_M_S)[0]
+        v = q[:, :2]
+        speed = np.sqrt(np.add.reduce(v * v, axis=1))  # np.linalg.norm's arithmetic, without its checks
+        # A first look (cosines to the examples' headings, within 1e-9 of :meth:`against`'s): requests
+        # that mix in no example near against them keep their weights as they are.
+        near = (v @ self._headings < (AGAINST_COS + 1e-9) * speed[:, None]) & (out > 0.0)
+        moving = np.nonzero((speed > STILL_M_S) & near.any(axis=1))[0]
         if not moving.size:
             return out
         against = self.against(np.arctan2(q[moving, 1], q[moving, 0]))

@@ -147,3 +147,9 @@ class LocomotionBinding:
     def has_idle(self) -> bool:
         """Whether an idle is among the clips (``idle.any()``, asked every block)."""
         return bool(self.idle.any())
+
+    @cached_property
+    def clip_sets(self) -> dict:
+        """What the blend takes of the binding for each set of clips it blends
+        (:class:`~.controller.ClipSet`, by the clips' indices as bytes), filled as sets come up."""
+        return {}

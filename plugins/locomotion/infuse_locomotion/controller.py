@@ -461,6 +461,8 @@ class Locomotion(Controller):
             if handing is not None:
                 self._hand_over(b, st, handing[0], handing[2], block.fps)
                 st.fading = (handing[0].name, handing[1], handing[2])
+        if len(parts) == 1:  # the block in one part (most blocks)
+            return active, parts[0]
         return active, tuple(None if a[0] is None else np.concatenate(a) for a in zip(*parts))
 
     def _asked(self, t: float, top) -> float:
@@ -734,23 +736,23 @@ class Locomotion(Controller):
         weighs = w > _LEAST_WEIGHT
         used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
         w = np.where(weighs, w, 0.0)
-        stepping = used[b.stepping[used]]
+        of = _clip_set(b, used)
+        stepping, feet = of.stepping, of.feet
         if stepping.size:
             ws = w[:, stepping]
-            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ b.events[stepping].reshape(-1, 8)).reshape(-1, 2, 4)
+            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
         phases = np.empty((used.size, 3, len(phase)))
         phases[:] = phase
-        feet = b.stepping[used]
-        if feet.any():
-            phases[feet, 1:] = np.swapaxes(foot_phase(b.events[used[feet]], events, phase), 1, 2)
-        clock = warp(b.keys[used, None, None], phases)
-        fade = np.nonzero(b.idle)[0] if standing.max() > 1e-6 else np.zeros(0, dtype=np.int64)
+        if of.foot_events is not None:
+            phases[feet, 1:] = np.swapaxes(foot_phase(of.foot_events, events, phase), 1, 2)
+        clock = warp(of.keys, phases)
+        fade = of.idle if standing.max() > 1e-6 else of.idle[:0]
         if fade.size:  # the idle clips, played at the activity's times
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
-        rot, root, jt = b.table.sample(np.concatenate((used, fade)), clock, b.limbs)
+        rot, root, jt = b.table.sample(of.with_idle if fade.size else used, clock, b.limbs)
         contact = np.zeros((len(phase), 2, 2))
         support = np.zeros((len(phase), 2))
         # Each frame's clips in its walk's order (U', one gather), their weights (F, U'): none past its walk's clips.
@@ -764,7 +766,7 @@ class Locomotion(Controller):
         acc = _accumulate(None, rot_of[:, :, 0], root_of[:, :, 0], None if jt_of is None else jt_of[:, :, 0], weight_of[:, 0])
         for u in range(1, count):
             acc = _accumulate(acc, rot_of[:, :, u], root_of[:, :, u], None if jt_of is None else jt_of[:, :, u], weight_of[:, u])
-        if not feet.all():  # clips without foot events: their own contact flags, in each walk's order
+        if not of.all_stepping:  # clips without foot events: their own contact flags, in each walk's order
             flags = np.zeros((used.size, len(phase), 2, 2))
             for u in np.flatnonzero(~feet).tolist():
                 flags[u] = Locomotion._phases(b, used[u], clock[u, 0])
@@ -1199,6 +1201,36 @@ def _clips_of(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     frame, and the same in the order the blend sums them (most weight over the frames first)."""
     used = np.nonzero(w.max(axis=0) > _LEAST_WEIGHT)[0]
     return used, used[np.argsort(-w[:, used].sum(axis=0))]
+
+
+class ClipSet(NamedTuple):
+    """What :meth:`Locomotion._blend` takes of a binding for the clips ``used`` (U,) it blends: those with
+    foot events ``stepping`` (S,) and their events (S, 8), the flags ``feet`` (U,) of those, their events
+    (U', 2, 4) or None without any, whether all have them, the clips' keys (U, 1, 1, 3), the idle clips
+    (I,) and ``used`` followed by them (U + I,). Worked out once per binding and set of clips."""
+
+    stepping: np.ndarray
+    stepping_events: np.ndarray
+    feet: np.ndarray
+    foot_events: np.ndarray | None
+    all_stepping: bool
+    keys: np.ndarray
+    idle: np.ndarray
+    with_idle: np.ndarray
+
+
+def _clip_set(b: LocomotionBinding, used: np.ndarray) -> ClipSet:
+    """The :class:`ClipSet` of clips ``used`` (U,) (increasing indices) in binding ``b``, kept on it."""
+    key = used.tobytes()
+    known = b.clip_sets.get(key)
+    if known is None:
+        feet = b.stepping[used]
+        stepping = used[feet]
+        idle = np.flatnonzero(b.idle)
+        known = b.clip_sets[key] = ClipSet(stepping, b.events[stepping].reshape(-1, 8), feet,
+                                           b.events[stepping] if feet.any() else None, bool(feet.all()),
+                                           b.keys[used, None, None], idle, np.concatenate((used, idle)))
+    return known
 
 
 class Ask(NamedTuple):
@@ -1725,15 +1757,16 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
     tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
     at that example's speed and the share is the ratio of the speeds."""
-    slow = np.ones(len(speed))
-    if not idle.any():
+    has_idle = bool(idle.any())
+    if not has_idle:
         floor = _slowest_towards(velocities, idle, direction)
         # no slower than the examples not travelling against it reach, which the space blends it from
         reached = space.slowest(direction)
         floor = np.where(np.isfinite(reached), np.maximum(reached, floor), floor)
         slow = np.where(speed < floor, speed / np.maximum(floor, 1e-9), 1.0)
         speed = np.maximum(speed, floor)
-    query = np.stack((speed * np.cos(direction), speed * np.sin(direction), turn), axis=-1)
+    query = np.empty((len(speed), 3))
+    query[:, 0], query[:, 1], query[:, 2] = speed * np.cos(direction), speed * np.sin(direction), turn
     w, inside = space.weights("locomotion", query)
     out = np.nonzero(~inside)[0]
     if out.size:  # the turn rate nearest the request's that the tessellation holds at that velocity
@@ -1742,8 +1775,8 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
         if cut.size:
             query[out[cut], 2] = turns[cut]
             w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
-    if idle.any():
-        slow = np.clip(1.0 - w[:, idle].sum(axis=1), 0.0, 1.0)
+    if has_idle:
+        slow = np.minimum(np.maximum(1.0 - w[:, idle].sum(axis=1), 0.0), 1.0)  # a clip, cheaper than np.clip on few values
     return w, slow, inside
 
 
