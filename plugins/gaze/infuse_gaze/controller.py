@@ -25,7 +25,7 @@ from infuse.runtime.targets import JointTarget
 
 from .binding import GazeBinding, GazeState, bind_chain
 from .model import DEFAULT_INFLUENCE, GROUP_NAMES, GROUPS, INFLUENCES, OFFSET_DIRECTIONS, SLOTS, group_name, smoothing_factor
-from .solver import SolverInput, faces, solve
+from .solver import Faces, SolverInput, solve
 
 _FORWARD = 2  # an aligned frame's forward axis (+Z): its matrix's third column
 #: Radians under which an ended gaze's turn is back at rest (the runtime then evaluates it no more).
@@ -144,16 +144,15 @@ class Gaze(Controller):
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         targets = arrays["targets"] = np.empty((len(names), frames, 3))
-        plan = chains.plan(block) if single else _plan_targets(rows, names, spans, chains, block)
-        refine, elsewhere, lost = plan
+        refine, elsewhere, lost, faces = chains.plan(block) if single else _plan_targets(rows, names, spans, chains, block)
         for c, job, these, target in elsewhere:
             targets[c, these] = target.positions(block.times, block)[these]
         for c, job, these, problem in lost:  # a target that names nothing in the scene: this gaze rests
             job.report(f"gaze target {job.controller.target!r} cannot be found ({problem}); the gaze is skipped")
             targets[c, these] = 0.0
             arrays["weights"][c, these] = 0.0
-        faces(targets, positions, refine)
-        inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), **arrays, **chain)
+        faces.place(targets, positions)
+        inp = SolverInput(present=chains.present, counts=chains.counts, refine=tuple(refine), faces=faces, **arrays, **chain)
         # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver,
         # which updates it in place: each character's state holds views of the stacked arrays.
         states = [job.rig.state_of(GazeState) for job in leads]
@@ -177,10 +176,10 @@ def _stacked_states(states: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return stacked
 
 
-def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block) -> tuple[list, list, list]:
+def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block) -> tuple[list, list, list, Faces]:
     """What each gaze of ``spans`` looks at: (c, c2, slots, frames) entries of faces of gazing
     characters (``refine``), (c, job, frames, target) of other targets and (c, job, frames, problem)
-    of targets that cannot be found."""
+    of targets that cannot be found; and ``refine`` as :class:`~infuse_gaze.solver.Faces`."""
     index = {name: c for c, name in enumerate(names)}
     refine: list[tuple[int, int, tuple[int, ...], slice | np.ndarray]] = []
     elsewhere, lost = [], []
@@ -198,7 +197,7 @@ def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block
                     elsewhere.append((c, job, these, target))
             except UsageError as exc:
                 lost.append((c, job, these, exc))
-    return refine, elsewhere, lost
+    return refine, elsewhere, lost, Faces(refine)
 
 
 def _settings_per_frame(rows: dict, names: list, block) -> tuple[dict, list]:
@@ -273,7 +272,7 @@ class _Chains:
         self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
-        self._plan: tuple[int, tuple[list, list, list]] | None = None
+        self._plan: tuple[int, tuple[list, list, list, Faces]] | None = None
         self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
@@ -320,7 +319,7 @@ class _Chains:
             kept = self._states = ([(st.groups, st.eyes, st.first) for st in states], stacked)
         return kept[1]
 
-    def plan(self, block) -> tuple[list, list, list]:
+    def plan(self, block) -> tuple[list, list, list, Faces]:
         """:func:`_plan_targets` of the gazes (one each, leading the block), kept while the runtime
         resolves target names as it did."""
         version = block.runtime.targets_version

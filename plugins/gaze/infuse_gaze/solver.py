@@ -66,7 +66,8 @@ class SolverInput:
       down, roll; ``smoothing`` (C, F, G): share per frame; ``max_step`` (C, F, G): radians per frame;
       ``offsets`` (C, F, 2): heading and pitch added to the target direction.
     - ``refine``: (c, c2, slots, frames) entries: character c looks at the mean of ``slots`` of
-      character c2 on ``frames`` (a slice or an (F,) mask), taken from a first solve of the block.
+      character c2 on ``frames`` (a slice or an (F,) mask), taken from a first solve of the block;
+      ``faces``: the same as :class:`Faces` (made from ``refine`` when None).
     - ``kept``: None, or a dict the solver keeps what it works out of the settings in (the groups'
       limits and smoothing), for the next blocks given the very same settings.
     """
@@ -86,6 +87,7 @@ class SolverInput:
     max_step: np.ndarray
     offsets: np.ndarray
     refine: tuple = ()
+    faces: "Faces | None" = None
     kept: dict | None = None
 
 
@@ -457,31 +459,44 @@ def solve(inp: SolverInput, groups_state: np.ndarray, eyes_state: np.ndarray, fi
         return offsets
     # The first pass only places the chains (no joint's position depends on the eyes' turn).
     first = groups_state.copy() if first_state is None else first_state
-    slots = sorted({s for _, _, faced, _ in inp.refine for s in faced})
-    _, placed = _solve_once(inp, block, target, first, eyes_state, eyes=False, place=slots)
+    faces = Faces(inp.refine) if inp.faces is None else inp.faces
+    _, placed = _solve_once(inp, block, target, first, eyes_state, eyes=False, place=faces.slots)
     positions = inp.positions.copy()
     for s, position in placed.items():
         positions[:, :, s] = position.transpose(1, 2, 0)
     targets = inp.targets.copy()
-    faces(targets, positions, inp.refine)
+    faces.place(targets, positions)
     return _solve_once(inp, block, _contiguous(targets, (2, 0, 1)), groups_state, eyes_state)[0]
 
 
-def faces(targets: np.ndarray, positions: np.ndarray, refine) -> None:
-    """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain ``positions``
-    (C, F, S, 3) for each ``(c, c2, slots, frames)`` of ``refine``: at once for the whole block's entries
-    with the same slots."""
-    whole: dict[tuple, tuple[list, list]] = {}
-    for c, other, slots, these in refine:
-        if isinstance(these, slice) and these == slice(None):
-            gazers, others = whole.setdefault(slots, ([], []))
-            gazers.append(c)
-            others.append(other)
-        else:
-            targets[c, these] = positions[other][these][:, list(slots)].mean(axis=1)
-    for slots, (gazers, others) in whole.items():
-        picked = positions[np.array(others)[:, None], :, slots]  # (n, k, F, 3)
-        targets[gazers] = picked[:, 0] if len(slots) == 1 else np.add.reduce(picked, axis=1) / len(slots)
+class Faces:
+    """Characters looking at others' faces: ``refine``'s (c, c2, slots, frames) entries (see
+    :class:`SolverInput`), prepared once for :meth:`place`; ``slots``: every slot looked at."""
+
+    def __init__(self, refine):
+        self.slots = sorted({s for _, _, faced, _ in refine for s in faced})
+        whole: dict[tuple, tuple[list, list]] = {}
+        self.partial = []  # (c, c2, slots, frames) of the entries on some frames only
+        for c, other, slots, these in refine:
+            if isinstance(these, slice) and these == slice(None):
+                gazers, others = whole.setdefault(slots, ([], []))
+                gazers.append(c)
+                others.append(other)
+            else:
+                self.partial.append((c, other, list(slots), these))
+        #: Per set of slots looked at over the whole block: the gazing characters (n,), those they
+        #: look at (n, 1) and the slots.
+        self.whole = [(np.array(gazers), np.array(others)[:, None], list(slots)) for slots, (gazers, others) in whole.items()]
+
+    def place(self, targets: np.ndarray, positions: np.ndarray) -> None:
+        """Write into ``targets`` (C, F, 3) the mean of the ``slots`` of character ``c2``'s chain
+        ``positions`` (C, F, S, 3) for each entry: at once for the whole block's entries with the same
+        slots."""
+        for c, other, slots, these in self.partial:
+            targets[c, these] = positions[other][these][:, slots].mean(axis=1)
+        for gazers, others, slots in self.whole:
+            picked = positions[others, :, slots]  # (n, k, F, 3)
+            targets[gazers] = picked[:, 0] if len(slots) == 1 else np.add.reduce(picked, axis=1) / len(slots)
 
 
 def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_state: np.ndarray, eyes_state: np.ndarray,
