@@ -132,6 +132,7 @@ TOUCH = 0.03
 _LEAST_WEIGHT = 1e-6
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+_GROUND = np.array([1.0, 0.0, 1.0])  # keeps a point's ground coordinates (x, z)
 
 
 class PreparedWalks(dict):
@@ -652,48 +653,19 @@ class Locomotion(Controller):
         summed = _clips_of(wm)[1]  # the clips in the order this walk sums them
         order = np.full(len(b.clips), -1)
         order[:summed.size] = summed
-        rot, root, jt, contact, support = yield Ask(Locomotion._blend, (id(b), bool(standing.max() > 1e-6)), (b,),
-                                                    (wm, np.broadcast_to(order, wm.shape), phase, standing, times, 0.5 * advance))
-        if not has_idle and rest.any():
-            # Come to rest without an idle: both feet stay down where they are, laid flat about their
-            # balls over the rest's fade (the held phase of a walk may have a foot in the air).
-            resting = rest > 0.0
-            contact[resting] = (0.9, 1.0)  # heel and ball: each foot pinned by its ball, its heel coming down
-            support = np.maximum(support, rest[:, None])
-        # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
-        # ahead, behind or aside of their path as their gait goes): its ground point (F, 3) in the
-        # facing frame, wherever joint 0 sits, is taken out by ``settle``.
-        pelvis = root if b.pelvis == 0 else chain_fk(b.skeleton, rot, root, jt, [b.pelvis])[1][:, 0]  # joint 0: its root translation
-        centre = pelvis * np.array([1.0, 0.0, 1.0]) * settle[:, None]
-        if b.stand_height > 0.0 and rest.any():
-            # Coming to rest without an idle, the pelvis rises to the takes' standing height (the stop's
-            # held double support had the knees bent 33-45 degrees): the legs, solved to the feet held
-            # down, straighten as the takes' stance legs.
-            centre[:, 1] = rest * (pelvis[:, 1] - b.stand_height)
-        # Place the blended pose on the integrated path.
-        turn_q = yaw(heading)
-        forward = np.zeros((len(heading), 3))
-        forward[:, 0], forward[:, 2] = np.sin(heading), np.cos(heading)
-        rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
-        ground = np.zeros((len(px), 3))
-        ground[:, 0], ground[:, 2] = px, pz
-        mover = b.movers[int(np.argmax(w.sum(axis=0)))]
-        if mover == 0:
-            root = ground + quat.rotate(turn_q, root - centre)
-        else:
-            jt[:, mover] = ground + quat.rotate(turn_q, jt[:, mover] - centre)
+        fading = bool(standing.max() > 1e-6)  # into the idle: played at the activity's times (else not asked for)
+        mover = np.full(len(wm), b.movers[int(np.argmax(w.sum(axis=0)))])  # the joint the walk travels on
+        rot, root, jt, contact, turn_q, forward, down, flat = yield Ask(
+            _placed, (id(b), fading), (b,), (wm, np.broadcast_to(order, wm.shape), phase, standing,
+                                             times if fading and has_idle else None, 0.5 * advance, settle, rest,
+                                             stride, heading, px, pz, mover))
         # Laying the feet down follows their stance share, but is let go no faster than over
         # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
         # off, and the foot would turn from lying flat to the animation's toe off at once.
-        down = settle[:, None] * support
         held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not has_idle)
         # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
         # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
         # off starting): there it does not fall.
-        # Stepping on the spot (strides of nothing) a foot stays flat through its swing as well: landing
-        # turned up as a walk's heel strike, held where it touched, it rolled down about its heel and
-        # stood short of its place by the roll.
-        flat = np.maximum(down, (settle * (1.0 - np.minimum(stride, 1.0)))[:, None])
         laid = _slow_fall(flat, st.laid, np.where(held, 0.0, dt / LAY_RELEASE_S)[:, None] if held.any() else dt / LAY_RELEASE_S)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
@@ -726,7 +698,8 @@ class Locomotion(Controller):
         """Weighted, sign-aligned rotations, root offsets, joint translations, foot contact phases
         (F, 2, 2) and stance shares (F, 2) (:func:`~.phase_keys.stance_of`) of the moving clips
         (weights ``w`` (F, N)) at blend ``phase``, each leg time-warped by its foot's events; then
-        faded into the idle clips by ``standing`` (F,) (played at the activity's ``times``).
+        faded into the idle clips by ``standing`` (F,) (played at the activity's ``times`` (F,), None
+        where nothing fades into an idle).
         ``half_frame`` (F,): half a frame's advance of the phase. ``orders`` (F, N): each frame's clips
         in the order its walk sums them (:func:`_clips_of`), then -1: frames of several walks blending
         other clips are blended at once, each summed as its walk alone would sum it (a clip another
@@ -1248,6 +1221,56 @@ class Ask(NamedTuple):
 def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_weights` in the pack's locomotion blend space as bound in ``b``."""
     return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
+
+
+def _placed(b: LocomotionBinding, w, orders, phase, standing, times, half_frame, settle, rest, stride, heading, px, pz, mover):
+    """The blend (:meth:`Locomotion._blend` of ``w`` to ``half_frame``, see there) placed on the steered path,
+    frame by frame: the pelvis taken ``settle`` (F,) of the way over the point the steering stands at (and
+    risen to the standing height by ``rest`` (F,) without an idle), the pose turned to ``heading`` (F,)
+    radians and carried to ``px``, ``pz`` (F,) metres on the joint ``mover`` (F,) (0: the root). Returns its
+    rotations (F, J, 4), root (F, 3), joint translations (F, J, 3) or None, contact phases (F, 2, 2), the
+    heading's turn (F, 4) and direction (F, 3), and how far each foot is laid down (F, 2): ``down`` by its
+    stance share into a stop and ``flat`` also through the swing of strides shrunk by ``stride`` (F,)."""
+    rot, root, jt, contact, support = Locomotion._blend(b, w, orders, phase, standing, times, half_frame)
+    if not b.has_idle:
+        resting = rest > 0.0
+        if resting.any():
+            # Come to rest without an idle: both feet stay down where they are, laid flat about their
+            # balls over the rest's fade (the held phase of a walk may have a foot in the air).
+            contact[resting] = (0.9, 1.0)  # heel and ball: each foot pinned by its ball, its heel coming down
+            support = np.maximum(support, rest[:, None])
+    # Coming to a stop, the pelvis comes over the point the steering stands at (the clips carry it
+    # ahead, behind or aside of their path as their gait goes): its ground point (F, 3) in the
+    # facing frame, wherever joint 0 sits, is taken out by ``settle``.
+    pelvis = root if b.pelvis == 0 else chain_fk(b.skeleton, rot, root, jt, [b.pelvis])[1][:, 0]  # joint 0: its root translation
+    centre = pelvis * _GROUND * settle[:, None]
+    if b.stand_height > 0.0 and rest.any():
+        # Coming to rest without an idle, the pelvis rises to the takes' standing height (the stop's
+        # held double support had the knees bent 33-45 degrees): the legs, solved to the feet held
+        # down, straighten as the takes' stance legs.
+        centre[:, 1] = rest * (pelvis[:, 1] - b.stand_height)
+    # Place the blended pose on the integrated path.
+    turn_q = yaw(heading)
+    forward = np.zeros((len(heading), 3))
+    forward[:, 0], forward[:, 2] = np.sin(heading), np.cos(heading)
+    rot[:, 0] = quat.multiply(turn_q, rot[:, 0])
+    ground = np.zeros((len(px), 3))
+    ground[:, 0], ground[:, 2] = px, pz
+    if not mover.any():
+        root = ground + quat.rotate(turn_q, root - centre)
+    else:  # walks travelling on other joints: each set of frames on its own
+        for m in np.unique(mover).tolist():
+            on = np.flatnonzero(mover == m)
+            if m == 0:
+                root[on] = ground[on] + quat.rotate(turn_q[on], root[on] - centre[on])
+            else:
+                jt[on, m] = ground[on] + quat.rotate(turn_q[on], jt[on, m] - centre[on])
+    down = settle[:, None] * support
+    # Stepping on the spot (strides of nothing) a foot stays flat through its swing as well: landing
+    # turned up as a walk's heel strike, held where it touched, it rolled down about its heel and
+    # stood short of its place by the roll.
+    flat = np.maximum(down, (settle * (1.0 - np.minimum(stride, 1.0)))[:, None])
+    return rot, root, jt, contact, turn_q, forward, down, flat
 
 
 def _shortened(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid):
