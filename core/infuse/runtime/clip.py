@@ -27,8 +27,13 @@ def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
     completed cycles (T,) of ``motion`` at ``times`` seconds from its start; held at the ends, or
     wrapped over its duration when ``loop``. ``joints`` (K,) indices: only those joints are sampled
     (J = K in the results), the same values as the full sampling's columns."""
+    return sample_positions(motion, *clip_positions(motion, times, loop), joints)
+
+
+def sample_positions(motion: Motion, position: np.ndarray, cycles: np.ndarray, joints=None):
+    """:func:`sample_motion` at fractional frames ``position`` (T,) in [0, F - 1] with ``cycles`` (T,)
+    completed cycles (what :func:`clip_positions` gives)."""
     f = motion.num_frames
-    position, cycles = clip_positions(motion, times, loop)
     jt = motion.joint_translations
     columns = slice(None) if joints is None else np.asarray(joints, dtype=np.int64)
 
@@ -74,10 +79,10 @@ def clip_positions(motion: Motion, times, loop: bool) -> tuple[np.ndarray, np.nd
     return np.clip(position, 0.0, span), cycles
 
 
-def on_frames(motion: Motion, times, loop: bool) -> np.ndarray:
-    """(n,) whether every time of each row of ``times`` (n, T) falls on one of the motion's own frames,
-    where :func:`sample_motion` takes them as they are, without interpolating."""
-    position = clip_positions(motion, times, loop)[0]
+def on_frames(position: np.ndarray) -> np.ndarray:
+    """(n,) whether every fractional frame of each row of ``position`` (n, T) (:func:`clip_positions`)
+    is one of the motion's own frames, where :func:`sample_motion` takes them as they are, without
+    interpolating."""
     return np.all(np.abs(position - np.rint(position)) < 1e-6, axis=-1)
 
 
@@ -380,8 +385,8 @@ class Clip(Controller):
 class _Together:
     """Clip jobs that sample one motion the same way (looping or not, the same joints), on characters of
     their own: ``rows`` (n,) their places among the jobs, ``offset_s`` and ``speed`` (n, 1) each clip's,
-    table ``columns`` (n K,) of the joints they drive (job-major) and the sampled ``sources`` (K,);
-    ``moving`` and ``held`` (among the n) those whose root the clip carries along or holds at its first
+    table ``columns`` (n K,) of the joints they drive (job-major) and the sampled ``sources`` (K,)
+    (``every``: all the motion's joints, in order); ``moving`` and ``held`` (among the n) those whose root the clip carries along or holds at its first
     frame, their ``characters`` in the table (``character_index``) and ``steps`` (m, 3) metres per cycle."""
 
     motion: Motion
@@ -396,6 +401,7 @@ class _Together:
     steps: np.ndarray
     held: np.ndarray
     held_characters: np.ndarray
+    every: bool
 
     @staticmethod
     def of(jobs: Jobs) -> tuple[list["_Together"], list[int]]:
@@ -426,23 +432,27 @@ class _Together:
             np.concatenate([jobs.table.first_joint[job.rig.name] + job.binding.joints for job in chosen]), b.columns,
             np.flatnonzero(moving), np.array([index[job.rig.name] for job, m in zip(chosen, moving) if m], dtype=np.int64),
             np.array([job.binding.step for job, m in zip(chosen, moving) if m]).reshape(-1, 3),
-            np.flatnonzero(held), np.array([index[job.rig.name] for job, h in zip(chosen, held) if h], dtype=np.int64))
+            np.flatnonzero(held), np.array([index[job.rig.name] for job, h in zip(chosen, held) if h], dtype=np.int64),
+            b.columns.size == b.motion.skeleton.num_joints and bool((b.columns == np.arange(b.columns.size)).all()))
 
     def evaluate(self, jobs: Jobs, block: Block) -> None:
         """Sample the clip at every job's times at once (as :meth:`Clip.evaluate_one` does, job by job),
         write the joints and the roots side by side."""
         count, frames = len(self.rows), jobs.local_times.shape[1]
         local = self.offset_s + np.maximum(jobs.local_times[self.rows], 0.0) * self.speed  # (n, F)
-        every = self.sources.size == self.motion.skeleton.num_joints and bool((self.sources == np.arange(self.sources.size)).all())
         # Sampled as each job alone would be: held on the clip's frames when all its times are, else interpolated.
-        rot = np.empty((count, frames, self.sources.size, 4))
-        root, cycles = np.empty((count, frames, 3)), np.empty((count, frames))
-        on = on_frames(self.motion, local, self.loop)
-        for rows in (np.flatnonzero(on), np.flatnonzero(~on)):
-            if rows.size:
-                r, t, _, c = sample_motion(self.motion, local[rows].ravel(), self.loop, None if every else self.sources)
-                rot[rows], root[rows], cycles[rows] = (r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3),
-                                                      c.reshape(rows.size, frames))
+        position, cycles = clip_positions(self.motion, local, self.loop)
+        on = on_frames(position)
+        sampled = None if self.every else self.sources
+        if on.all() or not on.any():  # one way for all (a block of one frame: always)
+            r, root, _, _ = sample_positions(self.motion, position.ravel(), cycles.ravel(), sampled)
+            rot = r.reshape(count, frames, -1, 4)
+            root = root.reshape(count, frames, 3)
+        else:
+            rot, root = np.empty((count, frames, self.sources.size, 4)), np.empty((count, frames, 3))
+            for rows in (np.flatnonzero(on), np.flatnonzero(~on)):
+                r, t, _, _ = sample_positions(self.motion, position[rows].ravel(), cycles[rows].ravel(), sampled)
+                rot[rows], root[rows] = r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3)
         joints = rot.shape[2]
         side_by_side = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
         weights = jobs.weights[self.rows]  # (n, F)

@@ -23,11 +23,13 @@ def swing(heading, pitch, roll=0.0) -> np.ndarray:
     h = 0.5 * np.asarray(heading, dtype=np.float64)
     p = -0.5 * np.asarray(pitch, dtype=np.float64)
     if np.ndim(roll) == 0 and roll == 0.0:  # no roll: cos 1, sin 0 in the products below
-        h, p = np.broadcast_arrays(h, p)
+        if h.shape != p.shape:
+            h, p = np.broadcast_arrays(h, p)
         ch, sh, cp, sp = np.cos(h), np.sin(h), np.cos(p), np.sin(p)
         return np.stack((ch * sp, sh * cp, -(sh * sp), ch * cp), axis=-1)
     r = 0.5 * np.asarray(roll, dtype=np.float64)
-    h, p, r = np.broadcast_arrays(h, p, r)
+    if not h.shape == p.shape == r.shape:
+        h, p, r = np.broadcast_arrays(h, p, r)
     ch, sh, cp, sp, cr, sr = np.cos(h), np.sin(h), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
     # (0, sh, 0, ch) * (sp, 0, 0, cp) * (0, 0, sr, cr), multiplied out.
     x = ch * sp * cr + sh * cp * sr

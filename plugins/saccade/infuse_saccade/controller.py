@@ -127,6 +127,7 @@ class Saccades(Controller):
         else:
             state.start_s, state.offset, state.before = float(times[k]), offsets[k], before[k]
             state.duration_s = saccade_duration(np.hypot(*(offsets[k:k + 1] - before[k:k + 1]).T))
+        state.held = (state.start_s, float(state.duration_s[0]), *state.offset.tolist(), *state.before.tolist())
         return self.offsets(schedule, t, pauses)
 
     @classmethod
@@ -140,19 +141,16 @@ class Saccades(Controller):
             return
         speaking = block.runtime.speaking()
         # Each character's saccade in progress, where it holds for the whole block (else the path itself).
-        held = np.zeros((len(batch.seeing), 6))  # start, duration, offset (2), before (2); at first none
-        held[:, :2] = (-np.inf, 1.0)
-        paths = {}
+        held, paths = [], {}
         for n, k in enumerate(batch.seeing):
             job = jobs[k]
             start, saccades, state = job.activity.start_s, job.controller, job.state_of(SaccadeState)
             pauses = [(s - start, e - start + saccades.resume_s) for s, e in speaking.get(job.rig.name, ())]
             path = saccades.follow(state, job.binding.schedule, job.local_times, pauses)
-            if path is None:
-                held[n] = (state.start_s, state.duration_s[0], *state.offset, *state.before)
-            else:
+            held.append(state.held)
+            if path is not None:
                 paths[n] = path
-        degrees = SaccadeState.path(held, jobs.local_times[batch.seeing])
+        degrees = SaccadeState.path(np.array(held, dtype=np.float64).reshape(-1, 6), jobs.local_times[batch.seeing])
         for n, path in paths.items():
             degrees[n] = path
         radians = np.radians(degrees) * jobs.weights[batch.seeing][..., None]  # (N', F, 2)
@@ -182,7 +180,8 @@ class SaccadeState:
     """The saccade a character's eyes follow, kept from block to block while nothing changes it: it
     started at ``start_s`` seconds from the activity's start (-inf: none yet; the eyes stay on the gaze),
     moves from ``before`` to ``offset`` ((heading, pitch) degrees) over ``duration_s`` (1,) seconds, and
-    holds until ``until_s`` (the next saccade or pause), as long as the ``pauses`` stay as they are."""
+    holds until ``until_s`` (the next saccade or pause), as long as the ``pauses`` stay as they are;
+    ``held``: the same as a row of :meth:`path`'s ``held``."""
 
     pauses: list | None = None
     until_s: float = -np.inf
@@ -190,6 +189,7 @@ class SaccadeState:
     duration_s: np.ndarray = field(default_factory=lambda: np.ones(1))
     offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
     before: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    held: tuple = (-np.inf, 1.0, 0.0, 0.0, 0.0, 0.0)
 
     @staticmethod
     def path(held: np.ndarray, t: np.ndarray) -> np.ndarray:
