@@ -149,6 +149,15 @@ class LocomotionBinding:
         return bool(self.idle.any())
 
     @cached_property
+    def body_columns(self) -> slice | np.ndarray:
+        """``body`` as a slice where its joints run in one stretch (a slice of the pose costs less than a
+        gather), else as it is."""
+        body = self.body
+        if body.size and np.array_equal(body, np.arange(body[0], body[0] + body.size)):
+            return slice(int(body[0]), int(body[0]) + body.size)
+        return body
+
+    @cached_property
     def clip_sets(self) -> dict:
         """What the blend takes of the binding for each set of clips it blends
         (:class:`~.controller.ClipSet`, by the clips' indices as bytes), filled as sets come up."""

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import itertools
 import math
 import weakref
 from dataclasses import dataclass, replace
@@ -385,7 +386,7 @@ class Locomotion(Controller):
                 rows = asks[0].rows if len(asks) == 1 else \
                     tuple(None if a[0] is None else np.concatenate(a) for a in zip(*(ask.rows for ask in asks)))
                 out = asks[0].work(*asks[0].shared, *rows)
-                ends = np.cumsum([0] + [len(ask.rows[0]) for ask in asks]).tolist()
+                ends = [0, *itertools.accumulate(len(ask.rows[0]) for ask in asks)]
                 for n, a, e in zip(members, ends[:-1], ends[1:]):
                     _resume(n, drives[n], tuple(None if x is None else x[a:e] for x in out), asked, done)
         driven = [(job, done[n]) for n, job in enumerate(jobs)]
@@ -648,7 +649,7 @@ class Locomotion(Controller):
         spun = _before(st.spun, (turn - shown) * dt)
         st.spun = float(spun[-1] + (turn[-1] - shown[-1]) * dt)
         # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
-        settle = np.clip(1.0 - slow / STAND_FRACTION, 0.0, 1.0) * (1.0 - standing)
+        settle = np.minimum(np.maximum(1.0 - slow / STAND_FRACTION, 0.0), 1.0) * (1.0 - standing)  # np.clip costs more
         stride = stride + (1.0 - stride) * standing
         summed = _clips_of(wm)[1]  # the clips in the order this walk sums them
         order = np.full(len(b.clips), -1)
@@ -794,10 +795,10 @@ class Locomotion(Controller):
         (F, 2) (the same, let go slower), so nothing jumps at strike or toe off.
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
         stance_feet = b.stance_feet
-        body, frames = b.body, len(rot)
+        body, frames = b.body_columns, len(rot)
         mean = quat.normalize((w @ b.body_means).reshape(frames, -1, 4))
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
-        calmer = quat.slerp(mean, np.take(rot, body, 1), stride[:, None])
+        calmer = quat.slerp(mean, rot[:, body], stride[:, None])
         # One FK of the legs (hip, knee, ankle, the hip's parent, ball; (2F, 2, 5)) for the pose as it is
         # (the goals) and with the calmer body (the leg IK's chains), the two stacked.
         both = np.concatenate((rot, rot))
@@ -1959,7 +1960,7 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
             rate[a:e] = r
             advance[a:e] = step
         done += float(advance[a:e].sum())
-    phase = st.phase + np.concatenate(([0.0], np.cumsum(advance[:-1])))
+    phase = _before(st.phase, advance)
     st.phase = float((phase[-1] + advance[-1]) % 1.0)
     # The idle's share follows the settled flag at 1 / SETTLE_S per second, counted in whole frames
     # from 0 or from the fade's length (exact in floating point), so that every partition of the
@@ -1987,6 +1988,8 @@ def _before(start: float, steps: np.ndarray) -> np.ndarray:
 
 def _runs(*flags: np.ndarray) -> list[int]:
     """Where the runs of frames alike in every one of ``flags`` (F,) each begin, then F: ``[0, ..., F]``."""
+    if len(flags[0]) == 1:  # a block of one frame: one run
+        return [0, 1]
     change = flags[0][1:] != flags[0][:-1]
     for other in flags[1:]:
         change = change | (other[1:] != other[:-1])
