@@ -1981,7 +1981,8 @@ def _before(start: float, steps: np.ndarray) -> np.ndarray:
     """(F,) ``start`` plus the ``steps`` (F,) taken before each frame (none before the first)."""
     out = np.empty(len(steps))
     out[0] = 0.0
-    np.cumsum(steps[:-1], out=out[1:])
+    if len(steps) > 1:
+        np.cumsum(steps[:-1], out=out[1:])
     out += start
     return out
 
