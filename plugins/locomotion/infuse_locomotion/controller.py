@@ -714,7 +714,8 @@ class Locomotion(Controller):
         stepping, feet = of.stepping, of.feet
         if stepping.size:
             ws = w[:, stepping]
-            events = ((ws / np.maximum(ws.sum(axis=1, keepdims=True), 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
+            stepping_share = ws.sum(axis=1)  # (F,) the clips with foot events
+            events = ((ws / np.maximum(stepping_share[:, None], 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
         phases = np.empty((used.size, 3, len(phase)))
@@ -727,19 +728,20 @@ class Locomotion(Controller):
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
         rot, root, jt = b.table.sample(of.with_idle if fade.size else used, clock, b.limbs)
-        contact = np.zeros((len(phase), 2, 2))
-        support = np.zeros((len(phase), 2))
         # Each frame's clips in its walk's order (U', one gather), their weights (F, U'): none past its walk's clips.
-        count = int((orders >= 0).sum(axis=1).max())
-        orders = orders[:, :count]
+        listed = orders >= 0
+        count = int(listed.sum(axis=1).max())
+        listed, clips = listed[:, :count], np.maximum(orders[:, :count], 0)
         frames = np.arange(len(phase))[:, None]
-        sample_of = np.searchsorted(used, np.maximum(orders, 0))
-        weight_of = np.where(orders >= 0, w[frames, np.maximum(orders, 0)], 0.0)
+        sample_of = np.searchsorted(used, clips)
+        weight_of = np.where(listed, w[frames, clips], 0.0)
         rot_of, root_of = rot[:, sample_of, frames], root[:, sample_of, frames]  # (4, F, U', J), (3, F, U')
         jt_of = None if jt is None else jt[:, sample_of, frames]
         acc = _accumulate(None, rot_of[:, :, 0], root_of[:, :, 0], None if jt_of is None else jt_of[:, :, 0], weight_of[:, 0])
         for u in range(1, count):
             acc = _accumulate(acc, rot_of[:, :, u], root_of[:, :, u], None if jt_of is None else jt_of[:, :, u], weight_of[:, u])
+        contact = np.zeros((len(phase), 2, 2))
+        support = np.zeros((len(phase), 2))
         if not of.all_stepping:  # clips without foot events: their own contact flags, in each walk's order
             flags = np.zeros((used.size, len(phase), 2, 2))
             for u in np.flatnonzero(~feet).tolist():
@@ -756,8 +758,8 @@ class Locomotion(Controller):
             early = events.copy()
             early[:, :, 0] -= half_frame[:, None]
             flags, share = stance_of(early, phase, HANDOVER, STANCE_RAMP)
-            contact += flags * ws.sum(axis=1)[:, None, None]
-            support += share * ws.sum(axis=1)[:, None]
+            contact += flags * stepping_share[:, None, None]
+            support += share * stepping_share[:, None]
         if fade.size:
             share = standing / fade.size
             kept = 1.0 - standing
