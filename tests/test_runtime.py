@@ -92,6 +92,40 @@ def test_override_weight_blends_with_the_pose_below():
     assert np.allclose(h, 40.0 * w, atol=1e-6)  # slerp about one axis is linear in the angle
 
 
+def test_blocks_see_activities_changed_by_assignment():
+    """The runtime keeps its activities' schedule as arrays from block to block: an end, a blend, a start
+    or a priority assigned straight to an activity (as a controller taking over from another does), an
+    activity added or the activities forgotten, all show from the next block on, as when given at the start."""
+    def build(moved: bool):
+        rt = Runtime(fps=30, block_frames=1)
+        rt.add_character(synthetic_character("a"))
+        ending = rt.activate("a", Turn("spine3", 30.0, mode=Mode.OVERRIDE), 0.0, None if moved else 1.0,
+                             blend_out_s=0.0 if moved else 0.4)
+        later = rt.activate("a", Turn("spine4", 20.0), 5.0 if moved else 0.5, blend_in_s=0.3)
+        first = rt.activate("a", Turn("spine4", -50.0, mode=Mode.OVERRIDE), 0.0, priority=-5 if moved else 5)
+        return rt, ending, later, first
+
+    told, _, _, _ = build(False)
+    told.run(2.0)
+    changed, ending, later, first = build(True)
+    changed.run(0.3)  # ten blocks of one frame with the first schedule
+    ending.end_s, ending.blend_out_s = 1.0, 0.4
+    later.start_s = 0.5
+    first.priority = 5
+    changed.run(1.7)
+    for joint in ("spine3", "spine4"):
+        assert np.allclose(heading_deg(changed, "a", joint)[9:], heading_deg(told, "a", joint)[9:], atol=1e-9), joint
+    assert np.allclose(heading_deg(changed, "a", "spine3")[40:], 0.0, atol=1e-9)  # ended, blended out
+    assert np.allclose(heading_deg(changed, "a", "spine4")[15:], -50.0, atol=1e-9)  # the override now after the turn
+    changed.activate("a", Turn("spine2", 12.0), changed.time)
+    changed.step()
+    assert np.isclose(heading_deg(changed, "a", "spine2")[-1], 12.0)
+    changed.forget(0.1)
+    changed.run(0.5)
+    assert np.allclose(heading_deg(changed, "a", "spine2")[-5:], 12.0)
+    assert np.allclose(heading_deg(changed, "a", "spine3")[-5:], 0.0, atol=1e-9)
+
+
 def test_step_by_step_equals_one_run_and_blocks():
     from infuse_gaze import Gaze
 
