@@ -160,17 +160,21 @@ class Blink(Controller):
         if batch is None:
             return super().evaluate(jobs, block)
         level = np.zeros(jobs.local_times.shape)
+        closed = False
         for n, job in enumerate(jobs):
             times, quiet = job.local_times, job.state_of(BlinkQuiet)
             if quiet.after_s < times[0] and times[-1] < quiet.before_s:
                 continue  # no blink falls on these times
             closing = job.controller.level(job.binding.schedule, times)
             if closing is not None:
-                level[n] = closing
+                level[n], closed = closing, True
             last, following = job.binding.schedule.around(float(times[-1]))
             quiet.after_s, quiet.before_s = last + job.controller.blink_s, following
-        level, weight = level.T, jobs.weights.T  # (F, N)
         table = block.table
+        if not closed:  # every eye open: adding nothing leaves the pose as it is (morph weights stay in [0, 1])
+            table.morph_written[batch.morph_columns] = True
+            return
+        level, weight = level.T, jobs.weights.T  # (F, N)
         table.set_morphs(batch.morph_columns, level[:, batch.morph_rows], weight[:, batch.morph_rows], Mode.ADDITIVE)
         if batch.lid_columns.size:
             angles = level[:, batch.lid_rows] * batch.lid_pitch
