@@ -663,11 +663,15 @@ class Locomotion(Controller):
         # Laying the feet down follows their stance share, but is let go no faster than over
         # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
         # off, and the foot would turn from lying flat to the animation's toe off at once.
-        held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping) & (not has_idle)
         # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
         # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
         # off starting): there it does not fall.
-        laid = _slow_fall(flat, st.laid, np.where(held, 0.0, dt / LAY_RELEASE_S)[:, None] if held.any() else dt / LAY_RELEASE_S)
+        release: float | np.ndarray = dt / LAY_RELEASE_S
+        if not has_idle:
+            held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping)
+            if held.any():
+                release = np.where(held, 0.0, release)[:, None]
+        laid = _slow_fall(flat, st.laid, release)
         st.laid = laid[-1].copy()
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
