@@ -163,6 +163,13 @@ def test_cast_poses_are_every_characters_last_poses_side_by_side():
         assert np.array_equal(rotations[:, j0:j1], own[0]) and np.array_equal(roots[:, c], own[1])
         assert np.array_equal(morphs[:, m0:m1], own[2])
     assert len(rt.cast_poses(1000)[1]) == 33  # every frame evaluated
+    rt.rig("b").rotation = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), 0.5)  # turned as a scene turns one
+    rt.rig("a").position = np.array([2.0, 0.0, 2.0])
+    layout, rotations, roots, morphs = rt.cast_poses(4)
+    for name in names:
+        c = layout.character_index[name]
+        own = rt.last_poses(name, 4)
+        assert np.array_equal(rotations[:, slice(*layout.joint_spans[c])], own[0]) and np.array_equal(roots[:, c], own[1])
     rt.add_character(character, "d")
     rt.step(2)
     assert rt.cast_poses(2) is not None and rt.cast_poses(3) is None

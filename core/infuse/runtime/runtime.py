@@ -187,6 +187,7 @@ class Runtime:
         self._tables: list[PoseTable] = []  # the blocks' tables, oldest first (as the tracks' arrays, up to forget)
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
         self._schedule: _Schedule | None = None  # the activities as arrays, while they stay as they are
+        self._placed: tuple[TableLayout, list, tuple] | None = None  # what cast_poses places, while it stays
         self._speakers: list[Activity] = []  # the activities whose controller speaks
         self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
         #: Counts the targets and characters added: what :meth:`target` resolves a name to changes only with it.
@@ -529,14 +530,26 @@ class Runtime:
         tables.reverse()
         rotations, roots, morphs = (np.concatenate([getattr(table, key)[start:] for table, start in tables])
                                     for key in ("local_rotations", "root_translations", "morph_weights"))
-        turns = np.stack([rig.rotation for rig in layout.rigs])  # (C, 4)
-        positions = np.stack([rig.position for rig in layout.rigs])  # (C, 3)
-        placed = np.flatnonzero((positions != 0.0).any(axis=1) | (turns != quat.IDENTITY).any(axis=1))  # Rig.placed
+        placed, columns, turns, positions = self._placements(layout)
         if placed.size:  # Rig.place on every placed character at once
-            columns = np.array([span[0] for span in layout.joint_spans])[placed]
-            rotations[:, columns] = quat.multiply(turns[placed], rotations[:, columns])
-            roots[:, placed] = quat.rotate(turns[placed], roots[:, placed]) + positions[placed]
+            rotations[:, columns] = quat.multiply(turns, rotations[:, columns])
+            roots[:, placed] = quat.rotate(turns, roots[:, placed]) + positions
         return layout, rotations, roots, morphs
+
+    def _placements(self, layout: TableLayout) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The characters of ``layout`` placed in the world (:attr:`Rig.placed`): their indices (n,), their
+        root joints' table columns (n,), rotations (n, 4) and positions (n, 3); kept while each rig holds
+        the same placement arrays (a scene turning a character gives its rig a new rotation)."""
+        kept = self._placed
+        if kept is None or kept[0] is not layout or any(rig.rotation is not rotation or rig.position is not position
+                                                        for rig, (rotation, position) in zip(layout.rigs, kept[1])):
+            turns = np.stack([rig.rotation for rig in layout.rigs])  # (C, 4)
+            positions = np.stack([rig.position for rig in layout.rigs])  # (C, 3)
+            placed = np.flatnonzero((positions != 0.0).any(axis=1) | (turns != quat.IDENTITY).any(axis=1))
+            columns = np.array([span[0] for span in layout.joint_spans], dtype=np.int64)[placed]
+            kept = self._placed = (layout, [(rig.rotation, rig.position) for rig in layout.rigs],
+                                   (placed, columns, turns[placed], positions[placed]))
+        return kept[2]
 
     def last_translations(self, character, count: int) -> np.ndarray | None:
         """Local joint translations (n, J, 3) metres of the frames :meth:`last_poses` returns (joint 0's:
