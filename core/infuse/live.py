@@ -405,15 +405,17 @@ class LiveScene:
             poses = {name: runtime.last_poses(name, count) for name in names}
             for name, (_, root, _) in poses.items():
                 root[:, 1] -= self._foot_height(name)
-        carried = {}
-        for name in names:
-            translations = runtime.last_translations(name, count)
-            if translations is not None:
-                translations[:, 0] = poses[name][1]
-                carried[name] = translations
-        return [(first + k, {name: CharacterFrame(r[k], t[k], m[k], carried[name][k] if name in carried else None)
-                             for name, (r, t, m) in poses.items()})
-                for k in range(count)]
+        frames: list[tuple[int, dict]] = [(first + k, {}) for k in range(count)]
+        for name, (r, t, m) in poses.items():
+            translations = runtime.last_translations(name, count) if name in runtime.translated else None
+            if translations is None:
+                for (_, shown), rotations, root, morphs in zip(frames, r, t, m):
+                    shown[name] = CharacterFrame(rotations, root, morphs)
+            else:
+                translations[:, 0] = t
+                for (_, shown), rotations, root, morphs, moved in zip(frames, r, t, m, translations):
+                    shown[name] = CharacterFrame(rotations, root, morphs, moved)
+        return frames
 
     def _resize(self, frames: int, seconds: float) -> None:
         """Adapt :attr:`block_frames` to what the block just evaluated (``frames`` frames in ``seconds``)

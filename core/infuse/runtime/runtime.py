@@ -192,6 +192,9 @@ class Runtime:
         self._resolved: dict[str, Any] = {}  # target names resolved since the last target or character added
         #: Counts the targets and characters added: what :meth:`target` resolves a name to changes only with it.
         self.targets_version = 0
+        #: The characters some evaluated frame of which places joints by translation (what
+        #: :meth:`last_translations` can return frames of; for the others it returns None).
+        self.translated: set[str] = set()
         #: Seconds of the evaluating thread's CPU time spent in the controllers (their jobs handed over
         #: included), over every block so far: what evaluation costs beside the runtime's own bookkeeping.
         self.controllers_cpu_s = 0.0
@@ -443,6 +446,8 @@ class Runtime:
             track.rotations.append(pose.local_rotations)
             track.roots.append(pose.root_translations)
             track.translations.append(pose.joint_translations)
+            if pose.joint_translations is not None:
+                self.translated.add(name)
             track.morphs.append(pose.morph_weights)
             written = pose.morph_written
             track.morph_written = written if track.morph_written is None else track.morph_written | written
