@@ -402,7 +402,7 @@ class Locomotion(Controller):
             parts = list(zip(*(p for _, p in group)))  # each walk's rotations, root, translations or None, ...
             rot, root, contact, forward, spun, made = (np.concatenate(parts[k]) for k in (0, 1, 3, 4, 5, 6))
             jt = None if parts[2][0] is None else np.concatenate(parts[2])
-            ends = np.cumsum([0] + [len(p[0]) for _, p in group]).tolist()
+            ends = [0, *itertools.accumulate(len(p[0]) for _, p in group)]
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
                 cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
@@ -829,7 +829,8 @@ class Locomotion(Controller):
         goal[..., 1] = low + (pos[:, :, 2, 1] - low) * (1.0 - down)
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
-        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=(np.abs(stride - 1.0) > 1e-6).astype(float),
+        shorter = np.abs(stride - 1.0) > 1e-6  # the frames whose steps are shortened (all, mostly: no weights then)
+        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=None if shorter.all() else shorter.astype(float),
                    pole=forward, end_rotation=feet[:, :, 0], chains=(g_rot[frames:, :, :4], g_pos[frames:, :, :4]), distance=False)
         if stance_feet is not None and b.balls_on_ankles.size:
             k = b.balls_on_ankles
