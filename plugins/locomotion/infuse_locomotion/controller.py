@@ -657,7 +657,7 @@ class Locomotion(Controller):
         fading = bool(standing.max() > 1e-6)  # into the idle: played at the activity's times (else not asked for)
         mover = np.full(len(wm), b.movers[int(np.argmax(w.sum(axis=0)))])  # the joint the walk travels on
         rot, root, jt, contact, turn_q, forward, down, flat = yield Ask(
-            _placed, (id(b), fading), (b,), (wm, np.broadcast_to(order, wm.shape), phase, standing,
+            _placed, (id(b), fading), (b,), (wm, order[None].repeat(len(wm), axis=0), phase, standing,
                                              times if fading and has_idle else None, 0.5 * advance, settle, rest,
                                              stride, heading, px, pz, mover))
         # Laying the feet down follows their stance share, but is let go no faster than over
