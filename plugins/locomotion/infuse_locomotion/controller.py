@@ -439,7 +439,9 @@ class Locomotion(Controller):
                         st.playing = (pick.name, float(times[i]), transitions.placement(pick, st.x, st.z, st.heading, asked))
             start, part, handing = i, None, None
             if st.playing is None:
-                before = copy.deepcopy(st) if b.stops and self.steering.path is not None else None
+                # A shallow copy to come back to: the steered blend replaces the state's fields, never
+                # writes into its arrays (only the feet's pinning does, after every walk is driven).
+                before = copy.copy(st) if b.stops and self.steering.path is not None else None
                 part = yield from self._steered(b, st, times[i:], dt, job.report)
                 stop = None if before is None else self._stop_at(b, before, st, block.fps, dt)
                 if stop is not None:  # walk up to where the stop begins, then play it
