@@ -8,7 +8,7 @@ import infuse
 from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Clip, Controller, Layer, Mode, Runtime, Tracks, blend_weights, controller_components
-from infuse.runtime.swing import clamp_ellipse, ellipse_scale, local_offsets, swing, swing_angles
+from infuse.runtime.swing import EllipseClamp, clamp_ellipse, ellipse_scale, local_offsets, swing, swing_angles
 
 from runtime_characters import synthetic_character
 
@@ -58,6 +58,23 @@ def test_swing_round_trip_and_ellipse():
     assert np.all(ellipse_scale(ch, cp, 0.5, 0.3, 0.2) <= 1 + 1e-12)
     inside = ellipse_scale(h, p, 0.5, 0.3, 0.2) <= 1
     assert np.allclose(ch[inside], h[inside]) and np.allclose(cp[inside], p[inside])
+
+
+def test_ellipse_clamp_with_fixed_limits_is_clamp_ellipse():
+    """EllipseClamp gives clamp_ellipse's angles bit for bit, with every limit open (its short way) or some
+    locked, on angles inside and outside the limits, zeros of either sign included."""
+    rng = np.random.default_rng(4)
+    heading, pitch = rng.uniform(-1.5, 1.5, (6, 20)), rng.uniform(-1.5, 1.5, (6, 20))
+    heading[0, :3], pitch[1, :3] = (0.0, -0.0, 0.0), (-0.0, 0.0, -0.0)
+    limits = rng.uniform(0.2, 0.9, (3, 20))
+    locked = limits.copy()
+    locked[0, ::4], locked[2, 1::5] = 0.0, 0.0
+    for chosen in (limits, locked):
+        clamp = EllipseClamp(*chosen)
+        assert clamp.open == (chosen is limits)
+        for got, want in zip(clamp(heading, pitch), clamp_ellipse(heading, pitch, *chosen)):
+            assert np.array_equal(got, want)
+    assert np.any(ellipse_scale(heading, pitch, *limits) > 1.0) and np.any(ellipse_scale(heading, pitch, *limits) < 1.0)
 
 
 def test_blend_weights_ramps_and_steps():

@@ -83,6 +83,26 @@ def clamp_ellipse(heading, pitch, heading_limit, up_limit, down_limit) -> tuple[
     return heading * factor, pitch * factor
 
 
+class EllipseClamp:
+    """:func:`clamp_ellipse` with fixed limits (radians; arrays broadcasting against the angles): what
+    depends only on them is worked out once. With every limit above zero (no axis locked, no division
+    by zero) it skips the locking and the guards, to the same results."""
+
+    def __init__(self, heading_limit, up_limit, down_limit):
+        self.limits = tuple(np.asarray(x, dtype=np.float64) for x in (heading_limit, up_limit, down_limit))
+        self.open = all(bool((limit > 0).all()) for limit in self.limits)
+
+    def __call__(self, heading: np.ndarray, pitch: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(heading, pitch) scaled toward zero onto the elliptical limit when outside it."""
+        if not self.open:
+            return clamp_ellipse(heading, pitch, *self.limits)
+        heading_limit, up_limit, down_limit = self.limits
+        a, b = heading / heading_limit, pitch / np.where(pitch >= 0.0, up_limit, down_limit)
+        scale = np.sqrt(a * a + b * b)
+        factor = np.where(scale > 1.0, 1.0 / np.maximum(scale, 1e-12), 1.0)
+        return heading * factor, pitch * factor
+
+
 #: The aligned-frame axis each of heading, pitch and roll turns about, with its sign (see :func:`swing`).
 SWING_AXES = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 

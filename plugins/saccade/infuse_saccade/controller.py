@@ -16,7 +16,7 @@ from infuse import quaternions as quat
 from infuse.errors import UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.controller import table_columns
-from infuse.runtime.swing import clamp_ellipse, swing, swing_angles
+from infuse.runtime.swing import EllipseClamp, clamp_ellipse, swing, swing_angles
 
 from .model import MODES, SaccadeSchedule, ease_out, saccade_duration
 
@@ -157,7 +157,7 @@ class Saccades(Controller):
         rows = batch.rows
         turn = _apply_per_eye(batch.to_turn, block.table.local_rotations[:, batch.columns])
         heading, pitch, roll = swing_angles(turn)
-        heading, pitch = clamp_ellipse(heading + radians[rows, :, 0].T, pitch + radians[rows, :, 1].T, *batch.limits)
+        heading, pitch = batch.clamp(heading + radians[rows, :, 0].T, pitch + radians[rows, :, 1].T)
         block.table.set_rotations(batch.columns, _apply_per_eye(batch.from_turn, swing(heading, pitch, roll)), None,
                                   Mode.OVERRIDE, [jobs[k].pose for k in batch.seeing])
 
@@ -209,14 +209,14 @@ class SaccadeState:
 class _Batch:
     """Saccade jobs side by side: ``seeing`` (N',) the jobs whose characters have eyes; per eye (K = 2 N')
     its table ``columns``, its job among ``seeing`` (``rows``), ``to_turn`` and ``from_turn`` (K, 4, 4)
-    and ``limits``: (heading, up, down) radians, each (K,)."""
+    and the ``clamp`` of its limits: (heading, up, down) radians, each (K,)."""
 
     seeing: list
     columns: np.ndarray
     rows: np.ndarray
     to_turn: np.ndarray
     from_turn: np.ndarray
-    limits: tuple
+    clamp: EllipseClamp
 
     @classmethod
     def of(cls, jobs) -> "_Batch | None":
@@ -229,10 +229,10 @@ class _Batch:
         columns, rows = placed
         rows = np.searchsorted(seeing, rows)  # from jobs to the jobs that see
         if not chosen:
-            return cls(seeing, columns, rows, np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), (np.zeros(0),) * 3)
+            return cls(seeing, columns, rows, np.zeros((0, 4, 4)), np.zeros((0, 4, 4)), EllipseClamp(*(np.zeros(0),) * 3))
         limits = np.concatenate([np.repeat(job.controller.eye_limits[None], len(job.binding.eyes), axis=0) for job in chosen])
         return cls(seeing, columns, rows, np.concatenate([job.binding.to_turn for job in chosen]),
-                   np.concatenate([job.binding.from_turn for job in chosen]), tuple(limits.T))
+                   np.concatenate([job.binding.from_turn for job in chosen]), EllipseClamp(*limits.T))
 
 
 def _apply_per_eye(matrices: np.ndarray, q: np.ndarray) -> np.ndarray:
