@@ -158,6 +158,12 @@ class LocomotionBinding:
         return body
 
     @cached_property
+    def stop_marks(self) -> dict:
+        """Each stop clip's phase at its start and its travel (:func:`~.controller._stop_marks`), by the
+        clip's name and the frame rate, filled as walks come to stop."""
+        return {}
+
+    @cached_property
     def clip_sets(self) -> dict:
         """What the blend takes of the binding for each set of clips it blends
         (:class:`~.controller.ClipSet`, by the clips' indices as bytes), filled as sets come up."""

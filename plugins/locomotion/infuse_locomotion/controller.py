@@ -492,10 +492,9 @@ class Locomotion(Controller):
         off = np.abs((np.arctan2(last[0] - x, last[1] - z) - heading + np.pi) % (2.0 * np.pi) - np.pi)
         best = None
         for clip in b.stops:
-            at = transitions.stop_phase(clip)
+            at, travel = _stop_marks(b, clip, fps)
             if at is None:
                 continue
-            travel = transitions.stop_travel(clip, fps)
             # The clip's phase reached between this frame and the next (each frame's own advance, so
             # the frame found is the same whichever frames are evaluated together).
             ok = ((np.mod(at - phase, 1.0) < advance) & (advance < 0.5)
@@ -630,7 +629,9 @@ class Locomotion(Controller):
             to_x, to_z = path[-1][0] - px, path[-1][1] - pz  # the last point from each frame, as the steering saw it
             bearing = (np.arctan2(to_x, to_z) - direction - heading + np.pi) % (2.0 * np.pi) - np.pi
             cruise = np.array([self._asked(t, b.limit) for t in times.tolist()])  # the speed it speeds up to
-            pace = (pacing.pacing_for(b.stops, 1.0 / dt, b.walk_speeds, b.walk_cadences, st.phase, self.steering.max_accel),
+            fps = 1.0 / dt
+            pace = (pacing.pacing_for(b.stops, fps, b.walk_speeds, b.walk_cadences, st.phase, self.steering.max_accel,
+                                      [_stop_marks(b, c, fps) for c in b.stops]),
                     np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing, cruise)
         # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
         # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
@@ -1168,6 +1169,18 @@ def _toes_slowed(b: LocomotionBinding, since: np.ndarray, across: np.ndarray, be
     if not math.isfinite(b.landing_rad_s):
         return pitch, -pitch
     return pitch, _slow_fall(-pitch[:, None], np.array([before]), b.landing_rad_s * dt)[:, 0]
+
+
+def _stop_marks(b: LocomotionBinding, clip, fps: float) -> tuple[float | None, float]:
+    """A stop ``clip``'s gait phase at its start (:func:`~.transitions.stop_phase`, None without one) and
+    how far (m) it travels at ``fps`` (:func:`~.transitions.stop_travel`): worked out once, kept on ``b``
+    (a walk heading for its last point looks at every stop clip every block)."""
+    key = (clip.name, fps)
+    known = b.stop_marks.get(key)
+    if known is None:
+        at = transitions.stop_phase(clip)
+        known = b.stop_marks[key] = (at, transitions.stop_travel(clip, fps) if at is not None else 0.0)
+    return known
 
 
 def _resume(n: int, drive, value, asked: dict, done: dict) -> None:

@@ -130,14 +130,16 @@ def straight_cadences(periods: np.ndarray, slow: np.ndarray) -> np.ndarray:
 
 
 def pacing_for(stops: list, fps: float, grid: np.ndarray, cadences: np.ndarray, phase: float,
-               accel: float = math.inf) -> StopPacing | None:
+               accel: float = math.inf, marks: list[tuple[float | None, float]] | None = None) -> StopPacing | None:
     """A :class:`StopPacing` for the stop clips ``stops`` (whose phase at their start is known) at
     ``fps``, with the straight walk's ``cadences`` (S,) at speeds ``grid`` (S,), from the gait's
-    ``phase``, the walk speeding up at ``accel`` m/s²; None without stops."""
+    ``phase``, the walk speeding up at ``accel`` m/s²; None without stops. ``marks``: each stop's
+    phase at its start and travel (m) at ``fps`` where already known (else worked out here)."""
     if not stops:
         return None
-    return StopPacing(phases=np.array([transitions.stop_phase(c) for c in stops]),
-                      travels=np.array([transitions.stop_travel(c, fps) for c in stops]),
+    if marks is None:
+        marks = [(transitions.stop_phase(c), transitions.stop_travel(c, fps)) for c in stops]
+    return StopPacing(phases=np.array([m[0] for m in marks]), travels=np.array([m[1] for m in marks]),
                       speeds=np.array([c.parameters["speed_start"] for c in stops]), grid=np.asarray(grid),
                       cadences=np.asarray(cadences), phase=float(phase), accel=float(accel))
 
