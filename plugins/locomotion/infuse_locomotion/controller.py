@@ -133,6 +133,7 @@ TOUCH = 0.03
 _LEAST_WEIGHT = 1e-6
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+_ORIGIN = np.zeros(3)
 _GROUND = np.array([1.0, 0.0, 1.0])  # keeps a point's ground coordinates (x, z)
 
 
@@ -876,8 +877,9 @@ class Locomotion(Controller):
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
             touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1], dt)
             touching = touched > 0  # (F, 2) held where it touched, before its blend's strike
-            anchors_all[a0:a1] = np.where(touched > 0, touched, anchors_all[a0:a1])
-            posed_all[a0:a1] |= touched == footing.BALL
+            if touching.any():
+                anchors_all[a0:a1] = np.where(touching, touched, anchors_all[a0:a1])
+                posed_all[a0:a1] |= touched == footing.BALL
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
             frames = a1 - a0
             feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
@@ -889,10 +891,11 @@ class Locomotion(Controller):
             for k in range(2):
                 goal, weight, rise, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], ankle_pos[:, k], turns[a0:a1, k]
                 prev = int(st.anchor[k])
-                offset, pin, released, lifted = st.offset[k].copy(), st.pins[k].copy(), float(st.released[k]), st.rise[k].copy()
-                landed, landed_as, across, left = st.landed[k].copy(), st.landed_as[k].copy(), st.across[k].copy(), st.foot_turn[k].copy()
-                landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k].copy()
-                let_go, free_s = st.let_go[k].copy(), float(st.free_s[k])
+                # Views of the carried state: never written in place here, only replaced (stored back below).
+                offset, pin, released, lifted = st.offset[k], st.pins[k], float(st.released[k]), st.rise[k]
+                landed, landed_as, across, left = st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k]
+                landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k]
+                let_go, free_s = st.let_go[k], float(st.free_s[k])
                 clear = bool(st.clear[k])
                 foot_heading, held_swivel, toes_up = float(st.foot_heading[k]), float(st.held_swivel[k]), float(st.toes_up[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
@@ -1131,12 +1134,15 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     strike puts it. Not before it has been off the ground long enough for its pinning's correction to
     fade (:data:`HOLD_S` and :data:`STEP_RELEASE_S`): held sooner, it stood where the correction left
     it, short of its place (a foot held behind as the pelvis came over it, 30 cm)."""
-    both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
-    heel = both[:, :, 0] + np.stack([_heel_of(b, k, both[:, k, 1] - both[:, k, 0]) for k in range(2)], axis=1)
-    by_heel = (heel[..., 1] <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
-    sole = np.where(by_heel[..., None], heel, both[:, :, 1])  # the lower sole point
-    lowest = sole[..., 1] - b.sole_floor
     free = anchors == footing.FREE
+    if not made.any() or not free.any():  # no swinging foot of a made step: none held
+        none: np.ndarray = np.zeros(anchors.shape, np.int64)
+        st.touched = none[-1].copy()
+        return none
+    both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
+    heel = both[:, :, 0, 1] + _heels_of(b, both[:, :, 1] - both[:, :, 0])[..., 1]  # (F + 1, 2) heights
+    by_heel = (heel <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
+    lowest = np.where(by_heel, heel, both[:, :, 1, 1]) - b.sole_floor  # the lower sole point's
     f = len(anchors)
     idx = np.arange(f)[:, None]
     # Frames off the ground (F, 2): from the swing's first frame, or carried from the last block.
@@ -1713,8 +1719,21 @@ def _heel_of(b: LocomotionBinding, k: int, reach: np.ndarray) -> np.ndarray:
     (:func:`infuse.contacts.foot_frames`) as the skate measure carries it; zeros (the ankle) without."""
     if b.heel_levers is None:
         return np.zeros_like(reach)
-    heel: np.ndarray = np.einsum("i,...ij->...j", b.heel_levers[k], foot_frames(np.zeros_like(reach), reach))
-    return heel
+    return _levered(b.heel_levers[k], foot_frames(_ORIGIN, reach))
+
+
+def _heels_of(b: LocomotionBinding, reach: np.ndarray) -> np.ndarray:
+    """(..., 2, 3) :func:`_heel_of` of both feet at once, their ankle-to-ball vectors ``reach`` (..., 2, 3)."""
+    if b.heel_levers is None:
+        return np.zeros_like(reach)
+    return _levered(b.heel_levers, foot_frames(_ORIGIN, reach))
+
+
+def _levered(lever: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """(..., 3) offsets ``lever`` (..., 3) in frames ``frames`` (..., 3, 3) (rows the frame's axes) in the
+    world, written out row by row (einsum's iterator costs more on a block's few frames)."""
+    out: np.ndarray = lever[..., 0:1] * frames[..., 0, :] + lever[..., 1:2] * frames[..., 1, :] + lever[..., 2:3] * frames[..., 2, :]
+    return out
 
 
 def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.ndarray | None:
@@ -1725,7 +1744,7 @@ def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.
     if b.heel_levers is None:
         return None
     reach = g_pos[:, :, 4] - g_pos[:, :, 2]
-    heel = g_pos[:, :, 2, 1] + np.stack([_heel_of(b, k, reach[:, k]) for k in range(2)], axis=1)[..., 1]
+    heel = g_pos[:, :, 2, 1] + _heels_of(b, reach)[..., 1]
     up: np.ndarray = heel - g_pos[:, :, 4, 1] > b.grounded_m
     return up
 
