@@ -87,21 +87,24 @@ class Job:
 class Jobs(list):
     """Every job of one controller class, layer and priority in a block (a list of :class:`Job`), with
     what a class evaluating them together needs at hand: ``weights`` (N, F) and ``local_times`` (N, F),
-    the jobs' own stacked, ``table``, the block's :class:`~infuse.runtime.pose.PoseTable`, and :meth:`memo`."""
+    the jobs' own stacked, ``table``, the block's :class:`~infuse.runtime.pose.PoseTable`, and :meth:`memo`
+    (``ids``: the jobs' activities' ids, when the caller has them)."""
 
-    def __init__(self, jobs, weights: np.ndarray, local_times: np.ndarray, table: PoseTable, memo: list):
+    def __init__(self, jobs, weights: np.ndarray, local_times: np.ndarray, table: PoseTable, memo: list,
+                 ids: tuple | None = None):
         super().__init__(jobs)
         self.weights = weights
         self.local_times = local_times
         self.table = table
         self._memo = memo
+        self._ids = ids
 
     def memo(self, make, chosen=None):
         """``make(jobs)``, worked out again only when these jobs (or the ``chosen`` ones among them) are
         not the activities they were at the last call (for what depends only on the activities: their
         bindings stacked, their settings)."""
         jobs = self if chosen is None else chosen
-        key = tuple(job.activity.id for job in jobs)
+        key = self._ids if chosen is None and self._ids is not None else tuple(job.activity.id for job in jobs)
         if self._memo[0] != key:
             self._memo[:] = [key, make(jobs)]
         return self._memo[1]

@@ -128,16 +128,16 @@ class _Schedule:
         start, end, blend_in, blend_out = timing.T
         self.on_from = np.where(blend_in > 0, start + blend_in, start) + 1e-9
         self.on_until = np.where(blend_out > 0, end - blend_out, end) - 2e-9
-        self._groups: dict[bytes, list[tuple[tuple, list[tuple[Activity, str]], np.ndarray]]] = {}
+        self._groups: dict[bytes, list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]] = {}
 
     def current(self, activities: list[Activity]) -> bool:
         """Whether these arrays still describe ``activities`` (the runtime's list)."""
         return activities is self.activities and self.key == (Activity.changes, len(activities))
 
-    def groups(self, active: np.ndarray) -> list[tuple[tuple, list[tuple[Activity, str]], np.ndarray]]:
+    def groups(self, active: np.ndarray) -> list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]:
         """The groups of the activities of indices ``active`` in evaluation order (by layer, priority and
         first activation): (layer, priority, controller class) keys with their activities and
-        characters' names, and their rows among ``active``."""
+        characters' names, their rows among ``active`` and their ids."""
         key = active.tobytes()
         found = self._groups.get(key)
         if found is None:
@@ -146,8 +146,8 @@ class _Schedule:
             for k, a in enumerate(chosen):
                 groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
             order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]].id))
-            found = self._groups[key] = [(g, [(chosen[k], chosen[k].rig.name) for k in groups[g]], np.array(groups[g]))
-                                         for g in order]
+            found = self._groups[key] = [(g, [(chosen[k], chosen[k].rig.name) for k in groups[g]], np.array(groups[g]),
+                                          tuple(chosen[k].id for k in groups[g])) for g in order]
         return found
 
 
@@ -434,10 +434,10 @@ class Runtime:
             weights = blend_weights_of(times, *schedule.timing[playing].T)
         local_times = times[None] - schedule.starts[playing, None]
         started = time.thread_time()
-        for key, members, rows in groups:
+        for key, members, rows, ids in groups:
             group_weights, group_times = weights[rows], local_times[rows]
             jobs = Jobs([Job(a, poses[name], w, t) for (a, name), w, t in zip(members, group_weights, group_times)],
-                        group_weights, group_times, table, self._memos.setdefault(key, [None, None]))
+                        group_weights, group_times, table, self._memos.setdefault(key, [None, None]), ids)
             key[2].evaluate(jobs, block)
         self.controllers_cpu_s += time.thread_time() - started
         for name, track in self._tracks.items():
