@@ -166,11 +166,10 @@ def within_reach(goal: np.ndarray, leg: np.ndarray) -> np.ndarray:
     and never locks straight: a goal pinned beyond reach that comes back within it would bend a
     straight knee by tens of degrees in one frame.
     """
-    length = np.linalg.norm(leg[:, 1] - leg[:, 0], axis=-1) + np.linalg.norm(leg[:, 2] - leg[:, 1], axis=-1)
-    length = np.maximum(length, 1e-12)
+    length = np.maximum(_length(leg[:, 1] - leg[:, 0]) + _length(leg[:, 2] - leg[:, 1]), 1e-12)
     away = goal - leg[:, 0]
-    share = np.linalg.norm(away, axis=-1) / length
-    start = np.maximum(np.linalg.norm(leg[:, 2] - leg[:, 0], axis=-1) / length, SOFT_REACH)
+    share = _length(away) / length
+    start = np.maximum(_length(leg[:, 2] - leg[:, 0]) / length, SOFT_REACH)
     band = np.maximum(REACH - start, 0.0)
     excess = np.maximum(share - start, 0.0)
     eased = start + np.where(band > 1e-9, band * np.tanh(excess / np.maximum(band, 1e-9)), 0.0)

@@ -887,6 +887,7 @@ class Locomotion(Controller):
             # The feet one frame earlier (from the last block at the first frame).
             before = np.concatenate((st.last[None], feet_pos[:-1]))
             changes = anchors != np.concatenate((st.anchor[None], anchors[:-1]))
+            changing = changes.any(axis=0).tolist()
             heading, turned = forward[a0:a1], spun[a0:a1]
             for k in range(2):
                 goal, weight, rise, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], ankle_pos[:, k], turns[a0:a1, k]
@@ -899,12 +900,20 @@ class Locomotion(Controller):
                 clear = bool(st.clear[k])
                 foot_heading, held_swivel, toes_up = float(st.foot_heading[k]), float(st.held_swivel[k]), float(st.toes_up[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
-                bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()})
+                bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()}) if changing[k] else [0, frames]
                 i = 0
                 while i < len(bounds) - 1:  # each stretch held alike (one may split: a ball aloft, below)
                     s, e = bounds[i], bounds[i + 1]
                     i += 1
                     kind = int(anchors[s, k])
+                    if kind == footing.FREE and prev == footing.FREE and released >= RELEASE_S:
+                        # Let go long enough ago that its corrections have faded out (and were dropped then):
+                        # it swings as the animation has it (no weight, no turn), only its clocks run on,
+                        # as below with the ball up on every frame.
+                        quick = np.where(made[a0 + s:a0 + e], RELEASE_S / STEP_RELEASE_S, 1.0)
+                        released = float((released + dt * np.cumsum(quick))[-1])
+                        free_s = float((round(free_s / dt) + (e - s)) * dt)
+                        continue
                     if kind == footing.FREE:
                         if prev != footing.FREE:
                             released, free_s = 0.0, 0.0
@@ -961,8 +970,9 @@ class Locomotion(Controller):
                             # Off the ground, kept within reach as a foot without a ball is (below): a ball let go
                             # far behind (a long foot's, pinned where it landed) held the leg straight toward it,
                             # and the knee bent by 18 degrees and the hip turned by 46 in the frame it came back.
-                            lifting = s + np.flatnonzero(up)
-                            goal[lifting] = footing.within_reach(goal[lifting], g_pos[lifting, k, :3])
+                            if up.any():
+                                lifting = s + np.flatnonzero(up)
+                                goal[lifting] = footing.within_reach(goal[lifting], g_pos[lifting, k, :3])
                             held = np.nonzero(~up)[0]
                             if held.size:  # still pivoting about the ball held on the ground: the heel rises where the hip cannot reach
                                 h = s + held
@@ -1105,7 +1115,8 @@ class Locomotion(Controller):
         # goal is kept within reach, the knee bending at least as the animation's.
         for k in np.flatnonzero(~b.has_ball).tolist():
             free = anchors_all[:, k] == footing.FREE
-            goals[free, k] = footing.within_reach(goals[free, k], g_pos_all[free, k, :3])
+            if free.any():
+                goals[free, k] = footing.within_reach(goals[free, k], g_pos_all[free, k, :3])
         if rises.any():
             g_rot_all[:, :, 2] = quat.multiply(g_rot_all[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot_all[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
