@@ -870,19 +870,20 @@ class Locomotion(Controller):
             shared = on_ball & ((contact > 1e-6) & (contact < 1.0 - 1e-6)).any(axis=-1)
             posed_all |= shared
         goals = g_pos_all[:, :, 2].copy()
+        feet_all = g_pos_all[:, :, 2::2]  # (F, 2, 2, 3) ankle and ball
         weights = np.zeros(anchors_all.shape)
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
-            touched = _touch_downs(b, st, anchors_all[a0:a1], g_pos_all[a0:a1][:, :, [2, 4]], made[a0:a1], dt)
+            touched = _touch_downs(b, st, anchors_all[a0:a1], feet_all[a0:a1], made[a0:a1], dt)
             touching = touched > 0  # (F, 2) held where it touched, before its blend's strike
             if touching.any():
                 anchors_all[a0:a1] = np.where(touching, touched, anchors_all[a0:a1])
                 posed_all[a0:a1] |= touched == footing.BALL
             g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
             frames = a1 - a0
-            feet_pos = g_pos[:, :, [2, 4]]  # (F, 2, 2, 3) ankle and ball
+            feet_pos = feet_all[a0:a1]
             ankle_pos = g_pos[:, :, 2]
             # The feet one frame earlier (from the last block at the first frame).
             before = np.concatenate((st.last[None], feet_pos[:-1]))
@@ -1077,7 +1078,8 @@ class Locomotion(Controller):
                             # Touching down by its ball, the ball goes down as the animation's does (never
                             # held above it: a ball held where it first touched, the animation's foot
                             # coming down on, held the foot up in the air and dropped it at the strike).
-                            held_at = np.tile(pin, (e - s, 1))
+                            held_at = np.empty((e - s, 3))
+                            held_at[:] = pin
                             held_at[:, 1] = np.minimum(pin[1], np.minimum.accumulate(np.where(touching[s:e, k], feet_pos[s:e, k, 1, 1], np.inf)))
                             pin = held_at[-1].copy()
                             goal[s:e] = held_at - reach
@@ -1094,9 +1096,9 @@ class Locomotion(Controller):
                         if kind == footing.ANKLE:
                             goal[s:e, 1] = np.where(touching[s:e, k], np.minimum(goal[s:e, 1], pinned), goal[s:e, 1])
                         weight[s:e] = 1.0
-                        ball_goal = goal[e - 1] + quat.rotate(turn[e - 1], lever[e - 1])
+                        ball_goal = goal[e - 1] + reach[-1]
                         if kind == footing.BALL:
-                            balls = goal[s:e] + quat.rotate(turn[s:e], lever[s:e])
+                            balls = goal[s:e] + reach
                             goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls,
                                                                    across)
                             ball_goal = balls[-1]
@@ -1656,7 +1658,8 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
     # turns are about stays across the foot when its ankle-to-tip direction points down or back (a foot
     # pitched over its ball at toe off), which would flip it and bend the toes down a frame.
     across = quat.rotate(g_rot[:, :, 1], floors.across)
-    ahead = np.stack((across[..., 2], np.zeros(across.shape[:-1]), -across[..., 0]), axis=-1)
+    ahead = np.zeros(across.shape)
+    ahead[..., 0], ahead[..., 2] = across[..., 2], -across[..., 0]
     angle = None
     if floors.kept.any():
         point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
@@ -1675,10 +1678,16 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> Non
         return
     tip = quat.rotate(ball_rot, floors.tip)
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ahead)  # across the whole foot
-    up = np.empty(angle.shape)
-    for st, a0, a1 in runs:
-        up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, floors.release * dt)
-        st.toe_bend = up[a1 - 1].copy()
+    if len(runs) > 1 and len({a1 - a0 for _, a0, a1 in runs}) == 1:  # walks as long: side by side, in one go
+        up = _slow_fall(angle.reshape(len(runs), -1, angle.shape[-1]), np.stack([st.toe_bend for st, _, _ in runs]),
+                        floors.release * dt).reshape(angle.shape)
+        for st, _, a1 in runs:
+            st.toe_bend = up[a1 - 1].copy()
+    else:
+        up = np.empty(angle.shape)
+        for st, a0, a1 in runs:
+            up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, floors.release * dt)
+            st.toe_bend = up[a1 - 1].copy()
     up = up * floors.toes
     if up.any():  # toes bent (else they keep their rotations)
         ball_rot = quat.multiply(quat.from_axis_angle(axis, up), ball_rot)
@@ -2083,13 +2092,13 @@ def _scatter(before: np.ndarray, active: np.ndarray, values: np.ndarray, frames:
 
 
 def _slow_fall(x: np.ndarray, before: np.ndarray, step: float | np.ndarray) -> np.ndarray:
-    """(F, K) ``x`` (F, K) falling by at most ``step`` a frame (a number, or each frame's (F, 1)), from
-    ``before`` (K,) a frame before the first; rising as ``x`` does. Each frame's value is the largest
-    of ``x`` at it and of every earlier value less the steps since."""
+    """([R,] F, K) ``x`` ([R,] F, K) falling by at most ``step`` a frame (a number, or each frame's ([R,] F, 1)),
+    from ``before`` ([R,] K) a frame before the first; rising as ``x`` does. Each frame's value is the
+    largest of ``x`` at it and of every earlier value less the steps since (R: runs of frames side by side)."""
     if np.ndim(step):
-        fallen = np.cumsum(np.broadcast_to(step, x.shape), axis=0)  # the steps down to each frame from before the first
-        out: np.ndarray = np.maximum(np.maximum.accumulate(x + fallen, axis=0) - fallen, before[None] - fallen)
+        fallen = np.cumsum(np.broadcast_to(step, x.shape), axis=-2)  # the steps down to each frame from before the first
+        out: np.ndarray = np.maximum(np.maximum.accumulate(x + fallen, axis=-2) - fallen, before[..., None, :] - fallen)
         return out
-    k = np.arange(len(x))[:, None]
-    return np.maximum(np.maximum.accumulate(x + step * k, axis=0) - step * k, before[None] - step * (k + 1))
+    k = np.arange(x.shape[-2])[:, None]
+    return np.maximum(np.maximum.accumulate(x + step * k, axis=-2) - step * k, before[..., None, :] - step * (k + 1))
 
