@@ -105,6 +105,66 @@ def test_latency_recovers_within_a_second_of_a_slow_moment():
         assert np.median(latencies) <= 2 / FPS + 0.010, (before, after)
 
 
+class Costly(Controller):
+    """A controller whose blocks cost ``block_s`` plus ``frame_s`` per frame of wall clock (it moves
+    nothing), and ``slow_s`` more while :attr:`slow` is set."""
+
+    kind = "costly"
+
+    def __init__(self, block_s: float, frame_s: float, slow_s: float = 0.035):
+        self.block_s, self.frame_s, self.slow_s = block_s, frame_s, slow_s
+        self.slow = threading.Event()
+
+    def evaluate_one(self, job, block) -> None:
+        time.sleep(self.block_s + self.frame_s * len(block.frames) + (self.slow_s if self.slow.is_set() else 0.0))
+
+
+def _grown_then(costly: Costly, seconds: float) -> tuple[LiveScene, list[tuple[int, int]], int]:
+    """A live scene with ``costly`` on its character, slowed for 0.6 s (blocks grow), then left for
+    ``seconds``: the scene, the blocks (first frame, frames) evaluated in that time and the frames
+    missed in it (its first 0.2 s left out: the slow moment's last block)."""
+    scene = Scene(fps=FPS, quiet=True)
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob")
+    scene.runtime.activate("bob", costly, 0.0)
+    live = LiveScene(scene)
+    with live:
+        time.sleep(0.3)
+        costly.slow.set()
+        time.sleep(0.6)
+        assert live.block_frames >= 2, live.stats.summary()
+        costly.slow.clear()
+        frame = live.scene.runtime.frame
+        time.sleep(0.2)
+        missed = live.stats.missed
+        time.sleep(seconds - 0.2)
+        blocks = [b for b in live.stats.blocks if b[0] >= frame]
+        missed = live.stats.missed - missed
+    return live, blocks, missed
+
+
+def test_shorter_blocks_that_only_a_try_shows_to_fit_are_tried_and_kept():
+    """Blocks cost 5 ms plus 3 ms a frame: one frame 8 ms, under 60% of a frame's time, but two frames
+    11 ms, over 50% of one frame's, so the bound on a shorter block cannot say one frame would fit. After
+    a slow moment grows the blocks, the loop tries blocks of one frame within a second, keeps them, and
+    misses no frame."""
+    live, blocks, missed = _grown_then(Costly(0.005, 0.003), 2.0)
+    assert live.block_frames == 1, live.stats.summary()
+    late = [frames for first, frames in blocks if first >= blocks[0][0] + FPS]  # the last second
+    assert late and np.mean(np.array(late) == 1) > 0.9, late
+    assert missed == 0, (missed, blocks)
+
+
+def test_a_shorter_block_that_does_not_fit_is_tried_less_and_less_often():
+    """Blocks cost 8 ms plus 3 ms a frame: one frame 11 ms (over 60% of a frame's time), two frames 14 ms
+    (7 ms a frame). Tries of one-frame blocks grow back, each try waiting twice as long as the last:
+    over 3 s, at most four tries of three blocks or so; no frame missed."""
+    live, blocks, missed = _grown_then(Costly(0.008, 0.003), 3.0)
+    ones = [frames for _, frames in blocks].count(1)
+    assert live.block_frames == 2, live.stats.summary()
+    assert 0 < ones <= 4 * 4, blocks
+    assert missed == 0, (missed, blocks)
+
+
 def test_a_burst_of_slow_commands_leaves_the_lead_alone():
     """Twenty commands of 8 ms each, submitted at once: each is applied between two frames, where it fits,
     so frames keep coming on time and the lead (measured on the evaluation only) does not grow."""

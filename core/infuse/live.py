@@ -31,8 +31,10 @@ Evaluating frames one by one costs more per frame than in blocks (each controlle
 much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
 while a frame costs under 60% of a frame's time; twice as many (up to ``max_block_frames``) when it
 costs more; as soon as the median of the last blocks says a shorter block's frames would cost under 50%
-(a shorter block costs at most what a longer one does), that many (the first frame, evaluated as the
-loop starts, sizes the first blocks). With blocks of one frame a command shows at most a frame, the lead
+(a shorter block costs at most what a longer one does), that many; and where that bound cannot tell but
+the frames cost under 50%, blocks half as long are tried half a second after blocks last grew, twice as
+long after each try that grew back (the first frame, evaluated as the loop starts, sizes the first
+blocks). With blocks of one frame a command shows at most a frame, the lead
 and the commands before it after it arrives; with blocks of B frames, within B frames plus the lead. A
 slow moment (the machine busy elsewhere, a costly controller) grows blocks and the lead; both are back
 within a second of its end. A frame still waiting when the next one is due is skipped and counts as
@@ -75,6 +77,10 @@ LEAD_MARGIN_S = 0.001
 #: Blocks double while a frame costs more than this share of a frame's time, and shrink to a size whose
 #: frames would cost under :data:`SHRINK_AT` of it (what is left: commands, and the machine's other work).
 GROW_AT, SHRINK_AT = 0.6, 0.5
+#: Seconds after blocks last grew before the loop tries blocks half as long whose cost only a try can tell
+#: (their frames cost under :data:`SHRINK_AT` of their time in the longer blocks); doubled after each try
+#: that grew back, up to :data:`TRY_MAX_S`, and back to this after a try that held.
+TRY_S, TRY_MAX_S = 0.5, 8.0
 
 
 @dataclass(frozen=True)
@@ -181,6 +187,7 @@ class LiveScene:
         self.max_block_frames = max(1, int(max_block_frames))
         self.block_frames = 1
         self._costs: deque[tuple[int, float]] = deque(maxlen=5)  # (frames, seconds) of the last blocks since a resize
+        self._try_wait_s, self._try_at, self._trying = TRY_S, 0.0, False  # shorter blocks tried (see _resize)
         self.stats = LiveStats()
         self.epoch: float | None = None
         self.error: BaseException | None = None
@@ -423,18 +430,30 @@ class LiveScene:
         machine busy elsewhere, resizes nothing). Blocks double while a frame costs over
         :data:`GROW_AT` of its time. They shrink at once to the shortest size whose frames would cost
         under :data:`SHRINK_AT` of it, counting a shorter block as costly as the longer ones measured (a
-        block costs much the same whatever its length, and never more for fewer frames)."""
+        block costs much the same whatever its length, and never more for fewer frames). Where that
+        bound keeps them long but their frames cost under :data:`SHRINK_AT` of their time, blocks half
+        as long are tried, :data:`TRY_S` after blocks last grew (a try that grows back waits twice as
+        long for the next, up to :data:`TRY_MAX_S`): what a block costs is partly its frames, so a
+        shorter one may fit where the bound says it might not."""
         self._costs.append((frames, seconds))
         if len(self._costs) < 3:
             return
         per_frame = statistics.median(s / f for f, s in self._costs)
         per_block = statistics.median([s for f, s in self._costs if f >= self.block_frames] or [math.inf])
-        size = self.block_frames
+        size, now, trying = self.block_frames, time.perf_counter(), False
         if per_frame > GROW_AT * self.period_s:
             size = min(2 * size, self.max_block_frames)
+            if self._trying:
+                self._try_wait_s = min(2.0 * self._try_wait_s, TRY_MAX_S)
+            self._try_at = now + self._try_wait_s
         else:
+            if self._trying:
+                self._try_wait_s = TRY_S
             while size > 1 and per_block / (size // 2) < SHRINK_AT * self.period_s:
                 size //= 2
+            if size == self.block_frames > 1 and per_frame < SHRINK_AT * self.period_s and now >= self._try_at:
+                size, trying = size // 2, True
+        self._trying = trying
         if size != self.block_frames:
             self.block_frames = size
             self._costs.clear()
