@@ -295,7 +295,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     dots[2] *= -1.0
     ac_at_0, ac_ab_0, ba_bc_0 = np.arctan2(cross_norms, dots)
     lab2, lcb2, lat2 = lab * lab, lcb * lcb, lat * lat
-    ac_ab_1, ba_bc_1 = _arccos(np.stack(((lcb2 - lab2 - lat2) / (-2.0 * lab * lat), (lat2 - lab2 - lcb2) / (-2.0 * lab * lcb))))
+    ac_ab_1, ba_bc_1 = _arccos((lcb2 - lab2 - lat2) / (-2.0 * lab * lat)), _arccos((lat2 - lab2 - lcb2) / (-2.0 * lab * lcb))
     small = axis_norms[0] < 1e-12
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
     toward = None
@@ -317,8 +317,11 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         axis1, axis0 = axes / np.maximum(axis_norms, 1e-12)[..., None]
     # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
     inverse = quat.conjugate(np.take(g_rot, [0, 1, 0], -2))  # a's, b's, a's: (F, [K,] 3, 4)
-    turns = quat.from_axis_angle(quat.rotate(inverse, np.stack((axis0, axis0, axis1), axis=-2)),
-                                 np.stack((ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0), axis=-1))
+    # Stacked by assignment: np.stack costs more than the copies on a block's few frames.
+    local_axes, angles = np.empty(inverse.shape[:-1] + (3,)), np.empty(inverse.shape[:-1])
+    local_axes[..., 0, :], local_axes[..., 1, :], local_axes[..., 2, :] = axis0, axis0, axis1
+    angles[..., 0], angles[..., 1], angles[..., 2] = ac_ab_1 - ac_ab_0, ba_bc_1 - ba_bc_0, ac_at_0
+    turns = quat.from_axis_angle(quat.rotate(inverse, local_axes), angles)
     if toward is not None:
         plane = _pole_plane(axis0, toward, cross_norms[2] / np.maximum(lab * lcb, 1e-12))
         moved = ~flat & (_dot(plane, axis0) < 1.0 - 1e-12)
@@ -330,7 +333,9 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
     # a bends in the limb's plane first (c stays on the line a->c), then turns that line onto the goal;
     # turning first would bend about a normal the turn has moved (off the goal unless the plane holds it).
-    new = quat.multiply(old, np.stack((quat.multiply(r2, r0), r1), axis=-2))
+    both = np.empty(old.shape)
+    both[..., 0, :], both[..., 1, :] = quat.multiply(r2, r0), r1
+    new = quat.multiply(old, both)
     if weight is not None:  # both joints in one interpolation
         w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
