@@ -251,24 +251,24 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     (F, J, 3), which must then be given, writable, and kept with the rotations.
     """
     plan = _limb_plan(skeleton, joints)
-    limbs, several, parents, hung, offsets, carried = plan.limbs, plan.several, plan.parents, plan.hung, plan.offsets, plan.carried
+    limbs, several, parents, offsets = plan.limbs, plan.several, plan.parents, plan.offsets
     T = np.asarray(goal, dtype=np.float64)
-    if (hung.any() and not hung.all()) or (carried.any() and not carried.all()):  # solved apart
+    if plan.apart:  # solved apart
         left = [solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb), T[:, k],
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
                            None if chains is None else tuple(c[:, k] for c in chains), distance)
                 for k, limb in enumerate(limbs)]
         return np.stack([d for d in left if d is not None], axis=1) if distance else None
     if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
-        rows = np.column_stack((limbs, parents)) if hung.all() else limbs  # (K, R)
+        rows = np.column_stack((limbs, parents)) if plan.all_hung else limbs  # (K, R)
         g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
         shape = (len(g_rot),) + (rows.shape if several else rows.shape[1:])
         g_rot, g_pos = g_rot.reshape(shape + (4,)), g_pos.reshape(shape + (3,))
     else:
         g_rot, g_pos = chains
-    parent_rot = g_rot[..., 3, :] if hung.all() else None
+    parent_rot = g_rot[..., 3, :] if plan.all_hung else None
     A, B, C = g_pos[..., 0, :], g_pos[..., 1, :], g_pos[..., 2, :]
-    if carried.all():
+    if plan.all_carried:
         if joint_translations is None or not joint_translations.flags.writeable:
             raise ValueError(f"joint {skeleton.names[limbs[0, 2]]!r} hangs outside its limb: placing it needs "
                              f"writable joint translations (F, J, 3), which the caller keeps")
@@ -344,7 +344,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
         else:
             new = quat.slerp(old, new, w)
     local_rotations[:, columns[..., :2]] = new
-    if carried.all():
+    if plan.all_carried:
         places, holders, middles = _place_carried(skeleton, local_rotations, root_translations, joint_translations,
                                                   limbs[:, 1], limbs[:, 2], carried_at)
         if end_rotation is not None or not keep_end:  # c hangs from a joint the limb does not turn
@@ -411,7 +411,9 @@ class _LimbPlan:
     legs every block): ``limbs`` (K, 3), ``several`` (given as K triples), ``parents`` (K,) a's parents
     and ``hung`` (K,) whether a has one, ``offsets`` (K,) each carried end's offset or None and ``carried``
     (K,) whether it has one; ``paths`` (K,) the joints below a down to c, and ``steps`` (S, K) the same
-    side by side when every path is as long (else None); no paths for carried ends or limbs solved apart."""
+    side by side when every path is as long (else None); no paths for carried ends or limbs solved apart;
+    ``all_hung``, ``all_carried``: every a has a parent, every end is carried; ``apart``: the limbs are
+    solved one by one (some are hung or carried and others not)."""
 
     limbs: np.ndarray
     several: bool
@@ -421,6 +423,9 @@ class _LimbPlan:
     carried: np.ndarray
     paths: list | None
     steps: np.ndarray | None
+    all_hung: bool
+    all_carried: bool
+    apart: bool
 
 
 _PLANS: weakref.WeakKeyDictionary[Skeleton, dict[tuple, _LimbPlan]] = weakref.WeakKeyDictionary()
@@ -447,7 +452,9 @@ def _limb_plan(skeleton, joints) -> _LimbPlan:
                 steps = np.array(paths).T
         for shared in (limbs, parents, hung, carried):
             shared.flags.writeable = False
-        plan = known[key] = _LimbPlan(limbs, several, parents, hung, offsets, carried, paths, steps)
+        all_hung, all_carried = bool(hung.all()), bool(carried.all())
+        apart = (bool(hung.any()) and not all_hung) or (bool(carried.any()) and not all_carried)
+        plan = known[key] = _LimbPlan(limbs, several, parents, hung, offsets, carried, paths, steps, all_hung, all_carried, apart)
     return plan
 
 
