@@ -1080,7 +1080,8 @@ class Locomotion(Controller):
                             # coming down on, held the foot up in the air and dropped it at the strike).
                             held_at = np.empty((e - s, 3))
                             held_at[:] = pin
-                            held_at[:, 1] = np.minimum(pin[1], np.minimum.accumulate(np.where(touching[s:e, k], feet_pos[s:e, k, 1, 1], np.inf)))
+                            if touching[s:e, k].any():
+                                held_at[:, 1] = np.minimum(pin[1], np.minimum.accumulate(np.where(touching[s:e, k], feet_pos[s:e, k, 1, 1], np.inf)))
                             pin = held_at[-1].copy()
                             goal[s:e] = held_at - reach
                         else:
@@ -1091,9 +1092,9 @@ class Locomotion(Controller):
                         # from there still down and slide as the foot is let go); touching down by the
                         # heel, no higher than keeps the heel where it touched (the blend's foot rising
                         # again before its strike would lift it and drop it back in a frame).
-                        pinned = goal[s:e, 1].copy()
+                        pinned = goal[s:e, 1].copy() if kind == footing.ANKLE and touching[s:e, k].any() else None
                         goal[s:e, 1] = np.where(posed_all[a0 + s:a0 + e, k], np.maximum(ankle[s:e, 1], goal[s:e, 1]), ankle[s:e, 1])
-                        if kind == footing.ANKLE:
+                        if pinned is not None:
                             goal[s:e, 1] = np.where(touching[s:e, k], np.minimum(goal[s:e, 1], pinned), goal[s:e, 1])
                         weight[s:e] = 1.0
                         ball_goal = goal[e - 1] + reach[-1]
