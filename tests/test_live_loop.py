@@ -143,7 +143,7 @@ def _grown_then(costly: Costly, seconds: float) -> tuple[LiveScene, list[tuple[i
 
 
 def test_shorter_blocks_that_only_a_try_shows_to_fit_are_tried_and_kept():
-    """Blocks cost 5 ms plus 3 ms a frame: one frame 8 ms, under 60% of a frame's time, but two frames
+    """Blocks cost 5 ms plus 3 ms a frame: one frame 8 ms, under 75% of a frame's time, but two frames
     11 ms, over 50% of one frame's, so the bound on a shorter block cannot say one frame would fit. After
     a slow moment grows the blocks, the loop tries blocks of one frame within a second, keeps them, and
     misses no frame."""
@@ -155,10 +155,10 @@ def test_shorter_blocks_that_only_a_try_shows_to_fit_are_tried_and_kept():
 
 
 def test_a_shorter_block_that_does_not_fit_is_tried_less_and_less_often():
-    """Blocks cost 8 ms plus 3 ms a frame: one frame 11 ms (over 60% of a frame's time), two frames 14 ms
-    (7 ms a frame). Tries of one-frame blocks grow back, each try waiting twice as long as the last:
-    over 3 s, at most four tries of three blocks or so; no frame missed."""
-    live, blocks, missed = _grown_then(Costly(0.008, 0.003), 3.0)
+    """Blocks cost 11 ms plus 2 ms a frame: one frame 13 ms (over 75% of a frame's time), two frames 15 ms
+    (7.5 ms a frame, under 50%). Tries of one-frame blocks grow back, each try waiting twice as long as
+    the last: over 3 s, at most four tries of three blocks or so; no frame missed."""
+    live, blocks, missed = _grown_then(Costly(0.011, 0.002), 3.0)
     ones = [frames for _, frames in blocks].count(1)
     assert live.block_frames == 2, live.stats.summary()
     assert 0 < ones <= 4 * 4, blocks
