@@ -14,6 +14,7 @@ so what a pack limits is the **top speed** in each direction: above it a request
 """
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -131,15 +132,30 @@ class SpeedLimit:
         self.hull = Hull(tessellation)
         self.directions = np.linspace(-math.pi, math.pi, self.SAMPLES + 1)
         self.top, self.low = speed_limits(tessellation, self.directions, hull=self.hull)
+        # Plain floats for one direction at a time (the steering asks once per frame): np.interp's
+        # arithmetic on Python floats, without its per-call overhead.
+        self._directions, self._top, self._low = self.directions.tolist(), self.top.tolist(), self.low.tolist()
 
     def __call__(self, direction: float) -> float:
-        d = (float(direction) + math.pi) % (2.0 * math.pi) - math.pi
-        return float(np.interp(d, self.directions, self.top))
+        return self._at(direction, self._top)
 
     def lowest(self, direction: float) -> float:
         """The slowest speed (m/s) the examples show in ``direction`` (radians); 0 with an idle."""
+        return self._at(direction, self._low)
+
+    def _at(self, direction: float, values: list[float]) -> float:
+        """``values`` (one per direction of :attr:`directions`) interpolated at ``direction`` (radians,
+        wrapped to [-pi, pi)), as ``np.interp`` does it."""
         d = (float(direction) + math.pi) % (2.0 * math.pi) - math.pi
-        return float(np.interp(d, self.directions, self.low))
+        xs = self._directions
+        j = bisect.bisect_right(xs, d) - 1
+        if j < 0:
+            return values[0]
+        if j >= len(xs) - 1:
+            return values[-1]
+        if xs[j] == d:
+            return values[j]
+        return (values[j + 1] - values[j]) / (xs[j + 1] - xs[j]) * (d - xs[j]) + values[j]
 
 
 def coverage(tessellation) -> dict:

@@ -54,7 +54,7 @@ from . import pacing, swivels, transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
 from .state import LocomotionState
-from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState, of_time
+from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState
 
 
 #: Seconds over which a released foot's pin correction fades back to the animation, and its extra
@@ -294,7 +294,7 @@ class Locomotion(Controller):
                     if paced is not None and pick.transition == "start":
                         paced.phase = transitions.start_phase(pick, fps, half)
                     continue
-            row = self.steering.run(st, np.array([frames * dt]), dt, top=top)[0]
+            row = self.steering.step(st, frames * dt, dt, top=top)
             if paced is not None:  # the gait's phase, paced as the walk will be
                 last_x, last_z = last[0] - st.x, last[1] - st.z
                 bearing = (math.atan2(last_x, last_z) - st.heading + math.pi) % (2.0 * math.pi) - math.pi
@@ -473,7 +473,7 @@ class Locomotion(Controller):
     def _asked(self, t: float, top) -> float:
         """The speed (m/s) asked at the activity's time ``t`` seconds, kept to ``top(0)`` (the pack's
         top speed straight ahead) where given."""
-        asked = of_time(self.steering.speed)(t)
+        asked = self.steering.requests()[0](t)
         return min(asked, float(top(0.0))) if top is not None else asked
 
     def _stop_at(self, b: LocomotionBinding, before: LocomotionState, st: LocomotionState, fps: float, dt: float):

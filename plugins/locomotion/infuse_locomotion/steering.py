@@ -85,6 +85,18 @@ class Steering:
                 raise ValueError("a path is (K, 2) ground points (x, z) or (K, 3) points, metres")
             self.path = p
 
+    def requests(self):
+        """The speed, turn rate and direction asked as functions of time (see :func:`of_time`) and the
+        path's points as a list of (x, z) (None without a path): made once, again only after a field
+        changes (the steering runs once per block, the planner once per frame)."""
+        fields = (self.speed, self.turn_rate, self.direction, self.path)
+        cached = self.__dict__.get("_requests")
+        if cached is None or any(a is not b for a, b in zip(cached[0], fields)):
+            made = (of_time(self.speed), of_time(self.turn_rate), of_time(self.direction),
+                    None if self.path is None else self.path.tolist())
+            cached = self.__dict__["_requests"] = (fields, made)
+        return cached[1]
+
     def run(self, state: SteeringState, times: np.ndarray, dt: float, top=None) -> np.ndarray:
         """(F, 5) requests (speed, turn rate, direction, stopping, final) for ``times``; updates
         ``state`` (``x``, ``z``, ``heading``, ``speed``, ``turn``, ``waypoint``), integrating the
@@ -92,56 +104,58 @@ class Steering:
         or there; ``final`` is 1 on the way to it, not braking yet. ``top(direction)``: the fastest
         speed (m/s) realizable in a travel direction (radians); a faster speed asked is kept to it and
         ``state.capped`` is set the first time."""
-        # Plain floats in the loop: it runs once per frame, and numpy scalars cost more than the maths.
-        rows = []
+        rows = [self.step(state, t, dt, top) for t in times.tolist()]
+        return np.array(rows, dtype=np.float64).reshape(len(rows), 5)
+
+    def step(self, state: SteeringState, t: float, dt: float, top=None) -> tuple[float, float, float, float, float]:
+        """One frame of :meth:`run` at time ``t`` (seconds): its request (speed, turn rate, direction,
+        stopping, final), ``state`` updated. Plain floats: it runs once per frame, and numpy scalars
+        cost more than the maths."""
         x, z, h = float(state.x), float(state.z), float(state.heading)
         v, w = float(state.speed), float(state.turn)
         k = state.waypoint
-        path = None if self.path is None else self.path.tolist()
-        last_k = -1 if path is None else len(path) - 1
+        speed_at, turn_rate_at, direction_at, path = self.requests()
         accel, decel = self.max_accel * dt, self.max_decel * dt
         turn_accel = self.max_turn_accel * dt
-        speed_at, turn_rate_at, direction_at = of_time(self.speed), of_time(self.turn_rate), of_time(self.direction)
-        for t in times.tolist():
-            direction = direction_at(t)
-            stopping = 0.0
-            asked = speed_at(t)
-            if top is not None:
-                limit = top(direction)
-                if asked > limit + 1e-3 and state.capped is None:
-                    state.capped = (asked, limit, direction)
-                asked = min(asked, limit)
-            if path is None:
-                v_goal, w_goal = asked, turn_rate_at(t)
+        direction = direction_at(t)
+        stopping, last, arrived = 0.0, False, False
+        asked = speed_at(t)
+        if top is not None:
+            limit = top(direction)
+            if asked > limit + 1e-3 and state.capped is None:
+                state.capped = (asked, limit, direction)
+            asked = min(asked, limit)
+        if path is None:
+            v_goal, w_goal = asked, turn_rate_at(t)
+        else:
+            # Advance along the path while the next point is within the look-ahead distance.
+            last_k = len(path) - 1
+            while k < last_k and math.hypot(path[k][0] - x, path[k][1] - z) < max(self.lookahead, 0.5 * v):
+                k += 1
+            px, pz = path[k]
+            dist = math.hypot(px - x, pz - z)
+            last = k == last_k
+            # There, or standing close by (it stopped there: the blend realizes the steering's
+            # motion to a few millimetres, not exactly).
+            arrived = last and (dist < self.arrive or (v < 1e-3 and dist < STAY))
+            if arrived:
+                v_goal, w_goal = 0.0, 0.0
             else:
-                # Advance along the path while the next point is within the look-ahead distance.
-                while k < last_k and math.hypot(path[k][0] - x, path[k][1] - z) < max(self.lookahead, 0.5 * v):
-                    k += 1
-                px, pz = path[k]
-                dist = math.hypot(px - x, pz - z)
-                last = k == last_k
-                # There, or standing close by (it stopped there: the blend realizes the steering's
-                # motion to a few millimetres, not exactly).
-                arrived = last and (dist < self.arrive or (v < 1e-3 and dist < STAY))
-                if arrived:
-                    v_goal, w_goal = 0.0, 0.0
-                else:
-                    want = math.atan2(px - x, pz - z) - direction
-                    err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
-                    w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, TURN_GAIN * err))
-                    ahead = (math.cos(err) - _COS_TURN_IN_PLACE) / (1.0 - _COS_TURN_IN_PLACE)
-                    v_goal = asked * min(max(ahead, 0.0), 1.0)
-                    if abs(math.sin(err)) > 1e-6:  # stay on a circle that meets the point
-                        v_goal = min(v_goal, self.max_turn_rate * dist / (2.0 * abs(math.sin(err))))
-                    if last:
-                        v_goal = min(v_goal, math.sqrt(2.0 * self.max_decel * max(dist - self.arrive, 0.0)))
-                stopping = float(last and (arrived or v_goal < v))
-            v += max(-decel, min(accel, v_goal - v))
-            w += max(-turn_accel, min(turn_accel, w_goal - w))
-            final = float(path is not None and last and not arrived and not stopping)
-            rows.append((v, w, direction, stopping, final))
-            h += w * dt
-            x += v * math.sin(h + direction) * dt
-            z += v * math.cos(h + direction) * dt
+                want = math.atan2(px - x, pz - z) - direction
+                err = (want - h + math.pi) % (2.0 * math.pi) - math.pi
+                w_goal = max(-self.max_turn_rate, min(self.max_turn_rate, TURN_GAIN * err))
+                ahead = (math.cos(err) - _COS_TURN_IN_PLACE) / (1.0 - _COS_TURN_IN_PLACE)
+                v_goal = asked * min(max(ahead, 0.0), 1.0)
+                if abs(math.sin(err)) > 1e-6:  # stay on a circle that meets the point
+                    v_goal = min(v_goal, self.max_turn_rate * dist / (2.0 * abs(math.sin(err))))
+                if last:
+                    v_goal = min(v_goal, math.sqrt(2.0 * self.max_decel * max(dist - self.arrive, 0.0)))
+            stopping = float(last and (arrived or v_goal < v))
+        v += max(-decel, min(accel, v_goal - v))
+        w += max(-turn_accel, min(turn_accel, w_goal - w))
+        final = float(path is not None and last and not arrived and not stopping)
+        h += w * dt
+        x += v * math.sin(h + direction) * dt
+        z += v * math.cos(h + direction) * dt
         state.x, state.z, state.heading, state.speed, state.turn, state.waypoint = x, z, h, v, w, k
-        return np.array(rows, dtype=np.float64).reshape(len(rows), 5)
+        return v, w, direction, stopping, final
