@@ -59,8 +59,9 @@ def run(frames: int, block: int) -> tuple[float, float, float, float]:
     def timed(function, part):
         def run(*args):
             start = time.process_time()
-            function(*args)
+            out = function(*args)
             spent[part] += time.process_time() - start
+            return out
         return run
 
     def walked(cls, jobs, at):

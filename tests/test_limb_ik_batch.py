@@ -6,7 +6,7 @@ import pytest
 
 from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
-from infuse.runtime.limb_ik import solve_limb
+from infuse.runtime.limb_ik import solve_limb, solve_limb_ends
 from infuse.skeleton import Skeleton
 
 rng = np.random.default_rng(7)
@@ -45,6 +45,28 @@ def test_both_legs_at_once_match_each_leg_alone(twist, frames, shared):
         assert np.allclose(together, alone, rtol=0.0, atol=1e-12)
         assert np.allclose(both, left, rtol=0.0, atol=1e-12)
         assert not np.allclose(together, local)  # the legs did move
+
+
+@pytest.mark.parametrize("twist", [False, True])
+@pytest.mark.parametrize("several", [False, True])
+def test_solved_ends_are_where_forward_kinematics_puts_them(twist, several):
+    sk, legs = two_legs(twist)
+    frames = 30
+    local = quat.normalize(rng.normal(size=(frames, sk.num_joints, 4)))
+    root = rng.normal(size=(frames, 3))
+    _, pos = forward_kinematics(sk, local, root)
+    goals = pos[:, [leg[2] for leg in legs]] + 0.1 * rng.normal(size=(frames, 2, 3))
+    weight = (rng.uniform(size=(frames, 2)) > 0.3).astype(float)
+    joints, goal, w = (legs, goals, weight) if several else (legs[0], goals[:, 0], weight[:, 0])
+    plain, solved = local.copy(), local.copy()
+    left = solve_limb(sk, plain, root, None, joints, goal, weight=w, pole=np.array([0.0, 0.0, 1.0]))
+    distance, above, ends = solve_limb_ends(sk, solved, root, None, joints, goal, weight=w, pole=np.array([0.0, 0.0, 1.0]))
+    assert np.array_equal(solved, plain) and np.array_equal(distance, left)  # the same solve
+    g_rot, g_pos = forward_kinematics(sk, solved, root)
+    c = np.array([leg[2] for leg in legs])[slice(None) if several else 0]
+    assert np.allclose(ends, g_pos[:, c], rtol=0.0, atol=1e-12)
+    assert np.allclose(quat.canonical_sign(above), quat.canonical_sign(g_rot[:, sk.parents[c]]), rtol=0.0, atol=1e-12)
+    assert not np.allclose(solved, local)  # the legs did move
 
 
 def test_straight_legs_bend_toward_the_pole_and_reach():

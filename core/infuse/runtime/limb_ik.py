@@ -250,6 +250,26 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
     there on every frame, whatever ``weight``, by its local translation, written in ``joint_translations``
     (F, J, 3), which must then be given, writable, and kept with the rotations.
     """
+    return _solve(skeleton, local_rotations, root_translations, joint_translations, joints, goal, weight, pole, keep_end,
+                  end_rotation, chains, distance, False)[0]
+
+
+def solve_limb_ends(skeleton, local_rotations: np.ndarray, root_translations: np.ndarray, joint_translations,
+                    joints, goal: np.ndarray, weight=None, pole: np.ndarray | None = None,
+                    keep_end: bool = True, end_rotation: np.ndarray | None = None, chains=None,
+                    distance: bool = True) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """:func:`solve_limb`, returning with the distance (or None) where the limbs' ends c are now: the global
+    rotations (F, [K,] 4) of c's parents and c's positions (F, [K,] 3), as a forward kinematics of the
+    solved pose gives them (the rotations composed in the same order), so a caller that goes on below c
+    needs none. Both are None for carried ends and for limbs solved apart."""
+    return _solve(skeleton, local_rotations, root_translations, joint_translations, joints, goal, weight, pole, keep_end,
+                  end_rotation, chains, distance, True)
+
+
+def _solve(skeleton, local_rotations, root_translations, joint_translations, joints, goal, weight, pole, keep_end,
+           end_rotation, chains, distance: bool, ends: bool) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """:func:`solve_limb`'s work: the distance (or None) and, with ``ends``, the ends' parent rotations and
+    positions (:func:`solve_limb_ends`)."""
     plan = _limb_plan(skeleton, joints)
     limbs, several, parents, offsets = plan.limbs, plan.several, plan.parents, plan.offsets
     T = np.asarray(goal, dtype=np.float64)
@@ -258,7 +278,7 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
                            None if chains is None else tuple(c[:, k] for c in chains), distance)
                 for k, limb in enumerate(limbs)]
-        return np.stack([d for d in left if d is not None], axis=1) if distance else None
+        return (np.stack([d for d in left if d is not None], axis=1) if distance else None), None, None
     if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
         rows = np.column_stack((limbs, parents)) if plan.all_hung else limbs  # (K, R)
         g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
@@ -354,25 +374,26 @@ def solve_limb(skeleton, local_rotations: np.ndarray, root_translations: np.ndar
             end_rotation = np.asarray(end_rotation, dtype=np.float64)
             local_rotations[:, limbs[:, 2]] = quat.multiply(quat.conjugate(holders),
                                                             end_rotation if several else end_rotation[:, None])
-        return _norm((places if several else places[:, 0]) - T) if distance else None
+        return (_norm((places if several else places[:, 0]) - T) if distance else None), None, None
     # Down from a's parent (which did not move) to c again: c's new parent rotation and position.
     rotation = new[..., 0, :] if parent_rot is None else quat.multiply(parent_rot, new[..., 0, :])
     paths = plan.paths
     assert paths is not None  # every limb solved here has its path (none is carried or solved apart)
-    position = A if distance else None
+    position = A if distance or ends else None
     if not several:
         position, rotation = _down(skeleton, local_rotations, joint_translations, paths[0], position, rotation)
     elif plan.steps is not None:  # all limbs step down together
         position, rotation = _down(skeleton, local_rotations, joint_translations, plan.steps, position, rotation)
     else:
-        ends = [_down(skeleton, local_rotations, joint_translations, p, None if position is None else position[:, i],
+        down = [_down(skeleton, local_rotations, joint_translations, p, None if position is None else position[:, i],
                       rotation[:, i]) for i, p in enumerate(paths)]
-        position = np.stack([e[0] for e in ends], axis=1) if distance else None
-        rotation = np.stack([e[1] for e in ends], axis=1)
+        position = np.stack([e[0] for e in down], axis=1) if position is not None else None
+        rotation = np.stack([e[1] for e in down], axis=1)
     if keep_end or end_rotation is not None:
         target = g_rot[..., 2, :] if end_rotation is None else end_rotation
         local_rotations[:, columns[..., 2]] = quat.multiply(quat.conjugate(rotation), target)
-    return _norm(position - T) if position is not None else None
+    return (_norm(position - T) if distance and position is not None else None), (rotation if ends else None), \
+        (position if ends else None)
 
 
 def _pole_plane(normal: np.ndarray, toward: np.ndarray, sin_bend: np.ndarray) -> np.ndarray:

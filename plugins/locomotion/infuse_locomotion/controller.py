@@ -47,7 +47,7 @@ from infuse.contacts import DOWN_TOLERANCE, foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
-from infuse.runtime.limb_ik import solve_limb
+from infuse.runtime.limb_ik import solve_limb, solve_limb_ends
 from infuse.runtime.pose import chain_fk
 
 from . import pacing, swivels, transitions
@@ -405,10 +405,11 @@ class Locomotion(Controller):
             jt = None if parts[2][0] is None else np.concatenate(parts[2])
             ends = [0, *itertools.accumulate(len(p[0]) for _, p in group)]
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
+            feet = None
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
-                cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
+                feet = cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
             if b.floors is not None:
-                _keep_feet_up(b.skeleton, b.floors, rot, root, jt, runs, dt)
+                _keep_feet_up(b.skeleton, b.floors, rot, root, jt, runs, dt, feet)
             for (job, _), (_, a, e) in zip(group, runs):
                 poses[id(job)] = (rot[a:e], root[a:e], None if jt is None else jt[a:e])
         for job, walk in driven:
@@ -841,7 +842,7 @@ class Locomotion(Controller):
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     @staticmethod
-    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> None:
+    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> tuple[np.ndarray, np.ndarray] | None:
         """Pin planted feet by leg IK: the sole under the heel while the heel is down (a foot landing
         turned up rolls down about it, its ankle swinging over it; the ankle itself where the binding
         knows no heel, ``b.heel_levers``), the ball while only it is down (the foot pivoting about it,
@@ -854,7 +855,9 @@ class Locomotion(Controller):
         after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
         (F,) the turn spun at the root so far (radians). ``runs``: the walks whose frames the arrays
         stack, each as its state and its frames (start, end). A swinging foot of the frames ``made`` (F,)
-        lands where it touches the ground (:func:`_touch_downs`)."""
+        lands where it touches the ground (:func:`_touch_downs`). Returns the feet's joints as the leg IK
+        left them, for :func:`_keep_feet_up` (:func:`_feet_below`), or None where it solved no leg or
+        cannot tell them (carried ends, feet with no floors)."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
@@ -1123,14 +1126,16 @@ class Locomotion(Controller):
         if rises.any():
             g_rot_all[:, :, 2] = quat.multiply(g_rot_all[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot_all[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
-        solving = np.flatnonzero(weights.any(axis=0)).tolist()
-        if len(solving) == 1:
-            k = solving[0]
-            solve_limb(b.skeleton, rot, root, jt, b.leg_limbs[k], goals[:, k], weight=weights[:, k], pole=forward,
-                       end_rotation=feet_rot[:, k], chains=(g_rot_all[:, k, :4], g_pos_all[:, k, :4]), distance=False)
-        elif solving:  # the legs are apart: both in one solve
-            solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
-                       end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
+        if not weights.any():
+            return None
+        # Both legs in one solve (a leg of weight 0 keeps its hip and knee, its ankle set to the rotation it
+        # has): one leg costs as much, and the solve gives both ankles' places for keeping the feet up.
+        _, above, ankles = solve_limb_ends(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
+                                           end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]),
+                                           distance=False)
+        if b.floors is None or above is None or ankles is None:
+            return None
+        return _feet_below(b.skeleton, b.floors, rot, jt, above, ankles)
 
 
 def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray,
@@ -1643,17 +1648,47 @@ def _lift(v: np.ndarray, height: np.ndarray, along: np.ndarray) -> tuple[np.ndar
     return axis, np.where(c < height, np.minimum(angle, most), 0.0)
 
 
-def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float) -> None:
+def _feet_below(sk, floors: FootFloors, rot, jt, above: np.ndarray, ankles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The global rotations (F, 2, 4, 4) of each foot's ankle's parent, ankle, ball's parent and ball
+    (``floors.joints``' order) and the positions (F, 2, 2, 3) of its ankle and ball in the pose ``rot`` (F, J, 4), ``jt`` (F, J, 3) or
+    None, from the ankles' parents' global rotations ``above`` (F, 2, 4) and the ankles' positions
+    ``ankles`` (F, 2, 3) (the leg IK's): the joints down from the ankle to the ball, stepped as a forward
+    kinematics would (the rotations composed in its order)."""
+    frames = len(rot)
+    g_rot, g_pos = np.empty((frames, 2, 4, 4)), np.empty((frames, 2, 2, 3))
+    g_rot[:, :, 0], g_pos[:, :, 0] = above, ankles
+    g_rot[:, :, 1] = ankle_rot = quat.multiply(above, rot[:, floors.ankles])
+    parents = sk.parents
+    for k in range(2):  # down from the ankle to the ball: none where the ball is the ankle
+        path, j = [], int(floors.balls[k])
+        while j != floors.ankles[k]:
+            path.append(j)
+            j = int(parents[j])
+        rotation, position, parent_rot = ankle_rot[:, k], ankles[:, k], above[:, k]
+        for j in path[::-1]:
+            offset = sk.rest_translations[j] if jt is None else jt[:, j]
+            parent_rot = rotation
+            position = position + quat.rotate(rotation, offset)
+            rotation = quat.multiply(rotation, rot[:, j])
+        g_rot[:, k, 2], g_rot[:, k, 3], g_pos[:, k, 1] = parent_rot, rotation, position
+    return g_rot, g_pos
+
+
+def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float, feet: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """No toes lower than they stand (in place; see :func:`_floors`): where the tip of a foot without a
     ball joint would go below the height it stands at, the foot pitches about its ankle until it does
     not; where the toes' tip of a foot with one would, the toes bend up about the ball, and unbend
     no faster than the pack's toes turn (``floors.release``; ``st.toe_bend`` carries the bends, radians, from block
     to block). A foot rolling over its ball at toe off pitches as the pack's does: a longer foot, or
     toes the pack's clips do not bend, would dig into the ground. Both turns are about the horizontal
-    axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None."""
-    g_rot, g_pos = chain_fk(sk, rot, root, jt, floors.joints)
-    g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)
-    ankle, ball = g_pos[:, :, 1], g_pos[:, :, 3]
+    axis across the foot or toes. ``rot`` (F, J, 4), ``root`` (F, 3), ``jt`` (F, J, 3) or None; ``feet``: the
+    feet's joints' global rotations and positions (:func:`_feet_below`) when the caller has them."""
+    if feet is None:
+        g_rot, g_pos = chain_fk(sk, rot, root, jt, floors.joints)
+        g_rot, g_pos = g_rot.reshape(len(rot), 2, 4, 4), g_pos.reshape(len(rot), 2, 4, 3)[:, :, 1::2]
+    else:
+        g_rot, g_pos = feet
+    ankle, ball = g_pos[:, :, 0], g_pos[:, :, 1]
     ball_rot, ball_parent = g_rot[:, :, 3], g_rot[:, :, 2]
     # Ahead along each foot as it stands, carried by its ankle (+Y x the axis across it): the axis the
     # turns are about stays across the foot when its ankle-to-tip direction points down or back (a foot
