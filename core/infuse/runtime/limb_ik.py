@@ -321,7 +321,7 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     toward = None
     if pole is not None:  # a->c x pole: the normal of the plane that bends the limb toward the pole
         pole = np.asarray(pole, dtype=np.float64)
-        toward = _cross(ca, np.broadcast_to(pole[:, None] if several and pole.ndim == 2 else pole, A.shape))
+        toward = _cross(ca, pole[:, None] if several and pole.ndim == 2 else pole)  # broadcast by the products
     if flat.any() or small.any():
         axis1, axis0 = axes
         if flat.any():  # a straight limb bends toward the pole, else toward the goal

@@ -1658,18 +1658,22 @@ def _feet_below(sk, floors: FootFloors, rot, jt, above: np.ndarray, ankles: np.n
     g_rot, g_pos = np.empty((frames, 2, 4, 4)), np.empty((frames, 2, 2, 3))
     g_rot[:, :, 0], g_pos[:, :, 0] = above, ankles
     g_rot[:, :, 1] = ankle_rot = quat.multiply(above, rot[:, floors.ankles])
-    parents = sk.parents
+    paths = []
     for k in range(2):  # down from the ankle to the ball: none where the ball is the ankle
         path, j = [], int(floors.balls[k])
         while j != floors.ankles[k]:
             path.append(j)
-            j = int(parents[j])
+            j = int(sk.parents[j])
+        paths.append(path[::-1])
+    # Both feet side by side where their paths are as long (the joints (S, 2)), else one by one.
+    legs = [(slice(None), np.array(paths).T)] if len(paths[0]) == len(paths[1]) else [(k, np.array(p)) for k, p in enumerate(paths)]
+    for k, steps in legs:
         rotation, position, parent_rot = ankle_rot[:, k], ankles[:, k], above[:, k]
-        for j in path[::-1]:
-            offset = sk.rest_translations[j] if jt is None else jt[:, j]
+        for js in steps:
+            offset = sk.rest_translations[js] if jt is None else jt[:, js]
             parent_rot = rotation
             position = position + quat.rotate(rotation, offset)
-            rotation = quat.multiply(rotation, rot[:, j])
+            rotation = quat.multiply(rotation, rot[:, js])
         g_rot[:, k, 2], g_rot[:, k, 3], g_pos[:, k, 1] = parent_rot, rotation, position
     return g_rot, g_pos
 
