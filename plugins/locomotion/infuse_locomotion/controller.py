@@ -1666,15 +1666,15 @@ def _feet_below(sk, floors: FootFloors, rot, jt, above: np.ndarray, ankles: np.n
             j = int(sk.parents[j])
         paths.append(path[::-1])
     # Both feet side by side where their paths are as long (the joints (S, 2)), else one by one.
-    legs = [(slice(None), np.array(paths).T)] if len(paths[0]) == len(paths[1]) else [(k, np.array(p)) for k, p in enumerate(paths)]
-    for k, steps in legs:
-        rotation, position, parent_rot = ankle_rot[:, k], ankles[:, k], above[:, k]
+    legs: list[tuple[int | slice, np.ndarray]] = [(slice(None), np.array(paths).T)] if len(paths[0]) == len(paths[1]) else [(k, np.array(p)) for k, p in enumerate(paths)]
+    for foot, steps in legs:
+        rotation, position, parent_rot = ankle_rot[:, foot], ankles[:, foot], above[:, foot]
         for js in steps:
             offset = sk.rest_translations[js] if jt is None else jt[:, js]
             parent_rot = rotation
             position = position + quat.rotate(rotation, offset)
             rotation = quat.multiply(rotation, rot[:, js])
-        g_rot[:, k, 2], g_rot[:, k, 3], g_pos[:, k, 1] = parent_rot, rotation, position
+        g_rot[:, foot, 2], g_rot[:, foot, 3], g_pos[:, foot, 1] = parent_rot, rotation, position
     return g_rot, g_pos
 
 
