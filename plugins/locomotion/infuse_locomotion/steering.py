@@ -89,13 +89,13 @@ class Steering:
         """The speed, turn rate and direction asked as functions of time (see :func:`of_time`) and the
         path's points as a list of (x, z) (None without a path): made once, again only after a field
         changes (the steering runs once per block, the planner once per frame)."""
-        fields = (self.speed, self.turn_rate, self.direction, self.path)
-        cached = self.__dict__.get("_requests")
-        if cached is None or any(a is not b for a, b in zip(cached[0], fields)):
+        c = self.__dict__.get("_requests")
+        if c is None or c[0] is not self.speed or c[1] is not self.turn_rate or c[2] is not self.direction \
+                or c[3] is not self.path:
             made = (of_time(self.speed), of_time(self.turn_rate), of_time(self.direction),
                     None if self.path is None else self.path.tolist())
-            cached = self.__dict__["_requests"] = (fields, made)
-        return cached[1]
+            c = self.__dict__["_requests"] = (self.speed, self.turn_rate, self.direction, self.path, made)
+        return c[4]
 
     def run(self, state: SteeringState, times: np.ndarray, dt: float, top=None) -> np.ndarray:
         """(F, 5) requests (speed, turn rate, direction, stopping, final) for ``times``; updates
