@@ -1048,7 +1048,7 @@ class Locomotion(Controller):
                             # the heel by centimetres). The pitch is the twist of the turn since it landed
                             # about the axis across; ``toes_up`` carries it (toes up positive).
                             pitch, up = _toes_slowed(b, since, across, 0.0 if kind != prev else toes_up, dt)
-                            since = quat.multiply(quat.multiply(since, quat.from_axis_angle(across, -pitch)), quat.from_axis_angle(across, -up))
+                            since = quat.multiply(since, quat.from_axis_angle(across, -(pitch + up)))  # both about one axis
                             toes_up = float(up[-1])
                             kept = quat.multiply(yaw(landed_spun - turned[s:e]), since)
                         else:
