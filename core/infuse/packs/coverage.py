@@ -135,9 +135,15 @@ class SpeedLimit:
         # Plain floats for one direction at a time (the steering asks once per frame): np.interp's
         # arithmetic on Python floats, without its per-call overhead.
         self._directions, self._top, self._low = self.directions.tolist(), self.top.tolist(), self.low.tolist()
+        self._last = (math.nan, 0.0)  # the last direction asked and its top speed: a walk asks one all along
 
     def __call__(self, direction: float) -> float:
-        return self._at(direction, self._top)
+        last = self._last  # one read: a walk planned on another thread may ask at the same time
+        if last[0] == direction:
+            return last[1]
+        top = self._at(direction, self._top)
+        self._last = (direction, top)
+        return top
 
     def lowest(self, direction: float) -> float:
         """The slowest speed (m/s) the examples show in ``direction`` (radians); 0 with an idle."""
