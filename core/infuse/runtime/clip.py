@@ -254,6 +254,10 @@ class Clip(Controller):
     - ``speed``: playback rate (1 = as recorded); ``offset_s``: clip time at the activity's start.
     - ``root_motion``: move the root as the clip does (else it stays at the clip's first root position).
     - ``source_mapping``: the motion's own mapping, to retarget it when it is on another skeleton.
+    - ``placement``: ``(turn, shift)``, a unit quaternion (4,) (x, y, z, w) about +Y and metres (3,): the
+      clip played as a copy of it whose root joint is turned by ``turn`` about the origin and moved by
+      ``shift`` would be (root rotation ``turn * q``, root position ``turn(p) + shift``), with no copy
+      made: characters placing one clip each their own way share its tables and play it together.
     """
 
     kind = "clip"
@@ -263,7 +267,7 @@ class Clip(Controller):
     blend_out_s = 0.0
 
     def __init__(self, motion: Motion, loop: bool = True, speed: float = 1.0, offset_s: float = 0.0,
-                 root_motion: bool = True, source_mapping=None):
+                 root_motion: bool = True, source_mapping=None, placement=None):
         if not isinstance(motion, Motion) or motion.num_frames == 0:
             raise UsageError("a clip needs a Motion with at least one frame")
         if not (np.isfinite(speed) and speed > 0):
@@ -274,6 +278,14 @@ class Clip(Controller):
         self.offset_s = float(offset_s)
         self.root_motion = bool(root_motion)
         self.source_mapping = source_mapping
+        self.turn = self.shift = None
+        if placement is not None:
+            turn, shift = (np.array(a, dtype=np.float64) for a in placement)
+            if turn.shape != (4,) or shift.shape != (3,) or not (np.isfinite(turn).all() and np.isfinite(shift).all()) \
+                    or abs(float(turn @ turn) - 1.0) > 1e-6 or abs(turn[0]) > 1e-9 or abs(turn[2]) > 1e-9:
+                raise UsageError("a clip's placement is (turn, shift): a unit quaternion about +Y (x, y, z, w) and "
+                                 "a shift (x, y, z) in metres")
+            self.turn, self.shift = turn, shift
         if not self.loop:
             self.duration_s = max(motion.duration - self.offset_s, 0.0) / self.speed
 
@@ -358,6 +370,10 @@ class Clip(Controller):
         rot, root, moved, cycles = sample_motion(motion, local, self.loop)
         if not (b.columns.size == rot.shape[1] and b.identity_columns):
             rot = rot[:, b.columns]
+        placed = self.turn is not None and b.drives_root
+        if placed:  # the root joint turned (the clip's first sampled column when it drives the root)
+            rot = rot.copy()
+            rot[:, 0] = quat.multiply(self.turn, rot[:, 0])
         additive = job.mode is Mode.ADDITIVE
         if additive:  # an additive clip adds its difference from its own rest pose
             rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b.columns]), rot)
@@ -369,6 +385,8 @@ class Clip(Controller):
         elif moved is not None and first_moved is not None:
             travel = moved[:, b.mover]
             moved[:, b.mover] = travel + cycles[:, None] * b.step if self.root_motion else first_moved[b.mover]
+        if placed:
+            root, first_root = quat.rotate(self.turn, root) + self.shift, quat.rotate(self.turn, first_root) + self.shift
         if b.drives_root:
             job.pose.set_root(root - first_root if additive else root, job.weight, job.mode)
         if moved is not None and first_moved is not None and b.moved_joints.size:
@@ -402,6 +420,9 @@ class _Together:
     held: np.ndarray
     held_characters: np.ndarray
     every: bool
+    placed: np.ndarray
+    turns: np.ndarray
+    shifts: np.ndarray
 
     @staticmethod
     def of(jobs: Jobs) -> tuple[list["_Together"], list[int]]:
@@ -426,6 +447,7 @@ class _Together:
         index = jobs.table.character_index
         moving = np.array([job.binding.drives_root and job.controller.root_motion for job in chosen], dtype=bool)
         held = np.array([job.binding.drives_root and not job.controller.root_motion for job in chosen], dtype=bool)
+        placed = np.array([job.binding.drives_root and job.controller.turn is not None for job in chosen], dtype=bool)
         return _Together(
             b.motion, chosen[0].controller.loop, np.array(rows), np.array([[job.controller.offset_s] for job in chosen]),
             np.array([[job.controller.speed] for job in chosen]),
@@ -433,7 +455,9 @@ class _Together:
             np.flatnonzero(moving), np.array([index[job.rig.name] for job, m in zip(chosen, moving) if m], dtype=np.int64),
             np.array([job.binding.step for job, m in zip(chosen, moving) if m]).reshape(-1, 3),
             np.flatnonzero(held), np.array([index[job.rig.name] for job, h in zip(chosen, held) if h], dtype=np.int64),
-            b.columns.size == b.motion.skeleton.num_joints and bool((b.columns == np.arange(b.columns.size)).all()))
+            b.columns.size == b.motion.skeleton.num_joints and bool((b.columns == np.arange(b.columns.size)).all()),
+            placed, np.array([quat.identity() if job.controller.turn is None else job.controller.turn for job in chosen]),
+            np.array([np.zeros(3) if job.controller.shift is None else job.controller.shift for job in chosen]))
 
     def evaluate(self, jobs: Jobs, block: Block) -> None:
         """Sample the clip at every job's times at once (as :meth:`Clip.evaluate_one` does, job by job),
@@ -453,6 +477,10 @@ class _Together:
             for rows in (np.flatnonzero(on), np.flatnonzero(~on)):
                 r, t, _, _ = sample_positions(self.motion, position[rows].ravel(), cycles[rows].ravel(), sampled)
                 rot[rows], root[rows] = r.reshape(rows.size, frames, -1, 4), t.reshape(rows.size, frames, 3)
+        if self.placed.any():  # each placed job's root joint turned (the first sampled column: the root)
+            rot = rot.copy()
+            p = self.placed
+            rot[p, :, 0] = quat.multiply(self.turns[p][:, None], rot[p, :, 0])
         joints = rot.shape[2]
         side_by_side = np.swapaxes(rot, 0, 1).reshape(frames, count * joints, 4)
         weights = jobs.weights[self.rows]  # (n, F)
@@ -465,7 +493,11 @@ class _Together:
         if self.moving.size:
             m = self.moving
             travel = root[m] + cycles[m][..., None] * self.steps[:, None]
+            if self.placed[m].any():
+                travel = quat.rotate(self.turns[m][:, None], travel) + self.shifts[m][:, None]
             table.set_roots(self.moving_characters, np.swapaxes(travel, 0, 1), weights[m].T, Mode.OVERRIDE, ())
         if self.held.size:
             first = np.broadcast_to(self.motion.root_translations[0], (frames, self.held.size, 3))
+            if self.placed[self.held].any():
+                first = np.broadcast_to(quat.rotate(self.turns[self.held], first[0]) + self.shifts[self.held], first.shape)
             table.set_roots(self.held_characters, first, weights[self.held].T, Mode.OVERRIDE, ())

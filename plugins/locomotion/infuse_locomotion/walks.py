@@ -159,14 +159,11 @@ class Walks:
             return  # standing, but its last steps or the fade into its idle still run
         heading_now = _heading(rig, rotations[-1, 0])
         turn = quat.from_axis_angle(np.array([0.0, 1.0, 0.0]), heading_now - _heading(rig, idle.local_rotations[0, 0]))
-        rotations = np.array(idle.local_rotations)
-        rotations[:, 0] = quat.multiply(turn, rotations[:, 0])
         start = idle.root_translations[0] * np.array([1.0, 0.0, 1.0])
         here = root[-1] * np.array([1.0, 0.0, 1.0])
-        placed = idle.replace(local_rotations=rotations, root_translations=here + quat.rotate(turn, idle.root_translations - start),
-                              name="idle")
-        at = stage.time
-        walk.settled = runtime.activate(name, Clip(placed, loop=True), at, blend_in_s=SETTLE_BLEND_S,
+        at = stage.time  # the idle turned to the heading and moved to where the walk stands: no copy of it made
+        placement = (turn, here - quat.rotate(turn, start))
+        walk.settled = runtime.activate(name, Clip(idle, loop=True, placement=placement), at, blend_in_s=SETTLE_BLEND_S,
                                         priority=walk.activity.priority + 1)
         runtime.stop(walk.activity, at + SETTLE_BLEND_S, blend_out_s=0.0)
         if after is not None:  # until the next walk has blended in over it
