@@ -278,7 +278,8 @@ class Clip(Controller):
         self.offset_s = float(offset_s)
         self.root_motion = bool(root_motion)
         self.source_mapping = source_mapping
-        self.turn = self.shift = None
+        self.turn: np.ndarray | None = None
+        self.shift: np.ndarray | None = None
         if placement is not None:
             turn, shift = (np.array(a, dtype=np.float64) for a in placement)
             if turn.shape != (4,) or shift.shape != (3,) or not (np.isfinite(turn).all() and np.isfinite(shift).all()) \
@@ -370,10 +371,10 @@ class Clip(Controller):
         rot, root, moved, cycles = sample_motion(motion, local, self.loop)
         if not (b.columns.size == rot.shape[1] and b.identity_columns):
             rot = rot[:, b.columns]
-        placed = self.turn is not None and b.drives_root
-        if placed:  # the root joint turned (the clip's first sampled column when it drives the root)
+        turn, shift = (self.turn, self.shift) if b.drives_root else (None, None)
+        if turn is not None:  # the root joint turned (the clip's first sampled column when it drives the root)
             rot = rot.copy()
-            rot[:, 0] = quat.multiply(self.turn, rot[:, 0])
+            rot[:, 0] = quat.multiply(turn, rot[:, 0])
         additive = job.mode is Mode.ADDITIVE
         if additive:  # an additive clip adds its difference from its own rest pose
             rot = quat.multiply(quat.conjugate(motion.skeleton.rest_rotations[b.columns]), rot)
@@ -385,8 +386,8 @@ class Clip(Controller):
         elif moved is not None and first_moved is not None:
             travel = moved[:, b.mover]
             moved[:, b.mover] = travel + cycles[:, None] * b.step if self.root_motion else first_moved[b.mover]
-        if placed:
-            root, first_root = quat.rotate(self.turn, root) + self.shift, quat.rotate(self.turn, first_root) + self.shift
+        if turn is not None:
+            root, first_root = quat.rotate(turn, root) + shift, quat.rotate(turn, first_root) + shift
         if b.drives_root:
             job.pose.set_root(root - first_root if additive else root, job.weight, job.mode)
         if moved is not None and first_moved is not None and b.moved_joints.size:
