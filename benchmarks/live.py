@@ -3,8 +3,9 @@ service under a flood of bad input.
 
 For 1, 10 and 50 characters (Mixamo Xbots and Ready Player Me avatars in a ring, each with its
 locomotion pack): everyone idles, blinks, breathes and looks at a neighbour with saccades; a third of
-them walk across the ring and back, a third speak (lip sync) and nod, round after round. The scene runs
-in a :class:`infuse.live.LiveScene` for ``--seconds`` (default 60), and the benchmark prints:
+them walk in toward the middle of the ring or back out to their places, a third speak (lip sync) and
+nod, round after round (every 4 s). The scene runs in a :class:`infuse.live.LiveScene` for
+``--seconds`` (default 60), and the benchmark prints:
 
 - frame time: the milliseconds the loop spends evaluating a frame (mean, median, 99th percentile, max
   over the blocks evaluated, per frame), the loop thread's CPU milliseconds per frame (what a machine
@@ -81,15 +82,18 @@ def direct(live: LiveScene, count: int, stop: threading.Event) -> None:
         if count > 1:
             live.bml(name, f'<bml xmlns="{BML_NS}" xmlns:sbm="http://ict.usc.edu" id="look{k}">'
                            f'<gazeShift id="g" target="{names[(k + 1) % count]}"/><sbm:saccade id="s" mode="listen"/></bml>')
+    homes = {name: (float(live.scene.runtime.rig(name).position[0]), float(live.scene.runtime.rig(name).position[2]))
+             for name in names}  # where each stands in the ring, before any walk
+    inside: set[str] = set()  # those that walked in toward the middle last
     round_ = 0
     while not stop.is_set():
         for k, name in enumerate(names):
             role = (k + round_) % 3
-            position = live.scene.runtime.rig(name).position
             try:
-                if role == 0:
-                    home = (float(position[0]), float(position[2]))
-                    live.walk_to(name, (0.3 * home[0], 0.3 * home[1]) if round_ % 2 == 0 else home)
+                if role == 0:  # in toward the middle, then back out to its place in the ring
+                    x, z = homes[name]
+                    live.walk_to(name, (x, z) if name in inside else (0.3 * x, 0.3 * z))
+                    inside ^= {name}
                 elif role == 1:
                     live.say(name, LINES[(k + round_) % len(LINES)])
                     live.nod(name)
