@@ -328,6 +328,8 @@ class Clip(Controller):
             rest = rig.skeleton.rest_translations
             moved = [(i, rig.skeleton.index[n]) for i, n in enumerate(src.names) if i > 0 and animated[i] and n in rig.skeleton.index
                      and np.abs(motion.joint_translations[:, i] - rest[rig.skeleton.index[n]]).max() > 1e-9]
+        if motion.num_frames > 1:  # prepared now, not on the first frame that falls between two of the clip's
+            _interpolation_table(motion)
         morph_sources = [k for k, n in enumerate(self.motion.morph_names) if n in rig.morph_index]
         if len(morph_sources) < len(self.motion.morph_names):
             lacking = [n for n in self.motion.morph_names if n not in rig.morph_index]
