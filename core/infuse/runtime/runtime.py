@@ -151,6 +151,20 @@ class _Schedule:
         return found
 
 
+@dataclass(frozen=True, slots=True)
+class _Evaluated:
+    """One evaluated block's arrays, every character side by side, as its :class:`PoseTable` held them:
+    ``local_rotations`` (F, N, 4), ``root_translations`` (F, C, 3), ``morph_weights`` (F, M) on ``layout``.
+    Kept without the table's per-character :class:`~infuse.runtime.pose.PoseBlock` objects: the fewer
+    objects a runtime keeps block after block, the shorter the garbage collector's passes over them."""
+
+    layout: TableLayout
+    frames: int
+    local_rotations: np.ndarray
+    root_translations: np.ndarray
+    morph_weights: np.ndarray
+
+
 @dataclass
 class _Track:
     """One character's output so far: per-block arrays."""
@@ -184,7 +198,7 @@ class Runtime:
         self._targets: dict = {}
         self._next_id = 0
         self._layout: TableLayout | None = None  # where each character sits in a block's PoseTable
-        self._tables: list[PoseTable] = []  # the blocks' tables, oldest first (as the tracks' arrays, up to forget)
+        self._tables: list[_Evaluated] = []  # the blocks' arrays, oldest first (as the tracks' arrays, up to forget)
         self._memos: dict[tuple, list] = {}  # per group of jobs: what its controller class memoized
         self._schedule: _Schedule | None = None  # the activities as arrays, while they stay as they are
         self._placed: tuple[TableLayout, list, tuple] | None = None  # what cast_poses places, while it stays
@@ -451,7 +465,7 @@ class Runtime:
             track.morphs.append(pose.morph_weights)
             written = pose.morph_written
             track.morph_written = written if track.morph_written is None else track.morph_written | written
-        self._tables.append(table)
+        self._tables.append(_Evaluated(table.layout, n, table.local_rotations, table.root_translations, table.morph_weights))
         self.frame += n
 
     # -- results ---------------------------------------------------------------------------------------

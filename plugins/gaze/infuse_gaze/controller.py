@@ -127,7 +127,8 @@ class Gaze(Controller):
         chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads) if single else _Chains(leads, block.table)
         if single:
             arrays = chains.settings(frames, dt)  # with "kept", what the solver keeps of them
-            arrays["weights"] = np.array([job.weight for job in leads])
+            # the jobs' own weights stacked, when they are the leads (one gaze per character, in their order)
+            arrays["weights"] = jobs.weights if len(jobs) == len(leads) else np.array([job.weight for job in leads])
             spans = [[(job, slice(None))] for job in leads]
         else:
             arrays, spans = _settings_per_frame(rows, names, block)
@@ -147,6 +148,8 @@ class Gaze(Controller):
         refine, elsewhere, lost, faces = chains.plan(block) if single else _plan_targets(rows, names, spans, chains, block)
         for c, job, these, target in elsewhere:
             targets[c, these] = target.positions(block.times, block)[these]
+        if lost and arrays["weights"] is jobs.weights:
+            arrays["weights"] = jobs.weights.copy()  # the jobs' own stay as they are
         for c, job, these, problem in lost:  # a target that names nothing in the scene: this gaze rests
             job.report(f"gaze target {job.controller.target!r} cannot be found ({problem}); the gaze is skipped")
             targets[c, these] = 0.0

@@ -349,12 +349,13 @@ def _turn_rows(local, aim, gain, settings: list, state) -> tuple[np.ndarray, np.
         h *= g
         v *= g
         dx, dy = (h - x0) * share, (v - y0) * share
-        k = limit / max(hypot(dx, dy), limit)  # 1 within the limit (> 0)
+        step = hypot(dx, dy)
+        k = limit / step if step > limit else 1.0  # limit / max(step, limit) (limit > 0)
         x0, y0 = dx * k + x0, dy * k + y0
         h, v = x0 / count, y0 / count
         ch, sh, cp, sp = cos(h), sin(h), cos(v), sin(v)
         put((x0, y0, h, v, ch, 0.0, -sh, -sh * sp, cp, -ch * sp, sh * cp, sp, ch * cp))
-    table = np.array(values).reshape(rows, 13)
+    table = np.fromiter(values, np.float64, 13 * rows).reshape(rows, 13)
     state[:] = table[:, :2]
     return table[:, 2:4].T[..., None], table[:, 4:].T.reshape(3, 3, rows, 1)
 
@@ -398,6 +399,7 @@ class _Block:
         self.eyes_aim = inp.offsets.transpose(2, 0, 1) + _HALF_TURN  # (2, C, F)
         self.aim = _contiguous(self.eyes_aim[:, None] - forward, (1, 0, 2, 3))
         self.gains = inp.active * inp.weights[..., None]  # (C, F, G)
+        self.turned = np.any(self.gains != 0.0, axis=(0, 1))  # (G,) the groups some character turns
         self.present, self.everyone, self.absent = _kept(inp, "present", lambda: (
             np.ascontiguousarray(inp.present.T[:, :, None]),  # (S, C, 1)
             np.all(inp.present, axis=0).tolist(),  # slots every character has
@@ -509,12 +511,13 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
     Up the chain the walk carries the target ``target`` (3, C, F) seen from the current slot; to place
     the slots ``place`` (slot indices) in the world it also carries the world's origin and axes (points
     move with the slots' offsets, axes only turn), from which each slot's position follows. Returns the
-    offsets (C, F, S, 2) and {slot: position (3, C, F) in the world} of the slots ``place``.
+    offsets (C, F, S, 2) (None without ``eyes``: such a pass only places) and {slot: position (3, C, F) in the
+    world} of the slots ``place``.
     """
     c_count, frames = target.shape[1:]
     scalar = frames == 1 and c_count <= SCALAR_TURN_MAX_CHARACTERS
-    out = np.zeros((c_count, frames, _S, 2))
-    turning = (np.any(block.gains != 0.0, axis=(0, 1)) | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
+    out = np.zeros((_S, 2, c_count, frames)) if eyes else None  # component-major, each slot's rows one copy
+    turning = (block.turned | np.any(groups_state != 0.0, axis=(0, 2))).tolist()
     points = 2 if place else 1  # the carried columns that are points
     carried = None  # (3, K, C, F): what the walk carries, seen from the last slot's aligned frame as turned; None until a slot turns
     past: dict[int, np.ndarray] = {}  # with ``place``: what it carried past each slot
@@ -545,17 +548,19 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
             assert share is not None  # set at the group's first slot, which comes before the others
             if block.everyone[s]:  # the group's slots share one turn
                 unturn = unswing_matrices(share) if unturn is None else unturn
-                out[:, :, s] = share.transpose(1, 2, 0)
-                turn = unturn
+                hv, turn = share, unturn
             else:
                 hv = share * block.present[s]
-                out[:, :, s] = hv.transpose(1, 2, 0)
                 turn = unswing_matrices(hv)
+            if out is not None:
+                out[s] = hv
             view = np.einsum("ijcf,jkcf->ikcf", turn, view)
         carried = past[s] = view
     placed = {s: block.placed(s, past[SLOT_PARENTS[s]]) if SLOT_PARENTS[s] in past else block.positions[s] for s in place}
-    if not (eyes and (inp.present[:, _EYE_SLOTS].any() or eyes_state.any())):
+    if out is None:
         return out, placed
+    if not (inp.present[:, _EYE_SLOTS].any() or eyes_state.any()):
+        return out.transpose(2, 3, 0, 1), placed
     # The eyes, side by side: each turns from its own position, all the way (within its limits).
     pair = _EYE_PAIR
     if carried is None:
@@ -572,5 +577,5 @@ def _solve_once(inp: SolverInput, block: _Block, target: np.ndarray, groups_stat
     path = _follow(smoothing, hv.reshape(2, 2 * c_count, frames), state)
     eyes_state[:] = state.reshape(2, c_count, 2).transpose(1, 0, 2)
     path = path.reshape(2, 2, c_count, frames) * block.present[pair]
-    out[:, :, pair] = path.transpose(2, 3, 1, 0)
-    return out, placed
+    out[pair] = path.transpose(1, 0, 2, 3)
+    return out.transpose(2, 3, 0, 1), placed
