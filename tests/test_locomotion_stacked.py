@@ -86,7 +86,7 @@ def test_walks_blended_together_walk_as_each_on_its_own(xbot, block, monkeypatch
     assert max(orders for _, orders in blends) > 1 and max(frames for frames, _ in blends) > block
     blends.clear()
     ask = controller.Ask
-    monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows: ask(work, (object(),), shared, rows))  # each alone
+    monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows, walk=(): ask(work, (object(),), shared, rows, walk))  # each alone
     alone = walked(xbot, block, [])
     assert max(frames for frames, _ in blends) <= block
     for name in WALKS:

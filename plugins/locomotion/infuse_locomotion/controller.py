@@ -386,7 +386,7 @@ class Locomotion(Controller):
                 asks = [now[n] for n in members]
                 rows = asks[0].rows if len(asks) == 1 else \
                     tuple(None if a[0] is None else np.concatenate(a) for a in zip(*(ask.rows for ask in asks)))
-                out = asks[0].work(*asks[0].shared, *rows)
+                out = asks[0].work(*asks[0].shared, *rows, *(list(a) for a in zip(*(ask.walk for ask in asks))))
                 ends = [0, *itertools.accumulate(len(ask.rows[0]) for ask in asks)]
                 for n, a, e in zip(members, ends[:-1], ends[1:]):
                     _resume(n, drives[n], tuple(None if x is None else x[a:e] for x in out), asked, done)
@@ -598,91 +598,24 @@ class Locomotion(Controller):
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3),
         the turn spun at the root so far (F,) radians and the frames (F,) bool stepping as no clip does
         (a stop's or a turn on the spot's steps, coming to rest: :func:`_touch_downs`), before the feet
-        are pinned. A generator: it yields the work it asks for (:class:`Ask`: its blend weights, its
-        blend, its shorter steps) and takes it back done."""
-        x0, z0, h0 = st.x, st.z, st.heading
+        are pinned. A generator: it yields the work it asks for (:class:`Ask`: the blend driven
+        (:func:`_driven`), the blend placed, its shorter steps) and takes it back done."""
+        start = (st.x, st.z, st.heading)
         req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
             asked, done, towards = st.capped
             report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
-        speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
-        w, slow, inside = yield Ask(_bound_weights, (id(b),), (b,), (speed, direction, turn))
-        has_idle = b.has_idle
-        # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
-        # the blend shows it; the clips' own turn shows what it can of the heading's.
-        vf, vl = speed * np.cos(direction), speed * np.sin(direction)
-        vt = (w @ b.velocities[:, 2]) * (1.0 if has_idle else slow)
-        # Root motion: integrate the blend's own velocities from where the last block ended; the heading
-        # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
-        # turning examples) spun at the root.
-        turned = turn * dt
-        heading = _before(h0, turned)
-        ahead = heading + turned  # each frame's step along the heading it turns to, as the steering integrates
-        sin_ahead, cos_ahead = np.sin(ahead), np.cos(ahead)
-        step_x = (vf * sin_ahead + vl * cos_ahead) * dt
-        step_z = (vf * cos_ahead - vl * sin_ahead) * dt
-        px, pz = _before(x0, step_x), _before(z0, step_z)
-        st.x, st.z, st.heading = float(px[-1] + step_x[-1]), float(pz[-1] + step_z[-1]), float(heading[-1] + turned[-1])
-        spinning = np.abs(turn - vt) > SPIN_STEP
-        pace, path = None, self.steering.path
-        if b.stops and path is not None and final.any():  # the stop clip begun on time (:mod:`.pacing`)
-            to_x, to_z = path[-1][0] - px, path[-1][1] - pz  # the last point from each frame, as the steering saw it
-            bearing = (np.arctan2(to_x, to_z) - direction - heading + np.pi) % (2.0 * np.pi) - np.pi
-            cruise = np.array([self._asked(t, b.limit) for t in times.tolist()])  # the speed it speeds up to
-            fps = 1.0 / dt
-            pace = (pacing.pacing_for(b.stops, fps, b.walk_speeds, b.walk_cadences, st.phase, self.steering.max_accel,
-                                      [_stop_marks(b, c, fps) for c in b.stops]),
-                    np.where(final, speed, 0.0), np.hypot(to_x, to_z), bearing, cruise)
-        # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
-        # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
-        # cadence, stays about constant with speed), and show the idle only when nearly standing.
-        target = _moving(w, b.idle, b.slowest)
-        wm, st.blend_held = _eased(target, st.blend, dt / BLEND_EASE_S, inside, st.blend_held)
-        st.blend = wm[-1].copy()
-        eased = wm - target  # the turn the eased blend shows more than the asked one's
-        vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if has_idle else slow)
-        period = np.maximum(wm @ b.durations, 1e-3)
-        phase, advance, stride, standing, rest = _clock(st, slow, stopping, spinning, period, dt, has_idle,
-                                                        lambda i: _settle_phases(b, wm[i:i + 1])[0], pace)
-        if b.stops:  # where it went, frame by frame: where a stop clip may take over
-            st.trace = (px, pz, heading, speed, phase, advance)
-        # The heading's turn the blend does not show, spun at the root (radians, from the walk's start):
-        # the idle's share of the pose shows none of the turning clips' (their planted feet turning back).
-        shown = vt * (1.0 - standing)
-        spun = _before(st.spun, (turn - shown) * dt)
-        st.spun = float(spun[-1] + (turn[-1] - shown[-1]) * dt)
-        # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
-        settle = np.minimum(np.maximum(1.0 - slow / STAND_FRACTION, 0.0), 1.0) * (1.0 - standing)  # np.clip costs more
-        stride = stride + (1.0 - stride) * standing
-        summed = _clips_of(wm)[1]  # the clips in the order this walk sums them
-        order = np.full(len(b.clips), -1)
-        order[:summed.size] = summed
-        fading = bool(standing.max() > 1e-6)  # into the idle: played at the activity's times (else not asked for)
-        mover = np.full(len(wm), b.movers[int(np.argmax(w.sum(axis=0)))])  # the joint the walk travels on
-        rot, root, jt, contact, turn_q, forward, down, flat = yield Ask(
-            _placed, (id(b), fading), (b,), (wm, order[None].repeat(len(wm), axis=0), phase, standing,
-                                             times if fading and has_idle else None, 0.5 * advance, settle, rest,
-                                             stride, heading, px, pz, mover))
-        # Laying the feet down follows their stance share, but is let go no faster than over
-        # LAY_RELEASE_S: at the stop's quicker cadence the share falls within a frame or two before toe
-        # off, and the foot would turn from lying flat to the animation's toe off at once.
-        # Standing still at the end of a stop without an idle, a foot lies down no less than as the stop's
-        # last step left it until it comes to rest (the held phase may be past the trailing foot's toe
-        # off starting): there it does not fall.
-        release: float | np.ndarray = dt / LAY_RELEASE_S
-        if not has_idle:
-            held = (advance == 0.0) & ((slow < STAND_FRACTION) | stopping)
-            if held.any():
-                release = np.where(held, 0.0, release)[:, None]
-        laid = _slow_fall(flat, st.laid, release)
-        st.laid = laid[-1].copy()
+        wm, order, phase, half_frame, standing, settle, rest, stride, heading, px, pz, mover, spun, made, held, fading = \
+            yield Ask(_driven, (id(b),), (b, dt), (times, req), (st, self, start, len(times)))
+        fading = bool(fading[0])  # into the idle: played at the activity's times (else not asked for)
+        rot, root, jt, contact, turn_q, forward, down, laid = yield Ask(
+            _placed, (id(b), fading), (b, dt), (wm, order, phase, standing, times if fading and b.has_idle else None,
+                                                half_frame, settle, rest, stride, heading, px, pz, mover, held),
+            (st, len(times)))
         if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
             rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
-        # The steps of a stop or a turn on the spot (shrinking, on the spot, coming to rest: the clips take
-        # none such) land a foot where it touches.
-        made = (slow < STAND_FRACTION) | stopping | (rest > 0.0)
         return rot, root, jt, contact, forward, spun, made
 
     @staticmethod
@@ -1219,9 +1152,10 @@ def _resume(n: int, drive, value, asked: dict, done: dict) -> None:
 
 def _clips_of(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The clips blended by weights ``w`` (F, N): those weighing more than :data:`_LEAST_WEIGHT` on some
-    frame, and the same in the order the blend sums them (most weight over the frames first)."""
+    frame, and the same in the order the blend sums them (most weight over the frames first, ties in
+    the clips' order)."""
     used = np.nonzero(w.max(axis=0) > _LEAST_WEIGHT)[0]
-    return used, used[np.argsort(-w[:, used].sum(axis=0))]
+    return used, used[np.argsort(-w[:, used].sum(axis=0), kind="stable")]
 
 
 class ClipSet(NamedTuple):
@@ -1255,15 +1189,18 @@ def _clip_set(b: LocomotionBinding, used: np.ndarray) -> ClipSet:
 
 
 class Ask(NamedTuple):
-    """Work a walk's :meth:`Locomotion._drive` asks for and waits on: ``work(*shared, *stacked)``, done
-    once for every walk of the block asking for the same ``work`` and ``key`` (:meth:`Locomotion.evaluate`),
-    with ``shared`` the first one's and ``stacked`` their ``rows`` (arrays (F, ...), or None for all)
-    concatenated. It returns arrays (F, ...) or None, frame by frame: each walk takes back its rows."""
+    """Work a walk's :meth:`Locomotion._drive` asks for and waits on: ``work(*shared, *stacked, *walks)``,
+    done once for every walk of the block asking for the same ``work`` and ``key`` (:meth:`Locomotion.evaluate`),
+    with ``shared`` the first one's, ``stacked`` their ``rows`` (arrays (F, ...), or None for all)
+    concatenated and ``walks`` their ``walk`` values, a list of each (one per walk, in the walks' order:
+    their states, how many frames each has). It returns arrays (F, ...) or None, frame by frame: each walk
+    takes back its rows."""
 
     work: Callable
     key: tuple
     shared: tuple
     rows: tuple
+    walk: tuple = ()
 
 
 def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1271,14 +1208,171 @@ def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.nda
     return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
 
 
-def _placed(b: LocomotionBinding, w, orders, phase, standing, times, half_frame, settle, rest, stride, heading, px, pz, mover):
+def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
+    """The steered blend driven for walks of binding ``b`` at once, their frames stacked (R,): the
+    activities' ``times`` (R,) seconds and the steering's requests ``req`` (R, 5) (:meth:`Steering.run`),
+    each walk's state (``states``, carried on), its controller (``walks``), where it stood before the
+    steering ran (``starts``: x, z, heading) and how many frames it has (``counts``). Each frame's
+    blend weights (:func:`_bound_weights`), eased (:func:`_eased`), its root motion along the heading,
+    the gait's clock (:func:`_clock`), the turn spun at the root; rows (R, ...): the moving clips'
+    weights (R, N), the order each walk sums them in (R, N), the phase, half a frame's advance of it,
+    the idle's share, how far into a stop, how far come to rest, the stride factor, the heading
+    (radians) and ground point (m), the joint the walk travels on, the turn spun at the root, the
+    frames stepping as no clip does (a stop's, a turn on the spot's, coming to rest), those holding
+    the phase at a stop without an idle (a foot laid down does not rise there), and whether the walk
+    fades into the idle (its every row)."""
+    speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
+    w, slow, inside = _bound_weights(b, speed, direction, turn)
+    has_idle = b.has_idle
+    ends = list(itertools.accumulate(counts))
+    spans = list(zip([0, *ends[:-1]], ends))
+    last = np.array(ends) - 1
+    # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
+    # the blend shows it; the clips' own turn shows what it can of the heading's.
+    vf, vl = speed * np.cos(direction), speed * np.sin(direction)
+    vt = (w @ b.velocities[:, 2]) * (1.0 if has_idle else slow)
+    # Root motion: integrate the blend's own velocities from where the last block ended; the heading
+    # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
+    # turning examples) spun at the root.
+    x0, z0, h0 = zip(*starts)
+    turned = turn * dt
+    heading = _before_each(h0, turned, counts)
+    ahead = heading + turned  # each frame's step along the heading it turns to, as the steering integrates
+    sin_ahead, cos_ahead = np.sin(ahead), np.cos(ahead)
+    step_x = (vf * sin_ahead + vl * cos_ahead) * dt
+    step_z = (vf * cos_ahead - vl * sin_ahead) * dt
+    px, pz = _before_each(x0, step_x, counts), _before_each(z0, step_z, counts)
+    for st, x, z, h in zip(states, (px[last] + step_x[last]).tolist(), (pz[last] + step_z[last]).tolist(),
+                           (heading[last] + turned[last]).tolist()):
+        st.x, st.z, st.heading = x, z, h
+    spinning = np.abs(turn - vt) > SPIN_STEP
+    # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
+    # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
+    # cadence, stays about constant with speed), and show the idle only when nearly standing.
+    target = _moving(w, b.idle, b.slowest)
+    wm = _eased_each(target, states, dt / BLEND_EASE_S, inside, counts)
+    for st, blend in zip(states, wm[last]):
+        st.blend = blend
+    eased = wm - target  # the turn the eased blend shows more than the asked one's
+    vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if has_idle else slow)
+    period = np.maximum(wm @ b.durations, 1e-3)
+    paces = []
+    for st, walk, (a, e) in zip(states, walks, spans):
+        pace, path = None, walk.steering.path
+        if b.stops and path is not None and final[a:e].any():  # the stop clip begun on time (:mod:`.pacing`)
+            to_x, to_z = path[-1][0] - px[a:e], path[-1][1] - pz[a:e]  # the last point from each frame, as the steering saw it
+            bearing = (np.arctan2(to_x, to_z) - direction[a:e] - heading[a:e] + np.pi) % (2.0 * np.pi) - np.pi
+            cruise = np.array([walk._asked(t, b.limit) for t in times[a:e].tolist()])  # the speed it speeds up to
+            fps = 1.0 / dt
+            pace = (pacing.pacing_for(b.stops, fps, b.walk_speeds, b.walk_cadences, st.phase, walk.steering.max_accel,
+                                      [_stop_marks(b, c, fps) for c in b.stops]),
+                    np.where(final[a:e], speed[a:e], 0.0), np.hypot(to_x, to_z), bearing, cruise)
+        paces.append(pace)
+    phase, advance, stride, standing, rest = _clocks(states, slow, stopping, spinning, period, dt, has_idle,
+                                                     lambda i: _settle_phases(b, wm[i:i + 1])[0], paces, counts)
+    if b.stops:  # where it went, frame by frame: where a stop clip may take over
+        for st, (a, e) in zip(states, spans):
+            st.trace = (px[a:e], pz[a:e], heading[a:e], speed[a:e], phase[a:e], advance[a:e])
+    # The heading's turn the blend does not show, spun at the root (radians, from the walk's start):
+    # the idle's share of the pose shows none of the turning clips' (their planted feet turning back).
+    shown = vt * (1.0 - standing)
+    unshown = (turn - shown) * dt
+    spun = _before_each([st.spun for st in states], unshown, counts)
+    for st, turned_at in zip(states, (spun[last] + unshown[last]).tolist()):
+        st.spun = turned_at
+    # How far into a stop; the idle plays as it is (so a block standing throughout needs no change).
+    settle = np.minimum(np.maximum(1.0 - slow / STAND_FRACTION, 0.0), 1.0) * (1.0 - standing)  # np.clip costs more
+    stride = stride + (1.0 - stride) * standing
+    # A foot laid down at the end of a stop without an idle does not rise while the phase holds there
+    # (:func:`_placed`).
+    held = None if has_idle else (advance == 0.0) & ((slow < STAND_FRACTION) | stopping)
+    # The steps of a stop or a turn on the spot (shrinking, on the spot, coming to rest: the clips take
+    # none such) land a foot where it touches.
+    made = (slow < STAND_FRACTION) | stopping | (rest > 0.0)
+    order, mover, fading = _walk_clips(b, w, wm, standing, counts)
+    return wm, order, phase, 0.5 * advance, standing, settle, rest, stride, heading, px, pz, mover, spun, made, held, fading
+
+
+def _before_each(starts, steps: np.ndarray, counts: list) -> np.ndarray:
+    """(R,) :func:`_before` for walks' frames stacked: each walk's start (``starts`` (W,)) plus the ``steps``
+    (R,) taken before each of its frames, the walks having ``counts`` (W,) frames each, in order."""
+    f = counts[0]
+    if counts.count(f) < len(counts):  # walks of different lengths: each on its own
+        ends = list(itertools.accumulate(counts))
+        return np.concatenate([_before(s, steps[e - c:e]) for s, c, e in zip(starts, counts, ends)])
+    out = np.empty((len(counts), f))
+    out[:, 0] = 0.0
+    if f > 1:
+        np.cumsum(steps.reshape(-1, f)[:, :-1], axis=1, out=out[:, 1:])
+    out += np.array(starts)[:, None]
+    return out.reshape(-1)
+
+
+def _eased_each(target: np.ndarray, states: list, step: float, inside: np.ndarray, counts: list) -> np.ndarray:
+    """(R, N) :func:`_eased` for walks' frames stacked (``target`` (R, N), ``inside`` (R,); ``counts`` (W,)
+    frames each), each from its state's eased weights, its state's ``blend_held`` updated. Walks whose
+    blend keeps up take their targets, looked at all at once (the frame loop runs only for one that lags)."""
+    f = counts[0]
+    befores = [st.blend for st in states]
+    if counts.count(f) == len(counts) and all(x is not None and x.shape == target.shape[1:] for x in befores):
+        n = target.shape[1]
+        stacked = target.reshape(-1, f, n)
+        at = inside.reshape(-1, f)
+        prev = np.concatenate((np.array(befores)[:, None], stacked[:, :-1]), axis=1)
+        free = at.copy()
+        free[:, 1:] &= at[:, :-1]
+        jump = (np.abs(stacked - prev).max(axis=2) > step) & ~free
+        keeps = ~jump.any(axis=1)
+        held_now = (~at[:, -1]).tolist()
+        if all(keeps.tolist()) and not any(st.blend_held for st in states):
+            for st, held in zip(states, held_now):
+                st.blend_held = held
+            return target
+    out = target.copy()
+    for st, e, c in zip(states, itertools.accumulate(counts), counts):
+        out[e - c:e], st.blend_held = _eased(target[e - c:e], st.blend, step, inside[e - c:e], st.blend_held)
+    return out
+
+
+def _walk_clips(b: LocomotionBinding, w: np.ndarray, wm: np.ndarray, standing: np.ndarray, counts: list) -> tuple[np.ndarray, ...]:
+    """For walks' frames stacked (blend weights ``w`` (R, N), the moving clips' ``wm`` (R, N), the idle's share
+    ``standing`` (R,); ``counts`` (W,) frames each): the clips each walk sums, in its order (:func:`_clips_of`),
+    then -1 (R, N); the joint it travels on (R,) (the most weighted clip's mover) and whether it fades into
+    the idle (R,) bool, each walk's on all its rows."""
+    f, n = counts[0], wm.shape[1]
+    if counts.count(f) == len(counts):
+        per = wm.reshape(-1, f, n)
+        used = per.max(axis=1) > _LEAST_WEIGHT
+        ranked = np.argsort(np.where(used, -per.sum(axis=1), np.inf), axis=1, kind="stable")
+        orders = np.where(np.arange(n) < used.sum(axis=1)[:, None], ranked, -1)
+        movers = np.asarray(b.movers)[np.argmax(w.reshape(-1, f, n).sum(axis=1), axis=1)]
+        fading = standing.reshape(-1, f).max(axis=1) > 1e-6
+    else:
+        ends = list(itertools.accumulate(counts))
+        orders = np.full((len(counts), n), -1)
+        movers = np.empty(len(counts), dtype=np.int64)
+        fading = np.empty(len(counts), dtype=bool)
+        for k, (c, e) in enumerate(zip(counts, ends)):
+            summed = _clips_of(wm[e - c:e])[1]
+            orders[k, :summed.size] = summed
+            movers[k] = b.movers[int(np.argmax(w[e - c:e].sum(axis=0)))]
+            fading[k] = standing[e - c:e].max() > 1e-6
+    if f == 1 and counts.count(1) == len(counts):
+        return orders, movers, fading
+    return np.repeat(orders, counts, axis=0), np.repeat(movers, counts), np.repeat(fading, counts)
+
+
+def _placed(b: LocomotionBinding, dt: float, w, orders, phase, standing, times, half_frame, settle, rest, stride, heading, px, pz,
+            mover, held, states: list, counts: list):
     """The blend (:meth:`Locomotion._blend` of ``w`` to ``half_frame``, see there) placed on the steered path,
     frame by frame: the pelvis taken ``settle`` (F,) of the way over the point the steering stands at (and
     risen to the standing height by ``rest`` (F,) without an idle), the pose turned to ``heading`` (F,)
     radians and carried to ``px``, ``pz`` (F,) metres on the joint ``mover`` (F,) (0: the root). Returns its
     rotations (F, J, 4), root (F, 3), joint translations (F, J, 3) or None, contact phases (F, 2, 2), the
     heading's turn (F, 4) and direction (F, 3), and how far each foot is laid down (F, 2): ``down`` by its
-    stance share into a stop and ``flat`` also through the swing of strides shrunk by ``stride`` (F,)."""
+    stance share into a stop, and ``laid`` also through the swing of strides shrunk by ``stride`` (F,), let
+    go slower (:data:`LAY_RELEASE_S`; not at all on the frames ``held`` (F,) bool, or None for none) from each
+    walk's state (``states``, carried on; ``counts`` (W,) its frames)."""
     rot, root, jt, contact, support = Locomotion._blend(b, w, orders, phase, standing, times, half_frame)
     if not b.has_idle:
         resting = rest > 0.0
@@ -1318,7 +1412,30 @@ def _placed(b: LocomotionBinding, w, orders, phase, standing, times, half_frame,
     # turned up as a walk's heel strike, held where it touched, it rolled down about its heel and
     # stood short of its place by the roll.
     flat = np.maximum(down, (settle * (1.0 - np.minimum(stride, 1.0)))[:, None])
-    return rot, root, jt, contact, turn_q, forward, down, flat
+    return rot, root, jt, contact, turn_q, forward, down, _laid(flat, held, dt, states, counts)
+
+
+def _laid(flat: np.ndarray, held: np.ndarray | None, dt: float, states: list, counts: list) -> np.ndarray:
+    """(R, 2) how far each foot is laid down, for walks' frames stacked: following ``flat`` (R, 2) (their stance
+    share), but let go no faster than over :data:`LAY_RELEASE_S` (:func:`_slow_fall`) from each walk's state
+    (``states``, its ``laid`` carried on; ``counts`` (W,) frames each), and not at all on the frames ``held``
+    (R,) bool (None: none). At the stop's quicker cadence the share falls within a frame or two before toe
+    off, and the foot would turn from lying flat to the animation's toe off at once. Standing still at the
+    end of a stop without an idle, a foot lies down no less than as the stop's last step left it until it
+    comes to rest (the held phase may be past the trailing foot's toe off starting): there it does not fall."""
+    release = dt / LAY_RELEASE_S
+    f = counts[0]
+    if (held is None or not held.any()) and counts.count(f) == len(counts):
+        laid = _slow_fall(flat.reshape(-1, f, 2), np.array([st.laid for st in states]), release).reshape(-1, 2)
+    else:
+        laid = np.empty_like(flat)
+        for st, c, e in zip(states, counts, itertools.accumulate(counts)):
+            on = held[e - c:e] if held is not None else None
+            step = np.where(on, 0.0, release)[:, None] if on is not None and on.any() else release
+            laid[e - c:e] = _slow_fall(flat[e - c:e], st.laid, step)
+    for st, at in zip(states, laid[np.array(list(itertools.accumulate(counts))) - 1]):
+        st.laid = at
+    return laid
 
 
 def _shortened(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid):
@@ -2076,6 +2193,132 @@ def _clock(st: LocomotionState, slow, stopping, spinning, period, dt, idle: bool
         st.idle_frames_left = float(left[e - 1])
     rest = footing.smoothstep(1.0 - left / full)
     return phase % 1.0, advance, np.where(stop, np.minimum(stride, 1.0), stride), rest if idle else np.zeros(f), rest
+
+
+def _clocks(states: list, slow, stopping, spinning, period, dt, idle: bool, settle_at, paces: list,
+            counts: list) -> tuple[np.ndarray, ...]:
+    """:func:`_clock` for walks' frames stacked (R,) (``counts`` (W,) frames each, their ``states`` and
+    ``paces``), ``settle_at(r)`` asked of a stacked row ``r``: the walks whose frames are each one run of
+    the clock (walking, or in one stop or turn on the spot throughout: a block of one frame always) and
+    not paced, all at once (:func:`_clocks_together`), any other on its own."""
+    f, n = counts[0], len(counts)
+    if counts.count(f) < n:
+        ends = list(itertools.accumulate(counts))
+        return tuple(np.concatenate(c) for c in zip(*(
+            _clock(st, slow[e - c:e], stopping[e - c:e], spinning[e - c:e], period[e - c:e], dt, idle,
+                   lambda i, a=e - c: settle_at(a + i), pace) for st, pace, c, e in zip(states, paces, counts, ends))))
+    stop = ((slow < STAND_FRACTION) | stopping).reshape(n, f)
+    spin = spinning.reshape(n, f)
+    together = ~stop.any(axis=1) | ((stop == stop[:, :1]) & (spin == spin[:, :1])).all(axis=1)
+    for k, pace in enumerate(paces):
+        if pace is not None and pace[1].any():
+            together[k] = False
+    if together.all():
+        return tuple(x.reshape(-1) for x in _clocks_together(states, slow.reshape(n, f), stop, spin, period.reshape(n, f), dt,
+                                                             idle, settle_at, 0))
+    out = np.empty((5, n, f))
+    for k in np.flatnonzero(~together).tolist():
+        a = k * f
+        out[:, k] = _clock(states[k], slow[a:a + f], stopping[a:a + f], spinning[a:a + f], period[a:a + f], dt, idle,
+                           lambda i, a=a: settle_at(a + i), paces[k])
+    for k in np.flatnonzero(together).tolist():  # walk by walk: their rows would be gathered and scattered again
+        out[:, k] = np.array(_clocks_together([states[k]], slow[None, k * f:k * f + f], stop[k:k + 1], spin[k:k + 1],
+                                              period[None, k * f:k * f + f], dt, idle, settle_at, k * f))[:, 0]
+    return tuple(out.reshape(5, -1))
+
+
+def _clocks_together(states: list, slow, stop, spin, period, dt, idle: bool, settle_at, first: int) -> tuple[np.ndarray, ...]:
+    """:func:`_clock` for walks (W,) of F frames each, their arrays (W, F) (``slow``, the ``stop`` flags (the
+    slowest walk's share below :data:`STAND_FRACTION`, or the steering stopping), ``spin`` flags and
+    ``period``), each walk's frames one run of the clock (walking, or in one stop or turn on the spot
+    throughout), none paced; ``settle_at(first + k * F + i)`` asked for walk k's frame i. Updates the
+    ``states``; returns (W, F) arrays as :func:`_clock` does, the same to the bit."""
+    w, f = slow.shape
+    phase0 = np.array([st.phase for st in states])
+    rate = np.sqrt(slow)
+    stride = rate.copy()
+    advance = np.zeros((w, f))
+    settled = np.zeros((w, f), dtype=bool)
+    stopped, spinning = stop[:, 0].tolist(), spin[:, 0].tolist()
+    walking = ~stop[:, 0]
+    if walking.any():
+        advance[walking] = dt * rate[walking] / period[walking]
+    stepping = []
+    for k, st in enumerate(states):
+        if not stopped[k]:
+            st.settled, st.landings, st.to_go = False, -1, -1.0
+        elif st.settled and not spinning[k]:  # standing after its stop: the phase holds
+            settled[k] = True
+        else:
+            stepping.append(k)
+            if st.landings < 0:  # the stop (or the turn on the spot) begins
+                st.landings, st.floor, st.stop_age = 0, float(rate[k, 0]) if not st.settled else 0.0, 0.0
+            if spinning[k]:
+                st.settled, st.landings, st.to_go = False, 0, -1.0
+    resting = settled[:, 0]
+    if resting.any():
+        rate[resting] = 0.0
+        stride[resting] = slow[resting] / STOP_CADENCE
+    if stepping:
+        # The steps of a stop or a turn on the spot (see :func:`_clock`), the stepping walks' rows at once.
+        on = np.array(stepping)
+        walks = [states[k] for k in stepping]
+        age = np.array([st.stop_age for st in walks])[:, None] + dt * np.arange(f)
+        r = np.maximum(rate[on], np.minimum(STOP_CADENCE, np.array([st.floor for st in walks])[:, None] + CADENCE_RAMP * age))
+        step = dt * r / period[on]
+        ph = phase0[on][:, None] + np.cumsum(step, axis=1)  # after each frame's step
+        before = ph - step
+        landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[on] < STILL_FRACTION)
+        count = np.array([st.landings for st in walks])[:, None] + np.cumsum(landed, axis=1)
+        ready = (landed & (count >= (2 if idle else STOP_LANDINGS))).any(axis=1).tolist()
+        goals = []
+        for m, (k, st) in enumerate(zip(stepping, walks)):
+            goal = phase0[k] + st.to_go if st.to_go >= 0.0 else None
+            if goal is None and not spinning[k]:
+                if ready[m]:
+                    j = int(np.argmax(landed[m] & (count[m] >= (2 if idle else STOP_LANDINGS))))
+                    strike = np.floor(2.0 * ph[m, j]) / 2.0  # the landing's phase: a left (whole) or right (half) strike
+                    goal = strike + settle_at(first + k * f + j)[int(round(2.0 * strike)) % 2]
+                st.landings = int(count[m, -1])
+            goals.append(goal)
+        stride[on] = slow[on] / np.maximum(r, 1e-9)  # no cadence yet (a stop from standing): no stride
+        for m, (k, st, goal) in enumerate(zip(stepping, walks, goals)):
+            if goal is not None:
+                over = ph[m] >= goal
+                if over.any():
+                    j = int(np.argmax(over))
+                    step[m, j] = goal - before[m, j]
+                    step[m, j + 1:] = 0.0
+                    r[m, j + 1:] = 0.0
+                    settled[k, j + 1:] = True
+                    st.settled, st.to_go = True, -1.0
+                else:
+                    st.to_go = float(goal - ph[m, -1])
+        for st, aged in zip(walks, (age[:, -1] + dt).tolist()):
+            st.stop_age = aged
+        rate[on] = r
+        advance[on] = step
+    phase = _before_each(phase0, advance.reshape(-1), [f] * w).reshape(w, f)
+    for st, at in zip(states, ((phase[:, -1] + advance[:, -1]) % 1.0).tolist()):
+        st.phase = at
+    # The idle's share (see :func:`_clock`), counted in whole frames.
+    full = _settle_frames(dt)
+    if f == 1 or (settled == settled[:, :1]).all():
+        ramp = np.array([st.idle_frames_left for st in states])[:, None] + \
+            np.where(settled[:, :1], -1.0, 1.0) * np.arange(1, f + 1)
+        left = np.minimum(np.maximum(ramp, 0.0), full)
+        for st, frames_left in zip(states, left[:, -1].tolist()):
+            st.idle_frames_left = frames_left
+    else:
+        left = np.empty((w, f))
+        for k, st in enumerate(states):
+            edges = _runs(settled[k])
+            for a, e in zip(edges[:-1], edges[1:]):
+                ramp = st.idle_frames_left + (-1.0 if settled[k, a] else 1.0) * np.arange(1, e - a + 1)
+                left[k, a:e] = np.minimum(np.maximum(ramp, 0.0), full)
+                st.idle_frames_left = float(left[k, e - 1])
+    rest = footing.smoothstep(1.0 - left / full)
+    return phase % 1.0, advance, np.where(stop, np.minimum(stride, 1.0), stride), rest if idle else np.zeros((w, f)), rest
 
 
 def _before(start: float, steps: np.ndarray) -> np.ndarray:
