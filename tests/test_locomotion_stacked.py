@@ -9,6 +9,8 @@ stacked and each on its own; compared by forward kinematics on every frame of th
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -93,3 +95,49 @@ def test_walks_blended_together_walk_as_each_on_its_own(xbot, block, monkeypatch
         a, b = motion_fk(together.motion(name))[1], motion_fk(alone.motion(name))[1]
         assert a.shape == b.shape
         assert np.abs(a - b).max() < 1e-9
+
+
+@pytest.mark.parametrize("frames", [1, 4])
+def test_the_clocks_of_walks_together_tick_as_each_alone(frames):
+    """The gait's clocks of walks evaluated together (walking, standing after a stop, stepping into a stop
+    and landing or reaching where it holds, turning on the spot, one stopping inside the block) give each
+    walk's phase, steps, strides and idle shares and carry its state as its clock alone does, to the bit."""
+    rng = np.random.default_rng(7)
+    dt, walks = 1.0 / 30.0, 24
+    states, slow, stopping, spinning = [], np.empty((walks, frames)), np.zeros((walks, frames), bool), np.zeros((walks, frames), bool)
+    for k in range(walks):
+        kind = k % 6
+        st = controller.LocomotionState(phase=float(rng.uniform(0.0, 1.0)), idle_frames_left=float(rng.integers(0, 16)))
+        slow[k] = rng.uniform(0.3, 1.0, frames)
+        if kind == 1:  # standing after its stop
+            st.settled, slow[k] = True, 0.0
+        elif kind in (2, 3):  # stepping into a stop: landing by the body, or holding where it goes to
+            st.settled, st.landings, st.floor, st.stop_age = False, int(rng.integers(-1, 3)), 0.8, float(rng.uniform(0.0, 0.3))
+            st.phase = float(rng.choice([0.49, 0.99, 0.2]))
+            st.to_go = float(rng.uniform(0.0, 0.05)) if kind == 3 else -1.0
+            slow[k] = rng.uniform(0.0, 0.009, frames)
+            stopping[k] = True
+        elif kind == 4:  # turning on the spot
+            st.settled, slow[k] = bool(rng.integers(0, 2)), 0.0
+            spinning[k] = True
+        elif kind == 5 and frames > 1:  # walking, then stopping inside the block: a clock of its own
+            stopping[k, frames // 2:] = True
+        states.append(st)
+    period = rng.uniform(0.9, 1.2, (walks, frames))
+    asked: list[int] = []
+
+    def settle_at(i):
+        asked.append(i)
+        return np.array([0.05, 0.04]) + 1e-3 * (i % 3)
+
+    alone_states = copy.deepcopy(states)
+    together = controller._clocks(states, slow.ravel(), stopping.ravel(), spinning.ravel(), period.ravel(), dt, True,
+                                  settle_at, [None] * walks, [frames] * walks)
+    for k, st in enumerate(alone_states):
+        a = k * frames
+        alone = controller._clock(st, slow[k], stopping[k], spinning[k], period[k], dt, True, lambda i, a=a: settle_at(a + i))
+        for mine, its in zip(together, alone):
+            assert np.array_equal(mine[a:a + frames], its)
+        for field in ("phase", "settled", "landings", "to_go", "floor", "stop_age", "idle_frames_left"):
+            assert getattr(st, field) == getattr(states[k], field), field
+    assert asked and any(st.settled for st in states[2::6] + states[3::6])  # stops landed, some came to hold
