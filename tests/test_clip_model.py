@@ -191,3 +191,31 @@ def test_a_retargeted_clip_keeps_the_morph_weights_the_character_has(tmp_path):
                  "-o", str(out)]) == 0
     clip = infuse.load(out).motions["talk"]
     np.testing.assert_allclose(clip.morph_weight("viseme_aa"), talk.morph_weights[:, 0], atol=1e-6)
+
+
+def test_a_clip_bound_again_to_a_character_binds_as_before_and_reports_the_same():
+    """A clip played again on a character (a walk settling onto the idle it started with) takes the binding
+    worked out the first time: the same values, the same reports, and the character keeps no clip alive."""
+    import gc
+    import weakref
+    from dataclasses import fields
+
+    runtime = Runtime(fps=30)
+    name = runtime.add_character(synthetic_character("face", morphs=("smile",)))
+    rig = runtime.rig(name)
+    clip = infuse.Motion.rest_pose(rig.skeleton, 10).replace(morph_names=["smile", "frown"], morph_weights=np.full((10, 2), 0.4))
+    first_reports: list[str] = []
+    again_reports: list[str] = []
+    first = Clip(clip, loop=True).bind(rig, first_reports.append)
+    again = Clip(clip, loop=False, placement=(quat.IDENTITY, np.zeros(3))).bind(rig, again_reports.append)
+    assert first_reports == again_reports and any("no morph target 'frown'" in r for r in again_reports)
+    assert again.motion is clip
+    for f in fields(first):
+        a, b = getattr(first, f.name), getattr(again, f.name)
+        assert (np.array_equal(a, b) if isinstance(a, np.ndarray) else a == b), f.name
+    other = infuse.Motion.rest_pose(rig.skeleton, 4)
+    assert Clip(other).bind(rig, lambda message: None).motion is other
+    gone = weakref.ref(other)
+    del other
+    gc.collect()
+    assert gone() is None

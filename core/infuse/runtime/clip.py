@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -294,6 +294,25 @@ class Clip(Controller):
         return f"clip {self.motion.name!r}"
 
     def bind(self, rig, report) -> ClipBinding:
+        bound = rig.state_of(_Bound)
+        kept = bound.get(self.motion)
+        if kept is not None:  # this clip bound to this character before: the same binding, the same reports
+            values, reported = kept
+            for message in reported:
+                report(message)
+            return ClipBinding(motion=self.motion, **values)
+        reports: list[str] = []
+
+        def noted(message: str) -> None:
+            reports.append(message)
+            report(message)
+
+        binding = self._bind(rig, noted)
+        if binding.motion is self.motion:  # not retargeted: it depends only on the clip and the character
+            bound[self.motion] = ({f.name: getattr(binding, f.name) for f in fields(binding) if f.name != "motion"}, reports)
+        return binding
+
+    def _bind(self, rig, report) -> ClipBinding:
         motion = self.motion
         if motion.skeleton is not rig.skeleton and motion.skeleton.names != rig.skeleton.names:
             shared = [n for n in motion.skeleton.names if n in rig.skeleton.index]
@@ -400,6 +419,13 @@ class Clip(Controller):
         if b.morph_columns.size:  # from the clip as given: a retargeted copy keeps no morph weights
             weights = sample_morph_weights(self.motion, local, self.loop)[:, b.morph_sources]
             job.pose.set_morphs(b.morph_columns, weights, job.weight, job.mode)
+
+
+class _Bound(weakref.WeakKeyDictionary):
+    """A character's clip bindings (a state of its rig): per clip (a Motion) bound to it as it is (not
+    retargeted), the :class:`ClipBinding`'s values but the clip (which the entry then does not keep alive)
+    and the messages binding reported. A clip played again on the character (a walk settling onto its
+    pack's idle, the idle it started with) binds at the cost of a look-up."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -120,12 +120,14 @@ class _Schedule:
     def __init__(self, activities: list[Activity]):
         self.activities = activities
         self.key = (Activity.changes, len(activities))
-        timing = np.array([(a.start_s, np.inf if a.end_s is None else a.end_s, a.blend_in_s, a.blend_out_s)
-                           for a in activities], dtype=np.float64).reshape(-1, 4)
+        timing = np.array([value for a in activities for value in (a.start_s, np.inf if a.end_s is None else a.end_s,
+                                                                   a.blend_in_s, a.blend_out_s)], dtype=np.float64).reshape(-1, 4)
         self.timing = timing
         self.starts = timing[:, 0]
-        self.settled = np.array([a.settled_s for a in activities], dtype=np.float64)
         start, end, blend_in, blend_out = timing.T
+        # Activity.settled_s of each: inf without an end, which its settle leaves as it is
+        self.settled = end + np.array([a.controller.settle_s if a.settle_s is None else a.settle_s for a in activities],
+                                      dtype=np.float64)
         self.on_from = np.where(blend_in > 0, start + blend_in, start) + 1e-9
         self.on_until = np.where(blend_out > 0, end - blend_out, end) - 2e-9
         self._groups: dict[bytes, list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]] = {}
