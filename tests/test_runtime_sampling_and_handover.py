@@ -54,7 +54,8 @@ def test_a_walk_takes_over_the_whole_state_of_the_walk_before_but_its_path(motio
     from infuse_locomotion.state import LocomotionState
 
     walk = controller("locomotion", target=(0.0, 1.0))
-    old = LocomotionState(x=1.5, heading=0.3, waypoint=2, pins=np.ones((2, 3)))
+    old = LocomotionState(x=1.5, heading=0.3, waypoint=2)
+    old.pins = np.ones((2, 3))
     state = walk.handover({LocomotionState: old})[LocomotionState]
     assert state.waypoint == 0 and old.waypoint == 2
     assert state.x == 1.5 and state.heading == 0.3

@@ -53,7 +53,7 @@ from infuse.runtime.pose import chain_fk
 from . import pacing, swivels, transitions
 from .binding import FootFloors, LocomotionBinding
 from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
-from .state import LocomotionState
+from .state import FOOT_VALUES, HELD_COLUMNS, LocomotionState
 from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState
 
 
@@ -811,13 +811,27 @@ class Locomotion(Controller):
         rises = np.zeros(goals.shape)  # extra heel rise about the ball, rotation vector in the foot's frame
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
+        touching_all = np.zeros(anchors_all.shape, dtype=bool)  # (F, 2) held where it touched, before its blend's strike
         for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
             touched = _touch_downs(b, st, anchors_all[a0:a1], feet_all[a0:a1], made[a0:a1], dt)
-            touching = touched > 0  # (F, 2) held where it touched, before its blend's strike
-            if touching.any():
-                anchors_all[a0:a1] = np.where(touching, touched, anchors_all[a0:a1])
+            if touched.any():
+                touching_all[a0:a1] = touched > 0
+                anchors_all[a0:a1] = np.where(touching_all[a0:a1], touched, anchors_all[a0:a1])
                 posed_all[a0:a1] |= touched == footing.BALL
-            g_rot, g_pos, anchors = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1]
+        # The feet held through all their walk's frames by what held them a frame before: those held
+        # alike (the anchor, as many frames) in one go, all walks together (the common case by far).
+        starts = np.array([a0 for _, a0, _ in runs])
+        held_before = np.stack([st.anchor for st, _, _ in runs])  # (R, 2)
+        anchor_before = np.concatenate((anchors_all[:1], anchors_all[:-1]))
+        anchor_before[starts] = held_before
+        steady = ~np.logical_or.reduceat(anchors_all != anchor_before, starts, axis=0) & (held_before != footing.FREE)
+        # Held to the block's end: each as (walk, foot, first frame, frames, anchor, carried from (None: its
+        # walk's state), held (below) with the others held as many frames.
+        holds: list[tuple[int, int, int, int, int, np.ndarray | None]] = \
+            [(r, k, runs[r][1], runs[r][2] - runs[r][1], int(held_before[r, k]), None) for r, k in np.argwhere(steady).tolist()]
+        for r in np.flatnonzero(~steady.all(axis=1)).tolist():  # the walks with a foot held otherwise
+            st, a0, a1 = runs[r]
+            g_rot, g_pos, anchors, touching = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1], touching_all[a0:a1]
             frames = a1 - a0
             feet_pos = feet_all[a0:a1]
             ankle_pos = g_pos[:, :, 2]
@@ -827,6 +841,8 @@ class Locomotion(Controller):
             changing = changes.any(axis=0).tolist()
             heading, turned = forward[a0:a1], spun[a0:a1]
             for k in range(2):
+                if steady[r, k]:
+                    continue
                 goal, weight, rise, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], ankle_pos[:, k], turns[a0:a1, k]
                 prev = int(st.anchor[k])
                 # Views of the carried state: never written in place here, only replaced (stored back below).
@@ -930,8 +946,9 @@ class Locomotion(Controller):
                             # blend's foot slapping flat about its held heel, its pitch slowed): pinned there
                             # it would hold the foot up and drop it when let go. The heel stays held until
                             # the foot's pitch has caught up with the animation's.
-                            pitch, up = _toes_slowed(b, quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed)), across, toes_up, dt)
-                            lagging = up > -pitch
+                            pitch, up = _toes_slowed(b, quat.multiply(g_rot[None, s:e, k, 2], quat.conjugate(landed)), across[None],
+                                                     np.array([toes_up]), dt)
+                            lagging = up[0] > -pitch[0]
                             if lagging[0]:
                                 kind = footing.ANKLE
                                 if not lagging.all():
@@ -971,83 +988,38 @@ class Locomotion(Controller):
                             along = quat.rotate(left, feet_pos[s, k, 1] - feet_pos[s, k, 0])  # the corrected foot's
                             along = along if math.hypot(along[0], along[2]) > 1e-6 else heading[s]
                             across = np.array([along[2], 0.0, -along[0]]) / math.hypot(along[0], along[2])
-                        # The animation's turn of the foot since then (world frame): on its heel all of it
-                        # but the turn spun at the root, on its ball only its pitch (the twist about the
-                        # axis across the foot).
-                        since = quat.multiply(g_rot[s:e, k, 2], quat.conjugate(landed))
-                        if kind == footing.ANKLE:
-                            # On its heel, its toes come down no faster than the pack's feet turn near the
-                            # ground (a blend's foot slapping flat in a frame would swing the ankle about
-                            # the heel by centimetres). The pitch is the twist of the turn since it landed
-                            # about the axis across; ``toes_up`` carries it (toes up positive).
-                            pitch, up = _toes_slowed(b, since, across, 0.0 if kind != prev else toes_up, dt)
-                            since = quat.multiply(since, quat.from_axis_angle(across, -(pitch + up)))  # both about one axis
-                            toes_up = float(up[-1])
-                            kept = quat.multiply(yaw(landed_spun - turned[s:e]), since)
-                        else:
-                            kept = np.concatenate((across * (since[:, :3] @ across)[:, None], since[:, 3:]), axis=-1)
-                            kept /= np.maximum(np.sqrt((kept * kept).sum(axis=-1, keepdims=True)), 1e-12)
-                        turn[s:e] = quat.multiply(quat.multiply(kept, landed_as), quat.conjugate(g_rot[s:e, k, 2]))
-                        reach = quat.rotate(turn[s:e], lever[s:e])  # the corrected ankle to ball
-                        if kind == footing.ANKLE:
-                            # While its ball is down too, the foot's heading (its ankle-to-ball direction about
-                            # the vertical) holds: a blend's or take's swivel about the heel, or a roll down
-                            # about an axis not square to the foot, would sweep the ball along the ground.
-                            # ``held_off`` (F,) the turn held off (radians), summed frame by frame.
-                            heading_now = np.arctan2(reach[:, 0], reach[:, 2])
-                            swivel = np.diff(np.concatenate(([foot_heading], heading_now)))
-                            if kind != prev:
+                        heading_from, held_from, toes_from = foot_heading, held_swivel, toes_up
+                        if kind == footing.ANKLE and kind != prev:  # the toes and the swivel count anew
+                            heading_from, held_from, toes_from = math.nan, 0.0, 0.0
+                            if prev == footing.BALL:
                                 # From the ball, the swivel counts from the corrected foot a frame ago: the
                                 # animation's turn in the frame the heel takes over swept the ball 1 cm.
-                                swivel[0], held_swivel = 0.0, 0.0
-                                if prev == footing.BALL:
-                                    was_reach = quat.rotate(left, before[s, k, 1] - before[s, k, 0])
-                                    swivel[0] = heading_now[0] - math.atan2(was_reach[0], was_reach[2])
-                            swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
-                            # The ball is down where the blend's is, and where the foot touched down before its strike.
-                            down = (contact[a0 + s:a0 + e, k, 1] > 0.5) | touching[s:e, k]
-                            held_off = held_swivel + np.cumsum(np.where(down, swivel, 0.0))
-                            foot_heading, held_swivel = float(heading_now[-1]), float(held_off[-1])
-                            turn[s:e] = quat.multiply(yaw(-held_off), turn[s:e])
-                            reach = quat.rotate(turn[s:e], lever[s:e])
-                        if kind == footing.BALL:
-                            # Touching down by its ball, the ball goes down as the animation's does (never
-                            # held above it: a ball held where it first touched, the animation's foot
-                            # coming down on, held the foot up in the air and dropped it at the strike).
-                            held_at = np.empty((e - s, 3))
-                            held_at[:] = pin
-                            if touching[s:e, k].any():
-                                held_at[:, 1] = np.minimum(pin[1], np.minimum.accumulate(np.where(touching[s:e, k], feet_pos[s:e, k, 1, 1], np.inf)))
-                            pin = held_at[-1].copy()
-                            goal[s:e] = held_at - reach
-                        else:
-                            goal[s:e] = pin - _heel_of(b, k, reach)
-                        # The ankle at the animation's height; held by the ball for the pose's sake, no
-                        # lower than keeps the ball at the height it took over at (the blend's leg, half
-                        # standing and half swinging, would push it into the ground, and it would rise
-                        # from there still down and slide as the foot is let go); touching down by the
-                        # heel, no higher than keeps the heel where it touched (the blend's foot rising
-                        # again before its strike would lift it and drop it back in a frame).
-                        pinned = goal[s:e, 1].copy() if kind == footing.ANKLE and touching[s:e, k].any() else None
-                        goal[s:e, 1] = np.where(posed_all[a0 + s:a0 + e, k], np.maximum(ankle[s:e, 1], goal[s:e, 1]), ankle[s:e, 1])
-                        if pinned is not None:
-                            goal[s:e, 1] = np.where(touching[s:e, k], np.minimum(goal[s:e, 1], pinned), goal[s:e, 1])
-                        weight[s:e] = 1.0
-                        ball_goal = goal[e - 1] + reach[-1]
-                        if kind == footing.BALL:
-                            balls = goal[s:e] + reach
-                            goal[s:e], rise[s:e] = footing.heel_rise(quat.multiply(turn[s:e], g_rot[s:e, k, 2]), g_pos[s:e, k, :3], goal[s:e], balls,
-                                                                   across)
-                            ball_goal = balls[-1]
-                        offset, ball_offset, lifted, left = goal[e - 1] - ankle[e - 1], ball_goal - feet_pos[e - 1, k, 1], rise[e - 1], turn[e - 1].copy()
-                        let_go = ball_goal.copy()
+                                was_reach = quat.rotate(left, before[s, k, 1] - before[s, k, 0])
+                                heading_from = math.atan2(was_reach[0], was_reach[2])
+                        carried = np.concatenate((pin, landed, landed_as, across, (landed_spun, toes_from, heading_from, held_from)))
+                        if e == frames:  # to the block's end: held with the others (below), its state then
+                            holds.append((r, k, a0 + s, e - s, kind, carried))
+                            prev = kind
+                            continue
+                        hold = _hold(b, np.array([kind]), np.array([k]), _held_feet(carried[None]), g_rot[None, s:e, k, 2], g_pos[None, s:e, k],
+                                     turned[None, s:e], contact[None, a0 + s:a0 + e, k, 1] > 0.5, touching[None, s:e, k],
+                                     posed_all[None, a0 + s:a0 + e, k], dt)
+                        goal[s:e], turn[s:e], weight[s:e] = hold.goal[0], hold.turn[0], 1.0
+                        if hold.rises is not None:
+                            rise[s:e] = hold.rises[0]
+                        pin = hold.held.pins[0]
+                        toes_up, foot_heading, held_swivel = float(hold.held.toes_up[0]), float(hold.held.foot_heading[0]), float(hold.held.held_swivel[0])
+                        offset, ball_offset, lifted, left, let_go = hold.offset[0], hold.ball_offset[0], hold.rise[0], hold.foot_turn[0], hold.let_go[0]
                     prev = kind
                 st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
                 st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
                 st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
                 st.foot_heading[k], st.held_swivel[k], st.clear[k], st.toes_up[k] = foot_heading, held_swivel, clear, toes_up
-            st.last, st.last_rot = feet_pos[-1].copy(), g_rot[-1, :, 2].copy()
-            st.shared = shared[a1 - 1].copy()
+        if holds:
+            _hold_all(b, runs, holds, g_rot_all, g_pos_all, spun, contact, touching_all, posed_all, (goals, turns, rises, weights), dt)
+        ends = [a1 - 1 for _, _, a1 in runs]  # each walk's last frame, carried to its next block
+        for (st, _, _), last, last_rot, last_shared in zip(runs, feet_all[ends], g_rot_all[ends, :, 2], shared[ends]):
+            st.last, st.last_rot, st.shared = last, last_rot, last_shared
         # A foot without a ball has no heel to rise about it: held by its ankle as the hip walks on, its
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
@@ -1092,7 +1064,7 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
         st.touched = none[-1].copy()
         return none
     both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
-    heel = both[:, :, 0, 1] + _heels_of(b, both[:, :, 1] - both[:, :, 0])[..., 1]  # (F + 1, 2) heights
+    heel = both[:, :, 0, 1] + _heel_heights(b, both[:, :, 1] - both[:, :, 0])  # (F + 1, 2) heights
     by_heel = (heel <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
     lowest = np.where(by_heel, heel, both[:, :, 1, 1]) - b.sole_floor  # the lower sole point's
     f = len(anchors)
@@ -1117,16 +1089,174 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     return out
 
 
-def _toes_slowed(b: LocomotionBinding, since: np.ndarray, across: np.ndarray, before: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """A foot held by its heel: its pitch (F,) radians, toes down positive, the twist about the horizontal
-    axis ``across`` (3,) of its turn ``since`` (F, 4) it landed, and how far its toes are up (F,) radians,
-    coming down no faster than ``b.landing_rad_s`` from ``before`` a frame before the first, frames ``dt``
-    seconds apart (as the animation's where that has no limit)."""
-    pitch = 2.0 * np.arctan2(since[:, :3] @ across, since[:, 3])
+class HeldFeet(NamedTuple):
+    """P planted feet (a walk's foot each) as a held stretch carries them, each field as the
+    :class:`~.state.LocomotionState` field of that name has it for the foot, a frame before the stretch:
+    where the anchor holds ``pins`` (P, 3), the foot's rotation as it landed, animated and corrected,
+    ``landed`` and ``landed_as`` (P, 4), the horizontal axis across it ``across`` (P, 3), the turn spun at
+    the root then ``landed_spun`` (P,) radians; held by the heel, how far its toes are up ``toes_up`` (P,),
+    its heading ``foot_heading`` (P,) (NaN: its swivel counts from the stretch's first frame) and the turn
+    held off it ``held_swivel`` (P,), radians."""
+
+    pins: np.ndarray
+    landed: np.ndarray
+    landed_as: np.ndarray
+    across: np.ndarray
+    landed_spun: np.ndarray
+    toes_up: np.ndarray
+    foot_heading: np.ndarray
+    held_swivel: np.ndarray
+
+
+class Hold(NamedTuple):
+    """What :func:`_hold` makes of P feet held over n frames: the ankles' goals ``goal`` (P, n, 3), the
+    feet's world turns from the animation's ``turn`` (P, n, 4), the heels' extra rise about the ball
+    ``rises`` (P, n, 3) (rotation vectors in the foot's frame; None: all held by the heel), the feet carried
+    on (``held``, :class:`HeldFeet`), and the corrections at the last frame that a release fades out, as
+    :class:`~.state.LocomotionState` names them: the ankle's ``offset`` and the ball's ``ball_offset``
+    (P, 3), the heel's extra ``rise`` (P, 3), the foot's turn ``foot_turn`` (P, 4), and where the ball is,
+    ``let_go`` (P, 3)."""
+
+    goal: np.ndarray
+    turn: np.ndarray
+    rises: np.ndarray | None
+    held: HeldFeet
+    offset: np.ndarray
+    ball_offset: np.ndarray
+    rise: np.ndarray
+    foot_turn: np.ndarray
+    let_go: np.ndarray
+
+
+def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFeet, foot_rot: np.ndarray, leg: np.ndarray,
+          turned: np.ndarray, ball_down: np.ndarray, touching: np.ndarray, posed: np.ndarray, dt: float) -> Hold:
+    """P feet, each one of a walk's (``feet`` (P,): 0 left, 1 right), held by ``kind`` (P,)
+    (:data:`~infuse.footing.ANKLE` or :data:`~infuse.footing.BALL`) over n frames ``dt`` seconds apart,
+    carried from ``held`` (:meth:`Locomotion._pin`). The animation's ankles' global rotations ``foot_rot``
+    (P, n, 4), its legs ``leg`` (P, n, 5, 3) (hip, knee, ankle, the hip's parent, the ball; metres), the
+    turn spun at the root ``turned`` (P, n) radians; (P, n) bool: the blend's ball down ``ball_down``,
+    touched down before its strike ``touching``, held by the ball for the pose's sake ``posed``. The work
+    along frames is cumulative (the toes' slowed pitch, the swivel held off, the touching ball's height),
+    so a stretch gives the same frames whether it comes in one call or frame by frame."""
+    on_heel = kind == footing.ANKLE  # (P,)
+    heels, balls = bool(on_heel.any()), not on_heel.all()
+    ankle, ball = leg[:, :, 2], leg[:, :, 4]
+    lever = ball - ankle  # (P, n, 3) the animated ankle to ball
+    pins, across = held.pins, held.across
+    toes_up, foot_heading, held_swivel = held.toes_up, held.foot_heading, held.held_swivel
+    # The animation's turn of the foot since it landed (world frame): on its heel all of it but the turn
+    # spun at the root, on its ball only its pitch (the twist about the axis across the foot).
+    since = quat.multiply(foot_rot, quat.conjugate(held.landed)[:, None])
+    if heels:
+        # On its heel, its toes come down no faster than the pack's feet turn near the ground (a blend's
+        # foot slapping flat in a frame would swing the ankle about the heel by centimetres). The pitch is
+        # the twist of the turn since it landed about the axis across; ``toes_up`` carries it (toes up positive).
+        pitch, up = _toes_slowed(b, since, across, toes_up, dt)
+        toes_up = np.where(on_heel, up[:, -1], toes_up)
+        kept = quat.multiply(yaw(held.landed_spun[:, None] - turned),
+                             quat.multiply(since, quat.from_axis_angle(across[:, None], -(pitch + up))))  # both about one axis
+    if balls:
+        pitched = np.concatenate((across[:, None] * (since[..., :3] @ across[:, :, None]), since[..., 3:]), axis=-1)
+        pitched /= np.maximum(np.sqrt((pitched * pitched).sum(axis=-1, keepdims=True)), 1e-12)
+        kept = np.where(on_heel[:, None, None], kept, pitched) if heels else pitched
+    turn = quat.multiply(quat.multiply(kept, held.landed_as[:, None]), quat.conjugate(foot_rot))
+    reach = quat.rotate(turn, lever)  # the corrected ankle to ball
+    if heels:
+        # While its ball is down too, the foot's heading (its ankle-to-ball direction about the vertical)
+        # holds: a blend's or take's swivel about the heel, or a roll down about an axis not square to the
+        # foot, would sweep the ball along the ground. ``held_off`` (P, n) the turn held off (radians),
+        # summed frame by frame; the ball is down where the blend's is, and where the foot touched down
+        # before its strike. None on a ball.
+        heading_now = np.arctan2(reach[..., 0], reach[..., 2])
+        start = np.where(np.isnan(foot_heading), heading_now[:, 0], foot_heading)
+        swivel = np.diff(np.concatenate((start[:, None], heading_now), axis=1), axis=1)
+        swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
+        held_off = held_swivel[:, None] + np.cumsum(np.where(ball_down | touching, swivel, 0.0), axis=1)
+        foot_heading = np.where(on_heel, heading_now[:, -1], foot_heading)
+        held_swivel = np.where(on_heel, held_off[:, -1], held_swivel)
+        turn = quat.multiply(yaw(np.where(on_heel[:, None], -held_off, 0.0)), turn)
+        reach = quat.rotate(turn, lever)
+        goal = pins[:, None] - _heel_of(b, feet, reach)
+    if balls:
+        # Touching down by its ball, the ball goes down as the animation's does (never held above it: a
+        # ball held where it first touched, the animation's foot coming down on, held the foot up in the
+        # air and dropped it at the strike).
+        held_at = np.repeat(pins[:, None], reach.shape[1], axis=1)
+        if touching.any():
+            held_at[..., 1] = np.minimum(pins[:, 1:2], np.minimum.accumulate(np.where(touching, ball[..., 1], np.inf), axis=1))
+        pins = np.where(on_heel[:, None], pins, held_at[:, -1])
+        goal = np.where(on_heel[:, None, None], goal, held_at - reach) if heels else held_at - reach
+    # The ankle at the animation's height; held by the ball for the pose's sake, no lower than keeps the
+    # ball at the height it took over at (the blend's leg, half standing and half swinging, would push it
+    # into the ground, and it would rise from there still down and slide as the foot is let go); touching
+    # down by the heel, no higher than keeps the heel where it touched (the blend's foot rising again
+    # before its strike would lift it and drop it back in a frame).
+    landing = touching & on_heel[:, None]
+    pinned = goal[..., 1].copy() if landing.any() else None
+    goal[..., 1] = np.where(posed, np.maximum(ankle[..., 1], goal[..., 1]), ankle[..., 1])
+    if pinned is not None:
+        goal[..., 1] = np.where(landing, np.minimum(goal[..., 1], pinned), goal[..., 1])
+    ball_goal = goal[:, -1] + reach[:, -1]
+    rise = None
+    if balls:  # the heel rises further about the ball where the hip cannot reach
+        rise = np.zeros(goal.shape)
+        rows = slice(None) if not heels else ~on_heel
+        n = goal[rows].shape[0] * goal.shape[1]
+        risen = footing.heel_rise(quat.multiply(turn[rows], foot_rot[rows]).reshape(n, 4), leg[rows, :, :3].reshape(n, 3, 3),
+                                  goal[rows].reshape(n, 3), (goal[rows] + reach[rows]).reshape(n, 3),
+                                  np.broadcast_to(across[rows, None], goal[rows].shape).reshape(n, 3))
+        goal[rows], rise[rows] = risen[0].reshape(goal[rows].shape), risen[1].reshape(goal[rows].shape)
+    lifted = np.zeros(pins.shape) if rise is None else rise[:, -1]
+    return Hold(goal, turn, rise, held._replace(pins=pins, toes_up=toes_up, foot_heading=foot_heading, held_swivel=held_swivel),
+                goal[:, -1] - ankle[:, -1], ball_goal - ball[:, -1], lifted, turn[:, -1].copy(), ball_goal)
+
+
+def _held_feet(values: np.ndarray) -> HeldFeet:
+    """The :class:`HeldFeet` of P feet's values ``values`` (P, >= :data:`~.state.HELD_COLUMNS`) laid out as
+    :attr:`~.state.LocomotionState.feet` has them (views)."""
+    return HeldFeet(*(values[:, FOOT_VALUES[name][0]] for name in HeldFeet._fields))
+
+
+def _hold_all(b: LocomotionBinding, runs, holds: list, g_rot: np.ndarray, g_pos: np.ndarray, spun: np.ndarray,
+              contact: np.ndarray, touching: np.ndarray, posed: np.ndarray, out: tuple, dt: float) -> None:
+    """Hold feet of the walks ``runs`` (:meth:`Locomotion._pin`) to the end of their walk's frames, those
+    held as many frames in one :func:`_hold`, and carry their walks' states on. ``holds``: each foot's
+    walk, foot, first frame and frames held, its anchor, and what it is carried from (``HELD_COLUMNS``
+    values laid out as :attr:`~.state.LocomotionState.feet` has them; None: as its walk's state has them).
+    The frames' legs ``g_rot``, ``g_pos`` (F, 2, 5, 4 / 3), ``spun`` (F,), ``contact`` (F, 2, 2),
+    ``touching``, ``posed`` (F, 2) as :meth:`Locomotion._pin` has them; written into ``out``: the goals
+    (F, 2, 3), turns (F, 2, 4), rises (F, 2, 3) and weights (F, 2)."""
+    goals, turns, rises, weights = out
+    every = np.stack([st.feet for st, _, _ in runs])  # (R, 2, C) the walks' planted feet's values
+    for n in sorted({h[3] for h in holds}):
+        group = [h for h in holds if h[3] == n]
+        walks, feet, first, kinds = (np.array([h[i] for h in group]) for i in (0, 1, 2, 4))
+        values = every[walks, feet]  # (P, C)
+        for i, h in enumerate(group):
+            if h[5] is not None:
+                values[i, :HELD_COLUMNS] = h[5]
+        at, foot = first[:, None] + np.arange(n), feet[:, None]  # (P, n) frames, (P, 1) feet
+        hold = _hold(b, kinds, feet, _held_feet(values), g_rot[at, foot, 2], g_pos[at, foot], spun[at], contact[at, foot, 1] > 0.5,
+                     touching[at, foot], posed[at, foot], dt)
+        goals[at, foot], turns[at, foot], weights[at, foot] = hold.goal, hold.turn, 1.0
+        if hold.rises is not None:
+            rises[at, foot] = hold.rises
+        left = (*hold.held, hold.offset, hold.ball_offset, hold.rise, hold.foot_turn, hold.let_go)  # in FOOT_VALUES' order
+        every[walks, feet] = np.concatenate([v if v.ndim == 2 else v[:, None] for v in left], axis=1)
+    for r in sorted({h[0] for h in holds}):
+        runs[r][0].feet = every[r]
+
+
+def _toes_slowed(b: LocomotionBinding, since: np.ndarray, across: np.ndarray, before: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """P feet held by their heels: their pitch (P, F) radians, toes down positive, the twist about the
+    horizontal axis ``across`` (P, 3) of their turn ``since`` (P, F, 4) they landed, and how far their toes
+    are up (P, F) radians, coming down no faster than ``b.landing_rad_s`` from ``before`` (P,) a frame
+    before the first, frames ``dt`` seconds apart (as the animation's where that has no limit)."""
+    pitch = 2.0 * np.arctan2((since[..., :3] @ across[:, :, None])[..., 0], since[..., 3])
     pitch = (pitch + math.pi) % (2.0 * math.pi) - math.pi
     if not math.isfinite(b.landing_rad_s):
         return pitch, -pitch
-    return pitch, _slow_fall(-pitch[:, None], np.array([before]), b.landing_rad_s * dt)[:, 0]
+    return pitch, _slow_fall(-pitch[..., None], before[:, None], b.landing_rad_s * dt)[..., 0]
 
 
 def _stop_marks(b: LocomotionBinding, clip, fps: float) -> tuple[float | None, float]:
@@ -1890,26 +2020,39 @@ def _heel_levers(ankles: np.ndarray, balls: np.ndarray, planted: np.ndarray, leg
     return np.stack([np.median(local[flat[:, k], k], axis=0) for k in range(2)])
 
 
-def _heel_of(b: LocomotionBinding, k: int, reach: np.ndarray) -> np.ndarray:
+def _heel_of(b: LocomotionBinding, k: int | np.ndarray, reach: np.ndarray) -> np.ndarray:
     """(..., 3) from foot ``k``'s ankle to the sole under its heel (metres), the foot's ankle-to-ball
-    vectors being ``reach`` (..., 3): ``b.heel_levers`` carried by the foot's frame
-    (:func:`infuse.contacts.foot_frames`) as the skate measure carries it; zeros (the ankle) without."""
+    vectors being ``reach`` (..., 3): ``b.heel_levers`` carried by the foot's frame (:func:`_soles`) as
+    the skate measure carries it; zeros (the ankle) without. With feet ``k`` (P,), one for each row of
+    ``reach`` (P, n, 3)."""
     if b.heel_levers is None:
         return np.zeros_like(reach)
-    return _levered(b.heel_levers[k], foot_frames(_ORIGIN, reach))
+    lever = b.heel_levers[k]
+    return _soles(lever if lever.ndim == 1 else lever[:, None], reach)
 
 
-def _heels_of(b: LocomotionBinding, reach: np.ndarray) -> np.ndarray:
-    """(..., 2, 3) :func:`_heel_of` of both feet at once, their ankle-to-ball vectors ``reach`` (..., 2, 3)."""
+def _heel_heights(b: LocomotionBinding, reach: np.ndarray) -> np.ndarray:
+    """(..., 2) how high the soles under both feet's heels lie above their ankles (metres, :func:`_heel_of`'s
+    vertical parts), their ankle-to-ball vectors being ``reach`` (..., 2, 3)."""
     if b.heel_levers is None:
-        return np.zeros_like(reach)
-    return _levered(b.heel_levers, foot_frames(_ORIGIN, reach))
+        return np.zeros(reach.shape[:-1])
+    return _soles(b.heel_levers, reach, heights=True)
 
 
-def _levered(lever: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """(..., 3) offsets ``lever`` (..., 3) in frames ``frames`` (..., 3, 3) (rows the frame's axes) in the
-    world, written out row by row (einsum's iterator costs more on a block's few frames)."""
-    out: np.ndarray = lever[..., 0:1] * frames[..., 0, :] + lever[..., 1:2] * frames[..., 1, :] + lever[..., 2:3] * frames[..., 2, :]
+def _soles(lever: np.ndarray, reach: np.ndarray, heights: bool = False) -> np.ndarray:
+    """(..., 3) offsets ``lever`` (..., 3) in the frames of feet whose ankle-to-ball vectors are ``reach``
+    (..., 3), in the world (metres); with ``heights`` only their vertical parts (...). The frames are
+    :func:`infuse.contacts.foot_frames`' (forward along ``reach``, side horizontal, up), written out
+    axis by axis on the foot's pitch: the frames themselves cost more on a block's few feet."""
+    forward = reach / np.maximum(np.sqrt((reach * reach).sum(axis=-1, keepdims=True)), 1e-12)
+    fx, fy, fz = forward[..., 0], forward[..., 1], forward[..., 2]
+    level = np.maximum(np.sqrt(fx * fx + fz * fz), 1e-12)  # the forward axis' horizontal length
+    if heights:
+        up: np.ndarray = lever[..., 0] * fy + lever[..., 2] * level
+        return up
+    along, side = lever[..., 0] - lever[..., 2] * fy / level, lever[..., 1] / level  # along the ground ahead, across
+    out = np.empty(np.broadcast_shapes(lever.shape, reach.shape))
+    out[..., 0], out[..., 1], out[..., 2] = fx * along - fz * side, lever[..., 0] * fy + lever[..., 2] * level, fz * along + fx * side
     return out
 
 
@@ -1921,7 +2064,7 @@ def _heels_up(b: LocomotionBinding, g_rot: np.ndarray, g_pos: np.ndarray) -> np.
     if b.heel_levers is None:
         return None
     reach = g_pos[:, :, 4] - g_pos[:, :, 2]
-    heel = g_pos[:, :, 2, 1] + _heels_of(b, reach)[..., 1]
+    heel = g_pos[:, :, 2, 1] + _heel_heights(b, reach)
     up: np.ndarray = heel - g_pos[:, :, 4, 1] > b.grounded_m
     return up
 

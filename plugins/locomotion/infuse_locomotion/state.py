@@ -25,6 +25,45 @@ def _unturned() -> np.ndarray:
     return np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (2, 1))
 
 
+def _columns(values) -> dict[str, tuple[slice | int, tuple[float, ...]]]:
+    out: dict[str, tuple[slice | int, tuple[float, ...]]] = {}
+    at = 0
+    for name, rest in values:
+        out[name] = (at if len(rest) == 1 else slice(at, at + len(rest)), rest)
+        at += len(rest)
+    return out
+
+
+_TURNED = (0.0, 0.0, 0.0, 1.0)
+#: The planted feet's values a held stretch carries (:class:`~.controller.HeldFeet`, the first
+#: :data:`HELD_COLUMNS` columns) and those it leaves (the corrections a release fades out), side by side
+#: in :attr:`LocomotionState.feet` (2, :data:`FOOT_COLUMNS`): by name, the columns and the value at rest.
+FOOT_VALUES = _columns((("pins", (0.0,) * 3), ("landed", _TURNED), ("landed_as", _TURNED), ("across", (0.0,) * 3),
+                        ("landed_spun", (0.0,)), ("toes_up", (0.0,)), ("foot_heading", (0.0,)), ("held_swivel", (0.0,)),
+                        ("offset", (0.0,) * 3), ("ball_offset", (0.0,) * 3), ("rise", (0.0,) * 3), ("foot_turn", _TURNED),
+                        ("let_go", (-np.inf,) * 3)))
+HELD_COLUMNS = 18
+FOOT_COLUMNS = sum(len(rest) for _, rest in FOOT_VALUES.values())
+
+
+def _planted() -> np.ndarray:
+    return np.tile(np.concatenate([rest for _, rest in FOOT_VALUES.values()]), (2, 1))
+
+
+class _FootValues:
+    """One of the planted feet's values, (2, ...) columns of :attr:`LocomotionState.feet` (a view; set in place)."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.columns = FOOT_VALUES[name][0]
+
+    def __get__(self, state: LocomotionState, owner=None) -> np.ndarray:
+        view: np.ndarray = state.feet[:, self.columns]
+        return view
+
+    def __set__(self, state: LocomotionState, value) -> None:
+        state.feet[:, self.columns] = value
+
+
 @dataclass
 class LocomotionState(SteeringState):
     """The steering's state (:class:`~.steering.SteeringState`), and:
@@ -41,7 +80,8 @@ class LocomotionState(SteeringState):
       (its controller's id), ``trace`` the steered stretch's ground points, headings, speeds, phases
       and each frame's advance of the phase (F,) each, where a stop may take over;
     - each planted foot (:meth:`~.controller.Locomotion._pin`): ``anchor`` (2,) what holds it (free, ankle,
-      ball), ``pins`` (2, 3) where, ``offset`` (2, 3) and ``ball_offset`` (2, 3) the ankle's and ball's
+      ball); ``feet`` (2, :data:`FOOT_COLUMNS`) its values side by side (:data:`FOOT_VALUES`), each also
+      under its name (a view of its columns): ``pins`` (2, 3) where, ``offset`` (2, 3) and ``ball_offset`` (2, 3) the ankle's and ball's
       corrections, ``released`` (2,) seconds since let go, ``free_s`` (2,) seconds in the air, ``let_go``
       (2, 3) where the ball was let go, ``last`` (2, 2, 3) the ankle and ball a frame earlier and ``last_rot``
       (2, 4) the ankle's rotation then, ``rise``
@@ -75,29 +115,30 @@ class LocomotionState(SteeringState):
     chooser: int | None = None
     trace: tuple[np.ndarray, ...] | None = None
     anchor: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
-    pins: np.ndarray = field(default_factory=lambda: _feet(3))
-    offset: np.ndarray = field(default_factory=lambda: _feet(3))
-    ball_offset: np.ndarray = field(default_factory=lambda: _feet(3))
+    feet: np.ndarray = field(default_factory=_planted)
     released: np.ndarray = field(default_factory=lambda: _feet(value=1e9))
     free_s: np.ndarray = field(default_factory=lambda: _feet(value=1e9))
-    let_go: np.ndarray = field(default_factory=lambda: _feet(3, value=-np.inf))
     last: np.ndarray = field(default_factory=lambda: _feet(2, 3))
     last_rot: np.ndarray = field(default_factory=_unturned)
-    rise: np.ndarray = field(default_factory=lambda: _feet(3))
-    landed: np.ndarray = field(default_factory=_unturned)
-    landed_as: np.ndarray = field(default_factory=_unturned)
-    landed_spun: np.ndarray = field(default_factory=lambda: _feet())
-    foot_heading: np.ndarray = field(default_factory=lambda: _feet())
-    held_swivel: np.ndarray = field(default_factory=lambda: _feet())
-    toes_up: np.ndarray = field(default_factory=lambda: _feet())
     touched: np.ndarray = field(default_factory=lambda: np.zeros(2, np.int64))
     shared: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
     clear: np.ndarray = field(default_factory=lambda: np.zeros(2, bool))
-    across: np.ndarray = field(default_factory=lambda: _feet(3))
-    foot_turn: np.ndarray = field(default_factory=_unturned)
     blend: np.ndarray | None = None
     blend_held: bool = False
     warned: bool = False
+    pins = _FootValues()
+    landed = _FootValues()
+    landed_as = _FootValues()
+    across = _FootValues()
+    landed_spun = _FootValues()
+    toes_up = _FootValues()
+    foot_heading = _FootValues()
+    held_swivel = _FootValues()
+    offset = _FootValues()
+    ball_offset = _FootValues()
+    rise = _FootValues()
+    foot_turn = _FootValues()
+    let_go = _FootValues()
 
     def restore(self, saved: LocomotionState) -> None:
         """Become ``saved`` (a copy taken earlier) again, in place."""
