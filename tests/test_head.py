@@ -65,3 +65,33 @@ def test_an_odd_repeat_count_fades_out():
     rt.run(2.0)
     pitch = head_turn_deg(rt, "a")[:, 1]
     assert abs(pitch[37]) < 1.0 and np.abs(np.diff(pitch)).max() < 8.0  # no jump at the end (1.25 s)
+
+
+MOVEMENTS = (("NOD", dict(amount=0.6, repeats=2.0, velocity_hz=1.25), {}), ("SHAKE", dict(repeats=1.25), {}),
+             ("TOSS", dict(amount=-0.4), {"mode": "override"}), ("TILT", {}, {}), ("ORIENT", dict(direction="UP_LEFT"), {}),
+             ("SPIN", dict(amount=0.3, repeats=0.75, velocity_hz=2.0), {"duration_s": 0.3}))
+
+
+def test_movements_on_several_characters_play_as_each_alone():
+    """Head movements of many characters evaluated together (in blocks of one frame, as a live scene does,
+    and of several) move each character exactly as the same movement alone: oscillations that fade out or
+    not, cut short, overriding, tilts and orientations, two at once on one character."""
+    def play(chosen, block, overlap=False):
+        rt = Runtime(fps=30, block_frames=block)
+        for k, (lexeme, settings, options) in chosen:
+            name = rt.add_character(synthetic_character(f"c{k}"), position=(k, 0.0, 0.0))
+            rt.activate(name, HeadMovement(lexeme, **settings), 0.1 * k, **options)
+        if overlap:  # a second movement on the first character, overlapping the first
+            rt.activate("c0", HeadMovement("SHAKE", 0.3), 0.5)
+        for _ in range(int(2.4 * 30) // block):
+            rt.step(block)
+        return rt
+
+    for block in (1, 7):
+        together = play(list(enumerate(MOVEMENTS)), block, overlap=True)
+        for k in range(1, len(MOVEMENTS)):
+            alone = play([(k, MOVEMENTS[k])], block)
+            assert np.array_equal(together.motion(f"c{k}").local_rotations, alone.motion(f"c{k}").local_rotations)
+        without_overlap = play(list(enumerate(MOVEMENTS))[1:], block)
+        for k in range(1, len(MOVEMENTS)):
+            assert np.array_equal(without_overlap.motion(f"c{k}").local_rotations, together.motion(f"c{k}").local_rotations)

@@ -20,6 +20,7 @@ import numpy as np
 
 from infuse.errors import MissingJointsError, UsageError
 from infuse.runtime import Controller, Layer, Mode, smoothstep
+from infuse.runtime.controller import table_columns
 from infuse.runtime.swing import SWING_AXES, local_axes, local_offsets, local_turns, swing
 
 #: Peak angle per unit amount, degrees.
@@ -43,11 +44,24 @@ def head_angle(t, lexeme: str, amount: float, repeats: float, velocity_hz: float
             return np.where(inside, -m * np.sin(np.pi * t / duration), 0.0)
         ramp = min(0.25 / velocity_hz, duration / 2)
         return np.where(inside, m * smoothstep(t / ramp) * smoothstep((duration - t) / ramp), 0.0)
-    angle = -m * np.sin(2.0 * np.pi * repeats * t / duration)
-    if abs(2 * repeats - round(2 * repeats)) > 1e-9:
-        fade = 0.25 / velocity_hz
-        angle = angle * smoothstep((duration - t) / fade)
-    return np.where(inside, angle, 0.0)
+    return _cycles(t, m, repeats, duration, _fade_s(repeats, velocity_hz))
+
+
+def _fade_s(repeats: float, velocity_hz: float) -> float:
+    """Seconds the last quarter period fades an oscillation out over (0: it ends at zero, at a multiple
+    of half a period)."""
+    return 0.25 / velocity_hz if abs(2 * repeats - round(2 * repeats)) > 1e-9 else 0.0
+
+
+def _cycles(t, peak, repeats, duration, fade_s) -> np.ndarray:
+    """-peak sin(2π r t / d) radians at ``t`` seconds, faded out over the last ``fade_s`` seconds where those
+    are positive, 0 outside [0, d]: of one movement (numbers), or of several at once ((n, 1) arrays against
+    (n, F) times)."""
+    angle = -peak * np.sin(2.0 * np.pi * repeats * t / duration)
+    fading = np.asarray(fade_s) > 0.0
+    if fading.any():
+        angle = np.where(fading, angle * smoothstep((duration - t) / np.where(fading, fade_s, 1.0)), angle)
+    return np.where((t >= 0.0) & (t <= duration), angle, 0.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,6 +114,24 @@ class HeadMovement(Controller):
         return HeadBinding(joints=np.array(joints), aligned=rig.aligned[joints],
                            axes=None if isinstance(axis, str) else local_axes(rig.aligned[joints], axis))
 
+    @classmethod
+    def evaluate(cls, jobs, block) -> None:
+        """The oscillations (all but TILT and ORIENT) added on characters of their own at once: their angles
+        worked out together and turned about every neck joint's axis side by side, in one write; the others
+        one at a time (:meth:`evaluate_one`), as are all when two share a character."""
+        batch = jobs.memo(_Batch.of)
+        if batch is None:
+            return super().evaluate(jobs, block)
+        rows = batch.rows
+        if rows.size:
+            shares = _cycles(jobs.local_times[rows], batch.peaks, batch.repeats, batch.durations, batch.fades) / batch.counts
+            turns = local_turns(batch.axes, shares[batch.owners].T)  # (F, K, 4)
+            weights = jobs.weights[rows]
+            block.table.add_offsets(batch.columns, turns, None if (weights >= 1.0).all() else weights[batch.owners].T,
+                                    [jobs[k].pose for k in rows])
+        for k in batch.alone:
+            jobs[k].controller.evaluate_one(jobs[k], block)
+
     def evaluate_one(self, job, block) -> None:
         b: HeadBinding = job.binding
         share = (self.angle(job.local_times) / len(b.joints))[:, None]  # (F, 1), the same for each joint
@@ -109,6 +141,49 @@ class HeadMovement(Controller):
             delta = swing(share * self.direction[0], share * self.direction[1])
             offsets = local_offsets(b.aligned, np.broadcast_to(delta, (len(share), len(b.joints), 4)))
         job.pose.set_rotations(b.joints, offsets, job.weight, job.mode)
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """Head movements evaluated together: the oscillations ``rows`` (n,) among the jobs, their ``peaks``,
+    ``repeats``, ``durations`` (seconds), ``fades`` (seconds, 0: none) and neck joint ``counts`` (n, 1); their
+    neck joints' table ``columns`` (K,), the movement of each (``owners``, (K,)) and its local ``axes`` (K, 3);
+    the jobs played ``alone``."""
+
+    rows: np.ndarray
+    peaks: np.ndarray
+    repeats: np.ndarray
+    durations: np.ndarray
+    fades: np.ndarray
+    counts: np.ndarray
+    columns: np.ndarray
+    owners: np.ndarray
+    axes: np.ndarray
+    alone: list
+
+    @classmethod
+    def of(cls, jobs) -> "_Batch | None":
+        """The batch of ``jobs``; None when two share a character."""
+        together = [k for k, job in enumerate(jobs) if job.binding.axes is not None and job.mode is Mode.ADDITIVE
+                    and job.controller.lexeme != "TILT"]
+        placed = table_columns(jobs, [jobs[k].binding.joints if k in together else np.zeros(0, dtype=np.int64)
+                                      for k in range(len(jobs))])
+        if placed is None:
+            return None
+        columns, owners = placed
+        chosen = [jobs[k].controller for k in together]
+
+        def per_movement(values) -> np.ndarray:
+            return np.array(values, dtype=np.float64).reshape(-1, 1)
+
+        return cls(np.array(together, dtype=np.int64),
+                   per_movement([np.radians(m.amount * AMPLITUDE_DEG[m.lexeme]) for m in chosen]),
+                   per_movement([m.repeats for m in chosen]), per_movement([m.repeats / m.velocity_hz for m in chosen]),
+                   per_movement([_fade_s(m.repeats, m.velocity_hz) for m in chosen]),
+                   per_movement([len(jobs[k].binding.joints) for k in together]),
+                   columns, np.searchsorted(together, owners),
+                   np.concatenate([jobs[k].binding.axes for k in together]) if together else np.zeros((0, 3)),
+                   [k for k in range(len(jobs)) if k not in together])
 
 
 def _direction(words) -> tuple[float, float]:
