@@ -598,8 +598,8 @@ class Locomotion(Controller):
         joint translations (F, J, 3) or None, contact phases (F, 2, 2), the heading's direction (F, 3),
         the turn spun at the root so far (F,) radians and the frames (F,) bool stepping as no clip does
         (a stop's or a turn on the spot's steps, coming to rest: :func:`_touch_downs`), before the feet
-        are pinned. A generator: it yields the work it asks for (:class:`Ask`: the blend driven
-        (:func:`_driven`), the blend placed, its shorter steps) and takes it back done."""
+        are pinned. A generator: it yields the work it asks for (:class:`Ask`: the blend driven, placed
+        and its steps shortened, :func:`_walked`) and takes it back done."""
         start = (st.x, st.z, st.heading)
         req = self.steering.run(st, times, dt, top=b.limit)
         if st.capped is not None and not st.warned:
@@ -607,15 +607,8 @@ class Locomotion(Controller):
             report(f"asked {asked:.2f} m/s {_towards(towards)}; pack {b.space.pack!r} realizes at most {done:.2f} m/s "
                        f"that way: {'walking at ' + format(done, '.2f') + ' m/s' if done > 0 else 'not moving'}")
             st.warned = True
-        wm, order, phase, half_frame, standing, settle, rest, stride, heading, px, pz, mover, spun, made, held, fading = \
-            yield Ask(_driven, (id(b),), (b, dt), (times, req), (st, self, start, len(times)))
-        fading = bool(fading[0])  # into the idle: played at the activity's times (else not asked for)
-        rot, root, jt, contact, turn_q, forward, down, laid = yield Ask(
-            _placed, (id(b), fading), (b, dt), (wm, order, phase, standing, times if fading and b.has_idle else None,
-                                                half_frame, settle, rest, stride, heading, px, pz, mover, held),
-            (st, len(times)))
-        if np.any(np.abs(stride - 1.0) > 1e-6) and len(b.legs) == 2:
-            rot, jt = yield Ask(_shortened, (id(b),), (b,), (wm, stride, rot, root, jt, turn_q, forward, settle, down, laid))
+        rot, root, jt, contact, forward, spun, made = yield Ask(_walked, (id(b),), (b, dt), (times, req),
+                                                               (st, self, start, len(times)))
         return rot, root, jt, contact, forward, spun, made
 
     @staticmethod
@@ -1336,6 +1329,63 @@ class Ask(NamedTuple):
 def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_weights` in the pack's locomotion blend space as bound in ``b``."""
     return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
+
+
+def _walked(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
+    """The steered blend of walks of binding ``b`` at once, their frames stacked (R,) (see :func:`_driven` for the
+    arguments): driven (:func:`_driven`), placed (:func:`_placed`; the walks fading into the idle and the others
+    apart, in the order the first of each comes) and, for the walks whose strides are shorter on some frame,
+    its steps shortened (:func:`_shortened`; in that order too). Returns each frame's rotations (R, J, 4), root
+    (R, 3), joint translations (R, J, 3) or None, contact phases (R, 2, 2), heading's direction (R, 3), turn spun
+    at the root (R,) and the frames stepping as no clip does (R,) bool (see :meth:`Locomotion._steered`)."""
+    wm, order, phase, half_frame, standing, settle, rest, stride, heading, px, pz, mover, spun, made, held, fading = \
+        _driven(b, dt, times, req, states, walks, starts, counts)
+    ends = list(itertools.accumulate(counts))
+    fades = fading[np.array(ends) - 1].tolist()
+    sets = [[k for k, fade in enumerate(fades) if fade == fades[0]], [k for k, fade in enumerate(fades) if fade != fades[0]]]
+    sets = [walk_set for walk_set in sets if walk_set]
+
+    def rows(walk_set: list[int]) -> np.ndarray:
+        """The stacked rows of the walks ``walk_set``, in that order."""
+        return np.concatenate([np.arange(ends[k] - counts[k], ends[k]) for k in walk_set])
+
+    def placed(walk_set: list[int], at):
+        """:func:`_placed` of the walks ``walk_set`` on their rows ``at`` (None: every row)."""
+        def of(x):
+            return x if x is None or at is None else x[at]
+        fade = fades[walk_set[0]]
+        return _placed(b, dt, of(wm), of(order), of(phase), of(standing), of(times) if fade and b.has_idle else None,
+                       of(half_frame), of(settle), of(rest), of(stride), of(heading), of(px), of(pz), of(mover), of(held),
+                       [states[k] for k in walk_set], [counts[k] for k in walk_set])
+
+    if len(sets) == 1:
+        rot, root, jt, contact, turn_q, forward, down, laid = placed(sets[0], None)
+    else:
+        ats = [rows(walk_set) for walk_set in sets]
+        parts = [placed(walk_set, at) for walk_set, at in zip(sets, ats)]
+        rot, root, jt, contact, turn_q, forward, down, laid = (None if x is None else np.empty((len(wm),) + x.shape[1:])
+                                                               for x in parts[0])
+        for at, part in zip(ats, parts):
+            for whole, x in zip((rot, root, jt, contact, turn_q, forward, down, laid), part):
+                if whole is not None:
+                    whole[at] = x
+    if len(b.legs) == 2:
+        shorter = np.abs(stride - 1.0) > 1e-6
+        if counts.count(counts[0]) == len(counts):
+            short = shorter.reshape(len(counts), -1).any(axis=1).tolist()
+        else:
+            short = [bool(shorter[e - c:e].any()) for c, e in zip(counts, ends)]
+        shortened = [k for walk_set in sets for k in walk_set if short[k]]
+        if len(shortened) == len(counts) and len(sets) == 1:
+            rot, jt = _shortened(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
+        elif shortened:
+            at = rows(shortened)
+            short_rot, short_jt = _shortened(b, wm[at], stride[at], rot[at], root[at], None if jt is None else jt[at],
+                                             turn_q[at], forward[at], settle[at], down[at], laid[at])
+            rot[at] = short_rot
+            if jt is not None:
+                jt[at] = short_jt
+    return rot, root, jt, contact, forward, spun, made
 
 
 def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
