@@ -19,7 +19,7 @@ from .. import quaternions as quat
 from ..errors import UsageError
 from ..motion import Motion
 from .controller import Block, Controller, Job, Jobs
-from .layers import Layer, Mode
+from .layers import Layer, Mode, clamp
 
 
 def sample_motion(motion: Motion, times: np.ndarray, loop: bool, joints=None):
@@ -76,7 +76,7 @@ def clip_positions(motion: Motion, times, loop: bool) -> tuple[np.ndarray, np.nd
     if loop:
         cycles = np.floor(position / span + 1e-9)
         position = position - cycles * span
-    return np.clip(position, 0.0, span), cycles
+    return clamp(position, 0.0, span), cycles
 
 
 def on_frames(position: np.ndarray) -> np.ndarray:
@@ -97,7 +97,7 @@ def sample_morph_weights(motion: Motion, times: np.ndarray, loop: bool) -> np.nd
     span = f - 1
     if loop:
         position = position - np.floor(position / span + 1e-9) * span
-    position = np.clip(position, 0.0, span)
+    position = clamp(position, 0.0, span)
     i0 = np.minimum(np.floor(position).astype(np.int64), f - 2)
     frac = (position - i0)[:, None]
     return weights[i0] + frac * (weights[i0 + 1] - weights[i0])

@@ -33,9 +33,15 @@ class Mode(str, enum.Enum):
     ADDITIVE = "additive"
 
 
+def clamp(x, low, high) -> np.ndarray:
+    """``x`` clipped to [``low``, ``high``], as ``np.clip`` clips it (NaN stays NaN), at half its fixed cost
+    per call: what evaluating blocks of one frame, a few values at a time, pays for."""
+    return np.minimum(np.maximum(x, low), high)
+
+
 def smoothstep(x) -> np.ndarray:
     """3x² - 2x³ of ``x`` clipped to [0, 1]: a ramp with zero slope at both ends."""
-    x = np.clip(np.asarray(x, dtype=np.float64), 0.0, 1.0)
+    x = clamp(np.asarray(x, dtype=np.float64), 0.0, 1.0)
     return x * x * (3.0 - 2.0 * x)
 
 

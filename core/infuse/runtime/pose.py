@@ -16,7 +16,7 @@ import numpy as np
 from .. import quaternions as quat
 from ..kinematics import forward_kinematics
 from ..skeleton import Skeleton
-from .layers import Mode
+from .layers import Mode, clamp
 
 
 def _weights(weight, frames: int) -> np.ndarray:
@@ -24,6 +24,8 @@ def _weights(weight, frames: int) -> np.ndarray:
     if weight is None:
         return np.ones((frames, 1, 1))
     w = np.asarray(weight, dtype=np.float64)
+    if w.shape == (frames,):  # the usual case, a view (read only by the callers) with nothing to broadcast
+        return w.reshape(frames, 1, 1)
     return np.broadcast_to(w.reshape(-1, 1, 1) if w.ndim else w, (frames, 1, 1))
 
 
@@ -156,7 +158,7 @@ class PoseBlock:
             current = current + w * values
         else:
             current = current + w * (values - current)
-        self.morph_weights[:, columns] = np.clip(current, 0.0, 1.0)
+        self.morph_weights[:, columns] = clamp(current, 0.0, 1.0)
         self.morph_written[columns] = True
 
     # -- reading ------------------------------------------------------------------------------------
@@ -269,7 +271,7 @@ class PoseTable:
             current = current + weight * values
         else:
             current = current + weight * (values - current)
-        self.morph_weights[:, columns] = np.clip(current, 0.0, 1.0)
+        self.morph_weights[:, columns] = clamp(current, 0.0, 1.0)
         self.morph_written[columns] = True
 
 

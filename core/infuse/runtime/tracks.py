@@ -18,15 +18,15 @@ import numpy as np
 from .. import quaternions as quat
 from ..errors import UsageError
 from .controller import Block, Controller, Job
-from .layers import Layer
+from .layers import Layer, clamp
 
 
 def _interpolation(sample_times: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Left sample index (T,) and fraction (T,) of ``times`` between ``sample_times`` (held at the ends)."""
     if len(sample_times) == 1:
         return np.zeros(len(times), dtype=np.int64), np.zeros(len(times))
-    t = np.clip(times, sample_times[0], sample_times[-1])
-    i0 = np.clip(np.searchsorted(sample_times, t, side="right") - 1, 0, len(sample_times) - 2)
+    t = clamp(times, sample_times[0], sample_times[-1])
+    i0 = clamp(np.searchsorted(sample_times, t, side="right") - 1, 0, len(sample_times) - 2)
     frac = (t - sample_times[i0]) / (sample_times[i0 + 1] - sample_times[i0])
     return i0, frac
 

@@ -159,5 +159,5 @@ def saccade_duration(amplitude_deg) -> np.ndarray:
 
 def ease_out(r) -> np.ndarray:
     """Share of a saccade's way covered after the share ``r`` of its duration: sqrt(1 - (r - 1)²)."""
-    r = np.clip(np.asarray(r, dtype=np.float64), 0.0, 1.0)
+    r = np.minimum(np.maximum(np.asarray(r, dtype=np.float64), 0.0), 1.0)  # np.clip, at half its cost on a few values
     return np.sqrt(1.0 - (r - 1.0) ** 2)
