@@ -1498,14 +1498,15 @@ def _eased_each(target: np.ndarray, states: list, step: float, inside: np.ndarra
         n = target.shape[1]
         stacked = target.reshape(-1, f, n)
         at = inside.reshape(-1, f)
-        prev = np.concatenate((np.array(befores)[:, None], stacked[:, :-1]), axis=1)
-        free = at.copy()
-        free[:, 1:] &= at[:, :-1]
+        if f == 1:  # each walk's one frame follows its last block's
+            prev, free = np.array(befores)[:, None], at
+        else:
+            prev = np.concatenate((np.array(befores)[:, None], stacked[:, :-1]), axis=1)
+            free = at.copy()
+            free[:, 1:] &= at[:, :-1]
         jump = (np.abs(stacked - prev).max(axis=2) > step) & ~free
-        keeps = ~jump.any(axis=1)
-        held_now = (~at[:, -1]).tolist()
-        if all(keeps.tolist()) and not any(st.blend_held for st in states):
-            for st, held in zip(states, held_now):
+        if not jump.any() and not any(st.blend_held for st in states):
+            for st, held in zip(states, (~at[:, -1]).tolist()):
                 st.blend_held = held
             return target
     out = target.copy()
@@ -1521,12 +1522,16 @@ def _walk_clips(b: LocomotionBinding, w: np.ndarray, wm: np.ndarray, standing: n
     the idle (R,) bool, each walk's on all its rows."""
     f, n = counts[0], wm.shape[1]
     if counts.count(f) == len(counts):
-        per = wm.reshape(-1, f, n)
-        used = per.max(axis=1) > _LEAST_WEIGHT
-        ranked = np.argsort(np.where(used, -per.sum(axis=1), np.inf), axis=1, kind="stable")
+        if f == 1:  # a frame a walk: each row is its walk's sums
+            used, summed, weighed, most = wm > _LEAST_WEIGHT, wm, w, standing
+        else:
+            per = wm.reshape(-1, f, n)
+            used, summed = per.max(axis=1) > _LEAST_WEIGHT, per.sum(axis=1)
+            weighed, most = w.reshape(-1, f, n).sum(axis=1), standing.reshape(-1, f).max(axis=1)
+        ranked = np.argsort(np.where(used, -summed, np.inf), axis=1, kind="stable")
         orders = np.where(np.arange(n) < used.sum(axis=1)[:, None], ranked, -1)
-        movers = np.asarray(b.movers)[np.argmax(w.reshape(-1, f, n).sum(axis=1), axis=1)]
-        fading = standing.reshape(-1, f).max(axis=1) > 1e-6
+        movers = np.asarray(b.movers)[np.argmax(weighed, axis=1)]
+        fading = most > 1e-6
     else:
         ends = list(itertools.accumulate(counts))
         orders = np.full((len(counts), n), -1)
@@ -2430,28 +2435,26 @@ def _clocks_together(states: list, slow, stop, spin, period, dt, idle: bool, set
     phase0 = np.array([st.phase for st in states])
     rate = np.sqrt(slow)
     stride = rate.copy()
-    advance = np.zeros((w, f))
+    advance = dt * rate / period  # walking: the cadence's (the other walks' rows are set below)
     settled = np.zeros((w, f), dtype=bool)
     stopped, spinning = stop[:, 0].tolist(), spin[:, 0].tolist()
-    walking = ~stop[:, 0]
-    if walking.any():
-        advance[walking] = dt * rate[walking] / period[walking]
-    stepping = []
+    stepping, resting = [], []
     for k, st in enumerate(states):
         if not stopped[k]:
             st.settled, st.landings, st.to_go = False, -1, -1.0
         elif st.settled and not spinning[k]:  # standing after its stop: the phase holds
-            settled[k] = True
+            resting.append(k)
         else:
             stepping.append(k)
             if st.landings < 0:  # the stop (or the turn on the spot) begins
                 st.landings, st.floor, st.stop_age = 0, float(rate[k, 0]) if not st.settled else 0.0, 0.0
             if spinning[k]:
                 st.settled, st.landings, st.to_go = False, 0, -1.0
-    resting = settled[:, 0]
-    if resting.any():
+    if resting:
         rate[resting] = 0.0
         stride[resting] = slow[resting] / STOP_CADENCE
+        advance[resting] = 0.0
+        settled[resting] = True
     if stepping:
         # The steps of a stop or a turn on the spot (see :func:`_clock`), the stepping walks' rows at once.
         on = np.array(stepping)
