@@ -217,14 +217,14 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     up = np.stack((-az * v[:, 1], az * v[:, 0] - ax * v[:, 2], ax * v[:, 1]), axis=-1)
     level = axis * (ax * v[:, 0] + az * v[:, 2])[:, None]
     flat = v - level
-    # Each rise's ankle, coordinate by coordinate (F, R), and its squared distance from the hip.
-    far = sum((ball[:, k, None] + level[:, k, None] + flat[:, k, None] * _RISE_COS + up[:, k, None] * _RISE_SIN - hip[:, k, None]) ** 2
-              for k in range(3))
+    # Each rise's ankle (F, 3, R), all coordinates at once, and its squared distance from the hip.
+    swung, lifted = flat[:, :, None] * _RISE_COS, up[:, :, None] * _RISE_SIN
+    far = (((ball + level)[:, :, None] + swung + lifted - hip[:, :, None]) ** 2).sum(axis=1)
     beyond = np.maximum(np.sqrt(far) - reach[short, None], 0.0)
     arc = RISE_GAIN * _length(v)[:, None] * _RISES
     if across is not None:  # no further than the ankle straight above the ball (ahead = axis x +Y)
-        ahead = (-az[:, None]) * (flat[:, 0, None] * _RISE_COS + up[:, 0, None] * _RISE_SIN) + \
-            ax[:, None] * (flat[:, 2, None] * _RISE_COS + up[:, 2, None] * _RISE_SIN)
+        turned = swung + lifted
+        ahead = (-az[:, None]) * turned[:, 0] + ax[:, None] * turned[:, 2]
         arc = np.where((ahead > 0.0) & (_RISES > 0.0), np.inf, arc)
     pick = np.argmin(beyond + arc, axis=1)
     out[short] = ball + level + flat * _RISE_COS[pick][:, None] + up * _RISE_SIN[pick][:, None]

@@ -402,9 +402,11 @@ def _pole_plane(normal: np.ndarray, toward: np.ndarray, sin_bend: np.ndarray) ->
     backward: the far branch), and turned toward ``toward`` (..., 3, a->c x pole) as the limb comes
     straight (``sin_bend`` (...) the sine of its bend at b, from :data:`POLE_PLANE_SINE`): the plane
     of a limb within a few degrees of straight is noise, and so is the side a blend leaves it bent to."""
+    lo, hi = POLE_PLANE_SINE
+    if (sin_bend >= hi).all() and (_dot(normal, toward) >= 0.0).all():  # all bent enough, to the pole's side: their own
+        return _unit(normal)
     p = _unit(toward)
     n = normal - 2.0 * np.minimum(_dot(normal, p), 0.0)[..., None] * p
-    lo, hi = POLE_PLANE_SINE
     w = np.minimum(np.maximum((sin_bend - lo) / (hi - lo), 0.0), 1.0)
     w = (w * w * (3.0 - 2.0 * w))[..., None]
     return _unit(w * n + (1.0 - w) * p)

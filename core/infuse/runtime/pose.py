@@ -314,8 +314,9 @@ class ChainPlan:
 
     - ``chain`` (N,): the joints and their ancestors, parents first; ``source`` (N,): their columns in
       the input arrays;
-    - ``levels``: (members, parents) per depth below the roots, an int when a level is one joint (a
-      view, not a copy); ``inner`` / ``inner_parents``: the chain joints below a root and their parents;
+    - ``levels``: (members, parents) per depth below the roots, each an int, a slice or an array
+      (:func:`_places`: a view, not a copy, where it can); ``inner`` / ``inner_parents``: the chain
+      joints below a root (a slice where they follow one another) and their parents;
     - ``roots``: chain roots other than joint 0, ``root``: joint 0's place in the chain or None;
     - ``paths`` (N, N): 1 where a column is the row's joint or one of its ancestors, so each joint's
       position is ``paths @`` (the root translation and every rotated offset on the way);
@@ -325,7 +326,7 @@ class ChainPlan:
     chain: np.ndarray
     source: np.ndarray
     levels: tuple
-    inner: np.ndarray
+    inner: np.ndarray | slice
     inner_parents: np.ndarray
     roots: np.ndarray
     root: int | None
@@ -349,6 +350,17 @@ def chain_plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | Non
     return plan
 
 
+def _places(places: list[int]) -> int | slice | np.ndarray:
+    """Indices ``places`` into a chain as the cheapest index that picks them, in order: one place, a slice
+    (evenly spaced, or one place for every row: a length-one slice that broadcasts), else an array."""
+    if len(places) == 1:
+        return places[0]
+    step = places[1] - places[0]
+    if step >= 0 and all(b - a == step for a, b in zip(places, places[1:])):
+        return slice(places[0], places[0] + 1) if step == 0 else slice(places[0], places[-1] + 1, step)
+    return np.array(places, dtype=np.int64)
+
+
 def _plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None) -> ChainPlan:
     chain = ancestors(skeleton, joints)
     place = {j: k for k, j in enumerate(chain)}
@@ -361,7 +373,7 @@ def _plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None) ->
     for d in range(1, max(depth) + 1):
         members = [k for k in range(len(chain)) if depth[k] == d]
         parents = [parent[k] for k in members]
-        levels.append((members[0], parents[0]) if len(members) == 1 else (np.array(members), np.array(parents)))
+        levels.append((_places(members), _places(parents)))
     paths = np.zeros((len(chain), len(chain)))
     for k in range(len(chain)):
         a = k
@@ -369,7 +381,9 @@ def _plan(skeleton, joints: tuple[int, ...], columns: tuple[int, ...] | None) ->
             paths[k, a] = 1.0
             a = parent[a]
     inner = [k for k in range(len(chain)) if parent[k] >= 0]
-    return ChainPlan(np.array(chain), np.array([column[j] for j in chain]), tuple(levels), np.array(inner, dtype=np.int64),
+    spread = _places(inner) if len(inner) > 1 else None  # the inner joints as a slice where they follow one another
+    return ChainPlan(np.array(chain), np.array([column[j] for j in chain]), tuple(levels),
+                     spread if isinstance(spread, slice) else np.array(inner, dtype=np.int64),
                      np.array([parent[k] for k in inner], dtype=np.int64),
                      np.array([k for k in range(len(chain)) if parent[k] < 0 and chain[k] != 0], dtype=np.int64),
                      place.get(0), paths, np.array([place[int(j)] for j in joints], dtype=np.int64))

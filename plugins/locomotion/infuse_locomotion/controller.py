@@ -805,12 +805,16 @@ class Locomotion(Controller):
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
         touching_all = np.zeros(anchors_all.shape, dtype=bool)  # (F, 2) held where it touched, before its blend's strike
-        for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
-            touched = _touch_downs(b, st, anchors_all[a0:a1], feet_all[a0:a1], made[a0:a1], dt)
-            if touched.any():
-                touching_all[a0:a1] = touched > 0
-                anchors_all[a0:a1] = np.where(touching_all[a0:a1], touched, anchors_all[a0:a1])
-                posed_all[a0:a1] |= touched == footing.BALL
+        if made.any():
+            for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
+                touched = _touch_downs(b, st, anchors_all[a0:a1], feet_all[a0:a1], made[a0:a1], dt)
+                if touched.any():
+                    touching_all[a0:a1] = touched > 0
+                    anchors_all[a0:a1] = np.where(touching_all[a0:a1], touched, anchors_all[a0:a1])
+                    posed_all[a0:a1] |= touched == footing.BALL
+        else:  # no step made: no swinging foot held where it touched (as _touch_downs has it)
+            for st, _, _ in runs:
+                st.touched = np.zeros(2, np.int64)
         # The feet held through all their walk's frames by what held them a frame before: those held
         # alike (the anchor, as many frames) in one go, all walks together (the common case by far).
         starts = np.array([a0 for _, a0, _ in runs])
