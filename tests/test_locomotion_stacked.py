@@ -17,6 +17,8 @@ import pytest
 import infuse
 from infuse.kinematics import motion_fk
 from infuse.mapping import map_skeleton
+from infuse.packs import build_pack, import_smartbody, infuse_character
+from infuse.runtime import Runtime, controller as runtime_controller
 from infuse.scene import Scene
 from infuse_locomotion import Locomotion, controller
 
@@ -141,3 +143,86 @@ def test_the_clocks_of_walks_together_tick_as_each_alone(frames):
         for field in ("phase", "settled", "landings", "to_go", "floor", "stop_age", "idle_frames_left"):
             assert getattr(st, field) == getattr(states[k], field), field
     assert asked and any(st.settled for st in states[2::6] + states[3::6])  # stops landed, some came to hold
+
+
+def test_walks_starting_apart_and_settling_apart_walk_together_as_each_alone(xbot, monkeypatch):
+    """Walks of one binding stacked in blocks of 7 frames, started at other times, one settling into the
+    idle while the others still walk (placed apart from them): each walks as when its work is done alone."""
+    starts = {"a": (0.0, (0.0, 0.6)), "b": (0.1, (1.0, 1.5)), "c": (0.37, (-0.8, 1.2))}  # start (s), target (x, z) m
+    seen = {"placed apart": 0}
+    walked, placed = controller._walked, controller._placed
+
+    def counting_walked(b, dt, times, req, states, walks, begun, counts):
+        before = seen["placed"] = 0
+        out = walked(b, dt, times, req, states, walks, begun, counts)
+        seen["placed apart"] += seen["placed"] - before > 1
+        return out
+
+    def counting_placed(*args):
+        seen["placed"] += 1
+        return placed(*args)
+
+    monkeypatch.setattr(controller, "_walked", counting_walked)
+    monkeypatch.setattr(controller, "_placed", counting_placed)
+
+    def scene_of() -> Scene:
+        scene = Scene(fps=FPS, quiet=True)
+        for k, (name, (at, target)) in enumerate(starts.items()):
+            scene.add_character(xbot, name, position=(2.0 * k, 0.0, 0.0), facing=0.0, packs=["locomotion-male"])
+            scene.walk_to(name, (2.0 * k + target[0], target[1]), at=at)
+        for _ in range(int(round(3.5 * FPS)) // 7):
+            scene.step(7)
+        return scene
+
+    together = scene_of()
+    assert seen["placed apart"]
+    ask = controller.Ask
+    monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows, walk=(): ask(work, (object(),), shared, rows, walk))
+    alone = scene_of()
+    for name in starts:
+        a, b = motion_fk(together.motion(name))[1], motion_fk(alone.motion(name))[1]
+        assert a.shape == b.shape
+        assert np.abs(a - b).max() < 1e-9
+
+
+@pytest.fixture(scope="module")
+def transitions_space(xbot, tmp_path_factory):
+    """SmartBody's FemaleLocomotion set (starts, turns on the spot and stops played whole) infused onto X Bot."""
+    folder = import_smartbody(corpus_file("smartbody/behaviorsets/FemaleLocomotion"), tmp_path_factory.mktemp("packs") / "female",
+                              name="sb-female")
+    build_pack(folder)
+    return next(iter(infuse_character(xbot, [str(folder)]).spaces.values()))
+
+
+def test_walks_handing_over_inside_a_block_walk_together_as_each_alone(xbot, transitions_space, monkeypatch):
+    """Walks of one binding whose steered frames in a block of 7 are not as many (a start or a turn on the spot
+    handing over inside it, a stop taking over, the last strides paced for it): each walks as when its work
+    is done alone."""
+    counts_seen: list[list[int]] = []
+    walked = controller._walked
+
+    def counting(b, dt, times, req, states, walks, begun, counts):
+        counts_seen.append(list(counts))
+        return walked(b, dt, times, req, states, walks, begun, counts)
+
+    monkeypatch.setattr(controller, "_walked", counting)
+
+    def run() -> list[np.ndarray]:
+        rt = Runtime(fps=FPS, block_frames=7)
+        out = []
+        for k, (at, target) in enumerate(((0.0, (0.3, 2.5)), (0.2, (-2.0, -1.0)), (0.45, (1.5, 0.5)))):
+            name = rt.add_character(infuse.Character(f"x{k}", xbot.asset))
+            rt.activate(name, runtime_controller("locomotion", pack=transitions_space, speed=0.6, target=target), at)
+            out.append(name)
+        rt.run(7.0)
+        return [motion_fk(rt.motion(name))[1] for name in out]
+
+    together = run()
+    assert any(len(set(c)) > 1 for c in counts_seen)  # stacked walks of unequal lengths
+    ask = controller.Ask
+    monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows, walk=(): ask(work, (object(),), shared, rows, walk))
+    for a, b, target in zip(together, run(), ((0.3, 2.5), (-2.0, -1.0), (1.5, 0.5))):
+        assert a.shape == b.shape
+        assert np.abs(a - b).max() < 1e-9
+        # It walked: its hips ended near where it was sent.
+        assert np.hypot(*(a[-1, 0, [0, 2]] - a[0, 0, [0, 2]] - target)) < 0.25 * np.hypot(*target)
