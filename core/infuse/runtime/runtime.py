@@ -131,6 +131,7 @@ class _Schedule:
         self.on_from = np.where(blend_in > 0, start + blend_in, start) + 1e-9
         self.on_until = np.where(blend_out > 0, end - blend_out, end) - 2e-9
         self._groups: dict[bytes, list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]] = {}
+        self._members: list[tuple[tuple, tuple[Activity, str]]] | None = None  # per activity: its group, itself and its character
 
     def current(self, activities: list[Activity]) -> bool:
         """Whether these arrays still describe ``activities`` (the runtime's list)."""
@@ -143,13 +144,15 @@ class _Schedule:
         key = active.tobytes()
         found = self._groups.get(key)
         if found is None:
-            chosen = [self.activities[k] for k in active.tolist()]
+            if self._members is None:
+                self._members = [((int(a.layer), a.priority, type(a.controller)), (a, a.rig.name)) for a in self.activities]
+            chosen = [self._members[k] for k in active.tolist()]
             groups: dict[tuple, list[int]] = {}
-            for k, a in enumerate(chosen):
-                groups.setdefault((int(a.layer), a.priority, type(a.controller)), []).append(k)
-            order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]].id))
-            found = self._groups[key] = [(g, [(chosen[k], chosen[k].rig.name) for k in groups[g]], np.array(groups[g]),
-                                          tuple(chosen[k].id for k in groups[g])) for g in order]
+            for row, (group, _) in enumerate(chosen):
+                groups.setdefault(group, []).append(row)
+            order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]][1][0].id))
+            found = self._groups[key] = [(g, [chosen[row][1] for row in groups[g]], np.array(groups[g]),
+                                          tuple(chosen[row][1][0].id for row in groups[g])) for g in order]
         return found
 
 
