@@ -228,6 +228,8 @@ class PoseTable:
         if columns.size == 0:
             return
         additive = Mode(mode) is Mode.ADDITIVE
+        if weight is not None and weight.min() >= 1.0:
+            weight = None  # every column fully on: one test instead of the columns' own
         if weight is None:  # fully on
             self.local_rotations[:, columns] = quat.multiply(self.local_rotations[:, columns], rotations) if additive else rotations
         else:
