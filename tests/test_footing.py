@@ -183,6 +183,22 @@ def _limb(frames: int, bend: float = 0.4) -> tuple[np.ndarray, np.ndarray, np.nd
     return root, middle, end
 
 
+def test_only_feet_on_their_ball_have_their_heel_risen():
+    frames = 12
+    hip = np.tile([0.0, 0.8, 0.0], (frames, 1))
+    knee = hip + [0.0, -0.42, 0.02]
+    leg = np.stack((hip, knee, knee + [0.0, -0.42, -0.02]), axis=1)
+    ball_goal = np.stack((np.zeros(frames), np.zeros(frames), np.linspace(0.56, 0.7, frames)), axis=-1)
+    ankle_goal = ball_goal + [0.0, 0.06, -0.13]  # all beyond reach: every heel on its ball rises
+    rotation = np.tile([0.0, 0.0, 0.0, 1.0], (frames, 1))
+    on_ball = np.arange(frames) % 3 != 0
+    out, rise = footing.heel_rise(rotation, leg, ankle_goal, ball_goal, on_ball=on_ball)
+    whole, whole_rise = footing.heel_rise(rotation, leg, ankle_goal, ball_goal)
+    assert (np.linalg.norm(whole_rise, axis=-1) > 0.0).all()
+    assert np.array_equal(out[on_ball], whole[on_ball]) and np.array_equal(rise[on_ball], whole_rise[on_ball])
+    assert np.array_equal(out[~on_ball], ankle_goal[~on_ball]) and not rise[~on_ball].any()
+
+
 def test_goals_beyond_reach_are_drawn_in_smoothly_no_nearer_than_the_animated_ankle():
     frames = 201
     hip = np.tile([0.0, 0.9, 0.0], (frames, 1))

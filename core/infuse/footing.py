@@ -178,7 +178,8 @@ def within_reach(goal: np.ndarray, leg: np.ndarray) -> np.ndarray:
 
 
 def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarray,
-              ball_goal: np.ndarray, across: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+              ball_goal: np.ndarray, across: np.ndarray | None = None,
+              on_ball: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Ankle goals (F, 3) for a foot pinned by its ball at ``ball_goal`` (F, 3) with its ankle
     wanted at ``ankle_goal`` (F, 3), and the further heel rise that needs as rotation vectors (F, 3)
     in the foot's frame (zero where the hip reaches).
@@ -194,12 +195,18 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     knee and ankle positions. ``across`` ((3,) or (F, 3)): the horizontal axis across the foot to rise
     about (the ball-to-ankle direction x +Y as it lay when the ball took over), with which the heel
     rises no further than the ankle straight above the ball; without it, the axis across the
-    ball-to-ankle direction, which turns over with it once the ankle passes over the ball.
+    ball-to-ankle direction, which turns over with it once the ankle passes over the ball. With
+    ``on_ball`` (F,) bool, only those frames' feet are pinned by the ball: the others keep their goals
+    (and no rise).
     """
     reach = REACH * (_length(leg[:, 1] - leg[:, 0]) + _length(leg[:, 2] - leg[:, 1]))
     v = ankle_goal - ball_goal
     out, rise = ball_goal + v, np.zeros_like(ankle_goal)
-    short = np.nonzero(_length(out - leg[:, 0]) > reach)[0]
+    beyond_reach = _length(out - leg[:, 0]) > reach
+    if on_ball is not None:
+        out = np.where(on_ball[:, None], out, ankle_goal)
+        beyond_reach &= on_ball
+    short = np.nonzero(beyond_reach)[0]
     if not short.size:
         return out, rise
     v, ball, hip = v[short], ball_goal[short], leg[short, 0]

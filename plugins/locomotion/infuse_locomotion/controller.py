@@ -818,14 +818,15 @@ class Locomotion(Controller):
         # The feet held through all their walk's frames by what held them a frame before: those held
         # alike (the anchor, as many frames) in one go, all walks together (the common case by far).
         starts = np.array([a0 for _, a0, _ in runs])
-        held_before = np.stack([st.anchor for st, _, _ in runs])  # (R, 2)
+        held_before = np.array([st.anchor for st, _, _ in runs])  # (R, 2)
         anchor_before = np.concatenate((anchors_all[:1], anchors_all[:-1]))
         anchor_before[starts] = held_before
         steady = ~np.logical_or.reduceat(anchors_all != anchor_before, starts, axis=0) & (held_before != footing.FREE)
         # Held to the block's end: each as (walk, foot, first frame, frames, anchor, carried from (None: its
         # walk's state), held (below) with the others held as many frames.
         holds: list[tuple[int, int, int, int, int, np.ndarray | None]] = \
-            [(r, k, runs[r][1], runs[r][2] - runs[r][1], int(held_before[r, k]), None) for r, k in np.argwhere(steady).tolist()]
+            [(i // 2, i % 2, runs[i // 2][1], runs[i // 2][2] - runs[i // 2][1], kind, None)
+             for i, kind in zip(np.flatnonzero(steady).tolist(), held_before[steady].tolist())]
         for r in np.flatnonzero(~steady.all(axis=1)).tolist():  # the walks with a foot held otherwise
             st, a0, a1 = runs[r]
             g_rot, g_pos, anchors, touching = g_rot_all[a0:a1], g_pos_all[a0:a1], anchors_all[a0:a1], touching_all[a0:a1]
@@ -1166,12 +1167,12 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         # before its strike. None on a ball.
         heading_now = np.arctan2(reach[..., 0], reach[..., 2])
         start = np.where(np.isnan(foot_heading), heading_now[:, 0], foot_heading)
-        swivel = np.diff(np.concatenate((start[:, None], heading_now), axis=1), axis=1)
+        swivel = heading_now - np.concatenate((start[:, None], heading_now[:, :-1]), axis=1)
         swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
         held_off = held_swivel[:, None] + np.cumsum(np.where(ball_down | touching, swivel, 0.0), axis=1)
         foot_heading = np.where(on_heel, heading_now[:, -1], foot_heading)
         held_swivel = np.where(on_heel, held_off[:, -1], held_swivel)
-        turn = quat.multiply(yaw(np.where(on_heel[:, None], -held_off, 0.0)), turn)
+        turn = quat.multiply(yaw(np.where(on_heel[:, None], -held_off, 0.0) if balls else -held_off), turn)
         reach = quat.rotate(turn, lever)
         goal = pins[:, None] - _heel_of(b, feet, reach)
     if balls:
@@ -1196,13 +1197,11 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
     ball_goal = goal[:, -1] + reach[:, -1]
     rise = None
     if balls:  # the heel rises further about the ball where the hip cannot reach
-        rise = np.zeros(goal.shape)
-        rows = slice(None) if not heels else ~on_heel
-        n = goal[rows].shape[0] * goal.shape[1]
-        risen = footing.heel_rise(quat.multiply(turn[rows], foot_rot[rows]).reshape(n, 4), leg[rows, :, :3].reshape(n, 3, 3),
-                                  goal[rows].reshape(n, 3), (goal[rows] + reach[rows]).reshape(n, 3),
-                                  np.broadcast_to(across[rows, None], goal[rows].shape).reshape(n, 3))
-        goal[rows], rise[rows] = risen[0].reshape(goal[rows].shape), risen[1].reshape(goal[rows].shape)
+        n = goal.shape[0] * goal.shape[1]
+        risen = footing.heel_rise(quat.multiply(turn, foot_rot).reshape(n, 4), leg[:, :, :3].reshape(n, 3, 3), goal.reshape(n, 3),
+                                  (goal + reach).reshape(n, 3), np.broadcast_to(across[:, None], goal.shape).reshape(n, 3),
+                                  np.repeat(~on_heel, goal.shape[1]) if heels else None)
+        goal, rise = risen[0].reshape(goal.shape), risen[1].reshape(goal.shape)
     lifted = np.zeros(pins.shape) if rise is None else rise[:, -1]
     return Hold(goal, turn, rise, held._replace(pins=pins, toes_up=toes_up, foot_heading=foot_heading, held_swivel=held_swivel),
                 goal[:, -1] - ankle[:, -1], ball_goal - ball[:, -1], lifted, turn[:, -1].copy(), ball_goal)
@@ -1224,10 +1223,10 @@ def _hold_all(b: LocomotionBinding, runs, holds: list, g_rot: np.ndarray, g_pos:
     ``touching``, ``posed`` (F, 2) as :meth:`Locomotion._pin` has them; written into ``out``: the goals
     (F, 2, 3), turns (F, 2, 4), rises (F, 2, 3) and weights (F, 2)."""
     goals, turns, rises, weights = out
-    every = np.stack([st.feet for st, _, _ in runs])  # (R, 2, C) the walks' planted feet's values
+    every = np.array([st.feet for st, _, _ in runs])  # (R, 2, C) the walks' planted feet's values
     for n in sorted({h[3] for h in holds}):
         group = [h for h in holds if h[3] == n]
-        walks, feet, first, kinds = (np.array([h[i] for h in group]) for i in (0, 1, 2, 4))
+        walks, feet, first, _, kinds = np.array([h[:5] for h in group]).T
         values = every[walks, feet]  # (P, C)
         for i, h in enumerate(group):
             if h[5] is not None:
