@@ -140,3 +140,22 @@ def test_bml_saccade_finish_stops_the_running_saccades():
     scheduler.submit('<act><bml id="b2"><saccade finish="true"/></bml></act>', at=2.0, character="utah")
     played = [rt.realize(a) for a in scheduler.activations("utah")]
     assert played[1] is None and played[0].end_s == pytest.approx(2.0 + played[0].blend_out_s)
+
+
+def test_offsets_of_saccades_that_are_over_are_kept_as_worked_out():
+    """Block after block, the eyes' offsets of saccades whose way is over are taken as the last block left
+    them: the same, bit for bit, as worked out again, for saccades in progress, over, of no duration and none
+    yet, in blocks of one frame and of several."""
+    from infuse_saccade.controller import SaccadeState, _Over
+
+    rows = [(0.10, 0.05, 3.0, -2.0, 1.0, 0.5), (0.0, 0.0, 1.5, 0.25, 0.0, 0.0), (-np.inf, 1.0, 0.0, 0.0, 0.0, 0.0),
+            (0.32, 0.031, -4.0, 1.0, 3.0, -2.0)]
+    for frames in (1, 4):
+        over, kept = _Over(), 0
+        for start in np.arange(0.0, 0.6, frames / 60.0):
+            held = [tuple(row) for row in rows]
+            times = np.repeat((start + np.arange(frames) / 60.0)[None], len(rows), axis=0)
+            got = over.path(held, times)
+            kept += not got.flags.writeable
+            assert np.array_equal(got, SaccadeState.path(np.array(held), times))
+        assert kept > 0

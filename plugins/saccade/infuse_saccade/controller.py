@@ -150,7 +150,10 @@ class Saccades(Controller):
             held.append(state.held)
             if path is not None:
                 paths[n] = path
-        degrees = SaccadeState.path(np.array(held, dtype=np.float64).reshape(-1, 6), jobs.local_times[batch.seeing])
+        times = jobs.local_times[batch.seeing]
+        degrees = batch.over.path(held, times)
+        if paths:
+            degrees = np.array(degrees)
         for n, path in paths.items():
             degrees[n] = path
         radians = np.radians(degrees) * jobs.weights[batch.seeing][..., None]  # (N', F, 2)
@@ -205,6 +208,35 @@ class SaccadeState:
         return np.where(np.isfinite(start)[..., None], before + progress * (offset - before), 0.0)
 
 
+class _Over:
+    """The offsets (N, 2) degrees that saccades whose way is over hold, kept with what says those saccades
+    (``held``, the rows of :meth:`SaccadeState.path`) while every one of them is over: a block in which no
+    eye moves (most blocks) takes them as they are."""
+
+    def __init__(self):
+        self.held: list | None = None
+        self.offsets = np.zeros((0, 2))
+
+    def path(self, held: list, times: np.ndarray) -> np.ndarray:
+        """:meth:`SaccadeState.path` of ``held`` (N rows of 6) at ``times`` (N, F) seconds, (N, F, 2) degrees (read
+        only when kept)."""
+        if held == self.held and all(_over(row, t) for row, t in zip(held, times[:, 0].tolist())):
+            return np.broadcast_to(self.offsets[:, None], times.shape + (2,))
+        degrees = SaccadeState.path(np.array(held, dtype=np.float64).reshape(-1, 6), times)
+        over = all(_over(row, t) for row, t in zip(held, times[:, -1].tolist()))
+        self.held, self.offsets = (held, degrees[:, -1].copy()) if over else (None, self.offsets)
+        return degrees
+
+
+def _over(row: tuple, t: float) -> bool:
+    """Whether the saccade of ``row`` (a row of :meth:`SaccadeState.path`'s ``held``) is over at ``t`` seconds
+    and ever after (none yet: its offsets are 0), as :meth:`SaccadeState.path` works out its share of the way."""
+    start, duration = row[0], row[1]
+    if not np.isfinite(start):
+        return True
+    return (t - start) / duration >= 1.0 if duration > 0.0 else t - start >= 0.0
+
+
 @dataclass(frozen=True, eq=False)
 class _Batch:
     """Saccade jobs side by side: ``seeing`` (N',) the jobs whose characters have eyes; per eye (K = 2 N')
@@ -217,6 +249,7 @@ class _Batch:
     to_turn: np.ndarray
     from_turn: np.ndarray
     clamp: EllipseClamp
+    over: _Over = field(default_factory=_Over)
 
     @classmethod
     def of(cls, jobs) -> "_Batch | None":
