@@ -699,8 +699,8 @@ class Locomotion(Controller):
             share = standing / fade.size
             kept = 1.0 - standing
             acc = (acc[0] * kept[:, None], acc[1] * kept, None if acc[2] is None else acc[2] * kept[:, None])
-            contact *= (1.0 - standing)[:, None, None]
-            support *= (1.0 - standing)[:, None]
+            contact *= kept[:, None, None]
+            support *= kept[:, None]
             for u, i in enumerate(fade, start=used.size):
                 acc = _accumulate(acc, rot[:, u], root[:, u], None if jt is None else jt[:, u], share)
                 flags = Locomotion._phases(b, i, times)
@@ -1424,7 +1424,7 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     sin_ahead, cos_ahead = np.sin(ahead), np.cos(ahead)
     step_x = (vf * sin_ahead + vl * cos_ahead) * dt
     step_z = (vf * cos_ahead - vl * sin_ahead) * dt
-    px, pz = _before_each(x0, step_x, counts), _before_each(z0, step_z, counts)
+    px, pz = _before_each(np.stack((x0, z0), axis=-1), np.stack((step_x, step_z), axis=-1), counts).T
     for st, x, z, h in zip(states, (px[last] + step_x[last]).tolist(), (pz[last] + step_z[last]).tolist(),
                            (heading[last] + turned[last]).tolist()):
         st.x, st.z, st.heading = x, z, h
@@ -1439,18 +1439,17 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     eased = wm - target  # the turn the eased blend shows more than the asked one's
     vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if has_idle else slow)
     period = np.maximum(wm @ b.durations, 1e-3)
-    paces = []
-    for st, walk, (a, e) in zip(states, walks, spans):
-        pace, path = None, walk.steering.path
-        if b.stops and path is not None and final[a:e].any():  # the stop clip begun on time (:mod:`.pacing`)
+    paces: list = [None] * len(states)
+    for k, (st, walk, (a, e)) in enumerate(zip(states, walks, spans) if b.stops else ()):
+        path = walk.steering.path
+        if path is not None and final[a:e].any():  # the stop clip begun on time (:mod:`.pacing`)
             to_x, to_z = path[-1][0] - px[a:e], path[-1][1] - pz[a:e]  # the last point from each frame, as the steering saw it
             bearing = (np.arctan2(to_x, to_z) - direction[a:e] - heading[a:e] + np.pi) % (2.0 * np.pi) - np.pi
             cruise = np.array([walk._asked(t, b.limit) for t in times[a:e].tolist()])  # the speed it speeds up to
             fps = 1.0 / dt
-            pace = (pacing.pacing_for(b.stops, fps, b.walk_speeds, b.walk_cadences, st.phase, walk.steering.max_accel,
-                                      [_stop_marks(b, c, fps) for c in b.stops]),
-                    np.where(final[a:e], speed[a:e], 0.0), np.hypot(to_x, to_z), bearing, cruise)
-        paces.append(pace)
+            paces[k] = (pacing.pacing_for(b.stops, fps, b.walk_speeds, b.walk_cadences, st.phase, walk.steering.max_accel,
+                                          [_stop_marks(b, c, fps) for c in b.stops]),
+                        np.where(final[a:e], speed[a:e], 0.0), np.hypot(to_x, to_z), bearing, cruise)
     phase, advance, stride, standing, rest = _clocks(states, slow, stopping, spinning, period, dt, has_idle,
                                                      lambda i: _settle_phases(b, wm[i:i + 1])[0], paces, counts)
     if b.stops:  # where it went, frame by frame: where a stop clip may take over
@@ -1477,18 +1476,23 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
 
 
 def _before_each(starts, steps: np.ndarray, counts: list) -> np.ndarray:
-    """(R,) :func:`_before` for walks' frames stacked: each walk's start (``starts`` (W,)) plus the ``steps``
-    (R,) taken before each of its frames, the walks having ``counts`` (W,) frames each, in order."""
+    """(R, ...) :func:`_before` for walks' frames stacked: each walk's start (``starts`` (W, ...)) plus the
+    ``steps`` (R, ...) taken before each of its frames, the walks having ``counts`` (W,) frames each, in order."""
     f = counts[0]
+    starts = np.asarray(starts, dtype=np.float64)
     if counts.count(f) < len(counts):  # walks of different lengths: each on its own
-        ends = list(itertools.accumulate(counts))
-        return np.concatenate([_before(s, steps[e - c:e]) for s, c, e in zip(starts, counts, ends)])
-    out = np.empty((len(counts), f))
+        out = np.empty(steps.shape)
+        for start, c, e in zip(starts, counts, itertools.accumulate(counts)):
+            out[e - c] = 0.0
+            np.cumsum(steps[e - c:e - 1], axis=0, out=out[e - c + 1:e])
+            out[e - c:e] += start
+        return out
+    out = np.empty((len(counts), f) + steps.shape[1:])
     out[:, 0] = 0.0
     if f > 1:
-        np.cumsum(steps.reshape(-1, f)[:, :-1], axis=1, out=out[:, 1:])
-    out += np.array(starts)[:, None]
-    return out.reshape(-1)
+        np.cumsum(steps.reshape((-1, f) + steps.shape[1:])[:, :-1], axis=1, out=out[:, 1:])
+    out += starts[:, None]
+    return out.reshape(steps.shape)
 
 
 def _eased_each(target: np.ndarray, states: list, step: float, inside: np.ndarray, counts: list) -> np.ndarray:
@@ -2454,10 +2458,11 @@ def _clocks_together(states: list, slow, stop, spin, period, dt, idle: bool, set
             if spinning[k]:
                 st.settled, st.landings, st.to_go = False, 0, -1.0
     if resting:
-        rate[resting] = 0.0
-        stride[resting] = slow[resting] / STOP_CADENCE
-        advance[resting] = 0.0
-        settled[resting] = True
+        still = np.array(resting)
+        rate[still] = 0.0
+        stride[still] = slow[still] / STOP_CADENCE
+        advance[still] = 0.0
+        settled[still] = True
     if stepping:
         # The steps of a stop or a turn on the spot (see :func:`_clock`), the stepping walks' rows at once.
         on = np.array(stepping)
