@@ -995,7 +995,7 @@ class Locomotion(Controller):
                                 was_reach = quat.rotate(left, before[s, k, 1] - before[s, k, 0])
                                 heading_from = math.atan2(was_reach[0], was_reach[2])
                         carried = np.concatenate((pin, landed, landed_as, across, (landed_spun, toes_from, heading_from, held_from)))
-                        if e == frames:  # to the block's end: held with the others (below), its state then
+                        if s == 0 and e == frames:  # all the block: held with the others (below), its state then
                             holds.append((r, k, a0 + s, e - s, kind, carried))
                             prev = kind
                             continue
@@ -1150,7 +1150,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         # foot slapping flat in a frame would swing the ankle about the heel by centimetres). The pitch is
         # the twist of the turn since it landed about the axis across; ``toes_up`` carries it (toes up positive).
         pitch, up = _toes_slowed(b, since, across, toes_up, dt)
-        toes_up = np.where(on_heel, up[:, -1], toes_up)
+        toes_up = np.where(on_heel, up[:, -1], toes_up) if balls else up[:, -1]
         kept = quat.multiply(yaw(held.landed_spun[:, None] - turned),
                              quat.multiply(since, quat.from_axis_angle(across[:, None], -(pitch + up))))  # both about one axis
     if balls:
@@ -1170,8 +1170,8 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         swivel = heading_now - np.concatenate((start[:, None], heading_now[:, :-1]), axis=1)
         swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
         held_off = held_swivel[:, None] + np.cumsum(np.where(ball_down | touching, swivel, 0.0), axis=1)
-        foot_heading = np.where(on_heel, heading_now[:, -1], foot_heading)
-        held_swivel = np.where(on_heel, held_off[:, -1], held_swivel)
+        foot_heading, held_swivel = (np.where(on_heel, heading_now[:, -1], foot_heading), np.where(on_heel, held_off[:, -1], held_swivel)) \
+            if balls else (heading_now[:, -1], held_off[:, -1])
         turn = quat.multiply(yaw(np.where(on_heel[:, None], -held_off, 0.0) if balls else -held_off), turn)
         reach = quat.rotate(turn, lever)
         goal = pins[:, None] - _heel_of(b, feet, reach)
@@ -1182,7 +1182,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         held_at = np.repeat(pins[:, None], reach.shape[1], axis=1)
         if touching.any():
             held_at[..., 1] = np.minimum(pins[:, 1:2], np.minimum.accumulate(np.where(touching, ball[..., 1], np.inf), axis=1))
-        pins = np.where(on_heel[:, None], pins, held_at[:, -1])
+        pins = np.where(on_heel[:, None], pins, held_at[:, -1]) if heels else held_at[:, -1]
         goal = np.where(on_heel[:, None, None], goal, held_at - reach) if heels else held_at - reach
     # The ankle at the animation's height; held by the ball for the pose's sake, no lower than keeps the
     # ball at the height it took over at (the blend's leg, half standing and half swinging, would push it
