@@ -110,3 +110,35 @@ def test_point_targets_of_ended_gazes_are_reused():
     assert reused.shape == fresh.shape == (15 * SHIFTS, synthetic_character().skeleton.num_joints, 3)
     assert np.abs(reused - fresh).max() < 1e-6
     assert np.ptp(fresh[:, synthetic_character().skeleton.index["skullbase"]], axis=0).max() > 0.05
+
+
+@pytest.mark.parametrize("block", [1, 7])
+def test_gazes_taking_over_play_as_the_frame_by_frame_settings_make_them(block):
+    """While a gaze takes over from another (its blend-in), a block that one gaze leads whole for each
+    character keeps its settings, targets and the solver's products from block to block: the frames are
+    the same, bit for bit, as with the settings worked out frame by frame, in blocks of one frame (a live
+    scene's) and of several."""
+    def play() -> Scene:
+        rng = np.random.default_rng(3)
+        scene = Scene(fps=30.0, quiet=True, block_frames=block)
+        for k, name in enumerate(("ann", "bob", "cid")):
+            scene.add_character(synthetic_character(name), name, position=(1.2 * k, 0.0, 0.0), facing=0.0)
+        scene.gaze("bob", "ann", at=0.0, influence="SHOULDER")
+        scene.gaze("cid", "bob", at=0.0)
+        at = 0.0
+        for k in range(12):
+            point = (rng.uniform(-2.0, 2.0), rng.uniform(0.5, 2.2), rng.uniform(0.5, 3.0))
+            scene.gaze("ann", point, at=at, influence=("HEAD", "SHOULDER", "WAIST")[k % 3])
+            if k % 4 == 3:
+                scene.gaze("cid", "ann" if k % 8 == 3 else point, at=at + 0.1)
+            at += rng.uniform(0.1, 0.5)
+        for _ in range(int(round((at + 1.0) * 30.0)) // block):
+            scene.step(block)
+        return scene
+
+    kept = play()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(gaze_controller, "_owners", lambda rows, names, block: None)
+        worked_out = play()
+    for name in ("ann", "bob", "cid"):
+        assert np.array_equal(kept.motion(name).local_rotations, worked_out.motion(name).local_rotations), name

@@ -120,16 +120,24 @@ class Gaze(Controller):
         rows = {name: row if len(row) == 1 else _drop_superseded(sorted(row, key=lambda j: (j.activity.start_s, j.activity.id)), block)
                 for name, row in rows.items()}
         frames, dt = len(block), block.dt
-        names = list(rows)
+        # The characters in the table's order: the same from block to block, whatever order their gazes began in.
+        names = sorted(rows, key=block.table.character_index.__getitem__)
         leads = [rows[name][0] for name in names]
-        # The usual case, one additive gaze per character: what depends only on the gazes is kept.
+        # The chains depend only on the leading gazes: kept while they lead (a gaze taking over blends in
+        # over many blocks). The usual case, one additive gaze per character: its settings are kept too.
         single = all(len(row) == 1 for row in rows.values()) and all(job.mode is Mode.ADDITIVE for job in leads)
-        chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads) if single else _Chains(leads, block.table)
+        chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads)
+        owned = None if single else _owners(rows, names, block)
         if single:
             arrays = chains.settings(frames, dt)  # with "kept", what the solver keeps of them
             # the jobs' own weights stacked, when they are the leads (one gaze per character, in their order)
-            arrays["weights"] = jobs.weights if len(jobs) == len(leads) else np.array([job.weight for job in leads])
+            in_order = len(jobs) == len(leads) and all(job is lead for job, lead in zip(jobs, leads))
+            arrays["weights"] = jobs.weights if in_order else np.array([job.weight for job in leads])
             spans = [[(job, slice(None))] for job in leads]
+        elif owned is not None:  # a gaze taking over in blocks it leads whole (blocks of one frame: always)
+            arrays = chains.settings(frames, dt, owned[0])
+            arrays["weights"] = owned[1]
+            spans = [[(job, slice(None))] for job in owned[0]]
         else:
             arrays, spans = _settings_per_frame(rows, names, block)
         # The pose below, along each chain; characters on one skeleton share the forward kinematics.
@@ -137,7 +145,7 @@ class Gaze(Controller):
         positions = chain["positions"]  # each slot's joint in the world
         # Where the priority joint points: the mean forward (+Z) axis of the eyes or the head.
         forward_axes = chain["frames_world"][..., _FORWARD]  # (C, F, S, 3)
-        lead_weights = chains.lead_weights if single else np.array([span[0][0].binding.lead_weights() for span in spans])
+        lead_weights = chains.lead_weights if single else chains.lead_weights_of([span[0][0] for span in spans])
         chain["forward"] = _weighted_slots(lead_weights, forward_axes)
         for c in (c for c in range(len(names)) if len(spans[c]) > 1):  # a gaze led otherwise may take over
             for job, these in spans[c][1:]:
@@ -145,7 +153,8 @@ class Gaze(Controller):
         # Targets. A character looking at another gazing one (its eyes or head) takes that character's
         # joints from the chain above, and again from its solved chain (``refine``).
         targets = arrays["targets"] = np.empty((len(names), frames, 3))
-        refine, elsewhere, lost, faces = chains.plan(block) if single else _plan_targets(rows, names, spans, chains, block)
+        refine, elsewhere, lost, faces = (chains.plan(block) if single else chains.plan(block, rows, owned[0]) if owned
+                                          else _plan_targets(rows, names, spans, chains, block))
         for c, job, these, target in elsewhere:
             targets[c, these] = target.positions(block.times, block)[these]
         if lost and arrays["weights"] is jobs.weights:
@@ -159,7 +168,7 @@ class Gaze(Controller):
         # The smoothing's state, per character (whichever of its gazes leads), stacked for the solver,
         # which updates it in place: each character's state holds views of the stacked arrays.
         states = [job.rig.state_of(GazeState) for job in leads]
-        offsets = solve(inp, *(chains.stacked_states(states) if single else _stacked_states(states)))
+        offsets = solve(inp, *(chains.stacked_states(states) if single or owned else _stacked_states(states)))
         _end_settled([rows[name] for name in names], states, block)
         # Each slot's turn Δ as a local offset A Δ A⁻¹ of its joint (A: its aligned frame), for every
         # character at once, written onto every character's joints at once.
@@ -201,6 +210,23 @@ def _plan_targets(rows: dict, names: list, spans: list, chains: "_Chains", block
             except UsageError as exc:
                 lost.append((c, job, these, exc))
     return refine, elsewhere, lost, Faces(refine)
+
+
+def _owners(rows: dict, names: list, block) -> tuple[list, np.ndarray] | None:
+    """Per character (``names``, their gaze jobs ``rows``), the gaze in charge (:func:`_in_charge`) when one is
+    over the whole block, and the blend weights (C, F); None when a character's changes within the block
+    or one of its gazes overrides the pose below."""
+    owners, weights = [], []
+    for name in names:
+        row = rows[name]
+        if any(job.mode is not Mode.ADDITIVE for job in row):
+            return None
+        owner, weight = _in_charge(row, block.times)
+        if (owner != owner[0]).any():
+            return None
+        owners.append(row[int(owner[0])])
+        weights.append(weight)
+    return owners, np.array(weights)
 
 
 def _settings_per_frame(rows: dict, names: list, block) -> tuple[dict, list]:
@@ -275,7 +301,8 @@ class _Chains:
         self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
-        self._plan: tuple[int, tuple[list, list, list, Faces]] | None = None
+        self._plans: dict[tuple, tuple[list, list, list, Faces]] = {}
+        self._lead_weights: dict[tuple, np.ndarray] = {}
         self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
@@ -292,23 +319,29 @@ class _Chains:
                                    (rotation, quat.unit_to_matrix(rotation), np.stack([rig.position for rig in rigs])))
         return kept[1]
 
-    def settings(self, frames: int, dt: float) -> dict:
+    def settings(self, frames: int, dt: float, owners: list | None = None) -> dict:
         """The solver's settings (C, F, ...) of one gaze per character over ``frames`` frames of ``dt``
-        seconds (read-only views: the same for every frame), and the solver's ``kept`` dict for them."""
-        kept = self._settings.get((frames, dt))
+        seconds (read-only views: the same for every frame), and the solver's ``kept`` dict for them. The
+        gazes are the chains' own, or ``owners`` (one job each, in order: gazes taking over, in charge of the
+        whole block)."""
+        jobs = self.jobs if owners is None else owners
+        key = (frames, dt, None if owners is None else tuple(job.activity.id for job in owners))
+        kept = self._settings.get(key)
         if kept is None:
-            gazes = [job.controller for job in self.jobs]
+            if len(self._settings) > 8:  # gazes taking over one after the other: only the latest are needed
+                self._settings.clear()
+            gazes = [job.controller for job in jobs]
             count = len(gazes)
             rates = [gaze.rates(dt) for gaze in gazes]
             per_character = {
-                "active": np.stack([job.binding.active for job in self.jobs]),
-                "fractions": np.stack([job.binding.fractions for job in self.jobs]),
+                "active": np.stack([job.binding.active for job in jobs]),
+                "fractions": np.stack([job.binding.fractions for job in jobs]),
                 "limits": np.stack([gaze.limits for gaze in gazes]),
                 "smoothing": np.stack([r[0] for r in rates]), "max_step": np.stack([r[1] for r in rates]),
                 "offsets": np.array([gaze.offset for gaze in gazes], dtype=np.float64).reshape(count, 2),
             }
-            kept = self._settings[(frames, dt)] = {key: np.broadcast_to(value[:, None], (count, frames) + value.shape[1:])
-                                                   for key, value in per_character.items()}
+            kept = self._settings[key] = {name: np.broadcast_to(value[:, None], (count, frames) + value.shape[1:])
+                                          for name, value in per_character.items()}
             kept["kept"] = {}
         return dict(kept)
 
@@ -322,15 +355,30 @@ class _Chains:
             kept = self._states = ([(st.groups, st.eyes, st.first) for st in states], stacked)
         return kept[1]
 
-    def plan(self, block) -> tuple[list, list, list, Faces]:
-        """:func:`_plan_targets` of the gazes (one each, leading the block), kept while the runtime
-        resolves target names as it did."""
-        version = block.runtime.targets_version
-        if self._plan is None or self._plan[0] != version:
-            rows = {job.rig.name: [job] for job in self.jobs}
-            spans = [[(job, slice(None))] for job in self.jobs]
-            self._plan = (version, _plan_targets(rows, list(rows), spans, self, block))
-        return self._plan[1]
+    def plan(self, block, rows: dict | None = None, owners: list | None = None) -> tuple[list, list, list, Faces]:
+        """:func:`_plan_targets` of the gazes (one each, leading the block; or ``owners``, in charge of the
+        whole block, of the characters' gaze jobs ``rows``), kept while the runtime resolves target names
+        as it did."""
+        jobs = self.jobs if owners is None else owners
+        key = (block.runtime.targets_version, None if owners is None else tuple(job.activity.id for job in owners))
+        plan = self._plans.get(key)
+        if plan is None:
+            if len(self._plans) > 8:
+                self._plans.clear()
+            rows = {job.rig.name: [job] for job in self.jobs} if rows is None else rows
+            plan = self._plans[key] = _plan_targets(rows, [job.rig.name for job in jobs], [[(job, slice(None))] for job in jobs],
+                                                    self, block)
+        return plan
+
+    def lead_weights_of(self, jobs: list) -> np.ndarray:
+        """(C, S) the slots each of ``jobs`` (one each, in order) points (:attr:`lead_weights` of other gazes)."""
+        key = tuple(job.activity.id for job in jobs)
+        weights = self._lead_weights.get(key)
+        if weights is None:
+            if len(self._lead_weights) > 8:
+                self._lead_weights.clear()
+            weights = self._lead_weights[key] = np.array([job.binding.lead_weights() for job in jobs])
+        return weights
 
     def slots_of(self, target: JointTarget, job, block) -> tuple[int, ...]:
         """:func:`_slots_of`, kept per target and gazing character's binding."""
