@@ -41,11 +41,25 @@ class GazeBinding:
     chain_aligned: np.ndarray
     columns: np.ndarray
     slot_source: np.ndarray
+    _weights: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False)  # origin, lead (see __post_init__)
 
     @property
     def joints(self) -> np.ndarray:
         """(P,) the joints of the present slots, bottom to top: the joints the gaze turns."""
         return self.slot_joints[self.present]
+
+    def __post_init__(self):
+        # What the weights below are made of, worked out once: the gaze's chains are stacked again each
+        # time the gazes of a group change (read-only: every caller reads them).
+        origin = np.zeros(len(SLOTS))
+        origin[list(EYE_SLOTS) if self.has_eyes else HEAD_SLOT] = 1.0
+        origin /= origin.sum()
+        lead = origin
+        if not self.eyes_lead:
+            lead = np.zeros(len(SLOTS))
+            lead[HEAD_SLOT] = 1.0
+        origin.flags.writeable = lead.flags.writeable = False
+        object.__setattr__(self, "_weights", (origin, lead))
 
     @property
     def has_eyes(self) -> bool:
@@ -53,18 +67,12 @@ class GazeBinding:
 
     def origin_weights(self) -> np.ndarray:
         """(S,) weights of the slots whose mean is where the gaze starts: the eyes, else the head."""
-        weights = np.zeros(len(SLOTS))
-        weights[list(EYE_SLOTS) if self.has_eyes else HEAD_SLOT] = 1.0
-        return weights / weights.sum()
+        return self._weights[0]
 
     def lead_weights(self) -> np.ndarray:
         """(S,) weights of the slots whose mean forward axis the gaze points: the eyes when they lead,
         else the head."""
-        if self.eyes_lead:
-            return self.origin_weights()
-        weights = np.zeros(len(SLOTS))
-        weights[HEAD_SLOT] = 1.0
-        return weights
+        return self._weights[1]
 
 
 def bind_chain(rig, moving: tuple[str, ...], priority_group: str, report: Callable[[str], None]) -> GazeBinding:
