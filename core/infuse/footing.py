@@ -214,14 +214,16 @@ def heel_rise(ankle_rotation: np.ndarray, leg: np.ndarray, ankle_goal: np.ndarra
     # +Y about the ball; level: v's part along the axis, which the turn keeps.
     ax, az = -v[:, 2], v[:, 0]
     if across is not None:
-        given = np.broadcast_to(np.asarray(across, dtype=np.float64), ankle_goal.shape)[short]
+        across = np.asarray(across, dtype=np.float64)
+        given = across[short] if across.shape == ankle_goal.shape else np.broadcast_to(across, ankle_goal.shape)[short]
         usable = np.hypot(given[:, 0], given[:, 2]) > 1e-9
         ax, az = np.where(usable, given[:, 0], ax), np.where(usable, given[:, 2], az)
     size = np.maximum(np.sqrt(ax * ax + az * az), 1e-12)
     ax, az = ax / size, az / size
     axis = np.zeros(v.shape)
     axis[:, 0], axis[:, 2] = ax, az
-    up = np.stack((-az * v[:, 1], az * v[:, 0] - ax * v[:, 2], ax * v[:, 1]), axis=-1)
+    up = np.empty(v.shape)
+    up[:, 0], up[:, 1], up[:, 2] = -az * v[:, 1], az * v[:, 0] - ax * v[:, 2], ax * v[:, 1]
     level = axis * (ax * v[:, 0] + az * v[:, 2])[:, None]
     flat = v - level
     # Each rise's ankle (F, 3, R), all coordinates at once, and its squared distance from the hip.

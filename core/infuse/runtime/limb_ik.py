@@ -359,10 +359,9 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     if weight is not None:  # both joints in one interpolation
         w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
-        if np.all((w == 0.0) | (w == 1.0)):  # solved or left as they are, frame by frame: no interpolation
-            new = np.where(w[..., None] == 1.0, new, old)
-        else:
-            new = quat.slerp(old, new, w)
+        solved = w == 1.0
+        if not solved.all():  # solved or left as they are frame by frame (no interpolation), else blended
+            new = np.where(solved[..., None], new, old) if np.all(solved | (w == 0.0)) else quat.slerp(old, new, w)
     local_rotations[:, columns[..., :2]] = new
     if plan.all_carried:
         places, holders, middles = _place_carried(skeleton, local_rotations, root_translations, joint_translations,

@@ -1022,7 +1022,7 @@ class Locomotion(Controller):
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
         # goal is kept within reach, the knee bending at least as the animation's.
-        for k in np.flatnonzero(~b.has_ball).tolist():
+        for k in np.flatnonzero(~b.has_ball).tolist() if not b.has_ball.all() else ():
             free = anchors_all[:, k] == footing.FREE
             if free.any():
                 goals[free, k] = footing.within_reach(goals[free, k], g_pos_all[free, k, :3])
@@ -1151,28 +1151,29 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         # the twist of the turn since it landed about the axis across; ``toes_up`` carries it (toes up positive).
         pitch, up = _toes_slowed(b, since, across, toes_up, dt)
         toes_up = np.where(on_heel, up[:, -1], toes_up) if balls else up[:, -1]
-        kept = quat.multiply(yaw(held.landed_spun[:, None] - turned),
-                             quat.multiply(since, quat.from_axis_angle(across[:, None], -(pitch + up))))  # both about one axis
+        kept = quat.multiply(since, quat.from_axis_angle(across[:, None], -(pitch + up)))  # both about one axis
     if balls:
         pitched = np.concatenate((across[:, None] * (since[..., :3] @ across[:, :, None]), since[..., 3:]), axis=-1)
         pitched /= np.maximum(np.sqrt((pitched * pitched).sum(axis=-1, keepdims=True)), 1e-12)
         kept = np.where(on_heel[:, None, None], kept, pitched) if heels else pitched
-    turn = quat.multiply(quat.multiply(kept, held.landed_as[:, None]), quat.conjugate(foot_rot))
+    turn = quat.multiply(quat.multiply(kept, held.landed_as[:, None]), quat.conjugate(foot_rot))  # on the heel, yet to turn about +Y
     reach = quat.rotate(turn, lever)  # the corrected ankle to ball
     if heels:
-        # While its ball is down too, the foot's heading (its ankle-to-ball direction about the vertical)
-        # holds: a blend's or take's swivel about the heel, or a roll down about an axis not square to the
-        # foot, would sweep the ball along the ground. ``held_off`` (P, n) the turn held off (radians),
-        # summed frame by frame; the ball is down where the blend's is, and where the foot touched down
-        # before its strike. None on a ball.
-        heading_now = np.arctan2(reach[..., 0], reach[..., 2])
+        # On the heel the foot turns back by the turn spun at the root since it landed (``spin`` (P, n)
+        # radians about +Y), and while its ball is down too, its heading (its ankle-to-ball direction about
+        # the vertical) holds: a blend's or take's swivel about the heel, or a roll down about an axis not
+        # square to the foot, would sweep the ball along the ground. ``held_off`` (P, n) the turn held off
+        # (radians), summed frame by frame; the ball is down where the blend's is, and where the foot
+        # touched down before its strike. Both turn it about +Y, in one turn.
+        spin = held.landed_spun[:, None] - turned
+        heading_now = (np.arctan2(reach[..., 0], reach[..., 2]) + spin + math.pi) % (2.0 * math.pi) - math.pi
         start = np.where(np.isnan(foot_heading), heading_now[:, 0], foot_heading)
         swivel = heading_now - np.concatenate((start[:, None], heading_now[:, :-1]), axis=1)
         swivel = (swivel + math.pi) % (2.0 * math.pi) - math.pi
         held_off = held_swivel[:, None] + np.cumsum(np.where(ball_down | touching, swivel, 0.0), axis=1)
         foot_heading, held_swivel = (np.where(on_heel, heading_now[:, -1], foot_heading), np.where(on_heel, held_off[:, -1], held_swivel)) \
             if balls else (heading_now[:, -1], held_off[:, -1])
-        turn = quat.multiply(yaw(np.where(on_heel[:, None], -held_off, 0.0) if balls else -held_off), turn)
+        turn = quat.multiply(yaw(np.where(on_heel[:, None], spin - held_off, 0.0) if balls else spin - held_off), turn)
         reach = quat.rotate(turn, lever)
         goal = pins[:, None] - _heel_of(b, feet, reach)
     if balls:
