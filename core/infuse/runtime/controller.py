@@ -109,6 +109,11 @@ class Jobs(list):
             self._memo[:] = [key, make(jobs)]
         return self._memo[1]
 
+    def last(self):
+        """What :meth:`memo` made last for this class, layer and priority (None before it made anything):
+        what a class working something out again for other activities may take over parts of."""
+        return self._memo[1]
+
 
 def table_columns(jobs: Jobs, indices, morphs: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
     """Where each job's joints ``indices`` (a sequence of (K_i,) index arrays, one per job; with

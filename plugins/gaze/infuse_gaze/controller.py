@@ -126,7 +126,8 @@ class Gaze(Controller):
         # The chains depend only on the leading gazes: kept while they lead (a gaze taking over blends in
         # over many blocks). The usual case, one additive gaze per character: its settings are kept too.
         single = all(len(row) == 1 for row in rows.values()) and all(job.mode is Mode.ADDITIVE for job in leads)
-        chains = jobs.memo(lambda chosen: _Chains(chosen, block.table), leads)
+        previous = jobs.last()
+        chains = jobs.memo(lambda chosen: _Chains(chosen, block.table, previous if isinstance(previous, _Chains) else None), leads)
         owned = None if single else _owners(rows, names, block)
         if single:
             arrays = chains.settings(frames, dt)  # with "kept", what the solver keeps of them
@@ -280,7 +281,7 @@ class _Chains:
       their cells ``c S + s`` among every character's slots.
     """
 
-    def __init__(self, jobs, table):
+    def __init__(self, jobs, table, previous: "_Chains | None" = None):
         bindings = [job.binding for job in jobs]
         self.jobs = jobs
         self.present = np.stack([b.present for b in bindings])
@@ -303,6 +304,12 @@ class _Chains:
         self._slots: dict[tuple, tuple[int, ...]] = {}
         self._plans: dict[tuple, tuple[list, list, list, Faces]] = {}
         self._lead_weights: dict[tuple, np.ndarray] = {}
+        if previous is not None:  # gazes that took over now lead: their settings and targets' plan, worked
+            # out meanwhile, hold (the slots a face is looked at by depend on the character alone)
+            ids = tuple(job.activity.id for job in jobs)
+            self._settings.update({(frames, dt, None): settings for (frames, dt, owners), settings in previous._settings.items()
+                                   if owners == ids})
+            self._plans.update({(version, None): plan for (version, owners), plan in previous._plans.items() if owners == ids})
         self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
