@@ -279,6 +279,9 @@ class _Chains:
       its characters; ``aligned_matrices`` (C, S, 3, 3): ``aligned`` as matrices;
     - ``columns`` (P,): the table columns of every character's present slots, ``present_cells`` (P,):
       their cells ``c S + s`` among every character's slots.
+
+    ``previous``: the chains of the gazes these follow, if any: what was worked out there for gazes that
+    then took over and lead here is taken over.
     """
 
     def __init__(self, jobs, table, previous: "_Chains | None" = None):
