@@ -805,16 +805,11 @@ class Locomotion(Controller):
         turns = np.zeros(anchors_all.shape + (4,))  # (F, 2, 4) world turn of each foot from the animation's to the pinned
         turns[..., 3] = 1.0
         touching_all = np.zeros(anchors_all.shape, dtype=bool)  # (F, 2) held where it touched, before its blend's strike
-        if made.any():
-            for st, a0, a1 in runs:  # each walk's frames, its feet carried from its last block
-                touched = _touch_downs(b, st, anchors_all[a0:a1], feet_all[a0:a1], made[a0:a1], dt)
-                if touched.any():
-                    touching_all[a0:a1] = touched > 0
-                    anchors_all[a0:a1] = np.where(touching_all[a0:a1], touched, anchors_all[a0:a1])
-                    posed_all[a0:a1] |= touched == footing.BALL
-        else:  # no step made: no swinging foot held where it touched (as _touch_downs has it)
-            for st, _, _ in runs:
-                st.touched = np.zeros(2, np.int64)
+        touched = _touch_downs(b, runs, anchors_all, feet_all, made, dt)
+        if touched.any():
+            touching_all = touched > 0
+            anchors_all = np.where(touching_all, touched, anchors_all)
+            posed_all |= touched == footing.BALL
         # The feet held through all their walk's frames by what held them a frame before: those held
         # alike (the anchor, as many frames) in one go, all walks together (the common case by far).
         starts = np.array([a0 for _, a0, _ in runs])
@@ -1041,12 +1036,12 @@ class Locomotion(Controller):
         return _feet_below(b.skeleton, b.floors, rot, jt, above, ankles)
 
 
-def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray,
-                 dt: float) -> np.ndarray:
+def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray, dt: float) -> np.ndarray:
     """(F, 2) what holds each swinging foot that has touched the ground before its blend's strike
     (:data:`~infuse.footing.ANKLE` or :data:`~infuse.footing.BALL`, 0 elsewhere), from ``anchors``
     (F, 2) (:func:`infuse.footing.anchors`) and the animated ankles and balls ``feet`` (F, 2, 2, 3)
-    metres, frames ``dt`` seconds apart; ``st.touched`` (2,) carries it from the last block.
+    metres, frames ``dt`` seconds apart, of the walks ``runs`` (:meth:`Locomotion._pin`: each walk's
+    state and frames) all at once; each walk's ``st.touched`` (2,) carries it from its last block.
 
     A free foot lands where the lower of its sole points (the sole under the heel, the ball), coming
     down, first comes within ``b.touch_m`` of its resting height (``b.sole_floor``), held by that point
@@ -1057,33 +1052,59 @@ def _touch_downs(b: LocomotionBinding, st: LocomotionState, anchors: np.ndarray,
     fade (:data:`HOLD_S` and :data:`STEP_RELEASE_S`): held sooner, it stood where the correction left
     it, short of its place (a foot held behind as the pelvis came over it, 30 cm)."""
     free = anchors == footing.FREE
+    states = [st for st, _, _ in runs]
     if not made.any() or not free.any():  # no swinging foot of a made step: none held
-        none: np.ndarray = np.zeros(anchors.shape, np.int64)
-        st.touched = none[-1].copy()
-        return none
-    both = np.concatenate((st.last[None], feet))  # (F + 1, 2, 2, 3) from the frame before the block's first
-    heel = both[:, :, 0, 1] + _heel_heights(b, both[:, :, 1] - both[:, :, 0])  # (F + 1, 2) heights
-    by_heel = (heel <= both[:, :, 1, 1]) | ~b.has_ball  # (F + 1, 2)
+        for st in states:
+            st.touched = np.zeros(2, np.int64)
+        return np.zeros(anchors.shape, np.int64)
+    starts = [a0 for _, a0, _ in runs]
+    walk_start = np.zeros(len(anchors), dtype=bool)  # (F,) each walk's first frame
+    walk_start[starts] = True
+    walk = np.cumsum(walk_start) - 1  # (F,) each frame's walk
+    # The feet a frame before each (from the walk's last block at its first frame), and now.
+    before = np.concatenate((feet[:1], feet[:-1]))
+    before[starts] = np.array([st.last for st in states])
+    both = np.concatenate((before, feet))  # (2F, 2, 2, 3)
+    heel = both[:, :, 0, 1] + _heel_heights(b, both[:, :, 1] - both[:, :, 0])  # (2F, 2) heights
+    by_heel = (heel <= both[:, :, 1, 1]) | ~b.has_ball  # (2F, 2)
     lowest = np.where(by_heel, heel, both[:, :, 1, 1]) - b.sole_floor  # the lower sole point's
     f = len(anchors)
-    idx = np.arange(f)[:, None]
+    idx = (np.arange(f) - np.array(starts)[walk])[:, None]  # (F, 1) frames since the walk's first
     # Frames off the ground (F, 2): from the swing's first frame, or carried from the last block.
-    starts = free & ~np.concatenate(((st.anchor == footing.FREE)[None], free[:-1]))
-    swung = np.maximum.accumulate(np.where(starts, idx, -1), axis=0)
-    swung = np.where(swung >= 0, idx - swung, idx + np.rint(np.minimum(st.free_s, 1e3) / dt)) + 1
-    coming = (free & (lowest[1:] < b.touch_m) & (lowest[1:] < lowest[:-1]) & made[:, None]
+    was_free = np.concatenate((free[:1], free[:-1]))
+    was_free[starts] = np.array([st.anchor for st in states]) == footing.FREE
+    swung = _latest(free & ~was_free, walk_start)
+    free_s = np.array([st.free_s for st in states])[walk]  # (F, 2)
+    swung = np.where(swung >= 0, idx - swung, idx + np.rint(np.minimum(free_s, 1e3) / dt)) + 1
+    coming = (free & (lowest[f:] < b.touch_m) & (lowest[f:] < lowest[:f]) & made[:, None]
               & (swung * dt >= HOLD_S + STEP_RELEASE_S - 1e-9))
     # Held from the first frame of its swing (its run of free frames, ``began``) coming down low (or
-    # from the block's first, carried) to the swing's end (the blend's strike), by its lower sole
+    # from the walk's first, carried) to the swing's end (the blend's strike), by its lower sole
     # point: where the blend's foot rocks between heel and ball, it rolls over them.
-    began = np.maximum.accumulate(np.where(free & ~np.concatenate((np.zeros((1, 2), bool), free[:-1])), idx, -1), axis=0)
-    carried = free[0] & (st.touched > 0)
-    first = np.maximum.accumulate(np.where(coming | (carried[None] & (idx == 0)), idx, -1), axis=0)
+    was_free[starts] = False
+    began = _latest(free & ~was_free, walk_start)
+    carried = np.zeros(free.shape, dtype=bool)
+    carried[starts] = free[starts] & (np.array([st.touched for st in states]) > 0)
+    first = _latest(coming | carried, walk_start)
     held = free & (first >= began) & (first >= 0) & made[:, None]
-    aloft = both[1:, :, 1, 1] - b.sole_floor >= b.touch_m  # (F, 2) the ball not within touch of its floor
-    kind = np.where(by_heel[1:] | aloft, footing.ANKLE, footing.BALL)
+    aloft = feet[:, :, 1, 1] - b.sole_floor >= b.touch_m  # (F, 2) the ball not within touch of its floor
+    kind = np.where(by_heel[f:] | aloft, footing.ANKLE, footing.BALL)
     out: np.ndarray = np.where(held, kind, 0)
-    st.touched = out[-1].copy()
+    for st, (_, _, a1) in zip(states, runs):
+        st.touched = out[a1 - 1].copy()
+    return out
+
+
+def _latest(marks: np.ndarray, first: np.ndarray) -> np.ndarray:
+    """(F, K) for each frame the latest frame at or before it within its walk's frames where ``marks``
+    (F, K) holds, counted from the walk's first frame (-1: none); ``first`` (F,) the walks' first frames
+    (each walk's frames follow one another)."""
+    f = len(marks)
+    at = np.arange(f)[:, None]
+    start = np.maximum.accumulate(np.where(first, np.arange(f), 0))[:, None]  # each frame's walk's first frame
+    # Marks at 2 x their frame, a walk's first frame unmarked at one less: nothing of an earlier walk's carries on.
+    latest = np.maximum.accumulate(np.where(marks, 2 * at, np.where(first[:, None], 2 * at - 1, -1)), axis=0)
+    out: np.ndarray = np.where(latest >= 2 * start, latest // 2 - start, -1)
     return out
 
 
