@@ -296,8 +296,8 @@ class Clip(Controller):
     def bind(self, rig, report) -> ClipBinding:
         bound = rig.state_of(_Bound)
         kept = bound.get(self.motion)
-        if kept is not None:  # this clip bound to this character before: the same binding, the same reports
-            values, reported = kept
+        if kept is not None and kept[0] is type(self):  # this clip bound to this character before: the same
+            _, values, reported = kept  # binding, the same reports
             for message in reported:
                 report(message)
             return ClipBinding(motion=self.motion, **values)
@@ -309,7 +309,7 @@ class Clip(Controller):
 
         binding = self._bind(rig, noted)
         if binding.motion is self.motion:  # not retargeted: it depends only on the clip and the character
-            bound[self.motion] = ({f.name: getattr(binding, f.name) for f in fields(binding) if f.name != "motion"}, reports)
+            bound[self.motion] = (type(self), {f.name: getattr(binding, f.name) for f in fields(binding) if f.name != "motion"}, reports)
         return binding
 
     def _bind(self, rig, report) -> ClipBinding:
@@ -423,9 +423,9 @@ class Clip(Controller):
 
 class _Bound(weakref.WeakKeyDictionary):
     """A character's clip bindings (a state of its rig): per clip (a Motion) bound to it as it is (not
-    retargeted), the :class:`ClipBinding`'s values but the clip (which the entry then does not keep alive)
-    and the messages binding reported. A clip played again on the character (a walk settling onto its
-    pack's idle, the idle it started with) binds at the cost of a look-up."""
+    retargeted), the class that bound it, the :class:`ClipBinding`'s values but the clip (which the entry
+    then does not keep alive) and the messages binding reported. A clip played again on the character (a
+    walk settling onto its pack's idle, the idle it started with) binds at the cost of a look-up."""
 
 
 @dataclass(frozen=True, eq=False)
