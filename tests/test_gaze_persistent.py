@@ -12,6 +12,7 @@ import pytest
 
 import infuse_gaze.controller as gaze_controller
 from infuse.kinematics import forward_kinematics, motion_fk
+from infuse.runtime.controller import Jobs
 from infuse.scene import Scene
 from infuse_gaze import Gaze
 
@@ -140,5 +141,9 @@ def test_gazes_taking_over_play_as_the_frame_by_frame_settings_make_them(block):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(gaze_controller, "_owners", lambda rows, names, block: None)
         worked_out = play()
+    with pytest.MonkeyPatch.context() as patch:  # nothing taken over from the chains of the gazes before
+        patch.setattr(Jobs, "last", lambda jobs: None)
+        afresh = play()
     for name in ("ann", "bob", "cid"):
         assert np.array_equal(kept.motion(name).local_rotations, worked_out.motion(name).local_rotations), name
+        assert np.array_equal(kept.motion(name).local_rotations, afresh.motion(name).local_rotations), name

@@ -287,22 +287,32 @@ class _Chains:
     def __init__(self, jobs, table, previous: "_Chains | None" = None):
         bindings = [job.binding for job in jobs]
         self.jobs = jobs
-        self.present = np.stack([b.present for b in bindings])
-        self.counts = np.stack([b.counts for b in bindings])
-        self.aligned = np.stack([b.chain_aligned for b in bindings])  # (C, S, 4)
-        to_local = quat.left_matrix(self.aligned) @ quat.right_matrix(quat.conjugate(self.aligned))  # (C, S, 4, 4)
+        self.layout = table.layout
         self.lead_weights = np.array([b.lead_weights() for b in bindings])
         self.origin_weights = np.array([b.origin_weights() for b in bindings])
-        world = np.stack([b.slot_source < 0 for b in bindings])[:, None, :, None]
-        self.world = world if world.any() else None
-        same_chain: dict[tuple, list[int]] = {}
-        for c, job in enumerate(jobs):
-            same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
-        self.skeletons = [_ChainGroup(members, [jobs[c] for c in members], table) for members in same_chain.values()]
-        self.aligned_matrices = quat.unit_to_matrix(self.aligned)  # (C, S, 3, 3)
-        self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
-        self.present_cells = np.flatnonzero(self.present)
-        self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
+        self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        if previous is not None and previous.layout is table.layout and len(previous.jobs) == len(jobs) \
+                and all(was.rig is job.rig for was, job in zip(previous.jobs, jobs)):
+            # The same characters in the same table: a chain, its slots and their frames are the character's
+            # whatever its gaze (which moves only some of them), so they are those already worked out.
+            for name in _CHARACTERS_OWN:
+                setattr(self, name, getattr(previous, name))
+        else:
+            self.present = np.stack([b.present for b in bindings])
+            self.counts = np.stack([b.counts for b in bindings])
+            self.aligned = np.stack([b.chain_aligned for b in bindings])  # (C, S, 4)
+            to_local = quat.left_matrix(self.aligned) @ quat.right_matrix(quat.conjugate(self.aligned))  # (C, S, 4, 4)
+            world = np.stack([b.slot_source < 0 for b in bindings])[:, None, :, None]
+            self.world = world if world.any() else None
+            same_chain: dict[tuple, list[int]] = {}
+            for c, job in enumerate(jobs):
+                same_chain.setdefault((id(job.rig.skeleton), tuple(job.binding.slot_joints)), []).append(c)
+            self.skeletons = [_ChainGroup(members, [jobs[c] for c in members], table) for members in same_chain.values()]
+            self.aligned_matrices = quat.unit_to_matrix(self.aligned)  # (C, S, 3, 3)
+            self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
+            self.present_cells = np.flatnonzero(self.present)
+            self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
         self._settings: dict[tuple, dict] = {}
         self._slots: dict[tuple, tuple[int, ...]] = {}
         self._plans: dict[tuple, tuple[list, list, list, Faces]] = {}
@@ -313,8 +323,6 @@ class _Chains:
             self._settings.update({(frames, dt, None): settings for (frames, dt, owners), settings in previous._settings.items()
                                    if owners == ids})
             self._plans.update({(version, None): plan for (version, owners), plan in previous._plans.items() if owners == ids})
-        self._states: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
-        self._placed: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     def placements(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where the characters stand: their rotations (C, 4), as matrices (C, 3, 3), and positions (C, 3);
@@ -397,6 +405,12 @@ class _Chains:
         if slots is None:
             slots = self._slots[key] = _slots_of(target, job, block)
         return slots
+
+
+#: What :class:`_Chains` works out of the characters alone (their rigs and places in the table), whatever
+#: their gazes: its chains' arrays and forward kinematics, and its caches of the characters' placements and turns.
+_CHARACTERS_OWN = ("present", "counts", "aligned", "world", "skeletons", "aligned_matrices", "columns", "present_cells",
+                   "present_to_local", "_states", "_placed")
 
 
 def _drop_superseded(row, block) -> list:
