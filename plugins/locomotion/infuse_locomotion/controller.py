@@ -838,13 +838,12 @@ class Locomotion(Controller):
                     continue
                 goal, weight, rise, ankle, turn = goals[a0:a1, k], weights[a0:a1, k], rises[a0:a1, k], ankle_pos[:, k], turns[a0:a1, k]
                 prev = int(st.anchor[k])
-                # Views of the carried state: never written in place here, only replaced (stored back below).
-                offset, pin, released, lifted = st.offset[k], st.pins[k], float(st.released[k]), st.rise[k]
-                landed, landed_as, across, left = st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k]
-                landed_spun, ball_offset = float(st.landed_spun[k]), st.ball_offset[k]
-                let_go, free_s = st.let_go[k], float(st.free_s[k])
-                clear = bool(st.clear[k])
-                foot_heading, held_swivel, toes_up = float(st.foot_heading[k]), float(st.held_swivel[k]), float(st.toes_up[k])
+                # Views of the carried state: never written in place here, only replaced (stored back below),
+                # the planted foot's values in FOOT_VALUES' order.
+                pin, landed, landed_as, across, landed_spun, toes_up, foot_heading, held_swivel, offset, ball_offset, lifted, left, \
+                    let_go = (st.feet[k, at] for at, _ in FOOT_VALUES.values())
+                landed_spun, toes_up, foot_heading, held_swivel = float(landed_spun), float(toes_up), float(foot_heading), float(held_swivel)
+                released, free_s, clear = float(st.released[k]), float(st.free_s[k]), bool(st.clear[k])
                 lever = feet_pos[:, k, 1] - ankle  # (F, 3) the animated ankle to ball
                 bounds = sorted({0, frames, *np.flatnonzero(changes[:, k]).tolist()}) if changing[k] else [0, frames]
                 i = 0
@@ -1004,10 +1003,9 @@ class Locomotion(Controller):
                         toes_up, foot_heading, held_swivel = float(hold.held.toes_up[0]), float(hold.held.foot_heading[0]), float(hold.held.held_swivel[0])
                         offset, ball_offset, lifted, left, let_go = hold.offset[0], hold.ball_offset[0], hold.rise[0], hold.foot_turn[0], hold.let_go[0]
                     prev = kind
-                st.anchor[k], st.pins[k], st.offset[k], st.released[k], st.rise[k] = prev, pin, offset, released, lifted
-                st.landed[k], st.landed_as[k], st.across[k], st.foot_turn[k] = landed, landed_as, across, left
-                st.landed_spun[k], st.ball_offset[k], st.let_go[k], st.free_s[k] = landed_spun, ball_offset, let_go, free_s
-                st.foot_heading[k], st.held_swivel[k], st.clear[k], st.toes_up[k] = foot_heading, held_swivel, clear, toes_up
+                st.anchor[k], st.released[k], st.free_s[k], st.clear[k] = prev, released, free_s, clear
+                st.feet[k] = np.concatenate((pin, landed, landed_as, across, (landed_spun, toes_up, foot_heading, held_swivel), offset,
+                                             ball_offset, lifted, left, let_go))  # in FOOT_VALUES' order
         if holds:
             _hold_all(b, runs, holds, g_rot_all, g_pos_all, spun, contact, touching_all, posed_all, (goals, turns, rises, weights), dt)
         ends = [a1 - 1 for _, _, a1 in runs]  # each walk's last frame, carried to its next block
