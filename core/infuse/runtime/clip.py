@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import weakref
+from collections import Counter
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -458,11 +459,11 @@ class _Together:
         """The groups of ``jobs`` that play together, and the jobs (indices) that play alone."""
         groups: dict[tuple, list[int]] = {}
         alone = []
-        characters = [job.rig.name for job in jobs]
+        clips = Counter(job.rig.name for job in jobs)  # per character
         for k, job in enumerate(jobs):
             b: ClipBinding = job.binding
             plain = (job.mode is Mode.OVERRIDE and b.mover == 0 and not b.moved_joints.size and not b.morph_columns.size
-                     and b.motion.joint_translations is None and characters.count(characters[k]) == 1)
+                     and b.motion.joint_translations is None and clips[job.rig.name] == 1)
             if plain:
                 groups.setdefault((content_key(b.motion), job.controller.loop, b.columns.tobytes()), []).append(k)
             else:
@@ -473,20 +474,21 @@ class _Together:
     def group(jobs: Jobs, rows: list[int]) -> "_Together":
         chosen = [jobs[k] for k in rows]
         b = chosen[0].binding
-        index = jobs.table.character_index
-        moving = np.array([job.binding.drives_root and job.controller.root_motion for job in chosen], dtype=bool)
-        held = np.array([job.binding.drives_root and not job.controller.root_motion for job in chosen], dtype=bool)
-        placed = np.array([job.binding.drives_root and job.controller.turn is not None for job in chosen], dtype=bool)
+        index, first = jobs.table.character_index, jobs.table.first_joint
+        clips = [job.controller for job in chosen]
+        drives = [job.binding.drives_root for job in chosen]
+        moving = [k for k, (clip, root) in enumerate(zip(clips, drives)) if root and clip.root_motion]
+        held = [k for k, (clip, root) in enumerate(zip(clips, drives)) if root and not clip.root_motion]
         return _Together(
-            b.motion, chosen[0].controller.loop, np.array(rows), np.array([[job.controller.offset_s] for job in chosen]),
-            np.array([[job.controller.speed] for job in chosen]),
-            np.concatenate([jobs.table.first_joint[job.rig.name] + job.binding.joints for job in chosen]), b.columns,
-            np.flatnonzero(moving), np.array([index[job.rig.name] for job, m in zip(chosen, moving) if m], dtype=np.int64),
-            np.array([job.binding.step for job, m in zip(chosen, moving) if m]).reshape(-1, 3),
-            np.flatnonzero(held), np.array([index[job.rig.name] for job, h in zip(chosen, held) if h], dtype=np.int64),
+            b.motion, clips[0].loop, np.array(rows), np.array([[clip.offset_s] for clip in clips]), np.array([[clip.speed] for clip in clips]),
+            np.concatenate([first[job.rig.name] + job.binding.joints for job in chosen]), b.columns,
+            np.array(moving, dtype=np.int64), np.array([index[chosen[k].rig.name] for k in moving], dtype=np.int64),
+            np.array([chosen[k].binding.step for k in moving]).reshape(-1, 3),
+            np.array(held, dtype=np.int64), np.array([index[chosen[k].rig.name] for k in held], dtype=np.int64),
             b.columns.size == b.motion.skeleton.num_joints and bool((b.columns == np.arange(b.columns.size)).all()),
-            placed, np.array([quat.identity() if job.controller.turn is None else job.controller.turn for job in chosen]),
-            np.array([np.zeros(3) if job.controller.shift is None else job.controller.shift for job in chosen]))
+            np.array([root and clip.turn is not None for clip, root in zip(clips, drives)], dtype=bool),
+            np.array([quat.identity() if clip.turn is None else clip.turn for clip in clips]),
+            np.array([np.zeros(3) if clip.shift is None else clip.shift for clip in clips]))
 
     def evaluate(self, jobs: Jobs, block: Block) -> None:
         """Sample the clip at every job's times at once (as :meth:`Clip.evaluate_one` does, job by job),
