@@ -66,14 +66,15 @@ class CompatibleBlend:
         """(Q, N) blend weights for (Q, 3) ``query`` points from the tessellation's own ``weights`` (Q, N):
         where those mix in an example travelling against the request and the others reach its velocity
         (as nearly as the tessellation's own weights do), the others' weights."""
-        q = np.atleast_2d(np.asarray(query, dtype=np.float64))
-        out = np.array(weights, dtype=np.float64)
+        q = query if isinstance(query, np.ndarray) and query.ndim == 2 and query.dtype == np.float64 else \
+            np.atleast_2d(np.asarray(query, dtype=np.float64))
         v = q[:, :2]
         speed = np.sqrt(np.add.reduce(v * v, axis=1))  # np.linalg.norm's arithmetic, without its checks
         # A first look (cosines to the examples' headings, within 1e-9 of :meth:`against`'s): requests
         # that mix in no example near against them keep their weights as they are.
-        near = (v @ self._headings < (AGAINST_COS + 1e-9) * speed[:, None]) & (out > 0.0)
-        moving = np.nonzero((speed > STILL_M_S) & near.any(axis=1))[0]
+        near = (v @ self._headings < (AGAINST_COS + 1e-9) * speed[:, None]) & (weights > 0.0)
+        moving = np.flatnonzero((speed > STILL_M_S) & near.any(axis=1))
+        out = np.array(weights, dtype=np.float64)
         if not moving.size:
             return out
         against = self.against(np.arctan2(q[moving, 1], q[moving, 0]))

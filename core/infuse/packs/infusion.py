@@ -35,6 +35,8 @@ from ..runtime.limb_ik import hangs_below, is_carried
 from ..skeleton import Skeleton
 from .balls import balls_above, depths, planted_heights
 from .analysis import body_frame_point, coordinates_of, headings, locomotion_parameters, resolution_of, transition_parameters
+from .compatible import CompatibleBlend
+from .coverage import SpeedLimit
 from .cycles import STRAIGHTEN_DEG_S, alignment, straighten
 from .order import content_order
 from .pack import Pack, file_digest, load_pack
@@ -114,14 +116,13 @@ class BlendSpace:
         ``direction`` radians (+ left of the facing) reach it; NaN where they do not."""
         return self._compatible("locomotion").slowest(direction)
 
-    def _compatible(self, group: str):
-        from .compatible import CompatibleBlend
-
+    def _compatible(self, group: str) -> CompatibleBlend:
         cached = self.__dict__.setdefault("_compatible_blends", {})
         t = self.tessellations[group]
-        if group not in cached or cached[group].t is not t:
-            cached[group] = CompatibleBlend(t, resolution_of(self.kind))
-        return cached[group]
+        blend = cached.get(group)
+        if blend is None or blend.t is not t:
+            blend = cached[group] = CompatibleBlend(t, resolution_of(self.kind))
+        return blend
 
     def contains(self, group: str, query) -> np.ndarray:
         """(Q,) flags of (Q, D) parameter points inside ``group``'s tessellation."""
@@ -130,8 +131,6 @@ class BlendSpace:
     def speed_limit(self):
         """The locomotion group's :class:`~infuse.packs.coverage.SpeedLimit` (top speed by travel
         direction), made once."""
-        from .coverage import SpeedLimit
-
         cached = self.__dict__.get("_speed_limit")
         if cached is None or cached[0] is not self.tessellations["locomotion"]:
             cached = self.__dict__["_speed_limit"] = (self.tessellations["locomotion"], SpeedLimit(self.tessellations["locomotion"]))

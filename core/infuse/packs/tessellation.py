@@ -83,7 +83,8 @@ class Tessellation:
 
     def reduced(self, query) -> np.ndarray:
         """(Q, d) coordinates of (Q, D) ``query`` points in the normalized, reduced space."""
-        q = np.atleast_2d(np.asarray(query, dtype=np.float64))
+        q = query if isinstance(query, np.ndarray) and query.ndim == 2 and query.dtype == np.float64 else \
+            np.atleast_2d(np.asarray(query, dtype=np.float64))
         return ((q - self.origin) / self.scale) @ self.basis
 
     def weights(self, query) -> tuple[np.ndarray, np.ndarray]:
@@ -96,11 +97,11 @@ class Tessellation:
             return out, np.ones(q, dtype=bool)
         bary, inside_s = self._barycentric(y)
         rows = np.arange(q)
-        inside = inside_s.any(axis=0)
-        best = np.argmax(inside_s, axis=0)  # the first simplex holding the query
+        inside = np.logical_or.reduce(inside_s, axis=0)
+        best = inside_s.argmax(axis=0)  # the first simplex holding the query
         chosen = bary[best, :, rows]  # (Q, d+1)
-        outside = np.nonzero(~inside)[0]
-        if outside.size:  # the clamped barycentric point nearest to the query, over every simplex
+        if not inside.all():  # the clamped barycentric point nearest to the query, over every simplex
+            outside = np.flatnonzero(~inside)
             clamped = np.clip(bary[:, :, outside], 0.0, None)
             clamped /= np.maximum(clamped.sum(axis=1, keepdims=True), 1e-12)
             gap = np.swapaxes(self._frames()[0], 1, 2) @ clamped - y[outside].T  # (S, d, O) from the query
@@ -109,7 +110,7 @@ class Tessellation:
             chosen[outside] = clamped[nearest, :, np.arange(outside.size)]
         out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
         share = self._shares()
-        return (out if share is None else out @ share), np.asarray(inside)
+        return (out if share is None else out @ share), inside
 
     def contains(self, query) -> np.ndarray:
         """(Q,) flags of (Q, D) query points inside the hull (as :meth:`weights` reports them), without the weights."""
@@ -125,7 +126,7 @@ class Tessellation:
         _, base, inv = self._frames()
         lam = inv @ (y.T[None] - base[:, :, None])  # (S, d, Q)
         bary = np.concatenate((1.0 - lam.sum(axis=1, keepdims=True), lam), axis=1)
-        return bary, np.all(bary >= -1e-9, axis=1)
+        return bary, np.logical_and.reduce(bary >= -1e-9, axis=1)
 
     def _frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Each simplex's corners (S, d+1, d), first corner (S, d) and inverted edge matrix (S, d, d) in

@@ -164,6 +164,12 @@ class LocomotionBinding:
         return {}
 
     @cached_property
+    def weights_known(self) -> dict:
+        """The blend weights of the steering's requests (:func:`~.controller._bound_weights`), by the
+        requests as bytes, filled as requests come up."""
+        return {}
+
+    @cached_property
     def clip_sets(self) -> dict:
         """What the blend takes of the binding for each set of clips it blends
         (:class:`~.controller.ClipSet`, by the clips' indices as bytes), filled as sets come up."""

@@ -131,6 +131,8 @@ HANDOVER = 0.5
 TOUCH = 0.03
 #: A clip weighing no more than this on a frame is left out of its blend there.
 _LEAST_WEIGHT = 1e-6
+#: How many requests' blend weights a binding keeps (:func:`_bound_weights`) before it starts again.
+_WEIGHTS_KEPT = 512
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 _ORIGIN = np.zeros(3)
@@ -1349,9 +1351,19 @@ class Ask(NamedTuple):
     walk: tuple = ()
 
 
-def _bound_weights(b: LocomotionBinding, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_weights` in the pack's locomotion blend space as bound in ``b``."""
-    return _weights(b.space, b.idle, b.velocities, b.limit, speed, direction, turn)
+def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_weights` in the pack's locomotion blend space as bound in ``b``, for the steering's requests
+    ``req`` (R, 5) (speed, turn, direction first), read only: kept on the binding by request, since walks
+    cruising or standing ask the same block after block (a few hundred kept at most)."""
+    key = req[:, :3].tobytes()
+    known = b.weights_known.get(key)
+    if known is None:
+        if len(b.weights_known) >= _WEIGHTS_KEPT:
+            b.weights_known.clear()
+        known = b.weights_known[key] = _weights(b.space, b.idle, b.velocities, b.limit, req[:, 0], req[:, 2], req[:, 1])
+        for x in known:
+            x.flags.writeable = False
+    return known
 
 
 def _walked(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
@@ -1425,7 +1437,7 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     the phase at a stop without an idle (a foot laid down does not rise there), and whether the walk
     fades into the idle (its every row)."""
     speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
-    w, slow, inside = _bound_weights(b, speed, direction, turn)
+    w, slow, inside = _bound_weights(b, req)
     has_idle = b.has_idle
     ends = list(itertools.accumulate(counts))
     spans = list(zip([0, *ends[:-1]], ends))
@@ -2235,8 +2247,8 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
     query = np.empty((len(speed), 3))
     query[:, 0], query[:, 1], query[:, 2] = speed * np.cos(direction), speed * np.sin(direction), turn
     w, inside = space.weights("locomotion", query)
-    out = np.nonzero(~inside)[0]
-    if out.size:  # the turn rate nearest the request's that the tessellation holds at that velocity
+    if not inside.all():  # the turn rate nearest the request's that the tessellation holds at that velocity
+        out = np.flatnonzero(~inside)
         turns, ok = limit.hull.nearest_turns(query[out, :2], query[out, 2])
         cut = np.nonzero(ok)[0]  # the others keep the weights of the full request's nearest point
         if cut.size:
