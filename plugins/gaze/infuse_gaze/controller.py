@@ -313,15 +313,20 @@ class _Chains:
             self.columns = np.concatenate([table.first_joint[job.rig.name] + b.joints for job, b in zip(jobs, bindings)])
             self.present_cells = np.flatnonzero(self.present)
             self.present_to_local = np.swapaxes(to_local.reshape(-1, 4, 4)[self.present_cells], -1, -2)
-        self._settings: dict[tuple, dict] = {}
+        self._settings: dict[tuple, dict] = {}  # by frames, dt and what the gazes set (:func:`_settings_of`)
+        self._own: dict[tuple, dict] = {}  # the chains' own gazes' of those, by frames and dt
+        self._set: dict[int, int] = {}  # by each gaze's activity id, the number of what it sets (:meth:`_setting`)
+        self._sets: dict[tuple, int] = {}  # :func:`_settings_of` gazes, numbered
         self._slots: dict[tuple, tuple[int, ...]] = {}
         self._plans: dict[tuple, tuple[list, list, list, Faces]] = {}
         self._lead_weights: dict[tuple, np.ndarray] = {}
-        if previous is not None:  # gazes that took over now lead: their settings and targets' plan, worked
-            # out meanwhile, hold (the slots a face is looked at by depend on the character alone)
-            ids = tuple(job.activity.id for job in jobs)
-            self._settings.update({(frames, dt, None): settings for (frames, dt, owners), settings in previous._settings.items()
-                                   if owners == ids})
+        if previous is not None and previous.present is self.present:
+            # The same characters: the settings worked out for gazes that set the same (a gaze taking over
+            # from one set alike, or that took over and leads now) hold, and the solver's products with them.
+            self._settings.update(previous._settings)
+            self._set.update(previous._set)
+            self._sets.update(previous._sets)
+            ids = tuple(job.activity.id for job in jobs)  # and the targets' plan of gazes that took over and lead now
             self._plans.update({(version, None): plan for (version, owners), plan in previous._plans.items() if owners == ids})
 
     def placements(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -342,8 +347,10 @@ class _Chains:
         seconds (read-only views: the same for every frame), and the solver's ``kept`` dict for them. The
         gazes are the chains' own, or ``owners`` (one job each, in order: gazes taking over, in charge of the
         whole block)."""
+        if owners is None and (frames, dt) in self._own:
+            return dict(self._own[(frames, dt)])
         jobs = self.jobs if owners is None else owners
-        key = (frames, dt, None if owners is None else tuple(job.activity.id for job in owners))
+        key = (frames, dt, tuple(map(self._setting, jobs)))
         kept = self._settings.get(key)
         if kept is None:
             if len(self._settings) > 8:  # gazes taking over one after the other: only the latest are needed
@@ -361,7 +368,22 @@ class _Chains:
             kept = self._settings[key] = {name: np.broadcast_to(value[:, None], (count, frames) + value.shape[1:])
                                           for name, value in per_character.items()}
             kept["kept"] = {}
+        if owners is None:
+            self._own[(frames, dt)] = kept
         return dict(kept)
+
+    def _setting(self, job) -> int:
+        """The number of what ``job``'s gaze sets (:func:`_settings_of`): the same for gazes that set the same."""
+        number = self._set.get(job.activity.id)
+        if number is None:
+            if len(self._set) > 256:  # gazes come and go: the numbers of those gone are not needed
+                self._set.clear()
+            if len(self._sets) > 256:  # numbered afresh, what was kept under the numbers before goes with them
+                self._sets.clear()
+                self._set.clear()
+                self._settings.clear()
+            number = self._set[job.activity.id] = self._sets.setdefault(_settings_of(job), len(self._sets))
+        return number
 
     def stacked_states(self, states: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:func:`_stacked_states`, the arrays of the last block again while every state still holds the
@@ -405,6 +427,13 @@ class _Chains:
         if slots is None:
             slots = self._slots[key] = _slots_of(target, job, block)
         return slots
+
+
+def _settings_of(job) -> tuple:
+    """What :meth:`_Chains.settings` reads of a gaze job: the groups its binding moves and their shares, and
+    its gaze's group settings and offset (two gazes setting the same share what is worked out of them)."""
+    gaze, b = job.controller, job.binding
+    return b.active.tobytes(), b.fractions.tobytes(), gaze.settings, gaze.offset
 
 
 #: What :class:`_Chains` works out of the characters alone (their rigs and places in the table), whatever
