@@ -1053,11 +1053,21 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     it, short of its place (a foot held behind as the pelvis came over it, 30 cm)."""
     free = anchors == footing.FREE
     states = [st for st, _, _ in runs]
-    if not made.any() or not free.any():  # no swinging foot of a made step: none held
-        for st in states:
-            st.touched = np.zeros(2, np.int64)
-        return np.zeros(anchors.shape, np.int64)
     starts = [a0 for _, a0, _ in runs]
+    # The walks with a swinging foot in frames of a made step: where none, none held.
+    swinging = np.logical_or.reduceat(made, starts) & np.logical_or.reduceat(free.any(axis=1), starts) if made.any() else \
+        np.zeros(len(runs), dtype=bool)
+    if swinging.sum() <= 1 and len(runs) > 1:  # one walk or none: that walk's frames alone
+        out: np.ndarray = np.zeros(anchors.shape, np.int64)
+        for r, (st, a0, a1) in enumerate(runs):
+            if swinging[r]:
+                out[a0:a1] = _touch_downs(b, [(st, 0, a1 - a0)], anchors[a0:a1], feet[a0:a1], made[a0:a1], dt)
+            else:
+                st.touched = np.zeros(2, np.int64)
+        return out
+    if not swinging.any():
+        states[0].touched = np.zeros(2, np.int64)
+        return np.zeros(anchors.shape, np.int64)
     walk_start = np.zeros(len(anchors), dtype=bool)  # (F,) each walk's first frame
     walk_start[starts] = True
     walk = np.cumsum(walk_start) - 1  # (F,) each frame's walk
@@ -1089,7 +1099,7 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     held = free & (first >= began) & (first >= 0) & made[:, None]
     aloft = feet[:, :, 1, 1] - b.sole_floor >= b.touch_m  # (F, 2) the ball not within touch of its floor
     kind = np.where(by_heel[f:] | aloft, footing.ANKLE, footing.BALL)
-    out: np.ndarray = np.where(held, kind, 0)
+    out = np.where(held, kind, 0)
     for st, (_, _, a1) in zip(states, runs):
         st.touched = out[a1 - 1].copy()
     return out
