@@ -147,23 +147,19 @@ def test_the_clocks_of_walks_together_tick_as_each_alone(frames):
 
 def test_walks_starting_apart_and_settling_apart_walk_together_as_each_alone(xbot, monkeypatch):
     """Walks of one binding stacked in blocks of 7 frames, started at other times, one settling into the
-    idle while the others still walk (placed apart from them): each walks as when its work is done alone."""
+    idle while the others still walk (placed with them, the idle faded in on its rows only): each walks as
+    when its work is done alone."""
     starts = {"a": (0.0, (0.0, 0.6)), "b": (0.1, (1.0, 1.5)), "c": (0.37, (-0.8, 1.2))}  # start (s), target (x, z) m
-    seen = {"placed apart": 0}
-    walked, placed = controller._walked, controller._placed
+    seen = {"fading with others": 0}
+    driven = controller._driven
 
-    def counting_walked(b, dt, times, req, states, walks, begun, counts):
-        before = seen["placed"] = 0
-        out = walked(b, dt, times, req, states, walks, begun, counts)
-        seen["placed apart"] += seen["placed"] - before > 1
+    def counting_driven(*args):
+        out = driven(*args)
+        fading = out[-1]
+        seen["fading with others"] += bool(fading.any() and not fading.all())
         return out
 
-    def counting_placed(*args):
-        seen["placed"] += 1
-        return placed(*args)
-
-    monkeypatch.setattr(controller, "_walked", counting_walked)
-    monkeypatch.setattr(controller, "_placed", counting_placed)
+    monkeypatch.setattr(controller, "_driven", counting_driven)
 
     def scene_of() -> Scene:
         scene = Scene(fps=FPS, quiet=True)
@@ -175,7 +171,7 @@ def test_walks_starting_apart_and_settling_apart_walk_together_as_each_alone(xbo
         return scene
 
     together = scene_of()
-    assert seen["placed apart"]
+    assert seen["fading with others"]
     ask = controller.Ask
     monkeypatch.setattr(controller, "Ask", lambda work, key, shared, rows, walk=(): ask(work, (object(),), shared, rows, walk))
     alone = scene_of()

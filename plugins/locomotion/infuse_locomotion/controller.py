@@ -1378,53 +1378,29 @@ def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> tuple[np.ndarray, n
 
 def _walked(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
     """The steered blend of walks of binding ``b`` at once, their frames stacked (R,) (see :func:`_driven` for the
-    arguments): driven (:func:`_driven`), placed (:func:`_placed`; the walks fading into the idle and the others
-    apart, in the order the first of each comes) and, for the walks whose strides are shorter on some frame,
-    its steps shortened (:func:`_shortened`; in that order too). Returns each frame's rotations (R, J, 4), root
-    (R, 3), joint translations (R, J, 3) or None, contact phases (R, 2, 2), heading's direction (R, 3), turn spun
-    at the root (R,) and the frames stepping as no clip does (R,) bool (see :meth:`Locomotion._steered`)."""
+    arguments): driven (:func:`_driven`), placed (:func:`_placed`; the idle faded in on the rows of the walks fading
+    into it, none on the others, as each alone) and, on the rows of the walks whose strides are shorter on some
+    frame, its steps shortened (:func:`_shortened`). Returns each frame's rotations (R, J, 4), root (R, 3), joint
+    translations (R, J, 3) or None, contact phases (R, 2, 2), heading's direction (R, 3), turn spun at the root
+    (R,) and the frames stepping as no clip does (R,) bool (see :meth:`Locomotion._steered`)."""
     wm, order, phase, half_frame, standing, settle, rest, stride, heading, px, pz, mover, spun, made, held, fading = \
         _driven(b, dt, times, req, states, walks, starts, counts)
-    ends = list(itertools.accumulate(counts))
-    fades = fading[np.array(ends) - 1].tolist()
-    sets = [[k for k, fade in enumerate(fades) if fade == fades[0]], [k for k, fade in enumerate(fades) if fade != fades[0]]]
-    sets = [walk_set for walk_set in sets if walk_set]
-
-    def rows(walk_set: list[int]) -> np.ndarray:
-        """The stacked rows of the walks ``walk_set``, in that order."""
-        return np.concatenate([np.arange(ends[k] - counts[k], ends[k]) for k in walk_set])
-
-    def placed(walk_set: list[int], at):
-        """:func:`_placed` of the walks ``walk_set`` on their rows ``at`` (None: every row)."""
-        def of(x):
-            return x if x is None or at is None else x[at]
-        fade = fades[walk_set[0]]
-        return _placed(b, dt, of(wm), of(order), of(phase), of(standing), of(times) if fade and b.has_idle else None,
-                       of(half_frame), of(settle), of(rest), of(stride), of(heading), of(px), of(pz), of(mover), of(held),
-                       [states[k] for k in walk_set], [counts[k] for k in walk_set])
-
-    if len(sets) == 1:
-        rot, root, jt, contact, turn_q, forward, down, laid = placed(sets[0], None)
-    else:
-        ats = [rows(walk_set) for walk_set in sets]
-        parts = [placed(walk_set, at) for walk_set, at in zip(sets, ats)]
-        rot, root, jt, contact, turn_q, forward, down, laid = (None if x is None else np.empty((len(wm),) + x.shape[1:])
-                                                               for x in parts[0])
-        for at, part in zip(ats, parts):
-            for whole, x in zip((rot, root, jt, contact, turn_q, forward, down, laid), part):
-                if whole is not None:
-                    whole[at] = x
+    fades = bool(fading.any()) and b.has_idle
+    if fades and not fading.all():  # a walk not fading into the idle shows none of it, as alone
+        standing = np.where(fading, standing, 0.0)
+    rot, root, jt, contact, turn_q, forward, down, laid = _placed(
+        b, dt, wm, order, phase, standing, times if fades else None, half_frame, settle, rest, stride, heading, px, pz,
+        mover, held, states, counts)
     if len(b.legs) == 2:
         shorter = np.abs(stride - 1.0) > 1e-6
         if counts.count(counts[0]) == len(counts):
-            short = shorter.reshape(len(counts), -1).any(axis=1).tolist()
+            short = shorter.reshape(len(counts), -1).any(axis=1)
         else:
-            short = [bool(shorter[e - c:e].any()) for c, e in zip(counts, ends)]
-        shortened = [k for walk_set in sets for k in walk_set if short[k]]
-        if len(shortened) == len(counts) and len(sets) == 1:
+            short = np.array([shorter[e - c:e].any() for c, e in zip(counts, itertools.accumulate(counts))])
+        if short.all():
             rot, jt = _shortened(b, wm, stride, rot, root, jt, turn_q, forward, settle, down, laid)
-        elif shortened:
-            at = rows(shortened)
+        elif short.any():
+            at = np.flatnonzero(np.repeat(short, counts))
             short_rot, short_jt = _shortened(b, wm[at], stride[at], rot[at], root[at], None if jt is None else jt[at],
                                              turn_q[at], forward[at], settle[at], down[at], laid[at])
             rot[at] = short_rot
