@@ -1068,9 +1068,16 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     if not swinging.any():
         states[0].touched = np.zeros(2, np.int64)
         return np.zeros(anchors.shape, np.int64)
-    walk_start = np.zeros(len(anchors), dtype=bool)  # (F,) each walk's first frame
-    walk_start[starts] = True
-    walk = np.cumsum(walk_start) - 1  # (F,) each frame's walk
+    f = len(anchors)
+    walk_start: np.ndarray | None = None  # (F,) each walk's first frame (None: one walk)
+    idx = np.arange(f)[:, None]  # (F, 1) frames since the walk's first
+    free_s = states[0].free_s
+    if len(runs) > 1:
+        walk_start = np.zeros(f, dtype=bool)
+        walk_start[starts] = True
+        walk = np.cumsum(walk_start) - 1  # (F,) each frame's walk
+        idx = idx - np.array(starts)[walk][:, None]
+        free_s = np.array([st.free_s for st in states])[walk]  # (F, 2)
     # The feet a frame before each (from the walk's last block at its first frame), and now.
     before = np.concatenate((feet[:1], feet[:-1]))
     before[starts] = np.array([st.last for st in states])
@@ -1078,13 +1085,10 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     heel = both[:, :, 0, 1] + _heel_heights(b, both[:, :, 1] - both[:, :, 0])  # (2F, 2) heights
     by_heel = (heel <= both[:, :, 1, 1]) | ~b.has_ball  # (2F, 2)
     lowest = np.where(by_heel, heel, both[:, :, 1, 1]) - b.sole_floor  # the lower sole point's
-    f = len(anchors)
-    idx = (np.arange(f) - np.array(starts)[walk])[:, None]  # (F, 1) frames since the walk's first
     # Frames off the ground (F, 2): from the swing's first frame, or carried from the last block.
     was_free = np.concatenate((free[:1], free[:-1]))
     was_free[starts] = np.array([st.anchor for st in states]) == footing.FREE
     swung = _latest(free & ~was_free, walk_start)
-    free_s = np.array([st.free_s for st in states])[walk]  # (F, 2)
     swung = np.where(swung >= 0, idx - swung, idx + np.rint(np.minimum(free_s, 1e3) / dt)) + 1
     coming = (free & (lowest[f:] < b.touch_m) & (lowest[f:] < lowest[:f]) & made[:, None]
               & (swung * dt >= HOLD_S + STEP_RELEASE_S - 1e-9))
@@ -1105,12 +1109,15 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     return out
 
 
-def _latest(marks: np.ndarray, first: np.ndarray) -> np.ndarray:
+def _latest(marks: np.ndarray, first: np.ndarray | None) -> np.ndarray:
     """(F, K) for each frame the latest frame at or before it within its walk's frames where ``marks``
     (F, K) holds, counted from the walk's first frame (-1: none); ``first`` (F,) the walks' first frames
-    (each walk's frames follow one another)."""
+    (each walk's frames follow one another), None: the frames are one walk's."""
     f = len(marks)
     at = np.arange(f)[:, None]
+    if first is None:
+        whole: np.ndarray = np.maximum.accumulate(np.where(marks, at, -1), axis=0)
+        return whole
     start = np.maximum.accumulate(np.where(first, np.arange(f), 0))[:, None]  # each frame's walk's first frame
     # Marks at 2 x their frame, a walk's first frame unmarked at one less: nothing of an earlier walk's carries on.
     latest = np.maximum.accumulate(np.where(marks, 2 * at, np.where(first[:, None], 2 * at - 1, -1)), axis=0)
