@@ -2127,8 +2127,8 @@ def _heel_heights(b: LocomotionBinding, reach: np.ndarray) -> np.ndarray:
 
 
 def _soles(lever: np.ndarray, reach: np.ndarray, heights: bool = False) -> np.ndarray:
-    """(..., 3) offsets ``lever`` (..., 3) in the frames of feet whose ankle-to-ball vectors are ``reach``
-    (..., 3), in the world (metres); with ``heights`` only their vertical parts (...). The frames are
+    """(..., 3) offsets ``lever`` (..., 3, broadcast to ``reach``) in the frames of feet whose ankle-to-ball
+    vectors are ``reach`` (..., 3), in the world (metres); with ``heights`` only their vertical parts (...). The frames are
     :func:`infuse.contacts.foot_frames`' (forward along ``reach``, side horizontal, up), written out
     axis by axis on the foot's pitch: the frames themselves cost more on a block's few feet."""
     forward = reach / np.maximum(np.sqrt((reach * reach).sum(axis=-1, keepdims=True)), 1e-12)
@@ -2138,7 +2138,7 @@ def _soles(lever: np.ndarray, reach: np.ndarray, heights: bool = False) -> np.nd
         up: np.ndarray = lever[..., 0] * fy + lever[..., 2] * level
         return up
     along, side = lever[..., 0] - lever[..., 2] * fy / level, lever[..., 1] / level  # along the ground ahead, across
-    out = np.empty(np.broadcast_shapes(lever.shape, reach.shape))
+    out = np.empty(reach.shape)
     out[..., 0], out[..., 1], out[..., 2] = fx * along - fz * side, lever[..., 0] * fy + lever[..., 2] * level, fz * along + fx * side
     return out
 
