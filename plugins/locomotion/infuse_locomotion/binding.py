@@ -170,6 +170,18 @@ class LocomotionBinding:
         return {}
 
     @cached_property
+    def sums_known(self) -> dict:
+        """How the blend sums its clips for the weights and orders it is given (:func:`~.controller._summed`),
+        by them as bytes, filled as they come up."""
+        return {}
+
+    @cached_property
+    def means_known(self) -> dict:
+        """The cycle means of the blends whose steps are shortened (:func:`~.controller._cycle_means`), by the
+        blend weights as bytes, filled as they come up."""
+        return {}
+
+    @cached_property
     def clip_sets(self) -> dict:
         """What the blend takes of the binding for each set of clips it blends
         (:class:`~.controller.ClipSet`, by the clips' indices as bytes), filled as sets come up."""

@@ -642,17 +642,8 @@ class Locomotion(Controller):
         in the order its walk sums them (:func:`_clips_of`), then -1: frames of several walks blending
         other clips are blended at once, each summed as its walk alone would sum it (a clip another
         walk brings in weighs nothing on it and adds zeros)."""
-        # A clip is left out of each frame it weighs no more than that on, as when that frame is
-        # blended alone: other frames of the block do not bring it in (by up to 1e-7 m).
-        weighs = w > _LEAST_WEIGHT
-        used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
-        w = np.where(weighs, w, 0.0)
-        of = _clip_set(b, used)
+        used, of, w, stepping_share, events, count, frames, sample_of, weight_of = _summed(b, w, orders)
         stepping, feet = of.stepping, of.feet
-        if stepping.size:
-            ws = w[:, stepping]
-            stepping_share = ws.sum(axis=1)  # (F,) the clips with foot events
-            events = ((ws / np.maximum(stepping_share[:, None], 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
         phases = np.empty((used.size, 3, len(phase)))
@@ -665,21 +656,13 @@ class Locomotion(Controller):
             clock = np.concatenate((clock, np.broadcast_to(times, (fade.size, 3, len(times)))))
         # Component-major samples: rotations (4, U, F, J), roots (3, U, F), joint translations (3, U, F, J).
         rot, root, jt = b.table.sample(of.with_idle if fade.size else used, clock, b.limbs)
-        # Each frame's clips in its walk's order (U', one gather), their weights (F, U'): none past its walk's clips.
-        listed = orders >= 0
-        count = int(listed.sum(axis=1).max())
-        listed, clips = listed[:, :count], np.maximum(orders[:, :count], 0)
-        frames = np.arange(len(phase))[:, None]
-        sample_of = np.searchsorted(used, clips)
-        weight_of = np.where(listed, w[frames, clips], 0.0)
         rot_of, root_of = rot[:, sample_of, frames], root[:, sample_of, frames]  # (4, F, U', J), (3, F, U')
         jt_of = None if jt is None else jt[:, sample_of, frames]
         acc = _accumulate(None, rot_of[:, :, 0], root_of[:, :, 0], None if jt_of is None else jt_of[:, :, 0], weight_of[:, 0])
         for u in range(1, count):
             acc = _accumulate(acc, rot_of[:, :, u], root_of[:, :, u], None if jt_of is None else jt_of[:, :, u], weight_of[:, u])
-        contact = np.zeros((len(phase), 2, 2))
-        support = np.zeros((len(phase), 2))
         if not of.all_stepping:  # clips without foot events: their own contact flags, in each walk's order
+            contact, support = np.zeros((len(phase), 2, 2)), np.zeros((len(phase), 2))
             flags = np.zeros((used.size, len(phase), 2, 2))
             for u in np.flatnonzero(~feet).tolist():
                 flags[u] = Locomotion._phases(b, used[u], clock[u, 0])
@@ -695,8 +678,11 @@ class Locomotion(Controller):
             early = events.copy()
             early[:, :, 0] -= half_frame[:, None]
             flags, share = stance_of(early, phase, HANDOVER, STANCE_RAMP)
-            contact += flags * stepping_share[:, None, None]
-            support += share * stepping_share[:, None]
+            if of.all_stepping:  # (their sums start here)
+                contact, support = flags * stepping_share[:, None, None], share * stepping_share[:, None]
+            else:
+                contact += flags * stepping_share[:, None, None]
+                support += share * stepping_share[:, None]
         if fade.size:
             share = standing / fade.size
             kept = 1.0 - standing
@@ -710,8 +696,8 @@ class Locomotion(Controller):
                 support += flags.max(axis=2) * share[:, None]
         rot, root, jt = acc
         out = np.empty(rot.shape[1:] + (4,))
-        np.divide(rot, np.sqrt(np.square(rot).sum(axis=0)), out=np.moveaxis(out, -1, 0))  # normalized, frame-major
-        return out, np.ascontiguousarray(root.T), None if jt is None else np.ascontiguousarray(np.moveaxis(jt, 0, -1)), contact, support
+        np.divide(rot, np.sqrt(np.square(rot).sum(axis=0)), out=out.transpose(2, 0, 1))  # normalized, frame-major
+        return out, np.ascontiguousarray(root.T), None if jt is None else np.ascontiguousarray(jt.transpose(1, 2, 0)), contact, support
 
     @staticmethod
     def _phases(b, i, t) -> np.ndarray:
@@ -735,7 +721,8 @@ class Locomotion(Controller):
         ``turn_q`` (F, 4) turns the facing frame to the heading, ``forward`` (F, 3) is the heading's direction."""
         stance_feet = b.stance_feet
         body, frames = b.body_columns, len(rot)
-        mean = quat.normalize((w @ b.body_means).reshape(frames, -1, 4))
+        means, centre, low = _cycle_means(b, w)
+        mean = means.copy()
         mean[:, 0] = quat.multiply(turn_q, mean[:, 0])  # the root's mean in the facing frame, turned to the heading
         calmer = quat.slerp(mean, rot[:, body], stride[:, None])
         # One FK of the legs (hip, knee, ankle, the hip's parent, ball; (2F, 2, 5)) for the pose as it is
@@ -753,12 +740,10 @@ class Locomotion(Controller):
         hips = 0.5 * (pos[:, 0, 0] + pos[:, 1, 0])
         rot[:, body] = calmer
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
-        centre = (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3)
         if b.has_idle:
             centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
         goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, :, 2] - hips[:, None] - centre)
-        low = w @ b.ankle_low
         goal[..., 1] = low + (pos[:, :, 2, 1] - low) * (1.0 - down)
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
@@ -1353,6 +1338,59 @@ def _clip_set(b: LocomotionBinding, used: np.ndarray) -> ClipSet:
     return known
 
 
+class Summed(NamedTuple):
+    """How :meth:`Locomotion._blend` sums the clips for weights ``w`` (F, N) and the orders (F, N) its walks sum
+    them in: the clips ``used`` (U,) (weighing more than :data:`_LEAST_WEIGHT` on some frame: one is left out of
+    each frame it weighs no more than that on, as when that frame is blended alone, other frames of the block
+    not bringing it in), their :class:`ClipSet`, the weights ``w`` (F, N) so left out, the share of the clips
+    with foot events ``stepping_share`` (F,) and their events blended ``events`` (F, 2, 4) (both zeros without
+    any), the most clips a frame sums ``most``, the frames' indices ``frames`` (F, 1), and each frame's clips in
+    its walk's order (U', one gather): their samples' places ``sample_of`` (F, U') among ``used`` and weights
+    ``weight_of`` (F, U'), none past its walk's clips."""
+
+    used: np.ndarray
+    of: ClipSet
+    w: np.ndarray
+    stepping_share: np.ndarray
+    events: np.ndarray
+    most: int
+    frames: np.ndarray
+    sample_of: np.ndarray
+    weight_of: np.ndarray
+
+
+def _summed(b: LocomotionBinding, w: np.ndarray, orders: np.ndarray) -> Summed:
+    """The :class:`Summed` of weights ``w`` (F, N) and ``orders`` (F, N) in binding ``b``, read only: kept on
+    the binding by them (walks cruising or standing blend alike block after block; a few hundred kept at most)."""
+    key = w.tobytes() + orders.tobytes()
+    known = b.sums_known.get(key)
+    if known is not None:
+        return known
+    if len(b.sums_known) >= _WEIGHTS_KEPT:
+        b.sums_known.clear()
+    weighs = w > _LEAST_WEIGHT
+    used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
+    w = np.where(weighs, w, 0.0)
+    of = _clip_set(b, used)
+    if of.stepping.size:
+        ws = w[:, of.stepping]
+        stepping_share = ws.sum(axis=1)  # (F,) the clips with foot events
+        events = ((ws / np.maximum(stepping_share[:, None], 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
+    else:
+        stepping_share, events = np.zeros(len(w)), np.zeros((len(w), 2, 4))
+    listed = orders >= 0
+    count = int(listed.sum(axis=1).max())
+    listed, clips = listed[:, :count], np.maximum(orders[:, :count], 0)
+    frames = np.arange(len(w))[:, None]
+    sample_of = np.searchsorted(used, clips)
+    known = b.sums_known[key] = Summed(used, of, w, stepping_share, events, count, frames, sample_of,
+                                       np.where(listed, w[frames, clips], 0.0))
+    for x in known:
+        if isinstance(x, np.ndarray):
+            x.flags.writeable = False
+    return known
+
+
 class Ask(NamedTuple):
     """Work a walk's :meth:`Locomotion._drive` asks for and waits on: ``work(*shared, *stacked, *walks)``,
     done once for every walk of the block asking for the same ``work`` and ``key`` (:meth:`Locomotion.evaluate`),
@@ -1368,16 +1406,33 @@ class Ask(NamedTuple):
     walk: tuple = ()
 
 
-def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_weights` in the pack's locomotion blend space as bound in ``b``, for the steering's requests
-    ``req`` (R, 5) (speed, turn, direction first), read only: kept on the binding by request, since walks
+class Weighed(NamedTuple):
+    """The blend weights of the steering's requests (R,) in a binding's blend space (:func:`_weights`):
+    ``w`` (R, N), the moving share ``slow`` (R,), the requests ``inside`` (R,) bool the tessellation, and
+    what the drive reads of them: the moving clips' weights ``target`` (R, N) (:func:`_moving`), the turn
+    rate ``turning`` (R,) rad/s the blend shows and the share ``moving`` (R,) of the clips not idle (1 - the
+    idle's weight; ``slow`` without an idle)."""
+
+    w: np.ndarray
+    slow: np.ndarray
+    inside: np.ndarray
+    target: np.ndarray
+    turning: np.ndarray
+    moving: np.ndarray
+
+
+def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> Weighed:
+    """The :class:`Weighed` blend of the steering's requests ``req`` (R, 5) (speed, turn, direction first) in
+    the pack's locomotion blend space as bound in ``b``, read only: kept on the binding by request, since walks
     cruising or standing ask the same block after block (a few hundred kept at most)."""
     key = req[:, :3].tobytes()
     known = b.weights_known.get(key)
     if known is None:
         if len(b.weights_known) >= _WEIGHTS_KEPT:
             b.weights_known.clear()
-        known = b.weights_known[key] = _weights(b.space, b.idle, b.velocities, b.limit, req[:, 0], req[:, 2], req[:, 1])
+        w, slow, inside = _weights(b.space, b.idle, b.velocities, b.limit, req[:, 0], req[:, 2], req[:, 1])
+        known = b.weights_known[key] = Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2],
+                                               1.0 - w[:, b.idle].sum(axis=1) if b.has_idle else slow)
         for x in known:
             x.flags.writeable = False
     return known
@@ -1430,7 +1485,7 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     the phase at a stop without an idle (a foot laid down does not rise there), and whether the walk
     fades into the idle (its every row)."""
     speed, turn, direction, stopping, final = req[:, 0], req[:, 1], req[:, 2], req[:, 3] > 0.5, req[:, 4] > 0.5
-    w, slow, inside = _bound_weights(b, req)
+    w, slow, inside, target, turning, moving = _bound_weights(b, req)
     has_idle = b.has_idle
     ends = list(itertools.accumulate(counts))
     spans = list(zip([0, *ends[:-1]], ends))
@@ -1438,7 +1493,7 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     # The root moves as asked (the request is feasible: the steering keeps to the pack's top speed),
     # the blend shows it; the clips' own turn shows what it can of the heading's.
     vf, vl = speed * np.cos(direction), speed * np.sin(direction)
-    vt = (w @ b.velocities[:, 2]) * (1.0 if has_idle else slow)
+    vt = turning if has_idle else turning * slow
     # Root motion: integrate the blend's own velocities from where the last block ended; the heading
     # turns as asked, the part of the turn the blend does not show (on the spot, or harder than the
     # turning examples) spun at the root.
@@ -1457,12 +1512,11 @@ def _driven(b: LocomotionBinding, dt: float, times, req, states: list, walks: li
     # Below the slowest walk the tessellation mixes in the idle: walk the moving clips instead, with
     # a slower cadence and shorter strides in equal proportion (the walk ratio, step length over
     # cadence, stays about constant with speed), and show the idle only when nearly standing.
-    target = _moving(w, b.idle, b.slowest)
     wm = _eased_each(target, states, dt / BLEND_EASE_S, inside, counts)
     for st, blend in zip(states, wm[last]):
         st.blend = blend
     eased = wm - target  # the turn the eased blend shows more than the asked one's
-    vt = vt + (eased @ b.velocities[:, 2]) * ((1.0 - w[:, b.idle].sum(axis=1)) if has_idle else slow)
+    vt = vt + (eased @ b.velocities[:, 2]) * moving
     period = np.maximum(wm @ b.durations, 1e-3)
     paces: list = [None] * len(states)
     for k, (st, walk, (a, e)) in enumerate(zip(states, walks, spans) if b.stops else ()):
@@ -1505,6 +1559,8 @@ def _before_each(starts, steps: np.ndarray, counts: list) -> np.ndarray:
     ``steps`` (R, ...) taken before each of its frames, the walks having ``counts`` (W,) frames each, in order."""
     f = counts[0]
     starts = np.asarray(starts, dtype=np.float64)
+    if f == 1 and len(counts) == len(steps):  # a frame a walk: its start (plus no steps, as below)
+        return (starts + 0.0).reshape(steps.shape)
     if counts.count(f) < len(counts):  # walks of different lengths: each on its own
         out = np.empty(steps.shape)
         for start, c, e in zip(starts, counts, itertools.accumulate(counts)):
@@ -1653,6 +1709,23 @@ def _laid(flat: np.ndarray, held: np.ndarray | None, dt: float, states: list, co
     for st, at in zip(states, laid[np.array(list(itertools.accumulate(counts))) - 1]):
         st.laid = at
     return laid
+
+
+def _cycle_means(b: LocomotionBinding, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cycle means the blend ``w`` (F, N) of the clips' gives :meth:`Locomotion._shorten`: the body's mean
+    rotations (F, B, 4) (the root's in the clips' facing frame), each ankle's mean offset from the hips (F, 2, 3)
+    and its lowest height (F, 2) m, read only: kept on binding ``b`` by the weights (walks standing, or
+    stepping on the spot, blend alike block after block; a few hundred kept at most)."""
+    key = w.tobytes()
+    known = b.means_known.get(key)
+    if known is None:
+        if len(b.means_known) >= _WEIGHTS_KEPT:
+            b.means_known.clear()
+        known = b.means_known[key] = (quat.normalize((w @ b.body_means).reshape(len(w), -1, 4)),
+                                      (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3), w @ b.ankle_low)
+        for x in known:
+            x.flags.writeable = False
+    return known
 
 
 def _shortened(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid):
@@ -2490,15 +2563,16 @@ def _clocks_together(states: list, slow, stop, spin, period, dt, idle: bool, set
         settled[still] = True
     if stepping:
         # The steps of a stop or a turn on the spot (see :func:`_clock`), the stepping walks' rows at once.
-        on = np.array(stepping)
+        on = slice(None) if len(stepping) == w else np.array(stepping)  # every walk (a view), or those
         walks = [states[k] for k in stepping]
         age = np.array([st.stop_age for st in walks])[:, None] + dt * np.arange(f)
         r = np.maximum(rate[on], np.minimum(STOP_CADENCE, np.array([st.floor for st in walks])[:, None] + CADENCE_RAMP * age))
         step = dt * r / period[on]
-        ph = phase0[on][:, None] + np.cumsum(step, axis=1)  # after each frame's step
+        # After each frame's step, and the landings up to it (a sum over one frame is that frame's).
+        ph = phase0[on][:, None] + (step if f == 1 else np.cumsum(step, axis=1))
         before = ph - step
         landed = (np.floor(2.0 * ph) > np.floor(2.0 * before)) & (slow[on] < STILL_FRACTION)
-        count = np.array([st.landings for st in walks])[:, None] + np.cumsum(landed, axis=1)
+        count = np.array([st.landings for st in walks])[:, None] + (landed if f == 1 else np.cumsum(landed, axis=1))
         ready = (landed & (count >= (2 if idle else STOP_LANDINGS))).any(axis=1).tolist()
         goals = []
         for m, (k, st) in enumerate(zip(stepping, walks)):
