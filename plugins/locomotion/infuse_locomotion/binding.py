@@ -164,21 +164,10 @@ class LocomotionBinding:
         return {}
 
     @cached_property
-    def weights_known(self) -> dict:
-        """The blend weights of the steering's requests (:func:`~.controller._bound_weights`), by the
-        requests as bytes, filled as requests come up."""
-        return {}
-
-    @cached_property
-    def sums_known(self) -> dict:
-        """How the blend sums its clips for the weights and orders it is given (:func:`~.controller._summed`),
-        by them as bytes, filled as they come up."""
-        return {}
-
-    @cached_property
-    def means_known(self) -> dict:
-        """The cycle means of the blends whose steps are shortened (:func:`~.controller._cycle_means`), by the
-        blend weights as bytes, filled as they come up."""
+    def by_weights(self) -> dict:
+        """What the walks work out from blend weights alone (:func:`~.controller._kept`: the requests' weights,
+        how the blend sums its clips, each walk's order of them, the shorter steps' cycle means), by the work's
+        name and its inputs as bytes, filled as they come up."""
         return {}
 
     @cached_property

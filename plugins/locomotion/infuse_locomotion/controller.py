@@ -38,7 +38,7 @@ import itertools
 import math
 import weakref
 from dataclasses import dataclass, replace
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
@@ -131,8 +131,8 @@ HANDOVER = 0.5
 TOUCH = 0.03
 #: A clip weighing no more than this on a frame is left out of its blend there.
 _LEAST_WEIGHT = 1e-6
-#: How many requests' blend weights a binding keeps (:func:`_bound_weights`) before it starts again.
-_WEIGHTS_KEPT = 512
+#: How many pieces of work on blend weights a binding keeps (:func:`_kept`) before it starts again.
+_WEIGHTS_KEPT = 2048
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 _ORIGIN = np.zeros(3)
@@ -1360,34 +1360,40 @@ class Summed(NamedTuple):
 
 
 def _summed(b: LocomotionBinding, w: np.ndarray, orders: np.ndarray) -> Summed:
-    """The :class:`Summed` of weights ``w`` (F, N) and ``orders`` (F, N) in binding ``b``, read only: kept on
-    the binding by them (walks cruising or standing blend alike block after block; a few hundred kept at most)."""
-    key = w.tobytes() + orders.tobytes()
-    known = b.sums_known.get(key)
-    if known is not None:
-        return known
-    if len(b.sums_known) >= _WEIGHTS_KEPT:
-        b.sums_known.clear()
-    weighs = w > _LEAST_WEIGHT
-    used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
-    w = np.where(weighs, w, 0.0)
-    of = _clip_set(b, used)
-    if of.stepping.size:
-        ws = w[:, of.stepping]
-        stepping_share = ws.sum(axis=1)  # (F,) the clips with foot events
-        events = ((ws / np.maximum(stepping_share[:, None], 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
-    else:
-        stepping_share, events = np.zeros(len(w)), np.zeros((len(w), 2, 4))
-    listed = orders >= 0
-    count = int(listed.sum(axis=1).max())
-    listed, clips = listed[:, :count], np.maximum(orders[:, :count], 0)
-    frames = np.arange(len(w))[:, None]
-    sample_of = np.searchsorted(used, clips)
-    known = b.sums_known[key] = Summed(used, of, w, stepping_share, events, count, frames, sample_of,
-                                       np.where(listed, w[frames, clips], 0.0))
-    for x in known:
-        if isinstance(x, np.ndarray):
-            x.flags.writeable = False
+    """The :class:`Summed` of weights ``w`` (F, N) and ``orders`` (F, N) in binding ``b`` (:func:`_kept`)."""
+    def sums() -> Summed:
+        weighs = w > _LEAST_WEIGHT
+        used = np.flatnonzero(weighs.any(axis=0))  # every walk's clips
+        kept = np.where(weighs, w, 0.0)
+        of = _clip_set(b, used)
+        if of.stepping.size:
+            ws = kept[:, of.stepping]
+            stepping_share = ws.sum(axis=1)  # (F,) the clips with foot events
+            events = ((ws / np.maximum(stepping_share[:, None], 1e-9)) @ of.stepping_events).reshape(-1, 2, 4)
+        else:
+            stepping_share, events = np.zeros(len(w)), np.zeros((len(w), 2, 4))
+        listed = orders >= 0
+        most = int(listed.sum(axis=1).max())
+        listed, clips = listed[:, :most], np.maximum(orders[:, :most], 0)
+        frames = np.arange(len(w))[:, None]
+        return Summed(used, of, kept, stepping_share, events, most, frames, np.searchsorted(used, clips),
+                      np.where(listed, kept[frames, clips], 0.0))
+
+    return _kept(b, ("sums", w.tobytes() + orders.tobytes()), sums)
+
+
+def _kept(b: LocomotionBinding, key: tuple, make: Callable[[], Any]) -> Any:
+    """What ``make()`` gives (a tuple of arrays and others, the arrays read only), kept on binding ``b`` by ``key``
+    (the work's name and its inputs as bytes): work that depends on the blend weights alone, which walks cruising
+    or standing ask for block after block (at most :data:`_WEIGHTS_KEPT` kept: then it starts again)."""
+    known = b.by_weights.get(key)
+    if known is None:
+        if len(b.by_weights) >= _WEIGHTS_KEPT:
+            b.by_weights.clear()
+        known = b.by_weights[key] = make()
+        for x in known:
+            if isinstance(x, np.ndarray):
+                x.flags.writeable = False
     return known
 
 
@@ -1423,19 +1429,13 @@ class Weighed(NamedTuple):
 
 def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> Weighed:
     """The :class:`Weighed` blend of the steering's requests ``req`` (R, 5) (speed, turn, direction first) in
-    the pack's locomotion blend space as bound in ``b``, read only: kept on the binding by request, since walks
-    cruising or standing ask the same block after block (a few hundred kept at most)."""
-    key = req[:, :3].tobytes()
-    known = b.weights_known.get(key)
-    if known is None:
-        if len(b.weights_known) >= _WEIGHTS_KEPT:
-            b.weights_known.clear()
+    the pack's locomotion blend space as bound in ``b`` (:func:`_kept`)."""
+    def weighed() -> Weighed:
         w, slow, inside = _weights(b.space, b.idle, b.velocities, b.limit, req[:, 0], req[:, 2], req[:, 1])
-        known = b.weights_known[key] = Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2],
-                                               1.0 - w[:, b.idle].sum(axis=1) if b.has_idle else slow)
-        for x in known:
-            x.flags.writeable = False
-    return known
+        return Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2],
+                       1.0 - w[:, b.idle].sum(axis=1) if b.has_idle else slow)
+
+    return _kept(b, ("weights", req[:, :3].tobytes()), weighed)
 
 
 def _walked(b: LocomotionBinding, dt: float, times, req, states: list, walks: list, starts: list, counts: list):
@@ -1610,16 +1610,17 @@ def _walk_clips(b: LocomotionBinding, w: np.ndarray, wm: np.ndarray, standing: n
     the idle (R,) bool, each walk's on all its rows."""
     f, n = counts[0], wm.shape[1]
     if counts.count(f) == len(counts):
-        if f == 1:  # a frame a walk: each row is its walk's sums
-            used, summed, weighed, most = wm > _LEAST_WEIGHT, wm, w, standing
-        else:
-            per = wm.reshape(-1, f, n)
-            used, summed = per.max(axis=1) > _LEAST_WEIGHT, per.sum(axis=1)
-            weighed, most = w.reshape(-1, f, n).sum(axis=1), standing.reshape(-1, f).max(axis=1)
-        ranked = np.argsort(np.where(used, -summed, np.inf), axis=1, kind="stable")
-        orders = np.where(np.arange(n) < used.sum(axis=1)[:, None], ranked, -1)
-        movers = np.asarray(b.movers)[np.argmax(weighed, axis=1)]
-        fading = most > 1e-6
+        def ordered() -> tuple[np.ndarray, np.ndarray]:
+            if f == 1:  # a frame a walk: each row is its walk's sums
+                used, summed, weighed = wm > _LEAST_WEIGHT, wm, w
+            else:
+                per = wm.reshape(-1, f, n)
+                used, summed, weighed = per.max(axis=1) > _LEAST_WEIGHT, per.sum(axis=1), w.reshape(-1, f, n).sum(axis=1)
+            ranked = np.argsort(np.where(used, -summed, np.inf), axis=1, kind="stable")
+            return np.where(np.arange(n) < used.sum(axis=1)[:, None], ranked, -1), np.asarray(b.movers)[np.argmax(weighed, axis=1)]
+
+        orders, movers = _kept(b, ("orders", f, wm.tobytes() + w.tobytes()), ordered)
+        fading = (standing if f == 1 else standing.reshape(-1, f).max(axis=1)) > 1e-6
     else:
         ends = list(itertools.accumulate(counts))
         orders = np.full((len(counts), n), -1)
@@ -1714,18 +1715,10 @@ def _laid(flat: np.ndarray, held: np.ndarray | None, dt: float, states: list, co
 def _cycle_means(b: LocomotionBinding, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The cycle means the blend ``w`` (F, N) of the clips' gives :meth:`Locomotion._shorten`: the body's mean
     rotations (F, B, 4) (the root's in the clips' facing frame), each ankle's mean offset from the hips (F, 2, 3)
-    and its lowest height (F, 2) m, read only: kept on binding ``b`` by the weights (walks standing, or
-    stepping on the spot, blend alike block after block; a few hundred kept at most)."""
-    key = w.tobytes()
-    known = b.means_known.get(key)
-    if known is None:
-        if len(b.means_known) >= _WEIGHTS_KEPT:
-            b.means_known.clear()
-        known = b.means_known[key] = (quat.normalize((w @ b.body_means).reshape(len(w), -1, 4)),
-                                      (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3), w @ b.ankle_low)
-        for x in known:
-            x.flags.writeable = False
-    return known
+    and its lowest height (F, 2) m (:func:`_kept`)."""
+    return _kept(b, ("means", w.tobytes()), lambda: (quat.normalize((w @ b.body_means).reshape(len(w), -1, 4)),
+                                                     (w @ b.ankle_means.reshape(len(b.ankle_means), 6)).reshape(-1, 2, 3),
+                                                     w @ b.ankle_low))
 
 
 def _shortened(b: LocomotionBinding, w, stride, rot, root, jt, turn_q, forward, settle, down, laid):
