@@ -735,12 +735,15 @@ class Locomotion(Controller):
         pos = g_pos[:frames]
         feet = g_rot[:frames, :, 2:3]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
-            flat = quat.multiply(turn_q[:, None, None], stance_feet)
-            feet = quat.slerp(g_rot[:frames, :, [2, 4]], flat, laid[:, :, None])
+            if laid.any():
+                flat = quat.multiply(turn_q[:, None, None], stance_feet)
+                feet = quat.slerp(g_rot[:frames, :, [2, 4]], flat, laid[:, :, None])
+            else:  # nothing laid down (walking slower, not stopping): the slerp's start, as it leaves it
+                feet = quat.normalize(g_rot[:frames, :, [2, 4]])
         hips = 0.5 * (pos[:, 0, 0] + pos[:, 1, 0])
         rot[:, body] = calmer
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
-        if b.has_idle:
+        if b.has_idle and settle.any():
             centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
         goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, :, 2] - hips[:, None] - centre)
