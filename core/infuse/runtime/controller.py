@@ -154,6 +154,10 @@ class Controller:
     speaks: bool = False  # per class, or per instance
     #: Natural length in seconds (a nod, a clip played once): an activity without an end lasts this long.
     duration_s: float | None = None
+    #: True for a class whose evaluate reads and writes only its own jobs' characters' poses, each job as
+    #: it would alone: the runtime then evaluates its activities of different priorities in one call,
+    #: where no character of one runs between them (a walk of priority 4 with another character's of 2).
+    own_characters_only: ClassVar[bool] = False
 
     def bind(self, rig, report) -> Any:
         """Prepare for character ``rig``; return what :meth:`evaluate_one` needs (kept on the activity).

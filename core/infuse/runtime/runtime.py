@@ -140,7 +140,10 @@ class _Schedule:
     def groups(self, active: np.ndarray) -> list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]:
         """The groups of the activities of indices ``active`` in evaluation order (by layer, priority and
         first activation): (layer, priority, controller class) keys with their activities and
-        characters' names, their rows among ``active`` and their ids."""
+        characters' names, their rows among ``active`` and their ids. A group of a class that touches
+        only its own characters (:attr:`Controller.own_characters_only`) joins the last one of its class
+        and layer before it when neither it nor any group between them has a character of it, and those
+        between touch only their own characters too: each character's activities keep their order."""
         key = active.tobytes()
         found = self._groups.get(key)
         if found is None:
@@ -150,10 +153,33 @@ class _Schedule:
             groups: dict[tuple, list[int]] = {}
             for row, (group, _) in enumerate(chosen):
                 groups.setdefault(group, []).append(row)
-            order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]][1][0].id))
-            found = self._groups[key] = [(g, [chosen[row][1] for row in groups[g]], np.array(groups[g]),
-                                          tuple(chosen[row][1][0].id for row in groups[g])) for g in order]
+            merged: list[tuple[tuple, list[int], set[str]]] = []
+            for g in sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]][1][0].id)):
+                rows, names = groups[g], {chosen[row][1][1] for row in groups[g]}
+                into = _joins(merged, g, names) if g[2].own_characters_only else None
+                if into is None:
+                    merged.append((g, list(rows), names))
+                else:
+                    into[1].extend(rows)
+                    into[2].update(names)
+            found = self._groups[key] = [(g, [chosen[row][1] for row in rows], np.array(rows),
+                                          tuple(chosen[row][1][0].id for row in rows)) for g, rows, _ in merged]
         return found
+
+
+def _joins(merged: list[tuple[tuple, list[int], set[str]]], group: tuple, names: set[str]):
+    """The group of ``merged`` (in evaluation order) that ``group`` (its characters ``names``) may join, or
+    None: the last of its layer and class, with none of its characters in it or after it, and only
+    classes touching their own characters after it."""
+    for other in reversed(merged):
+        key, _, touched = other
+        if touched & names:
+            return None
+        if key[0] == group[0] and key[2] is group[2]:
+            return other
+        if not key[2].own_characters_only:
+            return None
+    return None
 
 
 @dataclass(frozen=True, slots=True)
