@@ -52,7 +52,7 @@ from infuse.runtime.pose import chain_fk
 
 from . import pacing, swivels, transitions
 from .binding import FootFloors, LocomotionBinding
-from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, foot_events, foot_phase, stance_of, warp
+from .phase_keys import GROUNDED, GROUNDED_SHARE, LIFTED, FootKeys, foot_events, foot_keys, foot_phase, stance_of, warp
 from .state import FOOT_VALUES, HELD_COLUMNS, LocomotionState
 from .steering import STAY as STAY_M, TURN_IN_PLACE, Steering, SteeringState
 
@@ -643,14 +643,14 @@ class Locomotion(Controller):
         in the order its walk sums them (:func:`_clips_of`), then -1: frames of several walks blending
         other clips are blended at once, each summed as its walk alone would sum it (a clip another
         walk brings in weighs nothing on it and adds zeros)."""
-        used, of, w, stepping_share, events, count, frames, sample_of, weight_of = _summed(b, w, orders)
+        used, of, w, stepping_share, events, keys, count, frames, sample_of, weight_of = _summed(b, w, orders)
         stepping, feet = of.stepping, of.feet
         # Each clip's phases (U, 3, F): the body's at the blend phase, each leg's at its foot's phase;
         # then their times in the clips.
         phases = np.empty((used.size, 3, len(phase)))
         phases[:] = phase
         if of.foot_events is not None:
-            phases[feet, 1:] = np.swapaxes(foot_phase(of.foot_events, events, phase), 1, 2)
+            phases[feet, 1:] = np.swapaxes(foot_phase(of.foot_events, events, phase, keys), 1, 2)
         clock = warp(of.keys, phases)
         fade = of.idle if standing.max() > 1e-6 else of.idle[:0]
         if fade.size:  # the idle clips, played at the activity's times
@@ -1348,7 +1348,7 @@ class Summed(NamedTuple):
     each frame it weighs no more than that on, as when that frame is blended alone, other frames of the block
     not bringing it in), their :class:`ClipSet`, the weights ``w`` (F, N) so left out, the share of the clips
     with foot events ``stepping_share`` (F,) and their events blended ``events`` (F, 2, 4) (both zeros without
-    any), the most clips a frame sums ``most``, the frames' indices ``frames`` (F, 1), and each frame's clips in
+    any) with the clips' in :func:`~.phase_keys.foot_keys` (None without any), the most clips a frame sums ``most``, the frames' indices ``frames`` (F, 1), and each frame's clips in
     its walk's order (U', one gather): their samples' places ``sample_of`` (F, U') among ``used`` and weights
     ``weight_of`` (F, U'), none past its walk's clips."""
 
@@ -1357,6 +1357,7 @@ class Summed(NamedTuple):
     w: np.ndarray
     stepping_share: np.ndarray
     events: np.ndarray
+    keys: FootKeys | None
     most: int
     frames: np.ndarray
     sample_of: np.ndarray
@@ -1380,7 +1381,8 @@ def _summed(b: LocomotionBinding, w: np.ndarray, orders: np.ndarray) -> Summed:
         most = int(listed.sum(axis=1).max())
         listed, clips = listed[:, :most], np.maximum(orders[:, :most], 0)
         frames = np.arange(len(w))[:, None]
-        return Summed(used, of, kept, stepping_share, events, most, frames, np.searchsorted(used, clips),
+        keys = None if of.foot_events is None else foot_keys(of.foot_events, events)
+        return Summed(used, of, kept, stepping_share, events, keys, most, frames, np.searchsorted(used, clips),
                       np.where(listed, kept[frames, clips], 0.0))
 
     return _kept(b, ("sums", w.tobytes() + orders.tobytes()), sums)

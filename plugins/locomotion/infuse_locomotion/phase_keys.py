@@ -9,6 +9,8 @@ phase, so the blend's contact phases follow from its events alone.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from infuse.packs.analysis import steps
@@ -123,22 +125,40 @@ def foot_events(clip, heights: np.ndarray | None = None, leg_length: float = 1.0
     return out
 
 
-def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray) -> np.ndarray:
-    """Clip phases (F,) in [0, 1) of blend ``phase`` (F,) for one foot: piecewise linear from the
-    blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it.
-    Both feet at once with ``mine`` (2, 4) and ``theirs`` (F, 2, 4): phases (F, 2); and U clips' both
-    feet with ``mine`` (U, 2, 4): phases (U, F, 2)."""
+class FootKeys(NamedTuple):
+    """What :func:`foot_phase` reads of the blend's events ``theirs`` (F, [2,] 4) and the clips' ``mine``
+    ([U,] [2,] 4), worked out once for both: the blend's events closed by the next strike (P, 5) (its rows
+    flat, P = F or 2F), the events after its strikes (F, [2,] 4) and its strikes (F, [2]), each row's index
+    into those (F, [2]) and its foot's among the clips' events closed alike ([U,] feet, 5)."""
+
+    events: np.ndarray
+    later: np.ndarray
+    strikes: np.ndarray
+    rows: np.ndarray
+    feet: np.ndarray
+    mine: np.ndarray
+
+
+def foot_keys(mine: np.ndarray, theirs: np.ndarray) -> FootKeys:
+    """The :class:`FootKeys` of the clips' events ``mine`` and the blend's ``theirs`` (see :func:`foot_phase`)."""
     x = np.concatenate((theirs, theirs[..., :1] + 1.0), axis=-1)  # (F, [2,] 5)
     y = np.concatenate((mine, mine[..., :1] + 1.0), axis=-1)  # ([U,] [2,] 5)
     start = x[..., 0]
-    p = start + np.mod(phase.reshape((-1,) + (1,) * (start.ndim - 1)) - start, 1.0)
-    seg = np.minimum((p[..., None] >= x[..., 1:]).sum(axis=-1), 3)  # (np.clip costs more on a block's few rows)
-    # Each row's segment ends picked from the rows flattened (fancy indexing beats take_along_axis here).
-    rows = np.arange(p.size).reshape(p.shape)
-    flat_x = x.reshape(-1, 5)
-    x0, x1 = flat_x[rows, seg], flat_x[rows, seg + 1]
+    rows = np.arange(start.size).reshape(start.shape)
     y = y.reshape(y.shape[:y.ndim - theirs.ndim + 1] + (-1, 5))  # ([U,] feet, 5), one foot's row when alone
-    foot = rows % y.shape[y.ndim - 2]
+    return FootKeys(x.reshape(-1, 5), x[..., 1:], start, rows, rows % y.shape[y.ndim - 2], y)
+
+
+def foot_phase(mine: np.ndarray, theirs: np.ndarray, phase: np.ndarray, keys: FootKeys | None = None) -> np.ndarray:
+    """Clip phases (F,) in [0, 1) of blend ``phase`` (F,) for one foot: piecewise linear from the
+    blend's events ``theirs`` (F, 4) to the clip's ``mine`` (4,), one cycle after the strike closing it.
+    Both feet at once with ``mine`` (2, 4) and ``theirs`` (F, 2, 4): phases (F, 2); and U clips' both
+    feet with ``mine`` (U, 2, 4): phases (U, F, 2). ``keys``: their :func:`foot_keys`, if already made."""
+    x, later, start, rows, foot, y = foot_keys(mine, theirs) if keys is None else keys
+    p = start + np.mod(phase.reshape((-1,) + (1,) * (start.ndim - 1)) - start, 1.0)
+    seg = np.minimum((p[..., None] >= later).sum(axis=-1), 3)  # (np.clip costs more on a block's few rows)
+    # Each row's segment ends picked from the rows flattened (fancy indexing beats take_along_axis here).
+    x0, x1 = x[rows, seg], x[rows, seg + 1]
     y0, y1 = y[..., foot, seg], y[..., foot, seg + 1]
     frac = np.minimum(np.maximum((p - x0) / np.maximum(x1 - x0, 1e-9), 0.0), 1.0)
     return np.mod(y0 + frac * (y1 - y0), 1.0)
