@@ -2684,6 +2684,8 @@ def _slow_fall(x: np.ndarray, before: np.ndarray, step: float | np.ndarray) -> n
         fallen = np.cumsum(np.broadcast_to(step, x.shape), axis=-2)  # the steps down to each frame from before the first
         out: np.ndarray = np.maximum(np.maximum.accumulate(x + fallen, axis=-2) - fallen, before[..., None, :] - fallen)
         return out
+    if x.shape[-2] == 1:  # one frame: the same, without the running maximum of one value
+        return np.maximum(x, before[..., None, :] - step)
     k = np.arange(x.shape[-2])[:, None]
     return np.maximum(np.maximum.accumulate(x + step * k, axis=-2) - step * k, before[..., None, :] - step * (k + 1))
 

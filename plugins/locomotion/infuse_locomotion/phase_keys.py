@@ -178,7 +178,8 @@ def stance_of(events: np.ndarray, phase: np.ndarray, handover: float = 1.0, ramp
       that must not jump at strike or toe off)."""
     strike, flat, heel_off, off = (events[:, :, k] for k in range(4))
     p = strike + np.mod(phase[:, None] - strike, 1.0)  # (F, 2) from each foot's strike
-    heel = p < flat + handover * (heel_off - flat)
-    ball = (p >= flat) & (p < off)
+    flags = np.empty(p.shape + (2,), dtype=bool)  # heel and ball (np.stack costs more on a block's few rows)
+    np.less(p, flat + handover * (heel_off - flat), out=flags[..., 0])
+    flags[..., 1] = (p >= flat) & (p < off)
     support = np.minimum(np.maximum((p - strike) / ramp, 0.0), 1.0) * np.minimum(np.maximum((off - p) / ramp, 0.0), 1.0)
-    return np.stack((heel, ball), axis=-1), support
+    return flags, support
