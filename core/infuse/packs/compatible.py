@@ -73,8 +73,10 @@ class CompatibleBlend:
         # A first look (cosines to the examples' headings, within 1e-9 of :meth:`against`'s): requests
         # that mix in no example near against them keep their weights as they are.
         near = (v @ self._headings < (AGAINST_COS + 1e-9) * speed[:, None]) & (weights > 0.0)
-        moving = np.flatnonzero((speed > STILL_M_S) & near.any(axis=1))
         out = np.array(weights, dtype=np.float64)
+        if not near.any():
+            return out
+        moving = np.flatnonzero((speed > STILL_M_S) & near.any(axis=1))
         if not moving.size:
             return out
         against = self.against(np.arctan2(q[moving, 1], q[moving, 0]))
