@@ -264,6 +264,7 @@ class Clip(Controller):
     kind = "clip"
     layer = Layer.BASE
     own_characters_only = True  # clips of every priority on characters apart played in one call
+    call_ms = 0.2
     # A base clip usually starts from nothing (the rest pose): no fade unless a transition asks for one.
     blend_in_s = 0.0
     blend_out_s = 0.0

@@ -158,6 +158,9 @@ class Controller:
     #: it would alone: the runtime then evaluates its activities of different priorities in one call,
     #: where no character of one runs between them (a walk of priority 4 with another character's of 2).
     own_characters_only: ClassVar[bool] = False
+    #: About how long one evaluate call takes in a block of one frame, whatever its jobs (milliseconds):
+    #: where each character's order leaves a choice, the runtime joins the calls of the costlier class.
+    call_ms: ClassVar[float] = 0.1
 
     def bind(self, rig, report) -> Any:
         """Prepare for character ``rig``; return what :meth:`evaluate_one` needs (kept on the activity).

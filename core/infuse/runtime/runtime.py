@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import sys
 import time
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, ClassVar
 
@@ -140,10 +141,9 @@ class _Schedule:
     def groups(self, active: np.ndarray) -> list[tuple[tuple, list[tuple[Activity, str]], np.ndarray, tuple]]:
         """The groups of the activities of indices ``active`` in evaluation order (by layer, priority and
         first activation): (layer, priority, controller class) keys with their activities and
-        characters' names, their rows among ``active`` and their ids. A group of a class that touches
-        only its own characters (:attr:`Controller.own_characters_only`) joins the last one of its class
-        and layer before it when neither it nor any group between them has a character of it, and those
-        between touch only their own characters too: each character's activities keep their order."""
+        characters' names, their rows among ``active`` and their ids. Between two classes that may read
+        any character (:attr:`Controller.own_characters_only` False), the groups of the others are
+        evaluated as :func:`_calls` joins them."""
         key = active.tobytes()
         found = self._groups.get(key)
         if found is None:
@@ -153,33 +153,58 @@ class _Schedule:
             groups: dict[tuple, list[int]] = {}
             for row, (group, _) in enumerate(chosen):
                 groups.setdefault(group, []).append(row)
-            merged: list[tuple[tuple, list[int], set[str]]] = []
-            for g in sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]][1][0].id)):
-                rows, names = groups[g], {chosen[row][1][1] for row in groups[g]}
-                into = _joins(merged, g, names) if g[2].own_characters_only else None
-                if into is None:
-                    merged.append((g, list(rows), names))
-                else:
-                    into[1].extend(rows)
-                    into[2].update(names)
-            found = self._groups[key] = [(g, [chosen[row][1] for row in rows], np.array(rows),
-                                          tuple(chosen[row][1][0].id for row in rows)) for g, rows, _ in merged]
+            order = sorted(groups, key=lambda g: (g[0], g[1], chosen[groups[g][0]][1][0].id))
+            calls: list[tuple[tuple, list[int]]] = []
+            start = 0
+            for end in range(len(order) + 1):
+                if end == len(order) or not order[end][2].own_characters_only:
+                    calls += _calls([(g, groups[g]) for g in order[start:end]], [name for _, (_, name) in chosen])
+                    if end < len(order):
+                        calls.append((order[end], groups[order[end]]))
+                    start = end + 1
+            seen: dict[tuple, int] = {}
+            found = self._groups[key] = []
+            for g, rows in calls:  # a class called twice for one priority keeps a memo per call
+                seen[g] = seen.get(g, -1) + 1
+                found.append((g if not seen[g] else g + (seen[g],), [chosen[row][1] for row in rows], np.array(rows),
+                              tuple(chosen[row][1][0].id for row in rows)))
         return found
 
 
-def _joins(merged: list[tuple[tuple, list[int], set[str]]], group: tuple, names: set[str]):
-    """The group of ``merged`` (in evaluation order) that ``group`` (its characters ``names``) may join, or
-    None: the last of its layer and class, with none of its characters in it or after it, and only
-    classes touching their own characters after it."""
-    for other in reversed(merged):
-        key, _, touched = other
-        if touched & names:
-            return None
-        if key[0] == group[0] and key[2] is group[2]:
-            return other
-        if not key[2].own_characters_only:
-            return None
-    return None
+def _calls(groups: list[tuple[tuple, list[int]]], names: list[str]) -> list[tuple[tuple, list[int]]]:
+    """The calls evaluating ``groups`` (in evaluation order, keys and rows; ``names``: each row's
+    character) of classes touching only their own characters: each call one class and layer, for the
+    next activities of as many characters as can go together, each character's activities in their
+    order. The class called next is one whose waiting activities are all next for their characters,
+    else the one whose call costs least (:attr:`Controller.call_ms`), so that the costlier wait for more
+    to join them; the earliest first among equals. A walk of priority 4 of one character, over its idle
+    clip of priority 3, goes with another character's walk of priority 2 whose settled idle clip of
+    priority 3 is over it: the clips in two calls, the walks in one."""
+    chains: dict[str, list[tuple[int, list[int]]]] = {}  # per character, its rows of each group in order
+    for n, (_, rows) in enumerate(groups):
+        for row in rows:
+            chain = chains.setdefault(names[row], [])
+            if chain and chain[-1][0] == n:
+                chain[-1][1].append(row)
+            else:
+                chain.append((n, [row]))
+    kind = [(key[0], key[2]) for key, _ in groups]
+    waiting = Counter(kind[n] for chain in chains.values() for n, _ in chain)
+    calls = []
+    while chains:
+        heads: dict[tuple, list[tuple[int, list[int], str]]] = {}
+        for name, chain in chains.items():
+            n, rows = chain[0]
+            heads.setdefault(kind[n], []).append((n, rows, name))
+        chosen = max(heads, key=lambda k: (len(heads[k]) == waiting[k], -k[1].call_ms, -min(h[0] for h in heads[k])))
+        taken = sorted(heads[chosen])
+        calls.append((groups[taken[0][0]][0], [row for _, rows, _ in taken for row in rows]))
+        waiting[chosen] -= len(taken)
+        for _, _, name in taken:
+            chains[name].pop(0)
+            if not chains[name]:
+                del chains[name]
+    return calls
 
 
 @dataclass(frozen=True, slots=True)

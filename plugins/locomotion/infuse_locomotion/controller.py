@@ -241,6 +241,7 @@ class Locomotion(Controller):
     blend_in_s = 0.0
     blend_out_s = 0.3
     own_characters_only = True  # a character's walks of every priority evaluated with the others' at once
+    call_ms = 2.0  # the feet's pinning and the blend's fixed work (benchmarks/walking_blocks.py)
 
     def __init__(self, pack="locomotion-male", speed=1.3, turn_rate_deg_s=0.0, direction_deg=0.0, path=None, target=None,
                  max_accel: float = 1.5, max_decel: float = 2.5, max_turn_rate_deg_s: float = 90.0,
