@@ -222,3 +222,29 @@ def test_walks_handing_over_inside_a_block_walk_together_as_each_alone(xbot, tra
         assert np.abs(a - b).max() < 1e-9
         # It walked: its hips ended near where it was sent.
         assert np.hypot(*(a[-1, 0, [0, 2]] - a[0, 0, [0, 2]] - target)) < 0.25 * np.hypot(*target)
+
+
+def test_work_kept_by_blend_weights_is_the_work_done_afresh(xbot, monkeypatch):
+    """What the walks work out from blend weights alone, kept on the binding by those weights (a few pieces
+    at most here, the oldest going as one comes), read only: the walks are the same to the bit as with all of
+    it worked out afresh at each block."""
+    kept: list = []
+    keep = controller._kept
+
+    def watched(b, key, make):
+        if b not in kept:  # what earlier walks of this binding left is let go first
+            b.by_weights.clear()
+            kept.append(b)
+        return keep(b, key, make)
+
+    monkeypatch.setattr(controller, "_WEIGHTS_KEPT", 5)
+    monkeypatch.setattr(controller, "_kept", watched)
+    keeping = walked(xbot, 1, [])
+    binding = kept[0]
+    assert 0 < len(binding.by_weights) <= 5
+    pieces = [x for known in binding.by_weights.values() for x in known if isinstance(x, np.ndarray)]
+    assert pieces and not any(x.flags.writeable for x in pieces)
+    monkeypatch.setattr(controller, "_kept", lambda b, key, make: make())
+    afresh = walked(xbot, 1, [])
+    for name in WALKS:
+        assert np.array_equal(motion_fk(keeping.motion(name))[1], motion_fk(afresh.motion(name))[1])

@@ -131,7 +131,7 @@ HANDOVER = 0.5
 TOUCH = 0.03
 #: A clip weighing no more than this on a frame is left out of its blend there.
 _LEAST_WEIGHT = 1e-6
-#: How many pieces of work on blend weights a binding keeps (:func:`_kept`) before it starts again.
+#: How many pieces of work on blend weights a binding keeps (:func:`_kept`): the oldest goes as one comes.
 _WEIGHTS_KEPT = 2048
 _ONES4 = np.ones(4)
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
@@ -1392,11 +1392,12 @@ def _summed(b: LocomotionBinding, w: np.ndarray, orders: np.ndarray) -> Summed:
 def _kept(b: LocomotionBinding, key: tuple, make: Callable[[], Any]) -> Any:
     """What ``make()`` gives (a tuple of arrays and others, the arrays read only), kept on binding ``b`` by ``key``
     (the work's name and its inputs as bytes): work that depends on the blend weights alone, which walks cruising
-    or standing ask for block after block (at most :data:`_WEIGHTS_KEPT` kept: then it starts again)."""
+    or standing ask for block after block (at most :data:`_WEIGHTS_KEPT` kept: the oldest goes as one comes,
+    so no block lets go of them all at once)."""
     known = b.by_weights.get(key)
     if known is None:
-        if len(b.by_weights) >= _WEIGHTS_KEPT:
-            b.by_weights.clear()
+        while len(b.by_weights) >= _WEIGHTS_KEPT:
+            del b.by_weights[next(iter(b.by_weights))]
         known = b.by_weights[key] = make()
         for x in known:
             if isinstance(x, np.ndarray):
