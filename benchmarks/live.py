@@ -133,7 +133,8 @@ def latency(live: LiveScene, samples: int = 20) -> list[float]:
 
 async def ws_latency(port: int, character: str, samples: int = 20) -> list[float]:
     """Seconds from sending a nod's BML over the WebSocket to receiving the first binary frame at or after
-    the frame its reply says it starts on, at random points of a frame."""
+    the frame its reply says it starts on (received before the reply or after it), at random points of
+    a frame."""
     from websockets.asyncio.client import connect
 
     out = []
@@ -144,16 +145,15 @@ async def ws_latency(port: int, character: str, samples: int = 20) -> list[float
             sent = time.perf_counter()
             await ws.send(json.dumps({"type": "bml", "character": character, "request": k, "bml":
                                       f'<bml xmlns="{BML_NS}" id="wsprobe{k}"><head id="h" lexeme="NOD"/></bml>'}))
-            start = None
-            while True:
+            start, frames = None, []  # frames received since: (index, seconds), the reply may come after some
+            while start is None or not frames or frames[-1][0] < start:
                 message = await ws.recv()
                 if isinstance(message, bytes):
                     size = int.from_bytes(message[:4], "little")
-                    if start is not None and json.loads(message[4:4 + size])["frame"] >= start:
-                        out.append(time.perf_counter() - sent)
-                        break
+                    frames.append((json.loads(message[4:4 + size])["frame"], time.perf_counter()))
                 elif json.loads(message).get("request") == k:
                     start = json.loads(message)["frame"]
+            out.append(next(at for index, at in frames if index >= start) - sent)
     return out
 
 

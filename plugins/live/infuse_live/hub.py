@@ -15,7 +15,7 @@ import itertools
 import threading
 import wave
 from collections import deque
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
@@ -174,18 +174,26 @@ class Hub:
                     other.put(info)
             return {**info, "type": "accepted", "request": request, "character": name}
         if message.type == "bml":
-            blocks, _ = await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.parse,
-                                                        fields.get("character"), fields["bml"])
-            kind, function = "bml", (self.live.schedule, blocks)
+            submitted = await self.loop.run_in_executor(self._prepare, self._parse_and_submit, client, fields)
         else:
-            method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
-            prepared, _ = await self.loop.run_in_executor(self._prepare, self._on_behalf, client, self.live.prepare_call,
-                                                          method, character, arguments)
-            kind, function = method, (self.live.builder_call, method, character, arguments, prepared)
-        ids, at = await asyncio.wrap_future(self.live.submit(self._on_behalf, client, *function, kind=kind))
+            submitted = await self.loop.run_in_executor(self._prepare, self._prepare_and_submit, client, fields)
+        ids, at = await asyncio.wrap_future(submitted)
         ids = ids if isinstance(ids, list) else [ids]
         return {"type": "accepted", "request": request, "blocks": [i for b in ids for i in (b if isinstance(b, list) else [b])],
                 "time": at, "frame": round(at * self.live.fps)}
+
+    def _parse_and_submit(self, client: Client | None, fields: dict) -> Future:
+        """Parse a bml message's blocks and hand them to the loop, both on the preparing thread: the
+        command is queued as soon as it is parsed, not after this server's thread wakes again."""
+        blocks, _ = self._on_behalf(client, self.live.parse, fields.get("character"), fields["bml"])
+        return self.live.submit(self._on_behalf, client, self.live.schedule, blocks, kind="bml")
+
+    def _prepare_and_submit(self, client: Client | None, fields: dict) -> Future:
+        """Check (and prepare) a builder call and hand it to the loop, both on the preparing thread."""
+        method, character, arguments = fields["method"], fields["character"], fields.get("args", {})
+        prepared, _ = self._on_behalf(client, self.live.prepare_call, method, character, arguments)
+        return self.live.submit(self._on_behalf, client, self.live.builder_call, method, character, arguments, prepared,
+                                kind=method)
 
     def _move(self, name: str, position) -> float:
         return self.live.place_target(name, position)
