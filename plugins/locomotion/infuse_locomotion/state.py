@@ -42,7 +42,7 @@ FOOT_VALUES = _columns((("pins", (0.0,) * 3), ("landed", _TURNED), ("landed_as",
                         ("landed_spun", (0.0,)), ("toes_up", (0.0,)), ("foot_heading", (0.0,)), ("held_swivel", (0.0,)),
                         ("offset", (0.0,) * 3), ("ball_offset", (0.0,) * 3), ("rise", (0.0,) * 3), ("foot_turn", _TURNED),
                         ("let_go", (-np.inf,) * 3)))
-HELD_COLUMNS = FOOT_VALUES["held_swivel"][0] + 1  # pins to held_swivel
+HELD_COLUMNS = sum(len(rest) for _, rest in list(FOOT_VALUES.values())[:list(FOOT_VALUES).index("held_swivel") + 1])  # pins to held_swivel
 FOOT_COLUMNS = sum(len(rest) for _, rest in FOOT_VALUES.values())
 
 
