@@ -8,9 +8,12 @@ import gc
 import math
 import threading
 import time
+from collections import deque
+from concurrent.futures import Future
 
 import numpy as np
 
+from infuse.errors import UsageError
 from infuse.live import LiveScene
 from infuse.runtime import Controller
 from infuse.scene import Scene
@@ -304,3 +307,36 @@ def test_the_loaded_scene_is_set_aside_from_full_garbage_collections():
     assert set_aside >= 0.8 * loaded, (set_aside, loaded)
     assert walked < 0.2 * set_aside, (walked, set_aside)
     assert gc.get_freeze_count() == 0
+
+
+def test_the_lead_is_the_share_of_blocks_meant_to_be_ready_in_time():
+    """Blocks of the last second took 1 ms and 7 ms in turn: with ``lead_share`` 0.75 the lead is 7 ms (three
+    blocks in four ready in time), with 0.5 it is 1 ms; the usual cost (the median) is 1 ms either way.
+    A share outside (0, 1] is refused."""
+    for share, lead_ms in ((0.75, 7.0), (0.5, 1.0)):
+        live, _ = _live(0.0, lead_share=share)
+        live._leads.extend((k, 1, 0.001 if k % 2 else 0.007) for k in range(40))
+        live._update_lead()
+        assert math.isclose(live.stats.lead_ms, lead_ms), (share, live.stats.lead_ms)
+        assert math.isclose(live._usual_s, 0.001)
+    for share in (0.0, 1.5):
+        try:
+            _live(0.0, lead_share=share)
+        except UsageError as exc:
+            assert "lead_share" in str(exc)
+        else:
+            raise AssertionError(f"lead_share {share} accepted")
+
+
+def test_a_command_runs_before_the_block_when_the_block_at_its_usual_cost_is_still_in_time():
+    """A 3 ms command taken 1 ms before the block's planned start: it runs at once when the block usually
+    takes 6 ms less than its lead (it starts the block late by 2 ms, a usual block is still ready in time),
+    and waits for the next gap when the block usually takes its whole lead."""
+    for usual_s, runs in ((0.001, True), (0.007, False)):
+        live, _ = _live(0.0)
+        live._lead_s, live._usual_s = 0.007, usual_s
+        live._command_s["three"] = deque([0.003])
+        ran = []
+        live._commands.put_nowait((Future(), ran.append, (1,), "three"))
+        live._apply_commands(time.perf_counter() + 0.001)
+        assert bool(ran) is runs and (live._held is None) is runs, (usual_s, ran, live._held)

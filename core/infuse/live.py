@@ -17,13 +17,15 @@
 Frame ``k`` is at scene time ``k / fps`` and is due on the wall clock at ``epoch + k / fps``. Two
 threads run it: the evaluator (the loop thread) applies commands (BML, builder calls, target moves) and evaluates blocks
 of frames; the presenter shows each frame when it is due (:meth:`LiveScene.on_frame` callbacks). Each
-block starts as late as it can and still be ready when its first frame is due (the lead: the 90th
-percentile of how long the blocks of the last second took, waking late included, commands excluded), so
-a command that arrives before then shows on that frame. Commands are applied between blocks, each where
-it fits: one expected to run past the next block's start (it takes as long as the last ones of its kind,
-the median; the first of a kind as the longest kind known, at most a frame) waits for the gap after that
-block, which is
-made long enough for it (the block holds more frames), so a burst of them delays no frame. A loop running late spends at most
+block starts as late as it can and still be ready when its first frame is due (the lead: the
+:data:`LEAD_SHARE` percentile of how long the blocks of the last second took, waking late included,
+commands excluded; a costlier block shows its frame late by the difference, and misses it only when it
+takes a frame longer than the lead), so a command that arrives before then shows on that frame. Commands are applied between blocks, each where
+it fits: one that would leave the next block too little time to be ready when its first frame is due at
+the block's usual cost (the median of the last second's; a command takes as long as the last ones of its
+kind, the median; the first of a kind as the longest kind known, at most a frame) waits for the gap after
+that block, which is made long enough for it (the block holds more frames), so a burst of them delays no
+frame. A loop running late spends at most
 :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
 
@@ -74,6 +76,9 @@ from .scene import Scene
 KEEP_S = 2.0
 #: Seconds a block's frames are meant to be ready before the first is due (handing them to the presenter).
 LEAD_MARGIN_S = 0.001
+#: The share of blocks the lead is meant to have ready in time (by the last second's): a longer lead shows
+#: fewer frames late, a shorter one shows commands sooner (a command waits for the next block and its lead).
+LEAD_SHARE = 0.75
 #: Blocks double while a frame costs more than this share of a frame's time, and shrink to a size whose
 #: frames would cost under :data:`SHRINK_AT` of it (what is left: commands, and the machine's other work).
 GROW_AT, SHRINK_AT = 0.75, 0.5
@@ -115,6 +120,8 @@ class LiveStats:
     thread's CPU time (milliseconds; they differ when the machine is loaded; the CPU time includes taking
     the frames out), and the part of that CPU time spent in the controllers (the rest: the runtime's and
     the loop's own bookkeeping).
+    ``late_ms``: how long after it was due each of the last frames was shown (milliseconds; a block that
+    took longer than the lead shows its frames late).
     ``blocks``: the last blocks evaluated, (first frame, frames) each: a session replayed offline with
     the same blocks and commands gives the same frames (other blocks give them to rounding)."""
 
@@ -124,6 +131,7 @@ class LiveStats:
         self.commands = 0
         self.block_frames = 1
         self.lead_ms = 0.0
+        self.late_ms: deque[float] = deque(maxlen=window)  # how long after it was due each frame was shown
         self.evaluate_ms: deque[float] = deque(maxlen=window)
         self.evaluate_cpu_ms: deque[float] = deque(maxlen=window)
         self.controllers_cpu_ms: deque[float] = deque(maxlen=window)  # the part of it in the controllers
@@ -138,6 +146,8 @@ class LiveStats:
             figures.update(mean_ms=float(ms.mean()), p50_ms=float(np.percentile(ms, 50)),
                            p99_ms=float(np.percentile(ms, 99)), max_ms=float(ms.max()),
                            cpu_mean_ms=float(np.mean(self.evaluate_cpu_ms)),
+                           late_p99_ms=float(np.percentile(self.late_ms, 99)) if self.late_ms else 0.0,
+                           late_max_ms=max(self.late_ms, default=0.0),
                            controllers_cpu_mean_ms=float(np.mean(self.controllers_cpu_ms)))
         return figures
 
@@ -173,10 +183,11 @@ class LiveScene:
     ``command_budget_s``: most seconds per block spent on commands once the block is due (default a
     quarter of a frame).
     ``keep_s``: seconds of evaluated frames kept. ``max_block_frames``: the largest block evaluated at once.
+    ``lead_share``: the share of blocks meant to be ready when their first frame is due (:data:`LEAD_SHARE`).
     """
 
     def __init__(self, scene: Scene, *, queue_size: int = 256, command_budget_s: float | None = None,
-                 keep_s: float = KEEP_S, max_block_frames: int = 32):
+                 keep_s: float = KEEP_S, max_block_frames: int = 32, lead_share: float = LEAD_SHARE):
         if not isinstance(scene, Scene):
             raise UsageError(f"LiveScene takes an infuse.scene.Scene, not {type(scene).__name__}")
         self.scene = scene
@@ -185,6 +196,9 @@ class LiveScene:
         self.command_budget_s = 0.25 * self.period_s if command_budget_s is None else float(command_budget_s)
         self.keep_s = float(keep_s)
         self.max_block_frames = max(1, int(max_block_frames))
+        if not 0.0 < lead_share <= 1.0:
+            raise UsageError(f"lead_share is a share of blocks, over 0 and at most 1, not {lead_share}")
+        self.lead_share = float(lead_share)
         self.block_frames = 1
         self._costs: deque[tuple[int, float]] = deque(maxlen=5)  # (frames, seconds) of the last blocks since a resize
         self._try_wait_s, self._try_at, self._trying = TRY_S, 0.0, False  # shorter blocks tried (see _resize)
@@ -202,6 +216,7 @@ class LiveScene:
         self._ready = threading.Condition()
         self._presenter: threading.Thread | None = None
         self._lead_s = 0.0  # how long before a block's first frame is due its evaluation starts
+        self._usual_s = 0.0  # what a block usually takes (the median the lead is taken with)
         self._leads: deque[tuple[int, int, float]] = deque(maxlen=120)  # (first frame, frames, seconds) per block
         self._held: tuple | None = None  # a command taken from the queue that waits for the next gap
         self._command_s: dict[str, deque[float]] = {}  # kind -> seconds the last commands of that kind took
@@ -333,16 +348,18 @@ class LiveScene:
             self._fail(exc)
 
     def _update_lead(self) -> None:
-        """The lead for blocks of :attr:`block_frames`: the 90th percentile of what the blocks of the last
-        second took (at least the last few), from those of this size once there are three, else from all
-        of them, a shorter block's scaled by how much longer this one is (a block started late, the
-        machine busy elsewhere, moves it for a second at most)."""
+        """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile of what the blocks
+        of the last second took (at least the last few), from those of this size once there are three, else
+        from all of them, a shorter block's scaled by how much longer this one is (a block started late, the
+        machine busy elsewhere, moves it for a second at most); and what they usually took, the median."""
         size, now = self.block_frames, self.scene.runtime.frame
         recent = [lead for lead in self._leads if lead[0] >= now - self.fps] or list(self._leads)[-3:]
         same = [seconds for _, frames, seconds in recent if frames == size]
         if len(same) < 3:
             same = [seconds * max(1.0, size / frames) for _, frames, seconds in recent]
-        self._lead_s = min(sorted(same)[math.ceil(0.9 * len(same)) - 1], self.max_block_frames * self.period_s)
+        same.sort()
+        self._lead_s = min(same[max(math.ceil(self.lead_share * len(same)), 1) - 1], self.max_block_frames * self.period_s)
+        self._usual_s = min(same[(len(same) - 1) // 2], self._lead_s)
         self.stats.lead_ms = self._lead_s * 1e3
 
     def _present(self) -> None:
@@ -365,6 +382,7 @@ class LiveScene:
                         self._pending.popleft()
                         self.stats.missed += 1
                     shown = self._pending.popleft()
+                self.stats.late_ms.append(max(0.0, now - self.due_s(shown[0])) * 1e3)
                 self._show(*shown)
         except BaseException as exc:  # a frame callback's error: kept, as the evaluator's
             self._fail(exc)
@@ -468,11 +486,14 @@ class LiveScene:
         return height
 
     def _apply_commands(self, until: float) -> float:
-        """Apply commands, waiting for them, until the wall clock reaches ``until`` (the block's start):
-        each one expected to end by then (it takes as long as the last ones of its kind, the median). Once
-        ``until`` has passed (a loop running late), those expected to fit :attr:`command_budget_s`. One that
-        does not fit waits for the next gap, which :meth:`_room` makes long enough, and goes first in it.
-        Returns the seconds spent on commands after ``until``."""
+        """Apply commands, waiting for them, until the wall clock reaches ``until`` (the block's planned
+        start). A command runs when it is expected (it takes as long as the last ones of its kind, the
+        median) to end early enough for the block, at its usual cost (the median of the last second's), to
+        be ready when its first frame is due: it may start the block a little late (a costly block then
+        shows its frame late by as much), which costs less than the frame it would wait otherwise. Once
+        that moment has passed (a loop running late), commands run while they are expected to fit
+        :attr:`command_budget_s`. One that does not fit waits for the next gap, which :meth:`_room` makes
+        long enough, and goes first in it. Returns the seconds spent on commands after ``until``."""
         late_s = 0.0
         waited = self._held is not None
         while not self._stop.is_set():
@@ -491,7 +512,9 @@ class LiveScene:
             future, function, args, kind = command
             started = time.perf_counter()
             expected = self._expected_s(kind)
-            if not waited and (started + expected > until if started < until else late_s + expected > self.command_budget_s):
+            latest = until + LEAD_MARGIN_S + self._lead_s - self._usual_s  # a usual block still ready in time
+            fits = started + expected <= latest if started < latest else late_s + expected <= self.command_budget_s
+            if not waited and not fits:
                 self._held = command  # it would hold the block up: first thing after it
                 if started < until:
                     self._stop.wait(until - started)
