@@ -281,3 +281,50 @@ def test_one_speech_on_two_characters_drives_each_own_face(rpm, utterance):
     assert mute.morph_weights.size == 0
     assert np.allclose(mute.local_rotations, mute.skeleton.rest_rotations)
     assert any(c == "mute" and "without moving its mouth" in m for c, m in reports)
+
+
+def test_a_lip_sync_prepared_ahead_is_used_only_from_the_same_inputs(rpm, utterance, monkeypatch):
+    """Speech.prepare works a character's lip sync out ahead (a live scene does, on the caller's thread).
+    Binding the same utterance to the same character with the same settings takes it, once, and reports
+    what binding reports (a character without a mouth); another viseme set, frame rate or utterance is
+    worked out again. Every binding is that of a speech nothing prepared, to the bit."""
+    from infuse.runtime import Runtime
+    from infuse_lipsync import controllers
+    from infuse_lipsync.controllers import Speech
+
+    from runtime_characters import synthetic_character
+
+    worked_out = []
+    real = controllers.lipsync
+    monkeypatch.setattr(controllers, "lipsync", lambda *args, **kwargs: worked_out.append(args[0]) or real(*args, **kwargs))
+    rt = Runtime(fps=30.0)
+    rt.add_character(rpm, "ann")
+    rt.add_character(synthetic_character("mute"), "mute")  # no morph targets, no jaw
+    later = tts_engine("espeak").synthesize("Five ships.")
+    variants = {"same": Speech(utterance), "set": Speech(utterance, viseme_set="arkit"),
+                "fps": Speech(utterance, fps=60.0), "utterance": Speech(later)}
+    fresh = {}  # (character, variant) -> (binding, notes) of a speech nothing prepared
+    for name, what in [("ann", what) for what in variants] + [("mute", "same")]:
+        notes: list[str] = []
+        fresh[name, what] = variants[what].bind(rt.rig(name), notes.append), notes
+    assert any("without moving its mouth" in note for note in fresh["mute", "same"][1])
+
+    def check(name, what, calls):
+        notes: list[str] = []
+        bound = variants[what].bind(rt.rig(name), notes.append)
+        expected, expected_notes = fresh[name, what]
+        for field in ("times", "joints", "rotations", "columns", "morphs"):
+            assert np.array_equal(getattr(bound, field), getattr(expected, field)), (name, what, field)
+        assert notes == expected_notes
+        assert len(worked_out) == calls, (name, what)
+
+    for name in ("ann", "mute"):
+        worked_out.clear()
+        Speech(utterance).prepare(rt.rig(name))
+        assert len(worked_out) == 1
+        check(name, "same", 1)  # taken from what was prepared
+        check(name, "same", 2)  # taken once: worked out again
+    for what in ("set", "fps", "utterance"):
+        worked_out.clear()
+        Speech(utterance).prepare(rt.rig("ann"))
+        check("ann", what, 2)  # other inputs: worked out again

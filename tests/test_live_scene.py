@@ -454,6 +454,23 @@ def test_a_walk_planned_ahead_is_used_only_from_the_same_inputs(monkeypatch):
     assert np.array_equal(motions[0].root_translations, motions[1].root_translations)
 
 
+def test_a_say_is_lip_synced_on_the_callers_thread(monkeypatch):
+    """A live say works out its lip sync where it is parsed (LiveScene.prepare, on the caller's thread); the
+    loop's thread only binds what was worked out."""
+    from infuse_lipsync import controllers
+
+    threads = []
+    lipsync = controllers.lipsync
+    monkeypatch.setattr(controllers, "lipsync",
+                        lambda *args, **kwargs: threads.append(threading.current_thread()) or lipsync(*args, **kwargs))
+    with LiveScene(_scene(idle=False)) as live:
+        frames = Frames(live)
+        block = live.say("ann", "Hello there.")
+        frames.wait(round(live.scene.scheduler.blocks[block].end_s * FPS))
+        assert "ann" in {a.rig.name for a in live.scene.runtime.activities if a.controller.speaks}
+    assert threads == [threading.current_thread()]
+
+
 def test_only_blocks_a_controller_prepares_for_are_scheduled_ahead(monkeypatch):
     """LiveScene.parse schedules a block on a scratch planner (speech synthesis, walks planned ahead) only
     when it may have something to prepare: a nod once (to learn that no controller prepares nods), then no

@@ -3,6 +3,7 @@ kind, a replacement that lists the kind in ``realizes``, an explicit choice (env
 configuration file), and the warning when several replacements compete."""
 from __future__ import annotations
 
+import os
 import types
 
 import pytest
@@ -93,3 +94,31 @@ def test_a_realizer_table_in_the_configuration_must_hold_strings(settings):
     settings.write_text("[defaults.controller]\ngaze = 3\n")
     with pytest.raises(infuse.InputError, match=r"\[defaults.controller\] gaze.*must be a string"):
         registry.realizer("gaze")
+
+
+def test_the_choice_is_kept_until_one_of_its_inputs_changes(settings, registered, monkeypatch):
+    """The realizer is looked up for every behaviour realized: the configuration file is read once while it
+    stays as it is, and the choice is made again when a controller registers, the file appears or is
+    rewritten (even keeping its modification time) or the variable is set."""
+    from infuse import config
+
+    reads = []
+    read = config.read_config
+    monkeypatch.setattr(config, "read_config", lambda path, kinds: reads.append(path) or read(path, kinds))
+    assert registry.realizer("gaze").name == "gaze"  # no file
+    registered(_controllers_module("soft_gaze", ControllerFactory("soft-gaze", _gaze, realizes=("gaze",))))
+    assert registry.realizer("gaze").name == "soft-gaze"
+    settings.write_text('[defaults.controller]\ngaze = "gaze"\n')
+    for _ in range(3):
+        assert registry.realizer("gaze").name == "gaze"
+    assert len(reads) == 1
+    written = settings.stat()
+    settings.write_text('[defaults.controller]\ngaze = "soft-gaze"\n')
+    os.utime(settings, ns=(written.st_atime_ns, written.st_mtime_ns))
+    assert registry.realizer("gaze").name == "soft-gaze"
+    assert len(reads) == 2
+    monkeypatch.setenv("INFUSE_DEFAULT_CONTROLLER_GAZE", "gaze")
+    assert registry.realizer("gaze").name == "gaze"
+    monkeypatch.setenv("INFUSE_CONFIG", str(settings.with_name("elsewhere.toml")))
+    monkeypatch.delenv("INFUSE_DEFAULT_CONTROLLER_GAZE")
+    assert registry.realizer("gaze").name == "soft-gaze"  # no file there: the replacement again

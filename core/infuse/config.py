@@ -40,10 +40,16 @@ class Config:
 
 def config_path() -> Path:
     """Where the configuration file is looked for (it need not exist)."""
-    explicit = os.environ.get("INFUSE_CONFIG")
+    return _located(os.environ.get("INFUSE_CONFIG"), os.environ.get("XDG_CONFIG_HOME"), os.environ.get("HOME"))
+
+
+@lru_cache(maxsize=8)
+def _located(explicit: str | None, base: str | None, home: str | None) -> Path:
+    """:func:`config_path` from the variables it depends on (``home`` only through ``~``), worked out once
+    for each of their values: the configuration is looked up on every plugin lookup."""
     if explicit:
         return Path(explicit).expanduser()
-    base = os.environ.get("XDG_CONFIG_HOME") or os.path.join(os.path.expanduser("~"), ".config")
+    base = base or os.path.join(os.path.expanduser("~"), ".config")
     return Path(base) / "infuse" / "config.toml"
 
 
@@ -85,15 +91,20 @@ def _table(path: Path, table, place: str, kinds: frozenset[str] | None, values: 
 
 
 @lru_cache(maxsize=8)
-def _cached(path: Path, mtime_ns: int, kinds: frozenset[str]) -> Config:
+def _cached(path: Path, stamp: tuple[int, int, int, int], kinds: frozenset[str]) -> Config:
     return read_config(path, kinds)
 
 
 def current_config(kinds: frozenset[str]) -> Config:
-    """The configuration in effect now (re-read when the file changes)."""
+    """The configuration in effect now (re-read when the file changes: its times, size or inode)."""
     path = config_path()
     try:
-        stamp = path.stat().st_mtime_ns
+        status = os.stat(path)
     except OSError:
-        return Config(path)
-    return _cached(path, stamp, kinds)
+        return _absent(path)
+    return _cached(path, (status.st_mtime_ns, status.st_ctime_ns, status.st_size, status.st_ino), kinds)
+
+
+@lru_cache(maxsize=8)
+def _absent(path: Path) -> Config:
+    return Config(path)

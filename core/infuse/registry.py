@@ -69,6 +69,8 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("bml-generator", "infuse.bml_generators", "infuse_bml_generators", BMLGenerator),
     Kind("command", "infuse.commands", "infuse_commands", Command),
 )}
+#: The names of :data:`KINDS`: what the configuration file's sections may name.
+KIND_NAMES = frozenset(KINDS)
 
 #: The distribution name given to plugins registered by the program rather than installed.
 PROGRAM = "(program)"
@@ -233,7 +235,7 @@ class PluginSet:
         if complete:
             self.load_kind(kind)
         caller = getattr(self.manager.hook, kind_of(kind).hook)
-        config = current_config(frozenset(KINDS))
+        config = current_config(KIND_NAMES)
         prefer = config.prefer.get(kind, {})
         key = (config.path, tuple(sorted(prefer.items())), *(id(impl.plugin) for impl in caller.get_hookimpls()))
         cached = self._tables.get(kind)
@@ -274,7 +276,7 @@ def choose(kind: str, name: str, owners: list[tuple[str, str]], preferred: str |
         return distributions.index(preferred)
     listed = " and ".join(f"{dist} ({module})" for dist, module in owners)
     report(f"{len(owners)} {kind} plugins are named {name!r}: {listed}; using {distributions[0]}'s "
-           f"(choose with [prefer.{kind}] {name} = \"DISTRIBUTION\" in {current_config(frozenset(KINDS)).path})")
+           f"(choose with [prefer.{kind}] {name} = \"DISTRIBUTION\" in {current_config(KIND_NAMES).path})")
     return 0
 
 
@@ -294,7 +296,7 @@ def default_name(kind: str) -> tuple[str | None, str]:
     from_env = os.environ.get(spec.environment_variable)
     if from_env:
         return from_env, spec.environment_variable
-    config = current_config(frozenset(KINDS))
+    config = current_config(KIND_NAMES)
     if kind in config.defaults:
         return config.defaults[kind], f"[defaults] {kind} in {config.path}"
     return spec.default, "built-in default"
@@ -320,6 +322,7 @@ def get(kind: str, name: str | None = None) -> Any:
     return found[chosen]
 
 
+@lru_cache(maxsize=256)
 def realizer_variable(kind: str) -> str:
     """The variable that names the controller realizing BML behaviour ``kind``: ``INFUSE_DEFAULT_CONTROLLER_GAZE``."""
     return "INFUSE_DEFAULT_CONTROLLER_" + "".join(c if c.isalnum() else "_" for c in kind.upper())
@@ -339,28 +342,43 @@ def realizer(kind: str) -> ControllerFactory | None:
     3. among several replacements, the first by name, with a warning naming them all and how to choose.
     """
     controllers = table("controller")
-    candidates = [d for d in controllers.values() if kind in d.behaviour_kinds]
     variable = realizer_variable(kind)
-    config = current_config(frozenset(KINDS))
+    config = current_config(KIND_NAMES)
     chosen, source = os.environ.get(variable), variable
+    inputs = (controllers, chosen, config)
+    known = _REALIZERS.get(kind)
+    if known is not None and known[0][0] is controllers and known[0][1] == chosen and known[0][2] is config:
+        return known[1]
+    candidates = [d for d in controllers.values() if kind in d.behaviour_kinds]
     if not chosen and kind in config.realizers:
         chosen, source = config.realizers[kind], f"[defaults.controller] {kind} in {config.path}"
     if chosen:
         for descriptor in candidates:
             if descriptor.name == chosen:
+                _REALIZERS[kind] = (inputs, descriptor)
                 return descriptor
         names = ", ".join(sorted(d.name for d in candidates)) or "none"
         raise UsageError(f"{source} names controller {chosen!r}, which does not realize BML {kind!r} behaviours; "
                          f"those that do: {names}")
     replacements = sorted((d for d in candidates if d.name != kind), key=lambda d: d.name)
     if not replacements:
+        _REALIZERS[kind] = (inputs, candidates[0] if candidates else None)
         return candidates[0] if candidates else None
-    if len(replacements) > 1:
+    if len(replacements) == 1:
+        _REALIZERS[kind] = (inputs, replacements[0])
+    else:  # not kept: the warning comes with every choice
         listed = " and ".join(f"{d.name} ({plugins().distribution_of('controller', d)})" for d in replacements)
         plugins().report(f"{len(replacements)} controllers replace BML {kind!r} behaviours: {listed}; using "
                          f"{replacements[0].name} (choose with {variable}=NAME, or [defaults.controller] {kind} = "
                          f"\"NAME\" in {config.path})")
     return replacements[0]
+
+
+#: BML behaviour kind -> ((the controller table, the variable's value, the configuration) it was chosen
+#: from, the controller :func:`realizer` chose): a choice made without a warning, made again when the
+#: variable's value differs or the table or the configuration is another object (each is a new object
+#: whenever it changes).
+_REALIZERS: dict[str, tuple[tuple, ControllerFactory | None]] = {}
 
 
 def table_for_file(kind: str, path: str | Path, format: str | None = None) -> dict[str, Any]:

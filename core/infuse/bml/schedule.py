@@ -284,10 +284,9 @@ class Scheduler:
     # -- composition ----------------------------------------------------------------------------------------
     def _compose(self, block: Block, at: float, character, issues) -> float:
         """The block's global start time; interrupts what REPLACE and ``bmla:interrupt`` say."""
-        own = [r for r in self.blocks.values() if r.character == character and not r.failed and r.id != block.id]
         start = at
         if block.composition == "REPLACE":
-            for record in own:
+            for record in self._own(block, character):
                 if record.end_s > at:
                     self.interrupt(record.id, at)
         for name in block.interrupts:
@@ -296,13 +295,17 @@ class Scheduler:
             else:
                 issues.append(Issue(block.id, PARSING_FAILURE, f"bmla:interrupt names unknown block {name!r}", block.line))
         if block.composition == "APPEND":
-            start = max([at] + [self._effective_end(r) for r in own])
+            start = max([at] + [self._effective_end(r) for r in self._own(block, character)])
         for name in block.append_after:
             if name in self.blocks:
                 start = max(start, self._effective_end(self.blocks[name]))
             else:
                 issues.append(Issue(block.id, PARSING_FAILURE, f"block {name!r} to append after is unknown; not waiting for it", block.line))
         return start
+
+    def _own(self, block: Block, character) -> list[BlockSchedule]:
+        """The character's other blocks scheduled so far (not failed): what REPLACE and APPEND compose with."""
+        return [r for r in self.blocks.values() if r.character == character and not r.failed and r.id != block.id]
 
     @staticmethod
     def _effective_end(record: BlockSchedule) -> float:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import re
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -153,15 +154,60 @@ class Speech(Tracks):
 
     def bind(self, rig, report) -> TracksBinding:
         """The lip sync on this character's face channels, as keyed tracks (their own per character); none
-        when the face has no usable channels (it speaks without moving its mouth)."""
+        when the face has no usable channels (it speaks without moving its mouth). Taken from
+        :meth:`prepare` when it worked it out from the very same inputs."""
+        inputs = self._inputs(rig)
+        with _PREPARED_LOCK:
+            kept = rig.state_of(PreparedLipSync).pop(id(self.utterance), None)
+        if kept is not None and _same(kept[0], inputs):
+            binding, notes = kept[1]
+        else:
+            binding, notes = self._bound(rig, inputs[1])
+        for note in notes:
+            report(note)
+        return binding
+
+    def prepare(self, rig) -> None:
+        """Work out :meth:`bind` for ``rig`` ahead, on another thread, and keep it in the rig for
+        :meth:`bind` (the latest :data:`MAX_PREPARED` of a character)."""
+        inputs = self._inputs(rig)
+        bound = self._bound(rig, inputs[1])
+        with _PREPARED_LOCK:
+            kept = rig.state_of(PreparedLipSync)
+            kept[id(self.utterance)] = (inputs, bound)
+            while len(kept) > MAX_PREPARED:
+                del kept[next(iter(kept))]
+
+    def _inputs(self, rig) -> tuple:
+        """What :meth:`bind` depends on: the utterance, the face channels and the character (the same
+        objects), the viseme set, the settings and the name."""
+        return self.utterance, face_channels(rig, self.map_file), rig.character, self.viseme_set, self.settings, self.name
+
+    def _bound(self, rig, face) -> tuple[TracksBinding, list[str]]:
+        """The binding and what to report about it, in order."""
+        notes: list[str] = []
         try:
-            face = face_channels(rig, self.map_file)
             result = lipsync(self.utterance, face, self.viseme_set, self.settings, rig.skeleton)
         except UnusableInputError as exc:
-            report(f"{exc.problem}; it speaks without moving its mouth")
-            return super().bind(rig, report)  # no tracks: the speech's span alone
+            notes.append(f"{exc.problem}; it speaks without moving its mouth")
+            return super().bind(rig, notes.append), notes  # no tracks: the speech's span alone
         tracks = Tracks(result.times, dict(result.joint_rotations), dict(result.morph_weights), speaks=True, name=self.name)
-        return tracks.bind(rig, report)
+        return tracks.bind(rig, notes.append), notes
+
+
+class PreparedLipSync(dict):
+    """The lip syncs :meth:`Speech.prepare` worked out ahead for one runtime character, by the utterance's
+    id: (:meth:`Speech._inputs`, (binding, notes)). Kept in the character's rig, the oldest dropped first."""
+
+
+#: Lip syncs kept ahead per character.
+MAX_PREPARED = 16
+_PREPARED_LOCK = threading.Lock()
+
+
+def _same(kept: tuple, inputs: tuple) -> bool:
+    """Whether two :meth:`Speech._inputs` are the very same: objects by identity, settings by value."""
+    return all(a is b for a, b in zip(kept[:3], inputs[:3])) and kept[3:] == inputs[3:]
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,6 +21,12 @@ def _realize_speech(activation, stage):
     return realize_speech(activation, stage)
 
 
+def _prepare_speech(activation, stage):
+    from .realize import prepare_speech
+
+    prepare_speech(activation, stage)
+
+
 def _realize_face(activation, stage):
     from .realize import realize_face
 
@@ -30,6 +36,6 @@ def _realize_face(activation, stage):
 @hookimpl
 def infuse_controllers():
     return [ControllerFactory("speech", Speech, "lip sync of an utterance on the character's mouth (morphs, face poses or jaw)",
-                              from_bml=speech_from_bml, realize=_realize_speech),
+                              from_bml=speech_from_bml, realize=_realize_speech, prepare=_prepare_speech),
             ControllerFactory("face", FaceExpression, "a facial lexeme or FACS action unit held on the character's face",
                               from_bml=face_from_bml, realize=_realize_face)]

@@ -19,8 +19,20 @@ def realize_speech(activation, stage):
     if utterance is None:
         stage.warn(activation, CANNOT_CREATE_BEHAVIOR, f"<{activation.element}>: no synthesized utterance to lip-sync")
         return None
-    speech = Speech(utterance, fps=stage.fps, map_file=stage.map_file(activation.character))
-    return stage.activate(activation, speech, until_s(activation))
+    return stage.activate(activation, _speech(utterance, activation, stage), until_s(activation))
+
+
+def prepare_speech(activation, stage) -> None:
+    """Work out the lip sync of the activation's utterance on its character ahead (the costly part of
+    realizing it), on the caller's thread; :func:`realize_speech` binds it from there when it realizes
+    the very same utterance on the same face (:meth:`Speech.prepare`). Reads the stage only."""
+    utterance = stage.utterance(activation)
+    if utterance is not None:
+        _speech(utterance, activation, stage).prepare(stage.runtime.rig(activation.character))
+
+
+def _speech(utterance, activation, stage) -> Speech:
+    return Speech(utterance, fps=stage.fps, map_file=stage.map_file(activation.character))
 
 
 def realize_face(activation, stage):
