@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 import infuse
+from infuse.packs.analysis import LOCOMOTION_COORDINATES, resolution_of
 from infuse.packs.coverage import Hull, SpeedLimit, coverage, describe_coverage, speed_limits
+from infuse.packs.infusion import BlendSpace
 from infuse.packs.tessellation import Tessellation
 from infuse.runtime import Runtime
 
@@ -46,6 +48,77 @@ def test_hull_intervals_are_exact():
     table = coverage(t)
     assert table["top"][0] == pytest.approx(2.0, abs=1e-6)
     assert any("deg/s" in line for line in describe_coverage(table))
+
+
+def turning_space() -> BlendSpace:
+    """A locomotion blend space (no clips) of an idle, walks forward turning left, straight and right,
+    strafes, a walk back and turns on the spot (m/s, m/s, rad/s)."""
+    examples = {"idle": (0.0, 0.0, 0.0), "walk": (1.2, 0.0, 0.0), "walk_left": (1.0, 0.05, 0.9),
+                "walk_right": (1.0, -0.05, -0.9), "strafe_left": (0.1, 0.7, 0.0), "strafe_right": (0.1, -0.7, 0.0),
+                "back": (-0.8, 0.0, 0.0), "spin_left": (0.0, 0.0, 1.4), "spin_right": (0.0, 0.0, -1.4)}
+    t = Tessellation.build(LOCOMOTION_COORDINATES, list(examples), list(examples.values()),
+                           resolution=resolution_of("locomotion"))
+    return BlendSpace("turning", "1", "locomotion", {}, {"locomotion": t})
+
+
+def test_requests_outside_are_weighed_once_at_their_nearest_turn():
+    space = turning_space()
+    t = space.tessellations["locomotion"]
+    hull = space.speed_limit().hull
+    query = np.array([
+        [1.1, 0.0, 0.2],     # inside
+        [1.1, 0.0, 2.5],     # turning harder than any walk: outside, turned back in
+        [0.0, 0.0, 3.0],     # turning on the spot faster than the spins
+        [0.0, 0.0, -1.4],    # on the spot, on the boundary (an example's point)
+        [1.0, 0.05, 0.9],    # on the boundary (an example's point)
+        [0.5, 0.025, 1.15],  # on the boundary (halfway along the edge between a turning walk and a spin)
+        [3.0, 0.0, 0.0],     # faster than every example: no turn rate holds it, the hull's nearest point
+        [-0.4, 0.3, -2.0],   # back and to the side, turning hard
+    ])
+    w, inside = space.locomotion_weights(query)
+    assert inside.tolist() == [True, False, False, True, True, True, False, False]
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-12)
+    for i, q in enumerate(query):  # as each request weighed alone, turned where it lies outside
+        alone, flag = space.weights("locomotion", q[None])
+        assert flag[0] == inside[i]
+        turns, ok = hull.nearest_turns(q[None, :2], q[None, 2])
+        if not flag[0] and ok[0]:
+            alone = space.weights("locomotion", np.array([[q[0], q[1], turns[0]]]))[0]
+            assert abs(float(w[i] @ t.points[:, 2]) - turns[0]) < 1e-6  # shows the nearest turn the hull holds
+        np.testing.assert_allclose(w[i], alone[0], rtol=0.0, atol=1e-12)
+    assert not hull.nearest_turns(query[6:7, :2], query[6:7, 2])[1][0]
+    np.testing.assert_allclose(w[:3] @ t.points[:, :2], query[:3, :2], atol=1e-9)  # the velocity asked, shown
+
+
+def test_nearest_turns_are_the_hull_intervals_along_the_turn_rate():
+    for t in (turning_space().tessellations["locomotion"], square_space()):
+        hull = Hull(t)
+        rng = np.random.default_rng(3)
+        velocity = rng.uniform(-2.5, 2.5, (300, 2))
+        turn = rng.uniform(-4.0, 4.0, 300)
+        base = np.concatenate((velocity, np.zeros((300, 1))), axis=1)
+        lo, hi = hull.interval(base, np.array([0.0, 0.0, 1.0]))
+        turns, ok = hull.nearest_turns(velocity, turn)
+        assert ok.tolist() == (lo <= hi).tolist() and 0 < ok.sum() < 300
+        np.testing.assert_allclose(turns[ok], np.clip(turn[ok], lo[ok], hi[ok]), rtol=0.0, atol=1e-5)
+        assert np.array_equal(turns[~ok], turn[~ok])
+        assert t.contains(np.concatenate((velocity[ok], turns[ok, None]), axis=1)).all()  # just inside
+
+
+def test_located_points_weigh_as_the_points():
+    t = turning_space().tessellations["locomotion"]
+    rng = np.random.default_rng(5)
+    query = rng.uniform((-1.0, -1.0, -2.0), (1.5, 1.0, 2.0), (40, 3))
+    at = t.locate(query)
+    w, inside = t.weights(query)
+    assert np.array_equal(t.weights(query, at)[0], w) and np.array_equal(at.inside, inside)
+    assert np.array_equal(t.contains(query), inside) and 0 < inside.sum() < 40
+    rows = np.flatnonzero(~inside)[:5]
+    moved = query.copy()
+    moved[rows, 2] *= 0.1
+    merged = at.replaced(rows, t.locate(moved[rows]))
+    np.testing.assert_allclose(t.weights(moved, merged)[0], t.weights(moved)[0], rtol=0.0, atol=1e-12)
+    assert np.array_equal(merged.inside, t.contains(moved)) and not inside[rows].any()
 
 
 def test_a_single_walk_limits_speed_to_its_own():

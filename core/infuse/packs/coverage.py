@@ -84,10 +84,32 @@ class Hull:
         as it is). For a locomotion tessellation (coordinates forward speed, lateral speed, turn rate)."""
         v = np.atleast_2d(np.asarray(velocity, dtype=np.float64))
         turn = np.asarray(turn, dtype=np.float64)
-        lo, hi = self.interval(np.concatenate((v, np.zeros((len(v), 1))), axis=1), np.array([0.0, 0.0, 1.0]))
+        base = np.zeros((len(v), 3))
+        base[:, :2] = v
+        if self.t.dimension == 0:
+            lo, hi = self.interval(base, np.array([0.0, 0.0, 1.0]))
+        else:  # :meth:`interval` along the turn rate, with what depends on the hull alone worked out once
+            up, down, level, rate = self._turning()
+            room = -(self.t.reduced(base) @ self.normals.T + self.offsets) + 1e-9  # (Q, H): rate * turn <= room
+            hi = np.min(room[:, up] / rate[up], axis=1, initial=np.inf)
+            lo = np.max(room[:, down] / rate[down], axis=1, initial=-np.inf)
+            if level.size:
+                blocked = (room[:, level] < 0.0).any(axis=1)
+                lo, hi = np.where(blocked, np.inf, lo), np.where(blocked, -np.inf, hi)
         ok = lo <= hi
         margin = np.where(ok, 1e-6 * np.minimum(np.abs(hi - lo), 1.0), 0.0)
         return np.where(ok, np.clip(turn, lo + margin, hi - margin), turn), ok
+
+    def _turning(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """How fast each half-space's value grows with the turn rate (H,) (per rad/s, in the reduced space), and
+        the half-spaces it raises, lowers and leaves level (index arrays), as :meth:`interval` tells them apart
+        (made once)."""
+        cached = self.__dict__.get("_cached_turning")
+        if cached is None:
+            rate = ((np.array([0.0, 0.0, 1.0]) / self.t.scale) @ self.t.basis) @ self.normals.T
+            cached = self.__dict__["_cached_turning"] = (np.flatnonzero(rate > 1e-12), np.flatnonzero(rate < -1e-12),
+                                                         np.flatnonzero(np.abs(rate) <= 1e-12), rate)
+        return cached
 
 
 def speed_limits(tessellation, directions, turn: float | None = None, hull: Hull | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -111,6 +111,25 @@ class BlendSpace:
             w = self._compatible(group).weights(query, w)
         return w, inside
 
+    def locomotion_weights(self, query) -> tuple[np.ndarray, np.ndarray]:
+        """Blend weights (Q, N) of (Q, 3) locomotion requests (forward speed, lateral speed, turn rate) and (Q,)
+        flags of the requests inside the tessellation, as :meth:`weights` gives them, but a request outside
+        weighed at the turn rate nearest its own that the tessellation holds at its velocity (the rest is spun
+        at the root; :meth:`~.coverage.Hull.nearest_turns`), where it holds one. Each request is weighed once:
+        the turned ones located again, alone."""
+        t = self.tessellations["locomotion"]
+        at = t.locate(query)
+        inside = at.inside
+        if not inside.all():
+            out = np.flatnonzero(~inside)
+            turns, ok = self.speed_limit().hull.nearest_turns(query[out, :2], query[out, 2])
+            if ok.any():  # the others keep the weights of the full request's nearest point
+                cut = out[ok]
+                query = np.array(query, dtype=np.float64)
+                query[cut, 2] = turns[ok]
+                at = at.replaced(cut, t.locate(query[cut]))
+        return self._compatible("locomotion").weights(query, t.weights(query, at)[0]), inside
+
     def slowest(self, direction) -> np.ndarray:
         """(Q,) the slowest speed (m/s) at which the locomotion examples not travelling against each of (Q,)
         ``direction`` radians (+ left of the facing) reach it; NaN where they do not."""

@@ -9,12 +9,34 @@ hull gets those of the nearest point of the hull, and is reported as outside. No
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 
 #: Examples closer than this in the normalized, reduced space stand at one point and share its weight.
 SAME_POINT = 1e-9
+
+
+class Located(NamedTuple):
+    """Query points located in a :class:`Tessellation` (:meth:`Tessellation.locate`): their reduced coordinates
+    ``y`` (Q, d), barycentric coordinates ``bary`` (S, d+1, Q) in every simplex, (S, Q) flags ``held`` of the
+    simplices holding them and (Q,) flags ``inside`` of the points inside the hull."""
+
+    y: np.ndarray
+    bary: np.ndarray
+    held: np.ndarray
+    inside: np.ndarray
+
+    def replaced(self, rows: np.ndarray, other: "Located") -> "Located":
+        """These points with those at ``rows`` (K,) replaced by ``other``'s K points (the arrays written in place;
+        a new ``inside``)."""
+        self.y[rows] = other.y
+        self.bary[:, :, rows] = other.bary
+        self.held[:, rows] = other.held
+        inside = self.inside.copy()
+        inside[rows] = other.inside
+        return self._replace(inside=inside)
 
 
 @dataclass
@@ -87,18 +109,25 @@ class Tessellation:
             np.atleast_2d(np.asarray(query, dtype=np.float64))
         return ((q - self.origin) / self.scale) @ self.basis
 
-    def weights(self, query) -> tuple[np.ndarray, np.ndarray]:
-        """Blend weights (Q, N) of (Q, D) query points (each row sums to 1) and (Q,) inside-hull flags."""
+    def locate(self, query) -> Located:
+        """The :class:`Located` (Q, D) ``query`` points: where they lie in the simplices, for :meth:`weights`."""
         y = self.reduced(query)
+        if self.dimension == 0:
+            return Located(y, np.ones((1, 1, len(y))), np.ones((1, len(y)), dtype=bool), np.ones(len(y), dtype=bool))
+        bary, held = self._barycentric(y)
+        return Located(y, bary, held, np.logical_or.reduce(held, axis=0))
+
+    def weights(self, query, located: Located | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Blend weights (Q, N) of (Q, D) query points (each row sums to 1) and (Q,) inside-hull flags;
+        ``located``: the points as :meth:`locate` gives them (the query is then not read)."""
+        y, bary, held, inside = self.locate(query) if located is None else located
         q, n = len(y), len(self.labels)
         out = np.zeros((q, n))
         if self.dimension == 0:
             out[:, self.simplices[0, 0]] = 1.0
-            return out, np.ones(q, dtype=bool)
-        bary, inside_s = self._barycentric(y)
+            return out, inside
         rows = np.arange(q)
-        inside = np.logical_or.reduce(inside_s, axis=0)
-        best = inside_s.argmax(axis=0)  # the first simplex holding the query
+        best = held.argmax(axis=0)  # the first simplex holding the query
         chosen = bary[best, :, rows]  # (Q, d+1)
         if not inside.all():  # the clamped barycentric point nearest to the query, over every simplex
             outside = np.flatnonzero(~inside)
@@ -114,10 +143,7 @@ class Tessellation:
 
     def contains(self, query) -> np.ndarray:
         """(Q,) flags of (Q, D) query points inside the hull (as :meth:`weights` reports them), without the weights."""
-        y = self.reduced(query)
-        if self.dimension == 0:
-            return np.ones(len(y), dtype=bool)
-        return np.asarray(self._barycentric(y)[1].any(axis=0))
+        return self.locate(query).inside
 
     def _barycentric(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Barycentric coordinates (S, d+1, Q) of reduced points ``y`` (Q, d) in every simplex, and (S, Q)

@@ -1439,7 +1439,7 @@ def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> Weighed:
     """The :class:`Weighed` blend of the steering's requests ``req`` (R, 5) (speed, turn, direction first) in
     the pack's locomotion blend space as bound in ``b`` (:func:`_kept`)."""
     def weighed() -> Weighed:
-        w, slow, inside = _weights(b.space, b.idle, b.velocities, b.limit, req[:, 0], req[:, 2], req[:, 1])
+        w, slow, inside = _weights(b.space, b.idle, b.velocities, req[:, 0], req[:, 2], req[:, 1])
         return Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2],
                        1.0 - w[:, b.idle].sum(axis=1) if b.has_idle else slow)
 
@@ -2295,12 +2295,12 @@ def _slowest_towards(velocities: np.ndarray, idle: np.ndarray, direction) -> np.
     return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
 
 
-def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _weights(space, idle: np.ndarray, velocities: np.ndarray, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Blend weights (F, N) in the locomotion blend ``space`` (examples ``idle`` (N,) bool, with
-    ``velocities`` (N, 3), speed ``limit``) for the requests (F,), the moving share (F,) of the slowest walk's speed
+    ``velocities`` (N, 3)) for the requests (F,), the moving share (F,) of the slowest walk's speed
     and (F,) flags of the requests inside the tessellation:
     where the full request lies outside the tessellation, its turn rate is the nearest one the
-    tessellation holds at that velocity (the rest is spun at the root). With an idle among the examples the moving share is one
+    tessellation holds at that velocity (the rest is spun at the root; :meth:`BlendSpace.locomotion_weights`). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
     at that example's speed and the share is the ratio of the speeds."""
     has_idle = bool(idle.any())
@@ -2313,14 +2313,7 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, limit, speed, dire
         speed = np.maximum(speed, floor)
     query = np.empty((len(speed), 3))
     query[:, 0], query[:, 1], query[:, 2] = speed * np.cos(direction), speed * np.sin(direction), turn
-    w, inside = space.weights("locomotion", query)
-    if not inside.all():  # the turn rate nearest the request's that the tessellation holds at that velocity
-        out = np.flatnonzero(~inside)
-        turns, ok = limit.hull.nearest_turns(query[out, :2], query[out, 2])
-        cut = np.nonzero(ok)[0]  # the others keep the weights of the full request's nearest point
-        if cut.size:
-            query[out[cut], 2] = turns[cut]
-            w[out[cut]] = space.weights("locomotion", query[out[cut]])[0]
+    w, inside = space.locomotion_weights(query)
     if has_idle:
         slow = np.minimum(np.maximum(1.0 - w[:, idle].sum(axis=1), 0.0), 1.0)  # a clip, cheaper than np.clip on few values
     return w, slow, inside
@@ -2377,7 +2370,7 @@ def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
     slowest = np.zeros(len(clips))
     slowest[_slowest_walk(clips)] = 1.0
     ahead = np.zeros(len(grid))
-    w, slow, _ = _weights(space, idle, velocities, limit, grid, ahead, ahead)
+    w, slow, _ = _weights(space, idle, velocities, grid, ahead, ahead)
     durations = np.array([c.keys[2] - c.keys[0] for c in clips])
     return grid, pacing.straight_cadences(_moving(w, idle, slowest) @ durations, slow)
 
