@@ -141,6 +141,24 @@ def test_composition_merge_append_replace():
     assert ends["a"] == 2.0 and "p" not in [e.block for e in events if e.kind == "blockProgress" and e.sync == "start"]
 
 
+def test_the_blocks_interrupted_are_taken_once_each():
+    """take_interrupted hands over each block cut since the last call once, cut again earlier or not, and
+    leaves out those let go since; it names no block when nothing was cut."""
+    s = Scheduler()
+    for block_id, at in (("a", 0.0), ("b", 0.0), ("c", 0.0)):
+        s.submit(bml('<head id="n" lexeme="NOD" repetition="6"/>', block_id, characterId="C"), at=at)
+    assert s.take_interrupted() == []
+    s.submit(bml('<head id="n" lexeme="NOD"/>', "d", characterId="C", **{"xmlns:bmla": "http://www.asap-project.org/bmla",
+                                                                      "bmla:interrupt": "b, a"}), at=3.0)
+    s.interrupt("b", 2.0)  # cut again, earlier
+    assert [r.id for r in s.take_interrupted()] == ["b", "a"]
+    assert s.blocks["b"].interrupted_at == 2.0 and s.take_interrupted() == []
+    s.interrupt("c", 1.0)
+    s.flush()
+    s.forget(before_s=10.0)
+    assert "c" not in s.blocks and s.take_interrupted() == []
+
+
 def test_cross_block_reference():
     s = Scheduler()
     s.submit(bml('<head id="n" lexeme="NOD" start="1"/>', "first"), at=10.0)

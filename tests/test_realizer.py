@@ -1,9 +1,11 @@
 """Which installed controller realizes a BML behaviour kind (``registry.realizer``): the one named after the
 kind, a replacement that lists the kind in ``realizes``, an explicit choice (environment variable or
-configuration file), and the warning when several replacements compete."""
+configuration file), and the warning when several replacements compete; the choice kept until one of its
+inputs changes, and the configuration looked at once for a whole BML block (held_config)."""
 from __future__ import annotations
 
 import os
+import threading
 import types
 
 import pytest
@@ -122,3 +124,24 @@ def test_the_choice_is_kept_until_one_of_its_inputs_changes(settings, registered
     monkeypatch.setenv("INFUSE_CONFIG", str(settings.with_name("elsewhere.toml")))
     monkeypatch.delenv("INFUSE_DEFAULT_CONTROLLER_GAZE")
     assert registry.realizer("gaze").name == "soft-gaze"  # no file there: the replacement again
+
+
+def test_a_held_configuration_is_looked_at_once_on_its_thread(settings, registered):
+    """Within held_config (one scheduled BML block), lookups on its thread see the configuration of the first
+    look, nested or not; another thread looks for itself, and after it the file is looked at again."""
+    from infuse import config
+
+    registered(_controllers_module("soft_gaze", ControllerFactory("soft-gaze", _gaze, realizes=("gaze",))))
+    settings.write_text('[defaults.controller]\ngaze = "gaze"\n')
+    elsewhere = {}
+    with config.held_config():
+        assert registry.realizer("gaze").name == "gaze"
+        settings.write_text('[defaults.controller]\ngaze = "soft-gaze"\n')
+        with config.held_config():
+            assert registry.realizer("gaze").name == "gaze"
+        other = threading.Thread(target=lambda: elsewhere.update(name=registry.realizer("gaze").name))
+        other.start()
+        other.join()
+        assert registry.realizer("gaze").name == "gaze"  # the nested one did not let go
+    assert elsewhere["name"] == "soft-gaze"
+    assert registry.realizer("gaze").name == "soft-gaze"

@@ -19,7 +19,10 @@ Keys of ``[defaults]`` and ``[prefer]`` are plugin kinds (:data:`infuse.registry
 from __future__ import annotations
 
 import os
+import threading
 import tomllib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -96,7 +99,36 @@ def _cached(path: Path, stamp: tuple[int, int, int, int], kinds: frozenset[str])
 
 
 def current_config(kinds: frozenset[str]) -> Config:
-    """The configuration in effect now (re-read when the file changes: its times, size or inode)."""
+    """The configuration in effect now (re-read when the file changes: its times, size or inode); within
+    :func:`held_config`, the one in effect when it began."""
+    held = getattr(_held, "configs", None)
+    if held is None:
+        return _looked_up(kinds)
+    config = held.get(kinds)
+    if config is None:
+        config = held[kinds] = _looked_up(kinds)
+    return config
+
+
+@contextmanager
+def held_config() -> Iterator[None]:
+    """Within, :func:`current_config` on this thread gives the configuration in effect at the first look,
+    without looking at the file again: the many plugin lookups of one command (a BML block scheduled and
+    realized) see one configuration, for one look. Nested, the outermost holds."""
+    if getattr(_held, "configs", None) is not None:
+        yield
+        return
+    _held.configs = {}
+    try:
+        yield
+    finally:
+        _held.configs = None
+
+
+_held = threading.local()  # .configs: kinds -> Config while held_config() holds on this thread, else None
+
+
+def _looked_up(kinds: frozenset[str]) -> Config:
     path = config_path()
     try:
         status = os.stat(path)

@@ -147,6 +147,7 @@ class Scheduler:
         self._said: list[str] = []  # the text of every speech scheduled so far, for generators
         self._pending: list = []
         self._sequence = itertools.count()
+        self._cut: list[BlockSchedule] = []  # blocks interrupted since the last take_interrupted()
 
     # -- input ----------------------------------------------------------------------------------------------
     def submit(self, bml, at: float | None = None, character: str | None = None) -> list[BlockSchedule]:
@@ -320,6 +321,7 @@ class Scheduler:
         record.interrupted_at = at
         record.activations = tuple(a if a.end <= at and not a.persistent else replace(a, stop_s=at)
                                    for a in record.activations)
+        self._cut.append(record)
         started = record.start_s <= at
         self._pending = [p for p in self._pending if not (p[4] == block_id and p[0] > at)]
         heapq.heapify(self._pending)
@@ -330,6 +332,16 @@ class Scheduler:
             heapq.heapify(self._pending)
             self.feedback.emit(WarningFeedback(block_id, IMPOSSIBLE_TO_SCHEDULE, "block interrupted before it started",
                                                record.character))
+
+    def take_interrupted(self) -> list[BlockSchedule]:
+        """The blocks :meth:`interrupt` cut since the last call, each once, in the order first cut (those let
+        go or scheduled again under their id since left out): what plays them is to stop."""
+        cut, self._cut = self._cut, []
+        taken: dict[int, BlockSchedule] = {}
+        for record in cut:
+            if self.blocks.get(record.id) is record:
+                taken.setdefault(id(record), record)
+        return list(taken.values())
 
     def _external(self, ref: SyncRef, block_start: float) -> float | None:
         record = self.blocks.get(ref.block)
@@ -380,6 +392,7 @@ class Scheduler:
                 and (record.failed or self._effective_end(record) < before_s)]
         for block_id in gone:
             del self.blocks[block_id]
+        self._cut = [record for record in self._cut if self.blocks.get(record.id) is record]
         if len(self._said) > said:
             del self._said[:len(self._said) - said]
 

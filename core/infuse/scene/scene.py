@@ -40,6 +40,7 @@ from ..bml import BmlDocument, Scheduler, WarningFeedback, parse_bml, parse_bml_
 from ..bml import builder
 from ..bml.builder import BuilderCalls
 from ..bml.model import BEHAVIOR_DEGRADED, CANNOT_CREATE_BEHAVIOR, NO_SUCH_TARGET
+from ..config import held_config
 from ..errors import InfuseError, UsageError
 from ..runtime import Runtime
 from ..runtime.rig import Rig
@@ -423,20 +424,21 @@ class Scene(BuilderCalls):
             self.character(name)
             blocks.append(replace(block, character_id=name))
         ids = [block.id for block in blocks]
-        for block in (blocks if generated else [g for b in blocks for g in self.scheduler.generate(b)]):
-            self._scheduling = block.character_id
-            try:
-                record = self.scheduler.schedule_block(block, at)
-            finally:
-                self._scheduling = None
-            if at < self.time - 0.5 / self.fps:
-                self.feedback.emit(WarningFeedback(block.id, "IMPOSSIBLE_TO_SCHEDULE",
-                                                   f"the block starts at {at:g} s, before the scene's current time "
-                                                   f"({self.time:g} s): what falls before now is not shown",
-                                                   block.character_id))
-            for activation in record.activations:
-                self._realize(activation)
-            self._apply_interruptions()
+        with held_config():  # one look at the configuration file for all the block's plugin lookups
+            for block in (blocks if generated else [g for b in blocks for g in self.scheduler.generate(b)]):
+                self._scheduling = block.character_id
+                try:
+                    record = self.scheduler.schedule_block(block, at)
+                finally:
+                    self._scheduling = None
+                if at < self.time - 0.5 / self.fps:
+                    self.feedback.emit(WarningFeedback(block.id, "IMPOSSIBLE_TO_SCHEDULE",
+                                                       f"the block starts at {at:g} s, before the scene's current time "
+                                                       f"({self.time:g} s): what falls before now is not shown",
+                                                       block.character_id))
+                for activation in record.activations:
+                    self._realize(activation)
+                self._apply_interruptions()
         return ids[0] if len(ids) == 1 else ids
 
     def _realize(self, activation) -> None:
@@ -457,9 +459,7 @@ class Scene(BuilderCalls):
 
     def _apply_interruptions(self) -> None:
         """Stop the activities of behaviours a later block interrupted (REPLACE, ``bmla:interrupt``)."""
-        for record in self.scheduler.blocks.values():
-            if record.interrupted_at is None:
-                continue
+        for record in self.scheduler.take_interrupted():
             for activation in record.activations:
                 key = (activation.block, activation.behaviour)
                 if activation.stop_s is None or key in self._interrupted:
