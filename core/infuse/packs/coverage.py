@@ -91,14 +91,14 @@ class Hull:
         else:  # :meth:`interval` along the turn rate, with what depends on the hull alone worked out once
             up, down, level, rate = self._turning()
             room = -(self.t.reduced(base) @ self.normals.T + self.offsets) + 1e-9  # (Q, H): rate * turn <= room
-            hi = np.min(room[:, up] / rate[up], axis=1, initial=np.inf)
-            lo = np.max(room[:, down] / rate[down], axis=1, initial=-np.inf)
+            hi = np.minimum.reduce(room[:, up] / rate[up], axis=1, initial=np.inf)
+            lo = np.maximum.reduce(room[:, down] / rate[down], axis=1, initial=-np.inf)
             if level.size:
                 blocked = (room[:, level] < 0.0).any(axis=1)
                 lo, hi = np.where(blocked, np.inf, lo), np.where(blocked, -np.inf, hi)
         ok = lo <= hi
         margin = np.where(ok, 1e-6 * np.minimum(np.abs(hi - lo), 1.0), 0.0)
-        return np.where(ok, np.clip(turn, lo + margin, hi - margin), turn), ok
+        return np.where(ok, np.minimum(np.maximum(turn, lo + margin), hi - margin), turn), ok  # a clip, for less
 
     def _turning(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """How fast each half-space's value grows with the turn rate (H,) (per rad/s, in the reduced space), and

@@ -1439,9 +1439,8 @@ def _bound_weights(b: LocomotionBinding, req: np.ndarray) -> Weighed:
     """The :class:`Weighed` blend of the steering's requests ``req`` (R, 5) (speed, turn, direction first) in
     the pack's locomotion blend space as bound in ``b`` (:func:`_kept`)."""
     def weighed() -> Weighed:
-        w, slow, inside = _weights(b.space, b.idle, b.velocities, req[:, 0], req[:, 2], req[:, 1])
-        return Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2],
-                       1.0 - w[:, b.idle].sum(axis=1) if b.has_idle else slow)
+        w, slow, inside, moving = _weights(b.space, b.idle, b.velocities, req[:, 0], req[:, 2], req[:, 1])
+        return Weighed(w, slow, inside, _moving(w, b.idle, b.slowest), w @ b.velocities[:, 2], moving)
 
     return _kept(b, ("weights", req[:, :3].tobytes()), weighed)
 
@@ -2295,10 +2294,12 @@ def _slowest_towards(velocities: np.ndarray, idle: np.ndarray, direction) -> np.
     return np.where(np.isfinite(near), near, speeds.min(initial=np.inf) if moving.any() else 0.0)
 
 
-def _weights(space, idle: np.ndarray, velocities: np.ndarray, speed, direction, turn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _weights(space, idle: np.ndarray, velocities: np.ndarray, speed, direction,
+             turn) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Blend weights (F, N) in the locomotion blend ``space`` (examples ``idle`` (N,) bool, with
-    ``velocities`` (N, 3)) for the requests (F,), the moving share (F,) of the slowest walk's speed
-    and (F,) flags of the requests inside the tessellation:
+    ``velocities`` (N, 3)) for the requests (F,), the moving share (F,) of the slowest walk's speed,
+    (F,) flags of the requests inside the tessellation and the share (F,) of the clips not idle (1 - the
+    idle's weight; the moving share without an idle):
     where the full request lies outside the tessellation, its turn rate is the nearest one the
     tessellation holds at that velocity (the rest is spun at the root; :meth:`BlendSpace.locomotion_weights`). With an idle among the examples the moving share is one
     minus its weight; without, a request slower than the slowest example in its direction is blended
@@ -2315,8 +2316,9 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, speed, direction, 
     query[:, 0], query[:, 1], query[:, 2] = speed * np.cos(direction), speed * np.sin(direction), turn
     w, inside = space.locomotion_weights(query)
     if has_idle:
-        slow = np.minimum(np.maximum(1.0 - w[:, idle].sum(axis=1), 0.0), 1.0)  # a clip, cheaper than np.clip on few values
-    return w, slow, inside
+        moving = 1.0 - w[:, idle].sum(axis=1)
+        slow = np.minimum(np.maximum(moving, 0.0), 1.0)  # a clip, cheaper than np.clip on few values
+    return w, slow, inside, moving if has_idle else slow
 
 
 def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
@@ -2325,6 +2327,8 @@ def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
     nothing (:data:`SLOW_RAMP`)."""
     wm = np.where(idle[None], 0.0, w)
     moving = wm.sum(axis=1)
+    if (moving >= SLOW_RAMP).all():  # none of the slowest walk (the ramp at one; the sum below as it gives it)
+        return (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None]
     near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
     return near * (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * slowest[None]
 
@@ -2370,7 +2374,7 @@ def straight_walk(space, clips) -> tuple[np.ndarray, np.ndarray]:
     slowest = np.zeros(len(clips))
     slowest[_slowest_walk(clips)] = 1.0
     ahead = np.zeros(len(grid))
-    w, slow, _ = _weights(space, idle, velocities, grid, ahead, ahead)
+    w, slow, _, _ = _weights(space, idle, velocities, grid, ahead, ahead)
     durations = np.array([c.keys[2] - c.keys[0] for c in clips])
     return grid, pacing.straight_cadences(_moving(w, idle, slowest) @ durations, slow)
 
