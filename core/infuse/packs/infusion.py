@@ -118,6 +118,7 @@ class BlendSpace:
         at the root; :meth:`~.coverage.Hull.nearest_turns`), where it holds one. Each request is weighed once:
         the turned ones located again, alone."""
         t = self.tessellations["locomotion"]
+        query = np.atleast_2d(np.asarray(query, dtype=np.float64))
         at = t.locate(query)
         inside = at.inside
         if not inside.all():
@@ -125,7 +126,7 @@ class BlendSpace:
             turns, ok = self.speed_limit().hull.nearest_turns(query[out, :2], query[out, 2])
             if ok.any():  # the others keep the weights of the full request's nearest point
                 cut = out[ok]
-                query = np.array(query, dtype=np.float64)
+                query = query.copy()
                 query[cut, 2] = turns[ok]
                 at = at.replaced(cut, t.locate(query[cut]))
         return self._compatible("locomotion").weights(query, t.weights(query, at)[0]), inside
