@@ -112,7 +112,8 @@ class PluginSet:
         self._loaded: set[str] = set()
         self._order: dict[str, tuple] = {}  # pluggy plugin name -> its rank among providers of a name
         self._reported: set[str] = set()
-        self._tables: dict[str, tuple[tuple, dict[str, Any]]] = {}
+        # kind -> (the configuration and the hook implementations it was made from, its key, the table)
+        self._tables: dict[str, tuple[Any, list, tuple, dict[str, Any]]] = {}
 
     @property
     def records(self) -> list[PluginRecord]:
@@ -236,11 +237,15 @@ class PluginSet:
             self.load_kind(kind)
         caller = getattr(self.manager.hook, kind_of(kind).hook)
         config = current_config(KIND_NAMES)
-        prefer = config.prefer.get(kind, {})
-        key = (config.path, tuple(sorted(prefer.items())), *(id(impl.plugin) for impl in caller.get_hookimpls()))
+        impls = caller.get_hookimpls()
         cached = self._tables.get(kind)
-        if cached is not None and cached[0] == key:
-            return cached[1]
+        if cached is not None and cached[0] is config and cached[1] == impls:  # the very same inputs
+            return cached[3]
+        prefer = config.prefer.get(kind, {})
+        key = (config.path, tuple(sorted(prefer.items())), *(id(impl.plugin) for impl in impls))
+        if cached is not None and cached[2] == key:
+            self._tables[kind] = (config, impls, key, cached[3])
+            return cached[3]
         offered: dict[str, list[tuple[str, Any]]] = {}
         for plugin_name, items in self.offers(kind):
             for item in items:
@@ -248,7 +253,7 @@ class PluginSet:
         table = {}
         for name, candidates in offered.items():
             table[name] = self._winner(kind, name, candidates, prefer.get(name))
-        self._tables[kind] = (key, table)
+        self._tables[kind] = (config, impls, key, table)
         return table
 
     def distribution_of(self, kind: str, descriptor: Any) -> str:
@@ -364,9 +369,8 @@ def realizer(kind: str) -> ControllerFactory | None:
     if not replacements:
         _REALIZERS[kind] = (inputs, candidates[0] if candidates else None)
         return candidates[0] if candidates else None
-    if len(replacements) == 1:
-        _REALIZERS[kind] = (inputs, replacements[0])
-    else:  # not kept: the warning comes with every choice
+    _REALIZERS[kind] = (inputs, replacements[0])
+    if len(replacements) > 1:
         listed = " and ".join(f"{d.name} ({plugins().distribution_of('controller', d)})" for d in replacements)
         plugins().report(f"{len(replacements)} controllers replace BML {kind!r} behaviours: {listed}; using "
                          f"{replacements[0].name} (choose with {variable}=NAME, or [defaults.controller] {kind} = "
@@ -375,9 +379,9 @@ def realizer(kind: str) -> ControllerFactory | None:
 
 
 #: BML behaviour kind -> ((the controller table, the variable's value, the configuration) it was chosen
-#: from, the controller :func:`realizer` chose): a choice made without a warning, made again when the
-#: variable's value differs or the table or the configuration is another object (each is a new object
-#: whenever it changes).
+#: from, the controller :func:`realizer` chose): made again when the variable's value differs or the table
+#: or the configuration is another object (each is a new object whenever it changes; the plugin set that
+#: made the table warns about several replacements once anyway).
 _REALIZERS: dict[str, tuple[tuple, ControllerFactory | None]] = {}
 
 
