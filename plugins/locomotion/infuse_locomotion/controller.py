@@ -2065,16 +2065,7 @@ def _feet_below(sk, floors: FootFloors, rot, jt, above: np.ndarray, ankles: np.n
     g_rot, g_pos = np.empty((frames, 2, 4, 4)), np.empty((frames, 2, 2, 3))
     g_rot[:, :, 0], g_pos[:, :, 0] = above, ankles
     g_rot[:, :, 1] = ankle_rot = quat.multiply(above, rot[:, floors.ankles])
-    paths = []
-    for k in range(2):  # down from the ankle to the ball: none where the ball is the ankle
-        path, j = [], int(floors.balls[k])
-        while j != floors.ankles[k]:
-            path.append(j)
-            j = int(sk.parents[j])
-        paths.append(path[::-1])
-    # Both feet side by side where their paths are as long (the joints (S, 2)), else one by one.
-    legs: list[tuple[int | slice, np.ndarray]] = [(slice(None), np.array(paths).T)] if len(paths[0]) == len(paths[1]) else [(k, np.array(p)) for k, p in enumerate(paths)]
-    for foot, steps in legs:
+    for foot, steps in _foot_steps(sk, floors):
         rotation, position, parent_rot = ankle_rot[:, foot], ankles[:, foot], above[:, foot]
         for js in steps:
             offset = sk.rest_translations[js] if jt is None else jt[:, js]
@@ -2083,6 +2074,30 @@ def _feet_below(sk, floors: FootFloors, rot, jt, above: np.ndarray, ankles: np.n
             rotation = quat.multiply(rotation, rot[:, js])
         g_rot[:, foot, 2], g_rot[:, foot, 3], g_pos[:, foot, 1] = parent_rot, rotation, position
     return g_rot, g_pos
+
+
+#: Each skeleton's joints from its feet's ankles down to their balls (:func:`_foot_steps`), by ankles and balls.
+_FOOT_STEPS: weakref.WeakKeyDictionary[Any, dict[tuple, list]] = weakref.WeakKeyDictionary()
+
+
+def _foot_steps(sk, floors: FootFloors) -> list[tuple[int | slice, np.ndarray]]:
+    """The joints below each foot's ankle down to its ball (``floors.ankles``, ``floors.balls``), as (feet,
+    joints) pairs: both feet side by side (all feet, joints (S, 2)) where their paths are as long, else
+    each alone (its index, joints (S,)); none where the ball is the ankle. Worked out once per skeleton."""
+    key = (*floors.ankles.tolist(), *floors.balls.tolist())
+    known = _FOOT_STEPS.setdefault(sk, {})
+    steps = known.get(key)
+    if steps is None:
+        paths = []
+        for ankle, ball in zip(key[:2], key[2:]):
+            path, j = [], ball
+            while j != ankle:
+                path.append(j)
+                j = int(sk.parents[j])
+            paths.append(path[::-1])
+        steps = known[key] = [(slice(None), np.array(paths, dtype=np.int64).reshape(2, -1).T)] if len(paths[0]) == len(paths[1]) \
+            else [(k, np.array(p, dtype=np.int64)) for k, p in enumerate(paths)]
+    return steps
 
 
 def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float, feet: tuple[np.ndarray, np.ndarray] | None = None) -> None:
