@@ -95,3 +95,27 @@ def test_movements_on_several_characters_play_as_each_alone():
         without_overlap = play(list(enumerate(MOVEMENTS))[1:], block)
         for k in range(1, len(MOVEMENTS)):
             assert np.array_equal(without_overlap.motion(f"c{k}").local_rotations, together.motion(f"c{k}").local_rotations)
+
+
+def test_a_character_binds_each_angle_once():
+    """Head movements bind to their character's neck once per angle they turn (a nod and a wiggle share the
+    pitch binding, read-only); another angle, or the same character in another runtime, is bound anew, and
+    every binding is the one worked out alone."""
+    from infuse_head.controller import AXES, HeadBindings
+
+    runtimes = [Runtime(fps=30), Runtime(fps=30)]
+    for rt in runtimes:
+        rt.add_character(corpus_character("xbot"), name="x")
+    rig, other = (rt.rig("x") for rt in runtimes)
+    nod = HeadMovement("NOD").bind(rig, print)
+    assert HeadMovement("WIGGLE").bind(rig, print) is nod and not nod.axes.flags.writeable
+    shake, orient = HeadMovement("SHAKE").bind(rig, print), HeadMovement("ORIENT", direction="UP").bind(rig, print)
+    assert shake is not nod and orient.axes is None
+    assert HeadMovement("NOD").bind(other, print) is not nod
+    assert set(rig.state_of(HeadBindings)) == {AXES["NOD"], AXES["SHAKE"], AXES["ORIENT"]}
+    for lexeme, binding in (("NOD", nod), ("SHAKE", shake), ("ORIENT", orient)):
+        other.state_of(HeadBindings).clear()
+        alone = HeadMovement(lexeme).bind(other, print)
+        for field in ("joints", "aligned", "axes"):
+            kept, fresh = getattr(binding, field), getattr(alone, field)
+            assert (kept is None and fresh is None) or np.array_equal(kept, fresh), (lexeme, field)

@@ -428,7 +428,7 @@ class Runtime:
             spans.setdefault(a.rig.name, []).append((a.start_s, a.end_s if a.end_s is not None else np.inf))
         return {name: sorted(told) for name, told in spans.items()}
 
-    def realize(self, activation, character=None) -> Activity | None:
+    def realize(self, activation, character=None, *, component=None) -> Activity | None:
         """Play a scheduled BML :class:`~infuse.bml.Activation` through the installed controller that
         realizes its kind (:func:`infuse.registry.realizer`).
 
@@ -438,6 +438,7 @@ class Runtime:
         activation asks for nothing to play, and may stop activities itself (finishing saccades).
         Returns None, and reports why, when no installed controller realizes that kind. The activity
         runs from the activation's start to its end (persistent ones: until stopped), cut at ``stop_s``.
+        ``component``: that controller's factory when the caller looked it up already.
         """
         from .. import registry
 
@@ -445,7 +446,8 @@ class Runtime:
         rig = self.rig(name)
         if activation.stop_s is not None and activation.stop_s <= activation.start:
             return None  # interrupted before it started
-        component = registry.realizer(activation.controller)
+        if component is None:
+            component = registry.realizer(activation.controller)
         if component is None:
             self.report(rig.name, f"no installed controller realizes <{activation.element}> ({activation.controller!r}); skipped")
             return None

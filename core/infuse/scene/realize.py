@@ -54,7 +54,7 @@ def _through(descriptor, scene, activation: Activation):
     """The activation realized by the controller ``descriptor``: its ``realize``, else the generic way."""
     if descriptor.realize is not None:
         return descriptor.realize(activation, scene.stage)
-    return scene.stage.play(activation)
+    return scene.stage.play_with(descriptor, activation)
 
 
 def _speech(scene, activation: Activation):

@@ -56,7 +56,10 @@ class SceneStage:
         return self.scene.activate(activation, controller, end_s, **options)
 
     def play(self, activation):
-        descriptor = registry.realizer(activation.controller)
+        return self.play_with(registry.realizer(activation.controller), activation)
+
+    def play_with(self, descriptor, activation):
+        """:meth:`play` through ``descriptor``, the realizer of the activation's kind looked up already."""
         if descriptor is None:
             self.warn(activation, BEHAVIOR_TYPE_NOT_SUPPORTED,
                       f"<{activation.element}>: no installed controller realizes {activation.controller!r} behaviours")
@@ -67,7 +70,7 @@ class SceneStage:
         for name, idle in registry.table("controller").items():  # BML sets its own: the idle default stops
             if idle.idle is not None and activation.controller in idle.behaviour_kinds:
                 self.stop_idle(activation.character, name, activation.start)
-        return self.runtime.realize(activation, activation.character)
+        return self.runtime.realize(activation, activation.character, component=descriptor)
 
     def play_clip(self, activation):
         from .realize import play_clip

@@ -105,14 +105,14 @@ class HeadMovement(Controller):
         return head_angle(t, self.lexeme, self.amount, self.repeats, self.velocity_hz)
 
     def bind(self, rig, report) -> HeadBinding:
-        joints = [rig.joint(n) for n in NECK_JOINTS if rig.joint(n) is not None]
-        if not joints:
-            raise MissingJointsError(rig.name, "no neck or head joint is mapped for a head movement")
-        axis = AXES[self.lexeme]
-        if axis != "direction":  # one axis of each joint's aligned frame
-            axis = SWING_AXES[("heading", "pitch", "roll").index(axis)]
-        return HeadBinding(joints=np.array(joints), aligned=rig.aligned[joints],
-                           axes=None if isinstance(axis, str) else local_axes(rig.aligned[joints], axis))
+        """The character's neck joints and the movement's axis in them, worked out once per character and
+        angle (:class:`HeadBindings`)."""
+        angle = AXES[self.lexeme]
+        kept = rig.state_of(HeadBindings)
+        binding = kept.get(angle)
+        if binding is None:
+            binding = kept[angle] = _bind(rig, angle)
+        return binding
 
     @classmethod
     def evaluate(cls, jobs, block) -> None:
@@ -141,6 +141,25 @@ class HeadMovement(Controller):
             delta = swing(share * self.direction[0], share * self.direction[1])
             offsets = local_offsets(b.aligned, np.broadcast_to(delta, (len(share), len(b.joints), 4)))
         job.pose.set_rotations(b.joints, offsets, job.weight, job.mode)
+
+
+class HeadBindings(dict):
+    """The head bindings of one runtime character by the angle they turn (a value of :data:`AXES`): they
+    depend only on its neck joints' aligned frames, fixed with the rig. Kept in the character's rig
+    (:meth:`~infuse.runtime.rig.Rig.state_of`), read-only, shared by its head movements."""
+
+
+def _bind(rig, angle: str) -> HeadBinding:
+    joints = [rig.joint(n) for n in NECK_JOINTS if rig.joint(n) is not None]
+    if not joints:
+        raise MissingJointsError(rig.name, "no neck or head joint is mapped for a head movement")
+    axis = None if angle == "direction" else SWING_AXES[("heading", "pitch", "roll").index(angle)]
+    binding = HeadBinding(joints=np.array(joints), aligned=rig.aligned[joints],
+                          axes=None if axis is None else local_axes(rig.aligned[joints], axis))
+    for array in (binding.joints, binding.aligned, binding.axes):
+        if array is not None:
+            array.flags.writeable = False
+    return binding
 
 
 @dataclass(frozen=True, eq=False)
