@@ -89,26 +89,29 @@ class Hull:
         if self.t.dimension == 0:
             lo, hi = self.interval(base, np.array([0.0, 0.0, 1.0]))
         else:  # :meth:`interval` along the turn rate, with what depends on the hull alone worked out once
-            up, down, level, rate = self._turning()
-            room = -(self.t.reduced(base) @ self.normals.T + self.offsets) + 1e-9  # (Q, H): rate * turn <= room
-            hi = np.minimum.reduce(room[:, up] / rate[up], axis=1, initial=np.inf)
-            lo = np.maximum.reduce(room[:, down] / rate[down], axis=1, initial=-np.inf)
-            if level.size:
-                blocked = (room[:, level] < 0.0).any(axis=1)
+            normals, offsets, rate, up, down = self._turning()
+            room = -(self.t.reduced(base) @ normals + offsets) + 1e-9  # (Q, H): rate * turn <= room
+            hi = np.minimum.reduce(room[:, :up] / rate[:up], axis=1, initial=np.inf)
+            lo = np.maximum.reduce(room[:, up:down] / rate[up:down], axis=1, initial=-np.inf)
+            if down < len(rate):
+                blocked = np.logical_or.reduce(room[:, down:] < 0.0, axis=1)
                 lo, hi = np.where(blocked, np.inf, lo), np.where(blocked, -np.inf, hi)
         ok = lo <= hi
-        margin = np.where(ok, 1e-6 * np.minimum(np.abs(hi - lo), 1.0), 0.0)
+        margin = 1e-6 * np.minimum(np.abs(hi - lo), 1.0)  # only read where ok
         return np.where(ok, np.minimum(np.maximum(turn, lo + margin), hi - margin), turn), ok  # a clip, for less
 
-    def _turning(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """How fast each half-space's value grows with the turn rate (H,) (per rad/s, in the reduced space), and
-        the half-spaces it raises, lowers and leaves level (index arrays), as :meth:`interval` tells them apart
-        (made once)."""
+    def _turning(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+        """The half-spaces ordered by how the turn rate moves them, as :meth:`interval` tells them apart: those
+        it raises, those it lowers, those it leaves level; their normals (d, H) and offsets (H,), how fast each
+        one's value grows with the turn rate (H,) (per rad/s, in the reduced space), and where the lowered and
+        the level ones begin (made once)."""
         cached = self.__dict__.get("_cached_turning")
         if cached is None:
             rate = ((np.array([0.0, 0.0, 1.0]) / self.t.scale) @ self.t.basis) @ self.normals.T
-            cached = self.__dict__["_cached_turning"] = (np.flatnonzero(rate > 1e-12), np.flatnonzero(rate < -1e-12),
-                                                         np.flatnonzero(np.abs(rate) <= 1e-12), rate)
+            up, down = rate > 1e-12, rate < -1e-12
+            order = np.concatenate((np.flatnonzero(up), np.flatnonzero(down), np.flatnonzero(np.abs(rate) <= 1e-12)))
+            cached = self.__dict__["_cached_turning"] = (self.normals[order].T, self.offsets[order], rate[order],
+                                                         int(up.sum()), int(up.sum() + down.sum()))
         return cached
 
 

@@ -121,10 +121,10 @@ class BlendSpace:
         query = np.atleast_2d(np.asarray(query, dtype=np.float64))
         at = t.locate(query)
         inside = at.inside
-        if not inside.all():
-            out = np.flatnonzero(~inside)
+        if not np.logical_and.reduce(inside):
+            out = np.nonzero(~inside)[0]
             turns, ok = self.speed_limit().hull.nearest_turns(query[out, :2], query[out, 2])
-            if ok.any():  # the others keep the weights of the full request's nearest point
+            if np.logical_or.reduce(ok):  # the others keep the weights of the full request's nearest point
                 cut = out[ok]
                 query = query.copy()
                 query[cut, 2] = turns[ok]

@@ -8,6 +8,7 @@ hull gets those of the nearest point of the hull, and is reported as outside. No
 """
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -36,7 +37,7 @@ class Located(NamedTuple):
         self.held[:, rows] = other.held
         inside = self.inside.copy()
         inside[rows] = other.inside
-        return self._replace(inside=inside)
+        return Located(self.y, self.bary, self.held, inside)
 
 
 @dataclass
@@ -129,12 +130,12 @@ class Tessellation:
         rows = np.arange(q)
         best = held.argmax(axis=0)  # the first simplex holding the query
         chosen = bary[best, :, rows]  # (Q, d+1)
-        if not inside.all():  # the clamped barycentric point nearest to the query, over every simplex
-            outside = np.flatnonzero(~inside)
-            clamped = np.clip(bary[:, :, outside], 0.0, None)
-            clamped /= np.maximum(clamped.sum(axis=1, keepdims=True), 1e-12)
+        if not np.logical_and.reduce(inside):  # the clamped barycentric point nearest to the query, over every simplex
+            outside = np.nonzero(~inside)[0]
+            clamped = np.maximum(bary[:, :, outside], 0.0)
+            clamped /= np.maximum(np.add.reduce(clamped, axis=1, keepdims=True), 1e-12)
             gap = np.swapaxes(self._frames()[0], 1, 2) @ clamped - y[outside].T  # (S, d, O) from the query
-            nearest = np.argmin(np.sqrt((gap * gap).sum(axis=1)), axis=0)
+            nearest = np.argmin(np.sqrt(np.add.reduce(gap * gap, axis=1)), axis=0)
             best[outside] = nearest
             chosen[outside] = clamped[nearest, :, np.arange(outside.size)]
         out[rows[:, None], self.simplices[best]] = chosen  # a simplex's corners are distinct examples
@@ -151,7 +152,7 @@ class Tessellation:
         each simplex is one small matrix product, and the sums and tests run over whole rows."""
         _, base, inv = self._frames()
         lam = inv @ (y.T[None] - base[:, :, None])  # (S, d, Q)
-        bary = np.concatenate((1.0 - lam.sum(axis=1, keepdims=True), lam), axis=1)
+        bary = np.concatenate((1.0 - np.add.reduce(lam, axis=1, keepdims=True), lam), axis=1)
         return bary, np.logical_and.reduce(bary >= -1e-9, axis=1)
 
     def _frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -159,7 +160,7 @@ class Tessellation:
         the reduced space (computed once: a controller asks for weights every block)."""
         key = (self.points, self.simplices, self.origin, self.scale, self.basis)
         cached = self.__dict__.get("_cached_frames")
-        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+        if cached is None or not all(map(operator.is_, cached[0], key)):
             corners = self.reduced(self.points)[self.simplices]            # (S, d+1, d)
             base = corners[:, 0]                                           # (S, d)
             edges = np.swapaxes(corners[:, 1:] - base[:, None], 1, 2)      # (S, d, d)
@@ -173,7 +174,7 @@ class Tessellation:
         which one turns on the last bits of their coordinates: spread, their blend does not."""
         key = (self.points, self.origin, self.scale, self.basis)
         cached = self.__dict__.get("_cached_shares")
-        if cached is None or any(a is not b for a, b in zip(cached[0], key)):
+        if cached is None or not all(map(operator.is_, cached[0], key)):
             y = self.reduced(self.points)
             same = np.linalg.norm(y[:, None] - y[None], axis=-1) <= SAME_POINT
             share = same / same.sum(axis=1, keepdims=True) if same.sum() > len(y) else None

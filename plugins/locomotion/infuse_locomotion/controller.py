@@ -2331,7 +2331,7 @@ def _weights(space, idle: np.ndarray, velocities: np.ndarray, speed, direction,
     query[:, 0], query[:, 1], query[:, 2] = speed * np.cos(direction), speed * np.sin(direction), turn
     w, inside = space.locomotion_weights(query)
     if has_idle:
-        moving = 1.0 - w[:, idle].sum(axis=1)
+        moving = 1.0 - np.add.reduce(w[:, idle], axis=1)
         slow = np.minimum(np.maximum(moving, 0.0), 1.0)  # a clip, cheaper than np.clip on few values
     return w, slow, inside, moving if has_idle else slow
 
@@ -2341,8 +2341,8 @@ def _moving(w: np.ndarray, idle: np.ndarray, slowest: np.ndarray) -> np.ndarray:
     renormalized, turning into the slowest walk (``slowest`` (N,) one there) as their share falls to
     nothing (:data:`SLOW_RAMP`)."""
     wm = np.where(idle[None], 0.0, w)
-    moving = wm.sum(axis=1)
-    if (moving >= SLOW_RAMP).all():  # none of the slowest walk (the ramp at one; the sum below as it gives it)
+    moving = np.add.reduce(wm, axis=1)
+    if np.logical_and.reduce(moving >= SLOW_RAMP):  # none of the slowest walk (the ramp at one; the sum below as it gives it)
         return (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None]
     near = footing.smoothstep(moving / SLOW_RAMP)[:, None]  # the slowest walk when standing
     return near * (wm + SLOW_EPS * slowest[None]) / (moving + SLOW_EPS)[:, None] + (1.0 - near) * slowest[None]
