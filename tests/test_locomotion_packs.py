@@ -78,16 +78,45 @@ def test_requests_outside_are_weighed_once_at_their_nearest_turn():
     w, inside = space.locomotion_weights(query)
     assert inside.tolist() == [True, False, False, True, True, True, False, False]
     np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-12)
-    for i, q in enumerate(query):  # as each request weighed alone, turned where it lies outside
+    turned = _as_alone(space, query, w, inside)
+    np.testing.assert_allclose(w[turned] @ t.points[:, 2], hull.nearest_turns(query[turned, :2], query[turned, 2])[0],
+                               atol=1e-6)  # shows the nearest turn the hull holds
+    assert turned.tolist() == [1, 2, 7]  # the request faster than every example has no turn rate held
+    np.testing.assert_allclose(w[:3] @ t.points[:, :2], query[:3, :2], atol=1e-9)  # the velocity asked, shown
+
+
+def _as_alone(space: BlendSpace, query: np.ndarray, w: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Checks locomotion weights ``w`` (Q, N) and flags ``inside`` (Q,) of ``query`` (Q, 3) against each request
+    weighed alone (:meth:`BlendSpace.weights`), at its nearest turn rate where it lies outside and the hull
+    holds its velocity; returns the indices of those turned."""
+    hull = space.speed_limit().hull
+    turned = []
+    for i, q in enumerate(query):
         alone, flag = space.weights("locomotion", q[None])
         assert flag[0] == inside[i]
         turns, ok = hull.nearest_turns(q[None, :2], q[None, 2])
         if not flag[0] and ok[0]:
             alone = space.weights("locomotion", np.array([[q[0], q[1], turns[0]]]))[0]
-            assert abs(float(w[i] @ t.points[:, 2]) - turns[0]) < 1e-6  # shows the nearest turn the hull holds
+            turned.append(i)
         np.testing.assert_allclose(w[i], alone[0], rtol=0.0, atol=1e-12)
-    assert not hull.nearest_turns(query[6:7, :2], query[6:7, 2])[1][0]
-    np.testing.assert_allclose(w[:3] @ t.points[:, :2], query[:3, :2], atol=1e-9)  # the velocity asked, shown
+    return np.array(turned, dtype=np.int64)
+
+
+@pytest.mark.parametrize("examples", [
+    {"idle": (0.0, 0.0, 0.0), "walk": (1.2, 0.0, 0.0), "left": (0.1, 0.7, 0.0), "right": (0.1, -0.7, 0.0),
+     "back": (-0.8, 0.0, 0.0)},                                               # no turning clips: 2D
+    {"idle": (0.0, 0.0, 0.0), "walk": (1.2, 0.0, 0.0), "run": (3.0, 0.0, 0.0)},  # straight ahead only: 1D
+    {"walk": (1.2, 0.0, 0.0)},                                                 # one clip: a point
+], ids=["2d", "1d", "point"])
+def test_spaces_of_fewer_dimensions_weigh_requests_as_alone(examples):
+    t = Tessellation.build(LOCOMOTION_COORDINATES, list(examples), list(examples.values()),
+                           resolution=resolution_of("locomotion"))
+    space = BlendSpace("flat", "1", "locomotion", {}, {"locomotion": t})
+    query = np.array([[0.5, 0.1, 0.0], [0.5, 0.1, 2.0], [4.0, 0.0, 0.3], [0.0, 0.0, -3.0], [-1.0, 0.5, 0.2]])
+    w, inside = space.locomotion_weights(query)
+    np.testing.assert_allclose(w.sum(axis=1), 1.0, atol=1e-12)
+    _as_alone(space, query, w, inside)
+    assert inside[:2].all() and (t.dimension == 0 or not inside[2])  # a turn rate no clip shows is spun at the root
 
 
 def test_nearest_turns_are_the_hull_intervals_along_the_turn_rate():
