@@ -471,6 +471,40 @@ def test_a_say_is_lip_synced_on_the_callers_thread(monkeypatch):
     assert threads == [threading.current_thread()]
 
 
+def test_builder_calls_are_written_ahead_unless_the_loop_must_make_them():
+    """LiveScene.prepare_call writes and parses a nod, an expression and a gaze at a named character on the
+    caller's thread, for builder_call to schedule as they are; a gaze at a point (a scene target is made
+    for it), a call given ``at`` and a wrong argument are left to the loop, which makes them (and raises
+    the error) as the scene does. The frames are those of the scene's own builder calls, to the bit."""
+    calls = [("nod", "bob", {"repeats": 2.0}, True), ("expression", "ann", {"lexeme": "smile"}, True),
+             ("gaze", "bob", {"target": "ANN"}, True), ("gaze", "ann", {"target": [0.5, 1.6, 1.0]}, False),
+             ("shake", "ann", {"at": 1.5}, False)]
+    motions = []
+    for ahead in (False, True):
+        scene = _scene()
+        live = LiveScene(scene)
+        for method, name, arguments, written in calls:
+            if ahead:
+                prepared = live.prepare_call(method, name, arguments)
+                assert (prepared is not None) == written, method
+                live.builder_call(method, name, arguments, prepared)
+            else:
+                getattr(scene, method)(name, **arguments)
+            scene.step(20)
+        with pytest.raises(TypeError, match="bogus"):
+            if ahead:
+                prepared = live.prepare_call("nod", "bob", {"bogus": 1})
+                assert prepared is None
+                live.builder_call("nod", "bob", {"bogus": 1}, prepared)
+            else:
+                scene.nod("bob", bogus=1)
+        scene.step(60)
+        motions.append({name: scene.motion(name) for name in ("ann", "bob")})
+    for name in ("ann", "bob"):
+        assert np.array_equal(motions[0][name].local_rotations, motions[1][name].local_rotations), name
+        assert np.array_equal(motions[0][name].morph_weights, motions[1][name].morph_weights), name
+
+
 def test_only_blocks_a_controller_prepares_for_are_scheduled_ahead(monkeypatch):
     """LiveScene.parse schedules a block on a scratch planner (speech synthesis, walks planned ahead) only
     when it may have something to prepare: a nod once (to learn that no controller prepares nods), then no

@@ -700,7 +700,9 @@ class LiveScene:
     def prepare_call(self, method: str, character: str, arguments: dict) -> list | None:
         """Check a builder call, on the caller's thread. A ``say`` is made into its block here (the scene's
         ``say``, its id taken now), parsed and prepared (:meth:`parse`); its blocks are returned, for
-        :meth:`builder_call`."""
+        :meth:`builder_call`. So are the other calls' blocks, written as the scene's builder writes them,
+        unless the call gives ``at``, names a point (it becomes a scene target on the loop) or fails
+        (the loop makes it, and raises its error); None then."""
         if method not in self.BUILDER:
             raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
         name = self.scene.resolve_name(character)
@@ -713,7 +715,7 @@ class LiveScene:
                 raise UsageError(f"{method}: {exc}") from None
             return self.parse(name, written)
         if method != "say":
-            return None
+            return self._written_ahead(method, name, arguments)
         text = arguments.get("text")
         if not isinstance(text, str):
             raise UsageError("say needs the text to speak")
@@ -724,9 +726,19 @@ class LiveScene:
         speech = builder.element("speech", {"id": "s1", "voice": arguments.get("voice")}, content)
         return self.parse(name, builder.block(self.scene.block_id("say"), name, speech))
 
+    def _written_ahead(self, method: str, name: str, arguments: dict) -> list | None:
+        """A builder call's blocks, written and parsed on this thread (see :meth:`prepare_call`), or None."""
+        if arguments.get("at") is not None:
+            return None
+        try:
+            written = getattr(_Written(self.scene), method)(name, **arguments)
+        except Exception:  # noqa: BLE001 - the loop makes the call itself and raises its error there, as ever
+            return None
+        return self.parse(name, written)
+
     def builder_call(self, method: str, character: str, arguments: dict, prepared: list | None = None) -> str:
         """Run a builder method of the scene now (on the loop thread: inside :meth:`submit`); the block id.
-        ``prepared``: what :meth:`prepare_call` returned (a ``say``'s blocks, scheduled as they are)."""
+        ``prepared``: what :meth:`prepare_call` returned (the call's blocks, scheduled as they are)."""
         if method not in self.BUILDER:
             raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
         if prepared is not None:
@@ -843,8 +855,8 @@ class LiveScene:
 
 
 class _Written(builder.BuilderCalls):
-    """The scene builder's block for a call (a ``walk_to``), written as XML text, not scheduled; its block
-    id taken from the scene."""
+    """The scene builder's block for a call, written as XML text, not scheduled; its block id taken from
+    the scene, the names it gives as targets spelled as the scene spells them."""
 
     def __init__(self, scene: Scene):
         self.scene = scene
@@ -853,7 +865,9 @@ class _Written(builder.BuilderCalls):
         return builder.block(self.scene.block_id(what), character, behaviour, composition)
 
     def _target_name(self, target) -> str:
-        raise UsageError("only calls that name no target are written ahead")
+        if isinstance(target, str):
+            return self.scene.resolve_name(target)
+        raise UsageError("only calls that name no point are written ahead")
 
 
 def _rest_foot_height(asset, mapping) -> float:
