@@ -36,8 +36,11 @@ from .pose import chain_fk
 
 # Small vector helpers over (..., 3) arrays: numpy's generic cross and norm, and einsum's broadcasting
 # iterator, cost more than the arithmetic; sums over the last axis run as one matrix-vector product.
-# Gathers go through np.take: numpy's fancy indexing costs several times more on small arrays.
-_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+# Gathers go through the arrays' take with index arrays made once: numpy's fancy indexing, and np.take
+# with an index list, cost several times more on small arrays.
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
+_CROSSED_FIRST, _CROSSED_SECOND = np.array([2, 2, 0]), np.array([3, 0, 1])  # a->c x a->goal, a->c x a->b, a->b x b->c
+_A_B_A = np.array([0, 1, 0])
 _ONES = np.ones(3)
 
 
@@ -51,7 +54,18 @@ def _norm(v: np.ndarray) -> np.ndarray:
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    return np.take(u, _NEXT, -1) * np.take(v, _AFTER, -1) - np.take(u, _AFTER, -1) * np.take(v, _NEXT, -1)
+    u, v = np.asarray(u), np.asarray(v)
+    return u.take(_NEXT, -1) * v.take(_AFTER, -1) - u.take(_AFTER, -1) * v.take(_NEXT, -1)
+
+
+def _any(flags: np.ndarray) -> bool:
+    """Whether any of ``flags`` is set: counted, as numpy's any() costs several times more on a few values."""
+    return bool(np.count_nonzero(flags))
+
+
+def _all(flags: np.ndarray) -> bool:
+    """Whether all of ``flags`` are set (see :func:`_any`)."""
+    return bool(np.count_nonzero(flags) == np.size(flags))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -303,7 +317,7 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     lat = np.minimum(np.maximum(lta, np.abs(lab - lcb) + 1e-6), (lab + lcb) * (1.0 - 1e-6))
     # a->c x a->goal (toward the goal), a->c x a->b (the bend's normal) and a->b x b->c, their lengths.
     ca = sides[2]
-    first, second = np.take(sides, [2, 2, 0], 0), np.take(sides, [3, 0, 1], 0)
+    first, second = sides.take(_CROSSED_FIRST, 0), sides.take(_CROSSED_SECOND, 0)
     crossed = _cross(first, second)
     axes, cross_norms = crossed[:2], _norm(crossed)
     axis_norms = cross_norms[:2]
@@ -322,9 +336,9 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     if pole is not None:  # a->c x pole: the normal of the plane that bends the limb toward the pole
         pole = np.asarray(pole, dtype=np.float64)
         toward = _cross(ca, pole[:, None] if several and pole.ndim == 2 else pole)  # broadcast by the products
-    if flat.any() or small.any():
+    if _any(flat) or _any(small):
         axis1, axis0 = axes
-        if flat.any():  # a straight limb bends toward the pole, else toward the goal
+        if _any(flat):  # a straight limb bends toward the pole, else toward the goal
             if toward is not None:
                 fallback = toward
             else:
@@ -336,7 +350,7 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     else:
         axis1, axis0 = axes / np.maximum(axis_norms, 1e-12)[..., None]
     # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
-    inverse = quat.conjugate(np.take(g_rot, [0, 1, 0], -2))  # a's, b's, a's: (F, [K,] 3, 4)
+    inverse = quat.conjugate(np.asarray(g_rot).take(_A_B_A, -2))  # a's, b's, a's: (F, [K,] 3, 4)
     # Stacked by assignment: np.stack costs more than the copies on a block's few frames.
     local_axes, angles = np.empty(inverse.shape[:-1] + (3,)), np.empty(inverse.shape[:-1])
     local_axes[..., 0, :], local_axes[..., 1, :], local_axes[..., 2, :] = axis0, axis0, axis1
@@ -345,12 +359,12 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     if toward is not None:
         plane = _pole_plane(axis0, toward, cross_norms[2] / np.maximum(lab * lcb, 1e-12))
         moved = ~flat & (_dot(plane, axis0) < 1.0 - 1e-12)
-        if moved.any():  # bent in the plane the pole sides, not in its own
+        if _any(moved):  # bent in the plane the pole sides, not in its own
             turns[moved, :2] = _replaned(axis0[moved], plane[moved], ac_ab_0[moved], ac_ab_1[moved], ba_bc_0[moved],
                                          ba_bc_1[moved], inverse[moved, :2])
     r0, r1, r2 = turns[..., 0, :], turns[..., 1, :], turns[..., 2, :]
     columns = limbs if several else limbs[0]
-    old = np.take(local_rotations, columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
+    old = local_rotations.take(columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
     # a bends in the limb's plane first (c stays on the line a->c), then turns that line onto the goal;
     # turning first would bend about a normal the turn has moved (off the goal unless the plane holds it).
     both = np.empty(old.shape)
@@ -360,8 +374,8 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
         w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]
         solved = w == 1.0
-        if not solved.all():  # solved or left as they are frame by frame (no interpolation), else blended
-            new = np.where(solved[..., None], new, old) if np.all(solved | (w == 0.0)) else quat.slerp(old, new, w)
+        if not _all(solved):  # solved or left as they are frame by frame (no interpolation), else blended
+            new = np.where(solved[..., None], new, old) if _all(solved | (w == 0.0)) else quat.slerp(old, new, w)
     local_rotations[:, columns[..., :2]] = new
     if plan.all_carried:
         places, holders, middles = _place_carried(skeleton, local_rotations, root_translations, joint_translations,
@@ -402,7 +416,7 @@ def _pole_plane(normal: np.ndarray, toward: np.ndarray, sin_bend: np.ndarray) ->
     straight (``sin_bend`` (...) the sine of its bend at b, from :data:`POLE_PLANE_SINE`): the plane
     of a limb within a few degrees of straight is noise, and so is the side a blend leaves it bent to."""
     lo, hi = POLE_PLANE_SINE
-    if (sin_bend >= hi).all() and (_dot(normal, toward) >= 0.0).all():  # all bent enough, to the pole's side: their own
+    if _all(sin_bend >= hi) and _all(_dot(normal, toward) >= 0.0):  # all bent enough, to the pole's side: their own
         return _unit(normal)
     p = _unit(toward)
     n = normal - 2.0 * np.minimum(_dot(normal, p), 0.0)[..., None] * p

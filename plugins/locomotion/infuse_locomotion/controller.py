@@ -737,7 +737,7 @@ class Locomotion(Controller):
         pos = g_pos[:frames]
         feet = g_rot[:frames, :, 2:3]  # (F, 2, 1 or 2, 4): each foot's ankle (and ball) global rotations to keep
         if stance_feet is not None:
-            if laid.any():
+            if _any(laid):
                 flat = quat.multiply(turn_q[:, None, None], stance_feet)
                 feet = quat.slerp(g_rot[:frames, :, [2, 4]], flat, laid[:, :, None])
             else:  # nothing laid down (walking slower, not stopping): the slerp's start, as it leaves it
@@ -745,7 +745,7 @@ class Locomotion(Controller):
         hips = 0.5 * (pos[:, 0, 0] + pos[:, 1, 0])
         rot[:, body] = calmer
         # Each ankle's goal (F, 2, 3): its offset from the hips scaled about the (settling) cycle mean.
-        if b.has_idle and settle.any():
+        if b.has_idle and _any(settle):
             centre = centre + settle[:, None, None] * (b.ankle_means[np.argmax(b.idle)] - centre)
         centre = quat.rotate(turn_q[:, None], centre)
         goal = hips[:, None] + centre + stride[:, None, None] * (pos[:, :, 2] - hips[:, None] - centre)
@@ -753,7 +753,7 @@ class Locomotion(Controller):
         # The legs are apart: both in one solve. The feet keep their animated orientation, not the one
         # the calmer pelvis would give them (a planted foot would turn about its pinned ankle).
         shorter = np.abs(stride - 1.0) > 1e-6  # the frames whose steps are shortened (all, mostly: no weights then)
-        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=None if shorter.all() else shorter.astype(float),
+        solve_limb(b.skeleton, rot, root, jt, b.leg_limbs, goal, weight=None if _all(shorter) else shorter.astype(float),
                    pole=forward, end_rotation=feet[:, :, 0], chains=(g_rot[frames:, :, :4], g_pos[frames:, :, :4]), distance=False)
         if stance_feet is not None and b.balls_on_ankles.size:
             k = b.balls_on_ankles
@@ -787,7 +787,7 @@ class Locomotion(Controller):
         on_ball = anchors_all == footing.BALL
         posed_all = on_ball & (contact[..., 1] <= contact[..., 0])
         shared = np.zeros_like(on_ball)  # (F, 2) held by the idle's fading share
-        if b.idle.any():
+        if _any(b.idle):
             shared = on_ball & ((contact > 1e-6) & (contact < 1.0 - 1e-6)).any(axis=-1)
             posed_all |= shared
         goals = g_pos_all[:, :, 2].copy()
@@ -798,7 +798,7 @@ class Locomotion(Controller):
         turns[..., 3] = 1.0
         touching_all = np.zeros(anchors_all.shape, dtype=bool)  # (F, 2) held where it touched, before its blend's strike
         touched = _touch_downs(b, runs, anchors_all, feet_all, made, dt)
-        if touched.any():
+        if _any(touched):
             touching_all = touched > 0
             anchors_all = np.where(touching_all, touched, anchors_all)
             posed_all |= touched == footing.BALL
@@ -869,7 +869,7 @@ class Locomotion(Controller):
                             since = (round(free_s / dt) + np.arange(1, end - s + 1)) * dt
                             up = (feet_pos[s:end, k, 1, 1] + ball_offset[1] > let_go[1] + rises_by) | (since > HOLD_S)
                             up = np.logical_or.accumulate(up | (released > 0.0))
-                            e = s + int(np.argmin(up)) + 1 if not up.all() else end
+                            e = s + int(np.argmin(up)) + 1 if not _all(up) else end
                             since, up = since[:e - s], up[:e - s]
                             free_s = float(since[-1])
                             down = np.maximum.accumulate(np.where(up, -1, np.arange(e - s)))  # the last frame still down
@@ -891,7 +891,7 @@ class Locomotion(Controller):
                             # ground last, and the fading turn would swing it along the ground).
                             turn[s:e] = _share_of(left, fade)
                             hang = quat.rotate(turn[s:e], lever[s:e])
-                            if lifted.any():
+                            if _any(lifted):
                                 rise[s:e] = lifted * (1.0 - footing.smoothstep(age / RISE_RELEASE_S))[:, None]
                                 # The heel's extra rise (a turn in the corrected foot's frame) turns the lever too.
                                 corrected = quat.multiply(turn[s:e], g_rot[s:e, k, 2])
@@ -907,7 +907,7 @@ class Locomotion(Controller):
                             # Off the ground, kept within reach as a foot without a ball is (below): a ball let go
                             # far behind (a long foot's, pinned where it landed) held the leg straight toward it,
                             # and the knee bent by 18 degrees and the hip turned by 46 in the frame it came back.
-                            if up.any():
+                            if _any(up):
                                 lifting = s + np.flatnonzero(up)
                                 goal[lifting] = footing.within_reach(goal[lifting], g_pos[lifting, k, :3])
                             held = np.nonzero(~up)[0]
@@ -935,7 +935,7 @@ class Locomotion(Controller):
                             lagging = up[0] > -pitch[0]
                             if lagging[0]:
                                 kind = footing.ANKLE
-                                if not lagging.all():
+                                if not _all(lagging):
                                     e = s + int(np.argmin(lagging))
                                     bounds.insert(i, e)
                         if kind != prev and prev == footing.FREE:
@@ -1007,14 +1007,14 @@ class Locomotion(Controller):
         # pin may lie beyond the leg's reach (the knee locked straight), and once let go its goal would come
         # back within reach in a frame or two, bending the knee by tens of degrees in one. Let go, its
         # goal is kept within reach, the knee bending at least as the animation's.
-        for k in np.flatnonzero(~b.has_ball).tolist() if not b.has_ball.all() else ():
+        for k in np.flatnonzero(~b.has_ball).tolist() if not _all(b.has_ball) else ():
             free = anchors_all[:, k] == footing.FREE
-            if free.any():
+            if _any(free):
                 goals[free, k] = footing.within_reach(goals[free, k], g_pos_all[free, k, :3])
-        if rises.any():
+        if _any(rises):
             g_rot_all[:, :, 2] = quat.multiply(g_rot_all[:, :, 2], _turn_feet(b, rot, rises))
         feet_rot = quat.multiply(turns, g_rot_all[:, :, 2])  # (F, 2, 4) the ankles' global rotations to reach
-        if not weights.any():
+        if not _any(weights):
             return None
         # Both legs in one solve (a leg of weight 0 keeps its hip and knee, its ankle set to the rotation it
         # has): one leg costs as much, and the solve gives both ankles' places for keeping the feet up.
@@ -1045,7 +1045,7 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     states = [st for st, _, _ in runs]
     starts = [a0 for _, a0, _ in runs]
     # The walks with a swinging foot in frames of a made step: where none, none held.
-    swinging = np.logical_or.reduceat(made, starts) & np.logical_or.reduceat(free.any(axis=1), starts) if made.any() else \
+    swinging = np.logical_or.reduceat(made, starts) & np.logical_or.reduceat(free.any(axis=1), starts) if _any(made) else \
         np.zeros(len(runs), dtype=bool)
     if swinging.sum() <= 1 and len(runs) > 1:  # one walk or none: that walk's frames alone
         out: np.ndarray = np.zeros(anchors.shape, np.int64)
@@ -1055,7 +1055,7 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
             else:
                 st.touched = np.zeros(2, np.int64)
         return out
-    if not swinging.any():
+    if not _any(swinging):
         states[0].touched = np.zeros(2, np.int64)
         return np.zeros(anchors.shape, np.int64)
     f = len(anchors)
@@ -1097,6 +1097,16 @@ def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarr
     for st, (_, _, a1) in zip(states, runs):
         st.touched = out[a1 - 1].copy()
     return out
+
+
+def _any(flags: np.ndarray) -> bool:
+    """Whether any of ``flags`` is set: counted, as numpy's any() costs several times more on a block's few values."""
+    return bool(np.count_nonzero(flags))
+
+
+def _all(flags: np.ndarray) -> bool:
+    """Whether all of ``flags`` are set (see :func:`_any`)."""
+    return bool(np.count_nonzero(flags) == np.size(flags))
 
 
 def _latest(marks: np.ndarray, first: np.ndarray | None) -> np.ndarray:
@@ -1165,7 +1175,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
     along frames is cumulative (the toes' slowed pitch, the swivel held off, the touching ball's height),
     so a stretch gives the same frames whether it comes in one call or frame by frame."""
     on_heel = kind == footing.ANKLE  # (P,)
-    heels, balls = bool(on_heel.any()), not on_heel.all()
+    heels, balls = _any(on_heel), not _all(on_heel)
     ankle, ball = leg[:, :, 2], leg[:, :, 4]
     lever = ball - ankle  # (P, n, 3) the animated ankle to ball
     pins, across = held.pins, held.across
@@ -1209,7 +1219,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         # ball held where it first touched, the animation's foot coming down on, held the foot up in the
         # air and dropped it at the strike).
         held_at = np.repeat(pins[:, None], reach.shape[1], axis=1)
-        if touching.any():
+        if _any(touching):
             held_at[..., 1] = np.minimum(pins[:, 1:2], np.minimum.accumulate(np.where(touching, ball[..., 1], np.inf), axis=1))
         pins = np.where(on_heel[:, None], pins, held_at[:, -1]) if heels else held_at[:, -1]
         goal = np.where(on_heel[:, None, None], goal, held_at - reach) if heels else held_at - reach
@@ -1219,7 +1229,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
     # down by the heel, no higher than keeps the heel where it touched (the blend's foot rising again
     # before its strike would lift it and drop it back in a frame).
     landing = touching & on_heel[:, None]
-    pinned = goal[..., 1].copy() if landing.any() else None
+    pinned = goal[..., 1].copy() if _any(landing) else None
     goal[..., 1] = np.where(posed, np.maximum(ankle[..., 1], goal[..., 1]), ankle[..., 1])
     if pinned is not None:
         goal[..., 1] = np.where(landing, np.minimum(goal[..., 1], pinned), goal[..., 1])
@@ -2123,11 +2133,11 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float, feet: 
     ahead = np.zeros(across.shape)
     ahead[..., 0], ahead[..., 2] = across[..., 2], -across[..., 0]
     angle = None
-    if floors.kept.any():
+    if _any(floors.kept):
         point = ball + quat.rotate(g_rot[:, :, 3], floors.point) - ankle
         axis, angle = _lift(point, floors.point_floor - ankle[..., 1], ahead)
         angle = angle * floors.kept
-    if angle is not None and angle.any():  # feet that pitch (others keep their rotations as they are)
+    if angle is not None and _any(angle):  # feet that pitch (others keep their rotations as they are)
         pitch = quat.from_axis_angle(axis, angle)
         ankle_rot = quat.multiply(pitch, g_rot[:, :, 1])
         rot[:, floors.ankles] = quat.multiply(quat.conjugate(g_rot[:, :, 0]), ankle_rot)
@@ -2136,7 +2146,7 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float, feet: 
         ball_rot = quat.multiply(pitch, ball_rot)
         ball_parent = np.where((floors.ball_parents == floors.ankles)[None, :, None], ankle_rot,
                                quat.multiply(pitch, ball_parent))
-    if not floors.toes.any():
+    if not _any(floors.toes):
         return
     tip = quat.rotate(ball_rot, floors.tip)
     axis, angle = _lift(tip, floors.tip_floor - ball[..., 1], ahead)  # across the whole foot
@@ -2151,7 +2161,7 @@ def _keep_feet_up(sk, floors: FootFloors, rot, root, jt, runs, dt: float, feet: 
             up[a0:a1] = _slow_fall(angle[a0:a1], st.toe_bend, floors.release * dt)
             st.toe_bend = up[a1 - 1].copy()
     up = up * floors.toes
-    if up.any():  # toes bent (else they keep their rotations)
+    if _any(up):  # toes bent (else they keep their rotations)
         ball_rot = quat.multiply(quat.from_axis_angle(axis, up), ball_rot)
         rot[:, floors.balls] = np.where(floors.toes[None, :, None], quat.multiply(quat.conjugate(ball_parent), ball_rot),
                                         rot[:, floors.balls])
