@@ -263,3 +263,31 @@ def test_gaze_command_renders_and_saves(tmp_path):
     assert back.motions["gaze"].num_frames == 60
     assert {n for n, w in weights.items() if np.any(w > 0)} <= {"eyeBlinkLeft", "eyeBlinkRight"}
     assert main(["gaze", str(corpus_file(CORPUS_CHARACTERS["rpm"])), "-o", str(out), "--target-path", "1,2"]) == 2
+
+
+def test_a_character_binds_each_kind_of_gaze_once():
+    """Gazes bind to their character once per groups moved and group pointing (read-only, shared by its
+    gazes) and report what the character lacks every time; other groups, or the same character in another
+    runtime, are bound anew, and every binding is the one worked out alone."""
+    from dataclasses import fields
+
+    from infuse_gaze.binding import bind_chain
+    from infuse_gaze.model import INFLUENCES
+
+    from runtime_characters import synthetic_character
+
+    eyeless = synthetic_character("eyeless", drop=("eyeball_left", "eyeball_right"))
+    runtimes = [Runtime(fps=30), Runtime(fps=30)]
+    for rt in runtimes:
+        rt.add_character(eyeless)
+    rig, other = (rt.rig("eyeless") for rt in runtimes)
+    notes: list[str] = []
+    eyes = Gaze("a", influence="EYES").bind(rig, notes.append)
+    assert Gaze("b", influence="EYES").bind(rig, notes.append) is eyes and not eyes.present.flags.writeable
+    assert len(notes) == 2 and notes[0] == notes[1] and "has no eyes" in notes[0]
+    head = Gaze("a", influence="HEAD").bind(rig, notes.append)
+    assert head is not eyes and Gaze("a", influence="EYES").bind(other, notes.append) is not eyes
+    for influence, binding in (("EYES", eyes), ("HEAD", head)):
+        alone = bind_chain(rig, INFLUENCES[influence], "eyes", lambda note: None)
+        for field in fields(alone):
+            assert np.array_equal(getattr(binding, field.name), getattr(alone, field.name)), (influence, field.name)

@@ -108,7 +108,26 @@ class Gaze(Controller):
 
     # -- binding -------------------------------------------------------------------------------------
     def bind(self, rig, report) -> GazeBinding:
-        return bind_chain(rig, self.moving, self.priority_group, report)
+        """:func:`~.binding.bind_chain`'s binding, worked out once per character and the groups it moves
+        and points (:class:`GazeBindings`); what it reports is reported again each time."""
+        key = (self.moving, self.priority_group)
+        kept = rig.state_of(GazeBindings)
+        found = kept.get(key)
+        if found is None:
+            notes: list[str] = []
+            try:
+                binding = bind_chain(rig, self.moving, self.priority_group, notes.append)
+            except Exception:
+                for note in notes:
+                    report(note)
+                raise
+            for array in vars(binding).values():
+                if isinstance(array, np.ndarray):
+                    array.flags.writeable = False
+            found = kept[key] = (binding, tuple(notes))
+        for note in found[1]:
+            report(note)
+        return found[0]
 
     # -- evaluation ----------------------------------------------------------------------------------
     @classmethod
@@ -177,6 +196,12 @@ class Gaze(Controller):
         turns = swing(cells[..., 0], cells[..., 1])  # (F, P, 4)
         present = np.swapaxes(np.swapaxes(turns, 0, 1) @ chains.present_to_local, 0, 1)
         block.table.add_offsets(chains.columns, present, None, [job.pose for job in leads])
+
+
+class GazeBindings(dict):
+    """The gaze bindings of one runtime character, by (groups moved, group pointing): (binding, what binding
+    reported). They depend only on its mapped joints and their aligned frames, fixed with the rig. Kept
+    in the character's rig (:meth:`~infuse.runtime.rig.Rig.state_of`), read-only, shared by its gazes."""
 
 
 def _stacked_states(states: list) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -427,6 +452,7 @@ class _Chains:
         if slots is None:
             slots = self._slots[key] = _slots_of(target, job, block)
         return slots
+
 
 
 def _settings_of(job) -> tuple:
