@@ -358,12 +358,12 @@ class Scheduler:
         heapq.heappush(self._pending, (time, rank, next(self._sequence), event, block_id))
 
     def _queue_progress(self, record: BlockSchedule) -> None:
-        c = record.character
-        self._push(record.start_s, _RANK_BLOCK_START, record.id, BlockProgress(record.id, "start", record.start_s, c))
+        c, block_id, start = record.character, record.id, record.start_s
+        self._push(start, _RANK_BLOCK_START, block_id, BlockProgress(block_id, "start", start, c))
         for a in record.activations:
             for sync, t in a.sync_times.items():
-                self._push(t, _RANK_SYNC, record.id, SyncPointProgress(record.id, a.behaviour, sync, t - record.start_s, t, c))
-        self._push(record.end_s, _RANK_BLOCK_END, record.id, BlockProgress(record.id, "end", record.end_s, c))
+                self._push(t, _RANK_SYNC, block_id, SyncPointProgress(block_id, a.behaviour, sync, t - start, t, c))
+        self._push(record.end_s, _RANK_BLOCK_END, block_id, BlockProgress(block_id, "end", record.end_s, c))
 
     def advance(self, to_time: float) -> list:
         """Move the clock to ``to_time`` (global seconds) and deliver the progress feedback up to it, in order."""

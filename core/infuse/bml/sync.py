@@ -15,6 +15,7 @@ from .. import limits
 
 #: The BML 1.0 sync points, in temporal order.
 STANDARD_SYNC_POINTS = ("start", "ready", "strokeStart", "stroke", "strokeEnd", "relax", "end")
+_STANDARD_RANK = {s: i for i, s in enumerate(STANDARD_SYNC_POINTS)}  # the BML order of ties in time
 #: Other spellings found in documents -> the BML 1.0 name.
 SYNC_ALIASES = {"stroke_start": "strokeStart", "stroke_end": "strokeEnd"}
 #: Attribute names that carry sync references on a behaviour element (``attackPeak`` is the face sync point).
@@ -136,7 +137,7 @@ class TimingModel:
     def from_points(cls, points: dict[str, float], stretchable: bool = True, aliases: dict | None = None) -> "TimingModel":
         """A model from ``{sync: seconds from start}``; points are ordered by time, ties by the BML order
         (``start`` first, ``end`` last, others as given)."""
-        rank = {s: i for i, s in enumerate(STANDARD_SYNC_POINTS)}
+        rank = _STANDARD_RANK
 
         def key(item):
             name, t = item  # "stroke:3" ranks as "stroke"

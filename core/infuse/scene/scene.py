@@ -422,7 +422,7 @@ class Scene(BuilderCalls):
                 raise UsageError(f"block {block.id!r} names no character; pass the character to bml()")
             name = self.resolve_name(name)
             self.character(name)
-            blocks.append(replace(block, character_id=name))
+            blocks.append(block if block.character_id == name else replace(block, character_id=name))
         ids = [block.id for block in blocks]
         with held_config():  # one look at the configuration file for all the block's plugin lookups
             for block in (blocks if generated else [g for b in blocks for g in self.scheduler.generate(b)]):
