@@ -96,3 +96,19 @@ def test_first_steps_off_the_facing_do_not_skid():
         low = (y[1:] < 0.01) & (y[:-1] < 0.01)
         step = np.linalg.norm(np.diff(sole[..., [0, 2]], axis=0), axis=-1)
         assert step[low].max(initial=0.0) <= 0.01, step[low].max()
+
+
+def test_the_slowest_speeds_kept_are_those_worked_out_and_requests_of_many_directions_blend_as_alone():
+    blend = _blend()
+    directions = np.array([0.0, 0.3, math.pi, 0.0, -1.0, math.pi / 2])
+    first = blend.slowest(directions)
+    first[:] = -1.0  # the caller's own copy
+    np.testing.assert_array_equal(blend.slowest(directions), _blend().slowest(directions))
+    np.testing.assert_array_equal(blend.slowest(directions[:2]), _blend().slowest(directions[:2]))
+    speeds = np.array([0.8, 0.9, 0.5, 1.5, 0.85, 0.3])
+    query = np.stack((speeds * np.cos(directions), speeds * np.sin(directions), np.zeros(6)), axis=1)
+    w = blend.weights(query, blend.t.weights(query)[0])
+    for i in range(len(query)):  # grouped by the examples each leaves out, as each alone
+        alone = blend.weights(query[i:i + 1], blend.t.weights(query[i:i + 1])[0])
+        np.testing.assert_allclose(w[i], alone[0], rtol=0.0, atol=1e-12)
+    assert (w[[0, 1, 3], blend.t.labels.index("back")] == 0.0).all()

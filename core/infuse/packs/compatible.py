@@ -23,6 +23,8 @@ from .tessellation import Tessellation
 AGAINST_COS = -0.02
 #: Examples slower than this (m/s) do not travel (an idle) and go with every request.
 STILL_M_S = 1e-3
+#: How many sets of directions :meth:`CompatibleBlend.slowest` keeps its answer for (all let go when full).
+SLOWEST_KEPT = 256
 
 
 class CompatibleBlend:
@@ -34,19 +36,22 @@ class CompatibleBlend:
         self.resolution = resolution
         self._subsets: dict[bytes, tuple[np.ndarray, Tessellation, Hull] | None] = {}
         self._hull: Hull | None = None
+        self._slowest: dict[bytes, np.ndarray] = {}
         v = tessellation.points[:, :2]
         speed = np.linalg.norm(v, axis=1)
         # (2, N) each example's direction of travel (a unit vector; zeros for the still ones), for a
         # first look at which examples may travel against a request (:meth:`weights`).
         self._headings = np.where(speed > STILL_M_S, v.T / np.maximum(speed, 1e-12), 0.0)
+        # What :meth:`against` reads of the examples: velocities along and across (N,), speeds (N,) (at
+        # least 1e-12) and which ones travel (N,).
+        self._along, self._across = v[:, 0].copy(), v[:, 1].copy()
+        self._speeds, self._travel = np.maximum(speed, 1e-12), speed > STILL_M_S
 
     def against(self, direction) -> np.ndarray:
         """(Q, N) flags of the examples travelling against each of (Q,) ``direction`` radians (+ left)."""
         d = np.atleast_1d(np.asarray(direction, dtype=np.float64))
-        v = self.t.points[:, :2]
-        speed = np.linalg.norm(v, axis=1)
-        cos = (np.cos(d)[:, None] * v[None, :, 0] + np.sin(d)[:, None] * v[None, :, 1]) / np.maximum(speed, 1e-12)
-        return (cos < AGAINST_COS) & (speed > STILL_M_S)[None]
+        cos = (np.cos(d)[:, None] * self._along + np.sin(d)[:, None] * self._across) / self._speeds
+        return (cos < AGAINST_COS) & self._travel
 
     def _subset(self, against: np.ndarray):
         """(kept example indices, their tessellation, its hull) for a row of :meth:`against` flags, or None
@@ -86,8 +91,7 @@ class CompatibleBlend:
             return out
         scale = self.t.scale[:2]
         reached = np.linalg.norm((out[rows] @ self.t.points - q[rows])[:, :2] / scale, axis=1)
-        for key in np.unique(against, axis=0):
-            group = np.all(against == key, axis=1)
+        for key, group in _alike(against):
             found = self._subset(key)
             if found is None:
                 continue
@@ -105,12 +109,22 @@ class CompatibleBlend:
 
     def slowest(self, direction) -> np.ndarray:
         """(Q,) the slowest speed (m/s) at which the examples not travelling against each of (Q,)
-        ``direction`` radians reach it (0 with an idle among them; NaN where they do not reach it)."""
+        ``direction`` radians reach it (0 with an idle among them; NaN where they do not reach it). Kept by
+        the directions asked (a walk asks for the same block after block while it speeds up or slows down)."""
         d = np.atleast_1d(np.asarray(direction, dtype=np.float64))
+        key = d.tobytes()
+        kept = self._slowest.get(key)
+        if kept is None:
+            if len(self._slowest) >= SLOWEST_KEPT:
+                self._slowest.clear()
+            kept = self._slowest[key] = self._slowest_of(d)
+        return kept.copy()
+
+    def _slowest_of(self, d: np.ndarray) -> np.ndarray:
+        """:meth:`slowest` of (Q,) directions ``d`` (radians), worked out."""
         against = self.against(d)
         out = np.full(len(d), np.nan)
-        for key in np.unique(against, axis=0):
-            group = np.nonzero(np.all(against == key, axis=1))[0]
+        for key, group in _alike(against):
             found = self._subset(key)
             if found is None:
                 self._hull = self._hull or Hull(self.t)
@@ -120,3 +134,12 @@ class CompatibleBlend:
             top, low = speed_limits(tess, d[group], hull=hull)
             out[group] = np.where(top > 0.0, low, np.nan)
         return out
+
+
+def _alike(flags: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The distinct rows of (Q, N) ``flags``, each with the indices (ascending) of the rows equal to it, in
+    the order they first come (as ``np.unique(flags, axis=0)`` groups them, for less: a few rows at a time)."""
+    found: dict[bytes, list[int]] = {}
+    for i, row in enumerate(flags):
+        found.setdefault(row.tobytes(), []).append(i)
+    return [(flags[rows[0]], np.array(rows)) for rows in found.values()]
