@@ -6,7 +6,7 @@ import pytest
 
 from infuse import quaternions as quat
 from infuse.kinematics import forward_kinematics
-from infuse.runtime.limb_ik import solve_limb, solve_limb_ends
+from infuse.runtime.limb_ik import LimbSolve, solve_limb, solve_limb_ends, solve_limb_ends_together
 from infuse.skeleton import Skeleton
 
 rng = np.random.default_rng(7)
@@ -67,6 +67,40 @@ def test_solved_ends_are_where_forward_kinematics_puts_them(twist, several):
     assert np.allclose(ends, g_pos[:, c], rtol=0.0, atol=1e-12)
     assert np.allclose(quat.canonical_sign(above), quat.canonical_sign(g_rot[:, sk.parents[c]]), rtol=0.0, atol=1e-12)
     assert not np.allclose(solved, local)  # the legs did move
+
+
+def test_solves_together_give_each_as_alone():
+    """Poses of two skeletons, legs of both and one leg alone, with and without poles and weights: solved
+    together, each as solved alone, to the bit."""
+    plain, twisted = two_legs(False), two_legs(True)
+    cases = []
+    for (sk, legs), frames, several, pole, weighted, keep_end in (
+            (plain, 3, True, "frames", True, True), (twisted, 5, True, "one", False, True), (plain, 1, True, "limbs", True, False),
+            (twisted, 4, False, "frames", True, True), (plain, 2, False, None, False, True), (twisted, 3, True, None, True, True)):
+        local = quat.normalize(rng.normal(size=(frames, sk.num_joints, 4)))
+        root = rng.normal(size=(frames, 3))
+        _, pos = forward_kinematics(sk, local, root)
+        k = 2 if several else 1
+        goal = pos[:, [leg[2] for leg in legs[:k]]] + 0.1 * rng.normal(size=(frames, k, 3))
+        poles = {"frames": rng.normal(size=(frames, 3)), "one": np.array([0.0, 0.0, 1.0]), "limbs": rng.normal(size=(frames, k, 3)),
+                 None: None}[pole]
+        weight = (rng.uniform(size=(frames, k)) > 0.3).astype(float) if weighted else None
+        end = quat.normalize(rng.normal(size=(frames, k, 4))) if not keep_end else None
+        if not several:
+            goal, weight, end = goal[:, 0], None if weight is None else weight[:, 0], None if end is None else end[:, 0]
+            poles = poles if poles is None or poles.ndim < 3 else poles[:, 0]
+        cases.append(dict(skeleton=sk, local_rotations=local, root_translations=root, joint_translations=None,
+                          joints=legs if several else legs[0], goal=goal, weight=weight, pole=poles, keep_end=keep_end, end_rotation=end))
+    alone = [dict(c, local_rotations=c["local_rotations"].copy()) for c in cases]
+    together = [dict(c, local_rotations=c["local_rotations"].copy()) for c in cases]
+    each = [solve_limb_ends(**c) for c in alone]
+    both = solve_limb_ends_together([LimbSolve(**c) for c in together])
+    assert len(both) == len(each)
+    for c, a, t, e, b in zip(cases, alone, together, each, both):
+        assert np.array_equal(t["local_rotations"], a["local_rotations"])
+        assert not np.array_equal(t["local_rotations"], c["local_rotations"])  # the legs did move
+        for x, y in zip(e, b):
+            assert (x is None and y is None) or np.array_equal(x, y)
 
 
 def test_straight_legs_bend_toward_the_pole_and_reach():

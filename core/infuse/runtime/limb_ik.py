@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -280,19 +281,110 @@ def solve_limb_ends(skeleton, local_rotations: np.ndarray, root_translations: np
                   end_rotation, chains, distance, True)
 
 
+def solve_limb_ends_together(solves) -> list[tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]]:
+    """:func:`solve_limb_ends` of each of ``solves`` (:class:`LimbSolve`: several poses, each its own arrays,
+    of one skeleton or of several), each result as solving it alone gives it, in their order. The arithmetic of the limbs
+    solved together (as many in each, none solved apart, all with a pole or all without) runs once over
+    their frames stacked: on a block's few frames it costs about as much for all as for one."""
+    setups = [_set_up(s.skeleton, s.local_rotations, s.root_translations, s.joint_translations, s.joints, s.goal, s.pole,
+                      s.chains) for s in solves]
+    bends: list[np.ndarray | None] = [None] * len(solves)
+    alike: dict[tuple, list[_Setup]] = {}
+    at: dict[int, int] = {}  # each set-up's solve, by the set-up's id
+    for i, setup in enumerate(setups):
+        if setup is not None:
+            alike.setdefault((setup.several, setup.A.shape[1:], setup.pole is None), []).append(setup)
+            at[id(setup)] = i
+    for parts in alike.values():
+        if len(parts) == 1:
+            continue
+        A, B, C, T, ab_rot, old = (np.concatenate([getattr(u, name) for u in parts]) for name in ("A", "B", "C", "T", "ab_rot", "old"))
+        poles = [u.pole for u in parts if u.pole is not None]  # all or none (alike)
+        pole = np.concatenate([np.broadcast_to(p, u.A.shape) for p, u in zip(poles, parts)]) if poles else None
+        rows = _bend(A, B, C, T, ab_rot, pole, old)
+        for u, a, e in zip(parts, *_bounds([len(u.A) for u in parts])):
+            bends[at[id(u)]] = rows[a:e]
+    out = []
+    for s, setup, bent in zip(solves, setups, bends):
+        if setup is None:
+            out.append(_solve(s.skeleton, s.local_rotations, s.root_translations, s.joint_translations, s.joints, s.goal, s.weight,
+                              s.pole, s.keep_end, s.end_rotation, s.chains, s.distance, True))
+            continue
+        new = _bend(setup.A, setup.B, setup.C, setup.T, setup.ab_rot, setup.pole, setup.old) if bent is None else bent
+        out.append(_finish(s.skeleton, s.local_rotations, s.root_translations, s.joint_translations, setup, new, s.weight,
+                           s.keep_end, s.end_rotation, s.distance, True))
+    return out
+
+
+@dataclass(frozen=True)
+class LimbSolve:
+    """The arguments of one :func:`solve_limb_ends` call, for :func:`solve_limb_ends_together` (see there)."""
+
+    skeleton: Skeleton
+    local_rotations: np.ndarray
+    root_translations: np.ndarray
+    joint_translations: np.ndarray | None
+    joints: object
+    goal: np.ndarray
+    weight: object = None
+    pole: np.ndarray | None = None
+    keep_end: bool = True
+    end_rotation: np.ndarray | None = None
+    chains: tuple | None = None
+    distance: bool = True
+
+
+def _bounds(counts: list[int]) -> tuple[list[int], list[int]]:
+    """The first and past-the-last rows of parts of ``counts`` rows stacked in order."""
+    ends = np.cumsum(counts).tolist()
+    return [0, *ends[:-1]], ends
+
+
+class _Setup(NamedTuple):
+    """One solve's limbs as :func:`_bend` and :func:`_finish` take them: the plan, the goal ``T`` (F, [K,] 3),
+    the global rotations ``g_rot`` (F, [K,] R, 4) of a, b, c (and a's parent), the places ``A``, ``B``, ``C``
+    (F, [K,] 3) of a, b and c (a carried c: the end of b's bone), a's and b's global rotations ``ab_rot``
+    (F, [K,] 2, 4) and local ones ``old`` (a copy), the pole as the limbs' arrays broadcast it or None,
+    and the carried ends' offsets (K, 3) or None."""
+
+    plan: _LimbPlan
+    several: bool
+    T: np.ndarray
+    g_rot: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    ab_rot: np.ndarray
+    old: np.ndarray
+    pole: np.ndarray | None
+    carried_at: np.ndarray | None
+
+
 def _solve(skeleton, local_rotations, root_translations, joint_translations, joints, goal, weight, pole, keep_end,
            end_rotation, chains, distance: bool, ends: bool) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
     """:func:`solve_limb`'s work: the distance (or None) and, with ``ends``, the ends' parent rotations and
     positions (:func:`solve_limb_ends`)."""
-    plan = _limb_plan(skeleton, joints)
-    limbs, several, parents, offsets = plan.limbs, plan.several, plan.parents, plan.offsets
-    T = np.asarray(goal, dtype=np.float64)
-    if plan.apart:  # solved apart
+    setup = _set_up(skeleton, local_rotations, root_translations, joint_translations, joints, goal, pole, chains)
+    if setup is None:  # solved apart
+        plan = _limb_plan(skeleton, joints)
+        T = np.asarray(goal, dtype=np.float64)
         left = [solve_limb(skeleton, local_rotations, root_translations, joint_translations, tuple(limb), T[:, k],
                            _column(weight, k, 2), _column(pole, k, 3), keep_end, _column(end_rotation, k, 3),
                            None if chains is None else tuple(c[:, k] for c in chains), distance)
-                for k, limb in enumerate(limbs)]
+                for k, limb in enumerate(plan.limbs)]
         return (np.stack([d for d in left if d is not None], axis=1) if distance else None), None, None
+    bent = _bend(setup.A, setup.B, setup.C, setup.T, setup.ab_rot, setup.pole, setup.old)
+    return _finish(skeleton, local_rotations, root_translations, joint_translations, setup, bent, weight, keep_end, end_rotation,
+                   distance, ends)
+
+
+def _set_up(skeleton, local_rotations, root_translations, joint_translations, joints, goal, pole, chains) -> _Setup | None:
+    """The :class:`_Setup` of one solve (see :func:`solve_limb` for the arguments); None for limbs solved apart."""
+    plan = _limb_plan(skeleton, joints)
+    limbs, several, parents, offsets = plan.limbs, plan.several, plan.parents, plan.offsets
+    if plan.apart:
+        return None
+    T = np.asarray(goal, dtype=np.float64)
     if chains is None:  # one FK for every limb; arrays keep a limb axis only when there are several
         rows = np.column_stack((limbs, parents)) if plan.all_hung else limbs  # (K, R)
         g_rot, g_pos = chain_fk(skeleton, local_rotations, root_translations, joint_translations, rows.ravel())
@@ -300,14 +392,28 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
         g_rot, g_pos = g_rot.reshape(shape + (4,)), g_pos.reshape(shape + (3,))
     else:
         g_rot, g_pos = chains
-    parent_rot = g_rot[..., 3, :] if plan.all_hung else None
     A, B, C = g_pos[..., 0, :], g_pos[..., 1, :], g_pos[..., 2, :]
+    carried_at = None
     if plan.all_carried:
         if joint_translations is None or not joint_translations.flags.writeable:
             raise ValueError(f"joint {skeleton.names[limbs[0, 2]]!r} hangs outside its limb: placing it needs "
                              f"writable joint translations (F, J, 3), which the caller keeps")
         carried_at = np.stack(offsets)  # (K, 3)
         C = B + quat.rotate(g_rot[..., 1, :], carried_at if several else carried_at[0])
+    pole_at = None
+    if pole is not None:  # as the limbs' arrays broadcast it
+        pole = np.asarray(pole, dtype=np.float64)
+        pole_at = pole[:, None] if several and pole.ndim == 2 else pole
+    columns = limbs if several else limbs[0]
+    # a's and b's local rotations before the solve: a copy (F, [K,] 2, 4)
+    return _Setup(plan, several, T, g_rot, A, B, C, g_rot[..., :2, :], local_rotations.take(columns[..., :2], 1), pole_at,
+                  carried_at)
+
+
+def _bend(A, B, C, T, ab_rot, pole, old) -> np.ndarray:
+    """New local rotations (F, [K,] 2, 4) of limbs' joints a and b (local ones ``old``, global ones ``ab_rot``
+    (F, [K,] 2, 4)) at ``A`` and ``B`` (F, [K,] 3) that bring c at ``C`` to ``T`` (F, [K,] 3), bending toward
+    ``pole`` (broadcast to them) or None (see :func:`solve_limb`): frame by frame and limb by limb."""
     # The sides a->b, b->c, a->c and a->goal (4, F, [K,] 3) and their lengths.
     sides = np.empty((4,) + A.shape)
     for k, (end, start) in enumerate(((B, A), (C, B), (C, A), (T, A))):
@@ -334,8 +440,7 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     flat = axis_norms[1] < 1e-6 * np.maximum(lab * lcb, 1e-12)
     toward = None
     if pole is not None:  # a->c x pole: the normal of the plane that bends the limb toward the pole
-        pole = np.asarray(pole, dtype=np.float64)
-        toward = _cross(ca, pole[:, None] if several and pole.ndim == 2 else pole)  # broadcast by the products
+        toward = _cross(ca, pole)  # broadcast by the products
     if _any(flat) or _any(small):
         axis1, axis0 = axes
         if _any(flat):  # a straight limb bends toward the pole, else toward the goal
@@ -350,7 +455,7 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
     else:
         axis1, axis0 = axes / np.maximum(axis_norms, 1e-12)[..., None]
     # The turns of a (bend, then toward the goal) and of b (bend) as local rotations: one rotate.
-    inverse = quat.conjugate(np.asarray(g_rot).take(_A_B_A, -2))  # a's, b's, a's: (F, [K,] 3, 4)
+    inverse = quat.conjugate(ab_rot.take(_A_B_A, -2))  # a's, b's, a's: (F, [K,] 3, 4)
     # Stacked by assignment: np.stack costs more than the copies on a block's few frames.
     local_axes, angles = np.empty(inverse.shape[:-1] + (3,)), np.empty(inverse.shape[:-1])
     local_axes[..., 0, :], local_axes[..., 1, :], local_axes[..., 2, :] = axis0, axis0, axis1
@@ -363,13 +468,21 @@ def _solve(skeleton, local_rotations, root_translations, joint_translations, joi
             turns[moved, :2] = _replaned(axis0[moved], plane[moved], ac_ab_0[moved], ac_ab_1[moved], ba_bc_0[moved],
                                          ba_bc_1[moved], inverse[moved, :2])
     r0, r1, r2 = turns[..., 0, :], turns[..., 1, :], turns[..., 2, :]
-    columns = limbs if several else limbs[0]
-    old = local_rotations.take(columns[..., :2], 1)  # (F, [K,] 2, 4), a copy
     # a bends in the limb's plane first (c stays on the line a->c), then turns that line onto the goal;
     # turning first would bend about a normal the turn has moved (off the goal unless the plane holds it).
     both = np.empty(old.shape)
     both[..., 0, :], both[..., 1, :] = quat.multiply(r2, r0), r1
-    new = quat.multiply(old, both)
+    return quat.multiply(old, both)
+
+
+def _finish(skeleton, local_rotations, root_translations, joint_translations, setup: _Setup, new: np.ndarray, weight, keep_end,
+            end_rotation, distance: bool, ends: bool) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """Write the solved rotations ``new`` (:func:`_bend`), blended from ``setup.old`` by ``weight``, into
+    ``local_rotations`` and place the ends (see :func:`solve_limb`); the distance and ends as :func:`_solve`."""
+    plan, several, T, g_rot, A, old, carried_at = setup.plan, setup.several, setup.T, setup.g_rot, setup.A, setup.old, setup.carried_at
+    limbs = plan.limbs
+    parent_rot = g_rot[..., 3, :] if plan.all_hung else None
+    columns = limbs if several else limbs[0]
     if weight is not None:  # both joints in one interpolation
         w = np.minimum(np.maximum(np.asarray(weight, dtype=np.float64), 0.0), 1.0)
         w = (w[:, None] if several and w.ndim == 1 else w)[..., None]

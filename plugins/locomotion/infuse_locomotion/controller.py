@@ -47,7 +47,7 @@ from infuse.contacts import DOWN_TOLERANCE, foot_frames
 from infuse.errors import MissingFeatureError, UsageError
 from infuse.runtime import Controller, Layer, Mode
 from infuse.runtime.clip import LoopTable, continuous_rotations, sample_motion
-from infuse.runtime.limb_ik import solve_limb, solve_limb_ends
+from infuse.runtime.limb_ik import LimbSolve, solve_limb, solve_limb_ends_together
 from infuse.runtime.pose import chain_fk
 
 from . import pacing, swivels, transitions
@@ -402,6 +402,7 @@ class Locomotion(Controller):
                 groups.setdefault(key, []).append((job, walk[1]))
         dt = 1.0 / block.fps
         poses = {}
+        pinned = []  # each group's binding, walks, pose and the leg IK its pinning asks for (or None)
         for group in groups.values():
             b: LocomotionBinding = group[0][0].binding
             parts = list(zip(*(p for _, p in group)))  # each walk's rotations, root, translations or None, ...
@@ -409,9 +410,18 @@ class Locomotion(Controller):
             jt = None if parts[2][0] is None else np.concatenate(parts[2])
             ends = [0, *itertools.accumulate(len(p[0]) for _, p in group)]
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
-            feet = None
+            legs = None
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
-                feet = cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
+                legs = cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
+            pinned.append((b, group, runs, rot, root, jt, legs))
+        # Every group's legs in one leg IK (its arithmetic on all their frames at once), then the feet kept up.
+        solved = iter(solve_limb_ends_together([legs for *_, legs in pinned if legs is not None]))
+        for b, group, runs, rot, root, jt, legs in pinned:
+            feet = None
+            if legs is not None:
+                _, above, ankles = next(solved)
+                if b.floors is not None and above is not None and ankles is not None:
+                    feet = _feet_below(b.skeleton, b.floors, rot, jt, above, ankles)
             if b.floors is not None:
                 _keep_feet_up(b.skeleton, b.floors, rot, root, jt, runs, dt, feet)
             for (job, _), (_, a, e) in zip(group, runs):
@@ -760,7 +770,7 @@ class Locomotion(Controller):
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     @staticmethod
-    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> tuple[np.ndarray, np.ndarray] | None:
+    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> LimbSolve | None:
         """Pin planted feet by leg IK: the sole under the heel while the heel is down (a foot landing
         turned up rolls down about it, its ankle swinging over it; the ankle itself where the binding
         knows no heel, ``b.heel_levers``), the ball while only it is down (the foot pivoting about it,
@@ -773,9 +783,9 @@ class Locomotion(Controller):
         after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
         (F,) the turn spun at the root so far (radians). ``runs``: the walks whose frames the arrays
         stack, each as its state and its frames (start, end). A swinging foot of the frames ``made`` (F,)
-        lands where it touches the ground (:func:`_touch_downs`). Returns the feet's joints as the leg IK
-        left them, for :func:`_keep_feet_up` (:func:`_feet_below`), or None where it solved no leg or
-        cannot tell them (carried ends, feet with no floors)."""
+        lands where it touches the ground (:func:`_touch_downs`). Returns the leg IK that brings both legs
+        to their goals (a :class:`~infuse.runtime.limb_ik.LimbSolve` on ``rot``, solved with the other
+        groups' by :meth:`evaluate`), or None where no foot is pinned."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
@@ -1018,12 +1028,8 @@ class Locomotion(Controller):
             return None
         # Both legs in one solve (a leg of weight 0 keeps its hip and knee, its ankle set to the rotation it
         # has): one leg costs as much, and the solve gives both ankles' places for keeping the feet up.
-        _, above, ankles = solve_limb_ends(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward,
-                                           end_rotation=feet_rot, chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]),
-                                           distance=False)
-        if b.floors is None or above is None or ankles is None:
-            return None
-        return _feet_below(b.skeleton, b.floors, rot, jt, above, ankles)
+        return LimbSolve(b.skeleton, rot, root, jt, b.leg_limbs, goals, weight=weights, pole=forward, end_rotation=feet_rot,
+                         chains=(g_rot_all[:, :, :4], g_pos_all[:, :, :4]), distance=False)
 
 
 def _touch_downs(b: LocomotionBinding, runs, anchors: np.ndarray, feet: np.ndarray, made: np.ndarray, dt: float) -> np.ndarray:
