@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gc
 import math
+import sys
 import threading
 import time
 from collections import deque
@@ -340,3 +341,22 @@ def test_a_command_runs_before_the_block_when_the_block_at_its_usual_cost_is_sti
         live._commands.put_nowait((Future(), ran.append, (1,), "three"))
         live._apply_commands(time.perf_counter() + 0.001)
         assert bool(ran) is runs and (live._held is None) is runs, (usual_s, ran, live._held)
+
+
+def test_threads_switch_every_millisecond_while_a_live_scene_runs():
+    """While a live scene runs, a thread running Python hands the interpreter over within 1 ms (so one
+    preparing commands holds a block up by about that, not Python's 5 ms); the process's own interval is
+    back once the last live scene stops."""
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(0.004)
+    try:
+        first, _ = _live(0.0)
+        second, _ = _live(0.0)
+        with first:
+            assert sys.getswitchinterval() == 0.001
+            with second:
+                assert sys.getswitchinterval() == 0.001
+            assert sys.getswitchinterval() == 0.001  # the first one still runs
+        assert sys.getswitchinterval() == 0.004
+    finally:
+        sys.setswitchinterval(before)

@@ -57,6 +57,7 @@ import gc
 import math
 import queue
 import statistics
+import sys
 import threading
 import time
 from collections import deque
@@ -86,6 +87,10 @@ GROW_AT, SHRINK_AT = 0.75, 0.5
 #: (their frames cost under :data:`SHRINK_AT` of their time in the longer blocks); doubled after each try
 #: that grew back, up to :data:`TRY_MAX_S`, and back to this after a try that held.
 TRY_S, TRY_MAX_S = 0.5, 8.0
+#: Seconds a thread running Python keeps the interpreter before another that waits for it gets it, while a
+#: live scene runs (:func:`sys.setswitchinterval`; Python's default is 5 ms). A thread preparing commands
+#: (parsing, lip sync, a walk's path) then holds a block's start or its evaluation up by about this, not 5 ms.
+SWITCH_INTERVAL_S = 0.001
 
 
 @dataclass(frozen=True)
@@ -265,6 +270,7 @@ class LiveScene:
         gc.collect()
         gc.freeze()
         self._frozen = True
+        _switch_often(True)
         # The first frame, evaluated here, tells what a block costs: blocks start as long as it takes to keep
         # up (a block costs much the same whatever its length), so the first seconds miss no frames.
         started = time.perf_counter()
@@ -295,6 +301,7 @@ class LiveScene:
         if self._frozen:
             self._frozen = False
             gc.unfreeze()
+            _switch_often(False)
 
     def _refuse_waiting(self) -> None:
         """Commands still queued (or held for the next gap) get :class:`UsageError` (the loop has stopped)."""
@@ -889,3 +896,22 @@ class MovableTarget(Target):
     def positions(self, times, block=None) -> np.ndarray:
         """(F, 3) metres: the point at every time of ``times`` (F,)."""
         return np.broadcast_to(self.point, (len(times), 3)).copy()
+
+
+_switching = {"scenes": 0, "before": None}  # live scenes running, and the switch interval before the first
+_switching_lock = threading.Lock()
+
+
+def _switch_often(starting: bool) -> None:
+    """Threads switch every :data:`SWITCH_INTERVAL_S` (at most) while a live scene runs; the interval the
+    process had is back once the last one stops."""
+    with _switching_lock:
+        if starting:
+            if _switching["scenes"] == 0:
+                _switching["before"] = sys.getswitchinterval()
+                sys.setswitchinterval(min(sys.getswitchinterval(), SWITCH_INTERVAL_S))
+            _switching["scenes"] += 1
+        elif _switching["scenes"] > 0:
+            _switching["scenes"] -= 1
+            if _switching["scenes"] == 0 and _switching["before"] is not None:
+                sys.setswitchinterval(_switching["before"])
