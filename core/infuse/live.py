@@ -497,17 +497,21 @@ class LiveScene:
         start). A command runs when it is expected (it takes as long as the last ones of its kind, the
         median) to end early enough for the block, at its usual cost (the median of the last second's), to
         be ready when its first frame is due: it may start the block a little late (a costly block then
-        shows its frame late by as much), which costs less than the frame it would wait otherwise. Once
-        that moment has passed (a loop running late), commands run while they are expected to fit
-        :attr:`command_budget_s`. One that does not fit waits for the next gap, which :meth:`_room` makes
-        long enough, and goes first in it. Returns the seconds spent on commands after ``until``."""
+        shows its frame late by as much), which costs less than the frame it would wait otherwise. A loop
+        running late (the block's planned start passed before the gap began) runs commands while they are
+        expected to fit :attr:`command_budget_s`. One that does not fit waits for the next gap, which
+        :meth:`_room` makes long enough, and goes first in it. Returns the seconds spent on commands after
+        ``until``."""
         late_s = 0.0
         waited = self._held is not None
+        behind = time.perf_counter() >= until
+        latest = until + LEAD_MARGIN_S + self._lead_s - self._usual_s  # a usual block still ready in time
         while not self._stop.is_set():
-            wait = until - time.perf_counter()
+            now = time.perf_counter()
+            wait = until - now
             command = self._held
             if command is None:
-                if wait <= 0 and late_s >= self.command_budget_s:
+                if wait <= 0 and (late_s >= self.command_budget_s if behind else now >= latest):
                     return late_s
                 try:
                     command = self._commands.get(timeout=min(wait, 0.05)) if wait > 0 else self._commands.get_nowait()
@@ -519,8 +523,7 @@ class LiveScene:
             future, function, args, kind = command
             started = time.perf_counter()
             expected = self._expected_s(kind)
-            latest = until + LEAD_MARGIN_S + self._lead_s - self._usual_s  # a usual block still ready in time
-            fits = started + expected <= latest if started < latest else late_s + expected <= self.command_budget_s
+            fits = late_s + expected <= self.command_budget_s if behind else started + expected <= latest
             if not waited and not fits:
                 self._held = command  # it would hold the block up: first thing after it
                 if started < until:
