@@ -377,3 +377,34 @@ def test_a_loop_on_time_runs_past_the_block_start_only_what_keeps_a_usual_block_
         live._apply_commands(time.perf_counter() + (-0.001 if behind else 0.0005))
         assert len(ran) in counts, (behind, ran)
         assert live._commands.qsize() + (live._held is not None) == 5 - len(ran), (behind, live._commands.qsize())
+
+
+def test_work_on_a_callers_thread_begins_between_blocks():
+    """Blocks of a controller taking 30 ms: BML sent at various moments is parsed (and prepared) on the
+    caller's thread only once the block being evaluated is in hand, never in the middle of one (there it
+    would take turns with the block for Python's interpreter and make its frames late)."""
+    live, slow = _live(0.030)
+    slow.slow.set()
+    blocks: list[tuple[float, float]] = []
+    evaluate = live._evaluate
+
+    def timed(count):
+        begun = time.perf_counter()
+        try:
+            return evaluate(count)
+        finally:
+            blocks.append((begun, time.perf_counter()))
+    live._evaluate = timed
+    generate, began = live.scene.scheduler.generate, []
+
+    def noted(block):
+        began.append(time.perf_counter())
+        return generate(block)
+    live.scene.scheduler.generate = noted
+    with live:
+        time.sleep(0.3)
+        for k in range(12):
+            time.sleep(0.007 * (k % 5) + 0.01)
+            live.parse("bob", f'<bml xmlns="{BML_NS}" id="gap{k}"><head id="h" lexeme="NOD"/></bml>')
+    inside = [t for t in began if any(start + 0.002 < t < end for start, end in blocks)]
+    assert len(began) == 12 and not inside, (inside, blocks[-5:])

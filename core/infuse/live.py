@@ -219,6 +219,8 @@ class LiveScene:
         self._last: LiveFrame | None = None
         self._pending: deque[tuple[int, dict]] = deque()  # frames evaluated, not shown yet
         self._ready = threading.Condition()
+        self._between = threading.Event()  # set while the loop is not evaluating a block
+        self._between.set()
         self._presenter: threading.Thread | None = None
         self._lead_s = 0.0  # how long before a block's first frame is due its evaluation starts
         self._usual_s = 0.0  # what a block usually takes (the median the lead is taken with)
@@ -341,6 +343,7 @@ class LiveScene:
                 if self._stop.is_set():
                     break
                 overdue = int((time.perf_counter() - self.due_s(first)) / self.period_s)  # due already: shown no more
+                self._between.clear()
                 frames = self._evaluate(self.block_frames + self._room() + max(overdue, 0))
                 # the lead: from the planned start to the frames in hand, waking late included and commands
                 # applied meanwhile left out (a burst of them delays its own block, not every later one's)
@@ -351,8 +354,19 @@ class LiveScene:
                     self._ready.notify_all()
                 if first // int(self.fps) != scene.runtime.frame // int(self.fps):
                     self._forget()  # once a second, after the frames are in the presenter's hands
+                self._between.set()
         except BaseException as exc:  # kept (with its traceback) for callers, which get errors from then on
             self._fail(exc)
+        finally:
+            self._between.set()
+
+    def _wait_for_a_gap(self) -> None:
+        """On a caller's thread, wait until the loop is between blocks (at most a block's longest time):
+        Python runs one thread at a time, so work begun here while a block is evaluated (parsing,
+        synthesizing, planning a walk) would take turns with it and make its frames late. A command that
+        arrives while a block is evaluated shows on the next block anyway."""
+        if self._thread is not None and threading.current_thread() is not self._thread:
+            self._between.wait(self.max_block_frames * self.period_s)
 
     def _update_lead(self) -> None:
         """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile of what the blocks
@@ -638,7 +652,8 @@ class LiveScene:
         or the one it names), put them through the scene's BML generators (their ``generatedBml`` feedback
         is given here) and synthesize their speech, once, with what the generators marked in it; runs on
         the caller's thread. :class:`~infuse.errors.InputError` for malformed XML, :class:`UsageError` for
-        unknown characters."""
+        unknown characters. Begins between two blocks (:meth:`_wait_for_a_gap`)."""
+        self._wait_for_a_gap()
         document = bml if isinstance(bml, BmlDocument) else parse_bml(bml)
         blocks = []
         for block in document.blocks:
