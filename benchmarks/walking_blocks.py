@@ -55,7 +55,8 @@ def run(frames: int, block: int) -> tuple[float, float, float, float]:
     scene.step(int(FPS // 2))
     spent, walks = {"walks": 0.0, "feet": 0.0}, [0]
     evaluate, pin, keep_up = Locomotion.evaluate.__func__, Locomotion.__dict__["_pin"], locomotion._keep_feet_up
-    legs, below = locomotion.solve_limb_ends_together, locomotion._feet_below  # the pinning's leg IK, done for all groups at once
+    # The feet held alike, the leg IK and the feet's joints below it, done for all groups at once.
+    hold, legs, below = locomotion._hold_all, locomotion.solve_limb_ends_together, locomotion._feet_below
 
     def timed(function, part):
         def run(*args):
@@ -65,15 +66,30 @@ def run(frames: int, block: int) -> tuple[float, float, float, float]:
             return out
         return run
 
+    def timed_steps(function, part):  # a generator's steps timed as they run
+        def run(*args):
+            steps = function(*args)
+            while True:
+                start = time.process_time()
+                try:
+                    asked = next(steps)
+                except StopIteration as done:
+                    spent[part] += time.process_time() - start
+                    return done.value
+                spent[part] += time.process_time() - start
+                yield asked
+        return run
+
     def walked(cls, jobs, at):
         timed(evaluate, "walks")(cls, jobs, at)
         walks[0] += sum(1 for job in jobs if job.local_times[-1] >= 0.0)
 
     own = Locomotion.__dict__.get("evaluate")  # None: the base class's (one walk at a time)
     Locomotion.evaluate = classmethod(walked)
-    Locomotion._pin = staticmethod(timed(pin.__func__, "feet"))
+    Locomotion._pin = staticmethod(timed_steps(pin.__func__, "feet"))
     locomotion._keep_feet_up = timed(keep_up, "feet")
-    locomotion.solve_limb_ends_together, locomotion._feet_below = timed(legs, "feet"), timed(below, "feet")
+    locomotion._hold_all, locomotion.solve_limb_ends_together = timed(hold, "feet"), timed(legs, "feet")
+    locomotion._feet_below = timed(below, "feet")
     try:
         start, steps = time.process_time(), frames // block
         for _ in range(steps):
@@ -85,7 +101,7 @@ def run(frames: int, block: int) -> tuple[float, float, float, float]:
         else:
             Locomotion.evaluate = own
         Locomotion._pin, locomotion._keep_feet_up = pin, keep_up
-        locomotion.solve_limb_ends_together, locomotion._feet_below = legs, below
+        locomotion._hold_all, locomotion.solve_limb_ends_together, locomotion._feet_below = hold, legs, below
     return cpu / steps, spent["walks"] / steps, spent["feet"] / steps, walks[0] / steps
 
 

@@ -38,6 +38,7 @@ import itertools
 import math
 import weakref
 from dataclasses import dataclass, replace
+from collections.abc import Generator
 from typing import Any, Callable, NamedTuple
 
 import numpy as np
@@ -410,13 +411,18 @@ class Locomotion(Controller):
             jt = None if parts[2][0] is None else np.concatenate(parts[2])
             ends = [0, *itertools.accumulate(len(p[0]) for _, p in group)]
             runs = [(job.state_of(LocomotionState), a, e) for (job, _), a, e in zip(group, ends[:-1], ends[1:])]
-            legs = None
+            pinning = None
             if group[0][0].controller.pin_feet and len(b.legs) == 2:
-                legs = cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
-            pinned.append((b, group, runs, rot, root, jt, legs))
-        # Every group's legs in one leg IK (its arithmetic on all their frames at once), then the feet kept up.
-        solved = iter(solve_limb_ends_together([legs for *_, legs in pinned if legs is not None]))
-        for b, group, runs, rot, root, jt, legs in pinned:
+                pinning = cls._pin(b, runs, rot, root, jt, contact, forward, dt, spun, made)
+            pinned.append((b, group, runs, rot, root, jt, pinning))
+        # Every group's feet held in one go, and their legs in one leg IK (the arithmetic on all their
+        # frames at once), then the feet kept up.
+        steps = [None if pinning is None else _advance(pinning) for *_, pinning in pinned]
+        _hold_all([holding for done, holding in (step for step in steps if step is not None) if not done], dt)
+        legs_of = [None if step is None or pinning is None else step[1] if step[0] else _advance(pinning)[1]
+                   for (*_, pinning), step in zip(pinned, steps)]
+        solved = iter(solve_limb_ends_together([legs for legs in legs_of if legs is not None]))
+        for (b, group, runs, rot, root, jt, _), legs in zip(pinned, legs_of):
             feet = None
             if legs is not None:
                 _, above, ankles = next(solved)
@@ -770,7 +776,7 @@ class Locomotion(Controller):
             rot[:, b.balls[k]] = quat.multiply(quat.conjugate(feet[:, k, 0]), feet[:, k, 1])
 
     @staticmethod
-    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> LimbSolve | None:
+    def _pin(b: LocomotionBinding, runs, rot, root, jt, contact, forward, dt, spun, made) -> Generator[Holding, None, LimbSolve | None]:
         """Pin planted feet by leg IK: the sole under the heel while the heel is down (a foot landing
         turned up rolls down about it, its ankle swinging over it; the ankle itself where the binding
         knows no heel, ``b.heel_levers``), the ball while only it is down (the foot pivoting about it,
@@ -783,9 +789,11 @@ class Locomotion(Controller):
         after toe off. ``contact`` (F, 2, 2); ``forward`` (F, 3) the heading's direction; ``spun``
         (F,) the turn spun at the root so far (radians). ``runs``: the walks whose frames the arrays
         stack, each as its state and its frames (start, end). A swinging foot of the frames ``made`` (F,)
-        lands where it touches the ground (:func:`_touch_downs`). Returns the leg IK that brings both legs
-        to their goals (a :class:`~infuse.runtime.limb_ik.LimbSolve` on ``rot``, solved with the other
-        groups' by :meth:`evaluate`), or None where no foot is pinned."""
+        lands where it touches the ground (:func:`_touch_downs`). A generator: it yields the feet held
+        alike through all their walk's frames (:class:`Holding`, held with the other groups' by
+        :meth:`evaluate`, :func:`_hold_all`) and returns the leg IK that brings both legs to their goals
+        (a :class:`~infuse.runtime.limb_ik.LimbSolve` on ``rot``, solved with the other groups'), or None
+        where no foot is pinned."""
         # One FK for both legs before either is pinned: hip, knee, ankle, the hip's parent, the ball
         # (F, 2, 5). Each leg's IK leaves the other leg as it is, and turning a foot leaves its leg.
         g_rot_all, g_pos_all = chain_fk(b.skeleton, rot, root, jt, b.pin_joints)
@@ -940,7 +948,7 @@ class Locomotion(Controller):
                             # blend's foot slapping flat about its held heel, its pitch slowed): pinned there
                             # it would hold the foot up and drop it when let go. The heel stays held until
                             # the foot's pitch has caught up with the animation's.
-                            pitch, up = _toes_slowed(b, quat.multiply(g_rot[None, s:e, k, 2], quat.conjugate(landed)), across[None],
+                            pitch, up = _toes_slowed([(b, 1)], quat.multiply(g_rot[None, s:e, k, 2], quat.conjugate(landed)), across[None],
                                                      np.array([toes_up]), dt)
                             lagging = up[0] > -pitch[0]
                             if lagging[0]:
@@ -995,7 +1003,7 @@ class Locomotion(Controller):
                             holds.append((r, k, a0 + s, e - s, kind, carried))
                             prev = kind
                             continue
-                        hold = _hold(b, np.array([kind]), np.array([k]), _held_feet(carried[None]), g_rot[None, s:e, k, 2], g_pos[None, s:e, k],
+                        hold = _hold([(b, 1)], np.array([kind]), np.array([k]), _held_feet(carried[None]), g_rot[None, s:e, k, 2], g_pos[None, s:e, k],
                                      turned[None, s:e], contact[None, a0 + s:a0 + e, k, 1] > 0.5, touching[None, s:e, k],
                                      posed_all[None, a0 + s:a0 + e, k], dt)
                         goal[s:e], turn[s:e], weight[s:e] = hold.goal[0], hold.turn[0], 1.0
@@ -1009,7 +1017,7 @@ class Locomotion(Controller):
                 st.feet[k] = np.concatenate((pin, landed, landed_as, across, (landed_spun, toes_up, foot_heading, held_swivel), offset,
                                              ball_offset, lifted, left, let_go))  # in FOOT_VALUES' order
         if holds:
-            _hold_all(b, runs, holds, g_rot_all, g_pos_all, spun, contact, touching_all, posed_all, (goals, turns, rises, weights), dt)
+            yield Holding(b, runs, holds, g_rot_all, g_pos_all, spun, contact, touching_all, posed_all, (goals, turns, rises, weights))
         ends = [a1 - 1 for _, _, a1 in runs]  # each walk's last frame, carried to its next block
         for (st, _, _), last, last_rot, last_shared in zip(runs, feet_all[ends], g_rot_all[ends, :, 2], shared[ends]):
             st.last, st.last_rot, st.shared = last, last_rot, last_shared
@@ -1170,9 +1178,10 @@ class Hold(NamedTuple):
     let_go: np.ndarray
 
 
-def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFeet, foot_rot: np.ndarray, leg: np.ndarray,
-          turned: np.ndarray, ball_down: np.ndarray, touching: np.ndarray, posed: np.ndarray, dt: float) -> Hold:
-    """P feet, each one of a walk's (``feet`` (P,): 0 left, 1 right), held by ``kind`` (P,)
+def _hold(owners: list[tuple[LocomotionBinding, int]], kind: np.ndarray, feet: np.ndarray, held: HeldFeet, foot_rot: np.ndarray,
+          leg: np.ndarray, turned: np.ndarray, ball_down: np.ndarray, touching: np.ndarray, posed: np.ndarray, dt: float) -> Hold:
+    """P feet, each one of a walk's (``feet`` (P,): 0 left, 1 right; ``owners``: the bindings of the walks,
+    each with how many of the feet in turn are its walks'), held by ``kind`` (P,)
     (:data:`~infuse.footing.ANKLE` or :data:`~infuse.footing.BALL`) over n frames ``dt`` seconds apart,
     carried from ``held`` (:meth:`Locomotion._pin`). The animation's ankles' global rotations ``foot_rot``
     (P, n, 4), its legs ``leg`` (P, n, 5, 3) (hip, knee, ankle, the hip's parent, the ball; metres), the
@@ -1193,7 +1202,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
         # On its heel, its toes come down no faster than the pack's feet turn near the ground (a blend's
         # foot slapping flat in a frame would swing the ankle about the heel by centimetres). The pitch is
         # the twist of the turn since it landed about the axis across; ``toes_up`` carries it (toes up positive).
-        pitch, up = _toes_slowed(b, since, across, toes_up, dt)
+        pitch, up = _toes_slowed(owners, since, across, toes_up, dt)
         toes_up = np.where(on_heel, up[:, -1], toes_up) if balls else up[:, -1]
         kept = quat.multiply(since, quat.from_axis_angle(across[:, None], -(pitch + up)))  # both about one axis
     if balls:
@@ -1219,7 +1228,7 @@ def _hold(b: LocomotionBinding, kind: np.ndarray, feet: np.ndarray, held: HeldFe
             if balls else (heading_now[:, -1], held_off[:, -1])
         turn = quat.multiply(yaw(np.where(on_heel[:, None], spin - held_off, 0.0) if balls else spin - held_off), turn)
         reach = quat.rotate(turn, lever)
-        goal = pins[:, None] - _heel_of(b, feet, reach)
+        goal = pins[:, None] - (_heel_of(owners[0][0], feet, reach) if len(owners) == 1 else _heels_of(owners, feet, reach))
     if balls:
         # Touching down by its ball, the ball goes down as the animation's does (never held above it: a
         # ball held where it first touched, the animation's foot coming down on, held the foot up in the
@@ -1258,46 +1267,95 @@ def _held_feet(values: np.ndarray) -> HeldFeet:
     return HeldFeet(*(values[:, FOOT_VALUES[name][0]] for name in HeldFeet._fields))
 
 
-def _hold_all(b: LocomotionBinding, runs, holds: list, g_rot: np.ndarray, g_pos: np.ndarray, spun: np.ndarray,
-              contact: np.ndarray, touching: np.ndarray, posed: np.ndarray, out: tuple, dt: float) -> None:
-    """Hold feet of the walks ``runs`` (:meth:`Locomotion._pin`) to the end of their walk's frames, those
-    held as many frames in one :func:`_hold`, and carry their walks' states on. ``holds``: each foot's
-    walk, foot, first frame and frames held, its anchor, and what it is carried from (``HELD_COLUMNS``
-    values laid out as :attr:`~.state.LocomotionState.feet` has them; None: as its walk's state has them).
-    The frames' legs ``g_rot``, ``g_pos`` (F, 2, 5, 4 / 3), ``spun`` (F,), ``contact`` (F, 2, 2),
-    ``touching``, ``posed`` (F, 2) as :meth:`Locomotion._pin` has them; written into ``out``: the goals
-    (F, 2, 3), turns (F, 2, 4), rises (F, 2, 3) and weights (F, 2)."""
-    goals, turns, rises, weights = out
-    every = np.array([st.feet for st, _, _ in runs])  # (R, 2, C) the walks' planted feet's values
-    for n in sorted({h[3] for h in holds}):
-        group = [h for h in holds if h[3] == n]
-        walks, feet, first, _, kinds = np.array([h[:5] for h in group]).T
-        values = every[walks, feet]  # (P, C)
-        for i, h in enumerate(group):
-            if h[5] is not None:
-                values[i, :HELD_COLUMNS] = h[5]
-        at, foot = first[:, None] + np.arange(n), feet[:, None]  # (P, n) frames, (P, 1) feet
-        hold = _hold(b, kinds, feet, _held_feet(values), g_rot[at, foot, 2], g_pos[at, foot], spun[at], contact[at, foot, 1] > 0.5,
-                     touching[at, foot], posed[at, foot], dt)
-        goals[at, foot], turns[at, foot], weights[at, foot] = hold.goal, hold.turn, 1.0
-        if hold.rises is not None:
-            rises[at, foot] = hold.rises
+class Holding(NamedTuple):
+    """A group's feet held alike through all their walks' frames (:meth:`Locomotion._pin`): its binding,
+    walks ``runs`` and ``holds`` (each foot's walk, foot, first frame and frames held, its anchor, and what
+    it is carried from: ``HELD_COLUMNS`` values laid out as :attr:`~.state.LocomotionState.feet` has them,
+    None: as its walk's state has them); the frames' legs ``g_rot``, ``g_pos`` (F, 2, 5, 4 / 3), ``spun``
+    (F,), ``contact`` (F, 2, 2), ``touching``, ``posed`` (F, 2) as the pinning has them; ``out``: the goals
+    (F, 2, 3), turns (F, 2, 4), rises (F, 2, 3) and weights (F, 2) they are written into."""
+
+    b: LocomotionBinding
+    runs: list
+    holds: list
+    g_rot: np.ndarray
+    g_pos: np.ndarray
+    spun: np.ndarray
+    contact: np.ndarray
+    touching: np.ndarray
+    posed: np.ndarray
+    out: tuple
+
+
+def _advance(steps: Generator[Any, None, Any]) -> tuple[bool, Any]:
+    """Step the generator ``steps`` on: (False, what it yields next) or (True, what it returns)."""
+    try:
+        return False, next(steps)
+    except StopIteration as done:
+        return True, done.value
+
+
+def _hold_all(groups: list[Holding], dt: float) -> None:
+    """Hold the feet of every group's walks (:class:`Holding`) to the end of their walk's frames, those
+    held as many frames in one :func:`_hold` (of all groups: its arithmetic costs about as much for all
+    as for one), write the goals, turns, rises and weights, and carry the walks' states on."""
+    everys = [np.array([st.feet for st, _, _ in g.runs]) for g in groups]  # (R, 2, C) each group's planted feet's values
+    for n in sorted({h[3] for g in groups for h in g.holds}):
+        parts = []  # each group's feet held n frames: its index, walks, feet, frames
+        inputs = []
+        for gi, g in enumerate(groups):
+            held = [h for h in g.holds if h[3] == n]
+            if not held:
+                continue
+            walks, feet, first, _, kinds = np.array([h[:5] for h in held]).T
+            values = everys[gi][walks, feet]  # (P, C)
+            for i, h in enumerate(held):
+                if h[5] is not None:
+                    values[i, :HELD_COLUMNS] = h[5]
+            at, foot = first[:, None] + np.arange(n), feet[:, None]  # (P, n) frames, (P, 1) feet
+            parts.append((gi, walks, feet, at, foot))
+            inputs.append((kinds, feet, values, g.g_rot[at, foot, 2], g.g_pos[at, foot], g.spun[at], g.contact[at, foot, 1] > 0.5,
+                           g.touching[at, foot], g.posed[at, foot]))
+        kinds, feet, values, foot_rot, leg, turned, ball_down, touching, posed = \
+            inputs[0] if len(inputs) == 1 else (np.concatenate(x) for x in zip(*inputs))
+        hold = _hold([(groups[gi].b, len(walks)) for gi, walks, *_ in parts], kinds, feet, _held_feet(values), foot_rot, leg, turned,
+                     ball_down, touching, posed, dt)
         left = (*hold.held, hold.offset, hold.ball_offset, hold.rise, hold.foot_turn, hold.let_go)  # in FOOT_VALUES' order
-        every[walks, feet] = np.concatenate([v if v.ndim == 2 else v[:, None] for v in left], axis=1)
-    for r in sorted({h[0] for h in holds}):
-        runs[r][0].feet = every[r]
+        carried = np.concatenate([v if v.ndim == 2 else v[:, None] for v in left], axis=1)
+        for (gi, walks, feet, at, foot), a, e in zip(parts, *_row_bounds([len(part[1]) for part in parts])):
+            goals, turns, rises, weights = groups[gi].out
+            goals[at, foot], turns[at, foot], weights[at, foot] = hold.goal[a:e], hold.turn[a:e], 1.0
+            if hold.rises is not None:
+                rises[at, foot] = hold.rises[a:e]
+            everys[gi][walks, feet] = carried[a:e]
+    for g, every in zip(groups, everys):
+        for r in sorted({h[0] for h in g.holds}):
+            g.runs[r][0].feet = every[r]
 
 
-def _toes_slowed(b: LocomotionBinding, since: np.ndarray, across: np.ndarray, before: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """P feet held by their heels: their pitch (P, F) radians, toes down positive, the twist about the
-    horizontal axis ``across`` (P, 3) of their turn ``since`` (P, F, 4) they landed, and how far their toes
-    are up (P, F) radians, coming down no faster than ``b.landing_rad_s`` from ``before`` (P,) a frame
-    before the first, frames ``dt`` seconds apart (as the animation's where that has no limit)."""
+def _row_bounds(counts: list[int]) -> tuple[list[int], list[int]]:
+    """The first and past-the-last rows of parts of ``counts`` rows stacked in order."""
+    ends = list(itertools.accumulate(counts))
+    return [0, *ends[:-1]], ends
+
+
+def _toes_slowed(owners: list[tuple[LocomotionBinding, int]], since: np.ndarray, across: np.ndarray, before: np.ndarray,
+                 dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """P feet held by their heels (``owners``: their walks' bindings, each with how many of the feet in turn
+    are its walks'): their pitch (P, F) radians, toes down positive, the twist about the horizontal axis
+    ``across`` (P, 3) of their turn ``since`` (P, F, 4) they landed, and how far their toes are up (P, F)
+    radians, coming down no faster than the binding's ``landing_rad_s`` from ``before`` (P,) a frame before
+    the first, frames ``dt`` seconds apart (as the animation's where that has no limit)."""
     pitch = 2.0 * np.arctan2((since[..., :3] @ across[:, :, None])[..., 0], since[..., 3])
     pitch = (pitch + math.pi) % (2.0 * math.pi) - math.pi
-    if not math.isfinite(b.landing_rad_s):
-        return pitch, -pitch
-    return pitch, _slow_fall(-pitch[..., None], before[:, None], b.landing_rad_s * dt)[..., 0]
+    if len(owners) == 1:
+        rate = owners[0][0].landing_rad_s
+        return pitch, (_slow_fall(-pitch[..., None], before[:, None], rate * dt)[..., 0] if math.isfinite(rate) else -pitch)
+    up = np.empty(pitch.shape)
+    for (b, _), a, e in zip(owners, *_row_bounds([count for _, count in owners])):
+        rate = b.landing_rad_s
+        up[a:e] = _slow_fall(-pitch[a:e, :, None], before[a:e, None], rate * dt)[..., 0] if math.isfinite(rate) else -pitch[a:e]
+    return pitch, up
 
 
 def _stop_marks(b: LocomotionBinding, clip, fps: float) -> tuple[float | None, float]:
@@ -2220,6 +2278,16 @@ def _heel_of(b: LocomotionBinding, k: int | np.ndarray, reach: np.ndarray) -> np
         return np.zeros_like(reach)
     lever = b.heel_levers[k]
     return _soles(lever if lever.ndim == 1 else lever[:, None], reach)
+
+
+def _heels_of(owners: list[tuple[LocomotionBinding, int]], feet: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """(P, n, 3) :func:`_heel_of` of feet ``feet`` (P,) of several bindings (``owners``: each with how many
+    of the feet in turn are its walks'), their ankle-to-ball vectors ``reach`` (P, n, 3)."""
+    if all(b.heel_levers is None for b, _ in owners):
+        return np.zeros_like(reach)
+    levers = np.concatenate([np.zeros((e - a, 3)) if b.heel_levers is None else b.heel_levers[feet[a:e]]
+                             for (b, _), a, e in zip(owners, *_row_bounds([count for _, count in owners]))])
+    return _soles(levers[:, None], reach)
 
 
 def _heel_heights(b: LocomotionBinding, reach: np.ndarray) -> np.ndarray:
