@@ -75,8 +75,9 @@ from .scene import Scene
 
 #: Seconds of evaluated frames kept (walks look back 0.5 s to see a character standing).
 KEEP_S = 2.0
-#: Seconds a block's frames are meant to be ready before the first is due (handing them to the presenter).
-LEAD_MARGIN_S = 0.001
+#: Seconds a block's frames are meant to be ready before the first is due: handing them to the presenter
+#: thread, which wakes for them, takes a tenth of a millisecond or so.
+LEAD_MARGIN_S = 0.0003
 #: The share of blocks the lead is meant to have ready in time (by the last second's): a longer lead shows
 #: fewer frames late, a shorter one shows commands sooner (a command waits for the next block and its lead).
 LEAD_SHARE = 0.75
