@@ -281,11 +281,30 @@ def solve_limb_ends(skeleton, local_rotations: np.ndarray, root_translations: np
                   end_rotation, chains, distance, True)
 
 
+@dataclass(frozen=True)
+class LimbSolve:
+    """The arguments of one :func:`solve_limb_ends` call, for :func:`solve_limb_ends_together` (see there)."""
+
+    skeleton: Skeleton
+    local_rotations: np.ndarray
+    root_translations: np.ndarray
+    joint_translations: np.ndarray | None
+    joints: object
+    goal: np.ndarray
+    weight: object = None
+    pole: np.ndarray | None = None
+    keep_end: bool = True
+    end_rotation: np.ndarray | None = None
+    chains: tuple | None = None
+    distance: bool = True
+
+
 def solve_limb_ends_together(solves) -> list[tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]]:
-    """:func:`solve_limb_ends` of each of ``solves`` (:class:`LimbSolve`: several poses, each its own arrays,
-    of one skeleton or of several), each result as solving it alone gives it, in their order. The arithmetic of the limbs
-    solved together (as many in each, none solved apart, all with a pole or all without) runs once over
-    their frames stacked: on a block's few frames it costs about as much for all as for one."""
+    """:func:`solve_limb_ends` of each of ``solves`` (:class:`LimbSolve`: several poses, each its own
+    arrays, of one skeleton or of several), each result as solving it alone gives it, in their order.
+    The arithmetic of the limbs solved together (as many in each, none solved apart, all with a pole
+    or all without) runs once over their frames stacked: on a block's few frames it costs about as
+    much for all as for one."""
     setups = [_set_up(s.skeleton, s.local_rotations, s.root_translations, s.joint_translations, s.joints, s.goal, s.pole,
                       s.chains) for s in solves]
     bends: list[np.ndarray | None] = [None] * len(solves)
@@ -314,24 +333,6 @@ def solve_limb_ends_together(solves) -> list[tuple[np.ndarray | None, np.ndarray
         out.append(_finish(s.skeleton, s.local_rotations, s.root_translations, s.joint_translations, setup, new, s.weight,
                            s.keep_end, s.end_rotation, s.distance, True))
     return out
-
-
-@dataclass(frozen=True)
-class LimbSolve:
-    """The arguments of one :func:`solve_limb_ends` call, for :func:`solve_limb_ends_together` (see there)."""
-
-    skeleton: Skeleton
-    local_rotations: np.ndarray
-    root_translations: np.ndarray
-    joint_translations: np.ndarray | None
-    joints: object
-    goal: np.ndarray
-    weight: object = None
-    pole: np.ndarray | None = None
-    keep_end: bool = True
-    end_rotation: np.ndarray | None = None
-    chains: tuple | None = None
-    distance: bool = True
 
 
 def _bounds(counts: list[int]) -> tuple[list[int], list[int]]:

@@ -375,8 +375,8 @@ class Locomotion(Controller):
         the same of one binding, their frames stacked; then the walks of characters alike in skeleton,
         legs and feet (:func:`_stack_key`: one asset, one pack) have their feet pinned and kept above the
         ground together, their frames stacked (one forward kinematics and one leg IK for them all: a block
-        of one frame costs about the same for one walk as for several); then each writes its pose, in the
-        jobs' order."""
+        of one frame costs about the same for one walk as for several), the feet held alike and the legs'
+        leg IK of every such group in one go; then each writes its pose, in the jobs' order."""
         drives = [job.controller._drive(job, block) for job in jobs]
         asked: dict[int, Ask] = {}
         done: dict[int, tuple | None] = {}
@@ -403,7 +403,7 @@ class Locomotion(Controller):
                 groups.setdefault(key, []).append((job, walk[1]))
         dt = 1.0 / block.fps
         poses = {}
-        pinned = []  # each group's binding, walks, pose and the leg IK its pinning asks for (or None)
+        pinned = []  # each group's binding, walks, pose and its pinning (:meth:`_pin`, or None)
         for group in groups.values():
             b: LocomotionBinding = group[0][0].binding
             parts = list(zip(*(p for _, p in group)))  # each walk's rotations, root, translations or None, ...
