@@ -19,8 +19,9 @@ threads run it: the evaluator (the loop thread) applies commands (BML, builder c
 of frames; the presenter shows each frame when it is due (:meth:`LiveScene.on_frame` callbacks). Each
 block starts as late as it can and still be ready when its first frame is due (the lead: the
 :data:`LEAD_SHARE` percentile of how long the blocks of the last second took, waking late included,
-commands excluded; a costlier block shows its frame late by the difference, and misses it only when it
-takes a frame longer than the lead), so a command that arrives before then shows on that frame. Commands are applied between blocks, each where
+commands excluded, and at least the longest of them less a frame; a costlier block shows its frame late
+by the difference, and misses it only when it takes a frame longer than the lead), so a command that
+arrives before then shows on that frame. Commands are applied between blocks, each where
 it fits: one that would leave the next block too little time to be ready when its first frame is due at
 the block's usual cost (the median of the last second's; a command takes as long as the last ones of its
 kind, the median; the first of a kind as the longest kind known, at most a frame) waits for the gap after
@@ -373,14 +374,18 @@ class LiveScene:
         """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile of what the blocks
         of the last second took (at least the last few), from those of this size once there are three, else
         from all of them, a shorter block's scaled by how much longer this one is (a block started late, the
-        machine busy elsewhere, moves it for a second at most); and what they usually took, the median."""
+        machine busy elsewhere, moves it for a second at most), and at least the longest of them less a
+        frame: a block as long as that is late, not missed (its first frame is shown before the next one
+        is due); and what they usually took, the median."""
         size, now = self.block_frames, self.scene.runtime.frame
         recent = [lead for lead in self._leads if lead[0] >= now - self.fps] or list(self._leads)[-3:]
         same = [seconds for _, frames, seconds in recent if frames == size]
         if len(same) < 3:
             same = [seconds * max(1.0, size / frames) for _, frames, seconds in recent]
         same.sort()
-        self._lead_s = min(same[max(math.ceil(self.lead_share * len(same)), 1) - 1], self.max_block_frames * self.period_s)
+        share = same[max(math.ceil(self.lead_share * len(same)), 1) - 1]
+        safe = same[-1] - self.period_s + LEAD_MARGIN_S  # the longest of them still shows its first frame in time
+        self._lead_s = min(max(share, safe), self.max_block_frames * self.period_s)
         self._usual_s = min(same[(len(same) - 1) // 2], self._lead_s)
         self.stats.lead_ms = self._lead_s * 1e3
 
