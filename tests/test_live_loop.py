@@ -313,7 +313,8 @@ def test_the_loaded_scene_is_set_aside_from_full_garbage_collections():
 def test_the_lead_is_the_share_of_blocks_meant_to_be_ready_in_time():
     """Blocks of the last second took 1 ms and 7 ms in turn: with ``lead_share`` 0.75 the lead is 7 ms (three
     blocks in four ready in time), with 0.5 it is 1 ms; the usual cost (the median) is 1 ms either way.
-    Blocks of the last second of 10 ms and one of 30 ms: the lead is at least 30 ms less a frame (and the
+    Blocks of two frames take the 90th percentile at least (7 ms). Blocks of the last second of 10 ms and one
+    of 30 ms: the lead is at least 30 ms less a frame (and the
     margin), so that one, were it to come again, is late but not missed. A share outside (0, 1] is refused."""
     for share, lead_ms in ((0.75, 7.0), (0.5, 1.0)):
         live, _ = _live(0.0, lead_share=share)
@@ -321,6 +322,11 @@ def test_the_lead_is_the_share_of_blocks_meant_to_be_ready_in_time():
         live._update_lead()
         assert math.isclose(live.stats.lead_ms, lead_ms), (share, live.stats.lead_ms)
         assert math.isclose(live._usual_s, 0.001)
+    live, _ = _live(0.0, lead_share=0.5)  # blocks of two frames: the 90th percentile at least
+    live.block_frames = 2
+    live._leads.extend((k, 2, 0.001 if k % 2 else 0.007) for k in range(40))
+    live._update_lead()
+    assert math.isclose(live.stats.lead_ms, 7.0), live.stats.lead_ms
     live, _ = _live(0.0, lead_share=0.75)
     live._leads.extend((k, 1, 0.030 if k == 20 else 0.010) for k in range(40))
     live._update_lead()

@@ -79,9 +79,12 @@ KEEP_S = 2.0
 #: Seconds a block's frames are meant to be ready before the first is due: handing them to the presenter
 #: thread, which wakes for them, takes a tenth of a millisecond or so.
 LEAD_MARGIN_S = 0.0003
-#: The share of blocks the lead is meant to have ready in time (by the last second's): a longer lead shows
-#: fewer frames late, a shorter one shows commands sooner (a command waits for the next block and its lead).
+#: The share of one-frame blocks the lead is meant to have ready in time (by the last second's): a longer
+#: lead shows fewer frames late, a shorter one shows commands sooner (a command waits for the next block and
+#: its lead). Longer blocks, which show a command only frames later anyway and whose costs vary by more,
+#: take :data:`LONG_BLOCK_LEAD_SHARE` at least.
 LEAD_SHARE = 0.75
+LONG_BLOCK_LEAD_SHARE = 0.9
 #: Blocks double while a frame costs more than this share of a frame's time, and shrink to a size whose
 #: frames would cost under :data:`SHRINK_AT` of it (what is left: commands, and the machine's other work).
 GROW_AT, SHRINK_AT = 0.75, 0.5
@@ -190,7 +193,8 @@ class LiveScene:
     ``command_budget_s``: most seconds per block spent on commands once the block is due (default a
     quarter of a frame).
     ``keep_s``: seconds of evaluated frames kept. ``max_block_frames``: the largest block evaluated at once.
-    ``lead_share``: the share of blocks meant to be ready when their first frame is due (:data:`LEAD_SHARE`).
+    ``lead_share``: the share of one-frame blocks meant to be ready when their first frame is due
+    (:data:`LEAD_SHARE`).
     """
 
     def __init__(self, scene: Scene, *, queue_size: int = 256, command_budget_s: float | None = None,
@@ -371,9 +375,9 @@ class LiveScene:
             self._between.wait(self.max_block_frames * self.period_s)
 
     def _update_lead(self) -> None:
-        """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile of what the blocks
-        of the last second took (at least the last few), from those of this size once there are three, else
-        from all of them, a shorter block's scaled by how much longer this one is (a block started late, the
+        """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile (one-frame blocks;
+        :data:`LONG_BLOCK_LEAD_SHARE` at least for longer ones) of what the blocks of the last second took
+        (at least the last few), from those of this size once there are three, else from all of them, a shorter block's scaled by how much longer this one is (a block started late, the
         machine busy elsewhere, moves it for a second at most), and at least the longest of them less a
         frame: a block as long as that is late, not missed (its first frame is shown before the next one
         is due); and what they usually took, the median."""
@@ -383,7 +387,8 @@ class LiveScene:
         if len(same) < 3:
             same = [seconds * max(1.0, size / frames) for _, frames, seconds in recent]
         same.sort()
-        share = same[max(math.ceil(self.lead_share * len(same)), 1) - 1]
+        wanted = self.lead_share if size == 1 else max(self.lead_share, LONG_BLOCK_LEAD_SHARE)
+        share = same[max(math.ceil(wanted * len(same)), 1) - 1]
         safe = same[-1] - self.period_s + LEAD_MARGIN_S  # the longest of them still shows its first frame in time
         self._lead_s = min(max(share, safe), self.max_block_frames * self.period_s)
         self._usual_s = min(same[(len(same) - 1) // 2], self._lead_s)
