@@ -32,7 +32,7 @@ full queue raises :class:`~infuse.errors.BusyError` at once.
 
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
 much the same for one frame as for eight). So blocks hold :attr:`LiveScene.block_frames` frames: one
-while a frame costs under 75% of a frame's time; twice as many (up to ``max_block_frames``) when it
+while a frame costs under 90% of a frame's time; twice as many (up to ``max_block_frames``) when it
 costs more; as soon as the median of the last blocks says a shorter block's frames would cost under 50%
 (a shorter block costs at most what a longer one does), that many; and where that bound cannot tell but
 the frames cost under 50%, blocks half as long are tried half a second after blocks last grew, twice as
@@ -87,7 +87,7 @@ LEAD_SHARE = 0.75
 LONG_BLOCK_LEAD_SHARE = 0.9
 #: Blocks double while a frame costs more than this share of a frame's time, and shrink to a size whose
 #: frames would cost under :data:`SHRINK_AT` of it (what is left: commands, and the machine's other work).
-GROW_AT, SHRINK_AT = 0.75, 0.5
+GROW_AT, SHRINK_AT = 0.9, 0.5
 #: Seconds after blocks last grew before the loop tries blocks half as long whose cost only a try can tell
 #: (their frames cost under :data:`SHRINK_AT` of their time in the longer blocks); doubled after each try
 #: that grew back, up to :data:`TRY_MAX_S`, and back to this after a try that held.
