@@ -505,6 +505,19 @@ def test_builder_calls_are_written_ahead_unless_the_loop_must_make_them():
         assert np.array_equal(motions[0][name].morph_weights, motions[1][name].morph_weights), name
 
 
+def test_a_walk_given_a_time_starts_then():
+    """A live walk_to given ``at`` is left to the loop, which makes it as the scene's walk_to does: it starts
+    at that time, not on the next frame."""
+    scene = Scene(fps=FPS, quiet=True)
+    scene.add_character(corpus_file("runxaway-models/Xbot.glb"), "bob", packs=["locomotion-male"])
+    live = LiveScene(scene)
+    arguments = {"target": [0.5, 1.0], "at": 1.0}
+    prepared = live.prepare_call("walk_to", "bob", arguments)
+    assert prepared is None
+    block = live.builder_call("walk_to", "bob", arguments, prepared)
+    assert live.scene.scheduler.blocks[block].start_s == pytest.approx(1.0)
+
+
 def test_only_blocks_a_controller_prepares_for_are_scheduled_ahead(monkeypatch):
     """LiveScene.parse schedules a block on a scratch planner (speech synthesis, walks planned ahead) only
     when it may have something to prepare: a nod once (to learn that no controller prepares nods), then no

@@ -737,14 +737,15 @@ class LiveScene:
         """Check a builder call, on the caller's thread. A ``say`` is made into its block here (the scene's
         ``say``, its id taken now), parsed and prepared (:meth:`parse`); its blocks are returned, for
         :meth:`builder_call`. So are the other calls' blocks, written as the scene's builder writes them,
-        unless the call gives ``at``, names a point (it becomes a scene target on the loop) or fails
-        (the loop makes it, and raises its error); None then."""
+        unless the call gives ``at`` (a walk too: it is planned from where the character will be then),
+        names a point (it becomes a scene target on the loop) or fails (the loop makes it, and raises its
+        error); None then."""
         if method not in self.BUILDER:
             raise UsageError(f"no live builder method {method!r}; methods: {', '.join(self.BUILDER)}")
         name = self.scene.resolve_name(character)
         if name not in self.scene.characters:
             raise UsageError(f"no character {character!r}; characters: {', '.join(self.scene.characters) or 'none'}")
-        if method == "walk_to":  # its path is planned here (prepare), not on the loop's thread
+        if method == "walk_to" and arguments.get("at") is None:  # its path is planned here (prepare), not on the loop's thread
             try:
                 written = _Written(self.scene).walk_to(name, **arguments)
             except TypeError as exc:
