@@ -21,13 +21,12 @@ block starts as late as it can and still be ready when its first frame is due (t
 :data:`LEAD_SHARE` percentile of how long the blocks of the last second took, waking late included,
 commands excluded, and at least the longest of them less a frame; a costlier block shows its frame late
 by the difference, and misses it only when it takes a frame longer than the lead), so a command that
-arrives before then shows on that frame. Commands are applied between blocks, each where
-it fits: one that would leave the next block too little time to be ready when its first frame is due at
-the block's usual cost (the median of the last second's; a command takes as long as the last ones of its
-kind, the median; the first of a kind as the longest kind known, at most a frame) waits for the gap after
-that block, which is made long enough for it (the block holds more frames), so a burst of them delays no
-frame. A loop running late spends at most
-:attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
+arrives before then shows on that frame. Commands are applied between blocks, each where it fits: one
+that would leave the next block too little time to be ready when its first frame is due at the block's
+usual cost (the median of the last second's; a command takes as long as the last ones of its kind, the
+median; the first of a kind as the longest kind known, at most a frame) waits for the gap after that
+block, which is made long enough for it (the block holds more frames), so a burst of them delays no
+frame. A loop running late spends at most :attr:`LiveScene.command_budget_s` per block on them. Commands wait in a bounded queue: a
 full queue raises :class:`~infuse.errors.BusyError` at once.
 
 Evaluating frames one by one costs more per frame than in blocks (each controller's work per block is
@@ -377,10 +376,11 @@ class LiveScene:
     def _update_lead(self) -> None:
         """The lead for blocks of :attr:`block_frames`: the :attr:`lead_share` percentile (one-frame blocks;
         :data:`LONG_BLOCK_LEAD_SHARE` at least for longer ones) of what the blocks of the last second took
-        (at least the last few), from those of this size once there are three, else from all of them, a shorter block's scaled by how much longer this one is (a block started late, the
-        machine busy elsewhere, moves it for a second at most), and at least the longest of them less a
-        frame: a block as long as that is late, not missed (its first frame is shown before the next one
-        is due); and what they usually took, the median."""
+        (at least the last few), from those of this size once there are three, else from all of them, a
+        shorter block's scaled by how much longer this one is (a block started late, the machine busy
+        elsewhere, moves it for a second at most); and at least the longest of them less a frame, so that
+        a block as long is late, not missed (its first frame is shown before the next one is due). Also
+        what they usually took: the median."""
         size, now = self.block_frames, self.scene.runtime.frame
         recent = [lead for lead in self._leads if lead[0] >= now - self.fps] or list(self._leads)[-3:]
         same = [seconds for _, frames, seconds in recent if frames == size]
